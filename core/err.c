@@ -1,0 +1,59 @@
+#include "err.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+int glint_err_set(glint_err *err, int code, const char *fmt, ...)
+{
+    if (err) {
+        va_list ap;
+        va_start(ap, fmt);
+        err->code = code;
+        vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
+int glint_err_prefix(glint_err *err, const char *fmt, ...)
+{
+    char head[GLINT_ERR_MSG_MAX];
+    char old[GLINT_ERR_MSG_MAX];
+    va_list ap;
+
+    if (!err)
+        return GLINT_EINTERNAL;
+    va_start(ap, fmt);
+    vsnprintf(head, sizeof head, fmt, ap);
+    va_end(ap);
+    memcpy(old, err->msg, sizeof old);
+    snprintf(err->msg, sizeof err->msg, "%s: %s", head, old);
+    return err->code ? err->code : GLINT_EINTERNAL;
+}
+
+void glint_err_clear(glint_err *err)
+{
+    if (err) {
+        err->code = 0;
+        err->msg[0] = '\0';
+    }
+}
+
+const char *glint_strerror(int code)
+{
+    switch (code) {
+    case GLINT_OK: return "ok";
+    case GLINT_EINVAL: return "invalid argument";
+    case GLINT_ENOMEM: return "out of memory";
+    case GLINT_EIO: return "I/O error";
+    case GLINT_EFORMAT: return "malformed input";
+    case GLINT_ENUMERIC: return "numerical failure";
+    case GLINT_ERANGE: return "out of range";
+    case GLINT_ENONFINITE: return "non-finite value";
+    case GLINT_ENOTFOUND: return "not found";
+    case GLINT_EUNSUPPORTED: return "unsupported";
+    case GLINT_EINTERNAL: return "internal error";
+    default: return "unknown error";
+    }
+}

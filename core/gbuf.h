@@ -1,0 +1,39 @@
+/* gbuf.h: per-view geometry buffers (G-buffers).
+ *
+ * One gbuf per view, width x height pixels, row-major with row 0 at the
+ * top.  For pixels with mask == 0 every other channel is zero.  Directions
+ * are unit vectors pointing away from the surface: wi towards the light,
+ * wo towards the camera.  A gbuf owns its arrays; gbuf_free() accepts NULL
+ * and half-built buffers. */
+#ifndef GLINT_GBUF_H
+#define GLINT_GBUF_H
+
+#include <stdint.h>
+
+#include "err.h"
+
+typedef struct gbuf {
+    int width, height;
+    uint8_t *mask; /* 1 where the surface covers the pixel centre */
+    float *pos;    /* 3 per pixel: world position */
+    float *nrm;    /* 3 per pixel: unit shading normal */
+    float *uv;     /* 2 per pixel: texture coordinates */
+    float *wi;     /* 3 per pixel: unit direction to the light */
+    float *wo;     /* 3 per pixel: unit direction to the camera */
+} gbuf;
+
+/* Allocate a zeroed gbuf of the given size (OUT: *g). */
+int gbuf_alloc(gbuf *g, int width, int height, glint_err *err);
+void gbuf_free(gbuf *g);
+
+/* Number of pixels with mask set. */
+long gbuf_count(const gbuf *g);
+
+/* Write the gbuf to an OpenEXR file with named float channels:
+ *   mask, P.X P.Y P.Z, N.X N.Y N.Z, uv.U uv.V, wi.X wi.Y wi.Z, wo.X wo.Y wo.Z,
+ *   cos_i (n.wi) and cos_o (n.wo).
+ * These are exactly the values glint reads when it samples a painting of
+ * this view: a pixel is a sample when mask = 1, cos_i > 0 and cos_o > 0. */
+int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err);
+
+#endif

@@ -1,0 +1,58 @@
+/* img.h: float images and image file I/O (PNG, JPEG, OpenEXR, Radiance HDR)
+ * behind a small C interface; the implementation wraps OpenImageIO in a C++
+ * shim (img_oiio.cpp) that core/ never sees.
+ *
+ * An img owns its pixel array: width x height x channels floats,
+ * interleaved, row 0 at the top.  img_free() accepts NULL and zeroed images.
+ *
+ * Value conventions: 8-bit formats (PNG, JPEG) map 0..255 to 0..1 linearly
+ * (no transfer curve is applied: a painting's pixel value is the radiance
+ * glint fits); PNG output clamps to [0,1] and rounds.  EXR and HDR carry
+ * floats unchanged.  Readers reject non-finite pixels with GLINT_ENONFINITE
+ * (the message gives the first offending pixel and channel), sizes above
+ * IMG_MAX_DIM, and channel counts outside 1..4 (GLINT_ERANGE). */
+#ifndef GLINT_IMG_H
+#define GLINT_IMG_H
+
+#include <stddef.h>
+
+#include "err.h"
+
+#define IMG_MAX_DIM 16384
+
+typedef struct img {
+    int width, height, channels;
+    float *px;
+} img;
+
+/* Allocate a zeroed image (OUT: *im).  GLINT_ERANGE for sizes outside
+ * 1..IMG_MAX_DIM or channels outside 1..4. */
+int img_alloc(img *im, int width, int height, int channels, glint_err *err);
+void img_free(img *im);
+
+/* Read an image file; format by content (OpenImageIO's detection).  *out is
+ * zeroed first and owned by the caller. */
+int img_read(const char *path, img *out, glint_err *err);
+
+/* Decode an image held in memory (an upload).  Same checks as img_read. */
+int img_read_mem(const void *data, size_t len, img *out, glint_err *err);
+
+/* Write by file extension: .png (8-bit, clamped), .exr (half or float as
+ * chosen: float), .hdr.  GLINT_EUNSUPPORTED for other extensions. */
+int img_write(const char *path, const img *im, glint_err *err);
+
+/* Encode to memory in format "png" or "exr".  *out_data is malloc'ed
+ * (caller frees), *out_len its size. */
+int img_write_mem(const char *format, const img *im, void **out_data,
+                  size_t *out_len, glint_err *err);
+
+/* Write an OpenEXR file with `nch` named float channels (names[i], e.g.
+ * "N.X"), data interleaved width x height x nch. */
+int img_write_exr_named(const char *path, int width, int height, int nch,
+                        const char *const *names, const float *data,
+                        glint_err *err);
+
+/* Check every value is finite (GLINT_ENONFINITE naming the first bad one). */
+int img_check_finite(const img *im, glint_err *err);
+
+#endif
