@@ -1,0 +1,231 @@
+/* hf.h: fast homomorphic factorization (Jaroszkiewicz & McCool 2003,
+ * sections 3-4.1) of painted samples into three 1D factors,
+ *
+ *     f(wi, wo) ~ p(pi_p) q(pi_q) r(pi_r),
+ *
+ * pi_p, pi_q, pi_r = length of wi, h, wo projected on the tangent plane.
+ *
+ * Pipeline and ownership
+ *   hf_design_build : samples -> design (per sample: texel index and hat
+ *                     weight per factor; the sparse rows of A).
+ *   hf_decomp_build : design, res, lambda -> decomposition of
+ *                     B = [A; lambda L] (singular values, right singular
+ *                     vectors).  The expensive step: cache it (pcache.h).
+ *   hf_op_build     : decomposition + regularization -> operator
+ *                     M = V diag(c_i / s_i) V^T, so that the regularized
+ *                     pseudo-inverse is B^+ g = M A^T f (eq. 9-11 with the
+ *                     analysis vectors u'_i = A v_i / s_i applied implicitly).
+ *   hf_fit          : operator + painted RGB samples + mapping -> factors.
+ * Each stage owns what it allocates; every *_free accepts NULL and zeroed or
+ * half-built objects.  A decomposition may be shared read-only by any number
+ * of operators and threads; an operator likewise by any number of fits.
+ *
+ * Conventions (shared with ../shared/reference so numbers compare):
+ *  - Texels: node convention, texel k at u = k / (R-1); hat weights,
+ *    x = u (R-1), k0 = min(floor(x), R-2), t = x - k0, weights (1-t, t).
+ *    An R-texel texture sampled with linear filtering at (x + 0.5) / R gives
+ *    the same function.
+ *  - Unknowns y = [log p (R), log q (R), log r (R)], n = 3R.
+ *  - Laplacian: interior second differences [1 -2 1], (R-2) rows per
+ *    factor, unscaled; lambda multiplies them raw; data rows unweighted.
+ *  - Gauge: a constant moves freely between factors (hat weights sum to 1,
+ *    L kills constants), so B has an exact 2-dimensional null space for every
+ *    lambda.  glint removes it explicitly: the decomposition is taken on
+ *    the complement of the gauge directions, and every solution is
+ *    canonicalized so that mean(log p) = mean(log q) = mean(log r) (the
+ *    minimum-norm gauge).  Factors are therefore normalized the same way
+ *    every time; reports say so (gauge_dims).
+ *  - Numerical rank: singular values at or below rcond * s_max count as
+ *    zero (never the LAPACK default, which can keep noise and return
+ *    factors 1e10 too large). */
+#ifndef GLINT_HF_H
+#define GLINT_HF_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "err.h"
+#include "samples.h"
+
+#define HF_RES_MIN 4
+#define HF_RES_MAX 512
+#define HF_LAMBDA_MAX 1e8
+#define HF_NFACTORS 3
+
+/* ---- Design: the sparse data rows of A ----------------------------------- */
+
+typedef struct hf_design {
+    int n;             /* samples (rows of A) */
+    int res;           /* texels per factor */
+    int32_t *k0;       /* 3n: first texel of the hat pair, per factor (0..R-2) */
+    double *t;         /* 3n: weight of texel k0+1 (texel k0 gets 1 - t) */
+    double *cos_i;     /* n: n.wi of each sample (borrowed copy) */
+} hf_design;
+
+/* Build the design for `res` texels per factor from the samples' geometry.
+ * GLINT_ERANGE for res outside HF_RES_MIN..HF_RES_MAX. */
+int hf_design_build(const samples *s, int res, hf_design *out, glint_err *err);
+void hf_design_free(hf_design *d);
+
+/* The projections of equations 2-4 for one direction pair (unit vectors),
+ * each clipped to [0, 1] (OUT: pi[3] = pi_p, pi_q, pi_r). */
+void hf_project(const double n[3], const double wi[3], const double wo[3],
+                double pi[3]);
+
+/* Hat interpolation position for u in [0,1] (OUT: *k0, *t). */
+void hf_hat(double u, int res, int *k0, double *t);
+
+/* ---- Decomposition of B --------------------------------------------------- */
+
+typedef enum {
+    HF_ROUTE_EIG = 0, /* eigendecomposition of B^T B (assembled sparsely) */
+    HF_ROUTE_SVD = 1  /* dense SVD of B (LAPACK gesdd): the reference */
+} hf_route;
+
+typedef struct hf_decomp {
+    int res, n;        /* texels per factor, unknowns (3 res) */
+    int nsamples;      /* data rows used */
+    double lambda;
+    hf_route route;
+    double rcond;      /* relative cutoff used for the numerical rank */
+    int rank;          /* numerical rank: s_i > rcond * s_max (gauge excluded) */
+    int gauge_dims;    /* gauge directions removed (2) */
+    double *s;         /* rank singular values of B, descending */
+    double *V;         /* n x rank right singular vectors, column-major (V[i + n*k]) */
+    double build_seconds;
+} hf_decomp;
+
+/* Default relative cutoff (1e-6 for both routes): the operator is applied
+ * as M A^T f, which amplifies rounding along direction i by
+ * (s_max / s_i)^2 eps; below 1e-6 s_max that exceeds 2e-4, and the eig
+ * route cannot resolve values under about sqrt(n eps) s_max anyway. */
+double hf_rcond_default(hf_route route);
+
+/* Decompose B = [A; lambda L] for a design.  rcond <= 0 picks the
+ * default.  GLINT_ERANGE on lambda < 0 or > HF_LAMBDA_MAX or non-finite;
+ * GLINT_ENUMERIC if LAPACK fails (its info in the message). */
+int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
+                    double rcond, hf_decomp *out, glint_err *err);
+void hf_decomp_free(hf_decomp *dc);
+
+/* ---- Regularized operator -------------------------------------------------- */
+
+typedef enum {
+    HF_REG_TRUNC = 0,   /* eq. 6: c_i = 1/s_i for i < K */
+    HF_REG_TIKHONOV,    /* eq. 7: c_i = s_i / (s_i^2 + alpha^2) */
+    HF_REG_LINEAR       /* eq. 8: c_i = pos(1 - i/K) / s_i */
+} hf_reg_kind;
+
+typedef struct hf_reg {
+    hf_reg_kind kind;
+    /* How K is chosen (trunc, linear): the first non-zero of
+     *   rank > 0   : K = rank (clamped to the numerical rank)
+     *   frac > 0   : K = round(frac * numerical rank), at least 1
+     *   rel > 0    : K = #{ s_i > rel * s_max }
+     *   otherwise  : K = numerical rank ("full") */
+    int rank;
+    double frac;
+    double rel;
+    /* Tikhonov damping: alpha, or alpha_rel * s_max when alpha_rel > 0. */
+    double alpha;
+    double alpha_rel;
+} hf_reg;
+
+/* Parse "trunc[:full|:K|:P%|:relT]", "tikhonov:ALPHA|:relT",
+ * "linear[:full|:K|:P%]" (e.g. "trunc:50%", "trunc:rel1e-3",
+ * "tikhonov:rel0.01", "linear:37"). */
+int hf_reg_parse(const char *spec, hf_reg *out, glint_err *err);
+void hf_reg_format(const hf_reg *r, char *buf, size_t len);
+
+typedef enum { HF_F64 = 0, HF_F32 = 1 } hf_precision;
+
+typedef struct hf_op {
+    int res, n;
+    hf_precision prec;
+    int k;             /* singular triplets with non-zero weight */
+    double s_first, s_last; /* largest and smallest singular value used */
+    double weight_sum; /* sum of c_i / s_i (informative) */
+    double *M;         /* n x n, row-major, when prec == HF_F64 */
+    float *Mf;         /* n x n, row-major, when prec == HF_F32 */
+    double build_seconds;
+} hf_op;
+
+int hf_op_build(const hf_decomp *dc, const hf_reg *reg, hf_precision prec,
+                hf_op *out, glint_err *err);
+void hf_op_free(hf_op *op);
+
+/* Bytes read when applying: the operator plus the design's sparse rows. */
+size_t hf_op_bytes(const hf_op *op, const hf_design *d);
+
+/* ---- Mapping between linear and log space (section 3.4) -------------------- */
+
+typedef enum {
+    HF_MAP_LOG = 0,  /* log(max(f, eps));        inverse p q r            */
+    HF_MAP_ADD,      /* log(max(a + f, eps));    inverse max(pqr - a, 0)  (eq. 12-13) */
+    HF_MAP_SUB       /* log(max(a - f, eps)), a = (1 + margin) max f per channel;
+                        inverse max(a - pqr, 0)  (eq. 14-15) */
+} hf_map_kind;
+
+typedef struct hf_map {
+    hf_map_kind kind;
+    double a;        /* ADD: the offset (default 0.1) */
+    double eps;      /* floor before the log (default 1e-3, a quarter 8-bit step) */
+    double margin;   /* SUB: a = (1 + margin) * max sample (default 0.01) */
+} hf_map;
+
+void hf_map_default(hf_map *m, hf_map_kind kind);
+/* Parse "log", "add", "add:0.05", "sub", "sub:0.02" (margin), with
+ * ",eps=1e-4" optionally appended.  Values must be finite and in range. */
+int hf_map_parse(const char *spec, hf_map *out, glint_err *err);
+void hf_map_format(const hf_map *m, char *buf, size_t len);
+
+/* ---- Fit -------------------------------------------------------------------- */
+
+typedef enum {
+    HF_MODEL_RADIANCE = 0, /* factors approximate the painted pixel (f cos I) */
+    HF_MODEL_BRDF = 1      /* factors approximate painted / cos_i; render multiplies by cos_i */
+} hf_model;
+
+typedef struct hf_fit_stats {
+    int clamped[3];        /* samples per channel floored at eps before the log */
+    double a_used[3];      /* mapping offset per channel (ADD: a, SUB: chosen a) */
+    double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
+    double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
+    double max_abs;        /* max |reconstruction - sample| */
+    double apply_seconds;  /* operator application alone */
+    double total_seconds;  /* mapping + application + gauge + inverse */
+} hf_fit_stats;
+
+/* The fitted log-factors in the canonical gauge, with what is needed to
+ * invert the mapping.  logf[(j * res + k) * 3 + c]: factor j (p, q, r),
+ * texel k, channel c. */
+typedef struct hf_factors {
+    int res;
+    hf_model model;
+    hf_map map;
+    double a_used[3];
+    double *logf;          /* 3 * res * 3 */
+} hf_factors;
+
+/* Fit RGB samples (3 * d->n values, sample-major) with an operator built for
+ * this design.  OUT: *fac (allocated here), *stats (may be NULL).
+ * Non-finite input gives GLINT_ENONFINITE; outputs are always finite. */
+int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map,
+           hf_model model, const float *rgb, hf_factors *fac,
+           hf_fit_stats *stats, glint_err *err);
+
+/* Evaluate fitted factors at the design's samples (OUT: rgb[3 * d->n]). */
+void hf_factors_eval_design(const hf_factors *fac, const hf_design *d, float *rgb);
+
+/* Evaluate at one direction pair (unit vectors; OUT: rgb[3]).  Zero when
+ * n.wi <= 0 or n.wo <= 0. */
+void hf_factors_eval(const hf_factors *fac, const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3]);
+
+/* Shift the log-factors into the canonical gauge (equal mean log per factor,
+ * channel by channel).  The product is unchanged. */
+void hf_factors_canonicalize(double *logf, int res);
+
+void hf_factors_free(hf_factors *f);
+
+#endif

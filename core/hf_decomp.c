@@ -1,1 +1,238 @@
-/* placeholder */ typedef int glint_placeholder_hf_decomp;
+/* hf_decomp.c: decomposition of B = [A; lambda L] into singular values and
+ * right singular vectors, on the complement of the gauge directions.
+ *
+ * Gauge: both routes add sigma z z^T for the two known null directions z
+ * (eig route: to B^T B; SVD route: as two extra rows sqrt(sigma) z^T of B),
+ * with sigma larger than any other eigenvalue.  Because B z = 0 exactly, the
+ * z become the top two singular directions with a clean gap; they are
+ * identified (|Z^T v| ~ 1 is checked), dropped and reported.  What remains
+ * is B restricted to the gauge complement: its own rank deficiency (e.g.
+ * texels reached by no sample when lambda = 0) is decided by rcond. */
+#include <lapacke.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hf_int.h"
+
+double hf_rcond_default(hf_route route)
+{
+    /* Both routes apply the operator as M A^T f with M = V diag(c/s) V^T:
+     * rounding in A^T f (relative eps) reaches component i amplified by
+     * (s_max / s_i)^2.  Directions below 1e-6 s_max would turn that into
+     * more than 2e-4 of noise, so they count as rank deficiency.  The eig
+     * route also cannot resolve them: eigenvalues of B^T B carry errors of
+     * about n eps s_max^2, i.e. singular values below ~2e-7 s_max are noise.
+     * (The reference's smallest kept values sit between 3e-2 and 7e-5 s_max
+     * for lambda >= 0.01: nothing a useful fit needs is cut.) */
+    (void)route;
+    return 1e-6;
+}
+
+/* Given eigen/singular pairs of the deflated problem, sorted with the two
+ * gauge directions somewhere among them, keep the others in descending
+ * order.  vals[i] are singular values, vecs column-major n x m (m columns).
+ * order: indices of columns sorted by descending value. */
+static int keep_non_gauge(hf_decomp *dc, const double *vals, const double *vecs,
+                          int m, const int *order, const double *Z, double rcond,
+                          glint_err *err)
+{
+    int n = dc->n, ngauge = 0, kept = 0;
+    double smax = -1.0;
+    int *keep = malloc((size_t)m * sizeof *keep);
+
+    if (!keep)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory in the decomposition");
+    for (int a = 0; a < m; a++) {
+        int i = order[a];
+        const double *v = vecs + (size_t)n * i;
+        double p1 = 0.0, p2 = 0.0;
+        for (int r = 0; r < n; r++) {
+            p1 += Z[r] * v[r];
+            p2 += Z[n + r] * v[r];
+        }
+        if (a < 2) {
+            /* The deflated gauge directions must be the top two. */
+            if (p1 * p1 + p2 * p2 < 1.0 - 1e-6) {
+                free(keep);
+                return glint_err_set(err, GLINT_ENUMERIC,
+                                     "gauge deflation failed: top direction %d lies %.3g "
+                                     "inside the gauge space (expected 1)",
+                                     a, p1 * p1 + p2 * p2);
+            }
+            ngauge++;
+            continue;
+        }
+        if (smax < 0.0)
+            smax = vals[i];
+        if (vals[i] > rcond * smax && vals[i] > 0.0)
+            keep[kept++] = i;
+    }
+    dc->gauge_dims = ngauge;
+    dc->rank = kept;
+    dc->s = malloc((size_t)(kept ? kept : 1) * sizeof *dc->s);
+    dc->V = malloc((size_t)n * (kept ? kept : 1) * sizeof *dc->V);
+    if (!dc->s || !dc->V) {
+        free(keep);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory in the decomposition");
+    }
+    for (int k = 0; k < kept; k++) {
+        dc->s[k] = vals[keep[k]];
+        memcpy(dc->V + (size_t)n * k, vecs + (size_t)n * keep[k], (size_t)n * sizeof(double));
+    }
+    free(keep);
+    if (kept == 0)
+        return glint_err_set(err, GLINT_ENUMERIC, "the constraint matrix has rank 0");
+    return 0;
+}
+
+static int build_eig(const hf_design *d, hf_decomp *dc, const double *Z, glint_err *err)
+{
+    int n = dc->n, rc;
+    lapack_int info;
+    double *G = malloc((size_t)n * n * sizeof *G);
+    double *w = malloc((size_t)n * sizeof *w);
+    double *sv = malloc((size_t)n * sizeof *sv);
+    int *order = malloc((size_t)n * sizeof *order);
+    double sigma = 0.0;
+
+    if (!G || !w || !sv || !order) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d normal matrix", n, n);
+        goto done;
+    }
+    hf_normal_matrix(d, dc->lambda, G);
+    /* sigma above every eigenvalue: twice the largest absolute row sum. */
+    for (int c = 0; c < n; c++) {
+        double sum = 0.0;
+        for (int r = 0; r < n; r++)
+            sum += fabs(G[r + (size_t)n * c]);
+        if (sum > sigma)
+            sigma = sum;
+    }
+    sigma = 2.0 * sigma + 1.0;
+    for (int c = 0; c < n; c++)
+        for (int r = 0; r < n; r++)
+            G[r + (size_t)n * c] += sigma * (Z[r] * Z[c] + Z[n + r] * Z[n + c]);
+
+    info = LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', n, G, n, w);
+    if (info != 0) {
+        rc = glint_err_set(err, GLINT_ENUMERIC, "LAPACKE_dsyevd failed (info %d) for n = %d",
+                           (int)info, n);
+        goto done;
+    }
+    /* Ascending eigenvalues: descending order is reverse. */
+    for (int i = 0; i < n; i++) {
+        sv[i] = sqrt(w[i] > 0.0 ? w[i] : 0.0);
+        order[i] = n - 1 - i;
+    }
+    rc = keep_non_gauge(dc, sv, G, n, order, Z, dc->rcond, err);
+done:
+    free(G);
+    free(w);
+    free(sv);
+    free(order);
+    return rc;
+}
+
+static int build_svd(const hf_design *d, hf_decomp *dc, const double *Z, glint_err *err)
+{
+    int n = dc->n, rows = 0, ldb = 0, rc, m;
+    lapack_int info;
+    double *B = NULL, *B2 = NULL, *s = NULL, *vt = NULL, *vecs = NULL;
+    int *order = NULL;
+    double fro = 0.0, root;
+
+    B = hf_dense_B(d, dc->lambda, &rows, &ldb);
+    if (!B)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the dense constraint matrix");
+    m = rows + 2;
+    B2 = malloc((size_t)m * n * sizeof *B2);
+    s = malloc((size_t)n * sizeof *s);
+    vt = malloc((size_t)n * n * sizeof *vt);
+    vecs = malloc((size_t)n * n * sizeof *vecs);
+    order = malloc((size_t)n * sizeof *order);
+    if (!B2 || !s || !vt || !vecs || !order) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d SVD", m, n);
+        goto done;
+    }
+    for (int c = 0; c < n; c++) {
+        for (int r = 0; r < rows; r++) {
+            double v = B[r + (size_t)ldb * c];
+            B2[r + (size_t)m * c] = v;
+            fro += v * v;
+        }
+    }
+    root = sqrt(2.0 * fro) + 1.0; /* above ||B||_2 */
+    for (int c = 0; c < n; c++) {
+        B2[rows + (size_t)m * c] = root * Z[c];
+        B2[rows + 1 + (size_t)m * c] = root * Z[n + c];
+    }
+    /* jobz 'O': U overwrites B2, V^T goes to vt; no m x n copy of U. */
+    info = LAPACKE_dgesdd(LAPACK_COL_MAJOR, 'O', m, n, B2, m, s, NULL, m, vt, n);
+    if (info != 0) {
+        rc = glint_err_set(err, GLINT_ENUMERIC, "LAPACKE_dgesdd failed (info %d) for %dx%d",
+                           (int)info, m, n);
+        goto done;
+    }
+    for (int k = 0; k < n; k++) {
+        for (int r = 0; r < n; r++)
+            vecs[r + (size_t)n * k] = vt[k + (size_t)n * r];
+        order[k] = k;
+    }
+    rc = keep_non_gauge(dc, s, vecs, n, order, Z, dc->rcond, err);
+done:
+    free(B);
+    free(B2);
+    free(s);
+    free(vt);
+    free(vecs);
+    free(order);
+    return rc;
+}
+
+int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
+                    double rcond, hf_decomp *out, glint_err *err)
+{
+    double t0 = hf_now(), *Z = NULL;
+    int rc;
+
+    memset(out, 0, sizeof *out);
+    if (!d || d->n < 1 || d->res < HF_RES_MIN || d->res > HF_RES_MAX)
+        return glint_err_set(err, GLINT_EINVAL, "decomposition needs a non-empty design");
+    if (!isfinite(lambda) || lambda < 0.0 || lambda > HF_LAMBDA_MAX)
+        return glint_err_set(err, GLINT_ERANGE, "lambda %g outside [0, %g]", lambda,
+                             HF_LAMBDA_MAX);
+    if (route != HF_ROUTE_EIG && route != HF_ROUTE_SVD)
+        return glint_err_set(err, GLINT_EINVAL, "unknown decomposition route %d", (int)route);
+    if (!(rcond > 0.0))
+        rcond = hf_rcond_default(route);
+    if (!isfinite(rcond) || rcond >= 1.0)
+        return glint_err_set(err, GLINT_ERANGE, "rcond %g outside (0, 1)", rcond);
+    out->res = d->res;
+    out->n = 3 * d->res;
+    out->nsamples = d->n;
+    out->lambda = lambda;
+    out->route = route;
+    out->rcond = rcond;
+    Z = malloc((size_t)2 * out->n * sizeof *Z);
+    if (!Z)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    hf_gauge_vectors(d->res, Z);
+    rc = route == HF_ROUTE_EIG ? build_eig(d, out, Z, err) : build_svd(d, out, Z, err);
+    free(Z);
+    if (rc != 0) {
+        hf_decomp_free(out);
+        return rc;
+    }
+    out->build_seconds = hf_now() - t0;
+    return 0;
+}
+
+void hf_decomp_free(hf_decomp *dc)
+{
+    if (!dc)
+        return;
+    free(dc->s);
+    free(dc->V);
+    memset(dc, 0, sizeof *dc);
+}

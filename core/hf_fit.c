@@ -1,1 +1,275 @@
-/* placeholder */ typedef int glint_placeholder_hf_fit;
+/* hf_fit.c: apply a precomputed operator to painted samples (the fast
+ * factorization), invert the mapping, evaluate factors. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hf_int.h"
+
+#define COS_FLOOR 1e-6
+
+/* y = M t for 3 channels.  M is symmetric, so row k of M is column k: the
+ * loop streams M once, row by row, and updates three accumulators per
+ * element (an axpy per row and channel; vectorizes without reassociation). */
+static void apply_f64(const double *restrict M, int n, const double *restrict t,
+                      double *restrict y)
+{
+    double *y0 = y, *y1 = y + n, *y2 = y + 2 * n;
+
+    memset(y, 0, (size_t)3 * n * sizeof *y);
+    for (int k = 0; k < n; k++) {
+        const double *restrict row = M + (size_t)n * k;
+        double a = t[3 * k], b = t[3 * k + 1], c = t[3 * k + 2];
+        for (int i = 0; i < n; i++) {
+            double m = row[i];
+            y0[i] += m * a;
+            y1[i] += m * b;
+            y2[i] += m * c;
+        }
+    }
+}
+
+static void apply_f32(const float *restrict M, int n, const double *restrict t,
+                      float *restrict y)
+{
+    float *y0 = y, *y1 = y + n, *y2 = y + 2 * n;
+
+    memset(y, 0, (size_t)3 * n * sizeof *y);
+    for (int k = 0; k < n; k++) {
+        const float *restrict row = M + (size_t)n * k;
+        float a = (float)t[3 * k], b = (float)t[3 * k + 1], c = (float)t[3 * k + 2];
+        for (int i = 0; i < n; i++) {
+            float m = row[i];
+            y0[i] += m * a;
+            y1[i] += m * b;
+            y2[i] += m * c;
+        }
+    }
+}
+
+void hf_factors_canonicalize(double *logf, int res)
+{
+    for (int c = 0; c < 3; c++) {
+        double mean[3], all = 0.0;
+        for (int j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (int k = 0; k < res; k++)
+                s += logf[(j * res + k) * 3 + c];
+            mean[j] = s / res;
+            all += mean[j];
+        }
+        all /= 3.0;
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < res; k++)
+                logf[(j * res + k) * 3 + c] += all - mean[j];
+    }
+}
+
+static double map_inverse(const hf_factors *fac, int c, double prod)
+{
+    double v;
+    switch (fac->map.kind) {
+    case HF_MAP_ADD: v = prod - fac->a_used[c]; break;
+    case HF_MAP_SUB: v = fac->a_used[c] - prod; break;
+    default: v = prod; break;
+    }
+    return v > 0.0 ? v : 0.0;
+}
+
+static double clamp_exp(double x)
+{
+    /* exp of a log-factor sum; bounded so a wild fit stays finite */
+    if (x > 700.0)
+        x = 700.0;
+    return exp(x);
+}
+
+void hf_factors_eval_design(const hf_factors *fac, const hf_design *d, float *rgb)
+{
+    double *ly = malloc((size_t)3 * d->n * sizeof *ly);
+    if (!ly) {
+        memset(rgb, 0, (size_t)3 * d->n * sizeof *rgb);
+        return;
+    }
+    hf_A_y(d, fac->logf, ly);
+    for (int i = 0; i < d->n; i++) {
+        double w = fac->model == HF_MODEL_BRDF ? d->cos_i[i] : 1.0;
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)(w * map_inverse(fac, c, clamp_exp(ly[3 * i + c])));
+    }
+    free(ly);
+}
+
+void hf_factors_eval(const hf_factors *fac, const double n[3], const double wi[3],
+                     const double wo[3], double rgb[3])
+{
+    double pi[3], ci, co, acc[3] = {0.0, 0.0, 0.0};
+    int R = fac->res;
+
+    ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];
+    if (!(ci > 0.0) || !(co > 0.0)) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0;
+        return;
+    }
+    hf_project(n, wi, wo, pi);
+    for (int j = 0; j < 3; j++) {
+        int k;
+        double t;
+        hf_hat(pi[j], R, &k, &t);
+        for (int c = 0; c < 3; c++)
+            acc[c] += (1.0 - t) * fac->logf[(j * R + k) * 3 + c] +
+                      t * fac->logf[(j * R + k + 1) * 3 + c];
+    }
+    for (int c = 0; c < 3; c++) {
+        double v = map_inverse(fac, c, clamp_exp(acc[c]));
+        rgb[c] = fac->model == HF_MODEL_BRDF ? v * ci : v;
+    }
+}
+
+void hf_factors_free(hf_factors *f)
+{
+    if (!f)
+        return;
+    free(f->logf);
+    memset(f, 0, sizeof *f);
+}
+
+int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model model,
+           const float *rgb, hf_factors *fac, hf_fit_stats *stats, glint_err *err)
+{
+    double t0 = hf_now(), t1, t2;
+    int n, N, rc = 0;
+    double *f = NULL, *t = NULL, *y = NULL, *ly = NULL;
+    float *yf = NULL, *rec = NULL;
+    hf_fit_stats st;
+
+    memset(fac, 0, sizeof *fac);
+    memset(&st, 0, sizeof st);
+    if (!d || !op || !map || !rgb || d->res != op->res)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "fit needs a design and an operator of the same resolution");
+    if (!(map->eps > 0.0) || !isfinite(map->eps) || !isfinite(map->a) ||
+        !isfinite(map->margin) || map->margin < 0.0 ||
+        (map->kind == HF_MAP_ADD && !(map->a > 0.0)))
+        return glint_err_set(err, GLINT_EINVAL, "invalid mapping parameters");
+    n = op->n;
+    N = d->n;
+    for (long i = 0; i < 3L * N; i++)
+        if (!isfinite(rgb[i]))
+            return glint_err_set(err, GLINT_ENONFINITE,
+                                 "sample %ld channel %ld is not finite", i / 3, i % 3);
+
+    f = malloc((size_t)3 * N * sizeof *f);
+    t = malloc((size_t)3 * n * sizeof *t);
+    y = malloc((size_t)3 * n * sizeof *y);
+    yf = malloc((size_t)3 * n * sizeof *yf);
+    fac->logf = malloc((size_t)3 * n * sizeof *fac->logf);
+    if (!f || !t || !y || !yf || !fac->logf) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
+        goto fail;
+    }
+    fac->res = d->res;
+    fac->model = model;
+    fac->map = *map;
+
+    /* Values of the model's quantity, and the mapping offsets. */
+    for (int c = 0; c < 3; c++) {
+        double vmax = 0.0;
+        for (int i = 0; i < N; i++) {
+            double v = rgb[3 * i + c];
+            if (model == HF_MODEL_BRDF)
+                v /= d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
+            f[3 * i + c] = v;
+            if (v > vmax)
+                vmax = v;
+        }
+        if (map->kind == HF_MAP_ADD)
+            fac->a_used[c] = map->a;
+        else if (map->kind == HF_MAP_SUB)
+            fac->a_used[c] = vmax > 0.0 ? (1.0 + map->margin) * vmax : 1.0;
+        else
+            fac->a_used[c] = 0.0;
+    }
+    /* Forward mapping; samples at or below the floor are clamped, counted. */
+    for (int i = 0; i < N; i++) {
+        for (int c = 0; c < 3; c++) {
+            double v = f[3 * i + c], arg;
+            switch (map->kind) {
+            case HF_MAP_ADD: arg = fac->a_used[c] + v; break;
+            case HF_MAP_SUB: arg = fac->a_used[c] - v; break;
+            default: arg = v; break;
+            }
+            if (!(arg > map->eps)) {
+                arg = map->eps;
+                st.clamped[c]++;
+            }
+            f[3 * i + c] = log(arg);
+        }
+    }
+    t1 = hf_now();
+    hf_At_f(d, f, t);
+    if (op->prec == HF_F32) {
+        apply_f32(op->Mf, n, t, yf);
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < n; k++)
+                fac->logf[3 * k + c] = yf[c * n + k];
+    } else {
+        apply_f64(op->M, n, t, y);
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < n; k++)
+                fac->logf[3 * k + c] = y[c * n + k];
+    }
+    t2 = hf_now();
+    st.apply_seconds = t2 - t1;
+    hf_factors_canonicalize(fac->logf, d->res);
+    for (int c = 0; c < 3; c++)
+        st.a_used[c] = fac->a_used[c];
+    for (int k = 0; k < 3 * n; k++) {
+        if (!isfinite(fac->logf[k])) {
+            rc = glint_err_set(err, GLINT_ENUMERIC,
+                               "fit produced a non-finite log-factor (texel %d); "
+                               "the operator is unusable", k / 3);
+            goto fail;
+        }
+    }
+    st.total_seconds = hf_now() - t0;
+
+    /* Diagnostics (not part of the timed fit): log residual and linear error. */
+    ly = malloc((size_t)3 * N * sizeof *ly);
+    rec = malloc((size_t)3 * N * sizeof *rec);
+    if (ly && rec) {
+        double ss = 0.0, se = 0.0, mx = 0.0;
+        hf_A_y(d, fac->logf, ly);
+        for (long i = 0; i < 3L * N; i++) {
+            double e = ly[i] - f[i];
+            ss += e * e;
+        }
+        hf_factors_eval_design(fac, d, rec);
+        for (long i = 0; i < 3L * N; i++) {
+            double e = (double)rec[i] - (double)rgb[i];
+            se += e * e;
+            if (fabs(e) > mx)
+                mx = fabs(e);
+        }
+        st.log_residual = sqrt(ss / (3.0 * N));
+        st.rms = sqrt(se / (3.0 * N));
+        st.max_abs = mx;
+    }
+    free(ly);
+    free(rec);
+    if (stats)
+        *stats = st;
+    free(f);
+    free(t);
+    free(y);
+    free(yf);
+    return 0;
+fail:
+    free(f);
+    free(t);
+    free(y);
+    free(yf);
+    hf_factors_free(fac);
+    return rc;
+}

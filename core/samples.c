@@ -1,1 +1,333 @@
-/* placeholder */ typedef int glint_placeholder_samples;
+/* samples.c: the sampling pattern of a scene and reading painted values. */
+#include "samples.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <xxhash.h>
+
+void samples_free(samples *s)
+{
+    if (!s)
+        return;
+    free(s->used);
+    free(s->view);
+    free(s->pixel);
+    free(s->nrm);
+    free(s->wi);
+    free(s->wo);
+    free(s->cos_i);
+    free(s->intensity);
+    memset(s, 0, sizeof *s);
+}
+
+static int samples_alloc(samples *s, int n, int nviews, glint_err *err)
+{
+    s->n = n;
+    s->nviews = nviews;
+    s->used = calloc((size_t)nviews, 1);
+    s->view = malloc((size_t)n * sizeof *s->view);
+    s->pixel = malloc((size_t)n * sizeof *s->pixel);
+    s->nrm = malloc((size_t)3 * n * sizeof *s->nrm);
+    s->wi = malloc((size_t)3 * n * sizeof *s->wi);
+    s->wo = malloc((size_t)3 * n * sizeof *s->wo);
+    s->cos_i = malloc((size_t)n * sizeof *s->cos_i);
+    s->intensity = malloc((size_t)n * sizeof *s->intensity);
+    if (!s->used || !s->view || !s->pixel || !s->nrm || !s->wi || !s->wo || !s->cos_i ||
+        !s->intensity) {
+        samples_free(s);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for %d samples", n);
+    }
+    return 0;
+}
+
+static int is_sample(const gbuf *g, size_t p, double *ci)
+{
+    const float *n = g->nrm + 3 * p, *wi = g->wi + 3 * p, *wo = g->wo + 3 * p;
+    double a, b;
+    if (!g->mask[p])
+        return 0;
+    a = (double)n[0] * wi[0] + (double)n[1] * wi[1] + (double)n[2] * wi[2];
+    b = (double)n[0] * wo[0] + (double)n[1] * wo[1] + (double)n[2] * wo[2];
+    *ci = a;
+    return a > 0.0 && b > 0.0;
+}
+
+int samples_build(const gbuf *g, const scene_view *views, int nviews,
+                  const unsigned char *use, const char scene_hash[33],
+                  samples *out, glint_err *err)
+{
+    long count = 0;
+    int rc, k = 0;
+    XXH3_state_t *st;
+    XXH128_hash_t h;
+    static const char rule[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
+
+    memset(out, 0, sizeof *out);
+    if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
+        return glint_err_set(err, GLINT_ERANGE, "view count %d outside 1..%d", nviews,
+                             SCENE_MAX_VIEWS);
+    for (int v = 0; v < nviews; v++) {
+        double ci;
+        size_t np = (size_t)g[v].width * g[v].height;
+        if (g[v].width != g[0].width || g[v].height != g[0].height)
+            return glint_err_set(err, GLINT_EINVAL, "view %d has a different raster size", v);
+        if (use && !use[v])
+            continue;
+        for (size_t p = 0; p < np; p++)
+            count += is_sample(&g[v], p, &ci);
+    }
+    if (count < 1)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the chosen views have no lit, visible pixel: nothing to fit");
+    if (count > SAMPLES_MAX)
+        return glint_err_set(err, GLINT_ERANGE, "%ld samples exceed the limit of %d", count,
+                             SAMPLES_MAX);
+    rc = samples_alloc(out, (int)count, nviews, err);
+    if (rc)
+        return rc;
+    out->width = g[0].width;
+    out->height = g[0].height;
+    for (int v = 0; v < nviews; v++) {
+        size_t np = (size_t)g[v].width * g[v].height;
+        if (use && !use[v])
+            continue;
+        out->used[v] = 1;
+        for (size_t p = 0; p < np; p++) {
+            double ci;
+            if (!is_sample(&g[v], p, &ci))
+                continue;
+            out->view[k] = v;
+            out->pixel[k] = (int)p;
+            memcpy(out->nrm + 3 * k, g[v].nrm + 3 * p, 3 * sizeof(float));
+            memcpy(out->wi + 3 * k, g[v].wi + 3 * p, 3 * sizeof(float));
+            memcpy(out->wo + 3 * k, g[v].wo + 3 * p, 3 * sizeof(float));
+            out->cos_i[k] = ci;
+            out->intensity[k] = views ? views[v].light_intensity : 1.0;
+            k++;
+        }
+    }
+    st = XXH3_createState();
+    if (!st) {
+        samples_free(out);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory hashing samples");
+    }
+    XXH3_128bits_reset(st);
+    XXH3_128bits_update(st, rule, sizeof rule);
+    XXH3_128bits_update(st, scene_hash ? scene_hash : "", scene_hash ? 32 : 0);
+    XXH3_128bits_update(st, out->used, (size_t)nviews);
+    h = XXH3_128bits_digest(st);
+    XXH3_freeState(st);
+    snprintf(out->hash, sizeof out->hash, "%016llx%016llx", (unsigned long long)h.high64,
+             (unsigned long long)h.low64);
+    return 0;
+}
+
+int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
+{
+    for (int v = 0; v < s->nviews; v++) {
+        const img *im = &paintings[v];
+        if (!s->used[v])
+            continue;
+        if (!im->px || im->width != s->width || im->height != s->height)
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "painting of view %d is %dx%d, the scene's raster is %dx%d", v,
+                                 im->px ? im->width : 0, im->px ? im->height : 0, s->width,
+                                 s->height);
+        if (im->channels < 1 || im->channels > 4 || im->channels == 2)
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "painting of view %d has %d channels (1, 3 or 4 expected)", v,
+                                 im->channels);
+    }
+    for (int i = 0; i < s->n; i++) {
+        const img *im = &paintings[s->view[i]];
+        const float *px = im->px + (size_t)s->pixel[i] * im->channels;
+        double inv = 1.0 / s->intensity[i];
+        for (int c = 0; c < 3; c++) {
+            float v = im->channels == 1 ? px[0] : px[c];
+            if (!isfinite(v))
+                return glint_err_set(err, GLINT_ENONFINITE,
+                                     "painting of view %d: pixel (%d, %d) channel %d is not finite",
+                                     s->view[i], s->pixel[i] / s->width,
+                                     s->pixel[i] % s->width, c);
+            rgb[3 * i + c] = (float)(v * inv);
+        }
+    }
+    return 0;
+}
+
+int samples_scatter(const samples *s, const float *rgb, float fill, img *imgs, glint_err *err)
+{
+    for (int v = 0; v < s->nviews; v++) {
+        int rc = img_alloc(&imgs[v], s->width, s->height, 3, err);
+        if (rc) {
+            for (int u = 0; u < v; u++)
+                img_free(&imgs[u]);
+            return rc;
+        }
+        for (size_t p = 0; p < (size_t)s->width * s->height * 3; p++)
+            imgs[v].px[p] = fill;
+    }
+    for (int i = 0; i < s->n; i++)
+        memcpy(imgs[s->view[i]].px + (size_t)s->pixel[i] * 3, rgb + 3 * i, 3 * sizeof(float));
+    return 0;
+}
+
+int samples_export(const samples *s, const float *rgb, int channel, const char *path,
+                   glint_err *err)
+{
+    FILE *fp = fopen(path, "w");
+    if (!fp)
+        return glint_err_set(err, GLINT_EIO, "cannot write %s: %s", path, strerror(errno));
+    fprintf(fp, "# glint samples: %d samples, raster %dx%d, pattern %s\n", s->n, s->width,
+            s->height, s->hash);
+    fprintf(fp, "# view row col nx ny nz wix wiy wiz wox woy woz%s\n", rgb ? " value" : "");
+    for (int i = 0; i < s->n; i++) {
+        const float *n = s->nrm + 3 * i, *wi = s->wi + 3 * i, *wo = s->wo + 3 * i;
+        fprintf(fp, "%d %d %d %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g", s->view[i],
+                s->pixel[i] / s->width, s->pixel[i] % s->width, n[0], n[1], n[2], wi[0], wi[1],
+                wi[2], wo[0], wo[1], wo[2]);
+        if (rgb)
+            fprintf(fp, " %.9g", rgb[3 * i + channel]);
+        fputc('\n', fp);
+    }
+    if (fclose(fp) != 0)
+        return glint_err_set(err, GLINT_EIO, "writing %s failed: %s", path, strerror(errno));
+    return 0;
+}
+
+int samples_import(const char *path, samples *out, float **values, glint_err *err)
+{
+    FILE *fp;
+    char line[1024];
+    long n = 0, lineno = 0;
+    int rc = 0, maxv = 0, maxr = 0, maxc = 0, has_value = -1;
+    float *vals = NULL;
+
+    memset(out, 0, sizeof *out);
+    if (values)
+        *values = NULL;
+    fp = fopen(path, "r");
+    if (!fp)
+        return glint_err_set(err, GLINT_EIO, "cannot read %s: %s", path, strerror(errno));
+    while (fgets(line, sizeof line, fp))
+        if (line[0] != '#' && line[0] != '\n')
+            n++;
+    if (n < 1 || n > SAMPLES_MAX) {
+        fclose(fp);
+        return glint_err_set(err, GLINT_EFORMAT, "%s holds %ld samples (1..%d expected)", path,
+                             n, SAMPLES_MAX);
+    }
+    rewind(fp);
+    rc = samples_alloc(out, (int)n, SCENE_MAX_VIEWS, err);
+    if (rc) {
+        fclose(fp);
+        return rc;
+    }
+    vals = calloc((size_t)3 * n, sizeof *vals);
+    if (!vals) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory reading %s", path);
+        goto fail;
+    }
+    for (long i = 0; i < n;) {
+        double d[13];
+        int v, r, c, got;
+        if (!fgets(line, sizeof line, fp)) {
+            rc = glint_err_set(err, GLINT_EFORMAT, "%s: file changed while reading", path);
+            goto fail;
+        }
+        lineno++;
+        if (line[0] == '#' || line[0] == '\n')
+            continue;
+        got = sscanf(line, "%d %d %d %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v, &r, &c,
+                     &d[0], &d[1], &d[2], &d[3], &d[4], &d[5], &d[6], &d[7], &d[8], &d[9]);
+        if (got != 12 && got != 13) {
+            rc = glint_err_set(err, GLINT_EFORMAT,
+                               "%s line %ld: expected 12 or 13 numbers, got %d", path, lineno,
+                               got < 0 ? 0 : got);
+            goto fail;
+        }
+        if (has_value < 0)
+            has_value = got == 13;
+        if ((got == 13) != has_value) {
+            rc = glint_err_set(err, GLINT_EFORMAT, "%s line %ld: column count changed", path,
+                               lineno);
+            goto fail;
+        }
+        for (int e = 0; e < got - 3; e++)
+            if (!isfinite(d[e])) {
+                rc = glint_err_set(err, GLINT_ENONFINITE, "%s line %ld: column %d not finite",
+                                   path, lineno, e + 4);
+                goto fail;
+            }
+        if (v < 0 || v >= SCENE_MAX_VIEWS || r < 0 || c < 0 || r >= SCENE_MAX_SIZE ||
+            c >= SCENE_MAX_SIZE) {
+            rc = glint_err_set(err, GLINT_ERANGE, "%s line %ld: view/row/col out of range", path,
+                               lineno);
+            goto fail;
+        }
+        {
+            double nn = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            double ci = d[0] * d[3] + d[1] * d[4] + d[2] * d[5];
+            double co = d[0] * d[6] + d[1] * d[7] + d[2] * d[8];
+            if (fabs(nn - 1.0) > 1e-3 || !(ci > 0.0) || !(co > 0.0)) {
+                rc = glint_err_set(err, GLINT_EINVAL,
+                                   "%s line %ld: not a lit, visible sample (|n|^2 = %g, "
+                                   "n.wi = %g, n.wo = %g)", path, lineno, nn, ci, co);
+                goto fail;
+            }
+            out->cos_i[i] = ci;
+        }
+        out->view[i] = v;
+        out->pixel[i] = r * SCENE_MAX_SIZE + c; /* fixed below once width is known */
+        for (int e = 0; e < 3; e++) {
+            out->nrm[3 * i + e] = (float)d[e];
+            out->wi[3 * i + e] = (float)d[3 + e];
+            out->wo[3 * i + e] = (float)d[6 + e];
+        }
+        out->intensity[i] = 1.0;
+        if (got == 13)
+            vals[3 * i] = vals[3 * i + 1] = vals[3 * i + 2] = (float)d[9];
+        out->used[v] = 1;
+        if (v > maxv) maxv = v;
+        if (r > maxr) maxr = r;
+        if (c > maxc) maxc = c;
+        i++;
+    }
+    fclose(fp);
+    fp = NULL;
+    out->nviews = maxv + 1;
+    out->width = maxc + 1;
+    out->height = maxr + 1;
+    for (int i = 0; i < out->n; i++) {
+        int r = out->pixel[i] / SCENE_MAX_SIZE, c = out->pixel[i] % SCENE_MAX_SIZE;
+        out->pixel[i] = r * out->width + c;
+    }
+    {
+        XXH3_state_t *st = XXH3_createState();
+        XXH128_hash_t h = {0, 0};
+        if (st) {
+            XXH3_128bits_reset(st);
+            XXH3_128bits_update(st, out->nrm, (size_t)3 * n * sizeof(float));
+            XXH3_128bits_update(st, out->wi, (size_t)3 * n * sizeof(float));
+            XXH3_128bits_update(st, out->wo, (size_t)3 * n * sizeof(float));
+            h = XXH3_128bits_digest(st);
+            XXH3_freeState(st);
+        }
+        snprintf(out->hash, sizeof out->hash, "%016llx%016llx", (unsigned long long)h.high64,
+                 (unsigned long long)h.low64);
+    }
+    if (values)
+        *values = vals;
+    else
+        free(vals);
+    return 0;
+fail:
+    if (fp)
+        fclose(fp);
+    free(vals);
+    samples_free(out);
+    return rc;
+}

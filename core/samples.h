@@ -1,0 +1,74 @@
+/* samples.h: the sample set of a scene, i.e. its fixed sampling pattern.
+ *
+ * A sample is a pixel of a used view that the surface covers, lit and seen:
+ * mask = 1, n.wi > 0 and n.wo > 0 (pixels facing away from the light are
+ * not samples: a factor of the tangent projection cannot tell a light below
+ * the horizon from its mirror image).  Samples are ordered by view, then
+ * row-major within a view; this is the row order of every constraint
+ * matrix.  The set of views used and the raster size (through the scene
+ * hash) define the pattern, and its hash keys every precomputation.
+ *
+ * Ownership: samples_* allocate the arrays; samples_free() releases them
+ * and accepts NULL or a half-built set. */
+#ifndef GLINT_SAMPLES_H
+#define GLINT_SAMPLES_H
+
+#include "err.h"
+#include "gbuf.h"
+#include "img.h"
+#include "scene.h"
+
+#define SAMPLES_MAX (1 << 26)
+
+typedef struct samples {
+    int n;                 /* number of samples */
+    int nviews;            /* views of the scene (used or not) */
+    int width, height;     /* raster size */
+    unsigned char *used;   /* nviews flags: 1 if the view contributes */
+    int *view;             /* n: view index */
+    int *pixel;            /* n: row * width + col in that view */
+    float *nrm, *wi, *wo;  /* 3n each: geometry at the sample */
+    double *cos_i;         /* n: n.wi (> 0) */
+    double *intensity;     /* n: the light intensity of the sample's view */
+    char hash[33];         /* pattern hash: scene hash + used views + rule */
+} samples;
+
+/* Collect the samples of `nviews` gbufs.  `use` (nviews flags) selects the
+ * views that take part, or NULL for all.  `scene_hash` is the scene's
+ * content hash (scene_hash()).  GLINT_EINVAL if no sample results. */
+int samples_build(const gbuf *g, const scene_view *views, int nviews,
+                  const unsigned char *use, const char scene_hash[33],
+                  samples *out, glint_err *err);
+
+/* Read every sample's value from the paintings: one image per view (the
+ * unused views' images are ignored and may be zeroed imgs), each sized like
+ * the raster, with 1 (grey), 3 (RGB) or 4 (RGBA, alpha ignored) channels.
+ * OUT: rgb[3 * n] (sample-major, channel-minor), divided by the view's light
+ * intensity.  Non-finite values give GLINT_ENONFINITE naming the view and
+ * pixel; a size mismatch GLINT_EINVAL. */
+int samples_gather(const samples *s, const img *paintings, float *rgb,
+                   glint_err *err);
+
+/* Scatter per-sample RGB values (3 * n) into one RGB image per view
+ * (OUT: imgs[nviews], allocated here; non-sample pixels get `fill`). */
+int samples_scatter(const samples *s, const float *rgb, float fill,
+                    img *imgs, glint_err *err);
+
+/* Write the samples in the reference's text format, one line per sample:
+ *   view row col nx ny nz wix wiy wiz wox woy woz value
+ * (value: channel `channel` of rgb, or omitted when rgb is NULL). */
+int samples_export(const samples *s, const float *rgb, int channel,
+                   const char *path, glint_err *err);
+
+/* Read samples written by samples_export or by the reference
+ * (hf_ref.py export-samples): '#' lines are comments; 12 geometric columns
+ * after view/row/col; an optional 13th value column.  OUT: *out (width and
+ * height are inferred from the largest row/col), and, when `values` is not
+ * NULL, a malloc'ed array of 3 * n values (the value replicated to RGB;
+ * 0 where the column is absent).  Every number is validated. */
+int samples_import(const char *path, samples *out, float **values,
+                   glint_err *err);
+
+void samples_free(samples *s);
+
+#endif
