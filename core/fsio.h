@@ -1,0 +1,26 @@
+/* fsio.h: small file-system helpers with glint error reporting.
+ * Writes are atomic: data goes to a temporary file in the same directory,
+ * is fsync'ed, then renamed over the target, so a crash leaves either the
+ * old file or the new one, never a torn one. */
+#ifndef GLINT_FSIO_H
+#define GLINT_FSIO_H
+
+#include <stddef.h>
+
+#include "err.h"
+
+/* Write len bytes atomically to path. */
+int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err *err);
+
+/* Read a whole file (at most max_len bytes, else GLINT_ERANGE) into a
+ * malloc'ed buffer with a NUL appended (OUT: *data, *len). */
+int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len,
+                  glint_err *err);
+
+/* mkdir -p (mode 0755).  Existing directories are fine. */
+int fsio_mkdirs(const char *path, glint_err *err);
+
+/* Join dir and name into buf ("dir/name"); GLINT_ERANGE if it does not fit. */
+int fsio_join(char *buf, size_t len, const char *dir, const char *name, glint_err *err);
+
+#endif
