@@ -1,0 +1,83 @@
+/* fit.h: the whole path from paintings to a material, as one callable
+ * stage for the CLI, the benchmarks and the daemon:
+ *
+ *   scene G-buffers -> samples (pattern) -> design -> decomposition
+ *   (cached by content hash) -> regularized operator -> fit -> material
+ *
+ * fit_prepare() does everything that depends only on the scene, the views
+ * used and the parameters (the precomputation); fit_run() applies it to one
+ * set of paintings and is cheap.  A prepared fit is read-only during
+ * fit_run, so several runs may share it.  Ownership: fit_prep owns its
+ * samples, design, decomposition and operator; fit_prep_free accepts NULL
+ * and half-built objects. */
+#ifndef GLINT_FIT_H
+#define GLINT_FIT_H
+
+#include <jansson.h>
+
+#include "err.h"
+#include "gbuf.h"
+#include "hf.h"
+#include "img.h"
+#include "material.h"
+#include "samples.h"
+#include "scene.h"
+
+typedef struct fit_params {
+    int res;            /* texels per factor (default 64) */
+    double lambda;      /* Laplacian weight (default 0.1) */
+    hf_reg reg;         /* default trunc:full */
+    hf_map map;         /* default add:0.1 (log(0.1 + f)) */
+    hf_model model;     /* default radiance */
+    hf_precision prec;  /* default double */
+    hf_route route;     /* default eig */
+    double rcond;       /* 0: hf_rcond_default */
+} fit_params;
+
+void fit_params_default(fit_params *p);
+
+/* Parameters as JSON (a new object; caller decrefs). */
+json_t *fit_params_to_json(const fit_params *p);
+
+typedef struct fit_prep {
+    fit_params params;
+    samples s;
+    hf_design d;
+    hf_decomp dc;
+    hf_op op;
+    int cache_hit;         /* 1 decomposition loaded, 0 built, -1 rebuilt (corrupt file) */
+    char cache_key[33];
+    double t_samples, t_design, t_decomp, t_op; /* seconds */
+} fit_prep;
+
+/* Prepare a fit of the views flagged in `use` (NULL: all) of scene `sc`
+ * with G-buffers g (one per view).  cache_dir may be NULL (no disk cache). */
+int fit_prepare(fit_prep *fp, const scene *sc, const gbuf *g, const unsigned char *use,
+                const fit_params *p, const char *cache_dir, glint_err *err);
+
+/* Prepare from an explicit sample set (e.g. imported samples); takes
+ * ownership of *s (zeroed on return). */
+int fit_prepare_samples(fit_prep *fp, samples *s, const fit_params *p, const char *cache_dir,
+                        glint_err *err);
+
+/* Fit one set of paintings (one img per scene view; unused views ignored).
+ * OUT: *out, whose info holds parameters, precomputation report, timings
+ * and errors on the painted samples.  `rgb` may be given instead of
+ * paintings (3 * n sample values; then paintings is NULL). */
+int fit_run(const fit_prep *fp, const img *paintings, const float *rgb, material *out,
+            glint_err *err);
+
+void fit_prep_free(fit_prep *fp);
+
+
+
+/* Error of a material against reference images on the sample pixels
+ * (mask, n.wi > 0, n.wo > 0) of nviews G-buffers: RMS and max |difference|
+ * over pixels and RGB channels, radiance scaled by each view's light
+ * intensity.  truth[v] must be sized like g[v] (1, 3 or 4 channels).
+ * OUT: *rms, *max_abs, *count (pixels compared; any may be NULL). */
+int fit_error_views(const material *m, const gbuf *g, const scene_view *views, int nviews,
+                    const img *truth, double *rms, double *max_abs, long *count,
+                    glint_err *err);
+
+#endif
