@@ -136,9 +136,11 @@ int fit_run(const fit_prep *fp, const img *paintings, const float *rgb_in, mater
                     fp->op.s_last, "rank_kept", fp->op.k, "operator_bytes",
                     (json_int_t)hf_op_bytes(&fp->op, &fp->d));
     json_object_set_new(pre, "condition_used", json_real(fp->op.s_first / fp->op.s_last));
-    tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f}", "samples", fp->t_samples, "design",
-                    fp->t_design, "decomposition", fp->t_decomp, "operator", fp->t_op,
-                    "apply", st.apply_seconds, "fit", hf_now() - t0);
+    tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}", "samples", fp->t_samples,
+                    "design", fp->t_design, "decomposition", fp->t_decomp, "operator",
+                    fp->t_op, "map", st.map_seconds, "apply", st.apply_seconds,
+                    "factorization", st.total_seconds, "diagnostics", st.diag_seconds,
+                    "fit", hf_now() - t0);
     errs = json_pack("{s:f, s:f, s:f, s:[i,i,i]}", "rms_painted", st.rms, "max_abs_painted",
                      st.max_abs, "log_residual_rms", st.log_residual, "clamped", st.clamped[0],
                      st.clamped[1], st.clamped[2]);

@@ -192,8 +192,10 @@ typedef struct hf_fit_stats {
     double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
     double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
     double max_abs;        /* max |reconstruction - sample| */
-    double apply_seconds;  /* operator application alone */
-    double total_seconds;  /* mapping + application + gauge + inverse */
+    double map_seconds;    /* forward mapping (logs) */
+    double apply_seconds;  /* operator application alone (A^T f, then M t) */
+    double total_seconds;  /* the fast factorization: mapping + application + gauge */
+    double diag_seconds;   /* the diagnostics above (residual, errors), not in total */
 } hf_fit_stats;
 
 /* The fitted log-factors in the canonical gauge, with what is needed to

@@ -182,13 +182,37 @@ void hf_gauge_vectors(int res, double *Z)
 
 void hf_At_f(const hf_design *d, const double *f, double *t)
 {
+    /* Neighbouring samples usually hit the same texels, so a single
+     * accumulator array turns the scatter into chains of dependent
+     * read-modify-writes.  Four interleaved partial sums (sample i goes to
+     * copy i % 4) break the chains; they are added in a fixed order, so the
+     * result is deterministic. */
+    enum { NCOPY = 4 };
     int R = d->res;
+    size_t len = (size_t)9 * R;
+    double *part = calloc(NCOPY * len, sizeof *part);
 
-    memset(t, 0, (size_t)9 * R * sizeof *t);
+    if (!part) {
+        /* fall back to one accumulator */
+        memset(t, 0, len * sizeof *t);
+        for (int i = 0; i < d->n; i++) {
+            const double *fi = f + 3 * i;
+            for (int j = 0; j < 3; j++) {
+                double *tk = t + 3 * (j * R + d->k0[3 * i + j]);
+                double w1 = d->t[3 * i + j], w0 = 1.0 - w1;
+                for (int c = 0; c < 3; c++) {
+                    tk[c] += w0 * fi[c];
+                    tk[3 + c] += w1 * fi[c];
+                }
+            }
+        }
+        return;
+    }
     for (int i = 0; i < d->n; i++) {
         const double *fi = f + 3 * i;
+        double *base = part + (size_t)(i & (NCOPY - 1)) * len;
         for (int j = 0; j < 3; j++) {
-            double *tk = t + 3 * (j * R + d->k0[3 * i + j]);
+            double *tk = base + 3 * (j * R + d->k0[3 * i + j]);
             double w1 = d->t[3 * i + j], w0 = 1.0 - w1;
             tk[0] += w0 * fi[0];
             tk[1] += w0 * fi[1];
@@ -198,6 +222,9 @@ void hf_At_f(const hf_design *d, const double *f, double *t)
             tk[5] += w1 * fi[2];
         }
     }
+    for (size_t k = 0; k < len; k++)
+        t[k] = (part[k] + part[len + k]) + (part[2 * len + k] + part[3 * len + k]);
+    free(part);
 }
 
 void hf_A_y(const hf_design *d, const double *y, double *out)

@@ -1,0 +1,415 @@
+/* bench_hf: speed and accuracy of the fast homomorphic factorization.
+ *
+ * Part 1 reproduces Table 1 of Jaroszkiewicz & McCool 2003 (three 1D
+ * factors, about 7884 samples, resolutions 32..128): preinversion time by
+ * both routes (eig of B^T B, the default; dense SVD of B, the reference)
+ * and the fast factorization of one RGB painting, beside the paper's 2003
+ * figures and the memory-bandwidth bound for the operator's size.
+ *
+ * Part 2 sweeps the speed-accuracy trade a user makes: resolution 16..256,
+ * ranks kept, the three regularizations, single and double precision; for
+ * each it prints preinversion time, fit time, operator bytes and RMS error
+ * on 20 novel views, writes a CSV and (with gnuplot) a PNG of error against
+ * fit time.
+ *
+ * usage: bench_hf [--quick] [--out DIR]   (DIR default: bench-out)
+ * Timings are medians of repeated runs; the machine is shared and noisy. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "brdf.h"
+#include "fit.h"
+#include "fsio.h"
+#include "hf.h"
+#include "paint.h"
+#include "raster.h"
+#include "scene.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void die(const char *what, const glint_err *e)
+{
+    fprintf(stderr, "bench_hf: %s: %s\n", what, e ? e->msg : "failed");
+    exit(1);
+}
+
+/* Single-thread STREAM-style triad bandwidth in bytes/s. */
+static double triad_bandwidth(void)
+{
+    size_t n = (size_t)1 << 24; /* 3 x 128 MiB */
+    double *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b), *c = malloc(n * sizeof *c);
+    double best = 0.0;
+    if (!a || !b || !c)
+        return 0.0;
+    for (size_t i = 0; i < n; i++) {
+        a[i] = 0.0;
+        b[i] = 1.0;
+        c[i] = 2.0;
+    }
+    for (int r = 0; r < 5; r++) {
+        double t0 = now(), dt;
+        for (size_t i = 0; i < n; i++)
+            a[i] = b[i] + 3.0 * c[i];
+        dt = now() - t0;
+        if (3.0 * n * sizeof(double) / dt > best)
+            best = 3.0 * n * sizeof(double) / dt;
+    }
+    if (a[n / 2] != 7.0)
+        best = 0.0;
+    free(a);
+    free(b);
+    free(c);
+    return best;
+}
+
+typedef struct setup {
+    scene sc;
+    gbuf *g;
+    img *paint;
+    double scale;
+} setup;
+
+static void setup_make(setup *s, int w, int h, int view_set, int mid, const brdf *b,
+                       double scale)
+{
+    scene_params p;
+    glint_err e;
+    scene_params_default(&p);
+    p.width = w;
+    p.height = h;
+    p.view_set = view_set;
+    p.light_mid = mid;
+    if (scene_create(&p, &s->sc, &e) || raster_scene(&s->sc, &s->g, &e))
+        die("scene", &e);
+    s->paint = calloc((size_t)s->sc.nviews, sizeof *s->paint);
+    if (paint_views(b, s->g, s->sc.views, s->sc.nviews, scale, s->paint, &s->scale, &e))
+        die("paint", &e);
+    if (scale > 0)
+        s->scale = scale;
+}
+
+static long count_samples(int w, int h)
+{
+    scene_params p;
+    scene sc;
+    gbuf *g;
+    samples s;
+    char hash[33];
+    long n;
+    scene_params_default(&p);
+    p.width = w;
+    p.height = h;
+    if (scene_create(&p, &sc, NULL) || raster_scene(&sc, &g, NULL))
+        return -1;
+    scene_hash(&sc, hash);
+    n = samples_build(g, sc.views, sc.nviews, NULL, hash, &s, NULL) ? -1 : s.n;
+    samples_free(&s);
+    raster_free_all(g, sc.nviews);
+    scene_free(&sc);
+    return n;
+}
+
+/* ---- Part 1: Table 1 ------------------------------------------------------------- */
+
+static void table1(FILE *md, int quick)
+{
+    static const int res[] = {32, 64, 96, 128};
+    static const double paper_svd[] = {4.26, 11.08, 21.58, 38.06};
+    static const double paper_fast[] = {0.1834, 0.2868, 0.3842, 0.4375};
+    int bw_w = 36, bw_h = 36;
+    long best = -1;
+    brdf b;
+    setup s;
+    double bw1 = triad_bandwidth();
+    const double bw_notes = 30e9;
+
+    /* the raster whose sample count is nearest the paper's 7884 */
+    for (int w = 34; w <= 40; w++)
+        for (int h = w - 2; h <= w + 2; h++) {
+            long n = count_samples(w, h);
+            if (n > 0 && (best < 0 || labs(n - 7884) < labs(best - 7884))) {
+                best = n;
+                bw_w = w;
+                bw_h = h;
+            }
+        }
+    brdf_parse("ct0.5", &b, NULL);
+    setup_make(&s, bw_w, bw_h, SCENE_VIEWS_ICO12, 0, &b, 0.0);
+
+    printf("\n== Table 1 (seed 000): three 1D factors, %ld samples (%dx%d x 12 views; paper: 7884)\n",
+           best, bw_w, bw_h);
+    printf("memory bandwidth: measured single-thread triad %.1f GB/s; two-thread figure from "
+           "PLATFORM-NOTES 30 GB/s\n", bw1 / 1e9);
+    printf("%-4s | %-9s %-9s %-8s | %-8s %-8s %-8s %-8s %-8s %-8s | %-7s %-8s %-6s %-5s\n",
+           "res", "pre eig", "pre svd", "paper", "apply", "factor.", "f32", "fit_run", "paper",
+           "op KiB", "bound", "ratio", "apply", "<1ms");
+    printf("%-4s | %-9s %-9s %-8s | %-8s %-8s %-8s %-8s %-8s %-8s | %-7s %-8s %-6s %-5s\n",
+           "", "s", "s", "s", "us", "us", "us", "us", "s", "", "us", "factor.", "/bnd", "");
+    fprintf(md, "| res | preinversion eig (s) | preinversion SVD (s) | paper SVD (s) | apply (us) | factorization, double (us) | factorization, single (us) | whole fit_run (us) | paper fast (s) | operator (KiB) | bandwidth bound (us) | factorization / bound | apply / bound |\n");
+    fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
+        double pre_eig[5], pre_svd[3], fit_t[201], app_t[201], fac_t[201], fit32[201];
+        int reps_pre = quick ? 2 : 5, reps_fit = quick ? 51 : 201;
+        fit_params p;
+        fit_prep fp, fp32;
+        material m;
+        glint_err e;
+        double bytes, bound;
+        fit_params_default(&p);
+        p.res = res[r];
+        for (int k = 0; k < reps_pre; k++) {
+            double t0 = now();
+            if (fit_prepare(&fp, &s.sc, s.g, NULL, &p, NULL, &e))
+                die("prepare", &e);
+            pre_eig[k] = now() - t0 - fp.t_samples; /* design + decomposition + operator */
+            if (k + 1 < reps_pre)
+                fit_prep_free(&fp);
+        }
+        p.route = HF_ROUTE_SVD;
+        for (int k = 0; k < (quick ? 1 : 3); k++) {
+            fit_prep t;
+            double t0 = now();
+            if (fit_prepare(&t, &s.sc, s.g, NULL, &p, NULL, &e))
+                die("prepare svd", &e);
+            pre_svd[k] = now() - t0 - t.t_samples;
+            fit_prep_free(&t);
+        }
+        p.route = HF_ROUTE_EIG;
+        p.prec = HF_F32;
+        if (fit_prepare(&fp32, &s.sc, s.g, NULL, &p, NULL, &e))
+            die("prepare f32", &e);
+        for (int k = 0; k < reps_fit; k++) {
+            double t0 = now();
+            if (fit_run(&fp, s.paint, NULL, &m, &e))
+                die("fit", &e);
+            fit_t[k] = now() - t0;
+            app_t[k] = json_real_value(json_object_get(json_object_get(m.info, "seconds"), "apply"));
+            fac_t[k] = json_real_value(
+                json_object_get(json_object_get(m.info, "seconds"), "factorization"));
+            material_free(&m);
+            if (fit_run(&fp32, s.paint, NULL, &m, &e))
+                die("fit f32", &e);
+            fit32[k] = json_real_value(
+                json_object_get(json_object_get(m.info, "seconds"), "factorization"));
+            material_free(&m);
+        }
+        bytes = (double)hf_op_bytes(&fp.op, &fp.d);
+        bound = bytes / bw_notes;
+        {
+            double pe = median(pre_eig, reps_pre), ps = median(pre_svd, quick ? 1 : 3);
+            double ft = median(fit_t, reps_fit), at = median(app_t, reps_fit);
+            double fa = median(fac_t, reps_fit), f3 = median(fit32, reps_fit);
+            printf("%-4d | %-9.4f %-9.3f %-8.2f | %-8.1f %-8.1f %-8.1f %-8.1f %-8.4f %-8.0f | %-7.1f %-8.2f %-6.2f %-5s\n",
+                   res[r], pe, ps, paper_svd[r], 1e6 * at, 1e6 * fa, 1e6 * f3, 1e6 * ft,
+                   paper_fast[r], bytes / 1024.0, 1e6 * bound, fa / bound, at / bound,
+                   fa < 1e-3 ? "yes" : "NO");
+            fprintf(md, "| %d | %.4f | %.3f | %.2f | %.1f | %.1f | %.1f | %.1f | %.4f | %.0f | %.1f | %.2f | %.2f |\n",
+                    res[r], pe, ps, paper_svd[r], 1e6 * at, 1e6 * fa, 1e6 * f3, 1e6 * ft,
+                    paper_fast[r], bytes / 1024.0, 1e6 * bound, fa / bound, at / bound);
+        }
+        fit_prep_free(&fp);
+        fit_prep_free(&fp32);
+    }
+    printf("(pre: design + decomposition + operator, no cache; apply: A^T f and M t;\n"
+           " factorization: log mapping + apply + gauge, the fast factorization of Table 1;\n"
+           " fit_run: also reading the painting and the error diagnostics;\n"
+           " bound: operator bytes (M and the sparse rows of A) / 30 GB/s)\n");
+}
+
+/* ---- Part 2: speed-accuracy sweep -------------------------------------------------- */
+
+typedef struct row {
+    int res;
+    char reg[32];
+    const char *prec;
+    int k;
+    double pre_s, fit_s, bytes, rms_novel, rms_paint;
+} row;
+
+static double novel_rms(const material *m, const setup *nv)
+{
+    double rms;
+    glint_err e;
+    if (fit_error_views(m, nv->g, nv->sc.views, nv->sc.nviews, nv->paint, &rms, NULL, NULL, &e))
+        die("error", &e);
+    return rms;
+}
+
+static int sweep(FILE *md, const char *outdir, int quick, const char *spec)
+{
+    static const int res_full[] = {16, 32, 64, 128, 256};
+    static const int res_quick[] = {16, 64, 128};
+    static const char *regs[] = {"trunc:full", "trunc:50%", "trunc:20%", "trunc:10%",
+                                 "tikhonov:rel1e-3", "tikhonov:rel1e-2", "tikhonov:rel1e-1",
+                                 "linear:full", "linear:50%"};
+    const int *res = quick ? res_quick : res_full;
+    int nres = quick ? 3 : 5, nregs = quick ? 5 : 9, nrows = 0;
+    row rows[128];
+    brdf b;
+    setup train, novel;
+    char csv[4096], png[4096], gp[4096];
+    FILE *f;
+
+    brdf_parse(spec, &b, NULL);
+    setup_make(&train, 128, 128, SCENE_VIEWS_ICO12, 0, &b, 0.0);
+    setup_make(&novel, 128, 128, SCENE_VIEWS_ICO20, 1, &b, train.scale);
+    printf("\n== Speed-accuracy sweep: %s, 12 views at 128x128 (fit), 20 novel views (error)\n",
+           spec);
+    printf("%-4s %-17s %-6s %-5s | %-9s %-9s %-10s | %-8s %-8s\n", "res", "regularization",
+           "prec", "K", "pre s", "fit ms", "op KiB", "RMS new", "RMS paint");
+    for (int ri = 0; ri < nres; ri++) {
+        fit_params p;
+        fit_prep base;
+        glint_err e;
+        double t0;
+        fit_params_default(&p);
+        p.res = res[ri];
+        t0 = now();
+        if (fit_prepare(&base, &train.sc, train.g, NULL, &p, NULL, &e))
+            die("prepare", &e);
+        double pre_base = now() - t0 - base.t_samples - base.t_op;
+        for (int gi = 0; gi < nregs; gi++) {
+            for (int pi = 0; pi < 2; pi++) {
+                hf_op op;
+                hf_reg reg;
+                fit_prep fp = base; /* shares samples, design, decomposition */
+                material m;
+                double ft[15], tb;
+                int reps = quick ? 5 : 15;
+                row *rw = &rows[nrows];
+                hf_reg_parse(regs[gi], &reg, NULL);
+                t0 = now();
+                if (hf_op_build(&base.dc, &reg, pi ? HF_F32 : HF_F64, &op, &e))
+                    die("operator", &e);
+                tb = now() - t0;
+                fp.op = op;
+                fp.params.reg = reg;
+                fp.params.prec = pi ? HF_F32 : HF_F64;
+                for (int k = 0; k < reps; k++) {
+                    t0 = now();
+                    if (fit_run(&fp, train.paint, NULL, &m, &e))
+                        die("fit", &e);
+                    ft[k] = now() - t0;
+                    if (k + 1 < reps)
+                        material_free(&m);
+                }
+                rw->res = res[ri];
+                snprintf(rw->reg, sizeof rw->reg, "%s", regs[gi]);
+                rw->prec = pi ? "single" : "double";
+                rw->k = op.k;
+                rw->pre_s = pre_base + tb;
+                rw->fit_s = median(ft, reps);
+                rw->bytes = (double)hf_op_bytes(&op, &base.d);
+                rw->rms_novel = novel_rms(&m, &novel);
+                rw->rms_paint = json_real_value(
+                    json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
+                printf("%-4d %-17s %-6s %-5d | %-9.4f %-9.3f %-10.0f | %-8.4f %-8.4f\n", rw->res,
+                       rw->reg, rw->prec, rw->k, rw->pre_s, 1e3 * rw->fit_s, rw->bytes / 1024,
+                       rw->rms_novel, rw->rms_paint);
+                material_free(&m);
+                hf_op_free(&op);
+                nrows++;
+            }
+        }
+        fit_prep_free(&base);
+    }
+    fprintf(md, "\n%s: 12 views at 128x128, 20 novel views\n\n", spec);
+    fprintf(md, "| res | regularization | precision | K | preinversion (s) | fit (ms) | operator (KiB) | RMS novel | RMS painted |\n|---|---|---|---|---|---|---|---|---|\n");
+    for (int i = 0; i < nrows; i++)
+        fprintf(md, "| %d | %s | %s | %d | %.4f | %.3f | %.0f | %.4f | %.4f |\n", rows[i].res,
+                rows[i].reg, rows[i].prec, rows[i].k, rows[i].pre_s, 1e3 * rows[i].fit_s,
+                rows[i].bytes / 1024, rows[i].rms_novel, rows[i].rms_paint);
+    snprintf(csv, sizeof csv, "%s/sweep_%s.csv", outdir, spec);
+    f = fopen(csv, "w");
+    if (!f)
+        return -1;
+    fprintf(f, "res,regularization,precision,K,preinversion_s,fit_s,operator_bytes,rms_novel,rms_painted\n");
+    for (int i = 0; i < nrows; i++)
+        fprintf(f, "%d,%s,%s,%d,%.6f,%.6f,%.0f,%.6f,%.6f\n", rows[i].res, rows[i].reg,
+                rows[i].prec, rows[i].k, rows[i].pre_s, rows[i].fit_s, rows[i].bytes,
+                rows[i].rms_novel, rows[i].rms_paint);
+    fclose(f);
+    /* plot: error against fit time, one series per regularization family */
+    snprintf(png, sizeof png, "%s/sweep_%s.png", outdir, spec);
+    snprintf(gp, sizeof gp, "%s/sweep_%s.gp", outdir, spec);
+    f = fopen(gp, "w");
+    if (!f)
+        return -1;
+    fprintf(f,
+            "set terminal pngcairo size 900,600\nset output '%s'\nset datafile separator ','\n"
+            "set logscale xy\nset xlabel 'fit time (ms), one RGB painting'\n"
+            "set ylabel 'RMS error on 20 novel views'\nset title 'glint HF speed vs accuracy: %s'\n"
+            "set key outside right\nset grid\n"
+            "plot '%s' every ::1 using ($6*1000):(strcol(3) eq 'double' && strstr(strcol(2),'trunc:full') ? $8 : 1/0):1 with linespoints pt 7 lc rgb '#1f77b4' title 'trunc:full double (res labels)', \\\n"
+            " '' every ::1 using ($6*1000):(strcol(3) eq 'double' && strstr(strcol(2),'trunc:full') ? $8 : 1/0):(sprintf('R%%d',$1)) with labels offset 2,0.7 notitle, \\\n"
+            " '' every ::1 using ($6*1000):(strcol(3) eq 'single' && strstr(strcol(2),'trunc:full') ? $8 : 1/0) with points pt 6 ps 1.5 lc rgb '#ff7f0e' title 'trunc:full single', \\\n"
+            " '' every ::1 using ($6*1000):(strstr(strcol(2),'trunc:') && !strstr(strcol(2),'full') ? $8 : 1/0) with points pt 5 lc rgb '#2ca02c' title 'trunc K < full', \\\n"
+            " '' every ::1 using ($6*1000):(strstr(strcol(2),'tikhonov') ? $8 : 1/0) with points pt 9 lc rgb '#d62728' title 'tikhonov', \\\n"
+            " '' every ::1 using ($6*1000):(strstr(strcol(2),'linear') ? $8 : 1/0) with points pt 11 lc rgb '#9467bd' title 'linear damping'\n",
+            png, spec, csv);
+    fclose(f);
+    {
+        char cmd[8300];
+        snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", gp);
+        if (system("command -v gnuplot >/dev/null 2>&1") == 0 && system(cmd) == 0)
+            printf("plot: %s\n", png);
+        else
+            printf("plot: gnuplot not available; data in %s, script %s\n", csv, gp);
+    }
+    printf("table: %s\n", csv);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int quick = 0;
+    const char *out = "bench-out";
+    char mdpath[4096];
+    FILE *md;
+    glint_err e;
+
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--quick") == 0)
+            quick = 1;
+        else if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
+            out = argv[++i];
+        else {
+            fprintf(stderr, "usage: bench_hf [--quick] [--out DIR]\n");
+            return 1;
+        }
+    }
+    if (fsio_mkdirs(out, &e))
+        die("output directory", &e);
+    snprintf(mdpath, sizeof mdpath, "%s/bench_hf.md", out);
+    md = fopen(mdpath, "w");
+    if (!md)
+        die("cannot write the markdown table", NULL);
+    table1(md, quick);
+    sweep(md, out, quick, "ct0.2");
+    if (!quick)
+        sweep(md, out, quick, "ct0.5");
+    fclose(md);
+    printf("\nmarkdown tables: %s\n", mdpath);
+    return 0;
+}
