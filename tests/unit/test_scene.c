@@ -1,4 +1,699 @@
+/* test_scene.c: meshes, default views (against ../shared/reference/hf_ref.py),
+ * JSON I/O, validation and the content hash. */
+#include <ctype.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
 #include "check.h"
-TEST(placeholder) { ASSERT(1); }
-TEST_LIST { TEST_ENTRY(placeholder) };
+#include "mesh.h"
+#include "scene.h"
+#include "vec3.h"
+
+#define PHI 1.6180339887498949
+#define TOL (64 * DBL_EPSILON)
+/* scene_hash of the default scene (scene_params_default) */
+#define GOLDEN_HASH "6e3b3eb975337b6b6aa9355d46c3deda"
+
+static double deg(double rad) { return rad * 180.0 / 3.14159265358979323846; }
+
+/* ---- meshes ------------------------------------------------------------ */
+
+TEST(sphere_counts_and_validity)
+{
+    mesh m;
+    glint_err e;
+    ASSERT_OK(mesh_sphere(&m, 4, 6, &e));
+    /* 2 poles x 6 copies + 3 rings x 7 vertices; 6 + 6 cap triangles + 2 bands x 12 */
+    ASSERT_EQ(m.nverts, 2 * 6 + 3 * 7);
+    ASSERT_EQ(m.ntris, 2 * 6 + 2 * 6 * 2);
+    ASSERT_OK(mesh_validate(&m, &e));
+    mesh_free(&m);
+    ASSERT(m.pos == NULL && m.ntris == 0);
+    mesh_free(&m); /* twice is fine */
+    mesh_free(NULL);
+
+    ASSERT_OK(mesh_sphere_default(&m, &e));
+    ASSERT_EQ(m.nverts, 2 * 512 + 255 * 513);
+    ASSERT_EQ(m.ntris, 2 * 512 + 2 * 512 * 254);
+    ASSERT_OK(mesh_validate(&m, &e));
+    mesh_free(&m);
+}
+
+/* Every triangle has positive area and faces outwards (CCW from outside);
+ * normals are unit and equal the positions; uv follow (phi/2pi, theta/pi). */
+TEST(sphere_geometry)
+{
+    mesh m;
+    glint_err e;
+    double min_area = INFINITY;
+    ASSERT_OK(mesh_sphere(&m, 16, 24, &e));
+    for (int t = 0; t < m.ntris; t++) {
+        const uint32_t *f = m.tri + 3 * t;
+        v3 a = v3_loadf(m.pos + 3 * f[0]), b = v3_loadf(m.pos + 3 * f[1]),
+           c = v3_loadf(m.pos + 3 * f[2]);
+        v3 n = v3_cross(v3_sub(b, a), v3_sub(c, a));
+        v3 cen = v3_add(v3_add(a, b), c);
+        double area = 0.5 * v3_len(n);
+        if (area < min_area)
+            min_area = area;
+        ASSERT_MSG(v3_dot(n, cen) > 0.0, "triangle %d faces inwards", t);
+    }
+    ASSERT_LT(1e-4, min_area);
+    for (int v = 0; v < m.nverts; v++) {
+        v3 p = v3_loadf(m.pos + 3 * v), n = v3_loadf(m.nrm + 3 * v);
+        double theta = acos(fmax(-1.0, fmin(1.0, p.z)));
+        ASSERT_NEAR(v3_len(n), 1.0, 1e-6);
+        ASSERT_NEAR(v3_len(v3_sub(p, n)), 0.0, 0.0);
+        ASSERT_NEAR(m.uv[2 * v + 1], theta / 3.14159265358979323846, 1e-6);
+        ASSERT(m.uv[2 * v] >= 0.0f && m.uv[2 * v] <= 1.0f);
+        if (fabs(p.z) < 0.999) {
+            double phi = atan2(p.y, p.x);
+            double u = m.uv[2 * v];
+            if (phi < 0)
+                phi += 2 * 3.14159265358979323846;
+            /* u == 1 on the duplicated seam, where phi reads 0 */
+            ASSERT(fabs(u - phi / (2 * 3.14159265358979323846)) < 1e-6 ||
+                   (u == 1.0f && phi < 1e-6));
+        }
+    }
+    mesh_free(&m);
+}
+
+TEST(mesh_errors)
+{
+    mesh m;
+    glint_err e;
+    memset(&e, 0, sizeof e);
+    ASSERT_EQ(mesh_sphere(&m, 1, 8, &e), GLINT_ERANGE);
+    ASSERT(m.pos == NULL);
+    ASSERT_EQ(mesh_sphere(&m, 8, 2, &e), GLINT_ERANGE);
+    ASSERT_EQ(mesh_sphere(&m, 8, MESH_SPHERE_MAX_SEG + 1, &e), GLINT_ERANGE);
+    ASSERT_EQ(mesh_builtin("cube", &m, &e), GLINT_ENOTFOUND);
+    ASSERT(strstr(e.msg, "cube") && strstr(e.msg, "sphere"));
+    ASSERT_EQ(mesh_builtin(NULL, &m, &e), GLINT_EINVAL);
+
+    ASSERT_OK(mesh_sphere(&m, 3, 3, &e));
+    m.tri[5] = (uint32_t)m.nverts;
+    ASSERT_EQ(mesh_validate(&m, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "triangle 1") != NULL);
+    m.tri[5] = 0;
+    ASSERT_OK(mesh_validate(&m, &e));
+    m.pos[7] = NAN;
+    ASSERT_EQ(mesh_validate(&m, &e), GLINT_ENONFINITE);
+    m.pos[7] = 0.0f;
+    m.uv[3] = INFINITY;
+    ASSERT_EQ(mesh_validate(&m, &e), GLINT_ENONFINITE);
+    m.uv[3] = 0.0f;
+    m.ntris = 0;
+    ASSERT_EQ(mesh_validate(&m, &e), GLINT_EFORMAT);
+    mesh_free(&m);
+    ASSERT_EQ(mesh_validate(&m, &e), GLINT_EFORMAT);
+}
+
+/* ---- icosahedron and views ---------------------------------------------- */
+
+TEST(icosahedron_vertices)
+{
+    static const double ref[12][3] = {
+        {-1, PHI, 0}, {1, PHI, 0}, {-1, -PHI, 0}, {1, -PHI, 0},
+        {0, -1, PHI}, {0, 1, PHI}, {0, -1, -PHI}, {0, 1, -PHI},
+        {PHI, 0, -1}, {PHI, 0, 1}, {-PHI, 0, -1}, {-PHI, 0, 1}};
+    double d[12][3];
+    scene_icosahedron(d);
+    ASSERT_NEAR(d[0][0], -0.52573111211913359, 1e-15);
+    ASSERT_NEAR(d[0][1], 0.85065080835203988, 1e-15);
+    ASSERT_NEAR(d[1][0], 0.52573111211913359, 1e-15);
+    for (int i = 0; i < 12; i++) {
+        v3 r = v3_normalize(v3_load(ref[i]));
+        ASSERT_NEAR(v3_len(v3_load(d[i])), 1.0, TOL);
+        ASSERT_NEAR(v3_len(v3_sub(r, v3_load(d[i]))), 0.0, TOL);
+        for (int j = 0; j < i; j++)
+            ASSERT_LT(1.0, v3_len(v3_sub(v3_load(d[i]), v3_load(d[j]))));
+    }
+}
+
+TEST(icosahedron_faces)
+{
+    double v[12][3], f[20][3];
+    /* first faces of the reference (lexicographic): (0,1,5), (0,1,7), (0,5,11) */
+    static const int first[3][3] = {{0, 1, 5}, {0, 1, 7}, {0, 5, 11}};
+    scene_icosahedron(v);
+    scene_icosahedron_faces(f);
+    for (int i = 0; i < 20; i++) {
+        int near = 0;
+        ASSERT_NEAR(v3_len(v3_load(f[i])), 1.0, TOL);
+        for (int j = 0; j < i; j++)
+            ASSERT_LT(0.5, v3_len(v3_sub(v3_load(f[i]), v3_load(f[j]))));
+        /* a face centre is equidistant from exactly 3 vertices (its face) */
+        for (int k = 0; k < 12; k++)
+            near += v3_dot(v3_load(f[i]), v3_load(v[k])) > 0.79;
+        ASSERT_EQ(near, 3);
+    }
+    for (int i = 0; i < 3; i++) {
+        v3 c = v3_make(0, 0, 0);
+        for (int k = 0; k < 3; k++)
+            c = v3_add(c, v3_load(v[first[i][k]]));
+        ASSERT_NEAR(v3_len(v3_sub(v3_normalize(c), v3_load(f[i]))), 0.0, TOL);
+    }
+    ASSERT_NEAR(f[0][1], 0.93417235896271578, 1e-15);
+    ASSERT_NEAR(f[0][2], 0.35682208977308999, 1e-15);
+}
+
+TEST(default_views)
+{
+    scene s;
+    scene_params p;
+    glint_err e;
+    double d[12][3];
+    double tanfov = 1.1 / sqrt(3.5 * 3.5 - 1.0);
+
+    scene_params_default(&p);
+    ASSERT_EQ(p.width, 128);
+    ASSERT_EQ(p.height, 128);
+    ASSERT_OK(scene_create(&p, &s, &e));
+    ASSERT_EQ(s.nviews, 12);
+    ASSERT(strcmp(s.mesh_name, "sphere") == 0);
+    ASSERT_EQ(s.mesh.ntris, 261120);
+    scene_icosahedron(d);
+    for (int k = 0; k < 12; k++) {
+        const scene_view *v = &s.views[k];
+        double f[3], r[3], u[3];
+        v3 eye = v3_load(v->eye), light = v3_load(v->light);
+        double want = 20.0 + 50.0 * k / 11.0;
+
+        scene_view_frame(v, f, r, u);
+        /* orthonormal, right-handed (right x up = -fwd), looking at the origin */
+        ASSERT_NEAR(v3_len(v3_load(f)), 1.0, TOL);
+        ASSERT_NEAR(v3_len(v3_load(r)), 1.0, TOL);
+        ASSERT_NEAR(v3_len(v3_load(u)), 1.0, TOL);
+        ASSERT_NEAR(v3_dot(v3_load(f), v3_load(r)), 0.0, TOL);
+        ASSERT_NEAR(v3_dot(v3_load(f), v3_load(u)), 0.0, TOL);
+        ASSERT_NEAR(v3_dot(v3_load(r), v3_load(u)), 0.0, TOL);
+        ASSERT_NEAR(v3_len(v3_sub(v3_cross(v3_load(r), v3_load(u)), v3_scale(v3_load(f), -1))),
+                    0.0, TOL);
+        ASSERT_NEAR(v3_len(v3_add(v3_load(f), v3_load(d[k]))), 0.0, TOL);
+        ASSERT_NEAR(r[2], 0.0, TOL); /* world up +z: right is horizontal */
+        ASSERT_LT(0.0, u[2]);
+        ASSERT_NEAR(v3_len(v3_sub(eye, v3_scale(v3_load(d[k]), 3.5))), 0.0, 4 * TOL);
+        ASSERT_NEAR(v3_len(v3_load(v->target)), 0.0, 0.0);
+        ASSERT_NEAR(tan(v->half_fov), tanfov, TOL);
+        /* light: distance D, angle light_deg from the eye, rotated about up */
+        ASSERT_NEAR(v->light_deg, want, 1e-12);
+        ASSERT_NEAR(v->light_intensity, 1.0, 0.0);
+        ASSERT_NEAR(v3_len(light), 3.5, 4 * TOL);
+        ASSERT_NEAR(deg(acos(v3_dot(eye, light) / (3.5 * 3.5))), want, 1e-6);
+        ASSERT_NEAR(v3_dot(light, v3_load(u)), 0.0, 4 * TOL);
+        /* a positive rotation about up moves the light towards +right */
+        ASSERT_LT(0.0, v3_dot(light, v3_load(r)));
+    }
+    /* exact numbers from hf_ref.py (make_view_set("vertices", 3.5, "20:70", "up")) */
+    ASSERT_NEAR(s.views[0].light[0], -2.74737875, 1e-8);
+    ASSERT_NEAR(s.views[0].light[1], 2.1683888, 1e-7);
+    ASSERT_NEAR(s.views[1].light[0], 0.43697053, 1e-8);
+    ASSERT_NEAR(s.views[1].light[1], 3.47261526, 1e-8);
+    ASSERT_NEAR(s.views[5].light[0], -2.3747829404499625, 1e-14);
+    ASSERT_NEAR(s.views[5].light[1], 1.3516920058110684, 1e-14);
+    ASSERT_NEAR(s.views[5].light[2], 2.187083607723829, 1e-14);
+    scene_free(&s);
+    scene_free(&s);
+    scene_free(NULL);
+}
+
+TEST(face_views_midpoints)
+{
+    scene s;
+    scene_params p;
+    glint_err e;
+    double f[20][3];
+    scene_params_default(&p);
+    p.view_set = SCENE_VIEWS_ICO20;
+    p.light_mid = 1;
+    p.width = 64;
+    p.height = 32;
+    ASSERT_OK(scene_create(&p, &s, &e));
+    ASSERT_EQ(s.nviews, 20);
+    ASSERT_EQ(s.width, 64);
+    ASSERT_EQ(s.height, 32);
+    scene_icosahedron_faces(f);
+    for (int k = 0; k < 20; k++) {
+        ASSERT_NEAR(s.views[k].light_deg, 20.0 + 50.0 * (k + 0.5) / 20.0, 1e-12);
+        ASSERT_NEAR(v3_len(v3_sub(v3_load(s.views[k].eye), v3_scale(v3_load(f[k]), 3.5))), 0.0,
+                    1e-14);
+    }
+    /* hf_ref.py, make_view_set("faces", 3.5, "20:70:mid", "up")[0] */
+    ASSERT_NEAR(s.views[0].eye[1], 3.2696032563695048, 1e-14);
+    ASSERT_NEAR(s.views[0].light[0], -1.2685331339929558, 1e-14);
+    ASSERT_NEAR(s.views[0].light[1], 3.047295964369042, 1e-14);
+    ASSERT_NEAR(s.views[0].light[2], 1.1639634846085856, 1e-14);
+    scene_free(&s);
+}
+
+/* Looking straight down the z axis switches the world up to +y. */
+TEST(frame_near_pole)
+{
+    scene_view v;
+    double dir[3] = {0, 0, 1}, f[3], r[3], u[3];
+    scene_view_make(dir, 2.0, 1.0, 30.0, &v);
+    scene_view_frame(&v, f, r, u);
+    ASSERT_NEAR(f[2], -1.0, TOL);
+    ASSERT_NEAR(v3_len(v3_load(r)), 1.0, TOL);
+    ASSERT_NEAR(v3_len(v3_load(u)), 1.0, TOL);
+    ASSERT_NEAR(v3_dot(v3_load(r), v3_load(u)), 0.0, TOL);
+    ASSERT_NEAR(r[0], 1.0, TOL); /* fwd x +y = (0,0,-1) x (0,1,0) = (1,0,0) */
+    ASSERT_NEAR(u[1], 1.0, TOL); /* right x fwd = +y */
+    ASSERT_NEAR(deg(acos(v3_dot(v3_load(v.eye), v3_load(v.light)) / 4.0)), 30.0, 1e-9);
+}
+
+TEST(create_errors)
+{
+    scene s;
+    scene_params p;
+    glint_err e;
+
+    scene_params_default(&p);
+    p.width = 7;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ERANGE);
+    ASSERT(strstr(e.msg, "width") != NULL);
+    scene_params_default(&p);
+    p.height = SCENE_MAX_SIZE + 1;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ERANGE);
+    ASSERT(strstr(e.msg, "height") != NULL);
+    scene_params_default(&p);
+    p.distance = 1.0;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ERANGE);
+    scene_params_default(&p);
+    p.margin = NAN;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ERANGE);
+    scene_params_default(&p);
+    p.light_hi_deg = INFINITY;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ENONFINITE);
+    scene_params_default(&p);
+    p.view_set = 7;
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_EINVAL);
+    scene_params_default(&p);
+    snprintf(p.mesh_name, sizeof p.mesh_name, "teapot");
+    ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ENOTFOUND);
+    ASSERT(strstr(e.msg, "teapot") != NULL);
+    ASSERT(s.views == NULL && s.mesh.pos == NULL);
+    ASSERT_EQ(scene_create(NULL, &s, &e), GLINT_EINVAL);
+}
+
+/* ---- JSON and hash ------------------------------------------------------- */
+
+static int is_hex32(const char *h)
+{
+    if (strlen(h) != 32)
+        return 0;
+    for (int i = 0; i < 32; i++)
+        if (!isxdigit((unsigned char)h[i]) || isupper((unsigned char)h[i]))
+            return 0;
+    return 1;
+}
+
+TEST(json_round_trip_and_hash)
+{
+    scene s, t;
+    scene_params p;
+    glint_err e;
+    char h1[33], h2[33], h3[33];
+    char *text, *text2;
+
+    scene_params_default(&p);
+    ASSERT_OK(scene_create(&p, &s, &e));
+    scene_hash(&s, h1);
+    ASSERT_MSG(is_hex32(h1), "hash \"%s\" is not 32 lowercase hex digits", h1);
+    text = scene_to_json(&s, &e);
+    ASSERT(text != NULL);
+    ASSERT(strstr(text, "\"glint-scene\"") != NULL);
+    ASSERT_OK(scene_from_json(text, &t, &e));
+    scene_hash(&t, h2);
+    ASSERT_MSG(strcmp(h1, h2) == 0, "hash changed in a round trip: %s vs %s", h1, h2);
+    ASSERT_EQ(t.nviews, 12);
+    for (int k = 0; k < 12; k++) {
+        ASSERT(memcmp(t.views[k].eye, s.views[k].eye, sizeof t.views[k].eye) == 0);
+        ASSERT(memcmp(t.views[k].light, s.views[k].light, sizeof t.views[k].light) == 0);
+        ASSERT(t.views[k].half_fov == s.views[k].half_fov);
+        ASSERT(t.views[k].light_deg == s.views[k].light_deg);
+    }
+    /* serializing again gives the same text */
+    text2 = scene_to_json(&t, &e);
+    ASSERT(text2 != NULL);
+    ASSERT(strcmp(text, text2) == 0);
+    free(text);
+    free(text2);
+
+    /* light_deg is informative: not hashed; a light coordinate is */
+    t.views[3].light_deg = 99.0;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) == 0);
+    t.views[3].light[1] = nextafter(t.views[3].light[1], 10.0);
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    t.views[3].light[1] = s.views[3].light[1];
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) == 0);
+    /* raster size, intensity, fov, target and mesh are hashed */
+    t.width = 64;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    t.width = 128;
+    t.views[11].light_intensity = 2.0;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    t.views[11].light_intensity = 1.0;
+    t.views[0].half_fov *= 1.0000001;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    t.views[0].half_fov = s.views[0].half_fov;
+    t.views[0].target[2] = -0.0; /* the same geometry as +0 */
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) == 0);
+    t.mesh.uv[1000] += 0.25f;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    t.mesh.uv[1000] = s.mesh.uv[1000];
+    t.mesh.tri[7] ^= 1u;
+    scene_hash(&t, h3);
+    ASSERT(strcmp(h1, h3) != 0);
+    scene_free(&t);
+    scene_free(&s);
+}
+
+/* The hash of the default scene is the key of every cached precomputation:
+ * it must not change by accident (a change here invalidates all caches). */
+TEST(hash_golden)
+{
+    scene s;
+    scene_params p;
+    glint_err e;
+    char h[33];
+    scene_params_default(&p);
+    ASSERT_OK(scene_create(&p, &s, &e));
+    scene_hash(&s, h);
+    printf("  default scene hash %s\n", h);
+    ASSERT_MSG(strcmp(h, GOLDEN_HASH) == 0, "default scene hash %s, expected %s", h,
+               GOLDEN_HASH);
+    scene_free(&s);
+}
+
+static const char good_view[] =
+    "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[1,0,3]}";
+
+/* Parse a document built from a views array and the given top-level extras. */
+static int parse_doc(const char *fmt, const char *a, glint_err *e)
+{
+    char buf[4096];
+    scene s;
+    int rc;
+    snprintf(buf, sizeof buf, fmt, a);
+    memset(e, 0, sizeof *e);
+    rc = scene_from_json(buf, &s, e);
+    if (rc == 0)
+        scene_free(&s);
+    else
+        /* a failed parse leaves a zeroed scene */
+        if (s.views || s.mesh.pos || s.nviews)
+            return 1000;
+    return rc;
+}
+
+#define DOC_HEAD "{\"format\":\"glint-scene\",\"version\":1,\"mesh\":\"sphere\","
+#define DOC_VIEWS(v) "\"views\":[" v "]}"
+
+TEST(json_minimal_and_explicit)
+{
+    glint_err e;
+    scene s;
+    char buf[1024];
+    snprintf(buf, sizeof buf, DOC_HEAD "\"width\":32,\"height\":16," DOC_VIEWS("%s"),
+             good_view);
+    ASSERT_OK(scene_from_json(buf, &s, &e));
+    ASSERT_EQ(s.width, 32);
+    ASSERT_EQ(s.height, 16);
+    ASSERT_EQ(s.nviews, 1);
+    ASSERT_NEAR(s.views[0].light_intensity, 1.0, 0.0); /* default */
+    ASSERT_NEAR(s.views[0].light_deg, -1.0, 0.0);      /* explicit light */
+    ASSERT_NEAR(s.views[0].eye[2], 3.0, 0.0);
+    scene_free(&s);
+    /* light at the eye is fine */
+    snprintf(buf, sizeof buf,
+             DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+                 "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[0,0,3],"
+                 "\"light_intensity\":2.5}"));
+    ASSERT_OK(scene_from_json(buf, &s, &e));
+    ASSERT_NEAR(s.views[0].light_intensity, 2.5, 0.0);
+    scene_free(&s);
+}
+
+TEST(json_malformed)
+{
+    static const struct {
+        const char *doc;
+        int code;
+        const char *needle; /* must appear in the message */
+    } cases[] = {
+        {"", GLINT_EFORMAT, "JSON"},
+        {DOC_HEAD "\"width\":32,", GLINT_EFORMAT, "JSON"}, /* truncated */
+        {"[1,2,3]", GLINT_EFORMAT, "object"},
+        {"{\"format\":\"other\",\"version\":1}", GLINT_EFORMAT, "format"},
+        {"{\"version\":1}", GLINT_EFORMAT, "format"},
+        {"{\"format\":\"glint-scene\",\"version\":2,\"mesh\":\"sphere\"}", GLINT_EUNSUPPORTED,
+         "version"},
+        {"{\"format\":\"glint-scene\",\"version\":\"1\"}", GLINT_EFORMAT, "version"},
+        {DOC_HEAD "\"width\":32,\"height\":32,\"views\":[]}", GLINT_ERANGE, "views"},
+        {DOC_HEAD "\"width\":1000000,\"height\":32," DOC_VIEWS("%s"), GLINT_ERANGE, "width"},
+        {DOC_HEAD "\"width\":32,\"height\":-5," DOC_VIEWS("%s"), GLINT_ERANGE, "height"},
+        {DOC_HEAD "\"width\":32," DOC_VIEWS("%s"), GLINT_EFORMAT, "height"},
+        {DOC_HEAD "\"width\":32.5,\"height\":32," DOC_VIEWS("%s"), GLINT_EFORMAT, "width"},
+        {DOC_HEAD "\"width\":99999999999999999999999,\"height\":32," DOC_VIEWS("%s"),
+         GLINT_EFORMAT, "JSON"},
+        {DOC_HEAD "\"width\":32,\"height\":32,\"views\":{}}", GLINT_EFORMAT, "views"},
+        {DOC_HEAD "\"width\":32,\"height\":32,\"views\":[3]}", GLINT_EFORMAT, "views[0]"},
+        {DOC_HEAD "\"width\":32,\"width\":32,\"height\":32," DOC_VIEWS("%s"), GLINT_EFORMAT,
+         "duplicate"},
+        {DOC_HEAD "\"width\":32,\"height\":32,\"colour\":1," DOC_VIEWS("%s"), GLINT_EFORMAT,
+         "colour"},
+        {"{\"format\":\"glint-scene\",\"version\":1,\"mesh\":\"cube\",\"width\":32,"
+         "\"height\":32," DOC_VIEWS("%s"),
+         GLINT_ENOTFOUND, "cube"},
+        {"{\"format\":\"glint-scene\",\"version\":1,\"mesh\":7,\"width\":32,"
+         "\"height\":32," DOC_VIEWS("%s"),
+         GLINT_EFORMAT, "mesh"},
+        /* views */
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":\"NaN\",\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "views[0].half_fov"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":NaN,\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "JSON"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":1e999,\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "JSON"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "views[0].eye"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,null,3],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "views[0].eye[1]"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"half_fov\":0.4,\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "views[0].target"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "%s,{\"eye\":[1,2,3],\"target\":[1,2,3],\"half_fov\":0.4,\"light\":[1,0,3]}"),
+         GLINT_EINVAL, "views[1]"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0,\"light\":[1,0,3]}"),
+         GLINT_ERANGE, "half_fov"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":1.5708,\"light\":[1,0,3]}"),
+         GLINT_ERANGE, "half_fov"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[1,0,3],"
+             "\"light_intensity\":0}"),
+         GLINT_ERANGE, "light_intensity"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0.4,\"light\":[1,0,3],"
+             "\"ligth_deg\":3}"),
+         GLINT_EFORMAT, "ligth_deg"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[1e308,0,3],\"target\":[-1e308,0,0],\"half_fov\":0.4,\"light\":[1,0,3]}"),
+         GLINT_ENONFINITE, "views[0]"},
+        {DOC_HEAD "\"width\":32,\"height\":32," DOC_VIEWS(
+             "{\"eye\":[0,0,3],\"eye\":[0,0,3],\"target\":[0,0,0],\"half_fov\":0.4,"
+             "\"light\":[1,0,3]}"),
+         GLINT_EFORMAT, "duplicate"},
+    };
+    glint_err e;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        int rc = parse_doc(cases[i].doc, good_view, &e);
+        ASSERT_MSG(rc == cases[i].code, "case %zu: got %d, want %d (%s)", i, rc, cases[i].code,
+                   e.msg);
+        ASSERT_MSG(e.code == rc && strstr(e.msg, cases[i].needle) != NULL,
+                   "case %zu: message \"%s\" lacks \"%s\"", i, e.msg, cases[i].needle);
+    }
+    ASSERT_EQ(scene_from_json(NULL, &(scene){0}, &e), GLINT_EINVAL);
+}
+
+/* Too many views, deep nesting and random garbage: errors, never a crash. */
+TEST(json_hostile)
+{
+    glint_err e;
+    scene s;
+    size_t n = 0, cap = (SCENE_MAX_VIEWS + 2) * 96 + 256;
+    char *buf = malloc(cap);
+    ASSERT(buf != NULL);
+    n += (size_t)snprintf(buf + n, cap - n, DOC_HEAD "\"width\":32,\"height\":32,\"views\":[");
+    for (int k = 0; k <= SCENE_MAX_VIEWS; k++)
+        n += (size_t)snprintf(buf + n, cap - n, "%s%s", k ? "," : "", good_view);
+    snprintf(buf + n, cap - n, "]}");
+    ASSERT_EQ(scene_from_json(buf, &s, &e), GLINT_ERANGE);
+    ASSERT(strstr(e.msg, "views") != NULL);
+    free(buf);
+
+    buf = malloc(200001);
+    ASSERT(buf != NULL);
+    memset(buf, '[', 100000);
+    memset(buf + 100000, ']', 100000);
+    buf[200000] = '\0';
+    ASSERT_EQ(scene_from_json(buf, &s, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "deep") != NULL);
+    /* every prefix of a valid document fails cleanly */
+    {
+        scene d;
+        char *text;
+        size_t len;
+        ASSERT_OK(scene_create(&(scene_params){.mesh_name = "sphere", .width = 16,
+                                               .height = 16, .distance = 3, .margin = 1,
+                                               .light_lo_deg = 10, .light_hi_deg = 20},
+                               &d, &e));
+        text = scene_to_json(&d, &e);
+        scene_free(&d);
+        ASSERT(text != NULL);
+        len = strlen(text);
+        for (size_t cut = 0; cut < len; cut += 7) {
+            char c = text[cut];
+            int rc;
+            text[cut] = '\0';
+            rc = scene_from_json(text, &s, &e);
+            text[cut] = c;
+            ASSERT_MSG(rc == GLINT_EFORMAT, "prefix of %zu bytes: rc %d (%s)", cut, rc, e.msg);
+        }
+        /* bytes flipped at random positions: any error code, or success */
+        srand(12345);
+        for (int trial = 0; trial < 300; trial++) {
+            char *mut = strdup(text);
+            int rc;
+            ASSERT(mut != NULL);
+            for (int f = 0; f < 3; f++)
+                mut[(size_t)rand() % len] = (char)(32 + rand() % 95);
+            rc = scene_from_json(mut, &s, &e);
+            if (rc == 0)
+                scene_free(&s);
+            else
+                ASSERT_MSG(rc < 0 && e.msg[0], "trial %d: rc %d without a message", trial, rc);
+            free(mut);
+        }
+        free(text);
+    }
+    free(buf);
+}
+
+TEST(validate)
+{
+    scene s;
+    scene_params p;
+    glint_err e;
+    scene_params_default(&p);
+    p.width = p.height = 16;
+    ASSERT_OK(scene_create(&p, &s, &e));
+    ASSERT_OK(scene_validate(&s, &e));
+    s.views[2].eye[0] = NAN;
+    ASSERT_EQ(scene_validate(&s, &e), GLINT_ENONFINITE);
+    ASSERT(strstr(e.msg, "views[2].eye") != NULL);
+    ASSERT(scene_to_json(&s, &e) == NULL);
+    ASSERT_EQ(e.code, GLINT_ENONFINITE);
+    memcpy(s.views[2].eye, s.views[2].target, sizeof s.views[2].eye);
+    ASSERT_EQ(scene_validate(&s, &e), GLINT_EINVAL);
+    s.views[2].eye[0] = 3.0;
+    ASSERT_OK(scene_validate(&s, &e));
+    s.nviews = 0;
+    ASSERT_EQ(scene_validate(&s, &e), GLINT_ERANGE);
+    s.nviews = 12;
+    s.mesh.tri[0] = 0xffffffffu;
+    ASSERT_EQ(scene_validate(&s, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "mesh") != NULL);
+    ASSERT_EQ(scene_validate(NULL, &e), GLINT_EINVAL);
+    scene_free(&s);
+}
+
+TEST(save_load)
+{
+    char dir[] = "/tmp/glint_test_scene_XXXXXX";
+    char path[256], h1[33], h2[33];
+    scene s, t;
+    scene_params p;
+    glint_err e;
+    FILE *f;
+
+    ASSERT(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/views.json", dir);
+    scene_params_default(&p);
+    p.view_set = SCENE_VIEWS_ICO20;
+    p.light_mid = 1;
+    ASSERT_OK(scene_create(&p, &s, &e));
+    ASSERT_OK(scene_save(&s, path, &e));
+    ASSERT_OK(scene_save(&s, path, &e)); /* replacing works too */
+    ASSERT_OK(scene_load(path, &t, &e));
+    scene_hash(&s, h1);
+    scene_hash(&t, h2);
+    ASSERT(strcmp(h1, h2) == 0);
+    scene_free(&t);
+    /* nothing but the file is left in the directory */
+    {
+        char cmd[512];
+        snprintf(cmd, sizeof cmd, "test $(ls -A '%s' | wc -l) -eq 1", dir);
+        ASSERT_EQ(system(cmd), 0);
+    }
+    /* errors */
+    f = fopen(path, "w");
+    ASSERT(f != NULL);
+    fputs("{\"format\":\"glint-scene\",", f);
+    fclose(f);
+    ASSERT_EQ(scene_load(path, &t, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, path) != NULL);
+    unlink(path);
+    ASSERT_EQ(scene_load(path, &t, &e), GLINT_ENOTFOUND);
+    {
+        char bad[300];
+        snprintf(bad, sizeof bad, "%s/no/such/dir/x.json", dir);
+        ASSERT_EQ(scene_save(&s, bad, &e), GLINT_EIO);
+    }
+    scene_free(&s);
+    rmdir(dir);
+}
+
+TEST_LIST {
+    TEST_ENTRY(sphere_counts_and_validity),
+    TEST_ENTRY(sphere_geometry),
+    TEST_ENTRY(mesh_errors),
+    TEST_ENTRY(icosahedron_vertices),
+    TEST_ENTRY(icosahedron_faces),
+    TEST_ENTRY(default_views),
+    TEST_ENTRY(face_views_midpoints),
+    TEST_ENTRY(frame_near_pole),
+    TEST_ENTRY(create_errors),
+    TEST_ENTRY(json_round_trip_and_hash),
+    TEST_ENTRY(hash_golden),
+    TEST_ENTRY(json_minimal_and_explicit),
+    TEST_ENTRY(json_malformed),
+    TEST_ENTRY(json_hostile),
+    TEST_ENTRY(validate),
+    TEST_ENTRY(save_load),
+};
+
 TEST_MAIN()
