@@ -109,6 +109,16 @@ static void setup_make(setup *s, int w, int h, int view_set, int mid, const brdf
         s->scale = scale;
 }
 
+static void free_setup(setup *s)
+{
+    for (int v = 0; v < s->sc.nviews; v++)
+        img_free(&s->paint[v]);
+    free(s->paint);
+    raster_free_all(s->g, s->sc.nviews);
+    scene_free(&s->sc);
+    memset(s, 0, sizeof *s);
+}
+
 static long count_samples(int w, int h)
 {
     scene_params p;
@@ -240,11 +250,11 @@ static void table1(FILE *md, int quick)
 /* ---- Part 2: speed-accuracy sweep -------------------------------------------------- */
 
 typedef struct row {
-    int res;
+    int raster, res;
     char reg[32];
     const char *prec;
-    int k;
-    double pre_s, fit_s, bytes, rms_novel, rms_paint;
+    int k, n;
+    double pre_s, fact_s, run_s, bytes, rms_novel, rms_paint;
 } row;
 
 static double novel_rms(const material *m, const setup *nv)
@@ -256,118 +266,170 @@ static double novel_rms(const material *m, const setup *nv)
     return rms;
 }
 
+static double info_seconds(const material *m, const char *key)
+{
+    return json_real_value(json_object_get(json_object_get(m->info, "seconds"), key));
+}
+
+/* One configuration on a prepared base (shares samples, design, decomposition). */
+static void run_config(row *rw, const fit_prep *base, const setup *train, const setup *novel,
+                       const char *regspec, hf_precision prec, double pre_base, int quick)
+{
+    hf_op op;
+    hf_reg reg;
+    fit_prep fp = *base;
+    material m;
+    glint_err e;
+    double fa[15], fr[15], t0, tb;
+    int reps = quick ? 5 : 15;
+
+    hf_reg_parse(regspec, &reg, NULL);
+    t0 = now();
+    if (hf_op_build(&base->dc, &reg, prec, &op, &e))
+        die("operator", &e);
+    tb = now() - t0;
+    fp.op = op;
+    fp.params.reg = reg;
+    fp.params.prec = prec;
+    for (int k = 0; k < reps; k++) {
+        t0 = now();
+        if (fit_run(&fp, train->paint, NULL, &m, &e))
+            die("fit", &e);
+        fr[k] = now() - t0;
+        fa[k] = info_seconds(&m, "factorization");
+        if (k + 1 < reps)
+            material_free(&m);
+    }
+    rw->raster = train->sc.width;
+    rw->res = base->params.res;
+    snprintf(rw->reg, sizeof rw->reg, "%s", regspec);
+    rw->prec = prec == HF_F32 ? "single" : "double";
+    rw->k = op.k;
+    rw->n = base->s.n;
+    rw->pre_s = pre_base + tb;
+    rw->fact_s = median(fa, reps);
+    rw->run_s = median(fr, reps);
+    rw->bytes = (double)hf_op_bytes(&op, &base->d);
+    rw->rms_novel = novel_rms(&m, novel);
+    rw->rms_paint = json_real_value(json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
+    printf("%-6d %-4d %-17s %-6s %-5d %-6d | %-8.4f %-8.3f %-8.3f %-9.0f | %-8.4f %-8.4f\n",
+           rw->raster, rw->res, rw->reg, rw->prec, rw->k, rw->n, rw->pre_s, 1e3 * rw->fact_s,
+           1e3 * rw->run_s, rw->bytes / 1024, rw->rms_novel, rw->rms_paint);
+    material_free(&m);
+    hf_op_free(&op);
+}
+
 static int sweep(FILE *md, const char *outdir, int quick, const char *spec)
 {
     static const int res_full[] = {16, 32, 64, 128, 256};
     static const int res_quick[] = {16, 64, 128};
+    static const int rasters_full[] = {32, 64, 128, 256};
+    static const int rasters_quick[] = {64, 128};
     static const char *regs[] = {"trunc:full", "trunc:50%", "trunc:20%", "trunc:10%",
                                  "tikhonov:rel1e-3", "tikhonov:rel1e-2", "tikhonov:rel1e-1",
                                  "linear:full", "linear:50%"};
     const int *res = quick ? res_quick : res_full;
-    int nres = quick ? 3 : 5, nregs = quick ? 5 : 9, nrows = 0;
-    row rows[128];
+    const int *rasters = quick ? rasters_quick : rasters_full;
+    int nres = quick ? 3 : 5, nregs = quick ? 5 : 9, nrast = quick ? 2 : 4, nrows = 0;
+    row rows[256];
     brdf b;
-    setup train, novel;
+    setup novel;
     char csv[4096], png[4096], gp[4096];
     FILE *f;
 
     brdf_parse(spec, &b, NULL);
-    setup_make(&train, 128, 128, SCENE_VIEWS_ICO12, 0, &b, 0.0);
-    setup_make(&novel, 128, 128, SCENE_VIEWS_ICO20, 1, &b, train.scale);
-    printf("\n== Speed-accuracy sweep: %s, 12 views at 128x128 (fit), 20 novel views (error)\n",
+    printf("\n== Speed-accuracy sweep: %s; error on 20 novel views at 128x128 (light angles between the painted ones)\n",
            spec);
-    printf("%-4s %-17s %-6s %-5s | %-9s %-9s %-10s | %-8s %-8s\n", "res", "regularization",
-           "prec", "K", "pre s", "fit ms", "op KiB", "RMS new", "RMS paint");
-    for (int ri = 0; ri < nres; ri++) {
-        fit_params p;
-        fit_prep base;
-        glint_err e;
-        double t0;
-        fit_params_default(&p);
-        p.res = res[ri];
-        t0 = now();
-        if (fit_prepare(&base, &train.sc, train.g, NULL, &p, NULL, &e))
-            die("prepare", &e);
-        double pre_base = now() - t0 - base.t_samples - base.t_op;
-        for (int gi = 0; gi < nregs; gi++) {
-            for (int pi = 0; pi < 2; pi++) {
-                hf_op op;
-                hf_reg reg;
-                fit_prep fp = base; /* shares samples, design, decomposition */
-                material m;
-                double ft[15], tb;
-                int reps = quick ? 5 : 15;
-                row *rw = &rows[nrows];
-                hf_reg_parse(regs[gi], &reg, NULL);
-                t0 = now();
-                if (hf_op_build(&base.dc, &reg, pi ? HF_F32 : HF_F64, &op, &e))
-                    die("operator", &e);
-                tb = now() - t0;
-                fp.op = op;
-                fp.params.reg = reg;
-                fp.params.prec = pi ? HF_F32 : HF_F64;
-                for (int k = 0; k < reps; k++) {
-                    t0 = now();
-                    if (fit_run(&fp, train.paint, NULL, &m, &e))
-                        die("fit", &e);
-                    ft[k] = now() - t0;
-                    if (k + 1 < reps)
-                        material_free(&m);
-                }
-                rw->res = res[ri];
-                snprintf(rw->reg, sizeof rw->reg, "%s", regs[gi]);
-                rw->prec = pi ? "single" : "double";
-                rw->k = op.k;
-                rw->pre_s = pre_base + tb;
-                rw->fit_s = median(ft, reps);
-                rw->bytes = (double)hf_op_bytes(&op, &base.d);
-                rw->rms_novel = novel_rms(&m, &novel);
-                rw->rms_paint = json_real_value(
-                    json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
-                printf("%-4d %-17s %-6s %-5d | %-9.4f %-9.3f %-10.0f | %-8.4f %-8.4f\n", rw->res,
-                       rw->reg, rw->prec, rw->k, rw->pre_s, 1e3 * rw->fit_s, rw->bytes / 1024,
-                       rw->rms_novel, rw->rms_paint);
-                material_free(&m);
-                hf_op_free(&op);
-                nrows++;
-            }
+    printf("%-6s %-4s %-17s %-6s %-5s %-6s | %-8s %-8s %-8s %-9s | %-8s %-8s\n", "raster",
+           "res", "regularization", "prec", "K", "N", "pre s", "fact ms", "run ms", "op KiB",
+           "RMS new", "RMS paint");
+    for (int ai = 0; ai < nrast; ai++) {
+        setup train;
+        setup_make(&train, rasters[ai], rasters[ai], SCENE_VIEWS_ICO12, 0, &b, 0.0);
+        if (ai == 0)
+            setup_make(&novel, 128, 128, SCENE_VIEWS_ICO20, 1, &b, 0.0);
+        /* the novel views share the training scale (max over painted views = 1) */
+        for (int v = 0; v < novel.sc.nviews; v++)
+            img_free(&novel.paint[v]);
+        {
+            glint_err e;
+            if (paint_views(&b, novel.g, novel.sc.views, novel.sc.nviews, train.scale,
+                            novel.paint, NULL, &e))
+                die("paint novel", &e);
         }
-        fit_prep_free(&base);
+        for (int ri = 0; ri < nres; ri++) {
+            fit_params p;
+            fit_prep base;
+            glint_err e;
+            double t0, pre_base;
+            fit_params_default(&p);
+            p.res = res[ri];
+            t0 = now();
+            if (fit_prepare(&base, &train.sc, train.g, NULL, &p, NULL, &e))
+                die("prepare", &e);
+            pre_base = now() - t0 - base.t_samples - base.t_op;
+            for (int gi = 0; gi < nregs; gi++) {
+                for (int pi = 0; pi < 2; pi++) {
+                    /* the full grid at the default raster; elsewhere the default only */
+                    if (rasters[ai] != 128 && (gi > 0 || pi > 0))
+                        continue;
+                    run_config(&rows[nrows++], &base, &train, &novel, regs[gi],
+                               pi ? HF_F32 : HF_F64, pre_base, quick);
+                }
+            }
+            fit_prep_free(&base);
+        }
+        free_setup(&train);
     }
-    fprintf(md, "\n%s: 12 views at 128x128, 20 novel views\n\n", spec);
-    fprintf(md, "| res | regularization | precision | K | preinversion (s) | fit (ms) | operator (KiB) | RMS novel | RMS painted |\n|---|---|---|---|---|---|---|---|---|\n");
+    free_setup(&novel);
+    fprintf(md, "\n%s: error on 20 novel views at 128x128\n\n", spec);
+    fprintf(md, "| raster | res | regularization | precision | K | samples | preinversion (s) | factorization (ms) | fit_run (ms) | operator (KiB) | RMS novel | RMS painted |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (int i = 0; i < nrows; i++)
-        fprintf(md, "| %d | %s | %s | %d | %.4f | %.3f | %.0f | %.4f | %.4f |\n", rows[i].res,
-                rows[i].reg, rows[i].prec, rows[i].k, rows[i].pre_s, 1e3 * rows[i].fit_s,
-                rows[i].bytes / 1024, rows[i].rms_novel, rows[i].rms_paint);
+        fprintf(md, "| %d | %d | %s | %s | %d | %d | %.4f | %.3f | %.3f | %.0f | %.4f | %.4f |\n",
+                rows[i].raster, rows[i].res, rows[i].reg, rows[i].prec, rows[i].k, rows[i].n,
+                rows[i].pre_s, 1e3 * rows[i].fact_s, 1e3 * rows[i].run_s, rows[i].bytes / 1024,
+                rows[i].rms_novel, rows[i].rms_paint);
     snprintf(csv, sizeof csv, "%s/sweep_%s.csv", outdir, spec);
     f = fopen(csv, "w");
     if (!f)
         return -1;
-    fprintf(f, "res,regularization,precision,K,preinversion_s,fit_s,operator_bytes,rms_novel,rms_painted\n");
-    for (int i = 0; i < nrows; i++)
-        fprintf(f, "%d,%s,%s,%d,%.6f,%.6f,%.0f,%.6f,%.6f\n", rows[i].res, rows[i].reg,
-                rows[i].prec, rows[i].k, rows[i].pre_s, rows[i].fit_s, rows[i].bytes,
-                rows[i].rms_novel, rows[i].rms_paint);
+    fprintf(f, "raster,res,regularization,precision,K,samples,preinversion_s,factorization_s,fit_run_s,operator_bytes,rms_novel,rms_painted\n");
+    /* default-regularization rows first, so the plot draws them as lines */
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < nrows; i++) {
+            int base_row = strcmp(rows[i].reg, "trunc:full") == 0 &&
+                           strcmp(rows[i].prec, "double") == 0;
+            if (base_row != (pass == 0))
+                continue;
+            fprintf(f, "%d,%d,%s,%s,%d,%d,%.6f,%.6f,%.6f,%.0f,%.6f,%.6f\n", rows[i].raster,
+                    rows[i].res, rows[i].reg, rows[i].prec, rows[i].k, rows[i].n, rows[i].pre_s,
+                    rows[i].fact_s, rows[i].run_s, rows[i].bytes, rows[i].rms_novel,
+                    rows[i].rms_paint);
+        }
     fclose(f);
-    /* plot: error against fit time, one series per regularization family */
     snprintf(png, sizeof png, "%s/sweep_%s.png", outdir, spec);
     snprintf(gp, sizeof gp, "%s/sweep_%s.gp", outdir, spec);
     f = fopen(gp, "w");
     if (!f)
         return -1;
     fprintf(f,
-            "set terminal pngcairo size 900,600\nset output '%s'\nset datafile separator ','\n"
-            "set logscale xy\nset xlabel 'fit time (ms), one RGB painting'\n"
-            "set ylabel 'RMS error on 20 novel views'\nset title 'glint HF speed vs accuracy: %s'\n"
-            "set key outside right\nset grid\n"
-            "plot '%s' every ::1 using ($6*1000):(strcol(3) eq 'double' && strstr(strcol(2),'trunc:full') ? $8 : 1/0):1 with linespoints pt 7 lc rgb '#1f77b4' title 'trunc:full double (res labels)', \\\n"
-            " '' every ::1 using ($6*1000):(strcol(3) eq 'double' && strstr(strcol(2),'trunc:full') ? $8 : 1/0):(sprintf('R%%d',$1)) with labels offset 2,0.7 notitle, \\\n"
-            " '' every ::1 using ($6*1000):(strcol(3) eq 'single' && strstr(strcol(2),'trunc:full') ? $8 : 1/0) with points pt 6 ps 1.5 lc rgb '#ff7f0e' title 'trunc:full single', \\\n"
-            " '' every ::1 using ($6*1000):(strstr(strcol(2),'trunc:') && !strstr(strcol(2),'full') ? $8 : 1/0) with points pt 5 lc rgb '#2ca02c' title 'trunc K < full', \\\n"
-            " '' every ::1 using ($6*1000):(strstr(strcol(2),'tikhonov') ? $8 : 1/0) with points pt 9 lc rgb '#d62728' title 'tikhonov', \\\n"
-            " '' every ::1 using ($6*1000):(strstr(strcol(2),'linear') ? $8 : 1/0) with points pt 11 lc rgb '#9467bd' title 'linear damping'\n",
-            png, spec, csv);
+            "set terminal pngcairo size 1300,560 font ',10'\nset output '%s'\n"
+            "set datafile separator ','\nset logscale xy\nset grid\nset key bottom left\n"
+            "set ylabel 'RMS error, 20 novel views (radiance on [0,1])'\n"
+            "set multiplot layout 1,2 title 'glint fast homomorphic factorization: speed vs accuracy (%s)'\n"
+            "full(r) = (strcol(4) eq 'double' && strcol(3) eq 'trunc:full' && $1 == r)\n"
+            "set xlabel 'fast factorization of one RGB painting (ms)'\n"
+            "plot for [r in '32 64 128 256'] '%s' every ::1 using ($8*1000):(full(r+0) ? $11 : 1/0) with linespoints pt 7 title sprintf('raster %%s^2, trunc:full, double', r), \\\n"
+            " '' every ::1 using ($8*1000):(full($1) ? $11 : 1/0):(sprintf('R%%d', $2)) with labels offset 1.6,0.6 font ',8' notitle, \\\n"
+            " '' every ::1 using ($8*1000):(strcol(4) eq 'single' ? $11 : 1/0) with points pt 6 ps 1.4 lc rgb 'black' title 'single precision', \\\n"
+            " '' every ::1 using ($8*1000):(strstrt(strcol(3),'trunc:') > 0 && strcol(3) ne 'trunc:full' ? $11 : 1/0) with points pt 5 lc rgb '#2ca02c' title 'truncated rank', \\\n"
+            " '' every ::1 using ($8*1000):(strstrt(strcol(3),'tikhonov') > 0 ? $11 : 1/0) with points pt 9 lc rgb '#d62728' title 'Tikhonov', \\\n"
+            " '' every ::1 using ($8*1000):(strstrt(strcol(3),'linear') > 0 ? $11 : 1/0) with points pt 11 lc rgb '#9467bd' title 'linear damping'\n"
+            "set xlabel 'preinversion (s), computed once per scene and parameters, then cached'\n"
+            "plot for [r in '32 64 128 256'] '%s' every ::1 using 7:(full(r+0) ? $11 : 1/0) with linespoints pt 7 title sprintf('raster %%s^2', r), \\\n"
+            " '' every ::1 using 7:(full($1) ? $11 : 1/0):(sprintf('R%%d', $2)) with labels offset 1.6,0.6 font ',8' notitle\n"
+            "unset multiplot\n",
+            png, spec, csv, csv);
     fclose(f);
     {
         char cmd[8300];
@@ -375,7 +437,7 @@ static int sweep(FILE *md, const char *outdir, int quick, const char *spec)
         if (system("command -v gnuplot >/dev/null 2>&1") == 0 && system(cmd) == 0)
             printf("plot: %s\n", png);
         else
-            printf("plot: gnuplot not available; data in %s, script %s\n", csv, gp);
+            printf("plot: gnuplot not available or failed; data in %s, script %s\n", csv, gp);
     }
     printf("table: %s\n", csv);
     return 0;

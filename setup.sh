@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# glint set-up for a fresh Debian 12 machine (run as root, from the checkout).
+#
+#   ./setup.sh run    install what is missing, build, run the main job
+#   ./setup.sh test   install what is missing, build, run every test
+#
+# Both are idempotent: packages already present are not reinstalled, the
+# build directories are reused.
+set -euo pipefail
+
+cd "$(dirname "$0")"
+mode=${1:-}
+
+# Build and runtime dependencies (Debian 12 package names).
+BUILD_PKGS=(
+  gcc g++ meson ninja-build pkg-config
+  libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
+  libopenimageio-dev libmicrohttpd-dev libegl-dev libgles-dev libgl1-mesa-dri
+)
+# Test-only: the independent numpy reference, OpenImageIO's tools for
+# inspecting outputs, gnuplot for the benchmark plot, valgrind.
+TEST_PKGS=(
+  python3 python3-numpy python3-scipy openimageio-tools gnuplot-nox
+)
+
+missing_packages() {
+  local p
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || echo "$p"
+  done
+}
+
+install_packages() {
+  local missing
+  missing=$(missing_packages "$@")
+  if [ -n "$missing" ]; then
+    if [ "$(id -u)" -ne 0 ]; then
+      echo "setup.sh: missing packages ($missing); run as root to install them" >&2
+      exit 1
+    fi
+    echo "== installing: $missing"
+    apt-get update -qq
+    # shellcheck disable=SC2086
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing
+  fi
+}
+
+build() {
+  local dir=$1; shift
+  if [ ! -f "$dir/build.ninja" ]; then
+    meson setup "$dir" "$@"
+  fi
+  ninja -C "$dir"
+}
+
+case "$mode" in
+  run)
+    install_packages "${BUILD_PKGS[@]}"
+    build build
+    echo "== glint demo (paint the built-in sphere, fit, render new views)"
+    ./build/core/glint demo -o out/demo
+    ;;
+  test)
+    install_packages "${BUILD_PKGS[@]}" "${TEST_PKGS[@]}"
+    build build
+    echo "== unit, CLI and integration tests"
+    meson test -C build --print-errorlogs
+    echo "== unit tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+    build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debug
+    ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
+    LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      meson test -C build-asan --suite unit --print-errorlogs
+    python3 tests/summary.py build/meson-logs/testlog.json build-asan/meson-logs/testlog.json
+    ;;
+  *)
+    echo "usage: ./setup.sh run | ./setup.sh test" >&2
+    exit 1
+    ;;
+esac

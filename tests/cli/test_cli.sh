@@ -1,0 +1,107 @@
+#!/usr/bin/env bash
+# End-to-end tests of the glint command line: every subcommand on the
+# built-in sphere, and the errors it must give (clear message, non-zero
+# status, never a crash).  usage: test_cli.sh path/to/glint
+set -u
+G=${1:?usage: test_cli.sh path/to/glint}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+pass=0 fail=0
+
+ok()   { pass=$((pass + 1)); echo "ok   $1"; }
+bad()  { fail=$((fail + 1)); echo "FAIL $1"; }
+# expect_ok NAME CMD...: command succeeds
+expect_ok() { local n=$1; shift; if "$@" >"$T/out" 2>"$T/err"; then ok "$n"; else bad "$n (status $?)"; sed 's/^/    /' "$T/err"; fi; }
+# expect_err NAME STATUS PATTERN CMD...: fails with STATUS and a message matching PATTERN
+expect_err() {
+  local n=$1 st=$2 pat=$3; shift 3
+  "$@" >"$T/out" 2>"$T/err"; local got=$?
+  if [ "$got" -eq "$st" ] && grep -Eq -- "$pat" "$T/err"; then ok "$n"
+  else bad "$n (status $got, want $st; stderr: $(head -c 300 "$T/err"))"; fi
+}
+
+expect_ok "version" "$G" version
+expect_ok "help" "$G" help
+expect_err "unknown command" 1 "unknown command 'frobnicate'" "$G" frobnicate
+
+# scene
+expect_ok "scene create" "$G" scene create --size 48 -o "$T/scene.json"
+expect_ok "scene show" "$G" scene show "$T/scene.json"
+grep -q '"samples"' "$T/out" && ok "scene show reports samples" || bad "scene show reports samples"
+expect_err "scene size too small" 1 "size '2' must be a whole number in 8..4096" "$G" scene create --size 2 -o "$T/x.json"
+expect_err "scene size not a number" 1 "must be a whole number" "$G" scene create --size abc -o "$T/x.json"
+expect_err "scene light angles" 1 "light-angles" "$G" scene create --light-angles 70:20 -o "$T/x.json"
+expect_err "scene unknown mesh" 1 "unknown|sphere" "$G" scene create --mesh nosuch -o "$T/x.json"
+printf '{"format":"glint-scene","version":1,"mesh":"sphere","width":48' > "$T/trunc.json"
+expect_err "scene truncated JSON" 1 "." "$G" scene show "$T/trunc.json"
+expect_err "scene missing file" 1 "No such file" "$G" scene show "$T/nope.json"
+
+# G-buffers
+expect_ok "gbuffer" "$G" gbuffer "$T/scene.json" -o "$T/gb"
+[ -f "$T/gb/view_11.exr" ] && ok "gbuffer writes 12 views" || bad "gbuffer writes 12 views"
+if command -v iinfo >/dev/null; then
+  iinfo -v "$T/gb/view_00.exr" | grep -q "N.X" && ok "gbuffer channel names" || bad "gbuffer channel names"
+fi
+expect_err "gbuffer view out of range" 1 "has 12 views" "$G" gbuffer "$T/scene.json" -o "$T/gb" --view 12
+
+# paint
+expect_ok "paint ct" "$G" paint "$T/scene.json" --brdf "ct:rough=0.3,kd=0.5,f0=0.04" -o "$T/paint"
+expect_ok "paint png" "$G" paint "$T/scene.json" --brdf blinn20 --format png -o "$T/paintpng"
+expect_err "paint bad brdf" 1 "unknown|brdf" "$G" paint "$T/scene.json" --brdf velvet -o "$T/p"
+expect_err "paint bad key" 1 "rough" "$G" paint "$T/scene.json" --brdf "ct:rough=7" -o "$T/p"
+
+# fit
+expect_ok "fit" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/mat" --cache-dir "$T/cache" -q
+for f in material.json factors.exr factors.png; do
+  [ -s "$T/mat/$f" ] && ok "fit writes $f" || bad "fit writes $f"
+done
+expect_ok "fit png paintings, single precision, brdf model" "$G" fit "$T/scene.json" --paintings "$T/paintpng" -o "$T/mat2" --precision single --model brdf --map log --reg tikhonov:rel1e-3 --no-cache -q
+expect_ok "fit cached" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/mat3" --cache-dir "$T/cache"
+grep -q '"cache_hit": 1' "$T/out" && ok "second fit reuses the cached precomputation" || bad "second fit reuses the cached precomputation"
+expect_err "fit res out of range" 1 "--res '3'" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/m" --res 3
+expect_err "fit lambda nan" 1 "--lambda 'nan'" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/m" --lambda nan
+expect_err "fit bad regularization" 1 "unknown regularization" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/m" --reg magic
+expect_err "fit bad mapping" 1 "unknown mapping" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/m" --map exp
+expect_err "fit no paintings" 1 "no painting found" "$G" fit "$T/scene.json" --paintings "$T/gb/none" -o "$T/m"
+expect_err "fit wrong file count" 1 "expected 12 painting files" "$G" fit "$T/scene.json" "$T/paint/view_00.exr" -o "$T/m"
+mkdir -p "$T/small"
+"$G" scene create --size 32 -o "$T/scene32.json" >/dev/null && "$G" paint "$T/scene32.json" --brdf lambert -o "$T/small" >/dev/null
+expect_err "fit painting of the wrong size" 1 "32x32 but the scene renders 48x48" "$G" fit "$T/scene.json" --paintings "$T/small" -o "$T/m"
+printf 'not an image' > "$T/small/view_00.png"; rm -f "$T/small/view_00.exr"
+expect_err "fit corrupt painting" 1 "view 0" "$G" fit "$T/scene32.json" --paintings "$T/small" -o "$T/m"
+if command -v oiiotool >/dev/null; then
+  mkdir -p "$T/nan"; cp "$T/paint"/view_*.exr "$T/nan/"
+  oiiotool "$T/paint/view_03.exr" --mulc 1e39 -d float -o "$T/nan/view_03.exr" 2>/dev/null
+  expect_err "fit non-finite painting" 1 "not finite|non-finite|NaN|Inf" "$G" fit "$T/scene.json" --paintings "$T/nan" -o "$T/m"
+fi
+
+# render and eval
+expect_ok "render view" "$G" render "$T/mat" --scene "$T/scene.json" --view 3 -o "$T/r3.png"
+expect_ok "render free camera exr" "$G" render "$T/mat" --scene "$T/scene.json" --eye 0,3,1 --light 2,2,2 --size 64x40 -o "$T/rf.exr"
+expect_err "render needs a camera" 1 "needs --view" "$G" render "$T/mat" --scene "$T/scene.json" -o "$T/r.png"
+expect_err "render bad vector" 1 "three" "$G" render "$T/mat" --scene "$T/scene.json" --eye 1,2 --light 1,1,1 -o "$T/r.png"
+expect_err "render eye at target" 1 "coincide" "$G" render "$T/mat" --scene "$T/scene.json" --eye 0,0,0 --light 1,1,1 -o "$T/r.png"
+expect_err "render unsupported format" 1 "." "$G" render "$T/mat" --scene "$T/scene.json" --view 0 -o "$T/r.bmpx"
+printf '0 0 1  0.6 0 0.8  0 0 1\n0.3 0 0.95 -0.3 0 0.95\n' > "$T/dirs.txt"
+expect_ok "eval" "$G" eval "$T/mat" --dirs "$T/dirs.txt"
+[ "$(wc -l < "$T/out")" -eq 2 ] && ok "eval prints one line per pair" || bad "eval prints one line per pair"
+printf '0 0 1 nan 0 0.8 0 0 1\n' > "$T/dirsnan.txt"
+expect_err "eval non-finite direction" 1 "not finite" "$G" eval "$T/mat" --dirs "$T/dirsnan.txt"
+printf '0 0 1 1 2\n' > "$T/dirsshort.txt"
+expect_err "eval malformed line" 1 "expected 6 or 9 numbers" "$G" eval "$T/mat" --dirs "$T/dirsshort.txt"
+printf '{"format":"glint-material","version":1,"method":"hf3","res":64' > "$T/mat3/material.json"
+expect_err "corrupt material" 1 "material.json" "$G" eval "$T/mat3" --dirs "$T/dirs.txt"
+
+# samples round trip: fitting exported samples gives the same factors
+expect_ok "export-samples" "$G" export-samples "$T/scene.json" --paintings "$T/paint" --channel 1 -o "$T/s.txt"
+expect_ok "fit-samples" "$G" fit-samples "$T/s.txt" -o "$T/mats" --no-cache --eval "$T/s.txt"
+grep -q '"rms"' "$T/out" && ok "fit-samples reports eval error" || bad "fit-samples reports eval error"
+printf '0 1 2 0 0 1 nan 0 1 0 0 1 0.5\n' > "$T/sbad.txt"
+expect_err "fit-samples non-finite" 1 "not finite" "$G" fit-samples "$T/sbad.txt" -o "$T/m"
+
+# demo (the main job before the daemon exists)
+expect_ok "demo" "$G" demo -o "$T/demo"
+[ -f "$T/demo/material/material.json" ] && ok "demo writes a material" || bad "demo writes a material"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
