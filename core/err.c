@@ -19,7 +19,7 @@ int glint_err_set(glint_err *err, int code, const char *fmt, ...)
 int glint_err_prefix(glint_err *err, const char *fmt, ...)
 {
     char head[GLINT_ERR_MSG_MAX];
-    char old[GLINT_ERR_MSG_MAX];
+    char both[2 * GLINT_ERR_MSG_MAX + 4];
     va_list ap;
 
     if (!err)
@@ -27,8 +27,9 @@ int glint_err_prefix(glint_err *err, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(head, sizeof head, fmt, ap);
     va_end(ap);
-    memcpy(old, err->msg, sizeof old);
-    snprintf(err->msg, sizeof err->msg, "%s: %s", head, old);
+    snprintf(both, sizeof both, "%s: %s", head, err->msg);
+    memcpy(err->msg, both, sizeof err->msg - 1);
+    err->msg[sizeof err->msg - 1] = '\0';
     return err->code ? err->code : GLINT_EINTERNAL;
 }
 
