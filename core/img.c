@@ -1,9 +1,560 @@
-/* Temporary: replaced by the OpenImageIO-backed implementation. */
+/* img.c: the C side of img.h.  Allocation, validation, finiteness checks,
+ * format detection (by content for reading, by extension for writing) and
+ * atomic file replacement live here; the pixels go through the
+ * OpenImageIO shim in img_oiio.cpp (img_oiio.h). */
 #include "img.h"
 
-int img_write_exr_named(const char *path, int width, int height, int nch,
-                        const char *const *names, const float *data,
-                        glint_err *err)
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "img_oiio.h"
+
+/* Longest channel name img_write_exr_named accepts (OpenEXR's own limit). */
+#define IMG_MAX_NAME_LEN 255
+
+int img_alloc(img *im, int width, int height, int channels, glint_err *err)
 {
-    return glint_err_set(err, GLINT_EUNSUPPORTED, "image I/O not built yet");
+    if (!im)
+        return glint_err_set(err, GLINT_EINVAL, "img_alloc: NULL image");
+    memset(im, 0, sizeof *im);
+    if (width < 1 || height < 1 || width > IMG_MAX_DIM || height > IMG_MAX_DIM)
+        return glint_err_set(err, GLINT_ERANGE, "image size %dx%d outside 1..%d",
+                             width, height, IMG_MAX_DIM);
+    if (channels < 1 || channels > 4)
+        return glint_err_set(err, GLINT_ERANGE, "image with %d channels, supported 1..4",
+                             channels);
+    im->px = calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float));
+    if (!im->px)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%dx%d image",
+                             width, height, channels);
+    im->width = width;
+    im->height = height;
+    im->channels = channels;
+    return 0;
+}
+
+void img_free(img *im)
+{
+    if (!im)
+        return;
+    free(im->px);
+    memset(im, 0, sizeof *im);
+}
+
+void img_named_free(img_named *im)
+{
+    if (!im)
+        return;
+    if (im->names) {
+        for (int c = 0; c < im->channels; c++)
+            free(im->names[c]);
+        free(im->names);
+    }
+    free(im->px);
+    memset(im, 0, sizeof *im);
+}
+
+/* An image a caller hands in: sizes in range and pixels present. */
+static int img_validate(const img *im, glint_err *err)
+{
+    if (!im || !im->px)
+        return glint_err_set(err, GLINT_EINVAL, "image is NULL or has no pixels");
+    if (im->width < 1 || im->height < 1 || im->width > IMG_MAX_DIM ||
+        im->height > IMG_MAX_DIM)
+        return glint_err_set(err, GLINT_ERANGE, "image size %dx%d outside 1..%d",
+                             im->width, im->height, IMG_MAX_DIM);
+    if (im->channels < 1 || im->channels > 4)
+        return glint_err_set(err, GLINT_ERANGE, "image with %d channels, supported 1..4",
+                             im->channels);
+    return 0;
+}
+
+/* First non-finite value of an interleaved float array, reported with its
+ * pixel position and channel (named when names are given). */
+static int img_check_finite_array(const float *px, int width, int height, int nch,
+                                  const char *const *names, const char *what,
+                                  glint_err *err)
+{
+    static const char *const rgba[] = {"R", "G", "B", "A"};
+    size_t n = (size_t)width * (size_t)height * (size_t)nch;
+
+    for (size_t i = 0; i < n; i++) {
+        if (!isfinite(px[i])) {
+            size_t pixel = i / (size_t)nch;
+            int c = (int)(i % (size_t)nch);
+            const char *cname = names ? names[c] : (nch <= 4 ? rgba[c] : "?");
+            return glint_err_set(err, GLINT_ENONFINITE,
+                                 "%s: non-finite value %g at pixel (x %d, y %d), "
+                                 "channel %d (%s)",
+                                 what, (double)px[i], (int)(pixel % (size_t)width),
+                                 (int)(pixel / (size_t)width), c, cname);
+        }
+    }
+    return 0;
+}
+
+int img_check_finite(const img *im, glint_err *err)
+{
+    int rc = img_validate(im, err);
+    if (rc)
+        return rc;
+    return img_check_finite_array(im->px, im->width, im->height, im->channels, NULL,
+                                  "image", err);
+}
+
+/* ---- reading ----------------------------------------------------------- */
+
+/* OpenImageIO format name from the first bytes, or NULL. */
+static const char *img_sniff(const unsigned char *b, size_t n)
+{
+    static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    static const unsigned char exr[4] = {0x76, 0x2f, 0x31, 0x01};
+
+    if (n >= 8 && memcmp(b, png, 8) == 0)
+        return "png";
+    if (n >= 4 && memcmp(b, exr, 4) == 0)
+        return "openexr";
+    if (n >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
+        return "jpeg";
+    if (n >= 2 && b[0] == '#' && b[1] == '?')
+        return "hdr";
+    return NULL;
+}
+
+static int img_unrecognized(const char *what, const unsigned char *b, size_t n,
+                            glint_err *err)
+{
+    char hex[3 * 8 + 1] = "";
+    for (size_t i = 0; i < n && i < 8; i++)
+        snprintf(hex + 3 * i, sizeof hex - 3 * i, "%02x ", b[i]);
+    if (n)
+        hex[strlen(hex) - 1] = '\0';
+    return glint_err_set(err, GLINT_EFORMAT,
+                         "%s: not a PNG, JPEG, OpenEXR or Radiance HDR image "
+                         "(first bytes %s)",
+                         what, n ? hex : "none");
+}
+
+/* Decode a file (path != NULL) or a buffer, then check finiteness.
+ * (OUT: *pix, zeroed first; freed on failure.) */
+static int img_read_common(const char *path, const void *data, size_t len,
+                           int max_channels, int want_names, img_oiio_pixels *pix,
+                           glint_err *err)
+{
+    unsigned char head[16];
+    size_t nhead;
+    const char *fmt;
+    const char *what = path ? path : "image in memory";
+    FILE *fp = NULL;
+    struct stat st;
+    int rc;
+
+    memset(pix, 0, sizeof *pix);
+    if (path) {
+        fp = fopen(path, "rb");
+        if (!fp) {
+            int e = errno;
+            return glint_err_set(err, e == ENOENT ? GLINT_ENOTFOUND : GLINT_EIO,
+                                 "%s: cannot open: %s", path, strerror(e));
+        }
+        if (fstat(fileno(fp), &st) != 0) {
+            rc = glint_err_set(err, GLINT_EIO, "%s: cannot stat: %s", path,
+                               strerror(errno));
+            goto fail_file;
+        }
+        if (!S_ISREG(st.st_mode)) {
+            rc = glint_err_set(err, GLINT_EIO, "%s: not a regular file", path);
+            goto fail_file;
+        }
+        nhead = fread(head, 1, sizeof head, fp);
+        if (nhead == 0 && ferror(fp)) {
+            rc = glint_err_set(err, GLINT_EIO, "%s: read error: %s", path,
+                               strerror(errno));
+            goto fail_file;
+        }
+    } else {
+        if (!data)
+            return glint_err_set(err, GLINT_EINVAL, "image data is NULL");
+        nhead = len < sizeof head ? len : sizeof head;
+        memcpy(head, data, nhead);
+    }
+    if (nhead == 0) {
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s: empty (0 bytes)", what);
+        goto fail_file;
+    }
+    fmt = img_sniff(head, nhead);
+    if (!fmt) {
+        rc = img_unrecognized(what, head, nhead, err);
+        goto fail_file;
+    }
+
+    rc = img_oiio_read(fmt, fp, data, len, what, IMG_MAX_DIM, max_channels,
+                       want_names, pix, err);
+    if (fp)
+        fclose(fp);
+    fp = NULL;
+    if (rc)
+        return rc;
+
+    rc = img_check_finite_array(pix->px, pix->width, pix->height, pix->channels,
+                                (const char *const *)pix->names, what, err);
+    if (rc)
+        goto fail_pixels;
+    return 0;
+
+fail_pixels:
+    img_oiio_pixels_free(pix);
+fail_file:
+    if (fp)
+        fclose(fp);
+    return rc;
+}
+
+static void img_take(img *out, img_oiio_pixels *pix)
+{
+    out->width = pix->width;
+    out->height = pix->height;
+    out->channels = pix->channels;
+    out->px = pix->px;
+    pix->px = NULL;
+    img_oiio_pixels_free(pix);
+}
+
+int img_read(const char *path, img *out, glint_err *err)
+{
+    img_oiio_pixels pix;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "img_read: NULL output");
+    memset(out, 0, sizeof *out);
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "img_read: empty path");
+    rc = img_read_common(path, NULL, 0, 4, 0, &pix, err);
+    if (rc)
+        return rc;
+    img_take(out, &pix);
+    return 0;
+}
+
+int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
+{
+    img_oiio_pixels pix;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL output");
+    memset(out, 0, sizeof *out);
+    if (!data && len)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL data");
+    if (len == 0)
+        return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
+    rc = img_read_common(NULL, data, len, 4, 0, &pix, err);
+    if (rc)
+        return rc;
+    img_take(out, &pix);
+    return 0;
+}
+
+int img_read_named(const char *path, img_named *out, glint_err *err)
+{
+    img_oiio_pixels pix;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_named: NULL output");
+    memset(out, 0, sizeof *out);
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_named: empty path");
+    rc = img_read_common(path, NULL, 0, IMG_MAX_NAMED_CHANNELS, 1, &pix, err);
+    if (rc)
+        return rc;
+    out->width = pix.width;
+    out->height = pix.height;
+    out->channels = pix.channels;
+    out->names = pix.names;
+    out->px = pix.px;
+    return 0;
+}
+
+/* ---- writing ----------------------------------------------------------- */
+
+typedef struct img_fmt {
+    const char *key;  /* extension or img_write_mem format name */
+    const char *oiio; /* OpenImageIO format name */
+    int u8;           /* 1: 8-bit quantized, 0: float */
+} img_fmt;
+
+static const img_fmt img_formats[] = {
+    {"png", "png", 1},     {"exr", "openexr", 0}, {"hdr", "hdr", 0},
+    {"jpg", "jpeg", 1},    {"jpeg", "jpeg", 1},
+};
+
+static const img_fmt *img_fmt_find(const char *key)
+{
+    for (size_t i = 0; i < sizeof img_formats / sizeof img_formats[0]; i++)
+        if (strcasecmp(key, img_formats[i].key) == 0)
+            return &img_formats[i];
+    return NULL;
+}
+
+/* Channel counts a format can store without dropping or inventing data. */
+static int img_fmt_check_channels(const img_fmt *f, int nch, const char *what,
+                                  glint_err *err)
+{
+    if (strcmp(f->oiio, "hdr") == 0 && nch != 3)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "%s: Radiance HDR stores 3 channels, image has %d", what,
+                             nch);
+    if (strcmp(f->oiio, "jpeg") == 0 && nch != 1 && nch != 3)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "%s: JPEG stores 1 or 3 channels, image has %d", what, nch);
+    return 0;
+}
+
+/* 8-bit copy of an image: clamp to [0,1], round x*255 + 0.5, no transfer
+ * curve.  Returns a malloc'ed buffer or NULL. */
+static uint8_t *img_quantize(const img *im)
+{
+    size_t n = (size_t)im->width * (size_t)im->height * (size_t)im->channels;
+    uint8_t *q = malloc(n ? n : 1);
+    if (!q)
+        return NULL;
+    for (size_t i = 0; i < n; i++) {
+        double x = im->px[i];
+        x = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+        q[i] = (uint8_t)(x * 255.0 + 0.5);
+    }
+    return q;
+}
+
+/* Float copy with negatives set to 0, for RGBE, which has no sign (OpenImageIO
+ * 2.4 would wrap a negative component to a large positive one).  Returns
+ * a malloc'ed buffer or NULL. */
+static float *img_clamp_negative(const img *im)
+{
+    size_t n = (size_t)im->width * (size_t)im->height * (size_t)im->channels;
+    float *q = malloc(n * sizeof(float));
+    if (!q)
+        return NULL;
+    for (size_t i = 0; i < n; i++)
+        q[i] = im->px[i] > 0.0f ? im->px[i] : 0.0f;
+    return q;
+}
+
+/* fsync the directory holding `path` so the rename itself is durable.
+ * Best effort: some file systems refuse, which loses nothing but
+ * durability. */
+static void img_sync_dir(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char *dir;
+    int fd;
+
+    if (!slash) {
+        dir = strdup(".");
+    } else {
+        size_t n = (size_t)(slash - path);
+        dir = malloc(n + 2);
+        if (dir) {
+            memcpy(dir, path, n ? n : 1);
+            dir[n ? n : 1] = '\0';
+        }
+    }
+    if (!dir)
+        return;
+    fd = open(dir, O_RDONLY);
+    if (fd >= 0) {
+        (void)fsync(fd);
+        close(fd);
+    }
+    free(dir);
+}
+
+/* Encode into a temporary file next to `path`, sync it, rename it over
+ * `path`.  On any failure the temporary file is removed and `path` is
+ * untouched. */
+static int img_write_atomic(const char *path, const char *oiio_fmt, int width,
+                            int height, int nch, const char *const *names, int u8,
+                            const void *data, glint_err *err)
+{
+    static const char suffix[] = ".tmp-XXXXXX";
+    size_t plen = strlen(path);
+    char *tmp;
+    FILE *fp = NULL;
+    int fd, rc;
+
+    tmp = malloc(plen + sizeof suffix);
+    if (!tmp)
+        return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", path);
+    memcpy(tmp, path, plen);
+    memcpy(tmp + plen, suffix, sizeof suffix);
+
+    fd = mkstemp(tmp);
+    if (fd < 0) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: cannot create a temporary file: %s",
+                           path, strerror(errno));
+        goto fail_create;
+    }
+    (void)fchmod(fd, 0644); /* mkstemp makes 0600; images are not secrets */
+    fp = fdopen(fd, "wb");
+    if (!fp) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: fdopen: %s", path, strerror(errno));
+        close(fd);
+        goto fail_written;
+    }
+
+    rc = img_oiio_write(oiio_fmt, fp, NULL, NULL, path, width, height, nch, names,
+                        u8, data, err);
+    if (rc)
+        goto fail_open;
+    if (fflush(fp) != 0 || ferror(fp)) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: write error: %s", path,
+                           strerror(errno));
+        goto fail_open;
+    }
+    if (fsync(fileno(fp)) != 0) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: fsync: %s", path, strerror(errno));
+        goto fail_open;
+    }
+    if (fclose(fp) != 0) {
+        fp = NULL;
+        rc = glint_err_set(err, GLINT_EIO, "%s: close: %s", path, strerror(errno));
+        goto fail_written;
+    }
+    fp = NULL;
+    if (rename(tmp, path) != 0) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: rename from %s: %s", path, tmp,
+                           strerror(errno));
+        goto fail_written;
+    }
+    img_sync_dir(path);
+    free(tmp);
+    return 0;
+
+fail_open:
+    fclose(fp);
+fail_written:
+    unlink(tmp);
+fail_create:
+    free(tmp);
+    return rc;
+}
+
+/* Validate, check finiteness and channel support, quantize if 8-bit, then
+ * write to a file (path) or to memory (mem/mem_len). */
+static int img_encode(const img_fmt *f, const img *im, const char *path, void **mem,
+                      size_t *mem_len, glint_err *err)
+{
+    const char *what = path ? path : "encoding to memory";
+    const void *pixels;
+    void *q = NULL;
+    int rc;
+
+    rc = img_validate(im, err);
+    if (rc)
+        return rc;
+    rc = img_fmt_check_channels(f, im->channels, what, err);
+    if (rc)
+        return rc;
+    rc = img_check_finite_array(im->px, im->width, im->height, im->channels, NULL,
+                                what, err);
+    if (rc) {
+        if (err)
+            glint_err_prefix(err, "refusing to write");
+        return rc;
+    }
+    if (f->u8)
+        q = img_quantize(im);
+    else if (strcmp(f->oiio, "hdr") == 0)
+        q = img_clamp_negative(im);
+    if ((f->u8 || strcmp(f->oiio, "hdr") == 0) && !q)
+        return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", what);
+    pixels = q ? q : (const void *)im->px;
+    if (path)
+        rc = img_write_atomic(path, f->oiio, im->width, im->height, im->channels, NULL,
+                              f->u8, pixels, err);
+    else
+        rc = img_oiio_write(f->oiio, NULL, mem, mem_len, "<memory>", im->width,
+                            im->height, im->channels, NULL, f->u8, pixels, err);
+    free(q);
+    return rc;
+}
+
+int img_write(const char *path, const img *im, glint_err *err)
+{
+    const char *base, *dot;
+    const img_fmt *f;
+
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "img_write: empty path");
+    base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    dot = strrchr(base, '.');
+    f = dot ? img_fmt_find(dot + 1) : NULL;
+    if (!f)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "%s: unsupported extension '%s' (use .png, .exr, .hdr, "
+                             ".jpg)",
+                             path, dot ? dot : "");
+    return img_encode(f, im, path, NULL, NULL, err);
+}
+
+int img_write_mem(const char *format, const img *im, void **out_data, size_t *out_len,
+                  glint_err *err)
+{
+    const img_fmt *f;
+
+    if (!out_data || !out_len)
+        return glint_err_set(err, GLINT_EINVAL, "img_write_mem: NULL output");
+    *out_data = NULL;
+    *out_len = 0;
+    if (!format)
+        return glint_err_set(err, GLINT_EINVAL, "img_write_mem: NULL format");
+    f = img_fmt_find(format);
+    if (!f)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "unsupported image format '%s' (use png, exr, hdr, jpg)",
+                             format);
+    return img_encode(f, im, NULL, out_data, out_len, err);
+}
+
+int img_write_exr_named(const char *path, int width, int height, int nch,
+                        const char *const *names, const float *data, glint_err *err)
+{
+    int rc;
+
+    if (!path || !*path || !names || !data)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "img_write_exr_named: NULL path, names or data");
+    if (width < 1 || height < 1 || width > IMG_MAX_DIM || height > IMG_MAX_DIM)
+        return glint_err_set(err, GLINT_ERANGE, "%s: image size %dx%d outside 1..%d",
+                             path, width, height, IMG_MAX_DIM);
+    if (nch < 1 || nch > IMG_MAX_NAMED_CHANNELS)
+        return glint_err_set(err, GLINT_ERANGE, "%s: %d channels, supported 1..%d",
+                             path, nch, IMG_MAX_NAMED_CHANNELS);
+    for (int c = 0; c < nch; c++) {
+        size_t len = names[c] ? strlen(names[c]) : 0;
+        if (len == 0 || len > IMG_MAX_NAME_LEN)
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "%s: channel %d name is empty, NULL or longer than %d",
+                                 path, c, IMG_MAX_NAME_LEN);
+        for (int d = 0; d < c; d++)
+            if (strcmp(names[c], names[d]) == 0)
+                return glint_err_set(err, GLINT_EINVAL,
+                                     "%s: channel name '%s' used twice (%d and %d)", path,
+                                     names[c], d, c);
+    }
+    rc = img_check_finite_array(data, width, height, nch, names, path, err);
+    if (rc)
+        return rc;
+    return img_write_atomic(path, "openexr", width, height, nch, names, 0, data, err);
 }

@@ -19,6 +19,7 @@
 #include "err.h"
 
 #define IMG_MAX_DIM 16384
+#define IMG_MAX_NAMED_CHANNELS 256 /* img_write_exr_named, img_read_named */
 
 typedef struct img {
     int width, height, channels;
@@ -38,21 +39,46 @@ int img_read(const char *path, img *out, glint_err *err);
 int img_read_mem(const void *data, size_t len, img *out, glint_err *err);
 
 /* Write by file extension: .png (8-bit, clamped), .exr (half or float as
- * chosen: float), .hdr.  GLINT_EUNSUPPORTED for other extensions. */
+ * chosen: float), .hdr.  GLINT_EUNSUPPORTED for other extensions.
+ * Also .jpg / .jpeg (8-bit like PNG, 1 or 3 channels; lossy).  .hdr takes
+ * exactly 3 channels (RGBE cannot store negatives: they are written as 0).
+ * Non-finite pixels are refused (GLINT_ENONFINITE).  The file appears
+ * atomically: it is written to a temporary name in the same directory and
+ * renamed, so a crash never leaves a half-written file at `path`. */
 int img_write(const char *path, const img *im, glint_err *err);
 
-/* Encode to memory in format "png" or "exr".  *out_data is malloc'ed
- * (caller frees), *out_len its size. */
+/* Encode to memory in format "png" or "exr" (also "hdr", "jpg"/"jpeg",
+ * with the rules of img_write).  *out_data is malloc'ed (caller frees),
+ * *out_len its size. */
 int img_write_mem(const char *format, const img *im, void **out_data,
                   size_t *out_len, glint_err *err);
 
 /* Write an OpenEXR file with `nch` named float channels (names[i], e.g.
- * "N.X"), data interleaved width x height x nch. */
+ * "N.X"), data interleaved width x height x nch.  nch in
+ * 1..IMG_MAX_NAMED_CHANNELS, names non-empty and distinct, data finite;
+ * written atomically like img_write. */
 int img_write_exr_named(const char *path, int width, int height, int nch,
                         const char *const *names, const float *data,
                         glint_err *err);
 
 /* Check every value is finite (GLINT_ENONFINITE naming the first bad one). */
 int img_check_finite(const img *im, glint_err *err);
+
+/* Every channel of an image file with its name, e.g. an OpenEXR file from
+ * img_write_exr_named.  Channels come in the file's order, which need not
+ * be the order they were written in (OpenEXR sorts names; R, G, B, A come
+ * first): look them up by name.  Other formats name theirs R, G, B, A.
+ * Owns names (nch malloc'ed strings) and px; img_named_free() accepts
+ * NULL and zeroed structs. */
+typedef struct img_named {
+    int width, height, channels;
+    char **names;
+    float *px;       /* width x height x channels, interleaved */
+} img_named;
+
+/* Read with the checks of img_read, channels 1..IMG_MAX_NAMED_CHANNELS.
+ * (OUT: *out, zeroed first.) */
+int img_read_named(const char *path, img_named *out, glint_err *err);
+void img_named_free(img_named *im);
 
 #endif

@@ -16,6 +16,9 @@
  *   > 0  : multiply by it (HDR painting or a scale shared with other views);
  *   <= 0 : choose the scale that makes the maximum over these views 1 (the
  *          [0,1] convention); the chosen scale is written to *scale_out.
+ *          If no pixel is lit (every value 0) the chosen scale is 1.
+ * *scale_out receives the scale used in both cases.  Errors: NaN scale,
+ * light intensity not > 0, non-finite G-buffer vectors on covered pixels.
  * out must point to nviews zeroed imgs; they are allocated here (caller
  * frees each with img_free).  scale_out may be NULL. */
 int paint_views(const brdf *b, const gbuf *g, const scene_view *views,

@@ -614,6 +614,69 @@ TEST(extreme_paintings)
     free(rgb);
 }
 
+/* Grazing light and view: make a tenth of the samples nearly tangent
+ * (cos_i and cos_o down to 1e-9): projections reach 1, the brdf model divides
+ * by a floored cosine, and everything stays finite. */
+TEST(grazing_angles)
+{
+    const samples *s0 = sphere_samples();
+    samples s = *s0;
+    hf_design d;
+    hf_decomp dc;
+    hf_op op;
+    hf_reg reg;
+    hf_map map;
+    hf_factors fac;
+    hf_fit_stats st;
+    glint_err e;
+    float *nrm = malloc((size_t)3 * s.n * sizeof *nrm), *wi = malloc((size_t)3 * s.n * sizeof *wi);
+    double *ci = malloc((size_t)s.n * sizeof *ci);
+    float *rgb = paint_blinn(s0);
+    memcpy(nrm, s0->nrm, (size_t)3 * s.n * sizeof *nrm);
+    memcpy(wi, s0->wi, (size_t)3 * s.n * sizeof *wi);
+    memcpy(ci, s0->cos_i, (size_t)s.n * sizeof *ci);
+    for (int i = 0; i < s.n; i += 10) {
+        /* wi = tangent direction tilted up by 1e-9 */
+        v3 n = v3_loadf(nrm + 3 * i), a = fabs(n.x) < 0.9 ? v3_make(1, 0, 0) : v3_make(0, 1, 0);
+        v3 t = v3_normalize(v3_cross(n, a));
+        v3 w = v3_normalize(v3_add(t, v3_scale(n, 1e-9)));
+        v3_storef(w, wi + 3 * i);
+        ci[i] = 1e-9;
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.5f; /* paint that disagrees */
+    }
+    s.nrm = nrm;
+    s.wi = wi;
+    s.cos_i = ci;
+    hf_reg_parse("trunc:full", &reg, NULL);
+    ASSERT_OK(hf_design_build(&s, 32, &d, &e));
+    ASSERT_OK(hf_decomp_build(&d, 0.1, HF_ROUTE_EIG, 0, &dc, &e));
+    ASSERT_OK(hf_op_build(&dc, &reg, HF_F64, &op, &e));
+    for (int model = 0; model < 2; model++) {
+        hf_map_default(&map, HF_MAP_ADD);
+        ASSERT_OK(hf_fit(&d, &op, &map, (hf_model)model, rgb, &fac, &st, &e));
+        for (int k = 0; k < 9 * 32; k++)
+            ASSERT_FINITE(fac.logf[k]);
+        ASSERT_FINITE(st.rms);
+        hf_factors_free(&fac);
+    }
+    /* evaluation exactly at the horizon and exactly tangent */
+    hf_map_default(&map, HF_MAP_LOG);
+    ASSERT_OK(hf_fit(&d, &op, &map, HF_MODEL_BRDF, rgb, &fac, &st, &e));
+    double n[3] = {0, 0, 1}, w1[3] = {1, 0, 1e-12}, w2[3] = {0, 1, 0}, out[3];
+    hf_factors_eval(&fac, n, w1, w1, out);
+    ASSERT_FINITE(out[0]);
+    hf_factors_eval(&fac, n, w2, w1, out);
+    ASSERT_NEAR(out[0], 0.0, 0);
+    hf_factors_free(&fac);
+    hf_op_free(&op);
+    hf_decomp_free(&dc);
+    hf_design_free(&d);
+    free(nrm);
+    free(wi);
+    free(ci);
+    free(rgb);
+}
+
 TEST(nonfinite_input_is_an_error)
 {
     const samples *s = sphere_samples();
@@ -775,6 +838,7 @@ TEST_LIST {
     TEST_ENTRY(mapping_round_trips),
     TEST_ENTRY(map_parse),
     TEST_ENTRY(extreme_paintings),
+    TEST_ENTRY(grazing_angles),
     TEST_ENTRY(nonfinite_input_is_an_error),
     TEST_ENTRY(lambda_extremes),
     TEST_ENTRY(range_errors),
