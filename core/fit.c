@@ -11,7 +11,7 @@
 void fit_params_default(fit_params *p)
 {
     memset(p, 0, sizeof *p);
-    p->res = 64;
+    p->res = 128;
     p->lambda = 0.1;
     p->reg.kind = HF_REG_TRUNC;
     hf_map_default(&p->map, HF_MAP_ADD);

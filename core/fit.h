@@ -24,7 +24,7 @@
 #include "scene.h"
 
 typedef struct fit_params {
-    int res;            /* texels per factor (default 64) */
+    int res;            /* texels per factor (default 128: the knee in BENCHMARKS.md) */
     double lambda;      /* Laplacian weight (default 0.1) */
     hf_reg reg;         /* default trunc:full */
     hf_map map;         /* default add:0.1 (log(0.1 + f)) */

@@ -1089,7 +1089,7 @@ static void usage(FILE *f)
           "  version | help\n"
           "\n"
           "fit options:\n"
-          "  --res R            texels per factor, 4..512 (64)\n"
+          "  --res R            texels per factor, 4..512 (128)\n"
           "  --lambda L         Laplacian smoothing weight (0.1)\n"
           "  --reg SPEC         trunc[:full|:K|:P%|:relT], tikhonov:A|:relT, linear[:K|:P%]\n"
           "                     (trunc:full)\n"
