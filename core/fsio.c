@@ -16,44 +16,122 @@ int fsio_join(char *buf, size_t len, const char *dir, const char *name, glint_er
     return 0;
 }
 
-int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err *err)
+/* fsync the directory holding `path`, so the rename itself is durable.
+ * Best effort: a file system that refuses loses durability, not data. */
+static void sync_dir(const char *path)
 {
-    char tmp[4096];
-    const char *p = data;
-    int fd, n;
+    const char *slash = strrchr(path, '/');
+    char *dir;
+    int fd;
 
-    n = snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid());
-    if (n < 0 || (size_t)n >= sizeof tmp)
-        return glint_err_set(err, GLINT_ERANGE, "path too long: %s", path);
-    fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0)
-        return glint_err_set(err, GLINT_EIO, "cannot create %s: %s", tmp, strerror(errno));
-    while (len > 0) {
-        ssize_t w = write(fd, p, len);
-        if (w < 0) {
-            if (errno == EINTR)
-                continue;
-            goto fail;
-        }
-        p += w;
-        len -= (size_t)w;
+    if (!slash)
+        dir = strdup(".");
+    else if (slash == path)
+        dir = strdup("/");
+    else
+        dir = strndup(path, (size_t)(slash - path));
+    if (!dir)
+        return;
+    fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0) {
+        (void)fsync(fd);
+        close(fd);
     }
-    if (fsync(fd) != 0)
-        goto fail;
-    if (close(fd) != 0) {
-        fd = -1;
-        goto fail;
+    free(dir);
+}
+
+void fsio_atomic_abort(fsio_atomic *a)
+{
+    if (!a)
+        return;
+    if (a->fp)
+        fclose(a->fp);
+    if (a->tmp)
+        unlink(a->tmp);
+    free(a->tmp);
+    free(a->path);
+    memset(a, 0, sizeof *a);
+}
+
+int fsio_atomic_open(fsio_atomic *a, const char *path, glint_err *err)
+{
+    static const char suffix[] = ".tmp-XXXXXX";
+    size_t plen;
+    int fd;
+
+    memset(a, 0, sizeof *a);
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "empty output path");
+    plen = strlen(path);
+    a->path = strdup(path);
+    a->tmp = malloc(plen + sizeof suffix);
+    if (!a->path || !a->tmp) {
+        fsio_atomic_abort(a);
+        return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", path);
     }
-    fd = -1;
-    if (rename(tmp, path) != 0)
+    memcpy(a->tmp, path, plen);
+    memcpy(a->tmp + plen, suffix, sizeof suffix);
+    fd = mkstemp(a->tmp);
+    if (fd < 0) {
+        int e = errno;
+        free(a->tmp);
+        a->tmp = NULL;
+        fsio_atomic_abort(a);
+        return glint_err_set(err, GLINT_EIO, "%s: cannot create a temporary file: %s", path,
+                             strerror(e));
+    }
+    (void)fchmod(fd, 0644); /* mkstemp makes 0600; glint's files are not secrets */
+    a->fp = fdopen(fd, "wb");
+    if (!a->fp) {
+        int e = errno;
+        close(fd);
+        fsio_atomic_abort(a);
+        return glint_err_set(err, GLINT_EIO, "%s: fdopen: %s", path, strerror(e));
+    }
+    return 0;
+}
+
+int fsio_atomic_commit(fsio_atomic *a, glint_err *err)
+{
+    int rc;
+    const char *what = "write";
+
+    if (fflush(a->fp) != 0 || ferror(a->fp))
         goto fail;
+    what = "fsync";
+    if (fsync(fileno(a->fp)) != 0)
+        goto fail;
+    what = "close";
+    rc = fclose(a->fp);
+    a->fp = NULL;
+    if (rc != 0)
+        goto fail;
+    what = "rename";
+    if (rename(a->tmp, a->path) != 0)
+        goto fail;
+    sync_dir(a->path);
+    free(a->tmp);
+    a->tmp = NULL; /* nothing to unlink */
+    fsio_atomic_abort(a);
     return 0;
 fail:
-    n = errno;
-    if (fd >= 0)
-        close(fd);
-    unlink(tmp);
-    return glint_err_set(err, GLINT_EIO, "writing %s failed: %s", path, strerror(n));
+    rc = glint_err_set(err, GLINT_EIO, "%s: %s failed: %s", a->path, what, strerror(errno));
+    fsio_atomic_abort(a);
+    return rc;
+}
+
+int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err *err)
+{
+    fsio_atomic a;
+    int rc = fsio_atomic_open(&a, path, err);
+    if (rc)
+        return rc;
+    if (len && fwrite(data, 1, len, a.fp) != len) {
+        rc = glint_err_set(err, GLINT_EIO, "%s: write failed: %s", path, strerror(errno));
+        fsio_atomic_abort(&a);
+        return rc;
+    }
+    return fsio_atomic_commit(&a, err);
 }
 
 int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len, glint_err *err)

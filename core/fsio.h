@@ -6,10 +6,26 @@
 #define GLINT_FSIO_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "err.h"
 
-/* Write len bytes atomically to path. */
+/* An atomic write in progress: a temporary file (mode 0644, unique name
+ * "<path>.tmp-XXXXXX") in the target's directory, open for writing on
+ * `fp`.  Write to fp, then commit (flush, fsync, rename over the target,
+ * fsync the directory) or abort (remove the temporary file).  Either call
+ * releases everything; the target is untouched unless commit succeeds. */
+typedef struct fsio_atomic {
+    FILE *fp;
+    char *tmp;   /* temporary path (owned) */
+    char *path;  /* target path (owned copy) */
+} fsio_atomic;
+
+int fsio_atomic_open(fsio_atomic *a, const char *path, glint_err *err);
+int fsio_atomic_commit(fsio_atomic *a, glint_err *err);
+void fsio_atomic_abort(fsio_atomic *a);
+
+/* Write len bytes atomically to path (open + fwrite + commit). */
 int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err *err);
 
 /* Read a whole file (at most max_len bytes, else GLINT_ERANGE) into a

@@ -3,6 +3,7 @@
  * atomic file replacement live here; the pixels go through the
  * OpenImageIO shim in img_oiio.cpp (img_oiio.h). */
 #include "img.h"
+#include "fsio.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -350,103 +351,24 @@ static float *img_clamp_negative(const img *im)
     return q;
 }
 
-/* fsync the directory holding `path` so the rename itself is durable.
- * Best effort: some file systems refuse, which loses nothing but
- * durability. */
-static void img_sync_dir(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    char *dir;
-    int fd;
-
-    if (!slash) {
-        dir = strdup(".");
-    } else {
-        size_t n = (size_t)(slash - path);
-        dir = malloc(n + 2);
-        if (dir) {
-            memcpy(dir, path, n ? n : 1);
-            dir[n ? n : 1] = '\0';
-        }
-    }
-    if (!dir)
-        return;
-    fd = open(dir, O_RDONLY);
-    if (fd >= 0) {
-        (void)fsync(fd);
-        close(fd);
-    }
-    free(dir);
-}
-
-/* Encode into a temporary file next to `path`, sync it, rename it over
- * `path`.  On any failure the temporary file is removed and `path` is
- * untouched. */
+/* Encode into a temporary file next to `path` and commit it over `path`
+ * (fsio.h): on any failure `path` is untouched. */
 static int img_write_atomic(const char *path, const char *oiio_fmt, int width,
                             int height, int nch, const char *const *names, int u8,
                             const void *data, glint_err *err)
 {
-    static const char suffix[] = ".tmp-XXXXXX";
-    size_t plen = strlen(path);
-    char *tmp;
-    FILE *fp = NULL;
-    int fd, rc;
+    fsio_atomic a;
+    int rc = fsio_atomic_open(&a, path, err);
 
-    tmp = malloc(plen + sizeof suffix);
-    if (!tmp)
-        return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", path);
-    memcpy(tmp, path, plen);
-    memcpy(tmp + plen, suffix, sizeof suffix);
-
-    fd = mkstemp(tmp);
-    if (fd < 0) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: cannot create a temporary file: %s",
-                           path, strerror(errno));
-        goto fail_create;
-    }
-    (void)fchmod(fd, 0644); /* mkstemp makes 0600; images are not secrets */
-    fp = fdopen(fd, "wb");
-    if (!fp) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: fdopen: %s", path, strerror(errno));
-        close(fd);
-        goto fail_written;
-    }
-
-    rc = img_oiio_write(oiio_fmt, fp, NULL, NULL, path, width, height, nch, names,
-                        u8, data, err);
     if (rc)
-        goto fail_open;
-    if (fflush(fp) != 0 || ferror(fp)) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: write error: %s", path,
-                           strerror(errno));
-        goto fail_open;
+        return rc;
+    rc = img_oiio_write(oiio_fmt, a.fp, NULL, NULL, path, width, height, nch, names, u8,
+                        data, err);
+    if (rc) {
+        fsio_atomic_abort(&a);
+        return rc;
     }
-    if (fsync(fileno(fp)) != 0) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: fsync: %s", path, strerror(errno));
-        goto fail_open;
-    }
-    if (fclose(fp) != 0) {
-        fp = NULL;
-        rc = glint_err_set(err, GLINT_EIO, "%s: close: %s", path, strerror(errno));
-        goto fail_written;
-    }
-    fp = NULL;
-    if (rename(tmp, path) != 0) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: rename from %s: %s", path, tmp,
-                           strerror(errno));
-        goto fail_written;
-    }
-    img_sync_dir(path);
-    free(tmp);
-    return 0;
-
-fail_open:
-    fclose(fp);
-fail_written:
-    unlink(tmp);
-fail_create:
-    free(tmp);
-    return rc;
+    return fsio_atomic_commit(&a, err);
 }
 
 /* Validate, check finiteness and channel support, quantize if 8-bit, then

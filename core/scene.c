@@ -2,6 +2,7 @@
  * (contract and conventions in scene.h; they follow
  * ../shared/reference/hf_ref.py, section 1 "Geometry"). */
 #include "scene.h"
+#include "fsio.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -703,51 +704,11 @@ done:
     return rc;
 }
 
-/* Write all of buf to fd, retrying short writes and EINTR. */
-static int scene_write_all(int fd, const char *buf, size_t n)
-{
-    while (n > 0) {
-        ssize_t w = write(fd, buf, n);
-        if (w < 0) {
-            if (errno == EINTR)
-                continue;
-            return -1;
-        }
-        buf += w;
-        n -= (size_t)w;
-    }
-    return 0;
-}
-
-/* Make the rename durable: fsync the directory holding `path` (best effort;
- * the file itself is already synced and the rename is atomic either way). */
-static void scene_sync_dir(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    char *dir;
-    int fd;
-
-    if (!slash)
-        dir = strdup(".");
-    else if (slash == path)
-        dir = strdup("/");
-    else
-        dir = strndup(path, (size_t)(slash - path));
-    if (!dir)
-        return;
-    fd = open(dir, O_RDONLY | O_DIRECTORY);
-    if (fd >= 0) {
-        (void)fsync(fd);
-        close(fd);
-    }
-    free(dir);
-}
-
 int scene_save(const scene *s, const char *path, glint_err *err)
 {
-    char *text = NULL, *tmp = NULL;
-    size_t plen;
-    int fd = -1, rc = 0;
+    fsio_atomic a;
+    char *text;
+    int rc;
 
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "scene_save: empty path");
@@ -757,53 +718,15 @@ int scene_save(const scene *s, const char *path, glint_err *err)
     text = scene_to_json(s, err); /* after validation it can only run out of memory */
     if (!text)
         return GLINT_ENOMEM;
-    /* Temporary file in the same directory, so that rename() is atomic. */
-    plen = strlen(path);
-    tmp = malloc(plen + sizeof ".tmp.XXXXXX");
-    if (!tmp) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory saving %s", path);
-        goto cleanup_text;
+    rc = fsio_atomic_open(&a, path, err);
+    if (rc == 0) {
+        if (fputs(text, a.fp) < 0 || fputc('\n', a.fp) == EOF) {
+            rc = glint_err_set(err, GLINT_EIO, "writing %s failed", path);
+            fsio_atomic_abort(&a);
+        } else {
+            rc = fsio_atomic_commit(&a, err);
+        }
     }
-    memcpy(tmp, path, plen);
-    memcpy(tmp + plen, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
-    fd = mkstemp(tmp);
-    if (fd < 0) {
-        rc = glint_err_set(err, GLINT_EIO, "creating a temporary file for %s: %s", path,
-                           strerror(errno));
-        goto cleanup_tmp;
-    }
-    (void)fchmod(fd, 0644); /* mkstemp makes 0600; a scene is not secret */
-    if (scene_write_all(fd, text, strlen(text)) != 0 || scene_write_all(fd, "\n", 1) != 0) {
-        rc = glint_err_set(err, GLINT_EIO, "writing %s: %s", tmp, strerror(errno));
-        goto cleanup_file;
-    }
-    if (fsync(fd) != 0) {
-        rc = glint_err_set(err, GLINT_EIO, "syncing %s: %s", tmp, strerror(errno));
-        goto cleanup_file;
-    }
-    if (close(fd) != 0) {
-        fd = -1;
-        rc = glint_err_set(err, GLINT_EIO, "closing %s: %s", tmp, strerror(errno));
-        goto cleanup_file;
-    }
-    fd = -1;
-    if (rename(tmp, path) != 0) {
-        rc = glint_err_set(err, GLINT_EIO, "renaming %s to %s: %s", tmp, path,
-                           strerror(errno));
-        goto cleanup_file;
-    }
-    scene_sync_dir(path);
-    free(tmp);
-    free(text);
-    return 0;
-
-cleanup_file:
-    if (fd >= 0)
-        close(fd);
-    unlink(tmp);
-cleanup_tmp:
-    free(tmp);
-cleanup_text:
     free(text);
     return rc;
 }
