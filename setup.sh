@@ -15,7 +15,8 @@ mode=${1:-}
 BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
-  libopenimageio-dev libmicrohttpd-dev libegl-dev libgles-dev libgl1-mesa-dri
+  libopenimageio-dev libmicrohttpd-dev libassimp-dev
+  libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.

@@ -1,0 +1,1 @@
+/* placeholder */ typedef int glint_placeholder_mesh_io;
