@@ -15,13 +15,14 @@ mode=${1:-}
 BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
-  libopenimageio-dev libmicrohttpd-dev libassimp-dev
+  libopenimageio-dev libmicrohttpd-dev libsqlite3-dev libassimp-dev
   libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
-  python3 python3-numpy python3-scipy openimageio-tools gnuplot-nox
+  python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml
+  openimageio-tools gnuplot-nox wrk
 )
 
 missing_packages() {

@@ -1,0 +1,278 @@
+/* glintd: the glint daemon.  Serves the browser studio (web/) at "/" and the
+ * REST API under /api/v1 (described in proto/openapi.yaml).
+ *
+ * Options override the config file (--config FILE, JSON with the same keys
+ * as the long options, e.g. {"port": 8080, "data_dir": "/var/lib/glint"}).
+ * SIGTERM or SIGINT: stop accepting, let in-flight requests finish, exit 0. */
+#include <errno.h>
+#include <getopt.h>
+#include <jansson.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "app.h"
+#include "fsio.h"
+
+static void usage(FILE *f)
+{
+    fputs("usage: glintd [options]\n"
+          "  --address ADDR        listen address (127.0.0.1)\n"
+          "  --port N              port, 0 for an ephemeral one (8080)\n"
+          "  --data-dir DIR        scenes, sessions, paintings, materials, cache (./glint-data)\n"
+          "  --web-dir DIR         static files served at / (./web)\n"
+          "  --cache-mb N          in-memory precomputation cache budget (512)\n"
+          "  --threads N           background job threads (2)\n"
+          "  --timeout S           idle connection timeout in seconds (30)\n"
+          "  --max-connections N   (256)\n"
+          "  --max-body-mb N       request body limit (32)\n"
+          "  --max-image-dim N     largest upload / raster side (4096)\n"
+          "  --max-mesh-tris N     largest uploaded mesh (2000000)\n"
+          "  --max-strokes N       strokes per request (1000)\n"
+          "  --api-key KEY         require this key for creation and scripting\n"
+          "  --config FILE         JSON config file (keys as the long options, '-' as '_')\n"
+          "  --port-file FILE      write the bound port there once listening\n"
+          "  --quiet               no request log\n",
+          f);
+}
+
+static void config_default(app_config *c)
+{
+    memset(c, 0, sizeof *c);
+    strcpy(c->address, "127.0.0.1");
+    c->port = 8080;
+    strcpy(c->data_dir, "glint-data");
+    strcpy(c->web_dir, "web");
+    c->cache_bytes = (size_t)512 << 20;
+    c->worker_threads = 2;
+    c->timeout_s = 30;
+    c->max_connections = 256;
+    c->lim.max_body = (size_t)32 << 20;
+    c->lim.max_image_dim = 4096;
+    c->lim.max_mesh_tris = 2000000;
+    c->lim.max_strokes = 1000;
+    c->lim.max_stroke_points = 10000;
+    c->lim.max_views = 64;
+}
+
+static int parse_long(const char *s, const char *what, long lo, long hi, long *out)
+{
+    char *end;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < lo || v > hi) {
+        fprintf(stderr, "glintd: %s '%s' must be a whole number in %ld..%ld\n", what, s, lo, hi);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+static int copy_str(char *dst, size_t cap, const char *src, const char *what)
+{
+    if (strlen(src) >= cap) {
+        fprintf(stderr, "glintd: %s too long\n", what);
+        return -1;
+    }
+    strcpy(dst, src);
+    return 0;
+}
+
+/* Apply one option (from the command line or the config file). */
+static int apply_opt(app_config *c, const char *name, const char *val)
+{
+    long v;
+    if (!strcmp(name, "address"))
+        return copy_str(c->address, sizeof c->address, val, "--address");
+    if (!strcmp(name, "data-dir"))
+        return copy_str(c->data_dir, sizeof c->data_dir, val, "--data-dir");
+    if (!strcmp(name, "web-dir"))
+        return copy_str(c->web_dir, sizeof c->web_dir, val, "--web-dir");
+    if (!strcmp(name, "api-key"))
+        return copy_str(c->api_key, sizeof c->api_key, val, "--api-key");
+    if (!strcmp(name, "port")) {
+        if (parse_long(val, "--port", 0, 65535, &v)) return -1;
+        c->port = (int)v;
+    } else if (!strcmp(name, "cache-mb")) {
+        if (parse_long(val, "--cache-mb", 1, 1 << 20, &v)) return -1;
+        c->cache_bytes = (size_t)v << 20;
+    } else if (!strcmp(name, "threads")) {
+        if (parse_long(val, "--threads", 1, 64, &v)) return -1;
+        c->worker_threads = (int)v;
+    } else if (!strcmp(name, "timeout")) {
+        if (parse_long(val, "--timeout", 1, 3600, &v)) return -1;
+        c->timeout_s = (unsigned)v;
+    } else if (!strcmp(name, "max-connections")) {
+        if (parse_long(val, "--max-connections", 1, 100000, &v)) return -1;
+        c->max_connections = (unsigned)v;
+    } else if (!strcmp(name, "max-body-mb")) {
+        if (parse_long(val, "--max-body-mb", 1, 4096, &v)) return -1;
+        c->lim.max_body = (size_t)v << 20;
+    } else if (!strcmp(name, "max-image-dim")) {
+        if (parse_long(val, "--max-image-dim", 8, 16384, &v)) return -1;
+        c->lim.max_image_dim = (int)v;
+    } else if (!strcmp(name, "max-mesh-tris")) {
+        if (parse_long(val, "--max-mesh-tris", 1, 1 << 24, &v)) return -1;
+        c->lim.max_mesh_tris = (int)v;
+    } else if (!strcmp(name, "max-strokes")) {
+        if (parse_long(val, "--max-strokes", 1, 1000000, &v)) return -1;
+        c->lim.max_strokes = (int)v;
+    } else {
+        fprintf(stderr, "glintd: unknown option '%s'\n", name);
+        return -1;
+    }
+    return 0;
+}
+
+static int load_config(app_config *c, const char *path)
+{
+    json_error_t e;
+    json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &e), *v;
+    const char *k;
+    int rc = 0;
+
+    if (!root) {
+        fprintf(stderr, "glintd: config %s: line %d: %s\n", path, e.line, e.text);
+        return -1;
+    }
+    if (!json_is_object(root)) {
+        fprintf(stderr, "glintd: config %s: expected a JSON object\n", path);
+        json_decref(root);
+        return -1;
+    }
+    json_object_foreach(root, k, v) {
+        char name[64], val[4096];
+        size_t i;
+        if (strlen(k) >= sizeof name) {
+            fprintf(stderr, "glintd: config %s: key too long\n", path);
+            rc = -1;
+            break;
+        }
+        for (i = 0; k[i]; i++)
+            name[i] = k[i] == '_' ? '-' : k[i];
+        name[i] = '\0';
+        if (json_is_string(v))
+            snprintf(val, sizeof val, "%s", json_string_value(v));
+        else if (json_is_integer(v))
+            snprintf(val, sizeof val, "%lld", (long long)json_integer_value(v));
+        else if (json_is_boolean(v) && !strcmp(name, "quiet")) {
+            c->quiet = json_is_true(v);
+            continue;
+        } else {
+            fprintf(stderr, "glintd: config %s: '%s' must be a string or an integer\n", path, k);
+            rc = -1;
+            break;
+        }
+        if (apply_opt(c, name, val)) {
+            fprintf(stderr, "glintd: (in config %s)\n", path);
+            rc = -1;
+            break;
+        }
+    }
+    json_decref(root);
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    static const struct option lo[] = {
+        {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
+        {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
+        {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
+        {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
+        {"max-body-mb", required_argument, 0, 1}, {"max-image-dim", required_argument, 0, 1},
+        {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
+        {"api-key", required_argument, 0, 1}, {"config", required_argument, 0, 2},
+        {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
+        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    app a;
+    const char *port_file = NULL;
+    int c, idx, port = 0, sig;
+    char err[256];
+    sigset_t set;
+    glint_err ge;
+    http_config hc;
+    http_route *routes;
+    int nroutes = 0;
+
+    memset(&a, 0, sizeof a);
+    config_default(&a.cfg);
+    /* the config file first, so that options override it */
+    for (int i = 1; i < argc - 1; i++)
+        if (!strcmp(argv[i], "--config") && load_config(&a.cfg, argv[i + 1]))
+            return 1;
+    while ((c = getopt_long(argc, argv, "h", lo, &idx)) != -1) {
+        if (c == 1) {
+            if (apply_opt(&a.cfg, lo[idx].name, optarg))
+                return 1;
+        } else if (c == 2) {
+            /* handled above */
+        } else if (c == 3) {
+            port_file = optarg;
+        } else if (c == 4) {
+            a.cfg.quiet = 1;
+        } else if (c == 'h') {
+            usage(stdout);
+            return 0;
+        } else {
+            usage(stderr);
+            return 1;
+        }
+    }
+    if (optind != argc) {
+        fprintf(stderr, "glintd: unexpected argument '%s'\n", argv[optind]);
+        return 1;
+    }
+    if (fsio_mkdirs(a.cfg.data_dir, &ge)) {
+        fprintf(stderr, "glintd: %s\n", ge.msg);
+        return 1;
+    }
+
+    /* Block the stop signals in every thread; the main thread waits for them. */
+    sigemptyset(&set);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &set, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    routes = calloc((size_t)api_core_nroutes, sizeof *routes);
+    if (!routes)
+        return 1;
+    memcpy(routes + nroutes, api_core_routes, (size_t)api_core_nroutes * sizeof *routes);
+    nroutes += api_core_nroutes;
+
+    memset(&hc, 0, sizeof hc);
+    hc.address = a.cfg.address;
+    hc.port = a.cfg.port;
+    hc.max_body = a.cfg.lim.max_body;
+    hc.timeout_s = a.cfg.timeout_s;
+    hc.max_connections = a.cfg.max_connections;
+    hc.static_dir = a.cfg.web_dir;
+    hc.quiet = a.cfg.quiet;
+    a.started = time(NULL);
+    if (http_server_start(&hc, routes, nroutes, &a, &a.http, &port, err, sizeof err)) {
+        fprintf(stderr, "glintd: %s\n", err);
+        free(routes);
+        return 1;
+    }
+    fprintf(stderr, "glintd: serving http://%s:%d/ (data %s)\n", a.cfg.address, port,
+            a.cfg.data_dir);
+    if (port_file) {
+        char buf[32];
+        int n = snprintf(buf, sizeof buf, "%d\n", port);
+        if (fsio_write_atomic(port_file, buf, (size_t)n, &ge))
+            fprintf(stderr, "glintd: %s\n", ge.msg);
+    }
+    if (sigwait(&set, &sig) == 0)
+        fprintf(stderr, "glintd: %s: finishing in-flight requests\n",
+                sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    http_server_stop(a.http);
+    free(routes);
+    fprintf(stderr, "glintd: stopped\n");
+    return 0;
+}

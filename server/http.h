@@ -1,0 +1,119 @@
+/* http.h: glintd's HTTP layer on libmicrohttpd: request bodies with a size
+ * limit, a routing table with path parameters, response helpers (JSON,
+ * RFC 9457 problem+json, bytes, files, server-sent events), one log line
+ * per request, and request metrics.
+ *
+ * A handler receives an http_req and returns an http_resp made by one of
+ * the http_* constructors below; the layer queues it, logs it and destroys
+ * it.  Handlers run on the connection's own thread (thread per connection),
+ * so they may block; long work belongs in a job (jobs.h).  Ownership:
+ * constructors take ownership of what they are given where the comment says
+ * "steals". */
+#ifndef GLINTD_HTTP_H
+#define GLINTD_HTTP_H
+
+#include <jansson.h>
+#include <microhttpd.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define HTTP_MAX_PARAMS 4
+
+typedef struct http_req {
+    const char *method;     /* "GET", "POST", ... */
+    const char *path;       /* URL path without the query */
+    struct MHD_Connection *conn;
+    const char *param[HTTP_MAX_PARAMS]; /* {placeholders} of the route, in order */
+    int nparam;
+    const char *body;       /* request body (NUL-terminated), or "" */
+    size_t body_len;
+    int body_too_large;     /* the body exceeded the limit (handler answers 413) */
+    void *app;              /* the application (http_server_start's `app`) */
+} http_req;
+
+typedef struct http_resp {
+    int status;
+    struct MHD_Response *r; /* owned until queued */
+} http_resp;
+
+typedef http_resp (*http_handler)(http_req *req);
+
+typedef struct http_route {
+    const char *method;     /* "GET", "POST", "PUT", "DELETE" */
+    const char *pattern;    /* "/api/v1/scenes/{id}/views/{k}/base.png" */
+    http_handler fn;
+} http_route;
+
+typedef struct http_server http_server;
+
+typedef struct http_config {
+    const char *address;    /* "127.0.0.1" (default), "0.0.0.0", "::1" */
+    int port;               /* 0 = ephemeral */
+    size_t max_body;        /* request body limit in bytes */
+    unsigned timeout_s;     /* idle connection timeout */
+    unsigned max_connections;
+    const char *static_dir; /* served at "/" (NULL: none) */
+    int quiet;              /* no request log lines */
+} http_config;
+
+/* Start serving `routes` (n entries, matched in order).  OUT: *out, and the
+ * bound port in *port_out. */
+int http_server_start(const http_config *cfg, const http_route *routes, int n, void *app,
+                      http_server **out, int *port_out, char *err, size_t errlen);
+
+/* Stop accepting, let in-flight requests finish, stop. */
+void http_server_stop(http_server *s);
+
+/* ---- responses ---------------------------------------------------------------- */
+
+/* JSON body (steals a reference to j). */
+http_resp http_json(int status, json_t *j);
+
+/* RFC 9457 problem: {"type", "title", "status", "detail"} as
+ * application/problem+json; `type` is a short slug ("invalid-json"), made
+ * into "https://glint.invalid/problems/<slug>" is NOT done: type is
+ * "about:blank" unless slug given, then "/problems/<slug>". */
+http_resp http_problem(int status, const char *slug, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Bytes copied into the response. */
+http_resp http_bytes(int status, const char *content_type, const void *data, size_t len);
+
+/* Bytes handed over (steals `data`, freed with free()). */
+http_resp http_bytes_owned(int status, const char *content_type, void *data, size_t len);
+
+/* A plain-text body. */
+http_resp http_text(int status, const char *content_type, const char *text);
+
+/* A streamed response (server-sent events): `cb` is MHD's content reader
+ * callback, `cls` its closure freed with `free_cls`. */
+http_resp http_stream(int status, const char *content_type, MHD_ContentReaderCallback cb,
+                      void *cls, MHD_ContentReaderFreeCallback free_cls);
+
+/* Add a header to a response before it is returned. */
+void http_header(http_resp *r, const char *name, const char *value);
+
+/* ---- request helpers ------------------------------------------------------------ */
+
+/* Query argument or NULL. */
+const char *http_query(const http_req *req, const char *name);
+
+/* Request header or NULL. */
+const char *http_header_in(const http_req *req, const char *name);
+
+/* Parse the body as a JSON object with depth and size limits.  On failure
+ * returns NULL and sets *problem to a 400/413/415/422 response. */
+json_t *http_body_json(http_req *req, http_resp *problem);
+
+/* Request counters for /metrics (see metrics.h). */
+typedef struct http_stats {
+    uint64_t requests;
+    uint64_t by_class[6];   /* 1xx..5xx by status / 100 */
+    uint64_t latency_bucket[12];
+    double latency_sum;
+} http_stats;
+
+void http_stats_get(http_server *s, http_stats *out);
+extern const double http_latency_bounds[12];
+
+#endif
