@@ -1,0 +1,142 @@
+"""Test harness for glintd integration tests: starts the real daemon on an
+ephemeral loopback port with a fresh data directory, talks HTTP to it, and
+validates every JSON body against the schemas in proto/schemas.
+
+usage in a test file:
+    from harness import Daemon, run_tests
+    def test_x(d): d.get("/healthz", schema="Health.json")
+    run_tests(globals())
+"""
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+
+import jsonschema
+import requests
+from referencing import Registry, Resource
+
+SRC = os.environ.get("GLINT_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+GLINTD = os.environ.get("GLINTD", os.path.join(SRC, "build", "server", "glintd"))
+SCHEMA_DIR = os.path.join(SRC, "proto", "schemas")
+
+
+def _registry():
+    reg = Registry()
+    for name in os.listdir(SCHEMA_DIR):
+        if name.endswith(".json"):
+            with open(os.path.join(SCHEMA_DIR, name)) as f:
+                doc = json.load(f)
+            reg = reg.with_resource(name, Resource.from_contents(doc))
+    return reg
+
+
+REGISTRY = _registry()
+
+
+def validate(body, schema_name):
+    """Validate a decoded JSON body against proto/schemas/<schema_name>."""
+    schema = REGISTRY.get_or_retrieve(schema_name).value.contents
+    jsonschema.Draft202012Validator(schema, registry=REGISTRY).validate(body)
+
+
+class Daemon:
+    """A running glintd; stop() sends SIGTERM and waits."""
+
+    def __init__(self, *args, data_dir=None):
+        self.tmp = tempfile.mkdtemp(prefix="glintd-test-")
+        self.data_dir = data_dir or os.path.join(self.tmp, "data")
+        self.args = list(args)
+        self.proc = None
+        self.start()
+
+    def start(self):
+        port_file = os.path.join(self.tmp, "port")
+        if os.path.exists(port_file):
+            os.unlink(port_file)
+        self.log = open(os.path.join(self.tmp, "glintd.log"), "ab")
+        self.proc = subprocess.Popen(
+            [GLINTD, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
+             "--web-dir", os.path.join(SRC, "web")] + self.args,
+            stdout=self.log, stderr=self.log)
+        deadline = time.time() + 20
+        while time.time() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError("glintd exited with %d; log: %s" % (self.proc.returncode, self.tmp))
+            if os.path.exists(port_file):
+                with open(port_file) as f:
+                    txt = f.read().strip()
+                if txt:
+                    self.port = int(txt)
+                    self.base = "http://127.0.0.1:%d" % self.port
+                    return
+            time.sleep(0.02)
+        raise RuntimeError("glintd did not start")
+
+    def stop(self, sig=signal.SIGTERM):
+        if self.proc and self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            try:
+                self.proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.log.close()
+
+    def kill9(self):
+        self.stop(signal.SIGKILL)
+
+    def request(self, method, path, status=None, schema=None, **kw):
+        """HTTP request; checks the status, validates JSON (problem bodies
+        against Problem.json, others against `schema`) and returns the response."""
+        r = requests.request(method, self.base + path, timeout=60, **kw)
+        if status is not None:
+            assert r.status_code == status, "%s %s: status %d, want %d: %s" % (
+                method, path, r.status_code, status, r.text[:500])
+        ctype = r.headers.get("Content-Type", "")
+        if ctype.startswith("application/problem+json"):
+            validate(r.json(), "Problem.json")
+            assert r.status_code >= 400
+        elif schema is not None:
+            validate(r.json(), schema)
+        return r
+
+    def get(self, path, **kw):
+        return self.request("GET", path, **kw)
+
+    def post(self, path, **kw):
+        return self.request("POST", path, **kw)
+
+    def put(self, path, **kw):
+        return self.request("PUT", path, **kw)
+
+    def delete(self, path, **kw):
+        return self.request("DELETE", path, **kw)
+
+
+def run_tests(namespace, daemon_args=()):
+    """Run every test_* function of a module, each given a shared Daemon;
+    print one line per test and 'N passed, N failed'; exit non-zero on failure."""
+    d = Daemon(*daemon_args)
+    passed = failed = 0
+    try:
+        for name, fn in sorted(namespace.items()):
+            if not name.startswith("test_") or not callable(fn):
+                continue
+            try:
+                fn(d)
+                print("ok   " + name)
+                passed += 1
+            except Exception:
+                print("FAIL " + name)
+                traceback.print_exc(file=sys.stdout)
+                failed += 1
+            sys.stdout.flush()
+    finally:
+        d.stop()
+    print("%d passed, %d failed" % (passed, failed))
+    sys.exit(1 if failed else 0)
