@@ -18,30 +18,31 @@ import traceback
 
 import jsonschema
 import requests
-from referencing import Registry, Resource
 
 SRC = os.environ.get("GLINT_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 GLINTD = os.environ.get("GLINTD", os.path.join(SRC, "build", "server", "glintd"))
 SCHEMA_DIR = os.path.join(SRC, "proto", "schemas")
 
 
-def _registry():
-    reg = Registry()
+def _schemas():
+    store = {}
     for name in os.listdir(SCHEMA_DIR):
         if name.endswith(".json"):
             with open(os.path.join(SCHEMA_DIR, name)) as f:
-                doc = json.load(f)
-            reg = reg.with_resource(name, Resource.from_contents(doc))
-    return reg
+                store[name] = json.load(f)
+    return store
 
 
-REGISTRY = _registry()
+SCHEMAS = _schemas()
 
 
 def validate(body, schema_name):
-    """Validate a decoded JSON body against proto/schemas/<schema_name>."""
-    schema = REGISTRY.get_or_retrieve(schema_name).value.contents
-    jsonschema.Draft202012Validator(schema, registry=REGISTRY).validate(body)
+    """Validate a decoded JSON body against proto/schemas/<schema_name>
+    (cross-file $refs such as {"$ref": "Scene.json"} resolve by file name).
+    Debian 12's jsonschema 4.10 resolves them through RefResolver."""
+    schema = SCHEMAS[schema_name]
+    resolver = jsonschema.RefResolver(base_uri="", referrer=schema, store=SCHEMAS)
+    jsonschema.Draft202012Validator(schema, resolver=resolver).validate(body)
 
 
 class Daemon:
