@@ -36,16 +36,31 @@ typedef struct app_config {
     app_limits lim;
 } app_config;
 
+struct store;
+struct events;
+struct fitsvc;
+struct glr;
+
 typedef struct app {
     app_config cfg;
     time_t started;
     http_server *http;
-    void *store;              /* store.h */
-    void *cache;              /* pcache in memory (later) */
+    struct store *store;      /* store.h: SQLite + blobs */
+    struct events *events;    /* events.h: per-session SSE streams */
+    struct fitsvc *fits;      /* fitsvc.h: precomputation cache, jobs */
+    struct glr *gl;           /* glr.h: EGL renderer, opened lazily; */
+    pthread_mutex_t gl_lock;  /* one thread at a time uses it */
+    int gl_failed;            /* 1 after glr_open failed (previews then use the CPU) */
 } app;
 
 /* Routes of each api module (defined in api_*.c). */
 extern const http_route api_core_routes[];
 extern const int api_core_nroutes;
+extern const http_route api_scenes_routes[];     /* scenes, meshes */
+extern const int api_scenes_nroutes;
+extern const http_route api_sessions_routes[];   /* sessions, paintings, strokes, events */
+extern const int api_sessions_nroutes;
+extern const http_route api_fits_routes[];       /* fits, jobs, materials, methods */
+extern const int api_fits_nroutes;
 
 #endif

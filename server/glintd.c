@@ -16,7 +16,10 @@
 #include <unistd.h>
 
 #include "app.h"
+#include "events.h"
+#include "fitsvc.h"
 #include "fsio.h"
+#include "store.h"
 
 static void usage(FILE *f)
 {
@@ -240,11 +243,33 @@ int main(int argc, char **argv)
     pthread_sigmask(SIG_BLOCK, &set, NULL);
     signal(SIGPIPE, SIG_IGN);
 
-    routes = calloc((size_t)api_core_nroutes, sizeof *routes);
-    if (!routes)
-        return 1;
-    memcpy(routes + nroutes, api_core_routes, (size_t)api_core_nroutes * sizeof *routes);
-    nroutes += api_core_nroutes;
+    {
+        char cache_dir[4200];
+        snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
+        if (store_open(a.cfg.data_dir, &a.store, &ge) || events_open(&a.events) ||
+            fitsvc_open(cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, &a.fits, &ge)) {
+            fprintf(stderr, "glintd: %s\n", ge.msg);
+            return 1;
+        }
+    }
+    pthread_mutex_init(&a.gl_lock, NULL);
+
+    {
+        const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
+                                      api_fits_routes};
+        const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
+                              api_fits_nroutes};
+        int total = 0;
+        for (int i = 0; i < 4; i++)
+            total += counts[i];
+        routes = calloc((size_t)total, sizeof *routes);
+        if (!routes)
+            return 1;
+        for (int i = 0; i < 4; i++) {
+            memcpy(routes + nroutes, tables[i], (size_t)counts[i] * sizeof *routes);
+            nroutes += counts[i];
+        }
+    }
 
     memset(&hc, 0, sizeof hc);
     hc.address = a.cfg.address;
@@ -273,6 +298,10 @@ int main(int argc, char **argv)
                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
     http_server_stop(a.http);
     free(routes);
+    fitsvc_close(a.fits);
+    events_close(a.events);
+    store_close(a.store);
+    pthread_mutex_destroy(&a.gl_lock);
     fprintf(stderr, "glintd: stopped\n");
     return 0;
 }

@@ -1,0 +1,1 @@
+/* placeholder */ typedef int glint_placeholder_stroke;

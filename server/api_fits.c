@@ -1,0 +1,5 @@
+/* placeholder */
+#include "app.h"
+static http_resp placeholder(http_req *req) { (void)req; return http_problem(501, NULL, "not implemented yet"); }
+const http_route api_fits_routes[] = {{"GET", "/api/v1/_fits", placeholder}};
+const int api_fits_nroutes = 1;
