@@ -1,4 +1,491 @@
-/* placeholder */
+/* events.c: server-sent event streams per session (events.h).
+ *
+ * One hub per session with listeners: a generation counter bumped by every
+ * publish and the presence list.  A stream runs on its connection's own
+ * thread (libmicrohttpd thread per connection): MHD calls the content
+ * reader, which hands out buffered bytes or, when it has none, reads the
+ * session's log after the last sequence number it sent, the presence list
+ * when it changed, or waits on the module's condition variable.  Waits are
+ * short (EVENTS_POLL_MS) so a stream notices at once when its client has
+ * gone (the socket reads EOF or hangs up) or the daemon stops. */
 #include "events.h"
-int events_open(events **out) { *out = NULL; return 0; }
-void events_close(events *ev) { (void)ev; }
+
+#include <errno.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+
+#include "app.h"
+#include "store.h"
+
+#define EVENTS_POLL_MS 250
+#define EVENTS_BATCH 64        /* log rows read per wake-up */
+#define EVENTS_NAME_MAX 64
+
+typedef struct ev_stream ev_stream;
+
+typedef struct ev_hub {
+    char session[33];
+    unsigned long gen;         /* bumped by every publish / notify */
+    unsigned long presence;    /* bumped when a listener joins or leaves */
+    ev_stream *listeners;
+    struct ev_hub *next;
+} ev_hub;
+
+struct events {
+    pthread_mutex_t lock;
+    pthread_cond_t cond;       /* broadcast on every change */
+    ev_hub *hubs;
+    store *st;
+    int stopping;
+};
+
+struct ev_stream {
+    events *ev;
+    ev_hub *hub;
+    ev_stream *next;           /* in hub->listeners */
+    int fd;                    /* the client's socket, for hang-up checks (-1: unknown) */
+    int64_t last;              /* last sequence number sent */
+    unsigned long seen_gen;
+    unsigned long seen_presence;
+    int started;
+    char id[17];               /* this listener's id in presence */
+    char name[EVENTS_NAME_MAX + 1];
+    char *buf;                 /* pending output */
+    size_t len, off, cap;
+    struct timespec last_write;
+};
+
+int events_open(events **out)
+{
+    events *ev = calloc(1, sizeof *ev);
+    pthread_condattr_t ca;
+    *out = NULL;
+    if (!ev)
+        return GLINT_ENOMEM;
+    pthread_mutex_init(&ev->lock, NULL);
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&ev->cond, &ca);
+    pthread_condattr_destroy(&ca);
+    *out = ev;
+    return 0;
+}
+
+void events_shutdown(events *ev)
+{
+    if (!ev)
+        return;
+    pthread_mutex_lock(&ev->lock);
+    ev->stopping = 1;
+    pthread_cond_broadcast(&ev->cond);
+    pthread_mutex_unlock(&ev->lock);
+}
+
+void events_close(events *ev)
+{
+    ev_hub *h, *n;
+    if (!ev)
+        return;
+    /* glintd stops the HTTP server first, so no stream is left */
+    for (h = ev->hubs; h; h = n) {
+        n = h->next;
+        free(h);
+    }
+    pthread_cond_destroy(&ev->cond);
+    pthread_mutex_destroy(&ev->lock);
+    free(ev);
+}
+
+void events_attach_store(events *ev, store *s)
+{
+    if (!ev || !s)
+        return;
+    pthread_mutex_lock(&ev->lock);
+    ev->st = s;
+    pthread_mutex_unlock(&ev->lock);
+}
+
+/* The hub of a session (created on demand); ev->lock held. */
+static ev_hub *events_hub(events *ev, const char *session, int create)
+{
+    ev_hub *h;
+    for (h = ev->hubs; h; h = h->next)
+        if (strcmp(h->session, session) == 0)
+            return h;
+    if (!create)
+        return NULL;
+    h = calloc(1, sizeof *h);
+    if (!h)
+        return NULL;
+    snprintf(h->session, sizeof h->session, "%s", session);
+    h->next = ev->hubs;
+    ev->hubs = h;
+    return h;
+}
+
+/* Drop a hub nobody listens to; ev->lock held. */
+static void events_hub_release(events *ev, ev_hub *hub)
+{
+    ev_hub **p;
+    if (hub->listeners)
+        return;
+    for (p = &ev->hubs; *p; p = &(*p)->next)
+        if (*p == hub) {
+            *p = hub->next;
+            free(hub);
+            return;
+        }
+}
+
+void events_notify(events *ev, const char *session)
+{
+    ev_hub *h;
+    if (!ev || !session)
+        return;
+    pthread_mutex_lock(&ev->lock);
+    h = events_hub(ev, session, 0);
+    if (h) {
+        h->gen++;
+        pthread_cond_broadcast(&ev->cond);
+    }
+    pthread_mutex_unlock(&ev->lock);
+}
+
+void events_publish(events *ev, const char *session, const char *type, json_t *data)
+{
+    glint_err e;
+    store *st;
+
+    if (!ev || !session || !type) {
+        json_decref(data);
+        return;
+    }
+    if (strcmp(type, "stroke") == 0 || strcmp(type, "painting") == 0) {
+        json_decref(data);
+        events_notify(ev, session);
+        return;
+    }
+    if (strcmp(type, "presence") == 0) {
+        json_decref(data);
+        return;
+    }
+    pthread_mutex_lock(&ev->lock);
+    st = ev->st;
+    pthread_mutex_unlock(&ev->lock);
+    if (!st) {
+        fprintf(stderr, "glintd: events: no store attached, \"%s\" event of session %s lost\n",
+                type, session);
+    } else if (!json_is_object(data)) {
+        fprintf(stderr, "glintd: events: \"%s\" event of session %s has no JSON object, lost\n",
+                type, session);
+    } else if (store_event_append(st, session, type, -1, data, NULL, &e)) {
+        fprintf(stderr, "glintd: events: \"%s\" event of session %s lost: %s\n", type, session,
+                e.msg);
+    } else {
+        events_notify(ev, session);
+    }
+    json_decref(data);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Streams                                                                   */
+/* ------------------------------------------------------------------------ */
+
+static int stream_append(ev_stream *s, const char *text, size_t n)
+{
+    if (s->len + n + 1 > s->cap) {
+        size_t cap = s->cap ? s->cap : 4096;
+        char *b;
+        while (cap < s->len + n + 1)
+            cap *= 2;
+        b = realloc(s->buf, cap);
+        if (!b)
+            return -1;
+        s->buf = b;
+        s->cap = cap;
+    }
+    memcpy(s->buf + s->len, text, n);
+    s->len += n;
+    s->buf[s->len] = '\0';
+    return 0;
+}
+
+static int stream_appendf(ev_stream *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int stream_appendf(ev_stream *s, const char *fmt, ...)
+{
+    char tmp[256];
+    va_list ap;
+    int n;
+    va_start(ap, fmt);
+    n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n < 0 || (size_t)n >= sizeof tmp)
+        return -1;
+    return stream_append(s, tmp, (size_t)n);
+}
+
+/* One SSE event: optional id, type, one line of JSON. */
+static int stream_event(ev_stream *s, long long id, const char *type, const json_t *data)
+{
+    char *text = json_dumps(data, JSON_COMPACT | JSON_REAL_PRECISION(17));
+    int rc;
+    if (!text)
+        return -1;
+    rc = (id > 0 ? stream_appendf(s, "id: %lld\n", id) : 0) ||
+         stream_appendf(s, "event: %s\ndata: ", type) || stream_append(s, text, strlen(text)) ||
+         stream_append(s, "\n\n", 2);
+    free(text);
+    return rc ? -1 : 0;
+}
+
+/* The presence event of the stream's hub; ev->lock held. */
+static json_t *events_presence(ev_hub *hub)
+{
+    json_t *clients = json_array(), *o;
+    int n = 0;
+    for (ev_stream *l = hub->listeners; l; l = l->next) {
+        json_array_append_new(clients, json_pack("{s:s, s:s}", "id", l->id, "name", l->name));
+        n++;
+    }
+    o = json_pack("{s:s, s:o, s:i}", "type", "presence", "clients", clients, "count", n);
+    return o;
+}
+
+/* 1 when the client has gone (EOF, hang-up, error) or cannot be checked. */
+static int stream_client_gone(const ev_stream *s)
+{
+    struct pollfd p;
+    char c;
+    if (s->fd < 0)
+        return 0;
+    p.fd = s->fd;
+    p.events = POLLIN;
+    p.revents = 0;
+    if (poll(&p, 1, 0) <= 0)
+        return 0;
+    if (p.revents & (POLLHUP | POLLERR | POLLNVAL))
+        return 1;
+    if (p.revents & POLLIN) {
+        ssize_t n = recv(s->fd, &c, 1, MSG_PEEK | MSG_DONTWAIT);
+        if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR))
+            return 1;
+    }
+    return 0;
+}
+
+/* Read the log after s->last into the buffer.  Returns the number of rows
+ * read (EVENTS_BATCH means: maybe more), or -1 on a store error. */
+static int stream_read_log(ev_stream *s, store *st)
+{
+    json_t *arr = NULL, *rec;
+    glint_err e;
+    size_t i;
+    int n;
+
+    if (store_events_since(st, s->hub->session, s->last, EVENTS_BATCH, &arr, NULL, &e)) {
+        fprintf(stderr, "glintd: events of session %s: %s\n", s->hub->session, e.msg);
+        return -1;
+    }
+    n = (int)json_array_size(arr);
+    json_array_foreach(arr, i, rec) {
+        long long seq = json_integer_value(json_object_get(rec, "seq"));
+        const char *type = json_string_value(json_object_get(rec, "type"));
+        if (stream_event(s, seq, type ? type : "event", rec)) {
+            json_decref(arr);
+            return -1;
+        }
+        s->last = seq;
+    }
+    json_decref(arr);
+    return n;
+}
+
+static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
+{
+    ev_stream *s = cls;
+    events *ev = s->ev;
+    (void)pos;
+
+    for (;;) {
+        unsigned long gen, presence;
+        int stopping, gone;
+        store *st;
+
+        if (s->off < s->len) {
+            size_t n = s->len - s->off;
+            if (n > max)
+                n = max;
+            memcpy(out, s->buf + s->off, n);
+            s->off += n;
+            if (s->off == s->len)
+                s->off = s->len = 0;
+            clock_gettime(CLOCK_MONOTONIC, &s->last_write);
+            return (ssize_t)n;
+        }
+
+        pthread_mutex_lock(&ev->lock);
+        stopping = ev->stopping;
+        gen = s->hub->gen;
+        presence = s->hub->presence;
+        st = ev->st;
+        if (!stopping && s->started && gen == s->seen_gen && presence == s->seen_presence) {
+            /* nothing new: wait a little, then check the client and the clock */
+            struct timespec until;
+            clock_gettime(CLOCK_MONOTONIC, &until);
+            until.tv_nsec += (long)EVENTS_POLL_MS * 1000000L;
+            if (until.tv_nsec >= 1000000000L) {
+                until.tv_sec++;
+                until.tv_nsec -= 1000000000L;
+            }
+            pthread_cond_timedwait(&ev->cond, &ev->lock, &until);
+            stopping = ev->stopping;
+            gen = s->hub->gen;
+            presence = s->hub->presence;
+        }
+        pthread_mutex_unlock(&ev->lock);
+        if (stopping)
+            return MHD_CONTENT_READER_END_OF_STREAM;
+
+        if (!s->started) {
+            s->started = 1;
+            if (stream_appendf(s, "retry: 2000\n: glintd session %s\n\n", s->hub->session))
+                return MHD_CONTENT_READER_END_WITH_ERROR;
+            s->seen_gen = gen - 1; /* read the log at once (replay) */
+        }
+        if (gen != s->seen_gen) {
+            /* Note the generation before reading: a publish after this
+             * point bumps it again and triggers another read. */
+            int n;
+            if (!st)
+                return MHD_CONTENT_READER_END_WITH_ERROR;
+            n = stream_read_log(s, st);
+            if (n < 0)
+                return MHD_CONTENT_READER_END_WITH_ERROR;
+            if (n < EVENTS_BATCH)
+                s->seen_gen = gen;
+        }
+        if (presence != s->seen_presence) {
+            json_t *p;
+            pthread_mutex_lock(&ev->lock);
+            p = events_presence(s->hub);
+            s->seen_presence = s->hub->presence;
+            pthread_mutex_unlock(&ev->lock);
+            if (!p || stream_event(s, 0, "presence", p)) {
+                json_decref(p);
+                return MHD_CONTENT_READER_END_WITH_ERROR;
+            }
+            json_decref(p);
+        }
+        if (s->len > 0)
+            continue;
+        gone = stream_client_gone(s);
+        if (gone) /* (END_WITH_ERROR would log an "application error") */
+            return MHD_CONTENT_READER_END_OF_STREAM;
+        {
+            struct timespec now;
+            clock_gettime(CLOCK_MONOTONIC, &now);
+            if ((double)(now.tv_sec - s->last_write.tv_sec) +
+                    1e-9 * (double)(now.tv_nsec - s->last_write.tv_nsec) >=
+                EVENTS_KEEPALIVE_S) {
+                if (stream_append(s, ": keep-alive\n\n", 14))
+                    return MHD_CONTENT_READER_END_WITH_ERROR;
+            }
+        }
+    }
+}
+
+static void stream_free(void *cls)
+{
+    ev_stream *s = cls;
+    events *ev = s->ev;
+    ev_stream **p;
+
+    pthread_mutex_lock(&ev->lock);
+    for (p = &s->hub->listeners; *p; p = &(*p)->next)
+        if (*p == s) {
+            *p = s->next;
+            break;
+        }
+    s->hub->presence++;
+    pthread_cond_broadcast(&ev->cond);
+    events_hub_release(ev, s->hub);
+    pthread_mutex_unlock(&ev->lock);
+    free(s->buf);
+    free(s);
+}
+
+/* A presence name: printable, at most EVENTS_NAME_MAX bytes of valid
+ * UTF-8 (anything else becomes "anonymous"). */
+static void events_clean_name(const char *in, char *out)
+{
+    size_t n = 0;
+    json_t *probe;
+    if (in)
+        for (const unsigned char *c = (const unsigned char *)in; *c && n < EVENTS_NAME_MAX; c++)
+            if (*c >= 0x20 && *c != 0x7f)
+                out[n++] = (char)*c;
+    out[n] = '\0';
+    /* a cut in the middle of a multi-byte character: drop the tail */
+    while (n > 0 && !(probe = json_string(out)))
+        out[--n] = '\0';
+    if (n > 0)
+        json_decref(probe);
+    else
+        snprintf(out, EVENTS_NAME_MAX + 1, "anonymous");
+}
+
+http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
+                        const char *client_name)
+{
+    app *a = req->app;
+    ev_stream *s;
+    const union MHD_ConnectionInfo *ci;
+    char id[33];
+    http_resp r;
+
+    events_attach_store(ev, a->store);
+    s = calloc(1, sizeof *s);
+    if (!s || store_new_id(id, NULL)) {
+        free(s);
+        return http_problem(500, NULL, "out of memory opening an event stream");
+    }
+    s->ev = ev;
+    s->fd = -1;
+    ci = MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (ci)
+        s->fd = ci->connect_fd;
+    s->last = since > 0 ? since : 0;
+    memcpy(s->id, id, 16);
+    s->id[16] = '\0';
+    events_clean_name(client_name, s->name);
+    clock_gettime(CLOCK_MONOTONIC, &s->last_write);
+
+    pthread_mutex_lock(&ev->lock);
+    s->hub = events_hub(ev, session, 1);
+    if (!s->hub) {
+        pthread_mutex_unlock(&ev->lock);
+        free(s);
+        return http_problem(500, NULL, "out of memory opening an event stream");
+    }
+    s->next = s->hub->listeners;
+    s->hub->listeners = s;
+    s->hub->presence++;
+    s->seen_presence = s->hub->presence - 1; /* send presence first thing */
+    pthread_cond_broadcast(&ev->cond);
+    pthread_mutex_unlock(&ev->lock);
+
+    r = http_stream(200, "text/event-stream", stream_read, s, stream_free);
+    if (!r.r) {
+        stream_free(s);
+        return http_problem(500, NULL, "cannot create the event stream");
+    }
+    http_header(&r, "X-Accel-Buffering", "no");
+    return r;
+}

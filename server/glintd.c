@@ -252,6 +252,7 @@ int main(int argc, char **argv)
             return 1;
         }
     }
+    events_attach_store(a.events, a.store);
     pthread_mutex_init(&a.gl_lock, NULL);
 
     {
@@ -296,6 +297,7 @@ int main(int argc, char **argv)
     if (sigwait(&set, &sig) == 0)
         fprintf(stderr, "glintd: %s: finishing in-flight requests\n",
                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    events_shutdown(a.events); /* end the event streams, then the connections */
     http_server_stop(a.http);
     free(routes);
     fitsvc_close(a.fits);

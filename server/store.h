@@ -7,6 +7,26 @@
  * A call returns only after its data is durable: an answered request's
  * strokes, paintings and materials survive a crash.
  *
+ * Schema (version STORE_SCHEMA_VERSION, recorded in table schema_version;
+ * a database from a newer glintd is refused, never rewritten):
+ *   meshes(id, info, created)             uploaded mesh files, blob "meshes/<id>.<format>"
+ *   scenes(id, doc, created)              the API's scene objects
+ *   sessions(id, scene_id, doc, created, last_seq)
+ *   paintings(session, view, version, blob, updated)
+ *                                         current image of a view, blob
+ *                                         "sessions/<id>/view<k>-<random>.exr"
+ *   events(session, seq, type, view, data, created)
+ *                                         the session's durable event log:
+ *                                         "stroke", "painting", "fit", ...
+ *   materials(id, session, doc, created)
+ * Every session has ONE sequence (sessions.last_seq): strokes, painting
+ * uploads and published fits each take the next number, in commit order,
+ * so a reader that has seen everything up to N asks for "seq > N" and gets
+ * exactly what it missed.  A painting's blob gets a new name on every
+ * version; the previous file is removed after the commit, and files left by
+ * a crash between the two (or temporary files of an interrupted atomic
+ * write) are swept when the store opens.
+ *
  * Ids are 128 random bits as 32 lowercase hex digits (getrandom).
  * Thread-safety: every function may be called from any thread; the store
  * serializes access internally.  Strings returned through char** and json_t**
@@ -21,6 +41,8 @@
 
 #include "err.h"
 
+#define STORE_SCHEMA_VERSION 1
+
 typedef struct store store;
 
 int store_open(const char *data_dir, store **out, glint_err *err);
@@ -29,7 +51,18 @@ void store_close(store *s);
 /* 128 random bits as 32 hex digits + NUL (OUT: id[33]). */
 int store_new_id(char id[33], glint_err *err);
 
+/* 1 if `id` has the form of an id (32 lowercase hex digits). */
+int store_id_valid(const char *id);
+
+/* The current time as RFC 3339 UTC with milliseconds
+ * ("2024-05-01T12:00:00.123Z"; OUT: buf[32]). */
+void store_now(char buf[32]);
+
 /* ---- blobs (files under data_dir/blobs) ------------------------------------ */
+/* Names are relative paths of [A-Za-z0-9._-] segments separated by '/'
+ * (no "..", no leading '/'); parent directories are created.  put writes
+ * atomically and durably; get reads the whole file (OUT: *data malloc'ed,
+ * NUL appended, *len); GLINT_ENOTFOUND when absent. */
 int store_blob_put(store *s, const char *name, const void *data, size_t len, glint_err *err);
 int store_blob_get(store *s, const char *name, void **data, size_t *len, glint_err *err);
 /* Absolute path of a blob (OUT: buf). */
@@ -37,40 +70,94 @@ int store_blob_path(store *s, const char *name, char *buf, size_t len, glint_err
 int store_blob_delete(store *s, const char *name, glint_err *err);
 
 /* ---- meshes (uploaded files) -------------------------------------------------- */
-/* info: {"format": "ply", "triangles": n, "bytes": n, ...}; the file is a blob. */
+/* info: {"format": "ply", "triangles": n, "bytes": n, ...}; the file is the
+ * blob "meshes/<id>.<format>" (store_mesh_data reads it back). */
 int store_mesh_put(store *s, const char *id, const json_t *info, const void *data, size_t len,
                    glint_err *err);
 int store_mesh_get(store *s, const char *id, json_t **info, glint_err *err);
+/* The uploaded file's bytes and its format (OUT: *data malloc'ed, *len,
+ * format[16]). */
+int store_mesh_data(store *s, const char *id, void **data, size_t *len, char format[16],
+                    glint_err *err);
 
 /* ---- scenes -------------------------------------------------------------------------- */
 /* doc: the API's scene object (includes the glint scene JSON under "scene"). */
 int store_scene_put(store *s, const char *id, const json_t *doc, glint_err *err);
 int store_scene_get(store *s, const char *id, json_t **doc, glint_err *err);
+/* Every scene's doc, oldest first. */
 int store_scene_list(store *s, json_t **array, glint_err *err);
+/* Deletes the scene, its sessions with their events and paintings, and the
+ * blobs under "scenes/<id>/" and "sessions/<session>/" (materials stay). */
 int store_scene_delete(store *s, const char *id, glint_err *err);
 
+/* The core scene of a stored scene, ready to use: doc["scene"] (the glint
+ * scene JSON) with its mesh built (a built-in, doc["mesh"]) or loaded from
+ * the uploaded file (doc["mesh_id"], mesh_load_mem).  Scenes never change
+ * once created, so loaded scenes are shared and cached (a few, least
+ * recently used evicted).  OUT: *sc, read-only, valid until
+ * store_scene_release(s, *sc); the caller must not free it. */
+struct scene;
+struct img;
+int store_scene_acquire(store *s, const char *id, const struct scene **sc, glint_err *err);
+void store_scene_release(store *s, const struct scene *sc);
+
+/* The base render of view `view`: what a view looks like before anyone
+ * paints it, and what erase strokes bring back.  Painted on the CPU
+ * (raster_view + paint_views) with the BRDF and scale recorded in the
+ * scene's doc["base"] ({"brdf": spec, "scale": s}), so it never changes
+ * for a scene; cached as the blob "scenes/<id>/base<view>.exr".
+ * OUT: *out, float RGB of the raster's size (caller img_free's). */
+int store_scene_base(store *s, const char *id, int view, struct img *out, glint_err *err);
+
 /* ---- sessions ------------------------------------------------------------------------- */
-/* doc holds scene_id, created, and the two tokens (paint_token, view_token). */
+/* doc holds scene_id, created, and the two tokens (paint_token, view_token).
+ * put: GLINT_ENOTFOUND if the scene does not exist.  get: the stored doc
+ * with "last_seq" (the session's last sequence number, 0 if none) added. */
 int store_session_put(store *s, const char *id, const json_t *doc, glint_err *err);
 int store_session_get(store *s, const char *id, json_t **doc, glint_err *err);
 
 /* Paintings: the current image of view `view` of a session, as OpenEXR
- * bytes (float RGB, the raster's size).  version increments on each put. */
+ * bytes (float RGB, the raster's size).  version increments on each put
+ * (strokes included), from 1.  put also appends a "painting" event
+ * ({"view", "version"}) to the session's log in the same transaction
+ * (OUT: *seq, may be NULL).  get: GLINT_ENOTFOUND when the view was never
+ * painted (the caller then uses the base render). */
 int store_painting_put(store *s, const char *session, int view, const void *exr, size_t len,
-                       int64_t *version, glint_err *err);
+                       int64_t *version, int64_t *seq, glint_err *err);
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err);
+/* The painted views of a session: [{"view", "version", "updated"}] by view. */
+int store_paintings_list(store *s, const char *session, json_t **array, glint_err *err);
 
 /* Strokes: appended in one transaction with the painting they produced, so
- * the numbered history and the image never disagree.  OUT: *first_seq,
- * *last_seq (session-wide numbering from 1). */
+ * the numbered history and the image never disagree.  `strokes` is a JSON
+ * array of stroke objects (stored as given, one event each).  OUT:
+ * *first_seq, *last_seq (session-wide numbering from 1), *version (the
+ * painting's new version; may be NULL). */
 int store_strokes_append(store *s, const char *session, int view, const json_t *strokes,
                          const void *exr, size_t len, int64_t *first_seq, int64_t *last_seq,
-                         glint_err *err);
+                         int64_t *version, glint_err *err);
 /* Strokes with seq > since, in order, as a JSON array of
  * {"seq", "view", "stroke", "created"}. */
 int store_strokes_since(store *s, const char *session, int64_t since, json_t **array,
                         glint_err *err);
+/* The same, at most `limit` strokes.  OUT: *more = 1 when more follow;
+ * *last_seq: what the answer covers, to pass as `since` next time (the
+ * session's last sequence number, or the last stroke's when *more). */
+int store_strokes_page(store *s, const char *session, int64_t since, int limit, json_t **array,
+                       int *more, int64_t *last_seq, glint_err *err);
+
+/* ---- the session's event log ------------------------------------------------------------- */
+/* Append an event of `type` (not "stroke" or "painting", which the calls
+ * above append) with `data` (a JSON object, not stolen); view -1 for
+ * none.  OUT: *seq. */
+int store_event_append(store *s, const char *session, const char *type, int view,
+                       const json_t *data, int64_t *seq, glint_err *err);
+/* Events with seq > since, in order, at most `limit`, as a JSON array of
+ * {"seq", "type", "view" (absent when none), "data", "created"}.  OUT:
+ * *last_seq (may be NULL): the session's last sequence number. */
+int store_events_since(store *s, const char *session, int64_t since, int limit,
+                       json_t **array, int64_t *last_seq, glint_err *err);
 
 /* ---- materials ----------------------------------------------------------------------- */
 /* doc: the API's material object; files (material.json, factors.*, shader
