@@ -13,7 +13,7 @@ mode=${1:-}
 
 # Build and runtime dependencies (Debian 12 package names).
 BUILD_PKGS=(
-  gcc g++ meson ninja-build pkg-config
+  gcc g++ meson ninja-build pkg-config curl
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
   libopenimageio-dev libmicrohttpd-dev libsqlite3-dev libassimp-dev
   libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0
@@ -55,12 +55,45 @@ build() {
   ninja -C "$dir"
 }
 
+# The main job: glintd serving the studio on localhost, with a demo scene
+# (the built-in teapot, 12 views) and a painting session created through the
+# API on first start and reused afterwards.  Stops on Ctrl-C.
+json_field() {  # json_field NAME < json: the first string value of "NAME"
+  grep -o "\"$1\": *\"[^\"]*\"" | head -n1 | sed 's/.*: *"\(.*\)"/\1/'
+}
+
+run_daemon() {
+  local port=${GLINT_PORT:-8080} data=${GLINT_RUN_DATA:-out/glint-data}
+  local base="http://127.0.0.1:$port" demo sid tok scene
+  mkdir -p "$data"
+  ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web &
+  local pid=$!
+  trap 'kill -TERM $pid 2>/dev/null; wait $pid; exit 0' INT TERM
+  for _ in $(seq 100); do curl -fs "$base/healthz" >/dev/null && break; sleep 0.1; done
+  demo="$data/demo-session.json"
+  sid=$(json_field id < "$demo" 2>/dev/null || true)
+  tok=$(json_field paint_token < "$demo" 2>/dev/null || true)
+  if [ -z "$sid" ] || ! curl -fs "$base/api/v1/sessions/$sid?token=$tok" >/dev/null; then
+    scene=$(curl -fsS -X POST "$base/api/v1/scenes" -H 'Content-Type: application/json' \
+              -d '{"mesh": "teapot", "width": 256, "height": 256}' | json_field id)
+    curl -fsS -X POST "$base/api/v1/sessions" -H 'Content-Type: application/json' \
+         -d "{\"scene_id\": \"$scene\"}" > "$demo"
+    sid=$(json_field id < "$demo")
+    tok=$(json_field paint_token < "$demo")
+  fi
+  echo
+  echo "== glint studio: open $base/#/session/$sid?token=$tok"
+  echo "   (the REST API is under $base/api/v1, see README.md; Ctrl-C stops glintd)"
+  wait $pid
+}
+
 case "$mode" in
   run)
     install_packages "${BUILD_PKGS[@]}"
     build build
     echo "== glint demo (paint the built-in sphere, fit, render new views)"
     ./build/core/glint demo -o out/demo
+    run_daemon
     ;;
   test)
     install_packages "${BUILD_PKGS[@]}" "${TEST_PKGS[@]}"
