@@ -19,6 +19,7 @@
 #include "fit.h"
 #include "fsio.h"
 #include "gbuf.h"
+#include "glr.h"
 #include "hf.h"
 #include "img.h"
 #include "material.h"
@@ -374,11 +375,22 @@ static int cmd_scene(int argc, char **argv)
     optind = 2;
     while ((c = getopt_long(argc, argv, "m:s:v:l:d:o:h", lo, NULL)) != -1) {
         switch (c) {
-        case 'm':
-            if (strlen(optarg) >= sizeof p.mesh_name)
-                return fail(1, "--mesh name too long");
-            strcpy(p.mesh_name, optarg);
+        case 'm': {
+            /* a built-in name, or a mesh file (anything with a '/' or a '.') */
+            if (strchr(optarg, '/') || strchr(optarg, '.')) {
+                const char *base = strrchr(optarg, '/');
+                if (strlen(optarg) >= sizeof p.mesh_path)
+                    return fail(1, "--mesh path too long");
+                strcpy(p.mesh_path, optarg);
+                snprintf(p.mesh_name, sizeof p.mesh_name, "%.*s", (int)sizeof p.mesh_name - 1,
+                         base ? base + 1 : optarg);
+            } else {
+                if (strlen(optarg) >= sizeof p.mesh_name)
+                    return fail(1, "--mesh name too long");
+                strcpy(p.mesh_name, optarg);
+            }
             break;
+        }
         case 's':
             if ((rc = parse_size(optarg, &p.width, &p.height)))
                 return rc;
@@ -406,7 +418,7 @@ static int cmd_scene(int argc, char **argv)
             break;
         case 'o': out = optarg; break;
         default:
-            return fail(1, "usage: glint scene create [--mesh sphere] [--size N|WxH] [--views ico12|ico20] [--light-angles LO:HI[:mid]] [--distance D] -o scene.json");
+            return fail(1, "usage: glint scene create [--mesh sphere|torus|teapot|FILE] [--size N|WxH] [--views ico12|ico20] [--light-angles LO:HI[:mid]] [--distance D] -o scene.json");
         }
     }
     if (!out)
@@ -637,6 +649,156 @@ done:
     return rc;
 }
 
+/* ---- rendering engines ------------------------------------------------------- */
+
+/* The EGL renderer, opened on first use (NULL with a message on stderr if no
+ * platform works: callers fall back to the CPU unless --engine egl). */
+static glr *gl_ctx;
+static int gl_tried;
+
+static glr *gl_get(int required)
+{
+    glint_err e;
+    if (!gl_tried) {
+        gl_tried = 1;
+        if (glr_open(&gl_ctx, &e)) {
+            gl_ctx = NULL;
+            if (required)
+                fail(status_of(e.code), "%s", e.msg);
+            else
+                fprintf(stderr, "%s: EGL unavailable (%s); rendering on the CPU\n", cmd_name,
+                        e.msg);
+        }
+    }
+    return gl_ctx;
+}
+
+static void gl_release(void)
+{
+    if (gl_ctx)
+        glr_close(gl_ctx);
+    gl_ctx = NULL;
+}
+
+/* Render a material preview with the chosen engine ("auto", "egl", "cpu"). */
+static int render_material(const material *m, const mesh *msh, const scene_view *v, int w,
+                           int h, const char *engine, img *out)
+{
+    glint_err e;
+    glr *g = strcmp(engine, "cpu") == 0 ? NULL : gl_get(strcmp(engine, "egl") == 0);
+    if (!g && strcmp(engine, "egl") == 0)
+        return 1;
+    if (g) {
+        glr_mesh *gm = NULL;
+        int rc = glr_mesh_upload(g, msh, &gm, &e);
+        if (!rc)
+            rc = glr_preview(g, gm, m, v, w, h, 0.0f, out, &e);
+        glr_mesh_free(g, gm);
+        return rc ? fail_err(&e) : 0;
+    }
+    return material_render(m, msh, v, w, h, out, &e) ? fail_err(&e) : 0;
+}
+
+/* ---- base renders -------------------------------------------------------------- */
+
+static int cmd_base_render(int argc, char **argv)
+{
+    static const struct option lo[] = {{"out", required_argument, 0, 'o'},
+                                       {"brdf", required_argument, 0, 'b'},
+                                       {"scale", required_argument, 0, 's'},
+                                       {"engine", required_argument, 0, 'g'},
+                                       {"format", required_argument, 0, 'f'},
+                                       {0, 0, 0, 0}};
+    const char *out = NULL, *spec = "lambert:kd=0.6", *engine = "auto", *fmt = "png";
+    double scale = M_PI;
+    int c, rc = 0;
+    scene sc;
+    brdf b;
+    glint_err e;
+    glr *g = NULL;
+    glr_mesh *gm = NULL;
+    gbuf *gb = NULL;
+
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "o:b:s:g:f:", lo, NULL)) != -1) {
+        if (c == 'o') out = optarg;
+        else if (c == 'b') spec = optarg;
+        else if (c == 's') { if ((rc = parse_double(optarg, "--scale", 1e-9, 1e9, &scale))) return rc; }
+        else if (c == 'g') engine = optarg;
+        else if (c == 'f') fmt = optarg;
+        else return fail(1, "usage: glint base-render scene.json -o DIR [--brdf SPEC] [--scale S] [--engine auto|egl|cpu] [--format png|exr]");
+    }
+    if (!out || optind != argc - 1)
+        return fail(1, "usage: glint base-render scene.json -o DIR [--brdf SPEC] [--scale S] [--engine auto|egl|cpu] [--format png|exr]");
+    if (strcmp(engine, "auto") && strcmp(engine, "egl") && strcmp(engine, "cpu"))
+        return fail(1, "--engine '%s': auto, egl or cpu", engine);
+    if (strcmp(fmt, "png") && strcmp(fmt, "exr"))
+        return fail(1, "--format '%s': png or exr", fmt);
+    if (brdf_parse(spec, &b, &e))
+        return fail_err(&e);
+    if ((rc = load_scene(argv[optind], &sc)))
+        return rc;
+    if (fsio_mkdirs(out, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    if (strcmp(engine, "cpu") != 0)
+        g = gl_get(strcmp(engine, "egl") == 0);
+    if (!g && strcmp(engine, "egl") == 0) {
+        rc = 1;
+        goto done;
+    }
+    if (g && glr_mesh_upload(g, &sc.mesh, &gm, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    if (!g && (rc = raster_all(&sc, &gb)))
+        goto done;
+    for (int v = 0; v < sc.nviews; v++) {
+        img im = {0};
+        char path[4096];
+        int r;
+        if (g) {
+            r = glr_base_render(g, gm, &sc.views[v], sc.width, sc.height, &b, scale, 0.0f, &im, &e);
+        } else {
+            r = paint_views(&b, &gb[v], &sc.views[v], 1, scale, &im, NULL, &e);
+        }
+        snprintf(path, sizeof path, "%s/view_%02d.%s", out, v, fmt);
+        if (r || img_write(path, &im, &e)) {
+            img_free(&im);
+            rc = fail_err(&e);
+            goto done;
+        }
+        img_free(&im);
+        printf("%s\n", path);
+    }
+done:
+    if (g)
+        glr_mesh_free(g, gm);
+    raster_free_all(gb, sc.nviews);
+    scene_free(&sc);
+    return rc;
+}
+
+/* ---- shader export -------------------------------------------------------------- */
+
+static int cmd_export_shader(int argc, char **argv)
+{
+    material m;
+    glint_err e;
+    int rc = 0;
+    if (argc != 4 || strcmp(argv[2], "-o") != 0)
+        return fail(1, "usage: glint export-shader MATDIR -o DIR");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    if (glr_shader_export(&m, argv[3], &e))
+        rc = fail_err(&e);
+    else
+        printf("%s/glint_material.frag, .vert, glint_factors.exr, shader.json\n", argv[3]);
+    material_free(&m);
+    return rc;
+}
+
 /* ---- render ------------------------------------------------------------------- */
 
 static int cmd_render(int argc, char **argv)
@@ -646,8 +808,9 @@ static int cmd_render(int argc, char **argv)
         {"eye", required_argument, 0, 'e'}, {"target", required_argument, 0, 't'},
         {"light", required_argument, 0, 'l'}, {"fov", required_argument, 0, 'f'},
         {"intensity", required_argument, 0, 'i'}, {"size", required_argument, 0, 'z'},
-        {"out", required_argument, 0, 'o'}, {0, 0, 0, 0}};
-    const char *scene_path = NULL, *out = NULL;
+        {"engine", required_argument, 0, 'g'}, {"out", required_argument, 0, 'o'},
+        {0, 0, 0, 0}};
+    const char *scene_path = NULL, *out = NULL, *engine = "auto";
     int c, rc = 0, view = -1, w = 0, h = 0, have_eye = 0, have_light = 0;
     double eye[3], target[3] = {0, 0, 0}, light[3], fov = 0, intensity = 1.0;
     scene sc;
@@ -668,9 +831,14 @@ static int cmd_render(int argc, char **argv)
         case 'f': if ((rc = parse_double(optarg, "--fov", 1.0, 170.0, &fov))) return rc; break;
         case 'i': if ((rc = parse_double(optarg, "--intensity", 0.0, 1e9, &intensity))) return rc; break;
         case 'z': if ((rc = parse_size(optarg, &w, &h))) return rc; break;
+        case 'g':
+            if (strcmp(optarg, "auto") && strcmp(optarg, "egl") && strcmp(optarg, "cpu"))
+                return fail(1, "--engine '%s': auto, egl or cpu", optarg);
+            engine = optarg;
+            break;
         case 'o': out = optarg; break;
         default:
-            return fail(1, "usage: glint render MATDIR --scene scene.json (--view K | --eye X,Y,Z --light X,Y,Z) [--size WxH] -o image.png|exr");
+            return fail(1, "usage: glint render MATDIR --scene scene.json (--view K | --eye X,Y,Z --light X,Y,Z) [--size WxH] [--engine auto|egl|cpu] -o image.png|exr");
         }
     }
     if (!out || !scene_path || optind != argc - 1)
@@ -709,7 +877,9 @@ static int cmd_render(int argc, char **argv)
             goto done;
         }
     }
-    if (material_render(&m, &sc.mesh, &v, w, h, &im, &e) || img_write(out, &im, &e)) {
+    if ((rc = render_material(&m, &sc.mesh, &v, w, h, engine, &im)))
+        goto done;
+    if (img_write(out, &im, &e)) {
         rc = fail_err(&e);
         goto done;
     }
@@ -1071,7 +1241,7 @@ static void usage(FILE *f)
     fputs("glint " GLINT_VERSION ": paint how an object should look; glint finds the BRDF.\n"
           "\n"
           "usage: glint COMMAND [ARGS]\n"
-          "  scene create [--mesh sphere] [--size N|WxH] [--views ico12|ico20]\n"
+          "  scene create [--mesh sphere|torus|teapot|FILE] [--size N|WxH] [--views ico12|ico20]\n"
           "               [--light-angles LO:HI[:mid]] [--distance D] -o scene.json\n"
           "  scene show scene.json               describe a scene (hash, views, samples)\n"
           "  gbuffer scene.json -o DIR [--view K] G-buffers as OpenEXR (named channels)\n"
@@ -1080,8 +1250,12 @@ static void usage(FILE *f)
           "                                      (lambert, phong, blinn, ct, ward; e.g.\n"
           "                                      'ct:rough=0.2,kd=0.5,f0=0.3')\n"
           "  fit scene.json (--paintings DIR | FILE...) -o MATDIR [fit options]\n"
+          "  base-render scene.json -o DIR [--brdf SPEC] [--scale S] [--engine E]\n"
+          "                                      the images an artist paints over\n"
           "  render MATDIR --scene scene.json (--view K | --eye X,Y,Z --light X,Y,Z\n"
-          "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH] -o IMAGE\n"
+          "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH]\n"
+          "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
+          "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
           "  eval MATDIR --dirs FILE [-o OUT]    evaluate at direction pairs\n"
           "  export-samples scene.json [--paintings DIR] [--channel C] -o samples.txt\n"
           "  fit-samples samples.txt -o MATDIR [--eval samples.txt [--eval-out F]] [fit options]\n"
@@ -1108,7 +1282,8 @@ int main(int argc, char **argv)
         {"scene", cmd_scene}, {"gbuffer", cmd_gbuffer}, {"paint", cmd_paint},
         {"fit", cmd_fit}, {"render", cmd_render}, {"eval", cmd_eval},
         {"export-samples", cmd_export_samples}, {"fit-samples", cmd_fit_samples},
-        {"demo", cmd_demo}};
+        {"demo", cmd_demo}, {"base-render", cmd_base_render},
+        {"export-shader", cmd_export_shader}};
     static char name[64];
 
     if (argc < 2 || strcmp(argv[1], "help") == 0 || strcmp(argv[1], "--help") == 0 ||
@@ -1124,7 +1299,11 @@ int main(int argc, char **argv)
         if (strcmp(argv[1], cmds[i].name) == 0) {
             snprintf(name, sizeof name, "glint %s", cmds[i].name);
             cmd_name = name;
-            return cmds[i].fn(argc - 1, argv + 1);
+            {
+                int rc = cmds[i].fn(argc - 1, argv + 1);
+                gl_release();
+                return rc;
+            }
         }
     }
     fprintf(stderr, "glint: unknown command '%s' (try 'glint help')\n", argv[1]);
