@@ -1,0 +1,312 @@
+// Painting in the studio: the start page, strokes with the mouse in every
+// brush mode and their agreement with the server (within 1/255 on screen,
+// to the float in memory), undo and redo, reload, page-load time, the
+// eyedropper, keyboard, zoom and pan, a dropped photo, readable errors.
+import {
+  run, openStudio, drawStroke, settled, canvasPixels, serverPixels, floatDiff, maxDiff,
+  assert, assertLE, assertGE, assertEq, waitFor, sleep,
+} from './harness.mjs';
+
+async function setRange(page, id, v) {
+  await page.evaluate(([id, v]) => {
+    const el = document.getElementById(id);
+    el.value = v;
+    el.dispatchEvent(new Event('input', { bubbles: true }));
+  }, [id, String(v)]);
+}
+async function setChecked(page, id, on) {
+  if ((await page.isChecked('#' + id)) !== on) await page.click('#' + id);
+}
+async function setColor(page, hex) {
+  await page.evaluate(hex => { const c = document.getElementById('color'); c.value = hex; c.dispatchEvent(new Event('input', { bubbles: true })); }, hex);
+}
+async function agree(t, page, k, what) {
+  await settled(page, k);
+  const local = await canvasPixels(page), server = await serverPixels(page, k);
+  const d8 = maxDiff(local, server), df = await floatDiff(page, k);
+  t.log(`${what}: canvas vs server ${d8}/255 per channel, floats differ by ${df.toExponential(2)}`);
+  assertLE(d8, 1, what + ': canvas vs GET painting (1/255 units)');
+  assertLE(df, 1e-5, what + ': float image vs the server\'s EXR');
+  return local;
+}
+
+run({
+  async 'start page: create a scene and a session, see the views'(t) {
+    const page = await t.page();
+    await page.goto(t.daemon.base + '/');
+    await page.waitForSelector('#start:not(.hidden)');
+    await t.shot(page, '01-start.png');
+    await page.click('#shape-seg button[data-mesh="torus"]');
+    await page.selectOption('#size-sel', '128');
+    await page.click('#create-btn');
+    await page.waitForSelector('body[data-ready="1"]', { timeout: 20000 });
+    assert(/#\/session\/[0-9a-f]{32}\?token=/.test(page.url()), 'the URL is the session link: ' + page.url());
+    assertEq(await page.locator('#thumbs .thumb').count(), 12, 'thumbnails');
+    assertEq(await page.evaluate(() => window.glint.state.session.scene.mesh), 'torus', 'mesh');
+    await page.waitForFunction(() => window.glint.state.session.views.every(v => v.state === 'ready'));
+    await t.shot(page, '02-studio-empty.png');
+  },
+
+  async 'upload a mesh, make a scene of it and paint on it'(t) {
+    const page = await t.page();
+    await page.goto(t.daemon.base + '/');
+    await page.click('#shape-seg button[data-mesh="upload"]');
+    const obj = 'v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n' +
+      'f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n';
+    await page.setInputFiles('#mesh-file', { name: 'octahedron.obj', mimeType: 'text/plain', buffer: Buffer.from(obj) });
+    await page.waitForFunction(() => /8 triangles/.test(document.getElementById('mesh-info').textContent));
+    await page.selectOption('#size-sel', '128');
+    await page.click('#create-btn');
+    await page.waitForSelector('body[data-ready="1"]', { timeout: 20000 });
+    assertEq(await page.evaluate(() => window.glint.state.session.scene.mesh), 'upload', 'a scene of the uploaded mesh');
+    await drawStroke(page, [[40, 40], [90, 80]]);
+    await agree(t, page, 0, 'stroke on the uploaded mesh');
+  },
+
+  async 'mouse strokes in every mode agree with the server within 1/255'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 128, height: 128 });
+    const page = await t.page();
+    await openStudio(page, url);
+    // paint: white, soft
+    await setRange(page, 'diameter', 30); await setRange(page, 'kappa', 0.08);
+    await drawStroke(page, [[30, 40], [60, 50], [90, 45]]);
+    await agree(t, page, 0, 'paint');
+    // HDR: a red highlight above 1
+    await setChecked(page, 'hdr', true);
+    await page.fill('#intensity', '3.5'); await page.dispatchEvent('#intensity', 'input');
+    await setColor(page, '#ff4020');
+    await setRange(page, 'opacity', 0.7);
+    await drawStroke(page, [[40, 80], [70, 90]]);
+    await agree(t, page, 0, 'paint HDR 3.5');
+    const hdrMax = await page.evaluate(() => Math.max(...window.glint.state.session.views[0].conf.data));
+    assertGE(hdrMax, 2, 'the painting holds values above 1');
+    // negative: removes the highlight
+    await setChecked(page, 'hdr', false);
+    await page.keyboard.press('n');
+    await setColor(page, '#ffffff'); await setRange(page, 'opacity', 0.5);
+    await drawStroke(page, [[55, 40], [58, 100]]);
+    await agree(t, page, 0, 'negative color');
+    await page.keyboard.press('n');
+    // scale: darken by half
+    await page.keyboard.press('s');
+    await setRange(page, 'scale', 0.5); await setRange(page, 'opacity', 1); await setRange(page, 'kappa', 0);
+    await drawStroke(page, [[20, 20], [100, 100]]);
+    await agree(t, page, 0, 'scale S=0.5');
+    // erase: back to the base render
+    await page.keyboard.press('e');
+    await setRange(page, 'diameter', 16);
+    await drawStroke(page, [[30, 100], [100, 30]]);
+    await agree(t, page, 0, 'erase');
+    await page.keyboard.press('b');
+    // a dab (a click)
+    const [x, y] = [64, 64];
+    const box = await page.locator('#paint').boundingBox();
+    await page.mouse.click(box.x + x * box.width / 128, box.y + y * box.height / 128);
+    await agree(t, page, 0, 'dab');
+    await t.shot(page, '03-strokes.png');
+  },
+
+  async 'undo restores the canvas, redo brings the stroke back'(t) {
+    const { url, session } = await t.daemon.newSession({ mesh: 'sphere', width: 128, height: 128 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.keyboard.press('2');           // view 1
+    await page.waitForFunction(() => window.glint.state.k === 1 && window.glint.state.session.views[1].state === 'ready');
+    const before = await canvasPixels(page);
+    await setRange(page, 'diameter', 40);
+    await drawStroke(page, [[20, 60], [110, 70]]);
+    await settled(page, 1);
+    const after = await canvasPixels(page);
+    assertGE(maxDiff(before, after), 50, 'the stroke shows');
+    await page.keyboard.press('Control+z');
+    await waitFor(async () => maxDiff(await canvasPixels(page), before) === 0, 5000, 'undo on the canvas');
+    await settled(page, 1);
+    assertLE(maxDiff(await serverPixels(page, 1), before), 1, 'undo on the server');
+    await page.keyboard.press('Control+Shift+z');
+    await waitFor(async () => maxDiff(await canvasPixels(page), after) <= 1, 5000, 'redo on the canvas');
+    await settled(page, 1);
+    assertLE(maxDiff(await serverPixels(page, 1), after), 1, 'redo on the server');
+    // two strokes, undone in reverse order
+    await drawStroke(page, [[60, 10], [60, 120]]);
+    await settled(page, 1);
+    await page.keyboard.press('Control+z');
+    await waitFor(async () => maxDiff(await canvasPixels(page), after) <= 1, 5000, 'undo the 2nd stroke');
+    await page.keyboard.press('Control+z');
+    await waitFor(async () => maxDiff(await canvasPixels(page), before) <= 1, 5000, 'undo the 1st stroke');
+    await settled(page, 1);
+    assertLE(maxDiff(await serverPixels(page, 1), before), 1, 'both undone on the server');
+    // undo of my stroke keeps someone else's later stroke on top
+    await drawStroke(page, [[30, 30], [100, 100]]);
+    await settled(page, 1);
+    const other = { mode: 'paint', color: [0.9, 0.1, 0.1], diameter: 24, kappa: 0.02, opacity: 1, points: [[20, 100], [100, 20]] };
+    await t.daemon.api('POST', `/sessions/${session.id}/views/1/strokes`, { strokes: [other] }, { 'X-Glint-Token': session.paint_token });
+    await page.waitForFunction(() => window.glint.state.session.views[1].seq >= 8);
+    await page.click('#undo');
+    await settled(page, 1);
+    // expected: the base render with only the other person's stroke
+    const expected = await page.evaluate(async other => {
+      const { applyStroke } = await import('/brush.js');
+      const { cloneImage, to8 } = await import('/image.js');
+      const v = window.glint.state.session.views[1];
+      const im = cloneImage(v.base);
+      applyStroke(other, im, v.base);
+      const out = [];
+      for (let i = 0; i < im.w * im.h; i++) out.push(to8(im.data[3 * i]), to8(im.data[3 * i + 1]), to8(im.data[3 * i + 2]), 255);
+      return out;
+    }, other);
+    await waitFor(async () => maxDiff(await canvasPixels(page), expected) <= 1, 5000, 'undo under a later stroke');
+    assertLE(maxDiff(await serverPixels(page, 1), expected), 1, 'the server agrees');
+    await t.shot(page, '04-undo.png');
+  },
+
+  async 'reload keeps the paintings and the view'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'torus', width: 128, height: 128 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.keyboard.press('4');
+    await page.waitForFunction(() => window.glint.state.k === 3 && window.glint.state.session.views[3].state === 'ready');
+    await drawStroke(page, [[20, 20], [100, 40], [60, 110]]);
+    await settled(page, 3);
+    await page.keyboard.press('ArrowLeft');
+    await page.waitForFunction(() => window.glint.state.k === 2 && window.glint.state.session.views[2].state === 'ready');
+    await drawStroke(page, [[30, 60], [90, 60]]);
+    await settled(page, 2);
+    const v2 = await canvasPixels(page);
+    await page.reload();
+    await page.waitForSelector('body[data-ready="1"]');
+    assertEq(await page.evaluate(() => window.glint.state.k), 2, 'the view after reload');
+    assertEq(maxDiff(await canvasPixels(page), v2), 0, 'view 2 after reload');
+    await page.keyboard.press('ArrowRight');
+    await page.waitForFunction(() => window.glint.state.k === 3 && window.glint.state.session.views[3].state === 'ready');
+    assertLE(maxDiff(await canvasPixels(page), await serverPixels(page, 3)), 1, 'view 3 after reload');
+    await page.waitForFunction(() => document.querySelectorAll('#thumbs .thumb.painted').length === 2);
+  },
+
+  async 'page load to the first paintable view is under 1 s (warm cache)'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'teapot', width: 256, height: 256 });
+    const page = await t.page();
+    const cold = await openStudio(page, url);
+    const warm = [];
+    for (let i = 0; i < 5; i++) {
+      await page.reload();
+      await page.waitForSelector('body[data-ready="1"]');
+      warm.push(await page.evaluate(() => window.glint.paintableMs));
+    }
+    warm.sort((a, b) => a - b);
+    const med = warm[2];
+    console.log(`      page load to first paintable view: cold ${cold.toFixed(0)} ms, warm median ${med.toFixed(0)} ms (min ${warm[0].toFixed(0)}, max ${warm[4].toFixed(0)}; 256x256 teapot)`);
+    assertLE(med, 1000, 'warm page load (ms)');
+    // and it is paintable: a stroke goes through
+    await drawStroke(page, [[100, 100], [150, 120]]);
+    await settled(page, 0);
+  },
+
+  async 'eyedropper, brush-size keys, view keys, zoom and pan'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 96, height: 96 });
+    const page = await t.page();
+    await openStudio(page, url);
+    // eyedropper on an HDR dab
+    await setChecked(page, 'hdr', true);
+    await page.fill('#intensity', '2'); await page.dispatchEvent('#intensity', 'input');
+    await setColor(page, '#80ff40'); await setRange(page, 'kappa', 0); await setRange(page, 'diameter', 20);
+    await drawStroke(page, [[48, 48], [50, 48]]);
+    await settled(page, 0);
+    await setChecked(page, 'hdr', false); await setColor(page, '#000000');
+    await page.keyboard.press('i');
+    const box = await page.locator('#paint').boundingBox();
+    await page.mouse.click(box.x + 49 * box.width / 96, box.y + 48.5 * box.height / 96);
+    assertEq(await page.inputValue('#color'), '#80ff40', 'picked color');
+    assert(await page.isChecked('#hdr'), 'picked HDR value turns HDR on');
+    assertLE(Math.abs(+await page.inputValue('#intensity') - 2), 1e-3, 'picked intensity');
+    assertEq(await page.evaluate(() => window.glint.state.tool), 'paint', 'back to paint after picking');
+    // [ and ]
+    const d0 = +await page.inputValue('#diameter');
+    await page.keyboard.press(']'); await page.keyboard.press(']');
+    const d1 = +await page.inputValue('#diameter');
+    await page.keyboard.press('[');
+    const d2 = +await page.inputValue('#diameter');
+    assert(d1 > d0 && d2 < d1, `diameter keys: ${d0} -> ${d1} -> ${d2}`);
+    // views
+    await page.keyboard.press('7');
+    await page.waitForFunction(() => window.glint.state.k === 6);
+    await page.keyboard.press('ArrowRight');
+    await page.waitForFunction(() => window.glint.state.k === 7);
+    // zoom and pan
+    const z0 = await page.evaluate(() => window.glint.state.painter.zoom);
+    await page.keyboard.press('+');
+    const z1 = await page.evaluate(() => window.glint.state.painter.zoom);
+    assertGE(z1, z0 * 1.2, 'zoom in');
+    await page.mouse.move(box.x + 10, box.y + 10);
+    await page.mouse.wheel(0, 300);
+    const z2 = await page.evaluate(() => window.glint.state.painter.zoom);
+    assert(z2 < z1, 'wheel zooms out');
+    const p0 = await page.evaluate(() => [window.glint.state.painter.panX, window.glint.state.painter.panY]);
+    await page.keyboard.down(' ');
+    await page.mouse.move(box.x + 50, box.y + 50);
+    await page.mouse.down(); await page.mouse.move(box.x + 120, box.y + 90, { steps: 4 }); await page.mouse.up();
+    await page.keyboard.up(' ');
+    const p1 = await page.evaluate(() => [window.glint.state.painter.panX, window.glint.state.painter.panY]);
+    assertLE(Math.abs(p1[0] - p0[0] - 70) + Math.abs(p1[1] - p0[1] - 40), 2, 'space-drag pans by the drag');
+    const seq = await page.evaluate(() => window.glint.state.session.appliedSeq);
+    assertEq(seq, 1, 'panning painted nothing');
+    await page.keyboard.press('0');
+    await page.keyboard.press('?');
+    await page.waitForSelector('#help-dlg:not(.hidden)');
+    await t.shot(page, '05-keyboard-help.png');
+    await page.keyboard.press('Escape');
+  },
+
+  async 'a dropped photo becomes the painting, compared with the base first'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 128, height: 128 });
+    const page = await t.page();
+    await openStudio(page, url);
+    // a 200x150 "photo": a gradient with a bright spot
+    await page.evaluate(async () => {
+      const c = new OffscreenCanvas(200, 150), g = c.getContext('2d');
+      const gr = g.createLinearGradient(0, 0, 200, 0); gr.addColorStop(0, '#203040'); gr.addColorStop(1, '#c0a080');
+      g.fillStyle = gr; g.fillRect(0, 0, 200, 150);
+      g.fillStyle = '#fff'; g.beginPath(); g.arc(120, 60, 20, 0, 7); g.fill();
+      const blob = await c.convertToBlob({ type: 'image/png' });
+      const dt = new DataTransfer();
+      dt.items.add(new File([blob], 'photo.png', { type: 'image/png' }));
+      const vp = document.getElementById('viewport');
+      vp.dispatchEvent(new DragEvent('dragover', { dataTransfer: dt, bubbles: true, cancelable: true }));
+      vp.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    });
+    await page.waitForSelector('#photo-bar:not(.hidden)');
+    await setRange(page, 'photo-opacity', 0.6);
+    await page.selectOption('#photo-fit', 'cover');
+    await t.shot(page, '06-photo-compare.png');
+    const staged = await page.evaluate(() => {
+      const im = window.glint.state.photo.image, out = [];
+      for (let i = 0; i < im.w * im.h; i++) out.push(...[0, 1, 2].map(c => Math.round(im.data[3 * i + c] * 255)), 255);
+      return out;
+    });
+    await page.click('#photo-apply');
+    await page.waitForSelector('#photo-bar.hidden', { state: 'attached' });
+    await settled(page, 0);
+    assertLE(maxDiff(await serverPixels(page, 0), staged), 1, 'the server has the photo');
+    assertLE(maxDiff(await canvasPixels(page), staged), 1, 'the canvas shows the photo');
+    // undo brings the base render back
+    await page.keyboard.press('Control+z');
+    await settled(page, 0);
+    const base = await page.evaluate(() => { const v = window.glint.state.session.views[0]; return Array.from(v.conf.data.slice(0, 300)).map((x, i) => x - v.base.data[i]); });
+    assertLE(Math.max(...base.map(Math.abs)), 0, 'undo of the photo');
+  },
+
+  async 'server refusals are shown with their problem detail'(t) {
+    t.allowConsole(/status of 422/);
+    const page = await t.page();
+    await page.goto(t.daemon.base + '/');
+    await page.click('#shape-seg button[data-mesh="upload"]');
+    await page.setInputFiles('#mesh-file', { name: 'broken.ply', mimeType: 'application/octet-stream', buffer: Buffer.from('ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n') });
+    const toast = page.locator('.toast.error').first();
+    await toast.waitFor({ timeout: 10000 });
+    const text = await toast.innerText();
+    t.log('toast: ' + text.replace(/\s+/g, ' ').slice(0, 160));
+    assert(/422/.test(text) && /Uploading the mesh/.test(text), 'the toast names the action and the status');
+    const err = await page.evaluate(() => window.glint.errors[window.glint.errors.length - 1]);
+    assert(err.detail && text.includes(err.detail.slice(0, 40)), 'the toast shows the server\'s detail: ' + err.detail);
+    await t.shot(page, '07-error.png');
+  },
+});

@@ -1,0 +1,709 @@
+// app.js: the glint studio.  Start page (new scene and session, join by
+// link, scenes on the server), then the studio of one session: views,
+// paint canvas and brush, fit, judge, export, presence and activity.
+// Everything it knows comes from glintd's API (api.js).
+
+import { Api, ApiError, parseRoute, sessionHash } from './api.js';
+import { Session } from './session.js';
+import { Painter } from './painter.js';
+import { blit, bitmapToImage, decodeImage, resizeImage } from './image.js';
+import { isEXR } from './exr.js';
+
+const $ = id => document.getElementById(id);
+const api = new Api();
+const state = { session: null, painter: null, fit: null, judge: null, k: 0, tool: 'paint', photo: null };
+window.glint = { state, api };     // for the tests and the curious
+
+// ---- toasts ---------------------------------------------------------------------------
+
+function toast(title, detail, kind, ms) {
+  const t = document.createElement('div');
+  t.className = 'toast' + (kind ? ' ' + kind : '');
+  const x = document.createElement('button'); x.className = 'x'; x.textContent = '×'; x.title = 'Dismiss';
+  x.onclick = () => t.remove();
+  const a = document.createElement('div'); a.className = 't'; a.textContent = title;
+  const b = document.createElement('div'); b.className = 'd'; b.textContent = detail || '';
+  t.append(x, a, b);
+  $('toasts').appendChild(t);
+  setTimeout(() => t.remove(), ms || (kind === 'error' ? 12000 : 4000));
+  return t;
+}
+
+function showError(e) {
+  if (e && e.name === 'AbortError') return;
+  if (e instanceof ApiError) {
+    const p = e.problem || {};
+    toast((e.what ? e.what + ' — ' : '') + (p.title || 'Error') + (e.status ? ' (' + e.status + ')' : ''), p.detail || e.message, 'error');
+  } else {
+    toast('Error', e && e.message ? e.message : String(e), 'error');
+  }
+  // kept for the tests: what the person was told
+  (window.glint.errors = window.glint.errors || []).push(e instanceof ApiError ? { status: e.status, ...e.problem } : { detail: String(e && e.message) });
+}
+window.addEventListener('unhandledrejection', ev => { showError(ev.reason); ev.preventDefault(); });
+
+// ---- names and recent sessions -------------------------------------------------------------
+
+function myName() {
+  let n = localStorage.getItem('glint.name');
+  if (!n) {
+    const a = ['amber', 'cobalt', 'coral', 'jade', 'ochre', 'slate', 'teal', 'umber', 'violet', 'sienna'];
+    n = a[Math.floor(Math.random() * a.length)] + '-' + Math.floor(100 + Math.random() * 900);
+    localStorage.setItem('glint.name', n);
+  }
+  return n;
+}
+function hue(s) { let h = 0; for (const c of s) h = (h * 31 + c.charCodeAt(0)) % 360; return h; }
+
+function remember(doc, scene, token) {
+  const list = JSON.parse(localStorage.getItem('glint.recent') || '[]').filter(r => r.id !== doc.id);
+  list.unshift({ id: doc.id, token, mesh: scene.mesh, size: scene.width + '×' + scene.height, access: doc.access, at: Date.now() });
+  localStorage.setItem('glint.recent', JSON.stringify(list.slice(0, 12)));
+}
+
+// ---- start page ------------------------------------------------------------------------------
+
+let startBound = false;
+async function showStart() {
+  $('studio').classList.add('hidden');
+  $('start').classList.remove('hidden');
+  $('share-btn').classList.add('hidden');
+  $('crumbs').textContent = 'material design by painting';
+  $('presence').textContent = '';
+  $('conn').className = 'conn hidden';
+  if (!startBound) bindStart();
+  renderRecent();
+  loadScenes();
+}
+
+function renderRecent() {
+  const ul = $('recent');
+  ul.textContent = '';
+  const list = JSON.parse(localStorage.getItem('glint.recent') || '[]');
+  if (!list.length) { ul.innerHTML = '<li class="muted">none yet</li>'; return; }
+  for (const r of list) {
+    const li = document.createElement('li');
+    const s = document.createElement('span');
+    s.textContent = `${r.mesh} ${r.size} · ${r.access === 'view' ? 'view only · ' : ''}${new Date(r.at).toLocaleString()}`;
+    const b = document.createElement('a'); b.className = 'button'; b.textContent = 'Open'; b.href = sessionHash(r.id, r.token);
+    li.append(s, b); ul.appendChild(li);
+  }
+}
+
+async function loadScenes() {
+  const ul = $('scenes');
+  try {
+    const r = await api.listScenes();
+    ul.textContent = '';
+    if (!r.scenes.length) { ul.innerHTML = '<li class="muted">none yet</li>'; return; }
+    for (const sc of r.scenes.slice().reverse()) {
+      const li = document.createElement('li');
+      const s = document.createElement('span');
+      s.textContent = `${sc.mesh} ${sc.width}×${sc.height} · ${sc.views.length} views · ${sc.id.slice(0, 8)}`;
+      s.title = sc.id;
+      const b = document.createElement('button'); b.textContent = 'New session';
+      b.onclick = () => startSession(sc).catch(showError);
+      li.append(s, b); ul.appendChild(li);
+    }
+  } catch (e) {
+    ul.innerHTML = '';
+    const li = document.createElement('li'); li.className = 'muted';
+    li.textContent = e.status === 401 ? 'This server needs its API key to list scenes (below).' : e.message;
+    ul.appendChild(li);
+  }
+}
+
+function bindStart() {
+  startBound = true;
+  let mesh = 'sphere', meshId = null;
+  for (const b of $('shape-seg').querySelectorAll('button')) {
+    b.onclick = () => {
+      for (const o of $('shape-seg').querySelectorAll('button')) o.classList.toggle('on', o === b);
+      mesh = b.dataset.mesh;
+      $('mesh-drop').classList.toggle('hidden', mesh !== 'upload');
+    };
+  }
+  const upload = async file => {
+    const ext = (file.name.split('.').pop() || '').toLowerCase();
+    if (!['ply', 'obj', 'off', 'gltf', 'glb', 'dae'].includes(ext)) { toast('Not a mesh file', `"${file.name}": use PLY, OBJ, OFF, glTF, GLB or DAE`, 'error'); return; }
+    $('mesh-info').textContent = 'uploading ' + file.name + '…';
+    try {
+      const m = await api.uploadMesh(new Uint8Array(await file.arrayBuffer()), ext);
+      meshId = m.id;
+      $('mesh-info').textContent = `${file.name}: ${m.triangles} triangles, ${m.vertices} vertices` + (m.report && m.report.normals_generated ? ', normals generated' : '');
+    } catch (e) { meshId = null; $('mesh-info').textContent = ''; showError(e); }
+  };
+  $('mesh-file').onchange = e => e.target.files[0] && upload(e.target.files[0]);
+  const dz = $('mesh-drop');
+  dz.ondragover = e => { e.preventDefault(); dz.classList.add('over'); };
+  dz.ondragleave = () => dz.classList.remove('over');
+  dz.ondrop = e => { e.preventDefault(); dz.classList.remove('over'); if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]); };
+  $('create-btn').onclick = async () => {
+    const size = +$('size-sel').value;
+    const spec = { width: size, height: size, views: $('viewset-sel').value };
+    if (mesh === 'upload') {
+      if (!meshId) { toast('No mesh yet', 'Upload a mesh file first, or pick a built-in shape.', 'error'); return; }
+      spec.mesh_id = meshId;
+    } else spec.mesh = mesh;
+    $('create-btn').disabled = true;
+    $('create-status').textContent = 'rendering the views…';
+    try {
+      const sc = await api.createScene(spec);
+      await startSession(sc);
+    } catch (e) { showError(e); } finally { $('create-btn').disabled = false; $('create-status').textContent = ''; }
+  };
+  $('join-btn').onclick = () => {
+    const v = $('join-link').value.trim();
+    const i = v.indexOf('#');
+    const r = parseRoute(i >= 0 ? v.slice(i) : v);
+    if (r.name !== 'session') { toast('Not a session link', 'A link looks like …/#/session/<id>?token=<token>', 'error'); return; }
+    location.hash = sessionHash(r.id, r.token);
+  };
+  $('apikey').value = api.apiKey;
+  $('apikey-save').onclick = () => { api.apiKey = $('apikey').value.trim(); localStorage.setItem('glint.apiKey', api.apiKey); loadScenes(); };
+}
+
+async function startSession(scene) {
+  const s = await api.createSession(scene.id);
+  location.hash = sessionHash(s.id, s.paint_token);
+}
+
+// ---- studio ------------------------------------------------------------------------------
+
+async function openStudio(route) {
+  performance.mark('glint-open');
+  $('start').classList.add('hidden');
+  $('studio').classList.remove('hidden');
+  api.token = route.token;
+  const S = new Session(api, route.id, route.token, myName());
+  state.session = S;
+  let k0;
+  try {
+    k0 = await S.open(route.view);
+  } catch (e) {
+    showError(e);
+    $('crumbs').textContent = 'cannot open this session';
+    return;
+  }
+  remember(S.doc, S.scene, route.token);
+  setupStudioUI(S);
+  selectView(k0, true);
+  performance.mark('glint-paintable');
+  window.glint.paintableMs = performance.now();
+  document.body.dataset.ready = '1';
+  // everything else follows
+  S.connect();
+  S.loadRest().then(() => { for (const v of S.views) drawThumb(v.k); }).catch(showError);
+  loadFitAndMaterials(S).catch(showError);
+}
+
+let uiBound = false;
+function setupStudioUI(S) {
+  const sc = S.scene;
+  $('crumbs').innerHTML = '';
+  const b = document.createElement('b'); b.textContent = sc.mesh;
+  $('crumbs').append(b, document.createTextNode(` ${sc.width}×${sc.height} · ${sc.views.length} views · session ${S.id.slice(0, 8)}` + (S.canPaint ? '' : ' · view only')));
+  $('share-btn').classList.remove('hidden');
+  $('readonly-badge').classList.toggle('hidden', S.canPaint);
+  $('viewport').classList.toggle('readonly', !S.canPaint);
+  for (const id of ['undo', 'redo']) $(id).disabled = true;
+  for (const el of $('toolbar').querySelectorAll('input, button')) if (!S.canPaint && !['pick', 'pan'].includes(el.dataset.tool)) el.disabled = true;
+  for (const p of S.doc.paintings || []) if (S.views[p.view]) S.views[p.view].painted = true;
+  if (!S.canPaint) state.tool = 'pan';     // a view-only link drags to look around
+  $('fit-btn').disabled = !S.canPaint;
+  $('fit-btn').title = S.canPaint ? 'Fit the painted views (F)' : 'view-only link: fitting needs the paint link';
+
+  // thumbnails
+  const th = $('thumbs');
+  th.textContent = '';
+  for (const v of S.views) {
+    const bt = document.createElement('button');
+    bt.className = 'thumb'; bt.dataset.k = v.k;
+    bt.title = `view ${v.k} (${v.k < 9 ? 'key ' + (v.k + 1) : 'arrows'}) · ${sc.views[v.k].samples} samples`;
+    const c = document.createElement('canvas'); c.width = sc.width; c.height = sc.height;
+    const lab = document.createElement('span'); lab.className = 'k'; lab.textContent = v.k;
+    const dot = document.createElement('span'); dot.className = 'dot'; dot.title = 'painted';
+    bt.append(c, lab, dot);
+    bt.onclick = () => selectView(v.k);
+    th.appendChild(bt);
+  }
+
+  const painter = new Painter({
+    viewport: $('viewport'), stage: $('stage'), paint: $('paint'), base: $('overlay-base'), photo: $('overlay-photo'), cursor: $('cursor'),
+  }, S, brush);
+  state.painter = painter;
+  painter.addEventListener('error', e => showError(e.detail));
+  painter.addEventListener('zoom', e => { $('zoom-v').textContent = Math.round(e.detail * 100) + '%'; });
+  painter.addEventListener('hover', e => {
+    const d = e.detail;
+    $('st-px').textContent = d ? `x ${d.x} y ${d.y} · ${d.rgb.map(x => x.toFixed(3)).join(' ')}` : '';
+  });
+  painter.addEventListener('pick', e => setColorFrom(e.detail));
+  painter.addEventListener('painting', () => {});
+
+  S.addEventListener('view', e => {
+    const { k, box } = e.detail;
+    if (k === state.k && !state.photo) painter.redraw(box);
+    scheduleThumb(k);
+  });
+  S.addEventListener('event', e => onSessionEvent(e.detail));
+  S.addEventListener('presence', e => renderPresence(e.detail));
+  S.addEventListener('connection', e => {
+    const c = $('conn');
+    c.className = 'conn ' + e.detail.state;
+    c.textContent = { open: 'live', connecting: 'connecting…', reconnecting: 'reconnecting…', failed: 'disconnected', closed: 'closed' }[e.detail.state] || e.detail.state;
+    c.title = e.detail.state === 'failed' ? 'The event stream was refused: ' + e.detail.detail : 'Live updates from the other people in this session';
+    if (e.detail.state === 'failed') toast('Live updates stopped', e.detail.detail, 'error');
+  });
+  S.addEventListener('history', () => updateUndo());
+  S.addEventListener('settled', () => updateUndo());
+  S.addEventListener('error', e => showError(e.detail));
+
+  for (const v of S.views) if (v.disp) scheduleThumb(v.k);
+  if (!uiBound) bindStudioControls();
+  uiBound = true;
+  updateBrushUI();
+  updateUndo();
+}
+
+function selectView(k, first) {
+  const S = state.session;
+  if (!S || k < 0 || k >= S.views.length) return;
+  if (state.photo) cancelPhoto();
+  state.k = k;
+  for (const t of $('thumbs').children) t.classList.toggle('on', +t.dataset.k === k);
+  const v = S.views[k];
+  const go = () => {
+    state.painter.show(k, !first);
+    const sv = S.scene.views[k];
+    $('st-view').textContent = `view ${k} · ${sv.samples} samples` + (sv.light_deg != null ? ` · light ${sv.light_deg.toFixed(0)}°` : '');
+    updateUndo();
+    history.replaceState(null, '', sessionHash(S.id, S.token, k));
+  };
+  if (v.state === 'none') {
+    S.loadViews([k]).then(go).catch(showError);
+  } else go();
+  if (state.judge && state.judge.mat && !state.judge.drag) state.judge.showDiff(k);
+}
+
+// thumbnails: at most one redraw per view per frame
+const thumbDirty = new Set();
+function scheduleThumb(k) {
+  if (!thumbDirty.size) requestAnimationFrame(() => { for (const j of thumbDirty) drawThumb(j); thumbDirty.clear(); });
+  thumbDirty.add(k);
+}
+function drawThumb(k) {
+  const v = state.session.views[k];
+  const bt = $('thumbs').children[k];
+  if (!bt || !v.disp) return;
+  blit(bt.querySelector('canvas').getContext('2d'), v.disp, null, state.painter ? state.painter.exposure : 1);
+  bt.classList.toggle('painted', !!v.painted);
+}
+
+// ---- brush ---------------------------------------------------------------------------------
+
+function hexToRgb(h) { return [1, 3, 5].map(i => parseInt(h.slice(i, i + 2), 16) / 255); }
+function rgbToHex(c) { return '#' + c.map(v => Math.round(Math.min(1, Math.max(0, v)) * 255).toString(16).padStart(2, '0')).join(''); }
+
+// The brush as the server takes it.
+function brush() {
+  const hdr = $('hdr').checked;
+  const inten = hdr ? Math.max(0, +$('intensity').value || 0) : 1;
+  const sign = $('neg').checked ? -1 : 1;
+  const c = hexToRgb($('color').value).map(v => +(sign * v * inten).toFixed(6));
+  return {
+    mode: state.tool === 'scale' ? 'scale' : state.tool === 'erase' ? 'erase' : 'paint',
+    color: c, diameter: +$('diameter').value, kappa: +$('kappa').value,
+    scale: +$('scale').value, opacity: +$('opacity').value,
+  };
+}
+
+function updateBrushUI() {
+  const b = brush();
+  $('diameter-v').textContent = b.diameter;
+  $('kappa-v').textContent = b.kappa.toFixed(3);
+  $('opacity-v').textContent = b.opacity.toFixed(2);
+  $('scale-v').textContent = b.scale.toFixed(2);
+  $('cval').textContent = '(' + b.color.map(v => v.toFixed(2)).join(', ') + ')';
+  $('intensity').classList.toggle('hidden', !$('hdr').checked);
+  $('scale-tb').classList.toggle('hidden', state.tool !== 'scale');
+  for (const t of $('tools').children) t.classList.toggle('on', t.dataset.tool === state.tool);
+  if (state.painter) {
+    state.painter.tool = state.tool;
+    $('viewport').classList.toggle('pick', state.tool === 'pick');
+    $('viewport').classList.toggle('pan', state.tool === 'pan');
+    state.painter.drawCursor();
+  }
+}
+
+function setTool(t) { state.tool = t; updateBrushUI(); }
+
+function setColorFrom(rgb) {
+  const mx = Math.max(...rgb.map(Math.abs));
+  const neg = rgb.every(v => v <= 0) && mx > 0;
+  const c = rgb.map(v => Math.abs(v));
+  if (mx > 1) { $('hdr').checked = true; $('intensity').value = mx.toFixed(3); $('color').value = rgbToHex(c.map(v => v / mx)); }
+  else { $('hdr').checked = false; $('intensity').value = 1; $('color').value = rgbToHex(c); }
+  $('neg').checked = neg;
+  if (state.tool === 'pick') state.tool = 'paint';
+  updateBrushUI();
+  toast('Color picked', '(' + rgb.map(v => v.toFixed(3)).join(', ') + ')');
+}
+
+function updateUndo() {
+  const S = state.session;
+  if (!S) return;
+  $('undo').disabled = !S.canUndo(state.k);
+  $('redo').disabled = !S.canRedo(state.k);
+}
+
+async function doUndo() {
+  const S = state.session;
+  if (!S.canUndo(state.k)) return;
+  try { await S.undo(state.k); } catch (e) { showError(e); }
+  updateUndo();
+}
+async function doRedo() {
+  const S = state.session;
+  if (!S.canRedo(state.k)) return;
+  try { await S.redo(state.k); } catch (e) { showError(e); }
+  updateUndo();
+}
+
+// ---- session events: activity, presence, fits ------------------------------------------------
+
+function onSessionEvent(ev) {
+  const S = state.session;
+  if ((ev.type === 'stroke' || ev.type === 'painting') && S.views[ev.view]) {
+    const v = S.views[ev.view];
+    const was = v.painted;
+    v.painted = true;
+    if (!was) { scheduleThumb(ev.view); if (state.fit) state.fit.renderQuality(); }
+    const mine = ev.type === 'stroke' && ev.data && String(ev.data.tag || '').startsWith(S.client + '-');
+    if (!mine && ev.seq > S.loadSeq) {
+      const bt = $('thumbs').children[ev.view];
+      if (bt) { bt.classList.remove('flash'); void bt.offsetWidth; bt.classList.add('flash'); }
+    }
+  }
+  if (ev.type === 'fit') onFitEvent(ev);
+  addActivity(ev);
+}
+
+function addActivity(ev) {
+  const ol = $('activity');
+  const li = document.createElement('li');
+  const t = (ev.created || '').slice(11, 19);
+  const d = ev.data || {};
+  let what;
+  const who = ev.type === 'stroke' && typeof d.tag === 'string' && d.tag.includes('~') ? d.tag.slice(d.tag.indexOf('~') + 1) : '';
+  if (ev.type === 'stroke') what = `<b>${d.mode}</b> v${ev.view} D${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
+  else if (ev.type === 'painting') what = `<b>image</b> v${ev.view}`;
+  else if (ev.type === 'fit') what = `<b>fit</b> ${d.summary ? d.summary.res + ' · ' + (+d.summary.rms_painted).toFixed(4) : ''}`;
+  else what = `<b>${ev.type}</b>`;
+  li.innerHTML = `<span class="num">#${ev.seq}</span> ${what}`;
+  const by = li.querySelector('.by');
+  if (by) by.textContent = who;
+  li.title = `${ev.type} #${ev.seq} at ${t}` + (ev.type === 'stroke' ? ` · ${JSON.stringify(d).slice(0, 200)}` : '');
+  li.dataset.seq = ev.seq;
+  if (ev.view != null) li.dataset.view = ev.view;
+  const first = ol.querySelector('li');
+  if (ev.seq < (first ? +first.dataset.seq || 0 : 0)) ol.insertBefore(li, $('earlier-li'));   // an older one
+  else ol.prepend(li);
+  const all = ol.querySelectorAll('li[data-seq]');
+  for (let i = 600; i < all.length; i++) all[i].remove();
+  earlierLink();
+}
+
+// "earlier": strokes before the ones the stream replayed (GET /strokes, paged)
+function earlierLink() {
+  const ol = $('activity');
+  const items = [...ol.querySelectorAll('li[data-seq]')];
+  const oldest = items.length ? Math.min(...items.map(li => +li.dataset.seq)) : 0;
+  let li = $('earlier-li');
+  if (oldest <= 1) { if (li) li.remove(); return; }
+  if (!li) { li = document.createElement('li'); li.id = 'earlier-li'; li.innerHTML = '<a href="javascript:void 0" id="earlier">earlier…</a>'; }
+  ol.appendChild(li);
+}
+
+async function loadEarlier() {
+  const S = state.session;
+  const items = [...$('activity').querySelectorAll('li[data-seq]')];
+  const oldest = Math.min(...items.map(li => +li.dataset.seq));
+  const from = Math.max(0, oldest - 1 - 300);
+  const r = await api.strokes(S.id, from, 300);
+  for (const s of r.strokes.filter(s => s.seq < oldest).reverse())
+    addActivity({ seq: s.seq, type: 'stroke', view: s.view, data: s.stroke, created: s.created });
+  earlierLink();
+}
+
+function renderPresence(clients) {
+  const box = $('presence');
+  box.textContent = '';
+  const me = myName();
+  let meShown = false;
+  for (const c of clients) {
+    const d = document.createElement('span');
+    d.className = 'who';
+    const isMe = c.name === me && !meShown;
+    if (isMe) { d.classList.add('me'); meShown = true; }
+    d.style.background = `hsl(${hue(c.name || c.id)} 60% 65%)`;
+    d.textContent = (c.name || 'anonymous').slice(0, 14);
+    d.title = (c.name || 'anonymous') + (isMe ? ' (you)' : '');
+    box.appendChild(d);
+  }
+  box.title = clients.length + ' here';
+}
+
+// ---- fits and materials -----------------------------------------------------------------------
+
+async function loadFitAndMaterials(S) {
+  const [{ FitPanel }, { Judge }] = await Promise.all([import('./fit.js'), import('./judge.js')]);
+  const fit = new FitPanel(api, S);
+  const judge = new Judge(api, S);
+  state.fit = fit; state.judge = judge;
+  fit.addEventListener('error', e => showError(e.detail));
+  judge.addEventListener('error', e => showError(e.detail));
+  judge.addEventListener('reset', () => judge.resetCamera(state.k));
+  judge.addEventListener('select-view', e => selectView(e.detail));
+  fit.addEventListener('material', e => {
+    const { material: m, ms, cached } = e.detail;
+    addMaterialOption(m, true);
+    showMaterial(m);
+    $('fit-result').innerHTML = `<span title="${cached ? 'the precomputation was in memory: fitted in the request' : 'the precomputation was built (a job)'}">${cached ? 'cached' : 'built'}</span> · <em>${ms < 1000 ? ms.toFixed(0) + ' ms' : (ms / 1000).toFixed(1) + ' s'}</em> · RMS <em>${m.errors.rms_painted.toFixed(4)}</em>`;
+    window.glint.lastFit = { id: m.id, ms, cached };
+  });
+  $('mat-sel').onchange = async () => {
+    const id = $('mat-sel').value;
+    if (!id) return;
+    try { showMaterial(await api.material(id)); } catch (e) { showError(e); }
+  };
+  await fit.load().catch(showError);
+  const list = await api.materials(S.id);
+  const mats = (list.materials || []).slice().sort((a, b) => (a.created || '').localeCompare(b.created || ''));
+  for (const m of mats) addMaterialOption(m, false);
+  if (mats.length) { const m = mats[mats.length - 1]; $('mat-sel').value = m.id; showMaterial(m); }
+  else { const o = document.createElement('option'); o.value = ''; o.textContent = 'no fit yet'; $('mat-sel').appendChild(o); }
+}
+
+function addMaterialOption(m, select) {
+  const sel = $('mat-sel');
+  for (const o of [...sel.options]) if (!o.value) o.remove();
+  if (![...sel.options].some(o => o.value === m.id)) {
+    const o = document.createElement('option');
+    o.value = m.id;
+    const t = (m.created || '').slice(11, 19);
+    o.textContent = `${t} · ${m.res} texels · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
+    sel.appendChild(o);
+  }
+  if (select) sel.value = m.id;
+}
+
+function showMaterial(m) {
+  state.material = m;
+  state.judge.setMaterial(m, state.k);
+}
+
+async function onFitEvent(ev) {
+  const S = state.session;
+  const id = ev.data && ev.data.material_id;
+  if (!id || !state.judge || ev.seq <= S.loadSeq) return;
+  // our own fit announces itself before its answer arrives: wait for it
+  if (state.fit && state.fit.busy) await state.fit.running;
+  if ([...$('mat-sel').options].some(o => o.value === id)) return;   // ours, already shown
+  try {
+    const m = await api.material(id);
+    addMaterialOption(m, $('follow').checked);
+    if ($('follow').checked) showMaterial(m);
+    toast('New fit', `${m.res} texels · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
+    if (state.fit) state.fit.refresh();
+  } catch (e) { showError(e); }
+}
+
+// ---- a photo dropped on the canvas -----------------------------------------------------------
+
+async function stagePhoto(file) {
+  const S = state.session;
+  if (!S.canPaint) { toast('View only', 'This link cannot change paintings.', 'error'); return; }
+  const buf = await file.arrayBuffer();
+  let source;
+  if (isEXR(buf)) source = { exr: await decodeImage(buf) };
+  else {
+    try { source = { bmp: await createImageBitmap(new Blob([buf]), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' }) }; }
+    catch (_) { toast('Not an image', `"${file.name}" cannot be read as PNG, JPEG, WebP or OpenEXR.`, 'error'); return; }
+  }
+  state.photo = { source, name: file.name };
+  $('photo-bar').classList.remove('hidden');
+  renderPhoto();
+}
+
+function photoImage() {
+  const S = state.session, w = S.scene.width, h = S.scene.height;
+  const src = state.photo.source;
+  if (src.exr) return resizeImage(src.exr, w, h);
+  return bitmapToImage(src.bmp, w, h, $('photo-fit').value);
+}
+
+function renderPhoto() {
+  if (!state.photo) return;
+  const img = photoImage();
+  state.photo.image = img;
+  const c = $('overlay-photo');
+  blit(c.getContext('2d'), img, null, state.painter.exposure);
+  c.classList.remove('hidden');
+  c.style.opacity = $('photo-opacity').value;
+  // under the photo: the base render, to line the two up
+  $('overlay-base').style.opacity = 1;
+}
+
+function cancelPhoto() {
+  state.photo = null;
+  $('photo-bar').classList.add('hidden');
+  $('overlay-photo').classList.add('hidden');
+  $('overlay-base').style.opacity = $('base-mix').value;
+  state.painter.redraw();
+}
+
+async function applyPhoto() {
+  const S = state.session, k = state.k;
+  const img = state.photo.image || photoImage();
+  $('photo-apply').disabled = true;
+  try {
+    await S.uploadImage(k, img);
+    cancelPhoto();
+    toast('Painting replaced', `view ${k} now shows ${state.photo ? state.photo.name : 'the image'}`);
+  } catch (e) { showError(e); } finally { $('photo-apply').disabled = false; }
+}
+
+// ---- controls and keyboard ----------------------------------------------------------------------
+
+function bindStudioControls() {
+  // buttons do not keep the keyboard focus (Space would press them again)
+  for (const b of document.querySelectorAll('#toolbar button, #statusbar button, #thumbs, .tabs button'))
+    b.addEventListener('mousedown', e => { if (e.target.closest('button')) e.preventDefault(); });
+  for (const b of $('tools').children) b.onclick = () => setTool(b.dataset.tool);
+  $('activity').onclick = e => {
+    const li = e.target.closest('li');
+    if (li && li.dataset.view !== undefined && li.dataset.view !== '') selectView(+li.dataset.view);
+    if (e.target.id === 'earlier') loadEarlier().catch(showError);
+  };
+  for (const id of ['color', 'neg', 'hdr', 'intensity', 'scale', 'diameter', 'kappa', 'opacity']) $(id).addEventListener('input', updateBrushUI);
+  $('undo').onclick = doUndo;
+  $('redo').onclick = doRedo;
+  $('zoom-in').onclick = () => state.painter.zoomAt(1.25);
+  $('zoom-out').onclick = () => state.painter.zoomAt(0.8);
+  $('zoom-fit').onclick = () => state.painter.fitToWindow();
+  $('base-mix').oninput = () => state.painter.setBaseMix(+$('base-mix').value);
+  $('exposure').onchange = () => { state.painter.setExposure(+$('exposure').value); for (const v of state.session.views) drawThumb(v.k); };
+  $('photo-opacity').oninput = () => { $('overlay-photo').style.opacity = $('photo-opacity').value; };
+  $('photo-fit').onchange = renderPhoto;
+  $('photo-apply').onclick = applyPhoto;
+  $('photo-cancel').onclick = cancelPhoto;
+
+  const vp = $('viewport');
+  vp.addEventListener('dragover', e => { e.preventDefault(); $('drop-hint').classList.remove('hidden'); });
+  vp.addEventListener('dragleave', () => $('drop-hint').classList.add('hidden'));
+  vp.addEventListener('drop', e => {
+    e.preventDefault();
+    $('drop-hint').classList.add('hidden');
+    const f = e.dataTransfer.files[0];
+    if (f) stagePhoto(f).catch(showError);
+  });
+
+  $('share-btn').onclick = () => {
+    const S = state.session, L = S.doc.links || {};
+    const abs = p => location.origin + location.pathname + p.replace(/^\//, '');
+    $('link-paint').value = L.paint ? abs(L.paint) : '(this is a view-only link)';
+    $('link-view').value = L.view ? abs(L.view) : '';
+    $('my-name').value = myName();
+    $('share-dlg').classList.remove('hidden');
+  };
+  $('share-close').onclick = () => $('share-dlg').classList.add('hidden');
+  for (const b of document.querySelectorAll('[data-copy]')) {
+    b.onclick = async () => {
+      const inp = $(b.dataset.copy);
+      inp.select();
+      try { await navigator.clipboard.writeText(inp.value); toast('Copied', inp.value); }
+      catch (_) { document.execCommand('copy'); }
+    };
+  }
+  $('name-save').onclick = () => {
+    const n = $('my-name').value.trim().slice(0, 40);
+    if (!n) return;
+    localStorage.setItem('glint.name', n);
+    const S = state.session;
+    S.name = n;
+    if (S.stream) { S.stream.opts.query.name = n; S.stream.drop(); }   // presence shows the new name
+    $('share-dlg').classList.add('hidden');
+  };
+  $('help-btn').onclick = () => $('help-dlg').classList.toggle('hidden');
+  $('help-close').onclick = () => $('help-dlg').classList.add('hidden');
+
+  document.addEventListener('keydown', onKey);
+  document.addEventListener('keyup', e => {
+    if (e.code === 'Space' && state.painter) { state.painter.spaceHeld = false; $('viewport').classList.remove('pan'); state.painter.drawCursor(); }
+  });
+}
+
+function onKey(e) {
+  if ($('studio').classList.contains('hidden') || !state.session) return;
+  const tag = (e.target.tagName || '').toLowerCase();
+  const typing = (tag === 'input' && !['range', 'checkbox', 'radio', 'color'].includes(e.target.type)) || tag === 'textarea' || tag === 'select';
+  if (e.key === 'Escape') {
+    for (const d of ['share-dlg', 'help-dlg']) $(d).classList.add('hidden');
+    if (state.photo) cancelPhoto();
+    return;
+  }
+  if (typing) return;
+  // a focused slider keeps its arrow keys
+  if (e.target.type === 'range' && /^Arrow/.test(e.key)) return;
+  const S = state.session, ctrl = e.ctrlKey || e.metaKey;
+  if (ctrl && (e.key === 'z' || e.key === 'Z')) { e.preventDefault(); if (e.shiftKey) doRedo(); else doUndo(); return; }
+  if (ctrl && (e.key === 'y' || e.key === 'Y')) { e.preventDefault(); doRedo(); return; }
+  if (ctrl || e.altKey) return;
+  const n = S.views.length;
+  if (/^[1-9]$/.test(e.key)) { if (+e.key - 1 < n) selectView(+e.key - 1); e.preventDefault(); return; }
+  switch (e.key) {
+    case 'ArrowRight': case 'ArrowDown': selectView((state.k + 1) % n); e.preventDefault(); return;
+    case 'ArrowLeft': case 'ArrowUp': selectView((state.k + n - 1) % n); e.preventDefault(); return;
+    case '[': case ']': {
+      const d = $('diameter'), v = +d.value;
+      d.value = e.key === ']' ? Math.min(+d.max, Math.max(v + 1, Math.round(v * 1.2))) : Math.max(+d.min, Math.min(v - 1, Math.round(v / 1.2)));
+      updateBrushUI(); return;
+    }
+    case 'b': case 'B': setTool('paint'); return;
+    case 's': case 'S': setTool('scale'); return;
+    case 'e': case 'E': setTool('erase'); return;
+    case 'i': case 'I': setTool('pick'); return;
+    case 'h': case 'H': setTool('pan'); return;
+    case 'n': case 'N': $('neg').checked = !$('neg').checked; updateBrushUI(); return;
+    case '+': case '=': state.painter.zoomAt(1.25); return;
+    case '-': case '_': state.painter.zoomAt(0.8); return;
+    case '0': state.painter.fitToWindow(); return;
+    case 'f': case 'F': if (state.fit && S.canPaint) state.fit.fit(); return;
+    case '?': $('help-dlg').classList.toggle('hidden'); return;
+    case ' ':
+      if (e.target === document.body || e.target === $('viewport')) {
+        e.preventDefault();
+        state.painter.spaceHeld = true; $('viewport').classList.add('pan'); state.painter.drawCursor();
+      }
+      return;
+  }
+}
+
+// ---- routing ----------------------------------------------------------------------------------------
+
+let current = null;
+function route() {
+  const r = parseRoute(location.hash);
+  const key = r.name === 'session' ? r.id + '/' + r.token : 'start';
+  if (key === current) {
+    if (r.name === 'session' && r.view != null && r.view !== state.k) selectView(r.view);
+    return;
+  }
+  current = key;
+  if (state.session) { state.session.close(); state.session = null; location.reload(); return; }
+  if (r.name === 'session') openStudio(r).catch(showError);
+  else showStart().catch(showError);
+}
+window.addEventListener('hashchange', route);
+route();

@@ -1,0 +1,276 @@
+// fit.js: the fit panel: method, a quality control built from the server's
+// own measurements (GET /methods?session_id=: presets and the speed-accuracy
+// points measured on this scene), the parameters, and the fit itself: at
+// once when the precomputation is cached (201 with the material), or as a
+// job whose progress streams in (202, GET /jobs/{id}/events).
+
+import { API } from './api.js';
+import { EventStream } from './sse.js';
+
+const $ = id => document.getElementById(id);
+
+function fmtTime(s) {
+  if (s == null || !isFinite(s)) return '?';
+  if (s < 1e-3) return (s * 1e6).toFixed(0) + ' µs';
+  if (s < 1) return (s * 1e3).toFixed(s < 0.01 ? 2 : 0) + ' ms';
+  if (s < 120) return s.toFixed(s < 10 ? 2 : 1) + ' s';
+  return (s / 60).toFixed(1) + ' min';
+}
+function fmtErr(e) { return e == null || !isFinite(e) ? '?' : e.toFixed(4); }
+export { fmtTime, fmtErr };
+
+export class FitPanel extends EventTarget {
+  constructor(api, session) {
+    super();
+    this.api = api;
+    this.session = session;
+    this.method = null;
+    this.points = [];
+    this.preset = null;
+    this.job = null;
+    this.inputs = {};
+    $('fit-btn').onclick = () => this.fit();
+  }
+
+  emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+
+  async load() {
+    const m = await this.api.methods(this.session.id);
+    this.method = m.methods[0];
+    this.points = (m.scene && m.scene.points) || [];
+    $('fit-method').textContent = this.method.name;
+    $('fit-method').title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
+    this.buildParams();
+    const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
+    this.choose(def ? def.name : null);
+    this.renderQuality();
+    $('fit-btn').disabled = !this.session.canPaint;
+    if (!this.session.canPaint) $('fit-btn').title = 'view-only link: fitting needs the paint link';
+  }
+
+  // Refresh the measured points (after a fit, or when views get painted).
+  async refresh() {
+    try {
+      const m = await this.api.methods(this.session.id);
+      this.points = (m.scene && m.scene.points) || [];
+    } catch (_) { /* keep the old figures */ }
+    this.renderQuality();
+  }
+
+  defaults() {
+    const d = {};
+    for (const p of this.method.params) d[p.name] = p.default;
+    return d;
+  }
+
+  buildParams() {
+    const box = $('params');
+    box.textContent = '';
+    for (const p of this.method.params) {
+      const lab = document.createElement('label');
+      lab.textContent = p.name;
+      lab.title = p.description;
+      let inp;
+      if (p.enum) {
+        inp = document.createElement('select');
+        for (const v of p.enum) { const o = document.createElement('option'); o.value = o.textContent = v; inp.appendChild(o); }
+      } else {
+        inp = document.createElement('input');
+        if (p.type === 'string') {
+          inp.type = 'text';
+          if (p.examples) {
+            const dl = document.createElement('datalist'); dl.id = 'dl-' + p.name;
+            for (const v of p.examples) { const o = document.createElement('option'); o.value = v; dl.appendChild(o); }
+            box.appendChild(dl); inp.setAttribute('list', dl.id);
+          }
+        } else {
+          inp.type = 'number';
+          inp.step = p.type === 'integer' ? '1' : 'any';
+          if (p.minimum != null) inp.min = p.minimum;
+          if (p.maximum != null) inp.max = p.maximum;
+        }
+      }
+      inp.value = p.default;
+      inp.id = 'param-' + p.name;
+      inp.title = p.description + (p.syntax ? ' (' + p.syntax + ')' : '') + ' · changing it costs: ' + p.affects;
+      inp.addEventListener('input', () => { this.preset = this.matchPreset(); this.renderQuality(); });
+      this.inputs[p.name] = { p, inp };
+      lab.htmlFor = inp.id;
+      box.append(lab, inp);
+      const d = document.createElement('div'); d.className = 'desc';
+      d.textContent = p.affects === 'precomputation' ? 'new precomputation' : p.affects === 'operator' ? 'new operator' : 'free';
+      box.appendChild(d);
+    }
+  }
+
+  values() {
+    const o = {};
+    for (const [name, { p, inp }] of Object.entries(this.inputs)) {
+      if (inp.value === '') continue;
+      o[name] = p.type === 'string' ? inp.value : p.type === 'integer' ? parseInt(inp.value, 10) : parseFloat(inp.value);
+    }
+    return o;
+  }
+
+  choose(name) {
+    const pr = this.method.presets.find(p => p.name === name);
+    if (!pr) return;
+    const d = Object.assign(this.defaults(), pr.params);
+    for (const [k, { inp }] of Object.entries(this.inputs)) inp.value = d[k];
+    this.preset = name;
+    this.renderQuality();
+  }
+
+  matchPreset() {
+    const v = this.values(), d = this.defaults();
+    for (const pr of this.method.presets) {
+      const want = Object.assign({}, d, pr.params);
+      if (Object.keys(want).every(k => String(want[k]) === String(v[k]))) return pr.name;
+    }
+    return null;
+  }
+
+  paintedViews() { return this.session.views.filter(v => v.painted).map(v => v.k); }
+
+  // The measured point of a configuration: same parameters and, best, the
+  // same painted views (they make the sampling pattern).
+  pointFor(params) {
+    const views = this.paintedViews().join(',');
+    const same = p => p && p.params && Object.keys(params).every(k => p.params[k] === undefined || String(p.params[k]) === String(params[k]));
+    const cands = this.points.filter(same);
+    const exact = cands.filter(p => p.views.join(',') === views);
+    const pick = arr => arr.slice().sort((a, b) => (b.updated || '').localeCompare(a.updated || ''))[0];
+    if (exact.length) return { point: pick(exact), exact: true };
+    if (cands.length) return { point: pick(cands), exact: false };
+    return null;
+  }
+
+  // Cold time of an unmeasured resolution, from the nearest measured one
+  // (the precomputation grows as res^3, per the method's description).
+  estimateCold(res) {
+    const m = this.points.filter(p => p.cold_seconds != null && p.params.res);
+    if (!m.length) return null;
+    m.sort((a, b) => Math.abs(Math.log(a.params.res / res)) - Math.abs(Math.log(b.params.res / res)));
+    return m[0].cold_seconds * Math.pow(res / m[0].params.res, 3);
+  }
+
+  // One row per preset: texels, then what this server measured on this
+  // scene: the warm fit, the first fit (precomputation from scratch) and
+  // the error (held-out when measured, else on the painted pixels).
+  renderQuality() {
+    if (!this.method) return;            // not loaded yet
+    const box = $('quality');
+    box.textContent = '';
+    const head = document.createElement('div');
+    head.className = 'q head';
+    head.innerHTML = '<span></span><span>quality</span><span title="a fit when its precomputation is in memory">fit</span><span title="the first fit of a configuration: builds the precomputation">first</span><span title="RMS error: held-out (each painted view left out in turn) when measured, else on the painted pixels">error</span>';
+    box.appendChild(head);
+    const d = this.defaults();
+    const cell = (html, title) => { const c = document.createElement('span'); c.className = 'v'; c.innerHTML = html; if (title) c.title = title; return c; };
+    const addRow = (name, params, onpick, on) => {
+      const row = document.createElement('label');
+      row.className = 'q' + (on ? ' on' : '');
+      row.dataset.preset = name;
+      const r = document.createElement('input');
+      r.type = 'radio'; r.name = 'quality'; r.checked = on;
+      if (onpick) r.onchange = onpick; else r.disabled = true;
+      const nm = document.createElement('span'); nm.className = 'qn';
+      nm.innerHTML = '<b></b> <span class="res"></span>';
+      nm.firstChild.textContent = name;
+      nm.lastChild.textContent = params.res != null ? params.res : '';
+      nm.title = `${params.res} texels per factor`;
+      row.append(r, nm);
+      const found = this.pointFor(params);
+      if (found) {
+        const p = found.point;
+        const cold = p.cold_seconds != null ? p.cold_seconds : p.disk_seconds;
+        const err = p.held_out_rms != null ? p.held_out_rms : p.rms_painted;
+        const other = found.exact ? '' : '<sup title="measured with another set of painted views">*</sup>';
+        row.append(cell(`<em>${fmtTime(p.fit_seconds)}</em>`, `median of the last ${Math.min(16, p.fits)} fit(s), precomputation in memory`),
+                   cell(cold != null ? `<em>${fmtTime(cold)}</em>` : '—', p.cold_seconds != null ? 'precomputation from scratch' : 'precomputation with the decomposition from the disk cache'),
+                   cell(`<em>${err.toFixed(3)}</em>${p.held_out_rms != null ? '<sup>ho</sup>' : ''}${other}`,
+                        `RMS painted ${fmtErr(p.rms_painted)}, held-out ${fmtErr(p.held_out_rms)} (${p.samples} samples, views ${p.views.join(' ')})`));
+      } else {
+        const est = this.estimateCold(params.res);
+        row.append(cell('—', 'not measured on this scene yet'),
+                   cell(est != null ? `≈${fmtTime(est)}` : '—', est != null ? 'estimated from the measured resolutions (the precomputation grows as res³); not measured yet' : 'not measured on this scene yet'),
+                   cell('—', 'not measured on this scene yet: the first fit at this quality measures it'));
+      }
+      box.appendChild(row);
+    };
+    for (const pr of this.method.presets) addRow(pr.name, Object.assign({}, d, pr.params), () => this.choose(pr.name), this.preset === pr.name);
+    if (!this.preset) addRow('custom', this.values(), null, true);
+  }
+
+  setProgress(frac, text) {
+    const el = $('fit-progress');
+    el.classList.toggle('hidden', frac == null);
+    $('fit-result').classList.toggle('hidden', frac != null);
+    if (frac == null) return;
+    el.querySelector('.bar-fill').style.width = (100 * frac).toFixed(1) + '%';
+    el.querySelector('span').textContent = text;
+  }
+
+  fit() {
+    if (!this.method) return Promise.resolve();   // still loading the methods
+    if (this.busy) return this.running;
+    this.running = this.run();
+    return this.running;
+  }
+
+  async run() {
+    this.busy = true;
+    $('fit-btn').disabled = true;
+    const t0 = performance.now();
+    this.setProgress(0, 'sending…');
+    try {
+      await this.session.writeChain;       // the strokes made so far are in the fit
+      const r = await this.api.fit(this.session.id, { method: this.method.name, params: this.values() });
+      const body = await r.json();
+      if (r.status === 201) {
+        this.setProgress(null);
+        this.emit('material', { material: body, ms: performance.now() - t0, cached: true });
+      } else {
+        await this.follow(body.job, t0);
+      }
+      this.refresh();
+    } catch (e) {
+      this.setProgress(null);
+      this.emit('error', e);
+    } finally {
+      this.busy = false;
+      $('fit-btn').disabled = !this.session.canPaint;
+    }
+  }
+
+  // Stream a job's progress until it is done.
+  follow(job, t0) {
+    return new Promise((resolve, reject) => {
+      const show = j => this.setProgress(j.progress, `${j.stage} ${(100 * j.progress).toFixed(0)}%` + (j.seconds != null ? ` · ${fmtTime(j.seconds)}` : ''));
+      show(job);
+      const es = new EventStream(`${API}/jobs/${job.id}/events`, {
+        headers: { 'X-Glint-Token': this.session.token },
+        onEvent: async (type, j) => {
+          if (typeof j !== 'object') return;
+          show(j);
+          if (type === 'done' || j.state === 'done') {
+            this.setProgress(null);
+            try {
+              const m = await this.api.material(j.material_id);
+              this.emit('material', { material: m, ms: performance.now() - t0, cached: false, job: j });
+              resolve();
+            } catch (e) { reject(e); }
+            return 'stop';
+          }
+          if (type === 'failed' || j.state === 'failed') {
+            this.setProgress(null);
+            reject(new Error('The fit failed: ' + (j.error || 'no reason given')));
+            return 'stop';
+          }
+        },
+        onState: (s, d) => { if (s === 'failed') { this.setProgress(null); reject(new Error('Following the fit job: ' + d)); } },
+      }).start();
+      this.jobStream = es;
+    });
+  }
+}

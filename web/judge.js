@@ -1,0 +1,320 @@
+// judge.js: judging a material: a preview that follows the mouse (the
+// light or the camera orbit the object; glintd renders each frame:
+// GET /materials/{id}/preview.png?eye=&light=&size=), the error per view
+// (painted versus fitted, computed here from the painting and a render of
+// the material for that view, with a difference image), the three factor
+// curves (factors.exr) and the export links.
+
+import { decodeImage } from './image.js';
+import { fmtErr, fmtTime } from './fit.js';
+
+const $ = id => document.getElementById(id);
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const len = a => Math.hypot(a[0], a[1], a[2]);
+const mul = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+
+// Spherical coordinates about +z (the scene's world up).
+function toSph(v) { const r = len(v); return { r, az: Math.atan2(v[1], v[0]), el: Math.asin(Math.max(-1, Math.min(1, v[2] / r))) }; }
+function fromSph(s) { const c = Math.cos(s.el); return [s.r * c * Math.cos(s.az), s.r * c * Math.sin(s.az), s.r * Math.sin(s.el)]; }
+
+export class Judge extends EventTarget {
+  constructor(api, session) {
+    super();
+    this.api = api;
+    this.session = session;
+    this.mat = null;
+    this.cam = null;           // {eye, light, target}
+    this.inflight = false;
+    this.want = 0;             // number of the newest request wanted
+    this.shown = 0;            // number of the frame on screen
+    this.frames = 0;
+    this.errView = null;
+    this.bindPreview();
+    this.bindTabs();
+    $('diff-gain').onchange = () => this.showDiff(this.errView);
+    $('factors-log').onchange = () => this.drawFactors();
+  }
+
+  emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+
+  bindTabs() {
+    for (const b of document.querySelectorAll('.tabs button')) {
+      b.onclick = () => {
+        for (const o of document.querySelectorAll('.tabs button')) o.classList.toggle('on', o === b);
+        for (const t of ['errors', 'factors', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
+        if (b.dataset.tab === 'factors') this.drawFactors();
+      };
+    }
+  }
+
+  // ---- the material ------------------------------------------------------------------
+
+  async setMaterial(m, k) {
+    this.mat = m;
+    $('preview-empty').textContent = 'rendering…';
+    $('preview-empty').classList.toggle('hidden', this.frames > 0);
+    this.resetCamera(k);
+    const q = t => this.api.url(`/materials/${m.id}/${t}`);
+    $('dl-package').href = q('package');
+    $('dl-package').download = `glint-material-${m.id.slice(0, 8)}.tar`;
+    $('dl-factors-png').href = q('factors.png');
+    $('dl-factors-exr').href = q('factors.exr');
+    $('dl-shader').href = q('shader');
+    this.factors = null;
+    this.loadFactors().catch(e => this.emit('error', e));
+    this.computeErrors(k).catch(e => this.emit('error', e));
+  }
+
+  // ---- preview -----------------------------------------------------------------------
+
+  resetCamera(k) {
+    const v = this.session.scene.views[k != null ? k : 0];
+    this.cam = { eye: v.eye.slice(), light: v.light.slice(), target: (v.target || [0, 0, 0]).slice(), view: k };
+    this.request();
+  }
+
+  bindPreview() {
+    const g = $('preview-gizmo');
+    g.addEventListener('contextmenu', e => e.preventDefault());
+    g.addEventListener('pointerdown', e => {
+      if (!this.cam) return;
+      g.setPointerCapture(e.pointerId);
+      this.drag = { x: e.clientX, y: e.clientY, what: e.shiftKey || e.button === 2 ? 'eye' : 'light' };
+    });
+    g.addEventListener('pointermove', e => {
+      if (!this.drag) return;
+      const dx = e.clientX - this.drag.x, dy = e.clientY - this.drag.y;
+      this.drag.x = e.clientX; this.drag.y = e.clientY;
+      this.orbit(this.drag.what, dx, dy);
+    });
+    const end = () => { this.drag = null; };
+    g.addEventListener('pointerup', end);
+    g.addEventListener('pointercancel', end);
+    g.addEventListener('wheel', e => {
+      if (!this.cam) return;
+      e.preventDefault();
+      const d = sub(this.cam.eye, this.cam.target);
+      const r = Math.min(20, Math.max(1.3, len(d) * Math.exp(e.deltaY * 0.001)));
+      this.cam.eye = add(this.cam.target, mul(d, r / len(d)));
+      this.cam.view = null;
+      this.request();
+    }, { passive: false });
+    g.addEventListener('dblclick', () => this.emit('reset'));
+  }
+
+  // Orbit the light or the eye about the target: horizontal drags turn
+  // about the world up (+z), vertical ones tilt.
+  orbit(what, dx, dy) {
+    const rel = sub(this.cam[what], this.cam.target);
+    const s = toSph(rel);
+    const sign = what === 'eye' ? -1 : 1;
+    s.az -= sign * dx * 0.012;
+    s.el = Math.max(-1.5, Math.min(1.5, s.el + sign * dy * 0.012 * (what === 'eye' ? -1 : -1)));
+    this.cam[what] = add(this.cam.target, fromSph(s));
+    this.cam.view = null;
+    this.request();
+  }
+
+  // One request in flight; while it runs, later moves only update what is
+  // wanted, and the newest wanted frame is asked for when it returns.
+  request() {
+    if (!this.mat || !this.cam) return;
+    this.want++;
+    this.drawGizmo();
+    if (!this.inflight) this.fetchFrame();
+  }
+
+  async fetchFrame() {
+    const n = this.want;
+    const c = this.cam, f = a => a.map(x => x.toFixed(4)).join(',');
+    const q = { eye: f(c.eye), light: f(c.light), target: f(c.target), size: '256' };
+    this.inflight = true;
+    const mat = this.mat;
+    try {
+      const r = await this.api.materialFile(mat.id, 'preview.png', q);
+      const bmp = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none' });
+      if (mat === this.mat && n > this.shown) {
+        const g = $('preview').getContext('2d');
+        g.drawImage(bmp, 0, 0, 256, 256);
+        this.shown = n;
+        this.frames++;
+        $('preview-empty').classList.add('hidden');
+        this.lastRenderer = r.headers.get('X-Glint-Renderer') || '';
+        this.emit('frame', { n, renderer: this.lastRenderer });
+      }
+    } catch (e) {
+      this.emit('error', e);
+    } finally {
+      this.inflight = false;
+      if (this.want > n && mat === this.mat) this.fetchFrame();
+    }
+  }
+
+  // The light's direction as seen from the camera, drawn over the preview.
+  drawGizmo() {
+    const g = $('preview-gizmo').getContext('2d');
+    g.clearRect(0, 0, 256, 256);
+    if (!this.cam) return;
+    const fwd = sub(this.cam.target, this.cam.eye), fl = len(fwd);
+    const f = mul(fwd, 1 / fl);
+    let right = [f[1] * 1 - 0, -f[0] * 1, 0];      // f x z
+    if (len(right) < 1e-6) right = [1, 0, 0];
+    right = mul(right, 1 / len(right));
+    const up = [right[1] * f[2] - right[2] * f[1], right[2] * f[0] - right[0] * f[2], right[0] * f[1] - right[1] * f[0]];
+    const l = sub(this.cam.light, this.cam.target), ll = len(l);
+    const lx = (l[0] * right[0] + l[1] * right[1] + l[2] * right[2]) / ll;
+    const ly = (l[0] * up[0] + l[1] * up[1] + l[2] * up[2]) / ll;
+    const lz = -(l[0] * f[0] + l[1] * f[1] + l[2] * f[2]) / ll;   // > 0: light on the camera's side
+    const cx = 226, cy = 30, R = 20;
+    g.strokeStyle = 'rgba(255,255,255,.5)'; g.lineWidth = 1;
+    g.beginPath(); g.arc(cx, cy, R, 0, 7); g.stroke();
+    g.fillStyle = lz >= 0 ? '#ffd34d' : 'rgba(255,211,77,.35)';
+    g.beginPath(); g.arc(cx + lx * R, cy - ly * R, 4, 0, 7); g.fill();
+    g.fillStyle = 'rgba(255,255,255,.8)'; g.font = '10px system-ui';
+    g.fillText(this.cam.view != null ? 'view ' + this.cam.view : 'free', 6, 250);
+  }
+
+  // ---- factor curves -----------------------------------------------------------------
+
+  async loadFactors() {
+    const mat = this.mat;
+    const r = await this.api.materialFile(mat.id, 'factors.exr');
+    const im = await decodeImage(await r.arrayBuffer());
+    if (mat !== this.mat) return;
+    this.factors = im;             // 3 rows (p, q, r) x res texels, RGB, linear
+    this.drawFactors();
+  }
+
+  drawFactors() {
+    const c = $('factors'), g = c.getContext('2d');
+    g.clearRect(0, 0, c.width, c.height);
+    const im = this.factors;
+    if (!im) return;
+    const log = $('factors-log').checked;
+    const names = [['p(π_p)', 'light: |wi| on the tangent plane'], ['q(π_q)', 'half vector'], ['r(π_r)', 'view: |wo| on the tangent plane']];
+    const H = c.height / 3, L = 34, Rm = 6, W = c.width - L - Rm;
+    for (let j = 0; j < 3; j++) {
+      const y0 = j * H + 14, h = H - 30;
+      const vals = [];
+      for (let x = 0; x < im.w; x++) for (let ch = 0; ch < 3; ch++) vals.push(im.data[3 * (j * im.w + x) + ch]);
+      const tf = v => log ? Math.log10(Math.max(v, 1e-6)) : v;
+      let lo = Math.min(...vals.map(tf)), hi = Math.max(...vals.map(tf));
+      if (!log) lo = Math.min(0, lo);
+      if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
+      g.fillStyle = '#8d94a3'; g.font = '11px system-ui';
+      g.fillText(names[j][0], L, y0 - 3);
+      g.fillStyle = '#5d6473'; g.fillText(names[j][1], L + 44, y0 - 3);
+      g.strokeStyle = '#323744'; g.strokeRect(L, y0, W, h);
+      g.fillStyle = '#8d94a3'; g.font = '9px system-ui'; g.textAlign = 'right';
+      g.fillText(log ? '1e' + hi.toFixed(1) : hi.toPrecision(3), L - 3, y0 + 8);
+      g.fillText(log ? '1e' + lo.toFixed(1) : lo.toPrecision(3), L - 3, y0 + h);
+      g.textAlign = 'left';
+      if (j === 2) { g.fillText('0', L, y0 + h + 10); g.textAlign = 'right'; g.fillText('π = 1', L + W, y0 + h + 10); g.textAlign = 'left'; }
+      const cols = ['#ff6b6b', '#6bd66b', '#6ba4ff'];
+      for (let ch = 0; ch < 3; ch++) {
+        g.strokeStyle = cols[ch]; g.lineWidth = 1.3; g.globalCompositeOperation = 'lighter';
+        g.beginPath();
+        for (let x = 0; x < im.w; x++) {
+          const v = tf(im.data[3 * (j * im.w + x) + ch]);
+          const px = L + W * x / Math.max(1, im.w - 1), py = y0 + h - h * (v - lo) / (hi - lo);
+          if (x) g.lineTo(px, py); else g.moveTo(px, py);
+        }
+        g.stroke();
+        g.globalCompositeOperation = 'source-over';
+      }
+    }
+  }
+
+  // ---- error per view ---------------------------------------------------------------
+
+  // For every view the fit used: the RMS over the object's lit pixels of
+  // (fitted - painted), from a render of the material for that view (CPU
+  // renderer: the same rasterizer that defines the fit's samples) and the
+  // view's current painting.
+  async computeErrors(prefer) {
+    const mat = this.mat;
+    const S = this.session, sc = S.scene;
+    const tb = $('err-table').querySelector('tbody');
+    tb.textContent = '';
+    const e = mat.errors || {};
+    $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>, max ${fmtErr(e.max_abs_painted)} over ${mat.precomputation ? mat.precomputation.samples : '?'} samples` +
+      ` · ${mat.res} texels · fit ${fmtTime(mat.seconds && mat.seconds.fit)}`;
+    this.rows = new Map();
+    const square = sc.width === sc.height;
+    const used = mat.views_used || [];
+    const snap = new Map((mat.paintings || []).map(p => [p.view, p.version]));
+    let now = new Map();
+    try { now = new Map(((await this.api.session(S.id)).paintings || []).map(p => [p.view, p.version])); } catch (_) { /* no staleness marks */ }
+    for (const k of used) {
+      const tr = document.createElement('tr');
+      tr.dataset.view = k;
+      tr.innerHTML = `<td>${k}</td><td>…</td><td></td><td></td>`;
+      tr.onclick = () => { this.showDiff(k); this.emit('select-view', k); };
+      tb.appendChild(tr);
+    }
+    if (!square) { $('err-summary').innerHTML += '<br>per-view errors need a square raster (previews are square)'; return; }
+    await Promise.all(used.map(async k => {
+      const r = await this.api.materialFile(mat.id, 'preview.exr', { view: String(k), renderer: 'cpu', size: String(sc.width) });
+      const fitted = await decodeImage(await r.arrayBuffer());
+      if (mat !== this.mat) return;
+      const v = S.views[k];
+      if (!v.conf) await S.loadViews([k]);
+      const painted = v.conf, base = v.base;
+      let s2 = 0, n = 0, mx = 0;
+      const diff = new Float32Array(painted.w * painted.h);
+      for (let i = 0; i < painted.w * painted.h; i++) {
+        const lit = base.data[3 * i] > 0 || base.data[3 * i + 1] > 0 || base.data[3 * i + 2] > 0;
+        if (!lit) { diff[i] = -1; continue; }
+        let dm = 0;
+        for (let c = 0; c < 3; c++) {
+          const d = fitted.data[3 * i + c] - painted.data[3 * i + c];
+          s2 += d * d; mx = Math.max(mx, Math.abs(d)); dm += Math.abs(d) / 3;
+        }
+        diff[i] = dm; n++;
+      }
+      const rms = n ? Math.sqrt(s2 / (3 * n)) : 0;
+      const stale = snap.has(k) && now.has(k) && snap.get(k) !== now.get(k);
+      this.rows.set(k, { rms, max: mx, n, fitted, painted, diff, stale });
+      const tr = tb.querySelector(`tr[data-view="${k}"]`);
+      if (tr) {
+        tr.innerHTML = `<td>${k}${stale ? ' <span title="painted again since this fit">*</span>' : ''}</td><td><span class="meter"></span>${fmtErr(rms)}</td><td>${fmtErr(mx)}</td><td>${n}</td>`;
+      }
+    }));
+    if (mat !== this.mat) return;
+    // bars relative to the worst view
+    const worst = Math.max(1e-12, ...[...this.rows.values()].map(r => r.rms));
+    for (const [k, r] of this.rows) {
+      const m = tb.querySelector(`tr[data-view="${k}"] .meter`);
+      if (m) m.style.width = Math.max(2, Math.round(50 * r.rms / worst)) + 'px';
+    }
+    this.emit('errors', this.rows);
+    const k = used.includes(prefer) ? prefer : used[0];
+    if (k != null) this.showDiff(k);
+  }
+
+  showDiff(k) {
+    const row = this.rows && this.rows.get(k);
+    if (!row) return;
+    this.errView = k;
+    for (const tr of $('err-table').querySelectorAll('tr')) tr.classList.toggle('on', +tr.dataset.view === k);
+    $('diff-wrap').classList.remove('hidden');
+    const { painted, fitted, diff } = row;
+    const gain = +$('diff-gain').value;
+    const draw = (id, fn) => {
+      const c = $(id); c.width = painted.w; c.height = painted.h;
+      const g = c.getContext('2d'), img = g.createImageData(painted.w, painted.h);
+      for (let i = 0; i < painted.w * painted.h; i++) { const [r, gg, b] = fn(i); img.data[4 * i] = r; img.data[4 * i + 1] = gg; img.data[4 * i + 2] = b; img.data[4 * i + 3] = 255; }
+      g.putImageData(img, 0, 0);
+    };
+    const q = v => v <= 0 ? 0 : v >= 1 ? 255 : Math.round(v * 255);
+    draw('diff-painted', i => [q(painted.data[3 * i]), q(painted.data[3 * i + 1]), q(painted.data[3 * i + 2])]);
+    draw('diff-fitted', i => [q(fitted.data[3 * i]), q(fitted.data[3 * i + 1]), q(fitted.data[3 * i + 2])]);
+    // heat: black -> red -> yellow -> white as |difference| x gain grows
+    draw('diff-img', i => {
+      if (diff[i] < 0) return [20, 22, 28];
+      const t = Math.min(1, diff[i] * gain);
+      return [q(t * 3), q(t * 3 - 1), q(t * 3 - 2)];
+    });
+  }
+}
