@@ -22,7 +22,7 @@ BUILD_PKGS=(
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml
-  openimageio-tools gnuplot-nox wrk
+  openimageio-tools gnuplot-nox wrk chromium
 )
 
 missing_packages() {
@@ -97,6 +97,11 @@ case "$mode" in
     ;;
   test)
     install_packages "${BUILD_PKGS[@]}" "${TEST_PKGS[@]}"
+    # Node.js for the browser tests: the machine's own if present (>= 18),
+    # else Debian's.  playwright-core comes from npm, pinned by the lock file;
+    # it drives Debian's /usr/bin/chromium (no browser download).
+    command -v node >/dev/null && command -v npm >/dev/null || install_packages nodejs npm
+    npm ci --prefix tests/browser --no-audit --no-fund --loglevel=error
     build build
     echo "== unit, CLI and integration tests"
     meson test -C build --print-errorlogs
