@@ -376,6 +376,41 @@ static http_resp painting_put(http_req *req)
         goto done;
     }
     pthread_mutex_lock(session_lock(req->param[0]));
+    {
+        /* Conditional replace: If-Match names the painting version the client
+         * built its image from ("0" for a view never painted).  Checked under
+         * the session lock, so no stroke can slip in between. */
+        const char *im_hdr = http_header_in(req, "If-Match");
+        if (im_hdr) {
+            char *end;
+            long long want = strtoll(im_hdr + (im_hdr[0] == '"'), &end, 10);
+            int64_t cur = 0;
+            json_t *list = NULL;
+            if (end == im_hdr + (im_hdr[0] == '"') || want < 0) {
+                pthread_mutex_unlock(session_lock(req->param[0]));
+                r = http_problem(400, "bad-if-match",
+                                 "If-Match must be a painting version (a whole number), got '%s'",
+                                 im_hdr);
+                goto done;
+            }
+            if (store_paintings_list(a->store, req->param[0], &list, &e) == 0) {
+                size_t i;
+                json_t *it;
+                json_array_foreach(list, i, it) {
+                    if (json_integer_value(json_object_get(it, "view")) == k)
+                        cur = json_integer_value(json_object_get(it, "version"));
+                }
+                json_decref(list);
+            }
+            if (cur != want) {
+                pthread_mutex_unlock(session_lock(req->param[0]));
+                r = http_problem(412, "painting-changed",
+                                 "view %d is at painting version %lld, not %lld (If-Match): "
+                                 "someone changed it; read it again", k, (long long)cur, want);
+                goto done;
+            }
+        }
+    }
     rc = store_painting_put(a->store, req->param[0], k, exr, len, &version, &seq, &e);
     pthread_mutex_unlock(session_lock(req->param[0]));
     if (rc) {

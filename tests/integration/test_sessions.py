@@ -490,6 +490,26 @@ def test_painting_upload_and_read(d):
     d.get(p + "?format=gif", status=422, headers=h)
 
 
+def test_painting_conditional_replace(d):
+    """If-Match names the version a client built its image from: a replace
+    over a version that has moved on is refused (412), nothing is stored."""
+    s, _ = shared(d)
+    sess = new_session(d, s["id"])
+    p = "%s/sessions/%s/views/1/painting" % (API, sess["id"])
+    h = tok(sess["paint_token"])
+    img = png_encode(W, H, lambda x, y: (10, 20, 30))
+    d.put(p, status=200, data=img, headers=dict(h, **{"If-Match": "0"}))
+    r = d.put(p, status=412, data=img, headers=dict(h, **{"If-Match": "0"}))
+    assert "version 1" in detail(r)
+    post_strokes(d, sess, 1, [{"mode": "paint", "color": [1, 1, 1], "diameter": 6, "kappa": 0.1,
+                               "points": [[5, 5]]}])
+    r = d.put(p, status=412, data=img, headers=dict(h, **{"If-Match": '"1"'}))
+    assert "version 2" in detail(r)
+    r = d.put(p, status=200, data=img, headers=dict(h, **{"If-Match": '"2"'}))
+    assert r.json()["version"] == 3
+    d.put(p, status=400, data=img, headers=dict(h, **{"If-Match": "abc"}))
+
+
 def test_painting_errors(d):
     s, _ = shared(d)
     sess = new_session(d, s["id"])
