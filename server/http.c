@@ -293,12 +293,17 @@ static const char *mime_of(const char *path)
     return "application/octet-stream";
 }
 
-static http_resp serve_static(const http_server *s, const char *path)
+/* Static files are revalidated on every load (Cache-Control: no-cache)
+ * with Last-Modified / If-Modified-Since, so an unchanged module costs a
+ * 304 and no body. */
+static http_resp serve_static(const http_server *s, const char *path, const char *ims)
 {
-    char full[4096];
+    char full[4096], lm[64];
     struct stat st;
+    struct tm tm;
     FILE *f;
     char *data;
+    http_resp r;
 
     if (!s->cfg.static_dir || strstr(path, "..") || strchr(path, '\\'))
         return http_problem(404, "not-found", "no such resource: %s", path);
@@ -316,7 +321,17 @@ static http_resp serve_static(const http_server *s, const char *path)
         return http_problem(500, NULL, "cannot read %s", path);
     }
     fclose(f);
-    return http_bytes_owned(200, mime_of(full), data, (size_t)st.st_size);
+    gmtime_r(&st.st_mtime, &tm);
+    strftime(lm, sizeof lm, "%a, %d %b %Y %H:%M:%S GMT", &tm);
+    if (ims && strcmp(ims, lm) == 0) {
+        free(data);
+        r = http_bytes(304, NULL, "", 0);
+    } else {
+        r = http_bytes_owned(200, mime_of(full), data, (size_t)st.st_size);
+    }
+    http_header(&r, MHD_HTTP_HEADER_LAST_MODIFIED, lm);
+    http_header(&r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
+    return r;
 }
 
 /* ---- MHD callbacks ----------------------------------------------------------------------- */
@@ -413,8 +428,11 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     if (!resp.r) {
         if (matched_path)
             resp = http_problem(405, "method-not-allowed", "%s is not allowed on %s", method, url);
-        else if (strcmp(method, "GET") == 0 && strncmp(url, "/api/", 5) != 0)
-            resp = serve_static(s, url);
+        else if ((strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0) &&
+                 strncmp(url, "/api/", 5) != 0)
+            resp = serve_static(s, url, MHD_lookup_connection_value(
+                                           conn, MHD_HEADER_KIND,
+                                           MHD_HTTP_HEADER_IF_MODIFIED_SINCE));
         else
             resp = http_problem(404, "not-found", "no such resource: %s %s", method, url);
     }

@@ -29,6 +29,16 @@ def test_wrong_method_is_problem(d):
     assert "POST" in r.json()["detail"]
 
 
+def test_static_files_revalidate(d):
+    r = d.get("/", status=200)
+    assert r.headers["Content-Type"].startswith("text/html")
+    assert r.headers["Cache-Control"] == "no-cache"
+    lm = r.headers["Last-Modified"]
+    r = d.get("/", status=304, headers={"If-Modified-Since": lm})
+    assert r.content == b""
+    d.request("HEAD", "/", status=200)
+
+
 def test_static_traversal_refused(d):
     d.get("/../../etc/passwd", status=404)
 
