@@ -4,8 +4,9 @@
  * and accepts NULL or a zeroed / half-built mesh.  Positions, normals and
  * texture coordinates are per vertex; triangles are counter-clockwise seen
  * from outside.  Built-in shapes are centred at the origin and fit in the
- * unit ball, so the default views frame them.  Loading meshes from files
- * plugs in here later (mesh_load): the rest of core only sees `mesh`. */
+ * unit ball, so the default views frame them.  Meshes from files come in
+ * through mesh_load (mesh_io.c), normalized the same way: the rest of core
+ * only sees `mesh`. */
 #ifndef GLINT_MESH_H
 #define GLINT_MESH_H
 
@@ -51,14 +52,33 @@ int mesh_builtin(const char *name, mesh *out, glint_err *err);
 int mesh_torus(mesh *out, double R, double r, int nu, int nv, glint_err *err);
 
 /* The Utah teapot from its 32 bicubic Bezier patches, each tessellated
- * `seg` x `seg`; normals from the patch derivatives (degenerate points
- * handled), uv per patch in a documented atlas.  Fits the unit ball. */
+ * `seg` x `seg` (1..MESH_TEAPOT_MAX_SEG); normals from the patch
+ * derivatives (degenerate points handled), uv per patch in a documented
+ * atlas.  Fits the unit ball. */
 int mesh_teapot(mesh *out, int seg, glint_err *err);
+
+#define MESH_TEAPOT_MAX_SEG 512
+
+/* Parameters of the built-in "torus" and "teapot" (mesh_builtin). */
+#define MESH_TORUS_DEFAULT_R 0.7
+#define MESH_TORUS_DEFAULT_MINOR 0.3
+#define MESH_TORUS_DEFAULT_NU 512   /* segments around the axis */
+#define MESH_TORUS_DEFAULT_NV 256   /* segments around the tube */
+#define MESH_TEAPOT_DEFAULT_SEG 16
+
+/* The teapot's Bezier control data, for tests and tools (OUT, each may be
+ * NULL): 306 control points and 32 patches of 16 zero-based indices, row
+ * by row.  Static storage, never freed. */
+void mesh_teapot_data(const double (**points)[3], int *npoints,
+                      const uint16_t (**patches)[16], int *npatches);
 
 /* ---- meshes from files ---------------------------------------------------- */
 
 #define MESH_MAX_TRIS (1 << 24)    /* 16.7M triangles */
+#define MESH_MAX_VERTS (3 * MESH_MAX_TRIS) /* vertices, and any PLY element count */
 #define MESH_MAX_FILE_BYTES ((size_t)1 << 30)
+/* Time limit of one import (assimp runs in a child process, see mesh_load). */
+#define MESH_IMPORT_TIMEOUT_S 300
 
 /* What loading decided, for reports and manifests. */
 typedef struct mesh_report {
@@ -71,16 +91,27 @@ typedef struct mesh_report {
     double scale;              /* applied: unit-ball normalization factor */
     double center[3];          /* applied: subtracted before scaling */
     char format[16];           /* "ply", "obj", "off", "gltf", "dae", ... */
+    int dropped_primitives;    /* points, lines (and faces assimp could not triangulate) ignored */
+    int uvs_rescaled;          /* 1 if the file's uvs left [0,1]^2 and were moved into it */
+    int uv_charts;             /* charts of the generated parameterization (0 if none) */
+    double uv_coverage;        /* fraction of [0,1]^2 covered by uv triangles */
 } mesh_report;
 
 /* Load a mesh file through assimp (OBJ, PLY, OFF, glTF 2.0, COLLADA and
  * whatever else assimp reads), merge all its meshes, triangulate, then
- * clean and normalize: non-finite coordinates -> GLINT_ENONFINITE; empty ->
- * GLINT_EFORMAT; over MESH_MAX_TRIS or MESH_MAX_FILE_BYTES -> GLINT_ERANGE;
- * zero-area triangles dropped (counted); normals from the file or smooth
- * area-weighted ones; uvs from the file or generated (mesh_generate_uvs);
- * centred and scaled into the unit ball (mesh_normalize).  report may be
- * NULL.  *out is owned by the caller. */
+ * clean and normalize: missing file -> GLINT_ENOTFOUND; non-finite
+ * coordinates -> GLINT_ENONFINITE (naming the vertex); empty, truncated,
+ * unreadable or without triangles -> GLINT_EFORMAT (with assimp's message
+ * where it has one); over MESH_MAX_TRIS, MESH_MAX_FILE_BYTES or a PLY/OFF
+ * header claiming more, or an import needing more memory or time than
+ * allowed -> GLINT_ERANGE; zero-area triangles dropped (counted); normals
+ * from the file or smooth area-weighted ones; uvs from the file or
+ * generated (mesh_generate_uvs); centred and scaled into the unit ball
+ * (mesh_normalize).  assimp runs in a forked child process (time limit
+ * MESH_IMPORT_TIMEOUT_S, a memory limit), so a file that crashes or hangs
+ * it is an error, never the caller's crash; safe to call from several
+ * threads at once.  report may be NULL (it is zeroed on failure).  *out is
+ * zeroed first and owned by the caller.  Steps and limits in mesh_io.c. */
 int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err);
 
 /* The same from a buffer in memory (an upload); `hint` is the format's file

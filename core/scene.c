@@ -191,6 +191,8 @@ int scene_validate(const scene *s, glint_err *err)
         return glint_err_set(err, GLINT_EINVAL, "scene is NULL");
     if (!memchr(s->mesh_name, '\0', sizeof s->mesh_name))
         return glint_err_set(err, GLINT_EFORMAT, "scene mesh name is not terminated");
+    if (!memchr(s->mesh_path, '\0', sizeof s->mesh_path))
+        return glint_err_set(err, GLINT_EFORMAT, "scene mesh path is not terminated");
     rc = scene_check_size(s->width, s->height, err);
     if (rc)
         return rc;
@@ -224,6 +226,50 @@ void scene_free(scene *s)
 /* Creation from parameters                                                  */
 /* ------------------------------------------------------------------------ */
 
+/* Absolute form of a mesh file path (OUT: out[SCENE_PATH_MAX]): an absolute
+ * path is kept as written; a relative one is joined to `base` (a directory;
+ * NULL or "" for the working directory), and to the working directory if
+ * `base` is itself relative.  No symbolic links are resolved and "." / ".."
+ * stay as written. */
+static int scene_abs_path(const char *base, const char *path, char out[SCENE_PATH_MAX],
+                          glint_err *err)
+{
+    char cwd[SCENE_PATH_MAX];
+    int n;
+
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "empty mesh file path");
+    if (path[0] == '/') {
+        n = snprintf(out, SCENE_PATH_MAX, "%s", path);
+    } else if (base && base[0] == '/') {
+        n = snprintf(out, SCENE_PATH_MAX, "%s/%s", base, path);
+    } else {
+        if (!getcwd(cwd, sizeof cwd))
+            return glint_err_set(err, errno == ERANGE ? GLINT_ERANGE : GLINT_EIO,
+                                 "resolving mesh file %.200s: working directory: %s", path,
+                                 strerror(errno));
+        if (base && *base)
+            n = snprintf(out, SCENE_PATH_MAX, "%s/%s/%s", cwd, base, path);
+        else
+            n = snprintf(out, SCENE_PATH_MAX, "%s/%s", cwd, path);
+    }
+    if (n < 0 || n >= SCENE_PATH_MAX)
+        return glint_err_set(err, GLINT_ERANGE,
+                             "mesh file path %.200s is longer than %d bytes once made absolute",
+                             path, SCENE_PATH_MAX - 1);
+    return 0;
+}
+
+/* Load the scene's mesh: the file at out->mesh_path (absolute) or the
+ * built-in out->mesh_name. */
+static int scene_load_mesh(scene *out, glint_err *err)
+{
+    memset(&out->mesh_info, 0, sizeof out->mesh_info);
+    if (out->mesh_path[0])
+        return mesh_load(out->mesh_path, &out->mesh, &out->mesh_info, err);
+    return mesh_builtin(out->mesh_name, &out->mesh, err);
+}
+
 int scene_create(const scene_params *p, scene *out, glint_err *err)
 {
     double dirs[20][3];
@@ -237,6 +283,9 @@ int scene_create(const scene_params *p, scene *out, glint_err *err)
     if (!memchr(p->mesh_name, '\0', sizeof p->mesh_name))
         return glint_err_set(err, GLINT_EINVAL, "mesh name is not terminated within %d bytes",
                              SCENE_NAME_MAX);
+    if (!memchr(p->mesh_path, '\0', sizeof p->mesh_path))
+        return glint_err_set(err, GLINT_EINVAL, "mesh path is not terminated within %d bytes",
+                             SCENE_PATH_MAX);
     rc = scene_check_size(p->width, p->height, err);
     if (rc)
         return rc;
@@ -264,10 +313,21 @@ int scene_create(const scene_params *p, scene *out, glint_err *err)
                              p->view_set);
     }
 
-    snprintf(out->mesh_name, sizeof out->mesh_name, "%s", p->mesh_name);
+    if (p->mesh_path[0]) {
+        const char *slash = strrchr(p->mesh_path, '/');
+        const char *base = slash ? slash + 1 : p->mesh_path;
+        rc = scene_abs_path(NULL, p->mesh_path, out->mesh_path, err);
+        if (rc)
+            goto fail;
+        /* the label: the file's base name, cut to fit */
+        snprintf(out->mesh_name, sizeof out->mesh_name, "%.*s", SCENE_NAME_MAX - 1,
+                 *base ? base : "mesh");
+    } else {
+        snprintf(out->mesh_name, sizeof out->mesh_name, "%s", p->mesh_name);
+    }
     out->width = p->width;
     out->height = p->height;
-    rc = mesh_builtin(p->mesh_name, &out->mesh, err);
+    rc = scene_load_mesh(out, err);
     if (rc)
         goto fail;
     out->views = calloc((size_t)n, sizeof *out->views);
@@ -442,10 +502,13 @@ static int scene_json_depth_ok(const char *text, int limit)
     return 1;
 }
 
-int scene_from_json(const char *text, scene *out, glint_err *err)
+/* scene_from_json with relative mesh files resolved against `base_dir`
+ * (NULL: the working directory). */
+static int scene_from_json_at(const char *text, const char *base_dir, scene *out,
+                              glint_err *err)
 {
-    static const char *const keys[] = {"format", "version", "mesh", "width", "height",
-                                       "views", NULL};
+    static const char *const keys[] = {"format", "version", "mesh", "mesh_file", "width",
+                                       "height", "views", NULL};
     json_error_t jerr;
     json_t *root = NULL;
     const json_t *j, *jviews;
@@ -513,6 +576,27 @@ int scene_from_json(const char *text, scene *out, glint_err *err)
     }
     snprintf(out->mesh_name, sizeof out->mesh_name, "%s", json_string_value(j));
 
+    j = json_object_get(root, "mesh_file");
+    if (j) {
+        if (!json_is_string(j)) {
+            rc = glint_err_set(err, GLINT_EFORMAT, "scene.mesh_file: expected a string, got %s",
+                               scene_json_kind(j));
+            goto fail;
+        }
+        if (json_string_length(j) == 0 || json_string_length(j) >= SCENE_PATH_MAX ||
+            strlen(json_string_value(j)) != json_string_length(j)) {
+            rc = glint_err_set(err, GLINT_EFORMAT,
+                               "scene.mesh_file: expected a path of 1..%d bytes without NUL",
+                               SCENE_PATH_MAX - 1);
+            goto fail;
+        }
+        rc = scene_abs_path(base_dir, json_string_value(j), out->mesh_path, err);
+        if (rc) {
+            glint_err_prefix(err, "scene.mesh_file");
+            goto fail;
+        }
+    }
+
     if ((rc = scene_json_int(root, "width", &width, err)) ||
         (rc = scene_json_int(root, "height", &height, err)))
         goto fail;
@@ -557,10 +641,10 @@ int scene_from_json(const char *text, scene *out, glint_err *err)
             goto fail;
     }
 
-    /* The mesh last: building it is the expensive step. */
-    rc = mesh_builtin(out->mesh_name, &out->mesh, err);
+    /* The mesh last: building or loading it is the expensive step. */
+    rc = scene_load_mesh(out, err);
     if (rc) {
-        glint_err_prefix(err, "scene.mesh");
+        glint_err_prefix(err, "%s", out->mesh_path[0] ? "scene.mesh_file" : "scene.mesh");
         goto fail;
     }
     rc = scene_validate(out, err);
@@ -573,6 +657,11 @@ fail:
     json_decref(root);
     scene_free(out);
     return rc;
+}
+
+int scene_from_json(const char *text, scene *out, glint_err *err)
+{
+    return scene_from_json_at(text, NULL, out, err);
 }
 
 /* json_object_set_new that reports failure (it steals `val` either way). */
@@ -608,6 +697,7 @@ char *scene_to_json(const scene *s, glint_err *err)
     if (scene_json_set(root, "format", json_string(SCENE_FORMAT)) ||
         scene_json_set(root, "version", json_integer(SCENE_VERSION)) ||
         scene_json_set(root, "mesh", json_string(s->mesh_name)) ||
+        (s->mesh_path[0] && scene_json_set(root, "mesh_file", json_string(s->mesh_path))) ||
         scene_json_set(root, "width", json_integer(s->width)) ||
         scene_json_set(root, "height", json_integer(s->height)))
         goto nomem;
@@ -695,7 +785,21 @@ int scene_load(const char *path, scene *out, glint_err *err)
         rc = glint_err_set(err, GLINT_EFORMAT, "scene file %s contains a NUL byte", path);
         goto done;
     }
-    rc = scene_from_json(text, out, err);
+    {
+        /* relative mesh files are relative to the scene file's directory */
+        char dir[SCENE_PATH_MAX];
+        const char *slash = strrchr(path, '/');
+        size_t dl = slash ? (size_t)(slash - path) : 0;
+        if (dl >= sizeof dir) {
+            rc = glint_err_set(err, GLINT_ERANGE, "scene file path %.200s too long", path);
+            goto done;
+        }
+        if (slash && dl == 0)
+            snprintf(dir, sizeof dir, "/");
+        else
+            snprintf(dir, sizeof dir, "%.*s", (int)dl, path);
+        rc = scene_from_json_at(text, dir, out, err);
+    }
     if (rc)
         glint_err_prefix(err, "%s", path);
 done:

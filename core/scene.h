@@ -32,6 +32,7 @@
 #define SCENE_MIN_SIZE 8
 #define SCENE_MAX_SIZE 4096
 #define SCENE_NAME_MAX 64
+#define SCENE_PATH_MAX 4096
 
 typedef struct scene_view {
     double eye[3];
@@ -43,8 +44,11 @@ typedef struct scene_view {
 } scene_view;
 
 typedef struct scene {
-    char mesh_name[SCENE_NAME_MAX]; /* "sphere" (built-in) or a file name later */
+    char mesh_name[SCENE_NAME_MAX]; /* a built-in ("sphere", "torus", "teapot"), or the label
+                                       of a mesh file (its base name when glint made it) */
+    char mesh_path[SCENE_PATH_MAX]; /* "" for a built-in; else the mesh file, absolute */
     mesh mesh;
+    mesh_report mesh_info;  /* what mesh_load decided (zeroed for a built-in) */
     int width, height;     /* raster size of every view */
     int nviews;
     scene_view *views;     /* nviews entries */
@@ -53,7 +57,11 @@ typedef struct scene {
 /* Parameters of a scene built from a built-in mesh with the icosahedron
  * view set.  scene_params_default() fills the documented defaults. */
 typedef struct scene_params {
-    char mesh_name[SCENE_NAME_MAX]; /* default "sphere" */
+    char mesh_name[SCENE_NAME_MAX]; /* built-in mesh, default "sphere" */
+    char mesh_path[SCENE_PATH_MAX]; /* default "": the built-in mesh_name; else a mesh file
+                                       read with mesh_load (relative: to the working
+                                       directory), and mesh_name is ignored: the scene's
+                                       name is the file's base name */
     int width, height;     /* default 128 x 128 */
     double distance;       /* camera (and light) distance, default 3.5 */
     double margin;         /* silhouette of the unit ball spans 1/margin of the half-height, default 1.1 */
@@ -89,7 +97,19 @@ void scene_view_frame(const scene_view *v, double fwd[3], double right[3], doubl
  * hand-placed cameras and lights.  scene_to_json returns a malloc'ed
  * NUL-terminated string (caller frees) or NULL with *err set.
  * scene_from_json validates everything (sizes, finiteness, view count,
- * degenerate cameras) and fails with a message naming the field. */
+ * degenerate cameras) and fails with a message naming the field.
+ *
+ * Meshes from files: an optional "mesh_file" string names the file (read
+ * with mesh_load; "mesh" is then only a label).  A relative mesh_file is
+ * resolved against the directory of the scene file when read by
+ * scene_load, and against the working directory by scene_from_json; the
+ * scene keeps the absolute path (scene.mesh_path), which is what
+ * scene_to_json and scene_save write, so a saved scene can be moved
+ * anywhere on the same machine.  Scenes with a built-in mesh have no
+ * "mesh_file" key.  The content hash covers the mesh arrays, not the path:
+ * the same file in two places gives the same hash, an edited file a new
+ * one.  A scene document can make glint read any file the process can:
+ * a server must only accept mesh_file values it chose itself. */
 char *scene_to_json(const scene *s, glint_err *err);
 int scene_from_json(const char *text, scene *out, glint_err *err);
 int scene_load(const char *path, scene *out, glint_err *err);

@@ -1,12 +1,14 @@
 /* test_scene.c: meshes, default views (against ../shared/reference/hf_ref.py),
- * JSON I/O, validation and the content hash. */
+ * JSON I/O, validation, the content hash, and scenes whose mesh is a file. */
 #include <ctype.h>
+#include <fcntl.h>
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -296,9 +298,9 @@ TEST(create_errors)
     p.view_set = 7;
     ASSERT_EQ(scene_create(&p, &s, &e), GLINT_EINVAL);
     scene_params_default(&p);
-    snprintf(p.mesh_name, sizeof p.mesh_name, "teapot");
+    snprintf(p.mesh_name, sizeof p.mesh_name, "cube");
     ASSERT_EQ(scene_create(&p, &s, &e), GLINT_ENOTFOUND);
-    ASSERT(strstr(e.msg, "teapot") != NULL);
+    ASSERT(strstr(e.msg, "cube") != NULL);
     ASSERT(s.views == NULL && s.mesh.pos == NULL);
     ASSERT_EQ(scene_create(NULL, &s, &e), GLINT_EINVAL);
 }
@@ -631,6 +633,226 @@ TEST(validate)
     scene_free(&s);
 }
 
+/* ---- meshes from files and the other built-ins ------------------------------ */
+
+static const char tet_obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                              "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+static int put_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return -1;
+    fputs(text, f);
+    return fclose(f);
+}
+
+/* Replace the first occurrence of `from` in *text by `to` (reallocates). */
+static void replace_once(char **text, const char *from, const char *to)
+{
+    char *at = strstr(*text, from), *n;
+    size_t a, lf = strlen(from), lt = strlen(to), l = strlen(*text);
+    if (!at) {
+        fprintf(stderr, "replace_once: \"%s\" not found\n", from);
+        exit(2);
+    }
+    a = (size_t)(at - *text);
+    n = malloc(l - lf + lt + 1);
+    if (!n)
+        exit(2);
+    memcpy(n, *text, a);
+    memcpy(n + a, to, lt);
+    memcpy(n + a + lt, at + lf, l - a - lf + 1);
+    free(*text);
+    *text = n;
+}
+
+TEST(mesh_file_scenes)
+{
+    char dir[] = "/tmp/glint_test_scene_mesh_XXXXXX";
+    char path[512], sub[512], h1[33], h2[33];
+    scene_params p;
+    scene s, t;
+    glint_err e;
+    char *text;
+
+    ASSERT(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/tet.obj", dir);
+    ASSERT(put_file(path, tet_obj) == 0);
+    scene_params_default(&p);
+    p.width = p.height = 32;
+    snprintf(p.mesh_path, sizeof p.mesh_path, "%s", path);
+    ASSERT_OK(scene_create(&p, &s, &e));
+    ASSERT(strcmp(s.mesh_name, "tet.obj") == 0); /* the label: the base name */
+    ASSERT(strcmp(s.mesh_path, path) == 0);
+    ASSERT_EQ(s.mesh.ntris, 4);
+    ASSERT_EQ(s.mesh_info.ntris, 4);
+    ASSERT_EQ(s.mesh_info.normals_generated, 1);
+    ASSERT_EQ(s.mesh_info.uvs_generated, 1);
+    scene_hash(&s, h1);
+
+    /* JSON keeps the file; reading it back loads the same mesh */
+    text = scene_to_json(&s, &e);
+    ASSERT(text != NULL);
+    ASSERT(strstr(text, "\"mesh_file\"") != NULL);
+    ASSERT(strstr(text, "\"tet.obj\"") != NULL);
+    ASSERT_OK(scene_from_json(text, &t, &e));
+    scene_hash(&t, h2);
+    ASSERT(strcmp(h1, h2) == 0);
+    ASSERT(strcmp(t.mesh_path, path) == 0);
+    scene_free(&t);
+
+    /* save / load */
+    snprintf(sub, sizeof sub, "%s/scene.json", dir);
+    ASSERT_OK(scene_save(&s, sub, &e));
+    ASSERT_OK(scene_load(sub, &t, &e));
+    scene_hash(&t, h2);
+    ASSERT(strcmp(h1, h2) == 0);
+    scene_free(&t);
+
+    /* a hand-written relative mesh_file is relative to the scene file */
+    replace_once(&text, path, "tet.obj");
+    ASSERT(strstr(text, "\"mesh_file\": \"tet.obj\"") != NULL);
+    snprintf(sub, sizeof sub, "%s/rel.json", dir);
+    ASSERT(put_file(sub, text) == 0);
+    ASSERT_OK(scene_load(sub, &t, &e));
+    ASSERT(strcmp(t.mesh_path, path) == 0);
+    scene_hash(&t, h2);
+    ASSERT(strcmp(h1, h2) == 0);
+    scene_free(&t);
+    /* ... also when the scene file's own path is relative */
+    {
+        int here = open(".", O_RDONLY);
+        char want[600];
+        ASSERT(here >= 0);
+        ASSERT(chdir("/tmp") == 0);
+        ASSERT_OK(scene_load(sub + strlen("/tmp/"), &t, &e));
+        snprintf(want, sizeof want, "/tmp/%s/tet.obj", dir + strlen("/tmp/"));
+        ASSERT_MSG(strcmp(t.mesh_path, want) == 0, "%s vs %s", t.mesh_path, want);
+        scene_free(&t);
+        /* scene_from_json: relative to the working directory */
+        ASSERT(chdir(dir) == 0);
+        ASSERT_OK(scene_from_json(text, &t, &e));
+        ASSERT(strcmp(t.mesh_path, path) == 0);
+        scene_free(&t);
+        ASSERT(fchdir(here) == 0);
+        close(here);
+    }
+    /* ... and from a subdirectory, with .. */
+    {
+        char *t2 = strdup(text), subdir[560];
+        ASSERT(t2 != NULL);
+        replace_once(&t2, "\"mesh_file\": \"tet.obj\"", "\"mesh_file\": \"../tet.obj\"");
+        snprintf(subdir, sizeof subdir, "%s/sub", dir);
+        ASSERT(mkdir(subdir, 0755) == 0);
+        snprintf(sub, sizeof sub, "%s/sub/up.json", dir);
+        ASSERT(put_file(sub, t2) == 0);
+        ASSERT_OK(scene_load(sub, &t, &e));
+        scene_hash(&t, h2);
+        ASSERT(strcmp(h1, h2) == 0);
+        scene_free(&t);
+        unlink(sub);
+        rmdir(subdir);
+        free(t2);
+    }
+
+    /* the same bytes elsewhere: the same hash; other bytes: another hash */
+    {
+        char other[600];
+        scene u;
+        snprintf(other, sizeof other, "%s/copy.obj", dir);
+        ASSERT(put_file(other, tet_obj) == 0);
+        snprintf(p.mesh_path, sizeof p.mesh_path, "%s", other);
+        ASSERT_OK(scene_create(&p, &u, &e));
+        scene_hash(&u, h2);
+        ASSERT(strcmp(h1, h2) == 0);
+        scene_free(&u);
+        ASSERT(put_file(other, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.5\n"
+                               "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n") == 0);
+        ASSERT_OK(scene_create(&p, &u, &e));
+        scene_hash(&u, h2);
+        ASSERT(strcmp(h1, h2) != 0);
+        scene_free(&u);
+        /* a corrupt file: the loader's error, named */
+        ASSERT(put_file(other, "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n") == 0);
+        ASSERT_EQ(scene_create(&p, &u, &e), GLINT_ENONFINITE);
+        ASSERT(strstr(e.msg, "copy.obj") != NULL);
+        ASSERT(u.views == NULL && u.mesh.pos == NULL);
+        unlink(other);
+        /* missing */
+        ASSERT_EQ(scene_create(&p, &u, &e), GLINT_ENOTFOUND);
+    }
+
+    /* malformed mesh_file fields */
+    {
+        char *bad = strdup(text);
+        ASSERT(bad != NULL);
+        replace_once(&bad, "\"mesh_file\": \"tet.obj\"", "\"mesh_file\": \"missing.obj\"");
+        ASSERT_EQ(scene_from_json(bad, &t, &e), GLINT_ENOTFOUND);
+        ASSERT(strstr(e.msg, "mesh_file") != NULL && strstr(e.msg, "missing.obj") != NULL);
+        free(bad);
+        bad = strdup(text);
+        ASSERT(bad != NULL);
+        replace_once(&bad, "\"mesh_file\": \"tet.obj\"", "\"mesh_file\": 7");
+        ASSERT_EQ(scene_from_json(bad, &t, &e), GLINT_EFORMAT);
+        ASSERT(strstr(e.msg, "mesh_file") != NULL);
+        free(bad);
+        bad = strdup(text);
+        ASSERT(bad != NULL);
+        replace_once(&bad, "\"mesh_file\": \"tet.obj\"", "\"mesh_file\": \"\"");
+        ASSERT_EQ(scene_from_json(bad, &t, &e), GLINT_EFORMAT);
+        free(bad);
+        bad = strdup(text);
+        ASSERT(bad != NULL);
+        replace_once(&bad, "\"mesh_file\": \"tet.obj\"", "\"mesh_file\": \"tet\\u0000.obj\"");
+        ASSERT_EQ(scene_from_json(bad, &t, &e), GLINT_EFORMAT);
+        free(bad);
+    }
+    free(text);
+    scene_free(&s);
+    {
+        char cmd[600];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+        ASSERT_EQ(system(cmd), 0);
+    }
+}
+
+TEST(builtin_scenes)
+{
+    static const char *names[] = {"torus", "teapot"};
+    char hs[33];
+    scene s;
+    scene_params p;
+    glint_err e;
+    char *text;
+    scene_params_default(&p);
+    p.width = p.height = 16;
+    ASSERT_OK(scene_create(&p, &s, &e));
+    scene_hash(&s, hs);
+    text = scene_to_json(&s, &e);
+    ASSERT(text && strstr(text, "mesh_file") == NULL); /* built-ins: no file key */
+    free(text);
+    scene_free(&s);
+    for (int i = 0; i < 2; i++) {
+        scene t;
+        char h1[33], h2[33];
+        snprintf(p.mesh_name, sizeof p.mesh_name, "%s", names[i]);
+        ASSERT_OK(scene_create(&p, &s, &e));
+        ASSERT(s.mesh_path[0] == '\0');
+        ASSERT_EQ(s.mesh_info.ntris, 0);
+        scene_hash(&s, h1);
+        ASSERT(strcmp(h1, hs) != 0);
+        text = scene_to_json(&s, &e);
+        ASSERT(text != NULL);
+        ASSERT_OK(scene_from_json(text, &t, &e));
+        scene_hash(&t, h2);
+        ASSERT(strcmp(h1, h2) == 0);
+        free(text);
+        scene_free(&t);
+        scene_free(&s);
+    }
+}
+
 TEST(save_load)
 {
     char dir[] = "/tmp/glint_test_scene_XXXXXX";
@@ -694,6 +916,8 @@ TEST_LIST {
     TEST_ENTRY(json_hostile),
     TEST_ENTRY(validate),
     TEST_ENTRY(save_load),
+    TEST_ENTRY(mesh_file_scenes),
+    TEST_ENTRY(builtin_scenes),
 };
 
 TEST_MAIN()
