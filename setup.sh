@@ -22,7 +22,7 @@ BUILD_PKGS=(
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml
-  openimageio-tools gnuplot-nox wrk chromium
+  openimageio-tools gnuplot-nox wrk chromium jq
 )
 
 missing_packages() {

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "fitsvc.h"
 
 static http_resp healthz(http_req *req)
 {
@@ -43,6 +44,7 @@ static http_resp metrics(http_req *req)
     fprintf(f, "glintd_request_duration_seconds_count %llu\n", (unsigned long long)st.requests);
     fprintf(f, "# HELP glintd_uptime_seconds Seconds since start.\n# TYPE glintd_uptime_seconds gauge\n");
     fprintf(f, "glintd_uptime_seconds %lld\n", (long long)(time(NULL) - a->started));
+    fitsvc_metrics(a->fits, f);
     fclose(f);
     return http_bytes_owned(200, "text/plain; version=0.0.4; charset=utf-8", buf, len);
 }

@@ -25,6 +25,7 @@
 #include "app.h"
 #include "auth.h"
 #include "events.h"
+#include "fitsvc.h"
 #include "img.h"
 #include "store.h"
 #include "stroke.h"
@@ -417,6 +418,7 @@ static http_resp painting_put(http_req *req)
         r = api_fail(&e, "storing the painting");
         goto done;
     }
+    fitsvc_painting_offer(a->fits, req->param[0], k, (long long)version, &im);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I}", "view", k, "version", (json_int_t)version,
                                  "seq", (json_int_t)seq));
@@ -583,6 +585,8 @@ static http_resp strokes_post(http_req *req)
     }
     pthread_mutex_unlock(session_lock(req->param[0]));
     locked = 0;
+    /* the fit service keeps the decoded image, so a fit need not decode it */
+    fitsvc_painting_offer(a->fits, req->param[0], k, (long long)version, &cur);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I, s:I, s:i, s:I}", "view", k, "first_seq",
                                  (json_int_t)first, "last_seq", (json_int_t)last, "version",

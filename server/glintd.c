@@ -298,6 +298,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "glintd: %s: finishing in-flight requests\n",
                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
     events_shutdown(a.events); /* end the event streams, then the connections */
+    fitsvc_shutdown(a.fits);   /* and the job streams */
     http_server_stop(a.http);
     free(routes);
     fitsvc_close(a.fits);

@@ -1,0 +1,265 @@
+#!/usr/bin/env python3
+"""glintd benchmark (run by hand; not part of the test suite).
+
+Starts its own daemon (quiet, fresh data directory) on an ephemeral loopback
+port and prints a markdown table of:
+
+  1. the warm round trip "upload a 256x256 PNG painting for one view, fit at
+     64 texels, fetch the material JSON", median (and p90) over --runs runs,
+     for a session with only that view painted and for one with all 12
+     views painted (the fit then reads the other 11 paintings too);
+  2. a cold fit of the same scene (empty cache): the job's wall time and the
+     precomputation time it reports, and the same after a restart (the
+     decomposition comes from the disk cache);
+  3. wrk -t2 -c32 -d10s --latency on /healthz and on a cached material GET:
+     requests/s and p99 latency.
+
+usage: tests/bench/bench_daemon.py [--build DIR] [--glintd PATH] [--cli PATH]
+                                   [--runs N] [--wrk-seconds S] [--threads N]
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import requests
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SRC = os.path.dirname(os.path.dirname(HERE))
+
+
+class Daemon:
+    def __init__(self, glintd, data_dir, threads):
+        self.glintd, self.data_dir, self.threads = glintd, data_dir, threads
+        self.proc = None
+
+    def start(self):
+        port_file = os.path.join(self.data_dir + ".port")
+        if os.path.exists(port_file):
+            os.unlink(port_file)
+        self.log = open(self.data_dir + ".log", "ab")
+        self.proc = subprocess.Popen(
+            [self.glintd, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
+             "--threads", str(self.threads), "--quiet", "--web-dir", os.path.join(SRC, "web")],
+            stdout=self.log, stderr=self.log)
+        t0 = time.time()
+        while time.time() - t0 < 20:
+            if self.proc.poll() is not None:
+                raise RuntimeError("glintd exited; see %s.log" % self.data_dir)
+            if os.path.exists(port_file) and open(port_file).read().strip():
+                self.base = "http://127.0.0.1:%s" % open(port_file).read().strip()
+                return
+            time.sleep(0.02)
+        raise RuntimeError("glintd did not start")
+
+    def stop(self):
+        if self.proc and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            self.proc.wait(timeout=30)
+        self.log.close()
+
+
+def check(r, status):
+    if r.status_code != status:
+        raise RuntimeError("%s %s: %d %s" % (r.request.method, r.request.url, r.status_code,
+                                             r.text[:300]))
+    return r
+
+
+def wait_job(http, base, job, token):
+    while True:
+        j = check(http.get(base + job["links"]["self"], headers={"X-Glint-Token": token}),
+                  200).json()["job"]
+        if j["state"] == "done":
+            return j
+        if j["state"] == "failed":
+            raise RuntimeError("job failed: %s" % j["error"])
+        time.sleep(0.01)
+
+
+def fit(http, base, sid, token, res):
+    """Fit; follow the job if there is one.  Returns (material, job or None, seconds)."""
+    t0 = time.perf_counter()
+    r = http.post(base + "/api/v1/sessions/%s/fits" % sid,
+                  headers={"X-Glint-Token": token, "Content-Type": "application/json"},
+                  data=json.dumps({"params": {"res": res}}))
+    if r.status_code == 201:
+        return r.json(), None, time.perf_counter() - t0
+    check(r, 202)
+    j = wait_job(http, base, r.json()["job"], token)
+    dt = time.perf_counter() - t0
+    m = check(http.get(base + "/api/v1/materials/" + j["material_id"],
+                       headers={"X-Glint-Token": token}), 200).json()
+    return m, j, dt
+
+
+def new_session(http, base, scene_id, paint_dir, views, ext):
+    s = check(http.post(base + "/api/v1/sessions", json={"scene_id": scene_id}), 201).json()
+    ctype = {"png": "image/png", "exr": "image/x-exr"}[ext]
+    for k in views:
+        with open(os.path.join(paint_dir, "view_%02d.%s" % (k, ext)), "rb") as f:
+            check(http.put(base + "/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+                           headers={"X-Glint-Token": s["paint_token"], "Content-Type": ctype},
+                           data=f.read()), 200)
+    return s
+
+
+def round_trips(http, base, s, pngs, runs, res):
+    """Upload a PNG for view 0 (alternating contents), fit (201), GET the material."""
+    times, steps, hits = [], {"put": [], "fit": [], "get": []}, 0
+    h = {"X-Glint-Token": s["paint_token"]}
+    for i in range(runs):
+        body = pngs[i % len(pngs)]
+        t0 = time.perf_counter()
+        check(http.put(base + "/api/v1/sessions/%s/views/0/painting" % s["id"],
+                       headers=dict(h, **{"Content-Type": "image/png"}), data=body), 200)
+        t1 = time.perf_counter()
+        r = http.post(base + "/api/v1/sessions/%s/fits" % s["id"],
+                      headers=dict(h, **{"Content-Type": "application/json"}),
+                      data=json.dumps({"params": {"res": res}}))
+        check(r, 201)
+        t2 = time.perf_counter()
+        check(http.get(base + r.headers["Location"], headers=h), 200)
+        t3 = time.perf_counter()
+        times.append(t3 - t0)
+        steps["put"].append(t1 - t0)
+        steps["fit"].append(t2 - t1)
+        steps["get"].append(t3 - t2)
+        hits += r.json()["precomputation"]["cache"]["memory"] == "hit"
+    return times, steps, hits
+
+
+def wrk(url, seconds, headers=()):
+    cmd = ["wrk", "-t2", "-c32", "-d%ds" % seconds, "--latency"]
+    for h in headers:
+        cmd += ["-H", h]
+    out = subprocess.run(cmd + [url], check=True, capture_output=True, text=True).stdout
+    rps = float(re.search(r"Requests/sec:\s+([\d.]+)", out).group(1))
+    p99 = re.search(r"^\s+99%\s+([\d.]+)(us|ms|s)\s*$", out, re.M)
+    scale = {"us": 1e-3, "ms": 1.0, "s": 1e3}[p99.group(2)]
+    errors = re.search(r"Non-2xx or 3xx responses:\s+(\d+)", out)
+    return rps, float(p99.group(1)) * scale, int(errors.group(1)) if errors else 0
+
+
+def ms(x):
+    return "%.1f" % (1e3 * x)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--build", default=os.path.join(SRC, "build"))
+    ap.add_argument("--glintd")
+    ap.add_argument("--cli")
+    ap.add_argument("--runs", type=int, default=50)
+    ap.add_argument("--wrk-seconds", type=int, default=10)
+    ap.add_argument("--threads", type=int, default=2, help="glintd --threads (job workers)")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary directory")
+    a = ap.parse_args()
+    glintd = a.glintd or os.path.join(a.build, "server", "glintd")
+    cli = a.cli or os.path.join(a.build, "core", "glint")
+    tmp = tempfile.mkdtemp(prefix="glint-bench-")
+    rows = []
+    load0 = " ".join("%.2f" % x for x in os.getloadavg())
+    try:
+        # paintings made by the CLI for the daemon's default scene at 256x256
+        subprocess.run([cli, "scene", "create", "--size", "256", "-o", tmp + "/scene.json"],
+                       check=True, stdout=subprocess.DEVNULL)
+        pngs = []
+        for i, brdf in enumerate(["ct:rough=0.3,kd=0.5,f0=0.3", "ct:rough=0.2,kd=0.4,f0=0.2"]):
+            subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", brdf, "--format", "png",
+                            "-o", "%s/png%d" % (tmp, i)], check=True, stdout=subprocess.DEVNULL)
+            with open("%s/png%d/view_00.png" % (tmp, i), "rb") as f:
+                pngs.append(f.read())
+        subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", "ct:rough=0.3,kd=0.5,f0=0.3",
+                        "-o", tmp + "/exr"], check=True, stdout=subprocess.DEVNULL)
+
+        d = Daemon(glintd, tmp + "/data", a.threads)
+        d.start()
+        http = requests.Session()
+        sc = check(http.post(d.base + "/api/v1/scenes", json={"width": 256, "height": 256}),
+                   201).json()
+
+        # cold: empty memory and disk caches, one view painted, then all 12
+        s1 = new_session(http, d.base, sc["id"], tmp + "/png0", [0], "png")
+        m, job, dt = fit(http, d.base, s1["id"], s1["paint_token"], 64)
+        assert job is not None, "the first fit of a fresh daemon should be a job"
+        c = m["precomputation"]["cache"]
+        rows.append(("cold fit, 1 view (%d samples), res 64: job wall time" %
+                     m["precomputation"]["samples"], ms(dt), "ms"))
+        rows.append(("... its precomputation (raster + samples + design + decomposition + "
+                     "operator, disk %s)" % c["disk"], ms(c["cold_seconds"]), "ms"))
+        s12 = new_session(http, d.base, sc["id"], tmp + "/exr", range(12), "exr")
+        m12, job, dt = fit(http, d.base, s12["id"], s12["paint_token"], 64)
+        c = m12["precomputation"]["cache"]
+        rows.append(("cold fit, 12 views (%d samples), res 64: job wall time" %
+                     m12["precomputation"]["samples"], ms(dt), "ms"))
+        rows.append(("... its precomputation (disk %s)" % c["disk"], ms(c["cold_seconds"]),
+                     "ms"))
+        for name, lv in c["levels"].items():
+            rows.append(("...... %s level" % name, ms(lv["build_seconds"]), "ms"))
+
+        # warm round trips
+        for label, s in (("1 view painted", s1), ("12 views painted", s12)):
+            round_trips(http, d.base, s, pngs, 3, 64)  # warm the connection and the caches
+            t, steps, hits = round_trips(http, d.base, s, pngs, a.runs, 64)
+            t.sort()
+            rows.append(("warm round trip (PUT 256x256 PNG + POST fit res 64 + GET material), "
+                         "%s: median of %d (cache hits %d/%d)" % (label, a.runs, hits, a.runs),
+                         ms(statistics.median(t)), "ms"))
+            rows.append(("... p90 / min / max", "%s / %s / %s" % (
+                ms(t[int(0.9 * (len(t) - 1))]), ms(t[0]), ms(t[-1])), "ms"))
+            rows.append(("... medians of the steps: PUT painting / POST fit (201) / GET material",
+                         " / ".join(ms(statistics.median(steps[k])) for k in ("put", "fit", "get")),
+                         "ms"))
+        warm = check(http.get(d.base + "/api/v1/materials/" + m12["id"],
+                              headers={"X-Glint-Token": s12["paint_token"]}), 200)
+        rows.append(("material JSON size", str(len(warm.content)), "bytes"))
+
+        # wrk
+        if shutil.which("wrk"):
+            for label, url, hdr in (
+                    ("/healthz", d.base + "/healthz", ()),
+                    ("GET /api/v1/materials/{id} (cached material)",
+                     d.base + "/api/v1/materials/" + m12["id"],
+                     ("X-Glint-Token: " + s12["paint_token"],))):
+                rps, p99, bad = wrk(url, a.wrk_seconds, hdr)
+                rows.append(("wrk -t2 -c32 -d%ds %s: requests/s" % (a.wrk_seconds, label),
+                             "%.0f" % rps, "req/s"))
+                rows.append(("... p99 latency%s" % (" (%d non-2xx!)" % bad if bad else ""),
+                             "%.2f" % p99, "ms"))
+        else:
+            rows.append(("wrk", "not installed", ""))
+
+        # restart: the decomposition from the disk cache
+        d.stop()
+        d.start()
+        m, job, dt = fit(http, d.base, s12["id"], s12["paint_token"], 64)
+        c = m["precomputation"]["cache"]
+        rows.append(("after a restart, 12 views, res 64: job wall time (disk %s)" % c["disk"],
+                     ms(dt), "ms"))
+        rows.append(("... its precomputation", ms(c["cold_seconds"]), "ms"))
+        d.stop()
+    finally:
+        if not a.keep:
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            print("kept", tmp, file=sys.stderr)
+
+    print("load average before / after: %s / %s" % (load0, " ".join(
+        "%.2f" % x for x in os.getloadavg())))
+    print()
+    print("| measurement | value | unit |")
+    print("|---|---|---|")
+    for r in rows:
+        print("| %s | %s | %s |" % r)
+
+
+if __name__ == "__main__":
+    main()
