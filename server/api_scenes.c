@@ -20,6 +20,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "api_common.h"
 #include "app.h"
 #include "auth.h"
 #include "brdf.h"
@@ -39,29 +40,6 @@
 #define API_BASE_SCALE 3.14159265358979323846
 
 /* ---- shared helpers ---------------------------------------------------------- */
-
-/* The HTTP status for a glint error code. */
-static int api_status(int code)
-{
-    switch (code) {
-    case GLINT_ENOTFOUND: return 404;
-    case GLINT_EINVAL:
-    case GLINT_EFORMAT:
-    case GLINT_ENONFINITE:
-    case GLINT_ERANGE:
-    case GLINT_EUNSUPPORTED: return 422;
-    default: return 500;
-    }
-}
-
-static http_resp api_fail(const glint_err *e, const char *context)
-{
-    int st = api_status(e->code);
-    const char *slug = st == 404 ? "not-found" : st == 422 ? "invalid-input" : NULL;
-    if (st == 500)
-        fprintf(stderr, "glintd: %s: %s\n", context, e->msg);
-    return http_problem(st, slug, "%s: %s", context, e->msg);
-}
 
 /* A view index from a path segment: decimal digits, 0..n-1. */
 static int api_view_index(const char *text, int n, int *k)
@@ -101,15 +79,6 @@ static json_t *api_scene_public(const json_t *doc)
     if (pub)
         json_object_del(pub, "scene");
     return pub;
-}
-
-static http_resp api_body_too_large(http_req *req, const char *what)
-{
-    app *a = req->app;
-    return http_problem(413, "body-too-large",
-                        "%s exceeds the request body limit of %zu bytes (max_body, glintd "
-                        "--max-body-mb %zu)",
-                        what, a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
 }
 
 /* ---- meshes ------------------------------------------------------------------ */

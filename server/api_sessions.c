@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "api_common.h"
 #include "app.h"
 #include "auth.h"
 #include "events.h"
@@ -54,28 +55,6 @@ static pthread_mutex_t *session_lock(const char *id)
 }
 
 /* ---- helpers -------------------------------------------------------------------- */
-
-static int api_status(int code)
-{
-    switch (code) {
-    case GLINT_ENOTFOUND: return 404;
-    case GLINT_EINVAL:
-    case GLINT_EFORMAT:
-    case GLINT_ENONFINITE:
-    case GLINT_ERANGE:
-    case GLINT_EUNSUPPORTED: return 422;
-    default: return 500;
-    }
-}
-
-static http_resp api_fail(const glint_err *e, const char *context)
-{
-    int st = api_status(e->code);
-    const char *slug = st == 404 ? "not-found" : st == 422 ? "invalid-input" : NULL;
-    if (st == 500)
-        fprintf(stderr, "glintd: %s: %s\n", context, e->msg);
-    return http_problem(st, slug, "%s: %s", context, e->msg);
-}
 
 /* A non-negative decimal integer (at most 18 digits). */
 static int api_parse_count(const char *text, long long *out)
@@ -182,15 +161,6 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
     return rc;
 }
 
-static http_resp body_too_large(http_req *req, const char *what)
-{
-    app *a = req->app;
-    return http_problem(413, "body-too-large",
-                        "%s exceeds the request body limit of %zu bytes (max_body, glintd "
-                        "--max-body-mb %zu)",
-                        what, a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
-}
-
 /* ---- sessions --------------------------------------------------------------------- */
 
 /* The public form of a session for the access granted. */
@@ -242,7 +212,7 @@ static http_resp session_create(http_req *req)
     if (auth_require_key(req, &deny))
         return deny;
     if (req->body_too_large)
-        return body_too_large(req, "the session request");
+        return api_body_too_large(req, "the session request");
     body = http_body_json(req, &fail);
     if (!body)
         return fail;
@@ -335,7 +305,7 @@ static http_resp painting_put(http_req *req)
     if (r.r)
         goto done;
     if (req->body_too_large) {
-        r = body_too_large(req, "the painting");
+        r = api_body_too_large(req, "the painting");
         goto done;
     }
     if (req->body_len == 0) {
@@ -511,7 +481,7 @@ static http_resp strokes_post(http_req *req)
     if (r.r)
         goto done;
     if (req->body_too_large) {
-        r = body_too_large(req, "the strokes");
+        r = api_body_too_large(req, "the strokes");
         goto done;
     }
     body = http_body_json(req, &r);
