@@ -11,7 +11,10 @@
  *             Schlick F = F0 + (1-F0)(1 - h.wi)^5
  *   ward    : kd/pi + ks exp(-tan^2(th_h)/a^2) / (4 pi a^2 sqrt(cos_i cos_o))
  *             (isotropic Ward with roughness a)
- * These match ../shared/reference/hf_ref.py (lambert, phong, blinn, ct). */
+ * These match ../shared/reference/hf_ref.py (lambert, phong, blinn, ct).
+ *
+ * A brdf is a small value (no pointers; copy it freely).  Every function is
+ * pure and thread-safe. */
 #ifndef GLINT_BRDF_H
 #define GLINT_BRDF_H
 

@@ -12,8 +12,17 @@ int glint_err_set(glint_err *err, int code, const char *fmt, ...)
         err->code = code;
         vsnprintf(err->msg, sizeof err->msg, fmt, ap);
         va_end(ap);
+        err->kind[0] = '\0';
     }
     return code;
+}
+
+int glint_err_kind(glint_err *err, const char *kind)
+{
+    if (!err)
+        return GLINT_EINTERNAL;
+    snprintf(err->kind, sizeof err->kind, "%s", kind ? kind : "");
+    return err->code;
 }
 
 int glint_err_prefix(glint_err *err, const char *fmt, ...)
@@ -38,6 +47,7 @@ void glint_err_clear(glint_err *err)
     if (err) {
         err->code = 0;
         err->msg[0] = '\0';
+        err->kind[0] = '\0';
     }
 }
 
@@ -55,6 +65,11 @@ const char *glint_strerror(int code)
     case GLINT_ENOTFOUND: return "not found";
     case GLINT_EUNSUPPORTED: return "unsupported";
     case GLINT_EINTERNAL: return "internal error";
+    case GLINT_EAUTH: return "authentication required";
+    case GLINT_EDENIED: return "access denied";
+    case GLINT_ECONFLICT: return "conflict";
+    case GLINT_EBUSY: return "busy";
+    case GLINT_ETOOBIG: return "too large";
     default: return "unknown error";
     }
 }

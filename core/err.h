@@ -20,14 +20,24 @@ enum {
     GLINT_ENONFINITE = -7,/* NaN or Inf where finite values are required */
     GLINT_ENOTFOUND = -8, /* a named thing does not exist */
     GLINT_EUNSUPPORTED = -9, /* a valid request this build cannot serve */
-    GLINT_EINTERNAL = -10 /* an invariant broke: a bug, reported not aborted */
+    GLINT_EINTERNAL = -10,/* an invariant broke: a bug, reported not aborted */
+    /* Access and capacity, raised by the daemon's services: */
+    GLINT_EAUTH = -11,    /* credentials missing or not recognized */
+    GLINT_EDENIED = -12,  /* credentials recognized, access not granted */
+    GLINT_ECONFLICT = -13,/* the request conflicts with the current state */
+    GLINT_EBUSY = -14,    /* over capacity right now: try again later */
+    GLINT_ETOOBIG = -15   /* larger than a configured limit */
 };
 
 #define GLINT_ERR_MSG_MAX 512
+#define GLINT_ERR_KIND_MAX 32
 
 typedef struct glint_err {
     int code;                     /* the last code set (0 if none) */
     char msg[GLINT_ERR_MSG_MAX];  /* NUL-terminated message */
+    /* optional finer kind for the API's problem type ("no-paintings");
+     * "" unless glint_err_kind() set it after the last glint_err_set() */
+    char kind[GLINT_ERR_KIND_MAX];
 } glint_err;
 
 /* Set *err (if non-NULL) to `code` with a printf-style message.
@@ -47,6 +57,10 @@ int glint_err_prefix(glint_err *err, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* Name the kind of the error just set (a short slug, [a-z0-9-]); returns
+ * err->code.  Accepts NULL. */
+int glint_err_kind(glint_err *err, const char *kind);
 
 /* Reset *err to "no error".  Accepts NULL. */
 void glint_err_clear(glint_err *err);

@@ -1,5 +1,7 @@
-/* fit.h: the whole path from paintings to a material, as one callable
- * stage for the CLI, the benchmarks and the daemon:
+/* fit.h: the direct path of the hf3 method (method_hf3.h) from paintings
+ * to a material, as one call without the memory cache, for the tests and
+ * the benchmarks (the command line and the daemon fit through prep.h, which
+ * runs the same stages as cache levels):
  *
  *   scene G-buffers -> samples (pattern) -> design -> decomposition
  *   (cached by content hash) -> regularized operator -> fit -> material
@@ -9,7 +11,9 @@
  * set of paintings and is cheap.  A prepared fit is read-only during
  * fit_run, so several runs may share it.  Ownership: fit_prep owns its
  * samples, design, decomposition and operator; fit_prep_free accepts NULL
- * and half-built objects. */
+ * and half-built objects.  Thread-safety: no global state; a prepared fit
+ * is read-only during fit_run, so any number of threads may run fits on
+ * one prep at once; preparing or freeing one is its owner's. */
 #ifndef GLINT_FIT_H
 #define GLINT_FIT_H
 

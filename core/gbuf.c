@@ -54,18 +54,19 @@ long gbuf_count(const gbuf *g)
     return c;
 }
 
-int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err)
+#define NCH 17
+static const char *const gbuf_names[NCH] = {
+    "mask", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "uv.U", "uv.V",
+    "wi.X", "wi.Y", "wi.Z", "wo.X", "wo.Y", "wo.Z", "cos_i", "cos_o"};
+
+/* The NCH channels of gbuf_write_exr, interleaved (malloc'ed). */
+static float *gbuf_channels(const gbuf *g)
 {
-    static const char *const names[] = {
-        "mask", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "uv.U", "uv.V",
-        "wi.X", "wi.Y", "wi.Z", "wo.X", "wo.Y", "wo.Z", "cos_i", "cos_o"};
-    enum { NCH = 17 };
     size_t n = (size_t)g->width * (size_t)g->height;
     float *data = malloc(n * NCH * sizeof(float));
-    int rc;
 
     if (!data)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory exporting a G-buffer");
+        return NULL;
     for (size_t i = 0; i < n; i++) {
         float *d = data + i * NCH;
         const float *nr = g->nrm + 3 * i, *wi = g->wi + 3 * i, *wo = g->wo + 3 * i;
@@ -78,7 +79,29 @@ int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err)
         d[15] = nr[0] * wi[0] + nr[1] * wi[1] + nr[2] * wi[2];
         d[16] = nr[0] * wo[0] + nr[1] * wo[1] + nr[2] * wo[2];
     }
-    rc = img_write_exr_named(path, g->width, g->height, NCH, names, data, err);
+    return data;
+}
+
+int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err)
+{
+    float *data = gbuf_channels(g);
+    int rc;
+    if (!data)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory exporting a G-buffer");
+    rc = img_write_exr_named(path, g->width, g->height, NCH, gbuf_names, data, err);
+    free(data);
+    return rc;
+}
+
+int gbuf_exr_mem(const gbuf *g, void **out, size_t *len, glint_err *err)
+{
+    float *data = gbuf_channels(g);
+    int rc;
+    *out = NULL;
+    *len = 0;
+    if (!data)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory exporting a G-buffer");
+    rc = img_write_exr_named_mem(g->width, g->height, NCH, gbuf_names, data, out, len, err);
     free(data);
     return rc;
 }

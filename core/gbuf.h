@@ -8,6 +8,7 @@
 #ifndef GLINT_GBUF_H
 #define GLINT_GBUF_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "err.h"
@@ -35,5 +36,8 @@ long gbuf_count(const gbuf *g);
  * These are exactly the values glint reads when it samples a painting of
  * this view: a pixel is a sample when mask = 1, cos_i > 0 and cos_o > 0. */
 int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err);
+
+/* The same file's bytes (OUT: *out malloc'ed, *len). */
+int gbuf_exr_mem(const gbuf *g, void **out, size_t *len, glint_err *err);
 
 #endif

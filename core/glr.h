@@ -57,6 +57,11 @@ int glr_open(glr **out, glint_err *err);
 /* Release the context, programs and targets.  Accepts NULL. */
 void glr_close(glr *g);
 
+/* Release the render targets when they hold more than keep_pixels pixels
+ * (a large preview's buffers are not kept between draws: what the context
+ * holds between calls stays bounded).  Accepts NULL. */
+void glr_trim_targets(glr *g, long keep_pixels);
+
 /* Renderer and platform in words, e.g. "llvmpipe (LLVM 15.0.6, 256 bits),
  * OpenGL ES 3.2 Mesa 22.3.6, EGL 1.5 surfaceless".  Owned by g. */
 const char *glr_describe(const glr *g);

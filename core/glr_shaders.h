@@ -1,14 +1,14 @@
 /* glr_shaders.h: GLSL ES 3.00 sources of glr's programs, as C strings.
- * Private to glr.c (and its tests).
+ * Private to the glr*.c files (and their tests).
  *
- * GLR_VERT_SRC and GLR_PREVIEW_FRAG_SRC are exactly what
- * glr_shader_export() writes to glint_material.vert / .frag: the preview
- * glint draws and the shader handed to other renderers are the same text.
- * They are self-contained and carry their binding contract as comments.
- * The G-buffer and base-render fragment stages share the vertex stage.
+ * GLR_VERT_SRC is exactly what glr_shader_export() writes to
+ * glint_material.vert, with the fragment stage of the material's method
+ * (material_gpu, method.h) as glint_material.frag: the preview glint draws
+ * and the shader handed to other renderers are the same text.  The
+ * G-buffer and base-render fragment stages share the vertex stage.
  *
- * Conventions (must match hf_factors_eval(), hf_project(), hf_hat() and
- * brdf_eval() on the CPU):
+ * Conventions (must match raster.c, material_eval() and brdf_eval() on
+ * the CPU):
  *  - a normal is renormalized after interpolation (left as is if zero);
  *  - wi = normalize(light - P), wo = normalize(eye - P), both world space;
  *  - a value is non-zero only where n.wi > 0 and n.wo > 0. */
@@ -46,100 +46,6 @@ static const char GLR_VERT_SRC[] =
     "    v_nrm = u_normal_matrix * a_normal;\n"
     "    v_uv = a_uv;\n"
     "    gl_Position = u_view_proj * w;\n"
-    "}\n";
-
-/* Fragment stage of the material preview (and of the exported shader). */
-static const char GLR_PREVIEW_FRAG_SRC[] =
-    "#version 300 es\n"
-    "// glint_material.frag: a glint material, three 1D factors (GLSL ES 3.00).\n"
-    "// Written by glint (glr_shader_export); pair it with glint_material.vert.\n"
-    "//\n"
-    "// The material is f ~ inverse_map(p(pi_p) q(pi_q) r(pi_r)), where pi_p,\n"
-    "// pi_q, pi_r are the lengths of wi, h = normalize(wi + wo) and wo\n"
-    "// projected on the tangent plane (each in [0, 1]).  Output: linear\n"
-    "// radiance for a point light of intensity u_light_intensity (no tone\n"
-    "// mapping, no gamma); 0 unless n.wi > 0 and n.wo > 0.\n"
-    "//\n"
-    "// Binding contract (also in shader.json):\n"
-    "//   uniform highp sampler2D u_factors  the LOG-factors: width res, height 3;\n"
-    "//       row 0 = log p, row 1 = log q, row 2 = log r; RGB = channels.\n"
-    "//       Texel k sits at u = k / (res - 1) (node convention); the shader\n"
-    "//       fetches texels with texelFetch and interpolates them itself, so\n"
-    "//       the texture may be RGBA32F or RGBA16F and needs no filtering\n"
-    "//       (set NEAREST, no mipmaps).\n"
-    "//   uniform int   u_res            texels per factor (res, >= 2)\n"
-    "//   uniform int   u_map_kind       0 = log: value = pqr\n"
-    "//                                  1 = add: value = max(pqr - a, 0)\n"
-    "//                                  2 = sub: value = max(a - pqr, 0)\n"
-    "//   uniform vec3  u_a              the mapping offset a per channel (a_used)\n"
-    "//   uniform int   u_model_brdf     1: the factors are a BRDF, multiply by n.wi;\n"
-    "//                                  0: they are radiance (already include n.wi)\n"
-    "//   uniform vec3  u_eye            camera position, world space\n"
-    "//   uniform vec3  u_light          point light position, world space\n"
-    "//   uniform float u_light_intensity  light intensity (no distance fall-off)\n"
-    "//   out location 0  o_color        vec4(radiance RGB, 1)\n"
-    "precision highp float;\n"
-    "precision highp int;\n"
-    "precision highp sampler2D;\n"
-    "uniform highp sampler2D u_factors;\n"
-    "uniform int u_res;\n"
-    "uniform int u_map_kind;\n"
-    "uniform vec3 u_a;\n"
-    "uniform int u_model_brdf;\n"
-    "uniform vec3 u_eye;\n"
-    "uniform vec3 u_light;\n"
-    "uniform float u_light_intensity;\n"
-    "in vec3 v_pos;\n"
-    "in vec3 v_nrm;\n"
-    "in vec2 v_uv;\n"
-    "layout(location = 0) out vec4 o_color;\n"
-    "\n"
-    "vec3 glint_unit(vec3 v)\n"
-    "{\n"
-    "    float l = length(v);\n"
-    "    return l > 0.0 ? v / l : v;\n"
-    "}\n"
-    "\n"
-    "// Length of v projected on the plane orthogonal to the unit normal n.\n"
-    "float glint_tangent_len(vec3 v, vec3 n)\n"
-    "{\n"
-    "    return clamp(length(v - n * dot(v, n)), 0.0, 1.0);\n"
-    "}\n"
-    "\n"
-    "// Log-factor of row `row` at u in [0, 1]: hat interpolation between\n"
-    "// node texels k0 = min(floor(u (res-1)), res-2) and k0 + 1.\n"
-    "vec3 glint_factor(int row, float u)\n"
-    "{\n"
-    "    float x = clamp(u, 0.0, 1.0) * float(u_res - 1);\n"
-    "    int k = min(int(floor(x)), u_res - 2);\n"
-    "    float t = x - float(k);\n"
-    "    vec3 a = texelFetch(u_factors, ivec2(k, row), 0).rgb;\n"
-    "    vec3 b = texelFetch(u_factors, ivec2(k + 1, row), 0).rgb;\n"
-    "    return (1.0 - t) * a + t * b;\n"
-    "}\n"
-    "\n"
-    "// The material at unit n, wi, wo (per unit light intensity).\n"
-    "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
-    "{\n"
-    "    float ci = dot(n, wi), co = dot(n, wo);\n"
-    "    if (!(ci > 0.0) || !(co > 0.0))\n"
-    "        return vec3(0.0);\n"
-    "    vec3 h = glint_unit(wi + wo);\n"
-    "    vec3 s = glint_factor(0, glint_tangent_len(wi, n)) +\n"
-    "             glint_factor(1, glint_tangent_len(h, n)) +\n"
-    "             glint_factor(2, glint_tangent_len(wo, n));\n"
-    "    vec3 prod = exp(min(s, vec3(88.0))); // bounded: stays finite in float\n"
-    "    vec3 v = u_map_kind == 1 ? prod - u_a : (u_map_kind == 2 ? u_a - prod : prod);\n"
-    "    v = max(v, vec3(0.0));\n"
-    "    return u_model_brdf == 1 ? v * ci : v;\n"
-    "}\n"
-    "\n"
-    "void main()\n"
-    "{\n"
-    "    vec3 n = glint_unit(v_nrm);\n"
-    "    vec3 wi = glint_unit(u_light - v_pos);\n"
-    "    vec3 wo = glint_unit(u_eye - v_pos);\n"
-    "    o_color = vec4(glint_material(n, wi, wo) * u_light_intensity, 1.0);\n"
     "}\n";
 
 /* Fragment stage of the G-buffer pass: three float targets.

@@ -37,7 +37,16 @@
  *    every time; reports say so (gauge_dims).
  *  - Numerical rank: singular values at or below rcond * s_max count as
  *    zero (never the LAPACK default, which can keep noise and return
- *    factors 1e10 too large). */
+ *    factors 1e10 too large).
+ *  - Barely reached directions: a direction v_i of the unknowns that the
+ *    samples reach only through tiny hat weights (a texel hit by a handful
+ *    of samples near the far end of their hats, two neighbouring texels
+ *    that the samples never tell apart) is cut like a null direction, by
+ *    its data gain (hf_decomp below), whatever rcond says.
+ *  - Range: a fit never returns a log-factor beyond HF_LOG_FACTOR_MAX, so
+ *    that every factor and every product of the three is a finite
+ *    single-precision number; when a painting would drive the solution
+ *    past it, the fit damps the operator and says so (hf_fit). */
 #ifndef GLINT_HF_H
 #define GLINT_HF_H
 
@@ -51,6 +60,18 @@
 #define HF_RES_MAX 512
 #define HF_LAMBDA_MAX 1e8
 #define HF_NFACTORS 3
+
+/* Largest |log-factor| a fit returns.  Factor textures and renderers work
+ * in single precision, and a render multiplies one texel of each factor:
+ * with |log p|, |log q|, |log r| <= 29.5 the product stays below
+ * exp(88.5) < FLT_MAX (log FLT_MAX = 88.72) and every factor is a finite,
+ * non-zero float. */
+#define HF_LOG_FACTOR_MAX 29.5
+
+/* Data-gain cutoff of the decomposition (see hf_decomp): a direction whose
+ * log-factor moves by more than HF_LOG_FACTOR_MAX per unit of log-space
+ * misfit on the samples that reach it is barely reached, and cut. */
+#define HF_GAIN_MAX HF_LOG_FACTOR_MAX
 
 /* ---- Design: the sparse data rows of A ----------------------------------- */
 
@@ -82,14 +103,54 @@ typedef enum {
     HF_ROUTE_SVD = 1  /* dense SVD of B (LAPACK gesdd): the reference */
 } hf_route;
 
+/* What the decomposition keeps.  Of the n unknowns' directions,
+ *     n = gauge_dims + null_dims + weak_dims + rank:
+ *  - gauge_dims (2): the exact null space of B for every lambda, deflated.
+ *  - null_dims: s_i <= rcond * s_max, numerically zero: rounding reaches
+ *    them amplified by (s_max / s_i)^2 (hf_rcond_default).  With lambda = 0
+ *    these are the texels no sample reaches.
+ *  - weak_dims: barely reached.  A least-squares fit puts
+ *        y_i = (A v_i . f~) / s_i^2
+ *    on direction v_i (f~: the log-mapped samples), so the log-factors move
+ *    along v_i by up to
+ *        gain_i = ||A v_i|| / s_i^2
+ *    per unit of log-space data on the samples that reach v_i (the norm of
+ *    the map f~ -> y_i).  Paintings are not exact products of three
+ *    factors: a misfit of one log unit (a factor e) on a few samples is
+ *    ordinary.  A direction with gain_i above gain_max = HF_GAIN_MAX turns
+ *    such a misfit into a log-factor beyond HF_LOG_FACTOR_MAX, where exp
+ *    leaves the single-precision range.  (On the default sphere at 128
+ *    texels and lambda = 0, two texel pairs of r have gains 2400 and 7600;
+ *    Cook-Torrance GGX paintings put log-factors of 110 to 490 on them.)
+ *    Such a direction carries misfit, not information, and is cut like a
+ *    null direction.
+ *    With lambda = 0, gain_i = 1 / s_i: relative to the data it is the
+ *    s_max / s_i amplification of data noise, measured against one
+ *    unit-weight sample (rows are unweighted and their hat weights sum to
+ *    1 per factor) instead of against s_max: a direction is cut when the
+ *    samples reach it less than 1/gain_max of one sample, s_i^2 < 1.1e-3.
+ *    With lambda > 0 the Laplacian rows raise s_i without feeding data
+ *    into v_i, so a texel tied to its neighbours by smoothing has a small
+ *    gain and is kept.  The rule is independent of rcond: a caller's rcond
+ *    decides null_dims exactly as given, and a tiny one no longer lets
+ *    through a direction whose data the fit would amplify past the range.
+ * Since ||A v_i|| <= s_i, gain_i <= 1 / s_i: a cut needs s_i < 1 / gain_max,
+ * and gain_i is computed (one pass over the samples) only where it can
+ * exceed 1, for the few directions with s_i < 1. */
 typedef struct hf_decomp {
     int res, n;        /* texels per factor, unknowns (3 res) */
     int nsamples;      /* data rows used */
     double lambda;
     hf_route route;
-    double rcond;      /* relative cutoff used for the numerical rank */
-    int rank;          /* numerical rank: s_i > rcond * s_max (gauge excluded) */
+    double rcond;      /* relative cutoff used for the numerical rank (as given, or the default) */
+    int rank;          /* directions kept: s_i > rcond * s_max and gain_i <= gain_max */
     int gauge_dims;    /* gauge directions removed (2) */
+    int null_dims;     /* directions with s_i <= rcond * s_max */
+    int weak_dims;     /* directions cut as barely reached: gain_i > gain_max */
+    double s_null;     /* the absolute cutoff rcond * s_max */
+    double gain_max;   /* the data-gain cutoff used (HF_GAIN_MAX) */
+    double gain_kept;  /* largest gain_i kept (exact where s_i < 1; gain_i <= 1 / s_i elsewhere) */
+    double s_weak;     /* largest singular value cut as barely reached (0: none) */
     double *s;         /* rank singular values of B, descending */
     double *V;         /* n x rank right singular vectors, column-major (V[i + n*k]) */
     double build_seconds;
@@ -102,8 +163,10 @@ typedef struct hf_decomp {
 double hf_rcond_default(hf_route route);
 
 /* Decompose B = [A; lambda L] for a design.  rcond <= 0 picks the
- * default.  GLINT_ERANGE on lambda < 0 or > HF_LAMBDA_MAX or non-finite;
- * GLINT_ENUMERIC if LAPACK fails (its info in the message). */
+ * default; a given rcond is used as it is.  Barely reached directions are
+ * cut in both cases (see hf_decomp).  GLINT_ERANGE on lambda < 0 or
+ * > HF_LAMBDA_MAX or non-finite; GLINT_ENUMERIC if LAPACK fails (its info
+ * in the message). */
 int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
                     double rcond, hf_decomp *out, glint_err *err);
 void hf_decomp_free(hf_decomp *dc);
@@ -189,12 +252,17 @@ typedef enum {
 typedef struct hf_fit_stats {
     int clamped[3];        /* samples per channel floored at eps before the log */
     double a_used[3];      /* mapping offset per channel (ADD: a, SUB: chosen a) */
+    double log_max;        /* largest |log-factor| returned (<= HF_LOG_FACTOR_MAX) */
+    double log_max_undamped; /* largest |log-factor| of the operator's own solution */
+    double damping;        /* Tikhonov alpha the fit added to stay within
+                              HF_LOG_FACTOR_MAX (0: none was needed) */
     double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
     double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
     double max_abs;        /* max |reconstruction - sample| */
     double map_seconds;    /* forward mapping (logs) */
     double apply_seconds;  /* operator application alone (A^T f, then M t) */
-    double total_seconds;  /* the fast factorization: mapping + application + gauge */
+    double total_seconds;  /* the fast factorization: mapping + application + gauge
+                              (+ damping, when needed) */
     double diag_seconds;   /* the diagnostics above (residual, errors), not in total */
 } hf_fit_stats;
 
@@ -211,7 +279,26 @@ typedef struct hf_factors {
 
 /* Fit RGB samples (3 * d->n values, sample-major) with an operator built for
  * this design.  OUT: *fac (allocated here), *stats (may be NULL).
- * Non-finite input gives GLINT_ENONFINITE; outputs are always finite. */
+ * Non-finite input gives GLINT_ENONFINITE; outputs are always finite.
+ *
+ * Range of the log-factors.  The largest |log-factor| is checked against
+ * HF_LOG_FACTOR_MAX before anything is exponentiated.  The decomposition
+ * has cut the barely reached directions, so a painting within a few log
+ * units of a product of factors stays far inside; one that is not (say
+ * isolated 1e30 pixels on black) can still push a weakly determined
+ * direction past it.  Then the fit applies
+ *     y(alpha) = (I + alpha^2 M)^-1 y,
+ * which turns every operator weight w_i = c_i / s_i into
+ * 1 / (1 / w_i + alpha^2) (for truncation, 1 / (s_i^2 + alpha^2)):
+ * Tikhonov damping on top of the chosen regularization, which shrinks the
+ * weak directions first and leaves those with s_i >> alpha as they were.
+ * alpha is found by bisection, to 1%, as the smallest that brings every
+ * log-factor within the bound; stats report it (damping) with the
+ * undamped maximum.  This costs an eigendecomposition of M (about 15 ms at
+ * 128 texels, half a second at 512) and happens only for such paintings.
+ * SUB's offset a is at most FLT_MAX, so that a - pqr is a float too
+ * (samples above it, possible with the BRDF model's division by cos_i,
+ * are floored at eps and counted in clamped). */
 int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map,
            hf_model model, const float *rgb, hf_factors *fac,
            hf_fit_stats *stats, glint_err *err);

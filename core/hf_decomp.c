@@ -7,7 +7,8 @@
  * z become the top two singular directions with a clean gap; they are
  * identified (|Z^T v| ~ 1 is checked), dropped and reported.  What remains
  * is B restricted to the gauge complement: its own rank deficiency (e.g.
- * texels reached by no sample when lambda = 0) is decided by rcond. */
+ * texels reached by no sample when lambda = 0) is decided by rcond, and the
+ * directions the samples barely reach by their data gain (hf.h). */
 #include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
@@ -29,15 +30,34 @@ double hf_rcond_default(hf_route route)
     return 1e-6;
 }
 
+/* ||A v||: the data rows' part of ||B v||, one pass over the samples. */
+static double data_norm(const hf_design *d, const double *v)
+{
+    int R = d->res;
+    double a2 = 0.0;
+
+    for (int i = 0; i < d->n; i++) {
+        double r = 0.0;
+        for (int j = 0; j < 3; j++) {
+            const double *vk = v + j * R + d->k0[3 * i + j];
+            double t = d->t[3 * i + j];
+            r += (1.0 - t) * vk[0] + t * vk[1];
+        }
+        a2 += r * r;
+    }
+    return sqrt(a2);
+}
+
 /* Given eigen/singular pairs of the deflated problem, sorted with the two
  * gauge directions somewhere among them, keep the others in descending
- * order.  vals[i] are singular values, vecs column-major n x m (m columns).
+ * order, less the null (rcond) and barely reached (data gain) ones.
+ * vals[i] are singular values, vecs column-major n x m (m columns).
  * order: indices of columns sorted by descending value. */
-static int keep_non_gauge(hf_decomp *dc, const double *vals, const double *vecs,
-                          int m, const int *order, const double *Z, double rcond,
-                          glint_err *err)
+static int keep_non_gauge(const hf_design *d, hf_decomp *dc, const double *vals,
+                          const double *vecs, int m, const int *order, const double *Z,
+                          double rcond, glint_err *err)
 {
-    int n = dc->n, ngauge = 0, kept = 0;
+    int n = dc->n, ngauge = 0, kept = 0, exact = 0;
     double smax = -1.0;
     int *keep = malloc((size_t)m * sizeof *keep);
 
@@ -63,11 +83,31 @@ static int keep_non_gauge(hf_decomp *dc, const double *vals, const double *vecs,
             ngauge++;
             continue;
         }
-        if (smax < 0.0)
+        if (smax < 0.0) {
             smax = vals[i];
-        if (vals[i] > rcond * smax && vals[i] > 0.0)
-            keep[kept++] = i;
+            dc->s_null = rcond * smax;
+        }
+        if (!(vals[i] > dc->s_null && vals[i] > 0.0)) {
+            dc->null_dims++;
+            continue;
+        }
+        if (vals[i] < 1.0) {
+            /* gain = ||A v|| / s^2 <= 1 / s: only here can it exceed 1 */
+            double gain = data_norm(d, v) / (vals[i] * vals[i]);
+            if (gain > dc->gain_max) {
+                dc->weak_dims++;
+                if (vals[i] > dc->s_weak)
+                    dc->s_weak = vals[i];
+                continue;
+            }
+            if (!exact || gain > dc->gain_kept)
+                dc->gain_kept = gain;
+            exact = 1;
+        }
+        keep[kept++] = i;
     }
+    if (kept > 0 && !exact)
+        dc->gain_kept = 1.0 / vals[keep[kept - 1]]; /* every s_i >= 1: a bound, <= 1 */
     dc->gauge_dims = ngauge;
     dc->rank = kept;
     dc->s = malloc((size_t)(kept ? kept : 1) * sizeof *dc->s);
@@ -82,7 +122,9 @@ static int keep_non_gauge(hf_decomp *dc, const double *vals, const double *vecs,
     }
     free(keep);
     if (kept == 0)
-        return glint_err_set(err, GLINT_ENUMERIC, "the constraint matrix has rank 0");
+        return glint_err_set(err, GLINT_ENUMERIC,
+                             "the constraint matrix has rank 0 (%d null, %d barely reached "
+                             "directions)", dc->null_dims, dc->weak_dims);
     return 0;
 }
 
@@ -125,7 +167,7 @@ static int build_eig(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
         sv[i] = sqrt(w[i] > 0.0 ? w[i] : 0.0);
         order[i] = n - 1 - i;
     }
-    rc = keep_non_gauge(dc, sv, G, n, order, Z, dc->rcond, err);
+    rc = keep_non_gauge(d, dc, sv, G, n, order, Z, dc->rcond, err);
 done:
     free(G);
     free(w);
@@ -145,8 +187,11 @@ static int build_svd(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
     B = hf_dense_B(d, dc->lambda, &rows, &ldb);
     if (!B)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the dense constraint matrix");
-    m = rows + 2;
-    B2 = malloc((size_t)m * n * sizeof *B2);
+    /* Zero rows below, so that m >= n: dgesdd with jobz 'O' and m < n would
+     * leave V^T in B2 (its first m rows) and need U elsewhere; zero rows
+     * change neither the singular values nor V. */
+    m = rows + 2 > n ? rows + 2 : n;
+    B2 = calloc((size_t)m * n, sizeof *B2);
     s = malloc((size_t)n * sizeof *s);
     vt = malloc((size_t)n * n * sizeof *vt);
     vecs = malloc((size_t)n * n * sizeof *vecs);
@@ -179,7 +224,7 @@ static int build_svd(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
             vecs[r + (size_t)n * k] = vt[k + (size_t)n * r];
         order[k] = k;
     }
-    rc = keep_non_gauge(dc, s, vecs, n, order, Z, dc->rcond, err);
+    rc = keep_non_gauge(d, dc, s, vecs, n, order, Z, dc->rcond, err);
 done:
     free(B);
     free(B2);
@@ -214,6 +259,7 @@ int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
     out->lambda = lambda;
     out->route = route;
     out->rcond = rcond;
+    out->gain_max = HF_GAIN_MAX;
     Z = malloc((size_t)2 * out->n * sizeof *Z);
     if (!Z)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");

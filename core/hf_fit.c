@@ -1,5 +1,9 @@
 /* hf_fit.c: apply a precomputed operator to painted samples (the fast
- * factorization), invert the mapping, evaluate factors. */
+ * factorization), keep the log-factors within range, invert the mapping,
+ * evaluate factors. */
+#include <cblas.h>
+#include <float.h>
+#include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,7 +89,9 @@ static double map_inverse(const hf_factors *fac, int c, double prod)
 
 static double clamp_exp(double x)
 {
-    /* exp of a log-factor sum; bounded so a wild fit stays finite */
+    /* exp of a log-factor sum.  A fit's factors sum to at most
+     * 3 HF_LOG_FACTOR_MAX; the bound only matters for factors read from
+     * elsewhere (a material file). */
     if (x > 700.0)
         x = 700.0;
     return exp(x);
@@ -136,6 +142,119 @@ void hf_factors_eval(const hf_factors *fac, const double n[3], const double wi[3
         double v = map_inverse(fac, c, clamp_exp(acc[c]));
         rgb[c] = fac->model == HF_MODEL_BRDF ? v * ci : v;
     }
+}
+
+static double log_abs_max(const double *logf, int len)
+{
+    double mx = 0.0;
+    for (int k = 0; k < len; k++)
+        if (fabs(logf[k]) > mx)
+            mx = fabs(logf[k]);
+    return mx;
+}
+
+/* Damping of hf.h (hf_fit): with M = Q diag(d) Q^T and z = Q^T y,
+ * y(beta) = Q diag(1 / (1 + beta d)) z, beta = alpha^2.  Evaluates y(beta)
+ * into y (3 channels, channel-minor) and returns its largest |entry|. */
+typedef struct damp_ws {
+    int n;
+    const double *Q, *d, *z; /* n x n column-major, n, n x 3 */
+    double *zs, *yb;         /* n x 3 each */
+} damp_ws;
+
+static double damp_eval(damp_ws *w, double beta, double *y)
+{
+    int n = w->n;
+    for (int c = 0; c < 3; c++)
+        for (int i = 0; i < n; i++)
+            w->zs[i + (size_t)n * c] =
+                w->z[i + (size_t)n * c] / (1.0 + beta * (w->d[i] > 0.0 ? w->d[i] : 0.0));
+    cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, n, 3, n, 1.0, w->Q, n, w->zs, n,
+                0.0, w->yb, n);
+    for (int c = 0; c < 3; c++)
+        for (int k = 0; k < n; k++)
+            y[3 * k + c] = w->yb[k + (size_t)n * c];
+    return log_abs_max(y, 3 * n);
+}
+
+/* Bring the log-factors y (in the range of M) within `limit` with the
+ * smallest damping found by bisection to 1% in alpha.  OUT: *alpha. */
+static int damp_to_limit(const hf_op *op, double *y, double limit, double *alpha,
+                         glint_err *err)
+{
+    int n = op->n, rc = 0;
+    size_t nn = (size_t)n * n;
+    double *Q = malloc(nn * sizeof *Q), *d = malloc((size_t)n * sizeof *d);
+    double *z = malloc((size_t)3 * n * sizeof *z), *zs = malloc((size_t)3 * n * sizeof *zs);
+    double *yb = malloc((size_t)3 * n * sizeof *yb), *yt = malloc((size_t)3 * n * sizeof *yt);
+    double dmax = 0.0, lo = 0.0, hi;
+    damp_ws w;
+    lapack_int info;
+
+    if (!Q || !d || !z || !zs || !yb || !yt) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory damping a %dx%d operator", n, n);
+        goto done;
+    }
+    for (size_t i = 0; i < nn; i++) /* symmetric: row- and column-major agree */
+        Q[i] = op->prec == HF_F32 ? (double)op->Mf[i] : op->M[i];
+    info = LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', n, Q, n, d);
+    if (info != 0) {
+        rc = glint_err_set(err, GLINT_ENUMERIC,
+                           "LAPACKE_dsyevd failed (info %d) damping a %dx%d operator",
+                           (int)info, n, n);
+        goto done;
+    }
+    for (int i = 0; i < n; i++)
+        if (d[i] > dmax)
+            dmax = d[i];
+    /* z = Q^T y */
+    for (int c = 0; c < 3; c++)
+        for (int k = 0; k < n; k++)
+            yb[k + (size_t)n * c] = y[3 * k + c];
+    cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, n, 3, n, 1.0, Q, n, yb, n, 0.0, z, n);
+    w.n = n;
+    w.Q = Q;
+    w.d = d;
+    w.z = z;
+    w.zs = zs;
+    w.yb = yb;
+    /* Bracket: beta = 1 / dmax puts alpha at about the smallest singular
+     * value the operator uses; grow by 4 until within the limit (y(beta)
+     * -> 0), then bisect. */
+    hi = dmax > 0.0 ? 1.0 / dmax : 1.0;
+    while (damp_eval(&w, hi, yt) > limit) {
+        lo = hi;
+        hi *= 4.0;
+        if (hi > 1e300) {
+            rc = glint_err_set(err, GLINT_ENUMERIC,
+                               "log-factors stay beyond %g under any damping", limit);
+            goto done;
+        }
+    }
+    for (int it = 0; lo == 0.0 && it < 64; it++) {
+        double mid = hi / 16.0;
+        if (damp_eval(&w, mid, yt) > limit)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo > 0.0 && hi > 1.0201 * lo) { /* alpha to 1% */
+        double mid = sqrt(lo * hi);
+        if (damp_eval(&w, mid, yt) > limit)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    damp_eval(&w, hi, y);
+    *alpha = sqrt(hi);
+done:
+    free(Q);
+    free(d);
+    free(z);
+    free(zs);
+    free(yb);
+    free(yt);
+    return rc;
 }
 
 void hf_factors_free(hf_factors *f)
@@ -198,7 +317,7 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
         if (map->kind == HF_MAP_ADD)
             fac->a_used[c] = map->a;
         else if (map->kind == HF_MAP_SUB)
-            fac->a_used[c] = vmax > 0.0 ? (1.0 + map->margin) * vmax : 1.0;
+            fac->a_used[c] = vmax > 0.0 ? fmin((1.0 + map->margin) * vmax, FLT_MAX) : 1.0;
         else
             fac->a_used[c] = 0.0;
     }
@@ -245,6 +364,14 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
                                "the operator is unusable", k / 3);
             goto fail;
         }
+    }
+    /* Range: decided here, before anything is exponentiated (hf.h). */
+    st.log_max = st.log_max_undamped = log_abs_max(fac->logf, 3 * n);
+    if (st.log_max > HF_LOG_FACTOR_MAX) {
+        rc = damp_to_limit(op, fac->logf, HF_LOG_FACTOR_MAX, &st.damping, err);
+        if (rc)
+            goto fail;
+        st.log_max = log_abs_max(fac->logf, 3 * n);
     }
     st.total_seconds = hf_now() - t0;
     t1 = hf_now();

@@ -449,34 +449,72 @@ int img_write_mem(const char *format, const img *im, void **out_data, size_t *ou
     return img_encode(f, im, NULL, out_data, out_len, err);
 }
 
-int img_write_exr_named(const char *path, int width, int height, int nch,
-                        const char *const *names, const float *data, glint_err *err)
+/* Checks of img_write_exr_named(_mem); `what` names the output. */
+static int exr_named_check(const char *what, int width, int height, int nch,
+                           const char *const *names, const float *data, glint_err *err)
 {
-    int rc;
-
-    if (!path || !*path || !names || !data)
-        return glint_err_set(err, GLINT_EINVAL,
-                             "img_write_exr_named: NULL path, names or data");
+    if (!names || !data)
+        return glint_err_set(err, GLINT_EINVAL, "%s: NULL names or data", what);
     if (width < 1 || height < 1 || width > IMG_MAX_DIM || height > IMG_MAX_DIM)
         return glint_err_set(err, GLINT_ERANGE, "%s: image size %dx%d outside 1..%d",
-                             path, width, height, IMG_MAX_DIM);
+                             what, width, height, IMG_MAX_DIM);
     if (nch < 1 || nch > IMG_MAX_NAMED_CHANNELS)
         return glint_err_set(err, GLINT_ERANGE, "%s: %d channels, supported 1..%d",
-                             path, nch, IMG_MAX_NAMED_CHANNELS);
+                             what, nch, IMG_MAX_NAMED_CHANNELS);
     for (int c = 0; c < nch; c++) {
         size_t len = names[c] ? strlen(names[c]) : 0;
         if (len == 0 || len > IMG_MAX_NAME_LEN)
             return glint_err_set(err, GLINT_EINVAL,
                                  "%s: channel %d name is empty, NULL or longer than %d",
-                                 path, c, IMG_MAX_NAME_LEN);
+                                 what, c, IMG_MAX_NAME_LEN);
         for (int d = 0; d < c; d++)
             if (strcmp(names[c], names[d]) == 0)
                 return glint_err_set(err, GLINT_EINVAL,
-                                     "%s: channel name '%s' used twice (%d and %d)", path,
+                                     "%s: channel name '%s' used twice (%d and %d)", what,
                                      names[c], d, c);
     }
-    rc = img_check_finite_array(data, width, height, nch, names, path, err);
-    if (rc)
+    return img_check_finite_array(data, width, height, nch, names, what, err);
+}
+
+int img_write_exr_named(const char *path, int width, int height, int nch,
+                        const char *const *names, const float *data, glint_err *err)
+{
+    int rc;
+    if (!path || !*path)
+        return glint_err_set(err, GLINT_EINVAL, "img_write_exr_named: NULL path");
+    if ((rc = exr_named_check(path, width, height, nch, names, data, err)))
         return rc;
     return img_write_atomic(path, "openexr", width, height, nch, names, 0, data, err);
+}
+
+int img_write_exr_named_mem(int width, int height, int nch, const char *const *names,
+                            const float *data, void **out_data, size_t *out_len,
+                            glint_err *err)
+{
+    int rc;
+    *out_data = NULL;
+    *out_len = 0;
+    if ((rc = exr_named_check("encoding to memory", width, height, nch, names, data, err)))
+        return rc;
+    return img_oiio_write("openexr", NULL, out_data, out_len, "encoding to memory", width,
+                          height, nch, names, 0, data, err);
+}
+
+int img_to_rgb(img *im, glint_err *err)
+{
+    img out;
+    size_t n = (size_t)im->width * (size_t)im->height;
+    int c = im->channels, rc;
+    if (c == 3)
+        return 0;
+    if (c < 1 || c > 4)
+        return glint_err_set(err, GLINT_EINVAL, "an image of %d channels has no RGB", c);
+    if ((rc = img_alloc(&out, im->width, im->height, 3, err)))
+        return rc;
+    for (size_t p = 0; p < n; p++)
+        for (int ch = 0; ch < 3; ch++)
+            out.px[3 * p + (size_t)ch] = im->px[(size_t)c * p + (size_t)(c >= 3 ? ch : 0)];
+    img_free(im);
+    *im = out;
+    return 0;
 }

@@ -10,7 +10,11 @@
  * glint fits); PNG output clamps to [0,1] and rounds.  EXR and HDR carry
  * floats unchanged.  Readers reject non-finite pixels with GLINT_ENONFINITE
  * (the message gives the first offending pixel and channel), sizes above
- * IMG_MAX_DIM, and channel counts outside 1..4 (GLINT_ERANGE). */
+ * IMG_MAX_DIM, and channel counts outside 1..4 (GLINT_ERANGE).
+ *
+ * Thread-safety: every function may be called from any thread at once on
+ * different images (OpenImageIO's own caches are thread-safe; no global
+ * state here); an img is read-only while shared. */
 #ifndef GLINT_IMG_H
 #define GLINT_IMG_H
 
@@ -60,6 +64,13 @@ int img_write_mem(const char *format, const img *im, void **out_data,
 int img_write_exr_named(const char *path, int width, int height, int nch,
                         const char *const *names, const float *data,
                         glint_err *err);
+/* The same to memory (OUT: *out_data malloc'ed, *out_len). */
+int img_write_exr_named_mem(int width, int height, int nch, const char *const *names,
+                            const float *data, void **out_data, size_t *out_len,
+                            glint_err *err);
+
+/* Make *im RGB: grey replicated, alpha dropped (3 channels: unchanged). */
+int img_to_rgb(img *im, glint_err *err);
 
 /* Check every value is finite (GLINT_ENONFINITE naming the first bad one). */
 int img_check_finite(const img *im, glint_err *err);

@@ -1,4 +1,5 @@
-/* material.c: fitted materials: evaluation, CPU shading, files. */
+/* material.c: materials of any method: evaluation, CPU rendering, errors,
+ * files (material.h).  Method-specific work goes through material_ops. */
 #include "material.h"
 
 #include <math.h>
@@ -10,14 +11,11 @@
 
 #define MATERIAL_JSON_MAX (64u << 20)
 
-static const char *const factor_names[3] = {"p", "q", "r"};
-
-void material_init(material *m, hf_factors *fac, json_t *info)
+void material_init(material *m, const method *meth, void *data, json_t *info)
 {
     memset(m, 0, sizeof *m);
-    strcpy(m->method, "hf3");
-    m->fac = *fac;
-    memset(fac, 0, sizeof *fac);
+    m->method = meth;
+    m->data = data;
     m->info = info ? info : json_object();
 }
 
@@ -25,32 +23,47 @@ void material_free(material *m)
 {
     if (!m)
         return;
-    hf_factors_free(&m->fac);
+    if (m->method && m->data)
+        m->method->mat->free(m->data);
     json_decref(m->info);
     memset(m, 0, sizeof *m);
+}
+
+const char *material_method_name(const material *m)
+{
+    return m && m->method ? m->method->name : "";
 }
 
 void material_eval(const material *m, const double n[3], const double wi[3],
                    const double wo[3], double rgb[3])
 {
-    hf_factors_eval(&m->fac, n, wi, wo, rgb);
+    m->method->mat->eval(m->data, n, wi, wo, rgb);
 }
 
-int material_shade(const material *m, const gbuf *g, double intensity, float background,
-                   img *out, glint_err *err)
+json_t *material_summary(const material *m)
 {
-    int rc;
-    size_t np;
+    return m->method->mat->summary ? m->method->mat->summary(m->data) : json_object();
+}
 
-    if (!isfinite(intensity) || intensity < 0.0)
-        return glint_err_set(err, GLINT_EINVAL, "light intensity %g must be finite and >= 0",
-                             intensity);
-    rc = img_alloc(out, g->width, g->height, 3, err);
-    if (rc)
-        return rc;
-    np = (size_t)g->width * g->height;
-    for (size_t p = 0; p < np; p++) {
-        float *o = out->px + 3 * p;
+int material_gpu_get(const material *m, material_gpu *out, glint_err *err)
+{
+    memset(out, 0, sizeof *out);
+    if (!m->method || !m->data)
+        return glint_err_set(err, GLINT_EINVAL, "empty material");
+    if (!m->method->mat->gpu)
+        return glint_err_set(err, GLINT_EUNSUPPORTED, "method %s has no GPU evaluation",
+                             m->method->name);
+    return m->method->mat->gpu(m->data, out, err);
+}
+
+/* Shade one G-buffer pixel range [p0, p1) into out (RGB). */
+static void shade_pixels(const material *m, const gbuf *g, size_t p0, size_t p1,
+                         double intensity, float background, float *out)
+{
+    void (*eval)(const void *, const double *, const double *, const double *, double *) =
+        m->method->mat->eval;
+    for (size_t p = p0; p < p1; p++) {
+        float *o = out + 3 * (p - p0);
         double n[3], wi[3], wo[3], rgb[3];
         if (!g->mask[p]) {
             o[0] = o[1] = o[2] = background;
@@ -61,107 +74,158 @@ int material_shade(const material *m, const gbuf *g, double intensity, float bac
             wi[c] = g->wi[3 * p + c];
             wo[c] = g->wo[3 * p + c];
         }
-        hf_factors_eval(&m->fac, n, wi, wo, rgb);
+        eval(m->data, n, wi, wo, rgb);
         for (int c = 0; c < 3; c++)
             o[c] = (float)(rgb[c] * intensity);
     }
+}
+
+static int check_intensity(double intensity, glint_err *err)
+{
+    if (!isfinite(intensity) || intensity < 0.0)
+        return glint_err_set(err, GLINT_EINVAL, "light intensity %g must be finite and >= 0",
+                             intensity);
+    return 0;
+}
+
+int material_shade(const material *m, const gbuf *g, double intensity, float background,
+                   img *out, glint_err *err)
+{
+    int rc;
+
+    memset(out, 0, sizeof *out);
+    if ((rc = check_intensity(intensity, err)))
+        return rc;
+    if (!m->method)
+        return glint_err_set(err, GLINT_EINVAL, "empty material");
+    if ((rc = img_alloc(out, g->width, g->height, 3, err)))
+        return rc;
+    shade_pixels(m, g, 0, (size_t)g->width * g->height, intensity, background, out->px);
     return 0;
 }
 
 int material_render(const material *m, const mesh *msh, const scene_view *v, int width,
                     int height, img *out, glint_err *err)
 {
-    gbuf g;
-    int rc = raster_view(msh, v, width, height, &g, err);
-    if (rc)
+    int rc, band;
+
+    memset(out, 0, sizeof *out);
+    if (!m->method)
+        return glint_err_set(err, GLINT_EINVAL, "empty material");
+    if ((rc = check_intensity(v->light_intensity, err)))
         return rc;
-    rc = material_shade(m, &g, v->light_intensity, 0.0f, out, err);
-    gbuf_free(&g);
-    return rc;
+    if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE || height < SCENE_MIN_SIZE ||
+        height > SCENE_MAX_SIZE)
+        return glint_err_set(err, GLINT_ERANGE, "render size %dx%d outside %d..%d", width,
+                             height, SCENE_MIN_SIZE, SCENE_MAX_SIZE);
+    if ((rc = img_alloc(out, width, height, 3, err)))
+        return rc;
+    band = MATERIAL_RENDER_BAND_PIXELS / width;
+    if (band < 1)
+        band = 1;
+    for (int row0 = 0; row0 < height; row0 += band) {
+        int nrows = height - row0 < band ? height - row0 : band;
+        gbuf g;
+        rc = raster_view_rows(msh, v, width, height, row0, nrows, &g, err);
+        if (rc) {
+            img_free(out);
+            return rc;
+        }
+        shade_pixels(m, &g, 0, (size_t)width * nrows, v->light_intensity, 0.0f,
+                     out->px + (size_t)3 * width * row0);
+        gbuf_free(&g);
+    }
+    return 0;
 }
 
-static const char *model_name(hf_model m)
+int material_error_views(const material *m, const gbuf *g, const scene_view *views,
+                         int nviews, const img *truth, double *rms, double *max_abs,
+                         long *count, glint_err *err)
 {
-    return m == HF_MODEL_BRDF ? "brdf" : "radiance";
+    double ss = 0.0, mx = 0.0;
+    long cnt = 0;
+
+    for (int v = 0; v < nviews; v++) {
+        const gbuf *gb = &g[v];
+        const img *t = &truth[v];
+        size_t np = (size_t)gb->width * gb->height;
+        double I = views ? views[v].light_intensity : 1.0;
+        if (!t->px || t->width != gb->width || t->height != gb->height || t->channels < 1 ||
+            t->channels == 2 || t->channels > 4)
+            return glint_err_set(err, GLINT_EINVAL, "reference image %d does not match its view",
+                                 v);
+        for (size_t p = 0; p < np; p++) {
+            double n[3], wi[3], wo[3], rgb[3], ci, co;
+            if (!gb->mask[p])
+                continue;
+            for (int c = 0; c < 3; c++) {
+                n[c] = gb->nrm[3 * p + c];
+                wi[c] = gb->wi[3 * p + c];
+                wo[c] = gb->wo[3 * p + c];
+            }
+            ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+            co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];
+            if (!(ci > 0.0 && co > 0.0))
+                continue;
+            material_eval(m, n, wi, wo, rgb);
+            for (int c = 0; c < 3; c++) {
+                double ref = t->px[p * t->channels + (t->channels == 1 ? 0 : c)];
+                double d = rgb[c] * I - ref;
+                ss += d * d;
+                if (fabs(d) > mx)
+                    mx = fabs(d);
+            }
+            cnt++;
+        }
+    }
+    if (rms)
+        *rms = cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
+    if (max_abs)
+        *max_abs = mx;
+    if (count)
+        *count = cnt;
+    return 0;
 }
 
-json_t *material_to_json(const material *m)
+/* The manifest without what save_files adds (NULL when out of memory or
+ * the method refuses, with *err set). */
+static json_t *manifest_of(const material *m, glint_err *err)
 {
-    const hf_factors *f = &m->fac;
-    int R = f->res;
-    char mapbuf[96];
-    json_t *root = json_object(), *factors = json_object(), *a = json_array();
-
-    hf_map_format(&f->map, mapbuf, sizeof mapbuf);
+    json_t *root = json_object();
+    if (!root) {
+        glint_err_set(err, GLINT_ENOMEM, "out of memory for the material manifest");
+        return NULL;
+    }
     json_object_set_new(root, "format", json_string("glint-material"));
     json_object_set_new(root, "version", json_integer(1));
-    json_object_set_new(root, "method", json_string(m->method));
-    json_object_set_new(root, "res", json_integer(R));
-    json_object_set_new(root, "texels", json_string("node"));
-    json_object_set_new(root, "model", json_string(model_name(f->model)));
-    json_object_set_new(root, "mapping", json_string(mapbuf));
-    for (int c = 0; c < 3; c++)
-        json_array_append_new(a, json_real(f->a_used[c]));
-    json_object_set_new(root, "a_used", a);
-    for (int j = 0; j < 3; j++) {
-        json_t *rows = json_array();
-        for (int k = 0; k < R; k++) {
-            json_t *t = json_array();
-            for (int c = 0; c < 3; c++)
-                json_array_append_new(t, json_real(f->logf[(j * R + k) * 3 + c]));
-            json_array_append_new(rows, t);
-        }
-        json_object_set_new(factors, factor_names[j], rows);
+    json_object_set_new(root, "method", json_string(m->method->name));
+    if (m->method->mat->to_json(m->data, root, err)) {
+        json_decref(root);
+        return NULL;
     }
-    json_object_set_new(root, "log_factors", factors);
-    json_object_set_new(root, "gauge", json_string("equal mean log per factor and channel"));
     json_object_set_new(root, "info", json_deep_copy(m->info ? m->info : json_object()));
     return root;
 }
 
+json_t *material_to_json(const material *m)
+{
+    return m->method ? manifest_of(m, NULL) : NULL;
+}
+
 int material_save(const material *m, const char *dir, glint_err *err)
 {
-    const hf_factors *f = &m->fac;
-    int R = f->res, rc;
     char path[4096];
-    img lin = {0}, png = {0};
-    json_t *root = NULL, *scales;
+    json_t *root = NULL;
     char *text = NULL;
+    int rc;
 
-    rc = fsio_mkdirs(dir, err);
-    if (rc)
+    if (!m->method)
+        return glint_err_set(err, GLINT_EINVAL, "empty material");
+    if ((rc = fsio_mkdirs(dir, err)))
         return rc;
-    rc = img_alloc(&lin, R, 3, 3, err);
-    if (rc)
-        return rc;
-    rc = img_alloc(&png, R, 3, 3, err);
-    if (rc)
-        goto done;
-    root = material_to_json(m);
-    scales = json_object();
-    for (int j = 0; j < 3; j++) {
-        json_t *sc = json_array();
-        for (int c = 0; c < 3; c++) {
-            double mx = 0.0;
-            for (int k = 0; k < R; k++) {
-                double v = exp(f->logf[(j * R + k) * 3 + c]);
-                lin.px[((size_t)j * R + k) * 3 + c] = (float)v;
-                if (v > mx)
-                    mx = v;
-            }
-            for (int k = 0; k < R; k++)
-                png.px[((size_t)j * R + k) * 3 + c] =
-                    mx > 0.0 ? (float)(lin.px[((size_t)j * R + k) * 3 + c] / mx) : 0.0f;
-            json_array_append_new(sc, json_real(mx));
-        }
-        json_object_set_new(scales, factor_names[j], sc);
-    }
-    json_object_set_new(root, "png_scale", scales);
-    if ((rc = fsio_join(path, sizeof path, dir, "factors.exr", err)) ||
-        (rc = img_write(path, &lin, err)))
-        goto done;
-    if ((rc = fsio_join(path, sizeof path, dir, "factors.png", err)) ||
-        (rc = img_write(path, &png, err)))
+    if (!(root = manifest_of(m, err)))
+        return err && err->code ? err->code : GLINT_ENOMEM;
+    if (m->method->mat->save_files && (rc = m->method->mat->save_files(m->data, dir, root, err)))
         goto done;
     text = json_dumps(root, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
     if (!text) {
@@ -174,32 +238,20 @@ int material_save(const material *m, const char *dir, glint_err *err)
 done:
     free(text);
     json_decref(root);
-    img_free(&lin);
-    img_free(&png);
     return rc;
-}
-
-static int get_number(const json_t *v, double *out)
-{
-    if (!json_is_number(v))
-        return -1;
-    *out = json_number_value(v);
-    return isfinite(*out) ? 0 : -1;
 }
 
 int material_load(const char *path, material *out, glint_err *err)
 {
     char file[4096], *text = NULL;
-    size_t len;
-    json_t *root = NULL, *v, *lf;
+    size_t len, plen = strlen(path);
+    json_t *root = NULL, *v;
     json_error_t jerr;
-    hf_factors fac;
-    int rc, R;
-    const char *model, *mapping;
-    size_t plen = strlen(path);
+    const method *meth;
+    void *data = NULL;
+    int rc;
 
     memset(out, 0, sizeof *out);
-    memset(&fac, 0, sizeof fac);
     if (plen > 5 && strcmp(path + plen - 5, ".json") == 0)
         snprintf(file, sizeof file, "%s", path);
     else if ((rc = fsio_join(file, sizeof file, path, "material.json", err)))
@@ -223,79 +275,20 @@ int material_load(const char *path, material *out, glint_err *err)
         goto fail;
     }
     v = json_object_get(root, "method");
-    if (!json_is_string(v) || strcmp(json_string_value(v), "hf3") != 0) {
-        glint_err_set(err, rc, "%s: unsupported method (hf3 expected)", file);
+    meth = json_is_string(v) ? method_find(json_string_value(v)) : NULL;
+    if (!meth) {
+        char names[256];
+        method_names(names, sizeof names);
+        glint_err_set(err, rc, "%s: unsupported method (this glint knows %s)", file, names);
         goto fail;
     }
-    v = json_object_get(root, "res");
-    if (!json_is_integer(v) || json_integer_value(v) < HF_RES_MIN ||
-        json_integer_value(v) > HF_RES_MAX) {
-        glint_err_set(err, rc, "%s: res must be an integer in %d..%d", file, HF_RES_MIN,
-                      HF_RES_MAX);
+    if ((rc = meth->mat->from_json(root, file, &data, err)))
         goto fail;
-    }
-    R = (int)json_integer_value(v);
-    model = json_string_value(json_object_get(root, "model"));
-    mapping = json_string_value(json_object_get(root, "mapping"));
-    if (!model || (strcmp(model, "radiance") != 0 && strcmp(model, "brdf") != 0)) {
-        glint_err_set(err, rc, "%s: model must be \"radiance\" or \"brdf\"", file);
-        goto fail;
-    }
-    if (!mapping || hf_map_parse(mapping, &fac.map, err) != 0) {
-        glint_err_prefix(err, "%s: mapping", file);
-        goto fail;
-    }
-    fac.res = R;
-    fac.model = strcmp(model, "brdf") == 0 ? HF_MODEL_BRDF : HF_MODEL_RADIANCE;
-    v = json_object_get(root, "a_used");
-    if (!json_is_array(v) || json_array_size(v) != 3) {
-        glint_err_set(err, rc, "%s: a_used must be an array of 3 numbers", file);
-        goto fail;
-    }
-    for (int c = 0; c < 3; c++)
-        if (get_number(json_array_get(v, (size_t)c), &fac.a_used[c])) {
-            glint_err_set(err, rc, "%s: a_used[%d] is not a finite number", file, c);
-            goto fail;
-        }
-    lf = json_object_get(root, "log_factors");
-    fac.logf = malloc((size_t)9 * R * sizeof *fac.logf);
-    if (!fac.logf) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-        goto fail;
-    }
-    for (int j = 0; j < 3; j++) {
-        json_t *rows = json_object_get(lf, factor_names[j]);
-        if (!json_is_array(rows) || json_array_size(rows) != (size_t)R) {
-            glint_err_set(err, rc, "%s: log_factors.%s must hold %d texels", file,
-                          factor_names[j], R);
-            goto fail;
-        }
-        for (int k = 0; k < R; k++) {
-            json_t *t = json_array_get(rows, (size_t)k);
-            if (!json_is_array(t) || json_array_size(t) != 3) {
-                glint_err_set(err, rc, "%s: log_factors.%s[%d] must be [r, g, b]", file,
-                              factor_names[j], k);
-                goto fail;
-            }
-            for (int c = 0; c < 3; c++) {
-                double x;
-                if (get_number(json_array_get(t, (size_t)c), &x) || fabs(x) > 700.0) {
-                    glint_err_set(err, GLINT_ENONFINITE,
-                                  "%s: log_factors.%s[%d][%d] is not a finite number in "
-                                  "[-700, 700]", file, factor_names[j], k, c);
-                    rc = GLINT_ENONFINITE;
-                    goto fail;
-                }
-                fac.logf[(j * R + k) * 3 + c] = x;
-            }
-        }
-    }
     v = json_object_get(root, "info");
-    material_init(out, &fac, json_is_object(v) ? json_incref(v) : NULL);
+    material_init(out, meth, data, json_is_object(v) ? json_incref(v) : NULL);
     json_decref(root);
     return 0;
 fail:
-    hf_factors_free(&fac);
     json_decref(root);
     return rc;
 }

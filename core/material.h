@@ -1,18 +1,24 @@
-/* material.h: a fitted material (the factored BRDF), its evaluation,
- * CPU reference rendering, and its files.
+/* material.h: a fitted material, whatever method made it: evaluation, CPU
+ * rendering, errors against reference images, and its files.
+ *
+ * A material is the method that made it (method.h), the method's own
+ * representation of it (opaque here) and an `info` object (parameters,
+ * precomputation report, timings, errors).  Everything method-specific
+ * goes through the method's material_ops.
  *
  * On disk a material is a directory:
- *   material.json  manifest: method, every parameter, the log-factors at
- *                  full precision (authoritative), mapping offsets, timings
- *                  and errors (the `info` object), texel convention.
- *   factors.exr    3 rows (p, q, r) x res texels, RGB, linear factor values
- *                  in the canonical gauge (mean log equal across factors).
- *   factors.png    the same rows, each divided by its own maximum (the
- *                  scales are in the manifest, "png_scale").
- * Evaluation of a pixel: value_c = inverse_map_c(p q r) (x cos_i for the
- * brdf model), with log-linear interpolation between node texels, exactly
- * hf_factors_eval().  Ownership: a material owns its factors and its info
- * object (a jansson reference, decref'ed by material_free). */
+ *   material.json  the manifest: {"format": "glint-material", "version": 1,
+ *                  "method": name, <the method's members>, "info": {...}}
+ *                  (for hf3: res, texels, model, mapping, a_used, the
+ *                  log-factors at full precision, gauge, png_scale)
+ *   other files    written by the method (hf3: factors.exr, factors.png).
+ * material_load() finds the method by name and validates everything.
+ *
+ * Ownership: a material owns its data and info (a jansson reference,
+ * decref'ed by material_free, which accepts NULL and zeroed materials).
+ * Thread-safety: a material is read-only once made; any number of threads
+ * may evaluate, render or save it at once.  material_* functions touch no
+ * global state. */
 #ifndef GLINT_MATERIAL_H
 #define GLINT_MATERIAL_H
 
@@ -20,46 +26,69 @@
 
 #include "err.h"
 #include "gbuf.h"
-#include "hf.h"
 #include "img.h"
 #include "mesh.h"
+#include "method.h"
 #include "scene.h"
 
 typedef struct material {
-    char method[16];  /* "hf3": three 1D factors */
-    hf_factors fac;
-    json_t *info;     /* parameters, statistics, timings (owned reference) */
+    const method *method;  /* what made it (NULL: an empty material) */
+    void *data;            /* the method's representation (owned) */
+    json_t *info;          /* parameters, statistics, timings (owned reference) */
 } material;
 
-/* Take ownership of fitted factors (moved: *fac is zeroed) and of `info`
- * (a new reference is stolen; may be NULL). */
-void material_init(material *m, hf_factors *fac, json_t *info);
+/* Make a material of method `meth` from its data (ownership of `data` and
+ * of one reference to `info`, which may be NULL, passes to *m). */
+void material_init(material *m, const method *meth, void *data, json_t *info);
 
-/* Evaluate at a direction pair (unit vectors, OUT rgb[3]). */
+/* The method's name ("" for an empty material). */
+const char *material_method_name(const material *m);
+
+/* Evaluate at a direction pair (unit vectors, OUT rgb[3], per unit light):
+ * 0 unless n.wi > 0 and n.wo > 0. */
 void material_eval(const material *m, const double n[3], const double wi[3],
                    const double wo[3], double rgb[3]);
 
-/* Shade a G-buffer: RGB radiance for a light of intensity `intensity`
- * (per pixel value x intensity); pixels that are not lit and visible get 0,
- * background pixels `background`.  OUT: *out (RGB, allocated here). */
+/* Shade a G-buffer: RGB radiance for a light of intensity `intensity`;
+ * covered pixels that are not lit and seen get 0, background pixels
+ * `background`.  OUT: *out (RGB, allocated here). */
 int material_shade(const material *m, const gbuf *g, double intensity,
                    float background, img *out, glint_err *err);
 
-/* Rasterize `mesh` from view `v` at width x height, then shade (CPU
- * reference render) of mesh `msh`.  OUT: *out. */
+/* CPU reference render of mesh `msh` from view `v` at width x height
+ * (rasterized and shaded in bands of rows, so memory beyond the image is
+ * bounded by MATERIAL_RENDER_BAND_PIXELS G-buffer pixels).  OUT: *out. */
+#define MATERIAL_RENDER_BAND_PIXELS (1 << 18)
 int material_render(const material *m, const mesh *msh, const scene_view *v,
                     int width, int height, img *out, glint_err *err);
 
-/* Write the directory described above (created if missing; files written
- * atomically). */
-int material_save(const material *m, const char *dir, glint_err *err);
+/* Error of a material against reference images on the sample pixels
+ * (mask, n.wi > 0, n.wo > 0) of nviews G-buffers: RMS and max |difference|
+ * over pixels and RGB channels, radiance scaled by each view's light
+ * intensity (views may be NULL: intensity 1).  truth[v] must be sized like
+ * g[v] (1, 3 or 4 channels).  OUT: *rms, *max_abs, *count (any may be
+ * NULL). */
+int material_error_views(const material *m, const gbuf *g, const scene_view *views,
+                         int nviews, const img *truth, double *rms, double *max_abs,
+                         long *count, glint_err *err);
 
-/* Read a material from its manifest (a material.json path or its
- * directory).  Validates format, version, method, sizes and finiteness. */
-int material_load(const char *path, material *out, glint_err *err);
+/* A few members describing the material for the API (e.g. {"res": 64};
+ * a new object). */
+json_t *material_summary(const material *m);
+
+/* How the GPU evaluates it (see method.h; release with material_gpu_free). */
+int material_gpu_get(const material *m, material_gpu *out, glint_err *err);
 
 /* The manifest as a new JSON object (caller decrefs). */
 json_t *material_to_json(const material *m);
+
+/* Write the directory described above (created if missing; every file
+ * written atomically, material.json last). */
+int material_save(const material *m, const char *dir, glint_err *err);
+
+/* Read a material from its manifest (a material.json path or its
+ * directory).  Validates format, version, method and the method's data. */
+int material_load(const char *path, material *out, glint_err *err);
 
 void material_free(material *m);
 

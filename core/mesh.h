@@ -111,11 +111,24 @@ typedef struct mesh_report {
  * MESH_IMPORT_TIMEOUT_S, a memory limit), so a file that crashes or hangs
  * it is an error, never the caller's crash; safe to call from several
  * threads at once.  report may be NULL (it is zeroed on failure).  *out is
- * zeroed first and owned by the caller.  Steps and limits in mesh_io.c. */
+ * zeroed first and owned by the caller.  Steps and limits in mesh_io.c.
+ *
+ * References to other files (glTF buffers and images, OBJ material
+ * libraries, COLLADA images) may name files in the mesh file's directory
+ * or below it, and nothing else is ever read: an absolute path, a ".."
+ * that leaves the directory, or a URI with a scheme other than data: ->
+ * GLINT_EINVAL naming the reference (rules in mesh_fileio.c). */
 int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err);
 
 /* The same from a buffer in memory (an upload); `hint` is the format's file
- * extension ("ply", "obj", "glb", ...). */
+ * extension ("ply", "obj", "glb", ...).  The buffer is read on its own: no
+ * file is opened, whatever the data names.  data: URIs and a .glb's binary
+ * chunk are part of the data.  A reference to a file the import needs (a
+ * glTF buffer), or one mesh_load would refuse (also as a texture path), ->
+ * GLINT_EINVAL "external references are not allowed in uploads", naming
+ * the reference (truncated), the same whether such a file exists or not.
+ * A plain relative name the import can do without (an OBJ mtllib, a glTF
+ * image) is ignored: glint uses only the geometry. */
 int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
                   mesh_report *report, glint_err *err);
 

@@ -2,7 +2,8 @@
  * what a perfect artist would paint: per pixel radiance
  *   scale * I * f(wi, wo) * max(0, n.wi)
  * on the pixels glint samples (mask, n.wi > 0, n.wo > 0), 0 elsewhere.
- * Images are RGB (3 channels), one per view, sized like the gbufs. */
+ * Images are RGB (3 channels), one per view, sized like the gbufs.
+ * Pure and thread-safe: the output images are the caller's. */
 #ifndef GLINT_PAINT_H
 #define GLINT_PAINT_H
 

@@ -11,7 +11,9 @@
 #include "fsio.h"
 
 #define PCACHE_MAGIC "GLINTPC1"
-#define PCACHE_VERSION 1u
+/* 2: the decomposition cuts barely reached directions and records what it
+ * cut (null_dims, weak_dims, s_null, gain_max, gain_kept, s_weak). */
+#define PCACHE_VERSION 2u
 #define PCACHE_KIND_HF_DECOMP 1u
 #define PCACHE_MAX_FILE ((size_t)1 << 32)
 
@@ -141,6 +143,12 @@ int pcache_decomp_save(const char *dir, const char key[33], const hf_decomp *dc,
     wb_f64(&b, dc->lambda);
     wb_f64(&b, dc->rcond);
     wb_f64(&b, dc->build_seconds);
+    wb_u32(&b, (uint32_t)dc->null_dims);
+    wb_u32(&b, (uint32_t)dc->weak_dims);
+    wb_f64(&b, dc->s_null);
+    wb_f64(&b, dc->gain_max);
+    wb_f64(&b, dc->gain_kept);
+    wb_f64(&b, dc->s_weak);
     for (int k = 0; k < dc->rank; k++)
         wb_f64(&b, dc->s[k]);
     for (size_t i = 0; i < (size_t)dc->n * dc->rank; i++)
@@ -170,7 +178,7 @@ int pcache_decomp_load(const char *dir, const char key[33], hf_decomp *out, glin
     if (rc)
         return rc;
     rc = GLINT_EFORMAT;
-    if (len < 8 + 8 + 32 + 24 + 24 + 8 || memcmp(data, PCACHE_MAGIC, 8) != 0) {
+    if (len < 8 + 8 + 32 + 24 + 24 + 40 + 8 || memcmp(data, PCACHE_MAGIC, 8) != 0) {
         glint_err_set(err, rc, "%s: not a glint cache file (bad magic or too short)", path);
         goto fail;
     }
@@ -205,8 +213,18 @@ int pcache_decomp_load(const char *dir, const char key[33], hf_decomp *out, glin
     out->lambda = rb_f64(&b);
     out->rcond = rb_f64(&b);
     out->build_seconds = rb_f64(&b);
+    out->null_dims = (int)rb_u32(&b);
+    out->weak_dims = (int)rb_u32(&b);
+    out->s_null = rb_f64(&b);
+    out->gain_max = rb_f64(&b);
+    out->gain_kept = rb_f64(&b);
+    out->s_weak = rb_f64(&b);
     if (b.bad || out->res < HF_RES_MIN || out->res > HF_RES_MAX || out->n != 3 * out->res ||
         out->rank < 1 || out->rank > out->n || out->nsamples < 1 ||
+        out->null_dims < 0 || out->weak_dims < 0 ||
+        out->gauge_dims + out->null_dims + out->weak_dims + out->rank > out->n ||
+        !isfinite(out->s_null) || !isfinite(out->gain_max) || !isfinite(out->gain_kept) ||
+        !isfinite(out->s_weak) ||
         b.len - b.pos != (size_t)8 * out->rank * (1 + (size_t)out->n)) {
         glint_err_set(err, rc, "%s: inconsistent sizes in the header", path);
         goto fail;

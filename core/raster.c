@@ -68,6 +68,7 @@ typedef struct raster_ctx {
     gbuf *g;
     double *depth;
     int W, H;
+    int j_lo, j_hi;   /* rows drawn: [j_lo, j_hi) of the H rows; gbuf row 0 is j_lo */
     double cx, cy, k; /* projection: X = cx + k x / z, Y = cy - k y / z */
     double znear;
     v3 eye, light;
@@ -188,12 +189,12 @@ static void raster_tri(const raster_ctx *c, const raster_pt *v0, const raster_pt
     fj1 = floor(maxy - 0.5);
     if (fi0 < 0.0)
         fi0 = 0.0;
-    if (fj0 < 0.0)
-        fj0 = 0.0;
+    if (fj0 < c->j_lo)
+        fj0 = c->j_lo;
     if (fi1 > c->W - 1)
         fi1 = c->W - 1;
-    if (fj1 > c->H - 1)
-        fj1 = c->H - 1;
+    if (fj1 > c->j_hi - 1)
+        fj1 = c->j_hi - 1;
     if (!(fi0 <= fi1 && fj0 <= fj1))
         return;
     if (!isfinite(minx) || !isfinite(maxx) || !isfinite(miny) || !isfinite(maxy))
@@ -224,7 +225,7 @@ static void raster_tri(const raster_ctx *c, const raster_pt *v0, const raster_pt
         double py = j + 0.5;
         double r0 = e[0].A * (py - e[0].ly), r1 = e[1].A * (py - e[1].ly),
                r2 = e[2].A * (py - e[2].ly);
-        size_t row = (size_t)j * (size_t)c->W;
+        size_t row = (size_t)(j - c->j_lo) * (size_t)c->W;
         for (int i = i0; i <= i1; i++) {
             double px = i + 0.5, w0, w1, w2, iz, b[3];
             double l0 = e[0].sign * (r0 - e[0].B * (px - e[0].lx));
@@ -322,9 +323,10 @@ static int raster_check_view(const scene_view *v, glint_err *err)
     return 0;
 }
 
-/* raster_view with a caller's workspace; the mesh is already validated. */
-static int raster_view_ws(const mesh *m, const scene_view *v, int width, int height,
-                          raster_ws *ws, gbuf *out, glint_err *err)
+/* Rows [row0, row0 + nrows) of raster_view, with a caller's workspace;
+ * the mesh is already validated. */
+static int raster_rows_ws(const mesh *m, const scene_view *v, int width, int height, int row0,
+                          int nrows, raster_ws *ws, gbuf *out, glint_err *err)
 {
     double fwd[3], right[3], up[3], t;
     raster_ctx c;
@@ -335,14 +337,17 @@ static int raster_view_ws(const mesh *m, const scene_view *v, int width, int hei
         height > SCENE_MAX_SIZE)
         return glint_err_set(err, GLINT_ERANGE, "raster size %dx%d outside %d..%d", width,
                              height, SCENE_MIN_SIZE, SCENE_MAX_SIZE);
+    if (row0 < 0 || nrows < 1 || row0 > height - nrows)
+        return glint_err_set(err, GLINT_ERANGE, "rows %d..%d outside the %d rows of the view",
+                             row0, row0 + nrows - 1, height);
     rc = raster_check_view(v, err);
     if (rc)
         return rc;
-    npix = (size_t)width * (size_t)height;
+    npix = (size_t)width * (size_t)nrows;
     rc = raster_ws_reserve(ws, nv, npix, err);
     if (rc)
         return rc;
-    rc = gbuf_alloc(out, width, height, err);
+    rc = gbuf_alloc(out, width, nrows, err);
     if (rc)
         return rc;
 
@@ -354,6 +359,8 @@ static int raster_view_ws(const mesh *m, const scene_view *v, int width, int hei
     c.depth = ws->depth;
     c.W = width;
     c.H = height;
+    c.j_lo = row0;
+    c.j_hi = row0 + nrows;
     c.cx = 0.5 * width;
     c.cy = 0.5 * height;
     c.k = 0.5 * height / t;
@@ -402,7 +409,8 @@ static int raster_view_ws(const mesh *m, const scene_view *v, int width, int hei
             double maxy = fmax(fmax(vt[0]->sy, vt[1]->sy), vt[2]->sy);
             if (!(ceil(minx - 0.5) <= floor(maxx - 0.5) && ceil(miny - 0.5) <= floor(maxy - 0.5)))
                 continue;
-            if (maxx < 0.5 || maxy < 0.5 || minx > width - 0.5 || miny > height - 0.5)
+            if (maxx < 0.5 || maxy < row0 + 0.5 || minx > width - 0.5 ||
+                miny > row0 + nrows - 0.5)
                 continue;
             for (int k = 0; k < 3; k++) {
                 p[k].sx = vt[k]->sx;
@@ -416,6 +424,36 @@ static int raster_view_ws(const mesh *m, const scene_view *v, int width, int hei
         }
     }
     return 0;
+}
+
+static int raster_view_ws(const mesh *m, const scene_view *v, int width, int height,
+                          raster_ws *ws, gbuf *out, glint_err *err)
+{
+    return raster_rows_ws(m, v, width, height, 0, height, ws, out, err);
+}
+
+int raster_view_rows(const mesh *m, const scene_view *v, int width, int height, int row0,
+                     int nrows, gbuf *out, glint_err *err)
+{
+    raster_ws ws;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "raster_view_rows: output gbuf is NULL");
+    memset(out, 0, sizeof *out);
+    if (!m || !v)
+        return glint_err_set(err, GLINT_EINVAL, "raster_view_rows: mesh or view is NULL");
+    if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE || height < SCENE_MIN_SIZE ||
+        height > SCENE_MAX_SIZE)
+        return glint_err_set(err, GLINT_ERANGE, "raster size %dx%d outside %d..%d", width,
+                             height, SCENE_MIN_SIZE, SCENE_MAX_SIZE);
+    rc = mesh_validate(m, err);
+    if (rc)
+        return rc;
+    memset(&ws, 0, sizeof ws);
+    rc = raster_rows_ws(m, v, width, height, row0, nrows, &ws, out, err);
+    raster_ws_free(&ws);
+    return rc;
 }
 
 int raster_view(const mesh *m, const scene_view *v, int width, int height, gbuf *out,

@@ -21,6 +21,14 @@
 int raster_view(const mesh *m, const scene_view *v, int width, int height,
                 gbuf *out, glint_err *err);
 
+/* Rows [row0, row0 + nrows) of the width x height view, exactly as
+ * raster_view() computes them (same projection, coverage and depth order),
+ * into a width x nrows gbuf (row 0 = row `row0`): for rendering large
+ * images in bands with bounded memory.  GLINT_ERANGE for rows outside the
+ * view. */
+int raster_view_rows(const mesh *m, const scene_view *v, int width, int height, int row0,
+                     int nrows, gbuf *out, glint_err *err);
+
 /* Rasterize every view of a scene.  *out becomes a malloc'ed array of
  * s->nviews gbufs (caller frees each with gbuf_free, then free(*out)). */
 int raster_scene(const scene *s, gbuf **out, glint_err *err);

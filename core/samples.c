@@ -23,20 +23,35 @@ void samples_free(samples *s)
     memset(s, 0, sizeof *s);
 }
 
+/* Grow every per-sample array of s to hold `cap` samples. */
+static int samples_reserve(samples *s, size_t cap, glint_err *err)
+{
+    void *p;
+#define GROW(field, per)                                                            \
+    do {                                                                            \
+        if (!(p = realloc(s->field, cap * (per) * sizeof *s->field)))                \
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory for %zu samples", cap); \
+        s->field = p;                                                               \
+    } while (0)
+    GROW(view, 1);
+    GROW(pixel, 1);
+    GROW(nrm, 3);
+    GROW(wi, 3);
+    GROW(wo, 3);
+    GROW(cos_i, 1);
+    GROW(intensity, 1);
+#undef GROW
+    s->cap = cap;
+    return 0;
+}
+
+/* Arrays for n samples of nviews views (the importer's). */
 static int samples_alloc(samples *s, int n, int nviews, glint_err *err)
 {
+    memset(s, 0, sizeof *s);
     s->n = n;
     s->nviews = nviews;
-    s->used = calloc((size_t)nviews, 1);
-    s->view = malloc((size_t)n * sizeof *s->view);
-    s->pixel = malloc((size_t)n * sizeof *s->pixel);
-    s->nrm = malloc((size_t)3 * n * sizeof *s->nrm);
-    s->wi = malloc((size_t)3 * n * sizeof *s->wi);
-    s->wo = malloc((size_t)3 * n * sizeof *s->wo);
-    s->cos_i = malloc((size_t)n * sizeof *s->cos_i);
-    s->intensity = malloc((size_t)n * sizeof *s->intensity);
-    if (!s->used || !s->view || !s->pixel || !s->nrm || !s->wi || !s->wo || !s->cos_i ||
-        !s->intensity) {
+    if (!(s->used = calloc((size_t)nviews, 1)) || samples_reserve(s, (size_t)n, err)) {
         samples_free(s);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for %d samples", n);
     }
@@ -55,74 +70,157 @@ static int is_sample(const gbuf *g, size_t p, double *ci)
     return a > 0.0 && b > 0.0;
 }
 
+long samples_count(const gbuf *g)
+{
+    size_t np = (size_t)g->width * g->height;
+    long count = 0;
+    double ci;
+    for (size_t p = 0; p < np; p++)
+        count += is_sample(g, p, &ci);
+    return count;
+}
+
+int samples_begin(samples *s, int nviews, int width, int height, glint_err *err)
+{
+    memset(s, 0, sizeof *s);
+    if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
+        return glint_err_set(err, GLINT_ERANGE, "view count %d outside 1..%d", nviews,
+                             SCENE_MAX_VIEWS);
+    if (width < 1 || height < 1)
+        return glint_err_set(err, GLINT_EINVAL, "raster %dx%d is empty", width, height);
+    s->nviews = nviews;
+    s->width = width;
+    s->height = height;
+    if (!(s->used = calloc((size_t)nviews, 1)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    return 0;
+}
+
+int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity, glint_err *err)
+{
+    size_t np = (size_t)g->width * g->height;
+    int rc;
+
+    if (view < 0 || view >= s->nviews || g->width != s->width || row0 < 0 ||
+        row0 + g->height > s->height)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "view %d: a %dx%d band at row %d does not fit the %dx%d raster",
+                             view, g->width, g->height, row0, s->width, s->height);
+    s->used[view] = 1;
+    for (size_t p = 0; p < np; p++) {
+        double ci;
+        size_t k = (size_t)s->n;
+        if (!is_sample(g, p, &ci))
+            continue;
+        if (k == (size_t)SAMPLES_MAX)
+            return glint_err_set(err, GLINT_ERANGE, "more than %d samples (the limit)",
+                                 SAMPLES_MAX);
+        if (k == s->cap && (rc = samples_reserve(s, s->cap ? 2 * s->cap : 4096, err)))
+            return rc;
+        s->view[k] = view;
+        s->pixel[k] = (int)((size_t)row0 * (size_t)s->width + p);
+        memcpy(s->nrm + 3 * k, g->nrm + 3 * p, 3 * sizeof(float));
+        memcpy(s->wi + 3 * k, g->wi + 3 * p, 3 * sizeof(float));
+        memcpy(s->wo + 3 * k, g->wo + 3 * p, 3 * sizeof(float));
+        s->cos_i[k] = ci;
+        s->intensity[k] = intensity;
+        s->n++;
+    }
+    return 0;
+}
+
+/* The pattern hash: the rule, the scene hash and the views used. */
+static int samples_hash(samples *s, const char scene_hash[33], glint_err *err)
+{
+    static const char rule[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
+    XXH3_state_t *st = XXH3_createState();
+    XXH128_hash_t h;
+    if (!st)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory hashing samples");
+    XXH3_128bits_reset(st);
+    XXH3_128bits_update(st, rule, sizeof rule);
+    XXH3_128bits_update(st, scene_hash ? scene_hash : "", scene_hash ? 32 : 0);
+    XXH3_128bits_update(st, s->used, (size_t)s->nviews);
+    h = XXH3_128bits_digest(st);
+    XXH3_freeState(st);
+    snprintf(s->hash, sizeof s->hash, "%016llx%016llx", (unsigned long long)h.high64,
+             (unsigned long long)h.low64);
+    return 0;
+}
+
+int samples_end(samples *s, const unsigned char *use, const char scene_hash[33],
+                glint_err *err)
+{
+    int rc;
+    if (use)
+        for (int v = 0; v < s->nviews; v++)
+            s->used[v] |= use[v] != 0;
+    if (s->n < 1)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the chosen views have no lit, visible pixel: nothing to fit");
+    if ((size_t)s->n < s->cap && (rc = samples_reserve(s, (size_t)s->n, err)))
+        return rc; /* give back what growth left over */
+    return samples_hash(s, scene_hash, err);
+}
+
 int samples_build(const gbuf *g, const scene_view *views, int nviews,
                   const unsigned char *use, const char scene_hash[33],
                   samples *out, glint_err *err)
 {
-    long count = 0;
-    int rc, k = 0;
-    XXH3_state_t *st;
-    XXH128_hash_t h;
-    static const char rule[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
+    int rc;
 
     memset(out, 0, sizeof *out);
     if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
         return glint_err_set(err, GLINT_ERANGE, "view count %d outside 1..%d", nviews,
                              SCENE_MAX_VIEWS);
-    for (int v = 0; v < nviews; v++) {
-        double ci;
-        size_t np = (size_t)g[v].width * g[v].height;
+    for (int v = 0; v < nviews; v++)
         if (g[v].width != g[0].width || g[v].height != g[0].height)
             return glint_err_set(err, GLINT_EINVAL, "view %d has a different raster size", v);
-        if (use && !use[v])
-            continue;
-        for (size_t p = 0; p < np; p++)
-            count += is_sample(&g[v], p, &ci);
-    }
-    if (count < 1)
-        return glint_err_set(err, GLINT_EINVAL,
-                             "the chosen views have no lit, visible pixel: nothing to fit");
-    if (count > SAMPLES_MAX)
-        return glint_err_set(err, GLINT_ERANGE, "%ld samples exceed the limit of %d", count,
-                             SAMPLES_MAX);
-    rc = samples_alloc(out, (int)count, nviews, err);
-    if (rc)
+    if ((rc = samples_begin(out, nviews, g[0].width, g[0].height, err)))
         return rc;
-    out->width = g[0].width;
-    out->height = g[0].height;
-    for (int v = 0; v < nviews; v++) {
-        size_t np = (size_t)g[v].width * g[v].height;
-        if (use && !use[v])
-            continue;
-        out->used[v] = 1;
-        for (size_t p = 0; p < np; p++) {
-            double ci;
-            if (!is_sample(&g[v], p, &ci))
-                continue;
-            out->view[k] = v;
-            out->pixel[k] = (int)p;
-            memcpy(out->nrm + 3 * k, g[v].nrm + 3 * p, 3 * sizeof(float));
-            memcpy(out->wi + 3 * k, g[v].wi + 3 * p, 3 * sizeof(float));
-            memcpy(out->wo + 3 * k, g[v].wo + 3 * p, 3 * sizeof(float));
-            out->cos_i[k] = ci;
-            out->intensity[k] = views ? views[v].light_intensity : 1.0;
-            k++;
-        }
-    }
-    st = XXH3_createState();
-    if (!st) {
+    for (int v = 0; v < nviews && !rc; v++)
+        if (!use || use[v])
+            rc = samples_add(out, v, &g[v], 0, views ? views[v].light_intensity : 1.0, err);
+    if (!rc)
+        rc = samples_end(out, use, scene_hash, err);
+    if (rc)
         samples_free(out);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory hashing samples");
+    return rc;
+}
+
+int samples_subset(const samples *all, const unsigned char *use, const char scene_hash[33],
+                   samples *out, glint_err *err)
+{
+    size_t n = 0;
+    int rc;
+
+    if ((rc = samples_begin(out, all->nviews, all->width, all->height, err)))
+        return rc;
+    for (int i = 0; i < all->n; i++)
+        n += use[all->view[i]] != 0;
+    if (n && (rc = samples_reserve(out, n, err)))
+        goto fail;
+    for (int i = 0; i < all->n; i++) {
+        size_t k = (size_t)out->n;
+        if (!use[all->view[i]])
+            continue;
+        out->view[k] = all->view[i];
+        out->pixel[k] = all->pixel[i];
+        memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
+        out->cos_i[k] = all->cos_i[i];
+        out->intensity[k] = all->intensity[i];
+        out->n++;
     }
-    XXH3_128bits_reset(st);
-    XXH3_128bits_update(st, rule, sizeof rule);
-    XXH3_128bits_update(st, scene_hash ? scene_hash : "", scene_hash ? 32 : 0);
-    XXH3_128bits_update(st, out->used, (size_t)nviews);
-    h = XXH3_128bits_digest(st);
-    XXH3_freeState(st);
-    snprintf(out->hash, sizeof out->hash, "%016llx%016llx", (unsigned long long)h.high64,
-             (unsigned long long)h.low64);
+    for (int v = 0; v < all->nviews; v++)
+        out->used[v] = use[v] && all->used[v];
+    if ((rc = samples_end(out, NULL, scene_hash, err)))
+        goto fail;
     return 0;
+fail:
+    samples_free(out);
+    return rc;
 }
 
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)

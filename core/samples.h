@@ -9,7 +9,9 @@
  * hash) define the pattern, and its hash keys every precomputation.
  *
  * Ownership: samples_* allocate the arrays; samples_free() releases them
- * and accepts NULL or a half-built set. */
+ * and accepts NULL or a half-built set.  Thread-safety: no global state; a
+ * sample set is read-only once built and may be shared by any number of
+ * threads (the precomputation cache shares it between fits). */
 #ifndef GLINT_SAMPLES_H
 #define GLINT_SAMPLES_H
 
@@ -31,6 +33,7 @@ typedef struct samples {
     double *cos_i;         /* n: n.wi (> 0) */
     double *intensity;     /* n: the light intensity of the sample's view */
     char hash[33];         /* pattern hash: scene hash + used views + rule */
+    size_t cap;            /* samples the arrays hold room for (while building) */
 } samples;
 
 /* Collect the samples of `nviews` gbufs.  `use` (nviews flags) selects the
@@ -39,6 +42,28 @@ typedef struct samples {
 int samples_build(const gbuf *g, const scene_view *views, int nviews,
                   const unsigned char *use, const char scene_hash[33],
                   samples *out, glint_err *err);
+
+/* Building a pattern view by view, in bands of rows of a view if need be
+ * (so that no more than a band of G-buffer is ever held): samples_begin,
+ * then samples_add for the used views in order, each view's bands top to
+ * bottom (row0: the band's first row in the view), then samples_end, which
+ * marks the views flagged in `use` as used (views added are used already),
+ * checks that there is a sample and computes the pattern hash.  The result
+ * is exactly samples_build's.  On failure the caller samples_free()s. */
+int samples_begin(samples *s, int nviews, int width, int height, glint_err *err);
+int samples_add(samples *s, int view, const gbuf *band, int row0, double intensity,
+                glint_err *err);
+int samples_end(samples *s, const unsigned char *use, const char scene_hash[33],
+                glint_err *err);
+
+/* The samples of one G-buffer (or band). */
+long samples_count(const gbuf *g);
+
+/* The samples of the views flagged in `use` out of a pattern of every view:
+ * exactly the pattern samples_build would make from those views (same
+ * order, same hash for the same scene_hash). */
+int samples_subset(const samples *all, const unsigned char *use, const char scene_hash[33],
+                   samples *out, glint_err *err);
 
 /* Read every sample's value from the paintings: one image per view (the
  * unused views' images are ignored and may be zeroed imgs), each sized like

@@ -19,7 +19,10 @@
  *  - Lights are point lights of constant intensity (no 1/d^2 fall-off).
  *
  * Ownership: a scene owns its mesh and views; scene_free() releases them
- * and accepts NULL or a half-built scene. */
+ * and accepts NULL or a half-built scene.
+ * Thread-safety: no global state; a scene is read-only once made, so any
+ * number of threads may read, hash, rasterize or save one scene at once;
+ * building or freeing one is its owner's, on one thread. */
 #ifndef GLINT_SCENE_H
 #define GLINT_SCENE_H
 

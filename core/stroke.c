@@ -574,6 +574,47 @@ int stroke_apply(const stroke *s, img *im, const img *base, stroke_report *rep, 
     return 0;
 }
 
+double stroke_cost(const stroke *s, int width, int height)
+{
+    double r = 0.5 * s->diameter, xmin, xmax, ymin, ymax, cost = 0.0;
+    int ix0, ix1, iy0, iy1, nseg = stroke_nseg(s);
+
+    xmin = xmax = s->pts[0];
+    ymin = ymax = s->pts[1];
+    for (int i = 1; i < s->npoints; i++) {
+        xmin = fmin(xmin, s->pts[2 * i]);
+        xmax = fmax(xmax, s->pts[2 * i]);
+        ymin = fmin(ymin, s->pts[2 * i + 1]);
+        ymax = fmax(ymax, s->pts[2 * i + 1]);
+    }
+    stroke_range(xmin - r, xmax + r, width, &ix0, &ix1);
+    stroke_range(ymin - r, ymax + r, height, &iy0, &iy1);
+    /* the loops of stroke_apply, counting instead of evaluating */
+    for (int ty = iy0; ty <= iy1; ty += STROKE_TILE) {
+        int ty1 = ty + STROKE_TILE - 1 < iy1 ? ty + STROKE_TILE - 1 : iy1;
+        for (int tx = ix0; tx <= ix1; tx += STROKE_TILE) {
+            int tx1 = tx + STROKE_TILE - 1 < ix1 ? tx + STROKE_TILE - 1 : ix1;
+            double cx0 = tx + 0.5, cx1 = tx1 + 0.5, cy0 = ty + 0.5, cy1 = ty1 + 0.5;
+            long nc = 0;
+            for (int i = 0; i < nseg; i++) {
+                const double *a = s->pts + 2 * i, *b = stroke_seg_b(s, i);
+                nc += !(fmax(a[0], b[0]) + r < cx0 || fmin(a[0], b[0]) - r > cx1 ||
+                        fmax(a[1], b[1]) + r < cy0 || fmin(a[1], b[1]) - r > cy1);
+            }
+            cost += (double)nc * (tx1 - tx + 1) * (ty1 - ty + 1);
+        }
+    }
+    return cost;
+}
+
+double stroke_list_cost(const stroke *list, int n, int width, int height)
+{
+    double cost = 0.0;
+    for (int i = 0; i < n; i++)
+        cost += stroke_cost(&list[i], width, height);
+    return cost;
+}
+
 int stroke_apply_list(const stroke *list, int n, img *im, const img *base, long *pixels,
                       glint_err *err)
 {

@@ -33,7 +33,9 @@
  * color pulls a highlight down: it removes highlights) or above 1 (HDR).
  *
  * Ownership: a stroke owns its point array; stroke_free() and
- * stroke_list_free() accept NULL and half-built strokes. */
+ * stroke_list_free() accept NULL and half-built strokes.
+ * Thread-safety: no global state; strokes are values once parsed, and
+ * applying them writes only the caller's image. */
 #ifndef GLINT_STROKE_H
 #define GLINT_STROKE_H
 
@@ -126,6 +128,15 @@ typedef struct stroke_report {
  * On failure `im` may hold a partial result: apply to a copy when that
  * matters.  rep may be NULL. */
 int stroke_apply(const stroke *s, img *im, const img *base, stroke_report *rep, glint_err *err);
+
+/* The work stroke_apply does for s on a width x height image, in distance
+ * evaluations (pixels times the segments near them): at most this many,
+ * computed without evaluating anything (a few operations per segment and
+ * tile), so a server can refuse a request before doing it.  A one-point
+ * dab of diameter D costs about D^2; a long stroke with a huge diameter
+ * costs its points times the image. */
+double stroke_cost(const stroke *s, int width, int height);
+double stroke_list_cost(const stroke *list, int n, int width, int height);
 
 /* Apply n strokes in order.  On failure the message names the stroke
  * ("strokes[i]: ...").  OUT: *pixels (may be NULL): pixels changed, summed

@@ -23,6 +23,7 @@
 
 #include "glr.h"
 #include "material.h"
+#include "method_hf3.h"
 #include "mesh.h"
 #include "scene.h"
 
@@ -74,7 +75,7 @@ static int make_material(material *m, glint_err *err)
             f.logf[(2 * R + k) * 3 + c] = log(1.0 - 0.2 * u);
         }
     }
-    material_init(m, &f, NULL);
+    hf3_material_init(m, &f, NULL);
     return 0;
 }
 

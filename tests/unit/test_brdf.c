@@ -401,7 +401,7 @@ TEST(parse_errors)
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         brdf b;
-        glint_err e = {0, ""};
+        glint_err e = {0};
         int rc;
         memset(&b, 0xab, sizeof b);
         rc = brdf_parse(bad[k].spec, &b, &e);

@@ -1,0 +1,206 @@
+/* cmd_render.c: the glint commands that use a fitted material: render
+ * (any camera and light, on EGL or the CPU), eval (at given directions)
+ * and export-shader; and the process's renderer (render.h). */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "glr.h"
+
+/* ---- the renderer ------------------------------------------------------------- */
+
+static render *the_render;
+
+render *cli_render(void)
+{
+    glint_err e;
+    if (!the_render && render_open(4, 0, &the_render, &e))
+        the_render = NULL;
+    return the_render;
+}
+
+void cli_render_close(void)
+{
+    render_close(the_render);
+    the_render = NULL;
+}
+
+/* ---- render ----------------------------------------------------------------- */
+
+static const char usage_render[] =
+    "usage: glint render MATDIR --scene scene.json (--view K | --eye X,Y,Z --light X,Y,Z) "
+    "[--size WxH] [--engine auto|egl|cpu] -o image.png|exr";
+
+int cmd_render(int argc, char **argv)
+{
+    static const struct option lo[] = {
+        {"scene", required_argument, 0, 's'}, {"view", required_argument, 0, 'v'},
+        {"eye", required_argument, 0, 'e'}, {"target", required_argument, 0, 't'},
+        {"light", required_argument, 0, 'l'}, {"fov", required_argument, 0, 'f'},
+        {"intensity", required_argument, 0, 'i'}, {"size", required_argument, 0, 'z'},
+        {"engine", required_argument, 0, 'g'}, {"out", required_argument, 0, 'o'},
+        {0, 0, 0, 0}};
+    const char *scene_path = NULL, *out = NULL;
+    int c, rc = 0, view = -1, w = 0, h = 0;
+    render_engine engine = RENDER_AUTO;
+    render_camera cam;
+    scene sc;
+    material m;
+    scene_view v;
+    img im = {0};
+    glint_err e;
+
+    memset(&sc, 0, sizeof sc);
+    render_camera_init(&cam);
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "s:v:o:", lo, NULL)) != -1) {
+        switch (c) {
+        case 's': scene_path = optarg; break;
+        case 'v': if ((rc = parse_int(optarg, "--view", 0, SCENE_MAX_VIEWS - 1, &view))) return rc; break;
+        case 'e': if ((rc = parse_vec3(optarg, "--eye", cam.eye))) return rc; cam.has_eye = 1; break;
+        case 't': if ((rc = parse_vec3(optarg, "--target", cam.target))) return rc; cam.has_target = 1; break;
+        case 'l': if ((rc = parse_vec3(optarg, "--light", cam.light))) return rc; cam.has_light = 1; break;
+        case 'f': if ((rc = parse_double(optarg, "--fov", 1.0, 170.0, &cam.fov_deg))) return rc; break;
+        case 'i': if ((rc = parse_double(optarg, "--intensity", 0.0, 1e6, &cam.intensity))) return rc; break;
+        case 'z': if ((rc = parse_size(optarg, &w, &h))) return rc; break;
+        case 'g': if (render_engine_parse(optarg, &engine, &e)) return fail(1, "--%s", e.msg); break;
+        case 'o': out = optarg; break;
+        default: return fail(1, "%s", usage_render);
+        }
+    }
+    if (!out || !scene_path || optind != argc - 1)
+        return fail(1, "%s", usage_render);
+    if (view < 0 && !(cam.has_eye && cam.has_light))
+        return fail(1, "render needs --view K, or both --eye and --light");
+    if (material_load(argv[optind], &m, &e))
+        return fail_err(&e);
+    if ((rc = load_scene(scene_path, &sc)))
+        goto done;
+    if (view >= sc.nviews) {
+        rc = fail(1, "--view %d: the scene has %d views", view, sc.nviews);
+        goto done;
+    }
+    cam.view = view;
+    if (render_camera_view(&sc, &cam, &v, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    if (!w) {
+        w = sc.width;
+        h = sc.height;
+    }
+    if (render_material(cli_render(), engine, NULL, &sc.mesh, &m, &v, w, h, &im, NULL, &e) ||
+        img_write(out, &im, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    printf("%s\n", out);
+done:
+    img_free(&im);
+    material_free(&m);
+    scene_free(&sc);
+    return rc;
+}
+
+/* ---- eval ------------------------------------------------------------------- */
+
+int cmd_eval(int argc, char **argv)
+{
+    material m;
+    glint_err e;
+    FILE *in, *outf = stdout;
+    char line[1024];
+    long lineno = 0;
+    int rc = 0;
+    const char *dirs = NULL, *out = NULL;
+
+    for (int i = 2; i < argc; i++) {
+        if (strcmp(argv[i], "--dirs") == 0 && i + 1 < argc) dirs = argv[++i];
+        else if (strcmp(argv[i], "-o") == 0 && i + 1 < argc) out = argv[++i];
+        else return fail(1, "usage: glint eval MATDIR --dirs FILE [-o OUT]");
+    }
+    if (argc < 2 || !dirs)
+        return fail(1, "usage: glint eval MATDIR --dirs FILE [-o OUT]  (FILE: lines 'nx ny nz wix wiy wiz wox woy woz', or 'wix wiy wiz wox woy woz' with n = +z)");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    in = strcmp(dirs, "-") == 0 ? stdin : fopen(dirs, "r");
+    if (!in) {
+        material_free(&m);
+        return fail(2, "cannot read %s: %s", dirs, strerror(errno));
+    }
+    if (out && !(outf = fopen(out, "w"))) {
+        rc = fail(2, "cannot write %s: %s", out, strerror(errno));
+        goto done;
+    }
+    while (fgets(line, sizeof line, in)) {
+        double v[9], n[3], wi[3], wo[3], rgb[3];
+        int got;
+        lineno++;
+        if (line[0] == '#' || line[strspn(line, " \t\r\n")] == '\0')
+            continue;
+        got = sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3],
+                     &v[4], &v[5], &v[6], &v[7], &v[8]);
+        if (got != 6 && got != 9) {
+            rc = fail(1, "%s line %ld: expected 6 or 9 numbers", dirs, lineno);
+            goto done;
+        }
+        for (int k = 0; k < got; k++)
+            if (!isfinite(v[k])) {
+                rc = fail(1, "%s line %ld: number %d is not finite", dirs, lineno, k + 1);
+                goto done;
+            }
+        if (got == 6) {
+            n[0] = n[1] = 0; n[2] = 1;
+            memcpy(wi, v, sizeof wi);
+            memcpy(wo, v + 3, sizeof wo);
+        } else {
+            memcpy(n, v, sizeof n);
+            memcpy(wi, v + 3, sizeof wi);
+            memcpy(wo, v + 6, sizeof wo);
+        }
+        {
+            double *vs[3] = {n, wi, wo};
+            for (int k = 0; k < 3; k++) {
+                double l = sqrt(vs[k][0] * vs[k][0] + vs[k][1] * vs[k][1] + vs[k][2] * vs[k][2]);
+                if (!(l > 1e-12)) {
+                    rc = fail(1, "%s line %ld: zero-length direction", dirs, lineno);
+                    goto done;
+                }
+                for (int c = 0; c < 3; c++)
+                    vs[k][c] /= l;
+            }
+        }
+        material_eval(&m, n, wi, wo, rgb);
+        fprintf(outf, "%.9g %.9g %.9g\n", rgb[0], rgb[1], rgb[2]);
+    }
+done:
+    if (in != stdin)
+        fclose(in);
+    if (outf != stdout && outf && fclose(outf) != 0 && !rc)
+        rc = fail(2, "writing %s failed", out);
+    material_free(&m);
+    return rc;
+}
+
+/* ---- shader export ---------------------------------------------------------- */
+
+int cmd_export_shader(int argc, char **argv)
+{
+    material m;
+    glint_err e;
+    int rc = 0;
+    if (argc != 4 || strcmp(argv[2], "-o") != 0)
+        return fail(1, "usage: glint export-shader MATDIR -o DIR");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    if (glr_shader_export(&m, argv[3], &e))
+        rc = fail_err(&e);
+    else
+        printf("%s/glint_material.frag, .vert, glint_factors.exr, shader.json\n", argv[3]);
+    material_free(&m);
+    return rc;
+}

@@ -1,0 +1,253 @@
+/* method.h: fitting methods, the one way paintings become a material.
+ *
+ * A method is one constant table (struct method) holding everything the
+ * rest of glint needs to know about it:
+ *   - its parameters (name, type, default, range, description, what a
+ *     change costs), defined once and used by the daemon's API, the command
+ *     line, GET /methods and the JSON Schemas in proto/ (method_param_*);
+ *   - the precomputation levels it needs after the sampling pattern, each
+ *     with its cache key and how to build it (and optionally keep it on
+ *     disk): the cache (cache.h) and the pipeline (prep.h) run them;
+ *   - the fit of one set of painted samples;
+ *   - the operations on the material it produces (material_ops): CPU
+ *     evaluation, GLSL for previews and exports, its files and manifest.
+ * The daemon, the command line and the benchmarks reach methods only
+ * through this table; adding a method is one core file defining a struct
+ * method and one line in method_registry.c.
+ *
+ * Parameters live in a method-specific struct (params_size bytes).  Every
+ * value enters through the table: method_params_from_json() (the API's
+ * "params" object) and method_param_set_text() (a command-line option)
+ * apply the same checks and bounds; method_params_to_json() is the one
+ * canonical spelling (materials, reports, cache keys of measured points).
+ *
+ * Thread-safety: methods are immutable; their functions may be called from
+ * any thread at once on different data.  The registry is filled before
+ * threads start (method_register) and read-only afterwards. */
+#ifndef GLINT_METHOD_H
+#define GLINT_METHOD_H
+
+#include <jansson.h>
+#include <stddef.h>
+
+#include "cache.h"
+#include "err.h"
+#include "samples.h"
+
+struct material;
+
+/* ---- parameters ------------------------------------------------------------------ */
+
+typedef enum {
+    METHOD_PARAM_INT,    /* an int field; bounds min..max */
+    METHOD_PARAM_NUMBER, /* a double field; bounds min..max (finite) */
+    METHOD_PARAM_ENUM,   /* an int field holding the index of one of `values` */
+    METHOD_PARAM_TEXT    /* a string with a syntax, parsed into the field by `parse` */
+} method_param_type;
+
+typedef struct method_param {
+    const char *name;
+    const char *option;           /* command-line spelling when not --<name> ("reg"), or NULL */
+    method_param_type type;
+    const char *affects;          /* "precomputation", "operator" or "fit": what a change costs */
+    const char *description;
+    size_t offset;                /* of the field in the params struct */
+    double min, max;              /* INT, NUMBER */
+    int min_exclusive, max_exclusive;
+    const char *const *values;    /* ENUM: names, NULL-terminated */
+    const char *syntax;           /* TEXT: the grammar, for people */
+    const char *const *examples;  /* TEXT: NULL-terminated */
+    /* TEXT: parse `text` into the field (0, or a code with a message that
+     * names the problem, not the parameter: callers add that), and the
+     * canonical spelling of a field. */
+    int (*parse)(const char *text, void *field, glint_err *err);
+    void (*format)(const void *field, char *buf, size_t len);
+} method_param;
+
+/* A named set of parameters offered to users ("draft", "fine"). */
+typedef struct method_preset {
+    const char *name;
+    const char *params;           /* JSON object text, e.g. "{\"res\": 32}" */
+} method_preset;
+
+/* ---- precomputation levels --------------------------------------------------------- */
+
+/* What a level's key, build and disk functions see. */
+typedef struct method_build_in {
+    const void *params;
+    const samples *s;             /* the sampling pattern */
+    const void *const *prev;      /* data of the method's levels before this one */
+    int level;                    /* index of the level being made */
+    /* progress of the whole preparation (stage name, fraction); may be NULL */
+    void (*progress)(void *cls, const char *stage, double fraction);
+    void *progress_cls;
+} method_build_in;
+
+typedef struct method_level {
+    const char *name;             /* cache level, report and progress stage */
+    double progress;              /* fraction of the preparation done when it starts */
+    /* The key, from the parameters that affect this level and the key of
+     * the level before (prev_key: the pattern's hash for the first level).
+     * Keys are at most CACHE_KEY_MAX - 1 bytes. */
+    void (*key)(const void *params, const samples *s, const char *prev_key, char *key,
+                size_t len);
+    int (*build)(const method_build_in *in, cache_value *out, glint_err *err);
+    /* optional disk layer (see cache_level) */
+    int (*load)(const method_build_in *in, const char *dir, const char *key, cache_value *out,
+                glint_err *err);
+    int (*save)(const method_build_in *in, const char *dir, const char *key,
+                const cache_value *v, glint_err *err);
+} method_level;
+
+#define METHOD_MAX_LEVELS 6
+
+/* ---- fit ------------------------------------------------------------------------------ */
+
+/* What a fit sees: the prepared levels and the painted values. */
+typedef struct method_fit_in {
+    const void *params;
+    const samples *s;             /* the sampling pattern */
+    const float *rgb;             /* 3 s->n painted values (sample-major, per unit light) */
+    const void *const *levels;    /* data of each level */
+    const char *const *keys;      /* key of each level */
+    const cache_how *how;         /* how this fit's preparation got each level */
+    const double *spent;          /* seconds it spent on each (building or waiting) */
+    const cache_disk *disk;       /* what the disk layer answered when each was made */
+    double pattern_seconds;       /* seconds it spent on the pattern (0 when in memory) */
+} method_fit_in;
+
+/* ---- the material ------------------------------------------------------------------------ */
+
+#define MATERIAL_GPU_MAX_UNIFORMS 8
+
+typedef struct material_gpu_uniform {
+    const char *name;             /* "u_res" */
+    const char *type;             /* "int", "float" or "vec3" */
+    double v[3];                  /* the value (an int in v[0]) */
+    const char *meaning;
+} material_gpu_uniform;
+
+/* How the GPU evaluates a material: a fragment stage that defines
+ * `vec3 glint_material(vec3 n, vec3 wi, vec3 wo)` and shades with it (the
+ * renderer sets u_eye, u_light, u_light_intensity and feeds v_pos, v_nrm,
+ * v_uv from the shared vertex stage), at most one float texture, and
+ * constant uniforms.  Filled by material_ops.gpu; release with
+ * material_gpu_free(). */
+typedef struct material_gpu {
+    const char *program;          /* one compiled program per name ("hf3") */
+    const char *frag_src;         /* static text of the method */
+    const char *tex_uniform;      /* sampler name; NULL when there is no texture */
+    int tex_w, tex_h;
+    float *tex;                   /* RGB float, row-major, row 0 first (malloc'ed) */
+    int nuniforms;
+    material_gpu_uniform uniform[MATERIAL_GPU_MAX_UNIFORMS];
+    json_t *manifest;             /* method members of shader.json (owned) */
+} material_gpu;
+
+void material_gpu_free(material_gpu *g);
+
+typedef struct material_ops {
+    /* The material at unit vectors (OUT rgb[3], per unit light): 0 unless
+     * n.wi > 0 and n.wo > 0. */
+    void (*eval)(const void *data, const double n[3], const double wi[3], const double wo[3],
+                 double rgb[3]);
+    void (*free)(void *data);
+    /* Write the method's members of material.json into `manifest`. */
+    int (*to_json)(const void *data, json_t *manifest, glint_err *err);
+    /* Read them back (validated; `file` names the source in messages). */
+    int (*from_json)(const json_t *manifest, const char *file, void **data, glint_err *err);
+    /* Files beside material.json (may add members to `manifest`). */
+    int (*save_files)(const void *data, const char *dir, json_t *manifest, glint_err *err);
+    int (*gpu)(const void *data, material_gpu *out, glint_err *err);
+    /* A few members for the API's material object (e.g. {"res": 64}). */
+    json_t *(*summary)(const void *data);
+} material_ops;
+
+/* ---- the method ------------------------------------------------------------------------- */
+
+typedef struct method {
+    const char *name;             /* "hf3": [a-z0-9_-], at most 15 bytes */
+    const char *title;
+    const char *reference;        /* the paper, or NULL */
+    const char *description;
+    const char *held_out;         /* how the held-out error is measured, for people */
+    const char *schema;           /* file in proto/schemas of its params ("FitParams.json") */
+    size_t params_size;
+    const method_param *params;
+    int nparams;
+    const method_preset *presets;
+    int npresets;
+    void (*params_default)(void *params);
+    /* Checks across parameters after they were set (may be NULL). */
+    int (*params_check)(const void *params, glint_err *err);
+    const method_level *levels;
+    int nlevels;
+    int (*fit)(const method_fit_in *in, struct material *out, glint_err *err);
+    const material_ops *mat;
+    /* Whether a held-out measurement (one precomputation per painted view,
+     * in the background) is affordable with these parameters (NULL: yes). */
+    int (*holdout_ok)(const void *params);
+    /* An upper bound of the memory a fit with these parameters takes for
+     * nsamples samples, every level built (pattern included), in bytes: what
+     * a service admits a cold fit by (NULL: METHOD_FIT_BYTES_PER_SAMPLE per
+     * sample). */
+    size_t (*fit_bytes)(const void *params, long nsamples);
+} method;
+
+/* The default of method.fit_bytes, per sample. */
+#define METHOD_FIT_BYTES_PER_SAMPLE 512
+
+/* m->fit_bytes, or the default. */
+size_t method_fit_bytes(const method *m, const void *params, long nsamples);
+
+/* ---- the registry ------------------------------------------------------------------------ */
+
+/* The i-th method (0: the default), NULL past the end. */
+const method *method_at(int i);
+int method_count(void);
+/* By name; NULL when unknown. */
+const method *method_find(const char *name);
+/* The names, comma-separated, for messages (OUT: buf). */
+void method_names(char *buf, size_t len);
+/* Add a method at startup (a build's extra methods).  GLINT_EINVAL for a
+ * bad or taken name, GLINT_ERANGE when the registry is full. */
+int method_register(const method *m, glint_err *err);
+
+/* ---- parameters through the table --------------------------------------------------------- */
+
+/* A params struct with the method's defaults (malloc'ed; free()). NULL when
+ * out of memory. */
+void *method_params_new(const method *m);
+
+const method_param *method_param_find(const method *m, const char *name);
+
+/* Set one parameter from JSON (the API).  Messages name it
+ * "params.<name>".  Unknown names give GLINT_EINVAL naming the known ones. */
+int method_param_set_json(const method *m, void *params, const char *name, const json_t *v,
+                          glint_err *err);
+
+/* Set every member of a JSON object, then run the cross checks.  A non-object
+ * gives GLINT_EINVAL ("params must be an object"). */
+int method_params_from_json(const method *m, void *params, const json_t *obj, glint_err *err);
+
+/* Set one parameter from text (the command line: messages name it
+ * "--<name> '<text>'"). */
+int method_param_set_text(const method *m, void *params, const char *name, const char *text,
+                          glint_err *err);
+
+/* Every parameter with its canonical value (a new object). */
+json_t *method_params_to_json(const method *m, const void *params);
+
+/* The canonical text of one parameter (OUT: buf). */
+void method_param_format(const method_param *p, const void *params, char *buf, size_t len);
+
+/* The method described for GET /methods: name, title, reference,
+ * description, params (with defaults and ranges), presets, held_out (a
+ * new object). */
+json_t *method_describe(const method *m);
+
+/* A JSON Schema (draft 2020-12) of the method's params object, as proto/
+ * keeps it (a new object). */
+json_t *method_params_schema(const method *m);
+
+#endif

@@ -1,0 +1,669 @@
+/* prep.c: a fit's precomputation through the cache (prep.h). */
+#include "prep.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clock.h"
+#include "raster.h"
+
+struct prep {
+    const method *m;
+    void *params;                         /* a copy */
+    cache_entry *pattern;
+    cache_how pattern_how;
+    double pattern_spent;
+    cache_entry *lv[METHOD_MAX_LEVELS];
+    cache_how how[METHOD_MAX_LEVELS];
+    double spent[METHOD_MAX_LEVELS];
+};
+
+/* ---- scene level ---------------------------------------------------------------- */
+
+typedef struct scene_ctx {
+    const char *id;
+    const prep_scene_source *src;
+} scene_ctx;
+
+static size_t mesh_bytes(const mesh *m)
+{
+    return (size_t)m->nverts * 8 * sizeof(float) + (size_t)m->ntris * 3 * sizeof(uint32_t);
+}
+
+static void scene_free_value(void *data)
+{
+    prep_scene *ps = data;
+    if (ps->sc && ps->src.unload)
+        ps->src.unload(ps->src.cls, ps->sc);
+    free(ps);
+}
+
+static int scene_build(void *ctx, cache_value *out, glint_err *err)
+{
+    scene_ctx *x = ctx;
+    prep_scene *ps = calloc(1, sizeof *ps);
+    int rc;
+    if (!ps)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if ((rc = x->src->load(x->src->cls, x->id, &ps->sc, err))) {
+        free(ps);
+        return rc;
+    }
+    ps->src = *x->src;
+    snprintf(ps->id, sizeof ps->id, "%s", x->id);
+    scene_hash(ps->sc, ps->hash);
+    out->data = ps;
+    out->bytes = sizeof *ps + mesh_bytes(&ps->sc->mesh) +
+                 (size_t)ps->sc->nviews * sizeof(scene_view);
+    out->free = scene_free_value;
+    return 0;
+}
+
+int prep_scene_acquire(cache *c, const char *id, const prep_scene_source *src,
+                       cache_entry **out, glint_err *err)
+{
+    static const cache_level level = {.name = "scene", .build = scene_build};
+    scene_ctx x = {id, src};
+    char key[CACHE_KEY_MAX];
+    *out = NULL;
+    if (!id || strlen(id) >= sizeof((prep_scene *)0)->id)
+        return glint_err_set(err, GLINT_EINVAL, "scene id too long");
+    snprintf(key, sizeof key, "scene:%s", id);
+    return cache_acquire(c, &level, key, &x, NULL, out, NULL, NULL, err);
+}
+
+const prep_scene *prep_scene_of(const cache_entry *e)
+{
+    return cache_data(e);
+}
+
+/* ---- pattern level ---------------------------------------------------------------- */
+
+typedef struct pattern_ctx {
+    const prep_scene *ps;
+    const unsigned char *use;
+    samples *given;          /* samples made by the caller, moved into the value */
+    prep_progress_fn cb;
+    void *cls;
+} pattern_ctx;
+
+static size_t samples_bytes(const samples *s)
+{
+    return sizeof *s + (size_t)s->n * (2 * sizeof(int) + 9 * sizeof(float) + 2 * sizeof(double)) +
+           (size_t)s->nviews;
+}
+
+static void samples_free_value(void *data)
+{
+    samples_free(data);
+    free(data);
+}
+
+static void pattern_starting(void *ctx, int how)
+{
+    pattern_ctx *x = ctx;
+    if (x->cb)
+        x->cb(x->cls, "samples", 0.0);
+    (void)how;
+}
+
+/* Rasterize view v of sc in bands of rows (at most PREP_BAND_PIXELS of
+ * G-buffer at a time) and hand each band to fn. */
+typedef int (*band_fn)(void *cls, int view, const gbuf *band, int row0, glint_err *err);
+
+static int raster_bands(const scene *sc, int v, band_fn fn, void *cls, glint_err *err)
+{
+    int band = PREP_BAND_PIXELS / sc->width, rc = 0;
+    if (band < 1)
+        band = 1;
+    for (int row0 = 0; row0 < sc->height && !rc; row0 += band) {
+        int nrows = sc->height - row0 < band ? sc->height - row0 : band;
+        gbuf g;
+        if ((rc = raster_view_rows(&sc->mesh, &sc->views[v], sc->width, sc->height, row0, nrows,
+                                   &g, err)))
+            break;
+        rc = fn(cls, v, &g, row0, err);
+        gbuf_free(&g);
+    }
+    if (rc)
+        glint_err_prefix(err, "rasterizing view %d", v);
+    return rc;
+}
+
+typedef struct add_ctx {
+    samples *s;
+    const scene *sc;
+} add_ctx;
+
+static int add_band(void *cls, int v, const gbuf *band, int row0, glint_err *err)
+{
+    add_ctx *a = cls;
+    return samples_add(a->s, v, band, row0, a->sc->views[v].light_intensity, err);
+}
+
+static int pattern_build(void *ctx, cache_value *out, glint_err *err)
+{
+    pattern_ctx *x = ctx;
+    samples *s = calloc(1, sizeof *s);
+    int rc = 0;
+
+    if (!s)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if (x->given) {
+        *s = *x->given;
+        memset(x->given, 0, sizeof *x->given);
+    } else {
+        const scene *sc = x->ps->sc;
+        add_ctx a = {s, sc};
+        int nused = 0, done = 0;
+        for (int v = 0; v < sc->nviews; v++)
+            nused += x->use[v] != 0;
+        rc = samples_begin(s, sc->nviews, sc->width, sc->height, err);
+        /* views not used are left out of the pattern */
+        for (int v = 0; v < sc->nviews && !rc; v++) {
+            if (!x->use[v])
+                continue;
+            if (!(rc = raster_bands(sc, v, add_band, &a, err)) && x->cb)
+                x->cb(x->cls, "samples", 0.25 * ++done / nused);
+        }
+        if (!rc)
+            rc = samples_end(s, x->use, x->ps->hash, err);
+    }
+    if (rc) {
+        samples_free(s);
+        free(s);
+        return rc;
+    }
+    out->data = s;
+    out->bytes = samples_bytes(s);
+    out->free = samples_free_value;
+    return 0;
+}
+
+void prep_pattern_key(const prep_scene *ps, const unsigned char *use, char *key)
+{
+    int n = snprintf(key, CACHE_KEY_MAX, "pattern:%s:", ps->hash);
+    /* the used-view flags as hex digits, 4 views per digit */
+    for (int v = 0; v < ps->sc->nviews && n + 2 < CACHE_KEY_MAX; v += 4) {
+        int nib = 0;
+        for (int k = 0; k < 4 && v + k < ps->sc->nviews; k++)
+            nib |= (use[v + k] ? 1 : 0) << k;
+        key[n++] = "0123456789abcdef"[nib];
+    }
+    key[n] = '\0';
+}
+
+/* ---- the method's levels ------------------------------------------------------------ */
+
+typedef struct level_ctx {
+    const method_level *lv;
+    method_build_in in;
+} level_ctx;
+
+static void level_starting(void *ctx, int how)
+{
+    level_ctx *x = ctx;
+    /* a build reports its own stages; a wait shows the level's */
+    if (how == CACHE_JOINED && x->in.progress)
+        x->in.progress(x->in.progress_cls, x->lv->name, x->lv->progress);
+}
+
+static int level_build(void *ctx, cache_value *out, glint_err *err)
+{
+    level_ctx *x = ctx;
+    return x->lv->build(&x->in, out, err);
+}
+
+static int level_load(void *ctx, const char *dir, const char *key, cache_value *out,
+                      glint_err *err)
+{
+    level_ctx *x = ctx;
+    return x->lv->load(&x->in, dir, key, out, err);
+}
+
+static int level_save(void *ctx, const char *dir, const char *key, const cache_value *v,
+                      glint_err *err)
+{
+    level_ctx *x = ctx;
+    return x->lv->save(&x->in, dir, key, v, err);
+}
+
+/* ---- prepared fits ------------------------------------------------------------------ */
+
+static prep *prep_new(const method *m, const void *params, glint_err *err)
+{
+    prep *p = calloc(1, sizeof *p);
+    if (p && !(p->params = malloc(m->params_size ? m->params_size : 1))) {
+        free(p);
+        p = NULL;
+    }
+    if (!p) {
+        glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        return NULL;
+    }
+    if (m->nlevels > METHOD_MAX_LEVELS) {
+        free(p->params);
+        free(p);
+        glint_err_set(err, GLINT_EINTERNAL, "method %s has %d levels (at most %d)", m->name,
+                      m->nlevels, METHOD_MAX_LEVELS);
+        return NULL;
+    }
+    p->m = m;
+    memcpy(p->params, params, m->params_size);
+    return p;
+}
+
+void prep_release(cache *c, prep *p)
+{
+    if (!p)
+        return;
+    for (int i = p->m->nlevels - 1; i >= 0; i--)
+        cache_release(c, p->lv[i]);
+    cache_release(c, p->pattern);
+    free(p->params);
+    free(p);
+}
+
+/* The method's levels after the pattern (p->pattern set). */
+static int acquire_levels(cache *c, prep *p, prep_progress_fn cb, void *cls, glint_err *err)
+{
+    const samples *s = cache_data(p->pattern);
+    const void *prev[METHOD_MAX_LEVELS];
+    char key[CACHE_KEY_MAX], prev_key[CACHE_KEY_MAX];
+    int rc;
+
+    snprintf(prev_key, sizeof prev_key, "%s", s->hash);
+    for (int i = 0; i < p->m->nlevels; i++) {
+        const method_level *ml = &p->m->levels[i];
+        cache_level cl = {.name = ml->name, .starting = level_starting, .build = level_build};
+        level_ctx x;
+        memset(&x, 0, sizeof x);
+        x.lv = ml;
+        x.in.params = p->params;
+        x.in.s = s;
+        x.in.prev = prev;
+        x.in.level = i;
+        x.in.progress = cb;
+        x.in.progress_cls = cls;
+        if (ml->load && ml->save) {
+            cl.load = level_load;
+            cl.save = level_save;
+        }
+        ml->key(p->params, s, prev_key, key, sizeof key);
+        rc = cache_acquire(c, &cl, key, &x, i ? p->lv[i - 1] : p->pattern, &p->lv[i], &p->how[i],
+                           &p->spent[i], err);
+        if (rc)
+            return rc;
+        prev[i] = cache_data(p->lv[i]);
+        snprintf(prev_key, sizeof prev_key, "%s", key);
+    }
+    return 0;
+}
+
+int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cls, prep **out,
+                 glint_err *err)
+{
+    static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
+                                              .build = pattern_build};
+    const prep_scene *ps = cache_data(rq->scene);
+    pattern_ctx px = {ps, rq->use, NULL, cb, cls};
+    char key[CACHE_KEY_MAX];
+    prep *p;
+    int rc;
+
+    *out = NULL;
+    if (!(p = prep_new(rq->m, rq->params, err)))
+        return GLINT_ENOMEM;
+    prep_pattern_key(ps, rq->use, key);
+    rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
+                       &p->pattern_spent, err);
+    if (!rc)
+        rc = acquire_levels(c, p, cb, cls, err);
+    if (rc) {
+        prep_release(c, p);
+        return rc;
+    }
+    *out = p;
+    return 0;
+}
+
+int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
+                         prep_progress_fn cb, void *cls, prep **out, glint_err *err)
+{
+    static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
+                                              .build = pattern_build};
+    pattern_ctx px = {NULL, NULL, s, cb, cls};
+    char key[CACHE_KEY_MAX];
+    prep *p;
+    int rc;
+
+    *out = NULL;
+    if (!(p = prep_new(m, params, err)))
+        return GLINT_ENOMEM;
+    snprintf(key, sizeof key, "samples:%s", s->hash);
+    rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
+                       &p->pattern_spent, err);
+    samples_free(s); /* when the cache had them already, or the build failed */
+    if (!rc)
+        rc = acquire_levels(c, p, cb, cls, err);
+    if (rc) {
+        prep_release(c, p);
+        return rc;
+    }
+    *out = p;
+    return 0;
+}
+
+int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err)
+{
+    const prep_scene *ps = cache_data(rq->scene);
+    char key[CACHE_KEY_MAX], prev_key[CACHE_KEY_MAX];
+    const samples *s;
+    prep *p;
+
+    *out = NULL;
+    if (!(p = prep_new(rq->m, rq->params, err)))
+        return GLINT_ENOMEM;
+    prep_pattern_key(ps, rq->use, key);
+    if (cache_find(c, key, &p->pattern))
+        goto miss;
+    s = cache_data(p->pattern);
+    snprintf(prev_key, sizeof prev_key, "%s", s->hash);
+    for (int i = 0; i < p->m->nlevels; i++) {
+        p->m->levels[i].key(p->params, s, prev_key, key, sizeof key);
+        if (cache_find(c, key, &p->lv[i]))
+            goto miss;
+        snprintf(prev_key, sizeof prev_key, "%s", key);
+    }
+    cache_hit(c, p->pattern);
+    for (int i = 0; i < p->m->nlevels; i++)
+        cache_hit(c, p->lv[i]);
+    *out = p;
+    return 0;
+miss:
+    prep_release(c, p);
+    return glint_err_set(err, GLINT_ENOTFOUND, "the precomputation is not in memory");
+}
+
+const samples *prep_samples(const prep *p)
+{
+    return cache_data(p->pattern);
+}
+
+cache_entry *prep_pattern(const prep *p)
+{
+    return p->pattern;
+}
+
+const method *prep_method(const prep *p)
+{
+    return p->m;
+}
+
+double prep_cold_seconds(const prep *p)
+{
+    return cache_cold_seconds(p->m->nlevels ? p->lv[p->m->nlevels - 1] : p->pattern);
+}
+
+static cache_disk first_disk(const prep *p)
+{
+    for (int i = 0; i < p->m->nlevels; i++)
+        if (cache_disk_of(p->lv[i]) != CACHE_DISK_OFF)
+            return cache_disk_of(p->lv[i]);
+    return CACHE_DISK_OFF;
+}
+
+int prep_from_disk(const prep *p)
+{
+    return first_disk(p) == CACHE_DISK_LOADED;
+}
+
+int prep_was_hit(const prep *p)
+{
+    if (p->pattern_how != CACHE_HIT)
+        return 0;
+    for (int i = 0; i < p->m->nlevels; i++)
+        if (p->how[i] != CACHE_HIT)
+            return 0;
+    return 1;
+}
+
+static json_t *level_report(const cache_entry *e, cache_how how, double spent)
+{
+    return json_pack("{s:s, s:s, s:I, s:f, s:f}", "key", cache_key(e), "memory",
+                     cache_how_names[how], "bytes", (json_int_t)cache_bytes(e), "build_seconds",
+                     cache_build_seconds(e), "waited_seconds",
+                     how == CACHE_JOINED ? spent : 0.0);
+}
+
+json_t *prep_report(const prep *p)
+{
+    json_t *r = json_object(), *levels = json_object();
+    cache_how overall = p->pattern_how;
+    const cache_entry *last = p->m->nlevels ? p->lv[p->m->nlevels - 1] : p->pattern;
+
+    json_object_set_new(levels, "pattern",
+                        level_report(p->pattern, p->pattern_how, p->pattern_spent));
+    for (int i = 0; i < p->m->nlevels; i++) {
+        json_object_set_new(levels, p->m->levels[i].name,
+                            level_report(p->lv[i], p->how[i], p->spent[i]));
+        if (p->how[i] == CACHE_BUILT || overall == CACHE_BUILT)
+            overall = CACHE_BUILT;
+        else if (p->how[i] == CACHE_JOINED)
+            overall = CACHE_JOINED;
+    }
+    json_object_set_new(r, "memory", json_string(cache_how_names[overall]));
+    json_object_set_new(r, "disk", json_string(cache_disk_names[first_disk(p)]));
+    json_object_set_new(r, "key", json_string(cache_key(last)));
+    json_object_set_new(r, "cold_seconds", json_real(cache_cold_seconds(last)));
+    json_object_set_new(r, "levels", levels);
+    return r;
+}
+
+int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
+             glint_err *err)
+{
+    const samples *s = cache_data(p->pattern);
+    const void *levels[METHOD_MAX_LEVELS];
+    const char *keys[METHOD_MAX_LEVELS];
+    cache_disk disk[METHOD_MAX_LEVELS];
+    method_fit_in in;
+    float *own = NULL;
+    json_t *pre;
+    double t0 = glint_now();
+    int rc;
+
+    memset(out, 0, sizeof *out);
+    if (!rgb) {
+        own = malloc((size_t)3 * s->n * sizeof *own);
+        if (!own)
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory for %d samples", s->n);
+        if ((rc = samples_gather(s, paintings, own, err))) {
+            free(own);
+            return rc;
+        }
+        rgb = own;
+    }
+    for (int i = 0; i < p->m->nlevels; i++) {
+        levels[i] = cache_data(p->lv[i]);
+        keys[i] = cache_key(p->lv[i]);
+        disk[i] = cache_disk_of(p->lv[i]);
+    }
+    memset(&in, 0, sizeof in);
+    in.params = p->params;
+    in.s = s;
+    in.rgb = rgb;
+    in.levels = levels;
+    in.keys = keys;
+    in.how = p->how;
+    in.spent = p->spent;
+    in.disk = disk;
+    in.pattern_seconds = p->pattern_how == CACHE_HIT ? 0.0 : p->pattern_spent;
+    rc = p->m->fit(&in, out, err);
+    free(own);
+    if (rc)
+        return rc;
+    /* the fit's own time includes reading the paintings */
+    {
+        json_t *sec = json_object_get(out->info, "seconds");
+        if (json_is_object(sec))
+            json_object_set_new(sec, "fit", json_real(glint_now() - t0));
+    }
+    pre = json_object_get(out->info, "precomputation");
+    if (!json_is_object(pre)) {
+        pre = json_object();
+        json_object_set_new(out->info, "precomputation", pre);
+    }
+    json_object_set_new(pre, "cache", prep_report(p));
+    return 0;
+}
+
+typedef struct count_ctx {
+    long *per_view;
+} count_ctx;
+
+static int count_band(void *cls, int v, const gbuf *band, int row0, glint_err *err)
+{
+    count_ctx *c = cls;
+    (void)row0;
+    (void)err;
+    c->per_view[v] += samples_count(band);
+    return 0;
+}
+
+int prep_sample_counts(const scene *sc, long *per_view, long *total, glint_err *err)
+{
+    count_ctx c = {per_view};
+    int rc;
+
+    *total = 0;
+    if ((rc = scene_validate(sc, err)))
+        return rc;
+    memset(per_view, 0, (size_t)sc->nviews * sizeof *per_view);
+    for (int v = 0; v < sc->nviews; v++) {
+        if ((rc = raster_bands(sc, v, count_band, &c, err)))
+            return rc;
+        *total += per_view[v];
+    }
+    if (*total < 1)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the chosen views have no lit, visible pixel: nothing to fit");
+    return 0;
+}
+
+/* ---- held-out error ------------------------------------------------------------------ */
+
+/* The error of m on the samples of view k: RMS and max |fitted - painted|
+ * over the view's samples and RGB (radiance per the view's intensity). */
+static int error_on_view(const material *m, const samples *all, int k, const img *painting,
+                         double *rms, double *max_abs, long *count, glint_err *err)
+{
+    double ss = 0.0, mx = 0.0;
+    long cnt = 0;
+
+    if (!painting->px || painting->width != all->width || painting->height != all->height ||
+        painting->channels < 1 || painting->channels == 2 || painting->channels > 4)
+        return glint_err_set(err, GLINT_EINVAL, "painting of view %d does not match its view",
+                             k);
+    for (int i = 0; i < all->n; i++) {
+        double n[3], wi[3], wo[3], rgb[3];
+        const float *px;
+        if (all->view[i] != k)
+            continue;
+        for (int c = 0; c < 3; c++) {
+            n[c] = all->nrm[3 * i + c];
+            wi[c] = all->wi[3 * i + c];
+            wo[c] = all->wo[3 * i + c];
+        }
+        material_eval(m, n, wi, wo, rgb);
+        px = painting->px + (size_t)all->pixel[i] * painting->channels;
+        for (int c = 0; c < 3; c++) {
+            double d = rgb[c] * all->intensity[i] - px[painting->channels == 1 ? 0 : c];
+            ss += d * d;
+            if (fabs(d) > mx)
+                mx = fabs(d);
+        }
+        cnt++;
+    }
+    *rms = cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
+    *max_abs = mx;
+    *count = cnt;
+    return 0;
+}
+
+int prep_holdout(const method *m, const void *params, const samples *all,
+                 const img *paintings, int (*cancelled)(void *cls), prep_progress_fn cb,
+                 void *cls, json_t **result, glint_err *err)
+{
+    unsigned char use[SCENE_MAX_VIEWS];
+    cache *c = NULL;
+    json_t *per = NULL;
+    double ss = 0.0, mx = 0.0, t0 = glint_now();
+    long total = 0;
+    int rc, nused = 0, done = 0;
+
+    *result = NULL;
+    for (int v = 0; v < all->nviews; v++)
+        nused += all->used[v] != 0;
+    if (nused < 2)
+        return glint_err_set(err, GLINT_EINVAL, "a held-out error needs 2 painted views, not %d",
+                             nused);
+    /* a private cache: the folds' precomputations are not worth keeping */
+    if ((rc = cache_open(NULL, 0, &c, err)))
+        return rc;
+    if (!(per = json_array())) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        goto out;
+    }
+    for (int k = 0; k < all->nviews; k++) {
+        samples fold;
+        prep *p = NULL;
+        material mat;
+        double rms = 0.0, mabs = 0.0;
+        long cnt = 0;
+        if (!all->used[k])
+            continue;
+        if (cancelled && cancelled(cls)) {
+            rc = glint_err_set(err, GLINT_EUNSUPPORTED, "cancelled");
+            goto out;
+        }
+        if (cb)
+            cb(cls, "holdout", (double)done / nused);
+        for (int v = 0; v < all->nviews; v++)
+            use[v] = all->used[v] && v != k;
+        /* the other views' samples: the pattern those views alone make */
+        rc = samples_subset(all, use, NULL, &fold, err);
+        if (rc == 0 && (rc = prep_acquire_samples(c, m, params, &fold, NULL, NULL, &p, err)) == 0) {
+            rc = prep_fit(p, paintings, NULL, &mat, err);
+            prep_release(c, p);
+        }
+        if (rc == 0) {
+            rc = error_on_view(&mat, all, k, &paintings[k], &rms, &mabs, &cnt, err);
+            material_free(&mat);
+        }
+        if (rc) {
+            glint_err_prefix(err, "holding out view %d", k);
+            goto out;
+        }
+        json_array_append_new(per, json_pack("{s:i, s:f, s:I}", "view", k, "rms", rms, "pixels",
+                                             (json_int_t)cnt));
+        ss += rms * rms * 3.0 * (double)cnt;
+        total += cnt;
+        if (mabs > mx)
+            mx = mabs;
+        done++;
+    }
+    *result = json_pack("{s:s, s:f, s:f, s:I, s:i, s:o, s:f}", "method", "leave-one-view-out",
+                        "rms", total ? sqrt(ss / (3.0 * (double)total)) : 0.0, "max_abs", mx,
+                        "pixels", (json_int_t)total, "views", nused, "per_view", per,
+                        "seconds", glint_now() - t0);
+    per = NULL;
+    if (!*result)
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+out:
+    json_decref(per);
+    cache_close(c);
+    return rc;
+}

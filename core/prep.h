@@ -1,0 +1,144 @@
+/* prep.h: a fit's precomputation through the cache, for any method:
+ *
+ *   scene    "scene:<id>"                   the scene and its content hash
+ *   pattern  "pattern:<scene hash>:<views>" the samples of the views used
+ *                                           (rasterized on the CPU: the
+ *                                           rasterizer defines the pattern);
+ *                                           <views>: the used-view flags in hex
+ *   levels   the method's own (method.h), each keyed from the one before
+ *
+ * then the fit of one set of paintings.  The daemon, the command line and
+ * the held-out measurement all go through here, so a method's levels are
+ * built, shared, kept and reported one way.  A prepared fit (struct prep)
+ * holds a reference on each of its levels: they stay in memory, read-only,
+ * until prep_release.  Several fits may use one prep at once.
+ *
+ * Thread-safety: every function may be called from any thread (the cache
+ * serializes what must be).  Progress callbacks run on the building
+ * thread. */
+#ifndef GLINT_PREP_H
+#define GLINT_PREP_H
+
+#include <jansson.h>
+
+#include "cache.h"
+#include "err.h"
+#include "gbuf.h"
+#include "img.h"
+#include "material.h"
+#include "method.h"
+#include "samples.h"
+#include "scene.h"
+
+/* ---- the scene level ------------------------------------------------------------ */
+
+/* Where scenes come from: `load` sets *out to a read-only scene valid until
+ * `unload(cls, *out)` (0, or a code with a message; GLINT_ENOTFOUND: no such
+ * scene). */
+typedef struct prep_scene_source {
+    int (*load)(void *cls, const char *id, const scene **out, glint_err *err);
+    void (*unload)(void *cls, const scene *sc);
+    void *cls;
+} prep_scene_source;
+
+/* The scene level's value. */
+typedef struct prep_scene {
+    const scene *sc;
+    char id[64];
+    char hash[33];       /* scene_hash() */
+    prep_scene_source src;
+} prep_scene;
+
+/* The scene `id` (at most 63 bytes), from the cache or loaded once through
+ * `src` (scenes never change once created: the id is the key).  OUT: *out,
+ * one reference. */
+int prep_scene_acquire(cache *c, const char *id, const prep_scene_source *src,
+                       cache_entry **out, glint_err *err);
+const prep_scene *prep_scene_of(const cache_entry *scene_entry);
+
+/* ---- preparing a fit -------------------------------------------------------------- */
+
+typedef void (*prep_progress_fn)(void *cls, const char *stage, double fraction);
+
+typedef struct prep_request {
+    const method *m;
+    const void *params;          /* the method's params struct (copied) */
+    cache_entry *scene;          /* a scene entry the caller holds */
+    const unsigned char *use;    /* one flag per scene view: the views that take part */
+} prep_request;
+
+/* Patterns are rasterized one view at a time in bands of rows of at most
+ * this many pixels: a pattern never holds more G-buffer than a band. */
+#define PREP_BAND_PIXELS (1 << 18)
+
+typedef struct prep prep;
+
+/* The pattern key of a request (OUT: key[CACHE_KEY_MAX]). */
+void prep_pattern_key(const prep_scene *s, const unsigned char *use, char *key);
+
+/* The prepared fit if every level is in memory now (nothing is built or
+ * waited for): 0 with *out, else GLINT_ENOTFOUND. */
+int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err);
+
+/* The prepared fit, built where missing (levels in memory are shared, levels
+ * being built by another caller are waited for).  Blocks for as long as the
+ * builds take. */
+int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cls, prep **out,
+                 glint_err *err);
+
+/* The same from samples the caller made (e.g. imported from a file): they
+ * form the pattern level, keyed by their hash (*s is moved in, zeroed). */
+int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
+                         prep_progress_fn cb, void *cls, prep **out, glint_err *err);
+
+/* Fit one set of paintings (one img per scene view; unused views are not
+ * read) or, when paintings is NULL, the values rgb[3 n] directly.  The
+ * material's info gets precomputation.cache (prep_report). */
+int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
+             glint_err *err);
+
+/* What the preparation found (a new object):
+ * {"memory": "hit"|"built"|"joined", "disk": "loaded"|"built"|"rebuilt"|"off",
+ *  "key": the last level's key, "cold_seconds": the precomputation's cold
+ *  time, "levels": {<name>: {"key", "memory", "bytes", "build_seconds",
+ *  "waited_seconds"}}}.  "memory" is "built" if any level was built,
+ * else "joined" if any was waited for, else "hit". */
+json_t *prep_report(const prep *p);
+
+/* The precomputation's cold time: every level as it was built (disk
+ * loads included). */
+double prep_cold_seconds(const prep *p);
+/* 1 if the first disk-backed level was loaded from disk when made. */
+int prep_from_disk(const prep *p);
+/* 1 if everything was in memory already. */
+int prep_was_hit(const prep *p);
+const samples *prep_samples(const prep *p);
+/* The pattern's cache entry (for cache_ref: keeping the samples alive
+ * beyond the prep, e.g. for a held-out measurement). */
+cache_entry *prep_pattern(const prep *p);
+const method *prep_method(const prep *p);
+
+void prep_release(cache *c, prep *p); /* accepts NULL */
+
+/* What a fit of scene sc will see: the samples of each view (lit and seen
+ * pixels; OUT: per_view[sc->nviews]) and their total (*total).
+ * GLINT_EINVAL when no view has one. */
+int prep_sample_counts(const scene *sc, long *per_view, long *total, glint_err *err);
+
+/* ---- held-out error ----------------------------------------------------------------- */
+
+/* Leave-one-view-out: for each used view k of the pattern `all` (the
+ * samples of every painted view, e.g. prep_samples() of the fit being
+ * measured), fit the other views' samples (samples_subset: the pattern
+ * those views alone make; a precomputation of its own in a private cache,
+ * nothing kept) and measure the RMS error on view k's samples against its
+ * painting; the pooled RMS over all held-out pixels is the result.  Needs
+ * 2 used views or more.  `cancelled` (may be NULL) is asked between views;
+ * progress as ("holdout", fraction).  OUT: *result {"method":
+ * "leave-one-view-out", "rms", "max_abs", "pixels", "views", "per_view":
+ * [{"view", "rms", "pixels"}], "seconds"}. */
+int prep_holdout(const method *m, const void *params, const samples *all,
+                 const img *paintings, int (*cancelled)(void *cls), prep_progress_fn cb,
+                 void *cls, json_t **result, glint_err *err);
+
+#endif

@@ -1,0 +1,127 @@
+/* render.h: rendering for the command line and the daemon: base renders
+ * (an analytic BRDF: what an artist paints over) and material previews,
+ * through EGL or on the CPU, for any camera.
+ *
+ * Engines.  RENDER_EGL renders through glr.h (a GPU where there is one,
+ * llvmpipe otherwise) and fails with GLINT_EUNSUPPORTED when no EGL
+ * platform works; RENDER_CPU rasterizes with raster.h and shades on the
+ * CPU (the reference: paint.h for base renders, material_render for
+ * previews; any size up to SCENE_MAX_SIZE, in bands of rows so memory
+ * beyond the image stays bounded); RENDER_AUTO uses EGL when it works and
+ * the CPU otherwise (a failed EGL draw is reported once on stderr and
+ * redone on the CPU).  Both engines agree to float precision except at
+ * silhouettes (glr.h).  The EGL context is opened on first use and kept;
+ * meshes uploaded to it are kept by key (the caller's name for a mesh that
+ * never changes, e.g. a scene id), the least recently used dropped beyond
+ * `gl_meshes`.
+ *
+ * Cameras.  render_camera_view() turns a request (one of the scene's
+ * views, or a free camera: eye, light, optional target, field of view and
+ * light intensity) into a scene_view, checked: the daemon's previews and
+ * the command line's render use it.
+ *
+ * Thread-safety: a render may be used from any thread; its EGL work is
+ * serialized inside (one draw at a time), CPU renders run concurrently. */
+#ifndef GLINT_RENDER_H
+#define GLINT_RENDER_H
+
+#include <stddef.h>
+
+#include "err.h"
+#include "img.h"
+#include "material.h"
+#include "mesh.h"
+#include "scene.h"
+
+typedef enum { RENDER_AUTO = 0, RENDER_EGL = 1, RENDER_CPU = 2 } render_engine;
+
+/* "auto", "egl" or "cpu" (GLINT_EINVAL naming them otherwise). */
+int render_engine_parse(const char *text, render_engine *out, glint_err *err);
+
+typedef struct render render;
+
+/* An upper bound of the memory one render of width x height pixels takes
+ * beyond its inputs, the caller's encoding of the answer (PNG or EXR)
+ * included, in bytes: what a service admits a render by.  base: a base
+ * render (render_base), else a material preview.  Measured
+ * (tests/bench/bench_memory.py: growth of the daemon's peak RSS, llvmpipe,
+ * the EGL context opened before): a CPU preview 15 to 16 bytes per pixel, an
+ * EGL one 30 to 36 (its float target and depth buffer), a CPU base render 57
+ * (a whole G-buffer), plus about 10 MiB whatever the size (a thread's
+ * allocator arena, the encoder); the bounds are 20, 40 and 72 bytes per
+ * pixel plus RENDER_FIXED_BYTES.  The EGL context itself (about 110 MiB
+ * once) is not a render's. */
+size_t render_peak_bytes(render_engine eng, int base, int width, int height);
+
+/* The same for render_gbuffer_exr (measured 193 bytes per pixel: the
+ * G-buffer, its 17 float channels and the encoder's copy; bound 224). */
+size_t render_gbuffer_peak_bytes(int width, int height);
+
+/* The part of the bounds above that does not grow with the size. */
+#define RENDER_FIXED_BYTES ((size_t)16 << 20)
+
+/* EGL render targets above this many pixels are released after each draw,
+ * so what the context keeps between draws stays at 1024 x 1024 buffers. */
+#define RENDER_GL_KEEP_PIXELS (1L << 20)
+
+/* quiet: no line on stderr when EGL is unavailable or fails (the command
+ * line prints its own).  OUT: *out. */
+int render_open(int gl_meshes, int quiet, render **out, glint_err *err);
+/* Release the EGL context and the meshes.  Accepts NULL. */
+void render_close(render *r);
+
+/* What drew an image, e.g. "egl; llvmpipe (LLVM 15.0.6, 256 bits), ..."
+ * or "cpu" (OUT: buf). */
+typedef struct render_used {
+    char engine[256];
+} render_used;
+
+/* The base render of view v: scale * I * f * max(0, n.wi) with the
+ * analytic BRDF `brdf_spec` (brdf.h's syntax, e.g. "lambert:kd=0.6"), 0 on
+ * background and unlit pixels.  r may be NULL for RENDER_CPU.  mesh_key
+ * names the mesh for the EGL mesh cache (NULL: not cached).  OUT: *out
+ * (RGB), *used (may be NULL). */
+int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                const scene_view *v, int width, int height, const char *brdf_spec,
+                double scale, img *out, render_used *used, glint_err *err);
+
+/* Check a BRDF spec for render_base (0, or GLINT_EINVAL saying why). */
+int render_brdf_check(const char *brdf_spec, glint_err *err);
+
+/* A material preview for view v (its light intensity applied), 0 on
+ * background pixels. */
+int render_material(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                    const material *mat, const scene_view *v, int width, int height, img *out,
+                    render_used *used, glint_err *err);
+
+/* The CPU G-buffer of view v as OpenEXR bytes with named channels (mask,
+ * P, N, uv, wi, wo, cos_i, cos_o: gbuf.h).  OUT: *data (malloc'ed), *len. */
+int render_gbuffer_exr(const mesh *m, const scene_view *v, int width, int height, void **data,
+                       size_t *len, glint_err *err);
+
+/* The material's shader for other renderers (GLSL ES 3.00 stages, the
+ * method's texture, shader.json): glr_shader_export(), which needs no GL
+ * context. */
+int render_export_shader(const material *m, const char *dir, glint_err *err);
+
+/* A camera request. */
+typedef struct render_camera {
+    int view;            /* one of the scene's views, or -1 */
+    int has_eye, has_light, has_target;
+    double eye[3], light[3], target[3]; /* target defaults to the origin with an eye */
+    double fov_deg;      /* vertical field of view in degrees (1..170), 0: the scene's */
+    double intensity;    /* light intensity (0..1e6), < 0: the view's (1 for a free camera) */
+} render_camera;
+
+void render_camera_init(render_camera *c);
+
+/* The view a request asks for: the scene's view `view` with what the
+ * request overrides, or a free camera (eye and light required) with the
+ * scene's field of view.  GLINT_EINVAL naming the problem. */
+int render_camera_view(const scene *sc, const render_camera *c, scene_view *out,
+                       glint_err *err);
+
+/* "x,y,z": three finite numbers (0, or -1). */
+int render_parse_vec3(const char *text, double v[3]);
+
+#endif

@@ -1,0 +1,271 @@
+/* Tests of glintd's admission of expensive work (server/admit.h): the budget
+ * and the slots are never exceeded, what can never fit is told apart from
+ * what cannot fit now, waiting work enters as soon as room is made and gives
+ * up when cancelled, and many threads entering and leaving at once keep the
+ * books exact. */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <string.h>
+#include <time.h>
+
+#include "admit.h"
+#include "check.h"
+#include "clock.h"
+
+#define MB ((size_t)1 << 20)
+
+static void sleep_s(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    nanosleep(&ts, NULL);
+}
+
+TEST(enter_and_leave_within_the_budget)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    ASSERT_OK(admit_open(100 * MB, 4, 0, &a, NULL));
+    ASSERT_OK(admit_enter(a, 60 * MB, "first", NULL));
+    ASSERT_OK(admit_enter(a, 40 * MB, "second", NULL)); /* exactly the budget */
+    ASSERT_EQ(admit_enter(a, 1, "third", &e), GLINT_EBUSY);
+    ASSERT(strcmp(e.kind, "busy") == 0);
+    ASSERT(strstr(e.msg, "third") && strstr(e.msg, "100 of 100 MiB"));
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.held, 100 * MB);
+    ASSERT_EQ(st.running, 2);
+    ASSERT_EQ(st.refused_busy, 1);
+    admit_leave(a, 60 * MB);
+    ASSERT_OK(admit_enter(a, 60 * MB, "third", NULL));
+    admit_leave(a, 60 * MB);
+    admit_leave(a, 40 * MB);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.held, 0);
+    ASSERT_EQ(st.running, 0);
+    ASSERT_EQ(st.peak, 100 * MB);
+    ASSERT_EQ(st.admitted, 3);
+    admit_close(a);
+}
+
+TEST(beyond_the_whole_budget_is_too_big_not_busy)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    ASSERT_OK(admit_open(100 * MB, 1, 0, &a, NULL));
+    ASSERT_EQ(admit_enter(a, 100 * MB + 1, "a 4096x4096 preview", &e), GLINT_ETOOBIG);
+    ASSERT(strcmp(e.kind, "over-budget") == 0);
+    ASSERT(strstr(e.msg, "a 4096x4096 preview") && strstr(e.msg, "--work-mb"));
+    /* also while the budget is busy, and for a waiter: it would wait forever */
+    ASSERT_OK(admit_enter(a, 10 * MB, "x", NULL));
+    ASSERT_EQ(admit_enter(a, 200 * MB, "y", NULL), GLINT_ETOOBIG);
+    ASSERT_EQ(admit_wait(a, 200 * MB, "y", NULL, NULL, &e), GLINT_ETOOBIG);
+    admit_leave(a, 10 * MB);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.refused_size, 3);
+    ASSERT_EQ(st.held, 0);
+    admit_close(a);
+}
+
+TEST(slots_bound_the_pieces_of_work)
+{
+    admit *a;
+    glint_err e;
+    ASSERT_OK(admit_open(100 * MB, 2, 0, &a, NULL));
+    ASSERT_OK(admit_enter(a, 0, "a", NULL));
+    ASSERT_OK(admit_enter(a, 0, "b", NULL));
+    ASSERT_EQ(admit_enter(a, 0, "c", &e), GLINT_EBUSY);
+    ASSERT(strstr(e.msg, "2 of 2 at once"));
+    admit_leave(a, 0);
+    ASSERT_OK(admit_enter(a, 0, "c", NULL));
+    admit_leave(a, 0);
+    admit_leave(a, 0);
+    admit_close(a);
+}
+
+typedef struct holder {
+    admit *a;
+    size_t bytes;
+    double hold_s;
+} holder;
+
+static void *hold_main(void *arg)
+{
+    holder *h = arg;
+    sleep_s(h->hold_s);
+    admit_leave(h->a, h->bytes);
+    return NULL;
+}
+
+TEST(a_request_waits_up_to_wait_s_then_is_busy)
+{
+    admit *a;
+    admit_stats st;
+    pthread_t t;
+    holder h;
+    glint_err e;
+    double t0;
+    ASSERT_OK(admit_open(100 * MB, 1, 0.3, &a, NULL));
+    /* room made within the wait: admitted */
+    ASSERT_OK(admit_enter(a, 10 * MB, "first", NULL));
+    h = (holder){a, 10 * MB, 0.1};
+    ASSERT_OK(pthread_create(&t, NULL, hold_main, &h));
+    t0 = glint_now();
+    ASSERT_OK(admit_enter(a, 10 * MB, "second", NULL));
+    ASSERT_LT(glint_now() - t0, 0.29);
+    pthread_join(t, NULL);
+    /* no room within the wait: busy after about wait_s */
+    t0 = glint_now();
+    ASSERT_EQ(admit_enter(a, 10 * MB, "third", &e), GLINT_EBUSY);
+    ASSERT(glint_now() - t0 >= 0.29);
+    ASSERT_LT(glint_now() - t0, 1.0);
+    admit_leave(a, 10 * MB);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.waited, 2);
+    ASSERT_EQ(st.refused_busy, 1);
+    ASSERT_EQ(st.held, 0);
+    admit_close(a);
+}
+
+typedef struct waiter {
+    admit *a;
+    size_t bytes;
+    atomic_int cancel, entered, rc;
+} waiter;
+
+static int cancelled(void *cls)
+{
+    return atomic_load(&((waiter *)cls)->cancel);
+}
+
+static void *wait_main(void *arg)
+{
+    waiter *w = arg;
+    glint_err e;
+    int rc = admit_wait(w->a, w->bytes, "a fit", cancelled, w, &e);
+    atomic_store(&w->rc, rc);
+    atomic_store(&w->entered, rc == 0);
+    return NULL;
+}
+
+TEST(a_waiter_enters_when_room_is_made)
+{
+    waiter w = {0};
+    pthread_t t;
+    admit_stats st;
+    double t0;
+    ASSERT_OK(admit_open(100 * MB, 4, 0, &w.a, NULL));
+    w.bytes = 70 * MB;
+    ASSERT_OK(admit_enter(w.a, 50 * MB, "render", NULL));
+    ASSERT_OK(pthread_create(&t, NULL, wait_main, &w));
+    sleep_s(0.3);
+    ASSERT_EQ(atomic_load(&w.entered), 0); /* 50 + 70 > 100: still waiting */
+    t0 = glint_now();
+    admit_leave(w.a, 50 * MB);
+    pthread_join(t, NULL);
+    ASSERT_LT(glint_now() - t0, 0.5); /* woken, not a poll late */
+    ASSERT_EQ(atomic_load(&w.entered), 1);
+    admit_get_stats(w.a, &st);
+    ASSERT_EQ(st.held, 70 * MB);
+    ASSERT_EQ(st.waited, 1);
+    admit_leave(w.a, 70 * MB);
+    admit_close(w.a);
+}
+
+TEST(a_cancelled_waiter_gives_up)
+{
+    waiter w = {0};
+    pthread_t t;
+    admit_stats st;
+    double t0;
+    ASSERT_OK(admit_open(100 * MB, 1, 0, &w.a, NULL));
+    w.bytes = 10 * MB;
+    ASSERT_OK(admit_enter(w.a, 1 * MB, "render", NULL)); /* the only slot */
+    ASSERT_OK(pthread_create(&t, NULL, wait_main, &w));
+    sleep_s(0.2);
+    t0 = glint_now();
+    atomic_store(&w.cancel, 1);
+    pthread_join(t, NULL);
+    ASSERT_LT(glint_now() - t0, 0.5);
+    ASSERT_EQ(atomic_load(&w.entered), 0);
+    ASSERT_EQ(atomic_load(&w.rc), GLINT_EBUSY);
+    admit_get_stats(w.a, &st);
+    ASSERT_EQ(st.held, 1 * MB); /* the waiter took nothing */
+    ASSERT_EQ(st.running, 1);
+    admit_leave(w.a, 1 * MB);
+    admit_close(w.a);
+}
+
+/* Many threads entering (or waiting) and leaving: the held bytes never pass
+ * the budget and the books end at zero. */
+typedef struct churn {
+    admit *a;
+    int seed;
+    atomic_int *over;
+} churn;
+
+static void *churn_main(void *arg)
+{
+    churn *c = arg;
+    unsigned s = (unsigned)c->seed;
+    for (int i = 0; i < 500; i++) {
+        size_t b = (size_t)(1 + (s = s * 1103515245u + 12345u) % 40) * MB;
+        admit_stats st;
+        int wait = (s >> 16) & 1;
+        if (wait ? admit_wait(c->a, b, "w", NULL, NULL, NULL) : admit_enter(c->a, b, "e", NULL))
+            continue;
+        admit_get_stats(c->a, &st);
+        if (st.held > st.budget || st.running > st.slots)
+            atomic_fetch_add(c->over, 1);
+        sleep_s(1e-4); /* hold it a moment: the others meet a full budget */
+        admit_leave(c->a, b);
+    }
+    return NULL;
+}
+
+TEST(concurrent_books_stay_exact)
+{
+    admit *a;
+    admit_stats st;
+    atomic_int over = 0;
+    pthread_t t[8];
+    churn c[8];
+    ASSERT_OK(admit_open(100 * MB, 3, 0, &a, NULL));
+    for (int i = 0; i < 8; i++) {
+        c[i] = (churn){a, i + 1, &over};
+        ASSERT_OK(pthread_create(&t[i], NULL, churn_main, &c[i]));
+    }
+    for (int i = 0; i < 8; i++)
+        pthread_join(t[i], NULL);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(atomic_load(&over), 0);
+    ASSERT_EQ(st.held, 0);
+    ASSERT_EQ(st.running, 0);
+    ASSERT_LE(st.peak, 100 * MB);
+    ASSERT(st.admitted > 0 && st.refused_busy > 0);
+    admit_close(a);
+}
+
+TEST(null_admits_everything)
+{
+    ASSERT_OK(admit_enter(NULL, (size_t)-1, "x", NULL));
+    ASSERT_OK(admit_wait(NULL, (size_t)-1, "x", NULL, NULL, NULL));
+    admit_leave(NULL, 1);
+    admit_metrics(NULL, stdout);
+    ASSERT_EQ(admit_open(0, 1, 0, &(admit *){NULL}, NULL), GLINT_EINVAL);
+    ASSERT_EQ(admit_open(1, 1, -1.0, &(admit *){NULL}, NULL), GLINT_EINVAL);
+    ASSERT_EQ(admit_open(1, 0, 0, &(admit *){NULL}, NULL), GLINT_EINVAL);
+    ASSERT_EQ(admit_open(1, 1, -1.0, &(admit *){NULL}, NULL), GLINT_EINVAL);
+}
+
+TEST_LIST{
+    TEST_ENTRY(enter_and_leave_within_the_budget),
+    TEST_ENTRY(beyond_the_whole_budget_is_too_big_not_busy),
+    TEST_ENTRY(slots_bound_the_pieces_of_work),
+    TEST_ENTRY(a_request_waits_up_to_wait_s_then_is_busy),
+    TEST_ENTRY(a_waiter_enters_when_room_is_made),
+    TEST_ENTRY(a_cancelled_waiter_gives_up),
+    TEST_ENTRY(concurrent_books_stay_exact),
+    TEST_ENTRY(null_admits_everything),
+};
+TEST_MAIN()

@@ -1,0 +1,635 @@
+/* Tests of glintd's session event streams (server/events.h), driven through
+ * the transport-free core (events_stream_open / _next / _close) over a real
+ * store: replay from a sequence number, live events, presence and its
+ * names, what events_publish writes to the log, and the ends of a stream
+ * (shutdown, a client that hangs up).  The bytes are parsed as a
+ * server-sent-events client would. */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "clock.h"
+#include "events.h"
+#include "ids.h"
+#include "store.h"
+
+/* ---- fixture: a store with a scene and two sessions, and the hub ------------------ */
+
+typedef struct fixture {
+    char dir[64];
+    store *st;
+    events *ev;
+    char scene[33], session[33], other[33];
+} fixture;
+
+static int fx_session(fixture *f, char id[33])
+{
+    json_t *doc;
+    int rc = glint_id_new(id, NULL);
+    if (rc)
+        return rc;
+    doc = json_pack("{s:s}", "scene_id", f->scene);
+    rc = store_session_put(f->st, id, doc, NULL);
+    json_decref(doc);
+    return rc;
+}
+
+static int fx_open(fixture *f)
+{
+    json_t *doc;
+    int rc;
+    snprintf(f->dir, sizeof f->dir, "/tmp/glint-events-XXXXXX");
+    if (!mkdtemp(f->dir))
+        return -1;
+    if ((rc = store_open(f->dir, &f->st, NULL)) || (rc = glint_id_new(f->scene, NULL)))
+        return rc;
+    doc = json_pack("{s:s}", "id", f->scene);
+    rc = store_scene_put(f->st, f->scene, doc, NULL);
+    json_decref(doc);
+    if (rc || (rc = fx_session(f, f->session)) || (rc = fx_session(f, f->other)))
+        return rc;
+    return events_open(f->st, &f->ev);
+}
+
+static void fx_close(fixture *f)
+{
+    char cmd[128];
+    events_close(f->ev);
+    store_close(f->st);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", f->dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "  could not remove %s\n", f->dir);
+}
+
+/* n strokes on view 0 (OUT: *last, the last one's seq). */
+static int add_strokes(fixture *f, const char *session, int n, int64_t *last)
+{
+    json_t *a = json_array();
+    int64_t first;
+    int rc;
+    for (int i = 0; i < n; i++)
+        json_array_append_new(a, json_pack("{s:i, s:f}", "i", i, "diameter", 0.5));
+    rc = store_strokes_append(f->st, session, 0, a, "exr", 3, &first, last, NULL, NULL);
+    json_decref(a);
+    return rc;
+}
+
+/* ---- a client: the stream's bytes parsed into events ---------------------------- */
+
+typedef struct reader {
+    ev_stream *s;
+    size_t chunk;              /* bytes asked for per call */
+    char buf[1 << 16];
+    size_t len;
+    char first[64];            /* the first bytes of the stream */
+    char block[4096];          /* the text of the last event */
+    int retry, comments, unknown_lines;
+    ssize_t end;               /* EVENTS_STREAM_END / _ERROR once seen */
+} reader;
+
+typedef struct sse {
+    long long id;              /* 0: none */
+    char type[32];
+    json_t *data;
+} sse;
+
+static void reader_init(reader *r, ev_stream *s)
+{
+    memset(r, 0, sizeof *r);
+    r->s = s;
+    r->chunk = sizeof r->buf;
+}
+
+/* Read once more: 1 with bytes, 0 when none came before `until`, -1 at
+ * the end of the stream. */
+static int reader_fill(reader *r, double until)
+{
+    do {
+        size_t room = sizeof r->buf - 1 - r->len;
+        ssize_t n = events_stream_next(r->s, r->buf + r->len, room < r->chunk ? room : r->chunk);
+        if (n > 0) {
+            if (r->len < sizeof r->first - 1)
+                memcpy(r->first + r->len, r->buf + r->len,
+                       (size_t)n < sizeof r->first - 1 - r->len ? (size_t)n
+                                                                : sizeof r->first - 1 - r->len);
+            r->len += (size_t)n;
+            r->buf[r->len] = '\0';
+            return 1;
+        }
+        if (n < 0) {
+            r->end = n;
+            return -1;
+        }
+    } while (glint_now() < until);
+    return 0;
+}
+
+/* The next event (preamble, comments and keep-alives are counted, not
+ * returned): 1, 0 when none came within timeout_s, -1 at the end. */
+static int next_event(reader *r, sse *out, double timeout_s)
+{
+    double until = glint_now() + timeout_s;
+    memset(out, 0, sizeof *out);
+    for (;;) {
+        char *end = strstr(r->buf, "\n\n");
+        if (end) {
+            size_t n = (size_t)(end - r->buf) + 2;
+            int has_event = 0;
+            *end = '\0';
+            snprintf(r->block, sizeof r->block, "%.4000s\n\n", r->buf);
+            for (char *line = r->buf, *nl; line && *line; line = nl) {
+                nl = strchr(line, '\n');
+                if (nl)
+                    *nl++ = '\0';
+                if (strncmp(line, "id: ", 4) == 0)
+                    out->id = strtoll(line + 4, NULL, 10);
+                else if (strncmp(line, "event: ", 7) == 0) {
+                    snprintf(out->type, sizeof out->type, "%s", line + 7);
+                    has_event = 1;
+                } else if (strncmp(line, "data: ", 6) == 0)
+                    out->data = json_loads(line + 6, 0, NULL);
+                else if (strncmp(line, "retry: ", 7) == 0)
+                    r->retry = atoi(line + 7);
+                else if (line[0] == ':')
+                    r->comments++;
+                else
+                    r->unknown_lines++;
+            }
+            memmove(r->buf, r->buf + n, r->len - n + 1);
+            r->len -= n;
+            if (has_event)
+                return 1;
+            json_decref(out->data);
+            memset(out, 0, sizeof *out);
+            continue;
+        }
+        int rc = reader_fill(r, until);
+        if (rc <= 0)
+            return rc;
+    }
+}
+
+/* The next event that is not presence (presence events are skipped). */
+static int next_log_event(reader *r, sse *out, double timeout_s)
+{
+    double until = glint_now() + timeout_s;
+    int rc;
+    while ((rc = next_event(r, out, until - glint_now())) == 1 &&
+           strcmp(out->type, "presence") == 0)
+        json_decref(out->data);
+    return rc;
+}
+
+/* Read presence events until one lists `count` clients (OUT: *out's data
+ * kept; the caller decrefs).  1, or 0 / -1 as next_event. */
+static int until_presence(reader *r, int count, sse *out, double timeout_s)
+{
+    double until = glint_now() + timeout_s;
+    int rc;
+    while ((rc = next_event(r, out, until - glint_now())) == 1) {
+        if (strcmp(out->type, "presence") == 0 &&
+            json_integer_value(json_object_get(out->data, "count")) == count)
+            return 1;
+        json_decref(out->data);
+    }
+    return rc;
+}
+
+static int has_client(const json_t *presence, const char *name)
+{
+    size_t i;
+    json_t *c;
+    json_array_foreach(json_object_get(presence, "clients"), i, c)
+        if (strcmp(json_string_value(json_object_get(c, "name")), name) == 0)
+            return 1;
+    return 0;
+}
+
+/* ---- replay -------------------------------------------------------------------------- */
+
+TEST(replay_after_a_sequence_number)
+{
+    fixture f;
+    ev_stream *s;
+    reader r;
+    sse e;
+    int64_t last;
+    json_t *data = json_pack("{s:s}", "material_id", "m1");
+    static const char *const types[] = {"stroke", "stroke", "stroke", "fit", "painting"};
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(add_strokes(&f, f.session, 3, &last));
+    ASSERT_OK(store_event_append(f.st, f.session, "fit", -1, data, NULL, NULL));
+    ASSERT_OK(store_painting_put(f.st, f.session, 1, "exr", 3, NULL, &last, NULL));
+    ASSERT_EQ(last, 5);
+
+    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "ann", -1, &s));
+    reader_init(&r, s);
+    for (int seq = 3; seq <= 5; seq++) {
+        ASSERT_EQ(next_event(&r, &e, 5.0), 1);
+        ASSERT_EQ(e.id, seq);
+        ASSERT_MSG(strcmp(e.type, types[seq - 1]) == 0, "event %d is %s", seq, e.type);
+        ASSERT_EQ(json_integer_value(json_object_get(e.data, "seq")), seq);
+        ASSERT(strcmp(json_string_value(json_object_get(e.data, "type")), e.type) == 0);
+        if (seq == 4)
+            ASSERT(json_equal(json_object_get(e.data, "data"), data));
+        json_decref(e.data);
+    }
+    /* the wire: the preamble first, one event as three lines */
+    ASSERT(strncmp(r.first, "retry: 2000\n", 12) == 0);
+    ASSERT_EQ(r.retry, 2000);
+    {
+        static const char head[] = "id: 5\nevent: painting\ndata: {";
+        ASSERT_MSG(strncmp(r.block, head, strlen(head)) == 0, "block: %s", r.block);
+        ASSERT(strchr(r.block + strlen(head), '\n') == r.block + strlen(r.block) - 2);
+    }
+    /* then who is here, without an id */
+    ASSERT_EQ(next_event(&r, &e, 5.0), 1);
+    ASSERT(strcmp(e.type, "presence") == 0);
+    ASSERT_EQ(e.id, 0);
+    ASSERT_EQ(json_integer_value(json_object_get(e.data, "count")), 1);
+    json_decref(e.data);
+    /* and nothing else */
+    ASSERT_EQ(next_event(&r, &e, 0.3), 0);
+    ASSERT_EQ(r.unknown_lines, 0);
+    events_stream_close(s);
+
+    /* from the start, in small pieces; beyond the end: nothing */
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, &s));
+    reader_init(&r, s);
+    r.chunk = 7;
+    for (int seq = 1; seq <= 5; seq++) {
+        ASSERT_EQ(next_log_event(&r, &e, 5.0), 1);
+        ASSERT_EQ(e.id, seq);
+        json_decref(e.data);
+    }
+    events_stream_close(s);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 99, NULL, -1, &s));
+    reader_init(&r, s);
+    ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
+    events_stream_close(s);
+    json_decref(data);
+    fx_close(&f);
+}
+
+TEST(replay_longer_than_one_batch)
+{
+    fixture f;
+    ev_stream *s;
+    reader r;
+    sse e;
+    int64_t last;
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(add_strokes(&f, f.session, 150, &last));
+    ASSERT_OK(add_strokes(&f, f.session, 50, &last));
+    ASSERT_EQ(last, 200);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 10, NULL, -1, &s));
+    reader_init(&r, s);
+    for (int seq = 11; seq <= 200; seq++) {
+        ASSERT_EQ(next_log_event(&r, &e, 5.0), 1);
+        ASSERT_EQ(e.id, seq);
+        ASSERT_EQ(json_integer_value(json_object_get(json_object_get(e.data, "data"), "i")),
+                  seq <= 150 ? seq - 1 : seq - 151);
+        json_decref(e.data);
+    }
+    ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
+    events_stream_close(s);
+    fx_close(&f);
+}
+
+/* ---- live ---------------------------------------------------------------------------- */
+
+typedef struct live {
+    reader r;
+    int want;                  /* events to read */
+    long long ids[8];
+    double at[8];              /* when each arrived */
+    atomic_int got;
+} live;
+
+static void *live_main(void *arg)
+{
+    live *l = arg;
+    sse e;
+    int got = 0;
+    while (got < l->want && next_log_event(&l->r, &e, 5.0) == 1) {
+        l->ids[got] = e.id;
+        l->at[got] = glint_now();
+        atomic_store(&l->got, ++got);
+        json_decref(e.data);
+    }
+    return NULL;
+}
+
+/* 0 once both readers have n events, -1 after a while. */
+static int live_wait(live *a, live *b, int n)
+{
+    for (double end = glint_now() + 5.0; glint_now() < end; usleep(1000))
+        if (atomic_load(&a->got) >= n && atomic_load(&b->got) >= n)
+            return 0;
+    return -1;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+TEST(live_events_wake_every_stream_of_the_session)
+{
+    fixture f;
+    ev_stream *a, *b, *o;
+    static live la, lb;
+    reader ro;
+    pthread_t ta, tb;
+    double sent[5], lat[5];
+    int64_t last;
+    sse e;
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &a));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "b", -1, &b));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "o", -1, &o));
+    memset(&la, 0, sizeof la);
+    memset(&lb, 0, sizeof lb);
+    reader_init(&la.r, a);
+    reader_init(&lb.r, b);
+    reader_init(&ro, o);
+    la.want = lb.want = 5;
+    ASSERT_EQ(pthread_create(&ta, NULL, live_main, &la), 0);
+    ASSERT_EQ(pthread_create(&tb, NULL, live_main, &lb), 0);
+    usleep(100 * 1000); /* (they read the presence first) */
+    for (int i = 0; i < 5; i++) {
+        /* each event comes shortly after the readers went back to waiting */
+        ASSERT_OK(live_wait(&la, &lb, i));
+        usleep(20 * 1000);
+        ASSERT_OK(add_strokes(&f, f.session, 1, &last));
+        sent[i] = glint_now();
+        if (i % 2)
+            events_notify(f.ev, f.session); /* what the strokes handler does */
+        else
+            events_publish(f.ev, f.session, "stroke", json_object());
+    }
+    pthread_join(ta, NULL);
+    pthread_join(tb, NULL);
+    ASSERT_EQ(atomic_load(&la.got), 5);
+    ASSERT_EQ(atomic_load(&lb.got), 5);
+    for (int i = 0; i < 5; i++) {
+        ASSERT_EQ(la.ids[i], i + 1);
+        ASSERT_EQ(lb.ids[i], i + 1);
+        lat[i] = la.at[i] - sent[i];
+        ASSERT_LT(lat[i], 2.0);
+    }
+    /* woken, not found by the next poll: each event came 20 ms into a wait
+     * of EVENTS_POLL_MS, so without a wake-up it would wait the rest */
+    qsort(lat, 5, sizeof lat[0], cmp_double);
+    ASSERT_MSG(lat[2] < (EVENTS_POLL_MS - 20) / 2 * 1e-3, "median delay %.3f s", lat[2]);
+    /* the other session's stream saw none of it */
+    ASSERT_EQ(next_log_event(&ro, &e, 0.3), 0);
+    events_stream_close(a);
+    events_stream_close(b);
+    events_stream_close(o);
+    fx_close(&f);
+}
+
+/* ---- presence ------------------------------------------------------------------------ */
+
+TEST(presence_when_listeners_come_and_go)
+{
+    fixture f;
+    ev_stream *a, *b, *c, *d, *x, *o;
+    reader ra, rb, ro;
+    sse e;
+    char longname[101], utf8[70], expect[70];
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "Ann\x01\tie\x7f", -1, &a));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "elsewhere", -1, &o));
+    reader_init(&ra, a);
+    reader_init(&ro, o);
+    ASSERT_EQ(until_presence(&ra, 1, &e, 5.0), 1);
+    {
+        json_t *c0 = json_array_get(json_object_get(e.data, "clients"), 0);
+        ASSERT(strcmp(json_string_value(json_object_get(c0, "name")), "Annie") == 0);
+        ASSERT_EQ(strlen(json_string_value(json_object_get(c0, "id"))), 16);
+        ASSERT(strcmp(json_string_value(json_object_get(e.data, "type")), "presence") == 0);
+    }
+    json_decref(e.data);
+    /* joining: everyone hears of it, the newcomer sees everyone */
+    memset(longname, 'x', 100);
+    longname[100] = '\0';
+    memset(utf8, 'a', 63);
+    strcpy(utf8 + 63, "\xc3\xa9"); /* 65 bytes: the cut falls inside the last character */
+    memcpy(expect, utf8, 63);
+    expect[63] = '\0';
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, &b));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, longname, -1, &c));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, utf8, -1, &d));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "\x01\x02\x1b", -1, &x));
+    ASSERT_EQ(until_presence(&ra, 5, &e, 5.0), 1);
+    ASSERT(has_client(e.data, "Annie"));
+    ASSERT(has_client(e.data, "anonymous")); /* no name */
+    longname[EVENTS_NAME_MAX] = '\0';
+    ASSERT(has_client(e.data, longname));  /* 64 bytes of it */
+    ASSERT(has_client(e.data, expect));    /* no broken character */
+    {
+        size_t i, anonymous = 0;
+        json_t *cl;
+        json_array_foreach(json_object_get(e.data, "clients"), i, cl) {
+            anonymous += strcmp(json_string_value(json_object_get(cl, "name")), "anonymous") == 0;
+            ASSERT(strlen(json_string_value(json_object_get(cl, "name"))) <= EVENTS_NAME_MAX);
+        }
+        ASSERT_EQ(anonymous, 2); /* only control characters: anonymous too */
+    }
+    json_decref(e.data);
+    reader_init(&rb, b);
+    ASSERT_EQ(until_presence(&rb, 5, &e, 5.0), 1);
+    ASSERT(has_client(e.data, "Annie"));
+    json_decref(e.data);
+    /* leaving */
+    events_stream_close(c);
+    events_stream_close(d);
+    events_stream_close(x);
+    ASSERT_EQ(until_presence(&ra, 2, &e, 5.0), 1);
+    ASSERT(has_client(e.data, "Annie") && has_client(e.data, "anonymous"));
+    json_decref(e.data);
+    ASSERT_EQ(until_presence(&rb, 2, &e, 5.0), 1);
+    json_decref(e.data);
+    events_stream_close(b);
+    ASSERT_EQ(until_presence(&ra, 1, &e, 5.0), 1);
+    ASSERT(!has_client(e.data, "anonymous"));
+    json_decref(e.data);
+    /* the other session's stream only ever saw itself */
+    while (next_event(&ro, &e, 0.3) == 1) {
+        ASSERT(strcmp(e.type, "presence") == 0);
+        ASSERT_EQ(json_integer_value(json_object_get(e.data, "count")), 1);
+        ASSERT(has_client(e.data, "elsewhere"));
+        json_decref(e.data);
+    }
+    events_stream_close(a);
+    events_stream_close(o);
+    events_stream_close(NULL);
+    fx_close(&f);
+}
+
+/* ---- publish ------------------------------------------------------------------------- */
+
+static int64_t last_seq(fixture *f, const char *session)
+{
+    json_t *arr;
+    int64_t last = -1;
+    if (store_events_since(f->st, session, 0, 1, &arr, &last, NULL) == 0)
+        json_decref(arr);
+    return last;
+}
+
+TEST(publish_appends_fit_to_the_log_and_only_wakes_for_strokes)
+{
+    fixture f;
+    ev_stream *s;
+    reader r;
+    sse e;
+    int64_t last;
+    json_t *arr;
+    char unknown[33];
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(add_strokes(&f, f.session, 2, &last));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "r", -1, &s));
+    reader_init(&r, s);
+    ASSERT_EQ(until_presence(&r, 1, &e, 5.0), 1);
+    json_decref(e.data);
+
+    events_publish(f.ev, f.session, "fit", json_pack("{s:s}", "material_id", "m7"));
+    ASSERT_EQ(last_seq(&f, f.session), 3);
+    ASSERT_OK(store_events_since(f.st, f.session, 2, 0, &arr, NULL, NULL));
+    ASSERT_EQ(json_array_size(arr), 1);
+    ASSERT(strcmp(json_string_value(json_object_get(json_array_get(arr, 0), "type")), "fit") == 0);
+    ASSERT(json_object_get(json_array_get(arr, 0), "view") == NULL);
+    json_decref(arr);
+    ASSERT_EQ(next_log_event(&r, &e, 5.0), 1);
+    ASSERT_EQ(e.id, 3);
+    ASSERT(strcmp(e.type, "fit") == 0);
+    ASSERT(strcmp(json_string_value(json_object_get(json_object_get(e.data, "data"),
+                                                    "material_id")), "m7") == 0);
+    json_decref(e.data);
+
+    /* "stroke" and "painting" are in the log already: publishing only wakes */
+    events_publish(f.ev, f.session, "stroke", json_pack("{s:i}", "i", 1));
+    events_publish(f.ev, f.session, "painting", json_pack("{s:i}", "view", 0));
+    ASSERT_EQ(last_seq(&f, f.session), 3);
+    ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
+    /* reserved, malformed, unknown session, no session: nothing is logged */
+    events_publish(f.ev, f.session, "presence", json_object());
+    events_publish(f.ev, f.session, "note", json_array());
+    events_publish(f.ev, f.session, "note", NULL);
+    ASSERT_OK(glint_id_new(unknown, NULL));
+    events_publish(f.ev, unknown, "fit", json_object());
+    events_publish(f.ev, NULL, "fit", json_object());
+    events_publish(f.ev, f.session, NULL, json_object());
+    events_publish(NULL, f.session, "fit", json_object());
+    ASSERT_EQ(last_seq(&f, f.session), 3);
+    ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
+    /* any other type takes the next number */
+    events_publish(f.ev, f.session, "note", json_pack("{s:s}", "text", "hello"));
+    ASSERT_EQ(last_seq(&f, f.session), 4);
+    ASSERT_EQ(next_log_event(&r, &e, 5.0), 1);
+    ASSERT_EQ(e.id, 4);
+    ASSERT(strcmp(e.type, "note") == 0);
+    json_decref(e.data);
+    events_stream_close(s);
+    fx_close(&f);
+}
+
+/* ---- the end of a stream ------------------------------------------------------------- */
+
+typedef struct ender {
+    reader r;
+    double ended_at;
+    ssize_t end;
+} ender;
+
+static void *ender_main(void *arg)
+{
+    ender *x = arg;
+    sse e;
+    while (next_event(&x->r, &e, 30.0) == 1)
+        json_decref(e.data);
+    x->ended_at = glint_now();
+    x->end = x->r.end;
+    return NULL;
+}
+
+TEST(shutdown_ends_streams_promptly)
+{
+    fixture f;
+    ev_stream *a, *b, *late;
+    static ender xa, xb;
+    pthread_t ta, tb;
+    double t0;
+    char buf[256];
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &a));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "b", -1, &b));
+    reader_init(&xa.r, a);
+    reader_init(&xb.r, b);
+    ASSERT_EQ(pthread_create(&ta, NULL, ender_main, &xa), 0);
+    ASSERT_EQ(pthread_create(&tb, NULL, ender_main, &xb), 0);
+    usleep(100 * 1000); /* both are waiting */
+    t0 = glint_now();
+    events_shutdown(f.ev);
+    pthread_join(ta, NULL);
+    pthread_join(tb, NULL);
+    ASSERT_EQ(xa.end, EVENTS_STREAM_END);
+    ASSERT_EQ(xb.end, EVENTS_STREAM_END);
+    ASSERT_LT(xa.ended_at - t0, 1.0);
+    ASSERT_LT(xb.ended_at - t0, 1.0);
+    /* a stream opened afterwards ends at once */
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "late", -1, &late));
+    t0 = glint_now();
+    ASSERT_EQ(events_stream_next(late, buf, sizeof buf), EVENTS_STREAM_END);
+    ASSERT_LT(glint_now() - t0, 1.0);
+    events_stream_close(late);
+    events_stream_close(a);
+    events_stream_close(b);
+    fx_close(&f);
+}
+
+TEST(stream_ends_when_the_client_hangs_up)
+{
+    fixture f;
+    ev_stream *s;
+    reader r;
+    sse e;
+    int sv[2];
+    double t0;
+    ASSERT_OK(fx_open(&f));
+    ASSERT_EQ(socketpair(AF_UNIX, SOCK_STREAM, 0, sv), 0);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "gone", sv[0], &s));
+    reader_init(&r, s);
+    ASSERT_EQ(until_presence(&r, 1, &e, 5.0), 1);
+    json_decref(e.data);
+    /* a client that sends something is still there */
+    ASSERT_EQ(write(sv[1], "x", 1), 1);
+    ASSERT_EQ(next_event(&r, &e, 0.3), 0);
+    ASSERT_EQ(r.end, 0);
+    close(sv[1]);
+    t0 = glint_now();
+    ASSERT_EQ(next_event(&r, &e, 5.0), -1);
+    ASSERT_EQ(r.end, EVENTS_STREAM_END);
+    ASSERT_LT(glint_now() - t0, 1.0);
+    events_stream_close(s);
+    close(sv[0]);
+    fx_close(&f);
+}
+
+TEST_LIST{
+    TEST_ENTRY(replay_after_a_sequence_number),
+    TEST_ENTRY(replay_longer_than_one_batch),
+    TEST_ENTRY(live_events_wake_every_stream_of_the_session),
+    TEST_ENTRY(presence_when_listeners_come_and_go),
+    TEST_ENTRY(publish_appends_fit_to_the_log_and_only_wakes_for_strokes),
+    TEST_ENTRY(shutdown_ends_streams_promptly),
+    TEST_ENTRY(stream_ends_when_the_client_hangs_up),
+};
+
+TEST_MAIN()

@@ -1,0 +1,271 @@
+/* Tests of the pipeline through the cache (core/prep) and of what it is
+ * built on: patterns rasterized in bands equal patterns of whole
+ * G-buffers, subsets of a pattern equal the patterns of their views, a fit
+ * through prep equals the direct path (fit.h), materials render in bands
+ * exactly as they shade whole G-buffers, and the held-out measurement on
+ * samples equals the error measured on G-buffers. */
+#include <string.h>
+
+#include "brdf.h"
+#include "cache.h"
+#include "check.h"
+#include "fit.h"
+#include "material.h"
+#include "method_hf3.h"
+#include "paint.h"
+#include "prep.h"
+#include "raster.h"
+#include "samples.h"
+#include "scene.h"
+
+static scene SC;
+static gbuf *G;
+static img P[12];
+static char HASH[33];
+
+static int setup(void)
+{
+    scene_params p;
+    brdf b;
+    glint_err e;
+    if (G)
+        return 0;
+    scene_params_default(&p);
+    p.width = 56;
+    p.height = 40; /* not square: rows and columns must not be mixed up */
+    if (scene_create(&p, &SC, &e) || raster_scene(&SC, &G, &e) ||
+        brdf_parse("ct:rough=0.3,kd=0.5/0.4/0.3,f0=0.2", &b, &e) ||
+        paint_views(&b, G, SC.views, SC.nviews, 1.0, P, NULL, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    scene_hash(&SC, HASH);
+    return 0;
+}
+
+static int same_samples(const samples *a, const samples *b)
+{
+    if (a->n != b->n || a->nviews != b->nviews || a->width != b->width ||
+        a->height != b->height || strcmp(a->hash, b->hash) != 0 ||
+        memcmp(a->used, b->used, (size_t)a->nviews) != 0)
+        return 0;
+    return memcmp(a->view, b->view, (size_t)a->n * sizeof *a->view) == 0 &&
+           memcmp(a->pixel, b->pixel, (size_t)a->n * sizeof *a->pixel) == 0 &&
+           memcmp(a->nrm, b->nrm, (size_t)a->n * 3 * sizeof *a->nrm) == 0 &&
+           memcmp(a->wi, b->wi, (size_t)a->n * 3 * sizeof *a->wi) == 0 &&
+           memcmp(a->wo, b->wo, (size_t)a->n * 3 * sizeof *a->wo) == 0 &&
+           memcmp(a->cos_i, b->cos_i, (size_t)a->n * sizeof *a->cos_i) == 0 &&
+           memcmp(a->intensity, b->intensity, (size_t)a->n * sizeof *a->intensity) == 0;
+}
+
+TEST(bands_of_rows_are_the_rows_of_the_whole_view)
+{
+    glint_err e;
+    ASSERT_OK(setup());
+    for (int v = 0; v < 3; v++)
+        for (int band = 1; band <= 17; band += 8) {
+            for (int row0 = 0; row0 < SC.height; row0 += band) {
+                int n = SC.height - row0 < band ? SC.height - row0 : band;
+                size_t off = (size_t)row0 * SC.width, np = (size_t)n * SC.width;
+                gbuf b;
+                ASSERT_OK(raster_view_rows(&SC.mesh, &SC.views[v], SC.width, SC.height, row0, n,
+                                           &b, &e));
+                ASSERT(memcmp(b.mask, G[v].mask + off, np) == 0);
+                ASSERT(memcmp(b.nrm, G[v].nrm + 3 * off, 3 * np * sizeof(float)) == 0);
+                ASSERT(memcmp(b.pos, G[v].pos + 3 * off, 3 * np * sizeof(float)) == 0);
+                ASSERT(memcmp(b.wi, G[v].wi + 3 * off, 3 * np * sizeof(float)) == 0);
+                ASSERT(memcmp(b.wo, G[v].wo + 3 * off, 3 * np * sizeof(float)) == 0);
+                gbuf_free(&b);
+            }
+        }
+    {
+        gbuf b;
+        ASSERT_EQ(raster_view_rows(&SC.mesh, &SC.views[0], SC.width, SC.height, 30, 11, &b, &e),
+                  GLINT_ERANGE);
+    }
+}
+
+TEST(patterns_built_in_bands_and_subsets_equal_whole_ones)
+{
+    unsigned char use[12] = {1, 0, 1, 1, 0, 0, 1, 0, 0, 1, 1, 0};
+    samples whole, banded, all, sub;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, use, HASH, &whole, &e));
+    /* the same views, one band of 7 rows at a time */
+    ASSERT_OK(samples_begin(&banded, SC.nviews, SC.width, SC.height, &e));
+    for (int v = 0; v < SC.nviews; v++) {
+        if (!use[v])
+            continue;
+        for (int row0 = 0; row0 < SC.height; row0 += 7) {
+            int n = SC.height - row0 < 7 ? SC.height - row0 : 7;
+            gbuf b;
+            ASSERT_OK(raster_view_rows(&SC.mesh, &SC.views[v], SC.width, SC.height, row0, n, &b,
+                                       &e));
+            ASSERT_OK(samples_add(&banded, v, &b, row0, SC.views[v].light_intensity, &e));
+            gbuf_free(&b);
+        }
+    }
+    ASSERT_OK(samples_end(&banded, use, HASH, &e));
+    ASSERT(same_samples(&whole, &banded));
+    /* a subset of every view's pattern is the pattern of those views */
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, NULL, HASH, &all, &e));
+    ASSERT_OK(samples_subset(&all, use, HASH, &sub, &e));
+    ASSERT(same_samples(&whole, &sub));
+    ASSERT_LT(sub.n, all.n);
+    samples_free(&whole);
+    samples_free(&banded);
+    samples_free(&all);
+    samples_free(&sub);
+}
+
+static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    (void)id;
+    (void)err;
+    *out = cls;
+    return 0;
+}
+
+TEST(a_fit_through_the_cache_equals_the_direct_path)
+{
+    prep_scene_source src = {borrowed, NULL, &SC};
+    unsigned char use[12];
+    fit_params fp;
+    fit_prep direct;
+    material a, b;
+    cache *c;
+    cache_entry *se;
+    prep *p = NULL, *q = NULL;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    memset(use, 1, sizeof use);
+    use[4] = 0;
+    fit_params_default(&fp);
+    fp.res = 24;
+    ASSERT_OK(fit_prepare(&direct, &SC, G, use, &fp, NULL, &e));
+    ASSERT_OK(fit_run(&direct, P, NULL, &a, &e));
+    ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
+    ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
+    {
+        prep_request rq = {&method_hf3, &fp, se, use};
+        ASSERT_EQ(prep_try(c, &rq, &q, &e), GLINT_ENOTFOUND);
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
+        ASSERT_OK(prep_fit(p, P, NULL, &b, &e));
+        ASSERT_OK(prep_try(c, &rq, &q, &e)); /* now in memory */
+        ASSERT(prep_was_hit(q) && !prep_was_hit(p));
+        prep_release(c, q);
+    }
+    ASSERT_EQ(prep_samples(p)->n, direct.s.n);
+    ASSERT(strcmp(prep_samples(p)->hash, direct.s.hash) == 0);
+    for (int i = 0; i < 9 * 24; i++)
+        ASSERT_NEAR(hf3_factors(&b)->logf[i], hf3_factors(&a)->logf[i], 1e-12);
+    {
+        json_t *cr = json_object_get(json_object_get(b.info, "precomputation"), "cache");
+        ASSERT(strcmp(json_string_value(json_object_get(cr, "memory")), "built") == 0);
+        ASSERT(json_object_get(json_object_get(cr, "levels"), "decomposition") != NULL);
+    }
+    material_free(&a);
+    material_free(&b);
+    fit_prep_free(&direct);
+    prep_release(c, p);
+    cache_release(c, se);
+    cache_close(c);
+}
+
+TEST(rendering_in_bands_equals_shading_the_whole_view)
+{
+    fit_params fp;
+    fit_prep direct;
+    material m;
+    img a, b;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    fit_params_default(&fp);
+    fp.res = 16;
+    ASSERT_OK(fit_prepare(&direct, &SC, G, NULL, &fp, NULL, &e));
+    ASSERT_OK(fit_run(&direct, P, NULL, &m, &e));
+    ASSERT_OK(material_shade(&m, &G[3], SC.views[3].light_intensity, 0.0f, &a, &e));
+    ASSERT_OK(material_render(&m, &SC.mesh, &SC.views[3], SC.width, SC.height, &b, &e));
+    ASSERT(memcmp(a.px, b.px, (size_t)SC.width * SC.height * 3 * sizeof(float)) == 0);
+    img_free(&a);
+    img_free(&b);
+    material_free(&m);
+    fit_prep_free(&direct);
+}
+
+TEST(held_out_error_on_samples_equals_the_error_on_the_view)
+{
+    fit_params fp;
+    fit_prep all, fold;
+    material m;
+    json_t *r = NULL, *pv;
+    unsigned char use[12];
+    glint_err e;
+    double rms, mx;
+    long cnt;
+
+    ASSERT_OK(setup());
+    fit_params_default(&fp);
+    fp.res = 16;
+    memset(use, 0, sizeof use);
+    use[0] = use[5] = use[9] = 1;
+    ASSERT_OK(fit_prepare(&all, &SC, G, use, &fp, NULL, &e));
+    ASSERT_OK(prep_holdout(&method_hf3, &fp, &all.s, P, NULL, NULL, NULL, &r, &e));
+    ASSERT_EQ(json_integer_value(json_object_get(r, "views")), 3);
+    pv = json_array_get(json_object_get(r, "per_view"), 1); /* view 5 held out */
+    ASSERT_EQ(json_integer_value(json_object_get(pv, "view")), 5);
+    /* the same fold by the direct path, its error measured on the G-buffer */
+    use[5] = 0;
+    ASSERT_OK(fit_prepare(&fold, &SC, G, use, &fp, NULL, &e));
+    ASSERT_OK(fit_run(&fold, P, NULL, &m, &e));
+    ASSERT_OK(material_error_views(&m, &G[5], &SC.views[5], 1, &P[5], &rms, &mx, &cnt, &e));
+    ASSERT_NEAR(json_real_value(json_object_get(pv, "rms")), rms, 1e-9 * (1 + rms));
+    ASSERT_EQ(json_integer_value(json_object_get(pv, "pixels")), cnt);
+    json_decref(r);
+    material_free(&m);
+    fit_prep_free(&all);
+    fit_prep_free(&fold);
+    /* one painted view cannot be held out */
+    {
+        fit_prep one;
+        memset(use, 0, sizeof use);
+        use[2] = 1;
+        ASSERT_OK(fit_prepare(&one, &SC, G, use, &fp, NULL, &e));
+        ASSERT_EQ(prep_holdout(&method_hf3, &fp, &one.s, P, NULL, NULL, NULL, &r, &e),
+                  GLINT_EINVAL);
+        fit_prep_free(&one);
+    }
+}
+
+TEST(sample_counts_equal_the_pattern)
+{
+    long per[12], total;
+    samples s;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT_OK(prep_sample_counts(&SC, per, &total, &e));
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, NULL, HASH, &s, &e));
+    ASSERT_EQ(total, s.n);
+    for (int v = 0; v < 12; v++) {
+        long n = 0;
+        for (int i = 0; i < s.n; i++)
+            n += s.view[i] == v;
+        ASSERT_EQ(per[v], n);
+    }
+    samples_free(&s);
+}
+
+TEST_LIST{
+    TEST_ENTRY(bands_of_rows_are_the_rows_of_the_whole_view),
+    TEST_ENTRY(patterns_built_in_bands_and_subsets_equal_whole_ones),
+    TEST_ENTRY(a_fit_through_the_cache_equals_the_direct_path),
+    TEST_ENTRY(rendering_in_bands_equals_shading_the_whole_view),
+    TEST_ENTRY(held_out_error_on_samples_equals_the_error_on_the_view),
+    TEST_ENTRY(sample_counts_equal_the_pattern),
+};
+
+TEST_MAIN()
