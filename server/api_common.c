@@ -1,29 +1,114 @@
+/* api_common.c: errors to HTTP answers, access checks (api_common.h). */
 #include "api_common.h"
 
+#include <pthread.h>
+#include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "app.h"
+#include "auth.h"
+#include "fitsvc.h"
+#include "log.h"
+#include "store.h"
 
-int api_status(int code)
+static const struct {
+    int code, status;
+    const char *kind;
+} codes[] = {
+    {GLINT_ENOTFOUND, 404, "not-found"},
+    {GLINT_EINVAL, 422, "invalid-input"},
+    {GLINT_EFORMAT, 422, "invalid-input"},
+    {GLINT_ENONFINITE, 422, "non-finite"},
+    {GLINT_ERANGE, 422, "invalid-input"},
+    {GLINT_ENUMERIC, 422, "numerical-failure"},
+    {GLINT_EUNSUPPORTED, 422, "unsupported"},
+    {GLINT_EAUTH, 401, "unauthorized"},
+    {GLINT_EDENIED, 403, "forbidden"},
+    {GLINT_ECONFLICT, 409, "conflict"},
+    {GLINT_EBUSY, 503, "busy"},
+    {GLINT_ETOOBIG, 413, "too-large"},
+    {GLINT_ENOMEM, 503, "out-of-memory"},
+};
+
+/* Kinds whose status is not their code's. */
+static const struct {
+    const char *kind;
+    int status;
+} kinds[] = {
+    {"painting-changed", 412},
+    {"egl-unavailable", 503},
+    {"scene-gone", 409},
+    {"bad-request", 400},
+    {"missing-parameter", 400},
+    {"empty-body", 400},
+    {"invalid-json", 400},
+    {"bad-if-match", 400},
+    {"unsupported-media-type", 415},
+};
+
+int api_status(const glint_err *e)
 {
-    switch (code) {
-    case GLINT_ENOTFOUND: return 404;
-    case GLINT_EINVAL:
-    case GLINT_EFORMAT:
-    case GLINT_ENONFINITE:
-    case GLINT_ERANGE:
-    case GLINT_EUNSUPPORTED: return 422;
-    default: return 500;
-    }
+    for (size_t i = 0; e->kind[0] && i < sizeof kinds / sizeof kinds[0]; i++)
+        if (strcmp(e->kind, kinds[i].kind) == 0)
+            return kinds[i].status;
+    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++)
+        if (codes[i].code == e->code)
+            return codes[i].status;
+    return 500;
+}
+
+static const char *default_kind(int code)
+{
+    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++)
+        if (codes[i].code == code)
+            return codes[i].kind;
+    return NULL;
+}
+
+int api_reject(glint_err *err, int code, const char *kind, const char *fmt, ...)
+{
+    char msg[GLINT_ERR_MSG_MAX]; /* the arguments may point into err->msg */
+    va_list ap;
+    if (!err)
+        return code;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    memcpy(err->msg, msg, sizeof msg);
+    err->code = code;
+    snprintf(err->kind, sizeof err->kind, "%s", kind ? kind : "");
+    return code;
 }
 
 http_resp api_fail(const glint_err *e, const char *context)
 {
-    int st = api_status(e->code);
-    const char *slug = st == 404 ? "not-found" : st == 422 ? "invalid-input" : NULL;
-    if (st == 500)
-        fprintf(stderr, "glintd: %s: %s\n", context, e->msg);
-    return http_problem(st, slug, "%s: %s", context, e->msg);
+    char msg[GLINT_ERR_MSG_MAX + 160];
+    const char *kind = e->kind[0] ? e->kind : default_kind(e->code);
+    int st = api_status(e);
+    http_resp r;
+
+    if (context)
+        snprintf(msg, sizeof msg, "%s: %s", context, e->msg[0] ? e->msg : glint_strerror(e->code));
+    else
+        snprintf(msg, sizeof msg, "%s", e->msg[0] ? e->msg : glint_strerror(e->code));
+    if (st >= 500 && st != 503)
+        log_line("%s", msg);
+    log_redact_paths(msg, sizeof msg);
+    r = http_problem(st, kind, "%s", msg);
+    if (st == 401)
+        http_header(&r, "WWW-Authenticate",
+                    strcmp(e->kind, "api-key-required") == 0     ? "Bearer realm=\"glintd\""
+                    : strcmp(e->kind, "owner-key-required") == 0 ? "Bearer realm=\"glint-owner\""
+                                                                 : "Bearer realm=\"glint-session\"");
+    if (e->code == GLINT_EBUSY)
+        http_header(&r, "Retry-After", "2");
+    return r;
+}
+
+http_resp api_error(const glint_err *e)
+{
+    return api_fail(e, NULL);
 }
 
 http_resp api_body_too_large(http_req *req, const char *what)
@@ -33,4 +118,119 @@ http_resp api_body_too_large(http_req *req, const char *what)
                         "%s exceeds the request body limit of %zu bytes (max_body, glintd "
                         "--max-body-mb %zu)",
                         what, a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+}
+
+/* Nesting depth of JSON text, counted before parsing (so a hostile document
+ * cannot make the parser recurse deeply). */
+static int text_depth(const char *s, size_t n)
+{
+    int depth = 0, best = 0, in_str = 0;
+    for (size_t i = 0; i < n; i++) {
+        char c = s[i];
+        if (in_str) {
+            if (c == '\\')
+                i++;
+            else if (c == '"')
+                in_str = 0;
+        } else if (c == '"') {
+            in_str = 1;
+        } else if (c == '{' || c == '[') {
+            if (++depth > best)
+                best = depth;
+        } else if (c == '}' || c == ']') {
+            depth--;
+        }
+    }
+    return best;
+}
+
+int api_body_json(http_req *req, json_t **out, glint_err *err)
+{
+    const char *ct = http_header_in(req, "Content-Type");
+    json_error_t je;
+    json_t *j;
+
+    *out = NULL;
+    if (req->body_too_large)
+        return api_reject(err, GLINT_ETOOBIG, "body-too-large", "request body exceeds the limit");
+    if (ct && strncmp(ct, "application/json", 16) != 0)
+        return api_reject(err, GLINT_EINVAL, "unsupported-media-type",
+                          "expected Content-Type application/json, got %.100s", ct);
+    if (req->body_len == 0)
+        return api_reject(err, GLINT_EINVAL, "invalid-json",
+                          "empty body: a JSON object is required");
+    if (text_depth(req->body, req->body_len) > API_JSON_MAX_DEPTH)
+        return api_reject(err, GLINT_ETOOBIG, "json-too-deep",
+                          "JSON nesting deeper than the limit of %d", API_JSON_MAX_DEPTH);
+    j = json_loadb(req->body, req->body_len, JSON_REJECT_DUPLICATES, &je);
+    if (!j)
+        return api_reject(err, GLINT_EINVAL, "invalid-json",
+                          "malformed JSON at line %d column %d: %.200s", je.line, je.column,
+                          je.text);
+    if (!json_is_object(j)) {
+        json_decref(j);
+        return api_reject(err, GLINT_EINVAL, "invalid-input", "the body must be a JSON object");
+    }
+    *out = j;
+    return 0;
+}
+
+/* ---- access ------------------------------------------------------------------------ */
+
+int api_session(http_req *req, const char *sid, int need_paint, json_t **doc, glint_err *err)
+{
+    app *a = req->app;
+    int rc;
+
+    *doc = NULL;
+    rc = store_session_get(a->store, sid, doc, err);
+    if (rc == GLINT_ENOTFOUND)
+        return glint_err_set(err, rc, "no session %.40s", sid ? sid : "");
+    if (rc)
+        return rc;
+    if ((rc = auth_session(req, *doc, need_paint, err))) {
+        json_decref(*doc);
+        *doc = NULL;
+    }
+    return rc;
+}
+
+int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err)
+{
+    app *a = req->app;
+    json_t *sdoc = NULL;
+    int rc;
+
+    if ((rc = fitsvc_material_doc(a->fits, mid, doc, err)))
+        return rc;
+    if ((rc = api_session(req, doc->session, 0, &sdoc, err))) {
+        free(doc->text);
+        doc->text = NULL;
+        return rc;
+    }
+    json_decref(sdoc);
+    return 0;
+}
+
+int api_view_index(const char *text, int n, int *k)
+{
+    long long v;
+    if (strlen(text ? text : "") > 6 || api_parse_count(text, &v) || v >= n)
+        return -1;
+    *k = (int)v;
+    return 0;
+}
+
+int api_parse_count(const char *text, long long *out)
+{
+    long long v = 0;
+    if (!text || !*text || strlen(text) > 18)
+        return -1;
+    for (const char *c = text; *c; c++) {
+        if (*c < '0' || *c > '9')
+            return -1;
+        v = 10 * v + (*c - '0');
+    }
+    *out = v;
+    return 0;
 }

@@ -1,19 +1,61 @@
-/* api_common.h: answers shared by the api_* handler modules. */
+/* api_common.h: what every api_* handler module shares: the one mapping
+ * from glint errors to HTTP answers, and the access checks.
+ *
+ * Error convention in server/: functions return 0 or a negative GLINT_E*
+ * code with a glint_err (err.h), never an HTTP answer; a handler turns a
+ * failure into its answer with api_error() only.  The status comes from
+ * the code (and, for a few kinds, from err->kind); the problem's type is
+ * /problems/<kind> (the code's default kind when none was named); the
+ * detail is the message, with the daemon's own paths removed.  Server
+ * errors (5xx other than 503) are logged with the full message. */
 #ifndef GLINTD_API_COMMON_H
 #define GLINTD_API_COMMON_H
 
+#include <jansson.h>
+
 #include "err.h"
 #include "http.h"
+#include "memo.h"
 
-/* The HTTP status for a glint error code: the client's mistakes are 4xx
- * (ENOTFOUND 404; EINVAL, EFORMAT, ENONFINITE, ERANGE, EUNSUPPORTED 422),
- * anything else 500 (logged). */
-int api_status(int code);
+/* The HTTP status of a glint error (code and kind). */
+int api_status(const glint_err *e);
 
-/* A problem response for a glint error: "<context>: <message>". */
+/* The problem+json answer of an error. */
+http_resp api_error(const glint_err *e);
+
+/* Set *err to `code` with kind `kind` and a printf-style message; returns
+ * code (for "return api_reject(err, GLINT_EINVAL, "invalid-input", ...)"). */
+int api_reject(glint_err *err, int code, const char *kind, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* The same with context: detail "<context>: <message>". */
 http_resp api_fail(const glint_err *e, const char *context);
+
+/* The request body as a JSON object: Content-Type application/json (or
+ * none), not empty, nesting within API_JSON_MAX_DEPTH (counted before
+ * parsing), no duplicate keys.  OUT: *out (decref).  Errors: kinds
+ * "unsupported-media-type" (415), "invalid-json" (400), "json-too-deep" and
+ * "body-too-large" (GLINT_ETOOBIG, 413), "invalid-input" for a non-object
+ * (422). */
+#define API_JSON_MAX_DEPTH 32
+int api_body_json(http_req *req, json_t **out, glint_err *err);
 
 /* 413 naming the body limit and the option that sets it. */
 http_resp api_body_too_large(http_req *req, const char *what);
+
+/* Access: the session `sid` if the request may read it (need_paint 0) or
+ * write it (1).  OUT: *doc (decref).  GLINT_ENOTFOUND, GLINT_EAUTH,
+ * GLINT_EDENIED. */
+int api_session(http_req *req, const char *sid, int need_paint, json_t **doc, glint_err *err);
+
+/* The material `mid` if the request may read its session.  OUT: *doc (free
+ * doc->text). */
+int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err);
+
+/* A view index from a path segment: decimal digits, 0..n-1 (0), else -1. */
+int api_view_index(const char *text, int n, int *k);
+
+/* A non-negative decimal integer of at most 18 digits (0), else -1. */
+int api_parse_count(const char *text, long long *out);
 
 #endif

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "admit.h"
 #include "app.h"
 #include "fitsvc.h"
 
@@ -45,6 +46,7 @@ static http_resp metrics(http_req *req)
     fprintf(f, "# HELP glintd_uptime_seconds Seconds since start.\n# TYPE glintd_uptime_seconds gauge\n");
     fprintf(f, "glintd_uptime_seconds %lld\n", (long long)(time(NULL) - a->started));
     fitsvc_metrics(a->fits, f);
+    admit_metrics(a->work, f);
     fclose(f);
     return http_bytes_owned(200, "text/plain; version=0.0.4; charset=utf-8", buf, len);
 }

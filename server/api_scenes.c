@@ -12,51 +12,33 @@
  *
  * Reading a scene or mesh by id needs no key: ids are 128 random bits.
  * Everything numerical is core's: scene_create / scene_from_json build and
- * validate, raster_* and samples_build count samples, paint_views renders
- * base images, mesh_load_mem reads uploads. */
+ * validate, prep_sample_counts counts samples, render.h draws base images
+ * and G-buffers, mesh_load_mem reads uploads.  Helpers return 0 or a code
+ * with a glint_err; handlers answer failures with api_error(). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
+#include "admit.h"
 #include "api_common.h"
 #include "app.h"
 #include "auth.h"
-#include "brdf.h"
-#include "fsio.h"
-#include "gbuf.h"
+#include "clock.h"
+#include "fitsvc.h"
+#include "ids.h"
 #include "img.h"
 #include "mesh.h"
-#include "paint.h"
-#include "raster.h"
-#include "samples.h"
+#include "prep.h"
+#include "render.h"
 #include "scene.h"
+#include "scenes.h"
 #include "store.h"
 
 #define API_DEFAULT_SIZE 128
 #define API_BASE_BRDF "lambert:kd=0.6"
 /* Base renders show kd cos(theta_i) I: the Lambert 1/pi undone by the scale. */
 #define API_BASE_SCALE 3.14159265358979323846
-
-/* ---- shared helpers ---------------------------------------------------------- */
-
-/* A view index from a path segment: decimal digits, 0..n-1. */
-static int api_view_index(const char *text, int n, int *k)
-{
-    long v = 0;
-    if (!text || !*text || strlen(text) > 6)
-        return -1;
-    for (const char *c = text; *c; c++) {
-        if (*c < '0' || *c > '9')
-            return -1;
-        v = 10 * v + (*c - '0');
-    }
-    if (v >= n)
-        return -1;
-    *k = (int)v;
-    return 0;
-}
 
 static const char *api_kind(const json_t *j)
 {
@@ -76,87 +58,105 @@ static const char *api_kind(const json_t *j)
 static json_t *api_scene_public(const json_t *doc)
 {
     json_t *pub = json_deep_copy(doc);
-    if (pub)
+    if (pub) {
         json_object_del(pub, "scene");
+        json_object_del(pub, "owner");
+    }
     return pub;
+}
+
+static http_resp created(json_t *body, const char *what, const char *id)
+{
+    char loc[96];
+    http_resp r;
+    snprintf(loc, sizeof loc, "/api/v1/%s/%s", what, id);
+    r = http_json(201, body);
+    http_header(&r, "Location", loc);
+    return r;
 }
 
 /* ---- meshes ------------------------------------------------------------------ */
 
 static const char *const api_mesh_formats[] = {"ply", "obj", "off", "gltf", "glb", "dae", NULL};
 
-static http_resp mesh_create(http_req *req)
+static int mesh_create_do(http_req *req, json_t **info, char id[33], glint_err *e)
 {
     app *a = req->app;
-    http_resp deny;
     const char *fmt = http_query(req, "format");
-    mesh m;
+    char now[GLINT_TIME_LEN];
     mesh_report rep;
-    glint_err e;
-    char id[33], now[32];
-    json_t *info;
+    mesh m;
     int ok = 0, rc;
 
-    if (auth_require_key(req, &deny))
-        return deny;
+    if ((rc = auth_require_key(req, e)))
+        return rc;
     if (req->body_too_large)
-        return api_body_too_large(req, "the mesh file");
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the mesh file exceeds the request body limit of %zu bytes "
+                          "(max_body, glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
     if (!fmt)
-        return http_problem(400, "missing-parameter",
-                            "query parameter format is required: ply, obj, off, gltf, glb or dae");
+        return api_reject(e, GLINT_EINVAL, "missing-parameter",
+                          "query parameter format is required: ply, obj, off, gltf, glb or dae");
     for (int i = 0; api_mesh_formats[i]; i++)
-        if (strcmp(fmt, api_mesh_formats[i]) == 0)
-            ok = 1;
+        ok |= strcmp(fmt, api_mesh_formats[i]) == 0;
     if (!ok)
-        return http_problem(422, "invalid-input",
-                            "format \"%.32s\" is not one of ply, obj, off, gltf, glb, dae", fmt);
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "format \"%.32s\" is not one of ply, obj, off, gltf, glb, dae", fmt);
     if (req->body_len == 0)
-        return http_problem(400, "empty-body", "the body must be the mesh file (%s)", fmt);
-    rc = mesh_load_mem(req->body, req->body_len, fmt, &m, &rep, &e);
+        return api_reject(e, GLINT_EINVAL, "empty-body", "the body must be the mesh file (%s)",
+                          fmt);
+    rc = mesh_load_mem(req->body, req->body_len, fmt, &m, &rep, e);
     if (rc == GLINT_ERANGE)
-        return http_problem(413, "mesh-too-large", "mesh file rejected: %s", e.msg);
+        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large", "mesh file rejected: %.400s",
+                          e->msg);
     if (rc == GLINT_ENOMEM || rc == GLINT_EIO || rc == GLINT_EINTERNAL)
-        return api_fail(&e, "loading the mesh");
+        return glint_err_prefix(e, "loading the mesh");
     if (rc)
-        return http_problem(422, "invalid-mesh", "the %s file cannot be used: %s", fmt, e.msg);
+        return api_reject(e, GLINT_EINVAL, "invalid-mesh", "the %s file cannot be used: %.400s",
+                          fmt, e->msg);
     if (m.ntris > a->cfg.lim.max_mesh_tris) {
         int n = m.ntris;
         mesh_free(&m);
-        return http_problem(413, "mesh-too-large",
-                            "the mesh has %d triangles, more than the limit of %d (max_mesh_tris, "
-                            "glintd --max-mesh-tris)",
-                            n, a->cfg.lim.max_mesh_tris);
+        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large",
+                          "the mesh has %d triangles, more than the limit of %d (max_mesh_tris, "
+                          "glintd --max-mesh-tris)",
+                          n, a->cfg.lim.max_mesh_tris);
     }
-    if (store_new_id(id, &e)) {
+    if ((rc = glint_id_new(id, e))) {
         mesh_free(&m);
-        return api_fail(&e, "creating a mesh id");
+        return rc;
     }
-    store_now(now);
-    info = json_pack("{s:s, s:s, s:i, s:i, s:I, s:s, s:{s:i, s:b, s:b, s:i, s:i, s:i, s:f, "
-                     "s:[fff], s:f}}",
-                     "id", id, "format", fmt, "triangles", m.ntris, "vertices", m.nverts,
-                     "bytes", (json_int_t)req->body_len, "created", now, "report",
-                     "dropped_degenerate", rep.dropped_degenerate, "normals_generated",
-                     rep.normals_generated, "uvs_generated", rep.uvs_generated,
-                     "nonmanifold_edges", rep.nonmanifold_edges, "boundary_edges",
-                     rep.boundary_edges, "dropped_primitives", rep.dropped_primitives, "scale",
-                     rep.scale, "center", rep.center[0], rep.center[1], rep.center[2],
-                     "uv_coverage", rep.uv_coverage);
+    glint_time_iso_ms(now);
+    *info = json_pack("{s:s, s:s, s:i, s:i, s:I, s:s, s:{s:i, s:b, s:b, s:i, s:i, s:i, s:f, "
+                      "s:[fff], s:f}}",
+                      "id", id, "format", fmt, "triangles", m.ntris, "vertices", m.nverts,
+                      "bytes", (json_int_t)req->body_len, "created", now, "report",
+                      "dropped_degenerate", rep.dropped_degenerate, "normals_generated",
+                      rep.normals_generated, "uvs_generated", rep.uvs_generated,
+                      "nonmanifold_edges", rep.nonmanifold_edges, "boundary_edges",
+                      rep.boundary_edges, "dropped_primitives", rep.dropped_primitives, "scale",
+                      rep.scale, "center", rep.center[0], rep.center[1], rep.center[2],
+                      "uv_coverage", rep.uv_coverage);
     mesh_free(&m);
-    if (!info)
-        return http_problem(500, NULL, "cannot build the mesh record");
-    if (store_mesh_put(a->store, id, info, req->body, req->body_len, &e)) {
-        json_decref(info);
-        return api_fail(&e, "storing the mesh");
+    if (!*info)
+        return glint_err_set(e, GLINT_ENOMEM, "cannot build the mesh record");
+    if ((rc = store_mesh_put(a->store, id, *info, req->body, req->body_len, e))) {
+        json_decref(*info);
+        *info = NULL;
+        return glint_err_prefix(e, "storing the mesh");
     }
-    {
-        char loc[96];
-        http_resp r;
-        snprintf(loc, sizeof loc, "/api/v1/meshes/%s", id);
-        r = http_json(201, info);
-        http_header(&r, "Location", loc);
-        return r;
-    }
+    return 0;
+}
+
+static http_resp mesh_create(http_req *req)
+{
+    json_t *info = NULL;
+    char id[33];
+    glint_err e;
+    if (mesh_create_do(req, &info, id, &e))
+        return api_error(&e);
+    return created(info, "meshes", id);
 }
 
 static http_resp mesh_get(http_req *req)
@@ -203,81 +203,81 @@ static json_t *scene_view_defaults(const json_t *in)
     return v;
 }
 
-/* Build the core scene a creation request asks for.  OUT: *sc (scene_free),
- * *view_set ("ico12", "ico20", "explicit"). */
-static http_resp scene_build(app *a, const json_t *body, scene *sc, char *mesh_label,
-                             size_t label_len, const char **view_set)
+/* The raster size of a creation request (OUT: *w, *h). */
+static int scene_size(app *a, const json_t *body, long long *w, long long *h, glint_err *e)
 {
-    static const char *const keys[] = {"mesh", "mesh_id", "width", "height", "views",
-                                       "light_angles", "base", NULL};
-    const char *k;
-    json_t *v, *jmesh = json_object_get(body, "mesh"), *jmesh_id = json_object_get(body, "mesh_id");
-    json_t *jviews = json_object_get(body, "views"), *jangles = json_object_get(body, "light_angles");
-    const char *builtin = "sphere", *mesh_id = NULL;
-    long long width = API_DEFAULT_SIZE, height = API_DEFAULT_SIZE;
+    const char *names[2] = {"width", "height"};
+    long long *dst[2] = {w, h};
     int max_dim = a->cfg.lim.max_image_dim < SCENE_MAX_SIZE ? a->cfg.lim.max_image_dim
                                                             : SCENE_MAX_SIZE;
-    glint_err e;
-    int rc;
-
-    memset(sc, 0, sizeof *sc);
-    json_object_foreach((json_t *)body, k, v) {
-        int known = 0;
-        for (int i = 0; keys[i]; i++)
-            known |= strcmp(k, keys[i]) == 0;
-        if (!known)
-            return http_problem(422, "invalid-input",
-                                "unknown key \"%.64s\" (known: mesh, mesh_id, width, height, "
-                                "views, light_angles, base)", k);
+    *w = *h = API_DEFAULT_SIZE;
+    for (int i = 0; i < 2; i++) {
+        json_t *j = json_object_get(body, names[i]);
+        if (!j)
+            continue;
+        if (!json_is_integer(j))
+            return api_reject(e, GLINT_EINVAL, "invalid-input", "%s: expected an integer, got %s",
+                              names[i], api_kind(j));
+        *dst[i] = json_integer_value(j);
+        if (*dst[i] > max_dim)
+            return api_reject(e, GLINT_EINVAL, "image-too-large",
+                              "%s %lld exceeds the limit of %d pixels (max_image_dim, "
+                              "glintd --max-image-dim)",
+                              names[i], *dst[i], max_dim);
+        if (*dst[i] < SCENE_MIN_SIZE)
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "%s %lld is below the minimum of %d", names[i], *dst[i],
+                              SCENE_MIN_SIZE);
     }
+    return 0;
+}
+
+/* The mesh of a creation request: a built-in name or an uploaded mesh id
+ * (checked to exist).  OUT: *builtin, *mesh_id (borrowed from body). */
+static int scene_mesh(app *a, const json_t *body, const char **builtin, const char **mesh_id,
+                      glint_err *e)
+{
+    json_t *jmesh = json_object_get(body, "mesh"), *jmesh_id = json_object_get(body, "mesh_id");
+    json_t *info;
+
+    *builtin = "sphere";
+    *mesh_id = NULL;
     if (jmesh && jmesh_id)
-        return http_problem(422, "invalid-input",
-                            "give either mesh (a built-in) or mesh_id (an uploaded mesh), not both");
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "give either mesh (a built-in) or mesh_id (an uploaded mesh), not both");
     if (jmesh) {
         if (!json_is_string(jmesh))
-            return http_problem(422, "invalid-input",
-                                "mesh: expected a string (sphere, torus or teapot), got %s",
-                                api_kind(jmesh));
-        builtin = json_string_value(jmesh);
-        if (strcmp(builtin, "sphere") && strcmp(builtin, "torus") && strcmp(builtin, "teapot"))
-            return http_problem(422, "invalid-input",
-                                "mesh: \"%.64s\" is not a built-in (sphere, torus, teapot); "
-                                "upload a file with POST /api/v1/meshes and pass mesh_id",
-                                builtin);
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "mesh: expected a string (sphere, torus or teapot), got %s",
+                              api_kind(jmesh));
+        *builtin = json_string_value(jmesh);
+        if (strcmp(*builtin, "sphere") && strcmp(*builtin, "torus") && strcmp(*builtin, "teapot"))
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "mesh: \"%.64s\" is not a built-in (sphere, torus, teapot); "
+                              "upload a file with POST /api/v1/meshes and pass mesh_id",
+                              *builtin);
     }
     if (jmesh_id) {
-        json_t *info;
         if (!json_is_string(jmesh_id))
-            return http_problem(422, "invalid-input", "mesh_id: expected a string, got %s",
-                                api_kind(jmesh_id));
-        mesh_id = json_string_value(jmesh_id);
-        if (store_mesh_get(a->store, mesh_id, &info, &e))
-            return http_problem(e.code == GLINT_ENOTFOUND ? 422 : 500,
-                                e.code == GLINT_ENOTFOUND ? "unknown-mesh" : NULL, "mesh_id: %s",
-                                e.msg);
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "mesh_id: expected a string, got %s", api_kind(jmesh_id));
+        *mesh_id = json_string_value(jmesh_id);
+        if (store_mesh_get(a->store, *mesh_id, &info, e))
+            return e->code == GLINT_ENOTFOUND
+                       ? api_reject(e, GLINT_EINVAL, "unknown-mesh", "mesh_id: %.400s", e->msg)
+                       : glint_err_prefix(e, "mesh_id");
         json_decref(info);
     }
-    {
-        const char *names[2] = {"width", "height"};
-        long long *dst[2] = {&width, &height};
-        for (int i = 0; i < 2; i++) {
-            json_t *j = json_object_get(body, names[i]);
-            if (!j)
-                continue;
-            if (!json_is_integer(j))
-                return http_problem(422, "invalid-input", "%s: expected an integer, got %s",
-                                    names[i], api_kind(j));
-            *dst[i] = json_integer_value(j);
-            if (*dst[i] > max_dim)
-                return http_problem(422, "image-too-large",
-                                    "%s %lld exceeds the limit of %d pixels (max_image_dim, "
-                                    "glintd --max-image-dim)",
-                                    names[i], *dst[i], max_dim);
-            if (*dst[i] < SCENE_MIN_SIZE)
-                return http_problem(422, "invalid-input", "%s %lld is below the minimum of %d",
-                                    names[i], *dst[i], SCENE_MIN_SIZE);
-        }
-    }
+    return 0;
+}
+
+/* The views of a creation request (a view set with light angles, or
+ * explicit views) on the mesh named `builtin`.  OUT: *sc, *view_set. */
+static int scene_views(app *a, const json_t *body, const char *builtin, long long width,
+                       long long height, scene *sc, const char **view_set, glint_err *e)
+{
+    json_t *jviews = json_object_get(body, "views"), *jangles = json_object_get(body, "light_angles");
+    int rc;
 
     if (!jviews || json_is_string(jviews)) {
         scene_params p;
@@ -288,192 +288,165 @@ static http_resp scene_build(app *a, const json_t *body, scene *sc, char *mesh_l
         else if (strcmp(set, "ico20") == 0)
             p.view_set = SCENE_VIEWS_ICO20;
         else
-            return http_problem(422, "invalid-input",
-                                "views: \"%.32s\" is not \"ico12\", \"ico20\" or an array of "
-                                "views", set);
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "views: \"%.32s\" is not \"ico12\", \"ico20\" or an array of views",
+                              set);
         *view_set = p.view_set == SCENE_VIEWS_ICO12 ? "ico12" : "ico20";
         if ((p.view_set == SCENE_VIEWS_ICO12 ? 12 : 20) > a->cfg.lim.max_views)
-            return http_problem(422, "too-many-views",
-                                "views: %s has more views than the limit of %d (max_views)", set,
-                                a->cfg.lim.max_views);
+            return api_reject(e, GLINT_EINVAL, "too-many-views",
+                              "views: %s has more views than the limit of %d (max_views)", set,
+                              a->cfg.lim.max_views);
         if (jangles) {
             if (!json_is_array(jangles) || json_array_size(jangles) != 2 ||
                 !json_is_number(json_array_get(jangles, 0)) ||
                 !json_is_number(json_array_get(jangles, 1)))
-                return http_problem(422, "invalid-input",
-                                    "light_angles: expected [lo, hi] in degrees");
+                return api_reject(e, GLINT_EINVAL, "invalid-input",
+                                  "light_angles: expected [lo, hi] in degrees");
             p.light_lo_deg = json_number_value(json_array_get(jangles, 0));
             p.light_hi_deg = json_number_value(json_array_get(jangles, 1));
         }
-        snprintf(p.mesh_name, sizeof p.mesh_name, "%s", mesh_id ? "sphere" : builtin);
+        snprintf(p.mesh_name, sizeof p.mesh_name, "%s", builtin);
         p.width = (int)width;
         p.height = (int)height;
-        rc = scene_create(&p, sc, &e);
-        if (rc)
-            return api_fail(&e, "scene");
-    } else if (json_is_array(jviews)) {
-        json_t *doc, *arr;
+        if ((rc = scene_create(&p, sc, e)))
+            return glint_err_prefix(e, "scene");
+        return 0;
+    }
+    if (json_is_array(jviews)) {
+        json_t *doc, *arr, *v;
         char *text;
         size_t n = json_array_size(jviews), i;
         if (jangles)
-            return http_problem(422, "invalid-input",
-                                "light_angles applies to the ico12 and ico20 view sets; explicit "
-                                "views give each light");
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "light_angles applies to the ico12 and ico20 view sets; explicit "
+                              "views give each light");
         if (n == 0)
-            return http_problem(422, "invalid-input", "views: empty (give 1 view or more)");
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "views: empty (give 1 view or more)");
         if (n > (size_t)a->cfg.lim.max_views)
-            return http_problem(422, "too-many-views",
-                                "views: %zu views, more than the limit of %d (max_views)", n,
-                                a->cfg.lim.max_views);
+            return api_reject(e, GLINT_EINVAL, "too-many-views",
+                              "views: %zu views, more than the limit of %d (max_views)", n,
+                              a->cfg.lim.max_views);
         *view_set = "explicit";
         arr = json_array();
         json_array_foreach(jviews, i, v)
             json_array_append_new(arr, scene_view_defaults(v));
         doc = json_pack("{s:s, s:i, s:s, s:I, s:I, s:o}", "format", "glint-scene", "version", 1,
-                        "mesh", mesh_id ? "sphere" : builtin, "width", (json_int_t)width,
-                        "height", (json_int_t)height, "views", arr);
+                        "mesh", builtin, "width", (json_int_t)width, "height",
+                        (json_int_t)height, "views", arr);
         text = doc ? json_dumps(doc, JSON_COMPACT | JSON_REAL_PRECISION(17)) : NULL;
         json_decref(doc);
         if (!text)
-            return http_problem(500, NULL, "out of memory building the scene");
-        rc = scene_from_json(text, sc, &e);
+            return glint_err_set(e, GLINT_ENOMEM, "out of memory building the scene");
+        rc = scene_from_json(text, sc, e);
         free(text);
         if (rc) {
             /* scene_from_json names fields "scene.views[k].x"; the API's are "views[k].x" */
-            const char *msg = strncmp(e.msg, "scene.", 6) == 0 ? e.msg + 6 : e.msg;
-            return http_problem(api_status(rc), "invalid-input", "%s", msg);
+            if (strncmp(e->msg, "scene.", 6) == 0)
+                memmove(e->msg, e->msg + 6, strlen(e->msg + 6) + 1);
+            return glint_err_kind(e, "invalid-input");
         }
-    } else {
-        return http_problem(422, "invalid-input",
-                            "views: expected \"ico12\", \"ico20\" or an array of views, got %s",
-                            api_kind(jviews));
+        return 0;
     }
+    return api_reject(e, GLINT_EINVAL, "invalid-input",
+                      "views: expected \"ico12\", \"ico20\" or an array of views, got %s",
+                      api_kind(jviews));
+}
 
+/* Build the core scene a creation request asks for.  OUT: *sc (scene_free),
+ * mesh_label ("sphere", ..., "upload"), *view_set. */
+static int scene_build(app *a, const json_t *body, scene *sc, char *mesh_label,
+                       size_t label_len, const char **view_set, glint_err *e)
+{
+    static const char *const keys[] = {"mesh", "mesh_id", "width", "height", "views",
+                                       "light_angles", "base", NULL};
+    const char *k, *builtin, *mesh_id;
+    long long width, height;
+    json_t *v;
+    int rc;
+
+    memset(sc, 0, sizeof *sc);
+    json_object_foreach((json_t *)body, k, v) {
+        int known = 0;
+        for (int i = 0; keys[i]; i++)
+            known |= strcmp(k, keys[i]) == 0;
+        if (!known)
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "unknown key \"%.64s\" (known: mesh, mesh_id, width, height, "
+                              "views, light_angles, base)", k);
+    }
+    if ((rc = scene_mesh(a, body, &builtin, &mesh_id, e)) ||
+        (rc = scene_size(a, body, &width, &height, e)) ||
+        (rc = scene_views(a, body, mesh_id ? "sphere" : builtin, width, height, sc, view_set,
+                          e)))
+        return rc;
     if (mesh_id) {
         void *data = NULL;
         size_t len = 0;
         char fmt[16];
         mesh_free(&sc->mesh);
-        rc = store_mesh_data(a->store, mesh_id, &data, &len, fmt, &e);
+        rc = store_mesh_data(a->store, mesh_id, &data, &len, fmt, e);
         if (!rc)
-            rc = mesh_load_mem(data, len, fmt, &sc->mesh, &sc->mesh_info, &e);
+            rc = mesh_load_mem(data, len, fmt, &sc->mesh, &sc->mesh_info, e);
         free(data);
         if (rc) {
             scene_free(sc);
-            return api_fail(&e, "loading the uploaded mesh");
+            return glint_err_prefix(e, "loading the uploaded mesh");
         }
         snprintf(sc->mesh_name, sizeof sc->mesh_name, "upload:%s", mesh_id);
-        if ((rc = scene_validate(sc, &e))) {
+        if ((rc = scene_validate(sc, e))) {
             scene_free(sc);
-            return api_fail(&e, "scene");
+            return glint_err_prefix(e, "scene");
         }
     }
     snprintf(mesh_label, label_len, "%s", mesh_id ? "upload" : builtin);
-    return (http_resp){0, NULL};
+    return 0;
 }
 
 /* The base-render settings of a creation request: {"brdf", "scale"}. */
-static http_resp scene_base_settings(const json_t *body, const char **spec, double *scale)
+static int scene_base_settings(const json_t *body, const char **spec, double *scale,
+                               glint_err *e)
 {
     json_t *b = json_object_get(body, "base"), *j;
-    brdf tmp;
-    glint_err e;
     *spec = API_BASE_BRDF;
     *scale = API_BASE_SCALE;
     if (!b)
-        return (http_resp){0, NULL};
+        return 0;
     if (!json_is_object(b))
-        return http_problem(422, "invalid-input", "base: expected {\"brdf\": spec, \"scale\": s}");
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "base: expected {\"brdf\": spec, \"scale\": s}");
     if ((j = json_object_get(b, "brdf"))) {
         if (!json_is_string(j))
-            return http_problem(422, "invalid-input", "base.brdf: expected a string, got %s",
-                                api_kind(j));
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "base.brdf: expected a string, got %s", api_kind(j));
         *spec = json_string_value(j);
-        if (brdf_parse(*spec, &tmp, &e))
-            return http_problem(422, "invalid-input", "base.brdf: %s", e.msg);
+        if (render_brdf_check(*spec, e))
+            return api_reject(e, GLINT_EINVAL, "invalid-input", "base.brdf: %.400s", e->msg);
     }
     if ((j = json_object_get(b, "scale"))) {
         if (!json_is_number(j) || !(json_number_value(j) > 0.0) || json_number_value(j) > 1e6)
-            return http_problem(422, "invalid-input", "base.scale: expected a number in (0, 1e6]");
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "base.scale: expected a number in (0, 1e6]");
         *scale = json_number_value(j);
     }
-    return (http_resp){0, NULL};
+    return 0;
 }
 
-static http_resp scene_create_h(http_req *req)
+/* The scene document: ids, sizes, views with their sample counts and links. */
+static json_t *scene_doc(const scene *sc, const char *id, const char *label,
+                         const char *view_set, const long *counts, long total,
+                         const char *base_spec, double base_scale, glint_err *e)
 {
-    app *a = req->app;
-    http_resp deny, fail;
-    json_t *body, *views = NULL, *doc = NULL, *js = NULL;
-    scene sc;
-    gbuf *g = NULL;
-    samples smp;
-    char hash[33], id[33], now[32], label[16];
-    const char *view_set = "ico12", *base_spec;
-    double base_scale;
-    char *text = NULL;
-    long *counts = NULL;
-    glint_err e;
-    http_resp out;
-    int rc;
+    char hash[33], now[GLINT_TIME_LEN], *text;
+    json_t *views = json_array(), *js, *doc;
 
-    memset(&smp, 0, sizeof smp);
-    if (auth_require_key(req, &deny))
-        return deny;
-    if (req->body_too_large)
-        return api_body_too_large(req, "the scene request");
-    body = http_body_json(req, &fail);
-    if (!body)
-        return fail;
-    fail = scene_base_settings(body, &base_spec, &base_scale);
-    if (fail.r) {
-        json_decref(body);
-        return fail;
-    }
-    fail = scene_build(a, body, &sc, label, sizeof label, &view_set);
-    if (fail.r) {
-        json_decref(body);
-        return fail;
-    }
-    scene_hash(&sc, hash);
-
-    /* samples per view: what a fit of this scene will see */
-    counts = calloc((size_t)sc.nviews, sizeof *counts);
-    if (!counts) {
-        out = http_problem(500, NULL, "out of memory");
-        goto done;
-    }
-    if ((rc = raster_scene(&sc, &g, &e))) {
-        out = api_fail(&e, "rasterizing the views");
-        goto done;
-    }
-    rc = samples_build(g, sc.views, sc.nviews, NULL, hash, &smp, &e);
-    if (rc == GLINT_EINVAL) {
-        out = http_problem(422, "no-samples",
-                           "no view sees a lit surface pixel (check the cameras and lights): %s",
-                           e.msg);
-        goto done;
-    } else if (rc) {
-        out = api_fail(&e, "sampling the views");
-        goto done;
-    }
-    for (int i = 0; i < smp.n; i++)
-        counts[smp.view[i]]++;
-
-    if (store_new_id(id, &e)) {
-        out = api_fail(&e, "creating a scene id");
-        goto done;
-    }
-    store_now(now);
-    text = scene_to_json(&sc, &e);
+    scene_hash(sc, hash);
+    glint_time_iso_ms(now);
+    text = scene_to_json(sc, e);
     js = text ? json_loads(text, 0, NULL) : NULL;
-    views = json_array();
-    if (!js || !views) {
-        out = http_problem(500, NULL, "cannot serialize the scene");
-        goto done;
-    }
-    for (int k = 0; k < sc.nviews; k++) {
-        const scene_view *v = &sc.views[k];
+    free(text);
+    for (int k = 0; views && k < sc->nviews; k++) {
+        const scene_view *v = &sc->views[k];
         char base[128], gb[128];
         json_t *jv;
         snprintf(base, sizeof base, "/api/v1/scenes/%s/views/%d/base.png", id, k);
@@ -486,60 +459,121 @@ static http_resp scene_create_h(http_req *req)
                        "gbuffer", gb);
         if (jv && v->light_deg >= 0.0)
             json_object_set_new(jv, "light_deg", json_real(v->light_deg));
-        if (!jv || json_array_append_new(views, jv)) {
-            out = http_problem(500, NULL, "cannot serialize the scene");
-            goto done;
-        }
+        json_array_append_new(views, jv);
     }
-    doc = json_pack("{s:s, s:s, s:s, s:i, s:i, s:s, s:O, s:I, s:s, s:{s:s, s:f}, s:O}", "id", id,
-                    "hash", hash, "mesh", label, "width", sc.width, "height", sc.height, "view_set", view_set, "views", views,
-                    "samples", (json_int_t)smp.n, "created", now, "base", "brdf", base_spec,
-                    "scale", base_scale, "scene", js);
+    if (!js || !views) {
+        json_decref(js);
+        json_decref(views);
+        glint_err_set(e, GLINT_ENOMEM, "cannot serialize the scene");
+        return NULL;
+    }
+    doc = json_pack("{s:s, s:s, s:s, s:i, s:i, s:s, s:o, s:I, s:s, s:{s:s, s:f}, s:o}", "id", id,
+                    "hash", hash, "mesh", label, "width", sc->width, "height", sc->height,
+                    "view_set", view_set, "views", views, "samples", (json_int_t)total,
+                    "created", now, "base", "brdf", base_spec, "scale", base_scale, "scene", js);
     if (doc && strcmp(label, "upload") == 0)
-        json_object_set_new(doc, "mesh_id", json_string(sc.mesh_name + 7));
-    if (!doc) {
-        out = http_problem(500, NULL, "cannot build the scene record");
+        json_object_set_new(doc, "mesh_id", json_string(sc->mesh_name + 7));
+    if (!doc)
+        glint_err_set(e, GLINT_ENOMEM, "cannot build the scene record");
+    return doc;
+}
+
+static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *e)
+{
+    app *a = req->app;
+    json_t *body = NULL, *doc = NULL;
+    const char *view_set = "ico12", *base_spec, *owner;
+    char label[16], made[33];
+    double base_scale;
+    long *counts = NULL, total = 0;
+    scene sc;
+    int rc;
+
+    memset(&sc, 0, sizeof sc);
+    if ((rc = auth_require_key(req, e)) || (rc = auth_owner_key(req, &owner, e)))
+        return rc;
+    if (req->body_too_large)
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the scene request exceeds the request body limit of %zu bytes "
+                          "(max_body, glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if ((rc = api_body_json(req, &body, e)))
+        return rc;
+    if ((rc = scene_base_settings(body, &base_spec, &base_scale, e)) ||
+        (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)))
+        goto done;
+    /* samples per view: what a fit of this scene will see */
+    if (!(counts = calloc((size_t)sc.nviews, sizeof *counts))) {
+        rc = glint_err_set(e, GLINT_ENOMEM, "out of memory");
         goto done;
     }
-    if (store_scene_put(a->store, id, doc, &e)) {
-        out = api_fail(&e, "storing the scene");
+    rc = prep_sample_counts(&sc, counts, &total, e);
+    if (rc == GLINT_EINVAL) {
+        rc = api_reject(e, GLINT_EINVAL, "no-samples",
+                        "no view sees a lit surface pixel (check the cameras and lights): %.400s",
+                        e->msg);
         goto done;
     }
-    {
-        char loc[96];
-        snprintf(loc, sizeof loc, "/api/v1/scenes/%s", id);
-        out = http_json(201, api_scene_public(doc));
-        http_header(&out, "Location", loc);
+    if (rc || (rc = glint_id_new(id, e)) || (!owner && (rc = glint_id_new(made, e))))
+        goto done;
+    if (!owner)
+        owner = made;
+    if (!(doc = scene_doc(&sc, id, label, view_set, counts, total, base_spec, base_scale, e)) ||
+        json_object_set_new(doc, "owner", json_string(owner))) {
+        rc = doc ? glint_err_set(e, GLINT_ENOMEM, "out of memory") : e->code;
+        goto done;
     }
+    if ((rc = store_scene_put(a->store, id, doc, e))) {
+        glint_err_prefix(e, "storing the scene");
+        goto done;
+    }
+    /* the one answer that carries the owner key */
+    if ((*pub = api_scene_public(doc)))
+        json_object_set_new(*pub, "owner_key", json_string(owner));
 done:
     json_decref(doc);
-    json_decref(views);
-    json_decref(js);
-    free(text);
     free(counts);
-    samples_free(&smp);
-    raster_free_all(g, sc.nviews);
     scene_free(&sc);
     json_decref(body);
-    return out;
+    return rc;
+}
+
+static http_resp scene_create_h(http_req *req)
+{
+    json_t *pub = NULL;
+    char id[33];
+    glint_err e;
+    if (scene_create_do(req, &pub, id, &e))
+        return api_error(&e);
+    return created(pub, "scenes", id);
 }
 
 static http_resp scene_list(http_req *req)
 {
     app *a = req->app;
-    http_resp deny;
-    json_t *arr, *pub;
-    size_t i;
-    json_t *v;
+    json_t *arr, *pub, *v;
+    const char *owner = NULL, *o;
     glint_err e;
+    size_t i;
+    int all = auth_has_key(req);
 
-    if (auth_require_key(req, &deny))
-        return deny;
+    if (!all && auth_owner_key(req, &owner, &e))
+        return api_error(&e);
+    if (!all && !owner) {
+        api_reject(&e, GLINT_EAUTH, "owner-key-required",
+                   "listing scenes shows your own: send your owner key (\"X-Glint-Owner: "
+                   "KEY\", the one your scenes were created with)%s",
+                   a->cfg.api_key[0] ? ", or the daemon's API key for all of them" : "");
+        return api_error(&e);
+    }
     if (store_scene_list(a->store, &arr, &e))
         return api_fail(&e, "listing scenes");
     pub = json_array();
-    json_array_foreach(arr, i, v)
-        json_array_append_new(pub, api_scene_public(v));
+    json_array_foreach(arr, i, v) {
+        o = json_string_value(json_object_get(v, "owner"));
+        if (all || (o && glint_secret_equal(owner, o)))
+            json_array_append_new(pub, api_scene_public(v));
+    }
     json_decref(arr);
     return http_json(200, json_pack("{s:o, s:I}", "scenes", pub, "count",
                                     (json_int_t)json_array_size(pub)));
@@ -550,22 +584,26 @@ static http_resp scene_get(http_req *req)
     app *a = req->app;
     json_t *doc;
     glint_err e;
+    http_resp r;
     if (store_scene_get(a->store, req->param[0], &doc, &e))
         return api_fail(&e, "scene");
-    {
-        http_resp r = http_json(200, api_scene_public(doc));
-        json_decref(doc);
-        return r;
-    }
+    r = http_json(200, api_scene_public(doc));
+    json_decref(doc);
+    return r;
 }
 
 static http_resp scene_delete(http_req *req)
 {
     app *a = req->app;
-    http_resp deny;
+    json_t *doc;
     glint_err e;
-    if (auth_require_key(req, &deny))
-        return deny;
+    int rc;
+    if (store_scene_get(a->store, req->param[0], &doc, &e))
+        return api_fail(&e, "scene");
+    rc = auth_scene_owner(req, doc, &e);
+    json_decref(doc);
+    if (rc)
+        return api_error(&e);
     if (store_scene_delete(a->store, req->param[0], &e))
         return api_fail(&e, "scene");
     return http_bytes(204, NULL, "", 0);
@@ -573,22 +611,22 @@ static http_resp scene_delete(http_req *req)
 
 /* ---- per-view images ------------------------------------------------------------------ */
 
-/* The scene doc and a view index from the path (404 when either is unknown). */
-static http_resp scene_view_arg(http_req *req, json_t **doc, int *k)
+/* The scene doc and a view index from the path (GLINT_ENOTFOUND for either). */
+static int scene_view_arg(http_req *req, json_t **doc, int *k, glint_err *e)
 {
     app *a = req->app;
-    glint_err e;
     int n;
-    if (store_scene_get(a->store, req->param[0], doc, &e))
-        return api_fail(&e, "scene");
+    if (store_scene_get(a->store, req->param[0], doc, e))
+        return glint_err_prefix(e, "scene");
     n = (int)json_array_size(json_object_get(*doc, "views"));
     if (api_view_index(req->param[1], n, k)) {
         json_decref(*doc);
         *doc = NULL;
-        return http_problem(404, "not-found", "scene %s has no view \"%.16s\" (views 0..%d)",
-                            req->param[0], req->param[1], n - 1);
+        return api_reject(e, GLINT_ENOTFOUND, "not-found",
+                          "scene %s has no view \"%.16s\" (views 0..%d)", req->param[0],
+                          req->param[1], n - 1);
     }
-    return (http_resp){0, NULL};
+    return 0;
 }
 
 static http_resp image_response(const img *im, const char *format)
@@ -602,76 +640,79 @@ static http_resp image_response(const img *im, const char *format)
     return http_bytes_owned(200, exr ? "image/x-exr" : "image/png", data, len);
 }
 
+/* A number in (0, 1e6] from a query value (0), else -1. */
+static int positive_query(const char *text, double *out)
+{
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || *end || !isfinite(v) || !(v > 0.0) || v > 1e6)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+/* A base render with other settings than the scene's (not cached). */
+static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, glint_err *e)
+{
+    app *a = req->app;
+    const char *spec = http_query(req, "brdf"), *scale_q = http_query(req, "scale"),
+               *int_q = http_query(req, "intensity");
+    double scale = json_number_value(json_object_get(json_object_get(doc, "base"), "scale"));
+    cache_entry *se = NULL;
+    const scene *sc;
+    scene_view view;
+    size_t bytes;
+    int rc;
+
+    if (!spec)
+        spec = json_string_value(json_object_get(json_object_get(doc, "base"), "brdf"));
+    if (!spec)
+        spec = API_BASE_BRDF;
+    if (render_brdf_check(spec, e))
+        return api_reject(e, GLINT_EINVAL, "invalid-input", "brdf: %.400s", e->msg);
+    if (scale_q && positive_query(scale_q, &scale))
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "scale \"%.32s\" is not a number in (0, 1e6]", scale_q);
+    if ((rc = fitsvc_scene(a->fits, req->param[0], &se, e)))
+        return glint_err_prefix(e, "scene");
+    sc = prep_scene_of(se)->sc;
+    view = sc->views[k];
+    if (int_q && positive_query(int_q, &view.light_intensity))
+        rc = api_reject(e, GLINT_EINVAL, "invalid-input",
+                        "intensity \"%.32s\" is not a number in (0, 1e6]", int_q);
+    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height);
+    if (!rc && !(rc = admit_enter(a->work, bytes, "the base render", e))) {
+        if ((rc = render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, sc->width, sc->height,
+                              spec, scale, im, NULL, e)))
+            glint_err_prefix(e, "rendering");
+        admit_leave(a->work, bytes);
+    }
+    cache_release(fitsvc_cache(a->fits), se);
+    return rc;
+}
+
 static http_resp scene_base(http_req *req)
 {
     app *a = req->app;
+    const char *fmt = http_query(req, "format");
     json_t *doc = NULL;
-    const char *fmt = http_query(req, "format"), *spec = http_query(req, "brdf"),
-               *scale_q = http_query(req, "scale"), *int_q = http_query(req, "intensity");
     http_resp r;
-    img im;
     glint_err e;
-    int k;
+    img im;
+    int k, rc;
 
     memset(&im, 0, sizeof im);
     if (!fmt)
         fmt = "png";
     if (strcmp(fmt, "png") && strcmp(fmt, "exr"))
         return http_problem(422, "invalid-input", "format \"%.16s\" is not png or exr", fmt);
-    r = scene_view_arg(req, &doc, &k);
-    if (r.r)
-        return r;
-    if (!spec && !scale_q && !int_q) {
-        /* the base every session paints over (cached) */
-        if (store_scene_base(a->store, req->param[0], k, &im, &e))
-            r = api_fail(&e, "base render");
-        else
-            r = image_response(&im, fmt);
-    } else {
-        const scene *sc = NULL;
-        scene_view view;
-        brdf b;
-        gbuf g;
-        double scale = json_number_value(json_object_get(json_object_get(doc, "base"), "scale"));
-        char *end;
-        memset(&g, 0, sizeof g);
-        if (!spec)
-            spec = json_string_value(json_object_get(json_object_get(doc, "base"), "brdf"));
-        if (brdf_parse(spec ? spec : API_BASE_BRDF, &b, &e)) {
-            r = http_problem(422, "invalid-input", "brdf: %s", e.msg);
-            goto custom_done;
-        }
-        if (scale_q) {
-            scale = strtod(scale_q, &end);
-            if (end == scale_q || *end || !isfinite(scale) || !(scale > 0.0) || scale > 1e6) {
-                r = http_problem(422, "invalid-input", "scale \"%.32s\" is not a number in (0, 1e6]",
-                                 scale_q);
-                goto custom_done;
-            }
-        }
-        if (store_scene_acquire(a->store, req->param[0], &sc, &e)) {
-            r = api_fail(&e, "scene");
-            goto custom_done;
-        }
-        view = sc->views[k];
-        if (int_q) {
-            view.light_intensity = strtod(int_q, &end);
-            if (end == int_q || *end || !isfinite(view.light_intensity) ||
-                !(view.light_intensity > 0.0) || view.light_intensity > 1e6) {
-                r = http_problem(422, "invalid-input",
-                                 "intensity \"%.32s\" is not a number in (0, 1e6]", int_q);
-                goto custom_done;
-            }
-        }
-        if (raster_view(&sc->mesh, &view, sc->width, sc->height, &g, &e) ||
-            paint_views(&b, &g, &view, 1, scale, &im, NULL, &e))
-            r = api_fail(&e, "rendering");
-        else
-            r = image_response(&im, fmt);
-custom_done:
-        gbuf_free(&g);
-        store_scene_release(a->store, sc);
-    }
+    if (scene_view_arg(req, &doc, &k, &e))
+        return api_error(&e);
+    if (!http_query(req, "brdf") && !http_query(req, "scale") && !http_query(req, "intensity"))
+        rc = scenes_base(a, req->param[0], k, &im, &e); /* what every session paints over */
+    else
+        rc = scene_base_custom(req, doc, k, &im, &e);
+    r = rc ? api_fail(&e, "base render") : image_response(&im, fmt);
     img_free(&im);
     json_decref(doc);
     return r;
@@ -681,35 +722,29 @@ static http_resp scene_gbuffer(http_req *req)
 {
     app *a = req->app;
     json_t *doc = NULL;
-    const scene *sc = NULL;
-    gbuf g;
-    char dir[4200], path[4300], rnd[33];
-    char *data = NULL;
-    size_t len = 0;
+    cache_entry *se = NULL;
+    const scene *sc;
+    void *data = NULL;
+    size_t len = 0, bytes;
     glint_err e;
-    http_resp r;
-    int k;
+    int k, rc;
 
-    memset(&g, 0, sizeof g);
-    r = scene_view_arg(req, &doc, &k);
-    if (r.r)
-        return r;
+    if (scene_view_arg(req, &doc, &k, &e))
+        return api_error(&e);
     json_decref(doc);
-    snprintf(dir, sizeof dir, "%s/tmp", a->cfg.data_dir);
-    if (store_new_id(rnd, &e) || fsio_mkdirs(dir, &e))
-        return api_fail(&e, "G-buffer");
-    snprintf(path, sizeof path, "%s/gbuffer-%s.exr", dir, rnd);
-    if (store_scene_acquire(a->store, req->param[0], &sc, &e))
+    if (fitsvc_scene(a->fits, req->param[0], &se, &e))
         return api_fail(&e, "scene");
-    if (raster_view(&sc->mesh, &sc->views[k], sc->width, sc->height, &g, &e) ||
-        gbuf_write_exr(&g, path, &e) || fsio_read_all(path, (size_t)1 << 31, &data, &len, &e))
-        r = api_fail(&e, "G-buffer");
-    else
-        r = http_bytes_owned(200, "image/x-exr", data, len);
-    unlink(path);
-    gbuf_free(&g);
-    store_scene_release(a->store, sc);
-    return r;
+    sc = prep_scene_of(se)->sc;
+    bytes = render_gbuffer_peak_bytes(sc->width, sc->height);
+    if ((rc = admit_enter(a->work, bytes, "the G-buffer", &e)) == 0) {
+        rc = render_gbuffer_exr(&sc->mesh, &sc->views[k], sc->width, sc->height, &data, &len,
+                                &e);
+        admit_leave(a->work, bytes);
+    }
+    cache_release(fitsvc_cache(a->fits), se);
+    if (rc)
+        return api_fail(&e, "G-buffer");
+    return http_bytes_owned(200, "image/x-exr", data, len);
 }
 
 const http_route api_scenes_routes[] = {

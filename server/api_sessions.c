@@ -16,7 +16,9 @@
  * stored in one transaction before the answer (store.h), and each stroke
  * takes the session's next sequence number.  Writes to one session are
  * serialized here (a striped lock), so two requests never paint over the
- * same starting image. */
+ * same starting image.  Helpers return 0 or a code with a glint_err;
+ * handlers answer failures with api_error(). */
+#include <ctype.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -25,9 +27,13 @@
 #include "api_common.h"
 #include "app.h"
 #include "auth.h"
+#include "clock.h"
 #include "events.h"
 #include "fitsvc.h"
+#include "ids.h"
 #include "img.h"
+#include "memo.h"
+#include "scenes.h"
 #include "store.h"
 #include "stroke.h"
 
@@ -56,84 +62,31 @@ static pthread_mutex_t *session_lock(const char *id)
 
 /* ---- helpers -------------------------------------------------------------------- */
 
-/* A non-negative decimal integer (at most 18 digits). */
-static int api_parse_count(const char *text, long long *out)
-{
-    long long v = 0;
-    if (!text || !*text || strlen(text) > 18)
-        return -1;
-    for (const char *c = text; *c; c++) {
-        if (*c < '0' || *c > '9')
-            return -1;
-        v = 10 * v + (*c - '0');
-    }
-    *out = v;
-    return 0;
-}
-
-/* The session in the path, checked for access.  OUT: *doc (decref). */
-static http_resp session_load(http_req *req, int need_paint, json_t **doc)
-{
-    app *a = req->app;
-    http_resp deny;
-    glint_err e;
-    *doc = NULL;
-    if (store_session_get(a->store, req->param[0], doc, &e))
-        return api_fail(&e, "session");
-    if (auth_session(req, *doc, need_paint, &deny)) {
-        json_decref(*doc);
-        *doc = NULL;
-        return deny;
-    }
-    return (http_resp){0, NULL};
-}
-
 /* The session's scene doc and the view index of the path.  OUT: *scene_doc,
  * *k, *w, *h. */
-static http_resp session_view(http_req *req, const json_t *sdoc, json_t **scene_doc, int *k,
-                              int *w, int *h)
+static int session_view(http_req *req, const json_t *sdoc, json_t **scene_doc, int *k, int *w,
+                        int *h, glint_err *e)
 {
     app *a = req->app;
     const char *scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
-    glint_err e;
-    long long v;
-    int n;
+    int n, rc;
 
     *scene_doc = NULL;
-    if (store_scene_get(a->store, scene_id, scene_doc, &e)) {
-        if (e.code == GLINT_ENOTFOUND)
-            return http_problem(404, "not-found", "the scene of session %s no longer exists",
-                                req->param[0]);
-        return api_fail(&e, "scene");
-    }
+    if ((rc = store_scene_get(a->store, scene_id, scene_doc, e)))
+        return rc == GLINT_ENOTFOUND
+                   ? api_reject(e, rc, "not-found", "the scene of session %s no longer exists",
+                                req->param[0])
+                   : glint_err_prefix(e, "scene");
     n = (int)json_array_size(json_object_get(*scene_doc, "views"));
-    if (api_parse_count(req->param[1], &v) || v >= n) {
+    if (api_view_index(req->param[1], n, k)) {
         json_decref(*scene_doc);
         *scene_doc = NULL;
-        return http_problem(404, "not-found", "session %s has no view \"%.16s\" (views 0..%d)",
-                            req->param[0], req->param[1], n - 1);
+        return api_reject(e, GLINT_ENOTFOUND, "not-found",
+                          "session %s has no view \"%.16s\" (views 0..%d)", req->param[0],
+                          req->param[1], n - 1);
     }
-    *k = (int)v;
     *w = (int)json_integer_value(json_object_get(*scene_doc, "width"));
     *h = (int)json_integer_value(json_object_get(*scene_doc, "height"));
-    return (http_resp){0, NULL};
-}
-
-/* Any decoded image as float RGB (grey replicated, alpha dropped). */
-static int to_rgb(img *im, glint_err *e)
-{
-    img out;
-    size_t n = (size_t)im->width * (size_t)im->height;
-    int c = im->channels, rc;
-    if (c == 3)
-        return 0;
-    if ((rc = img_alloc(&out, im->width, im->height, 3, e)))
-        return rc;
-    for (size_t p = 0; p < n; p++)
-        for (int ch = 0; ch < 3; ch++)
-            out.px[3 * p + (size_t)ch] = im->px[(size_t)c * p + (size_t)(c >= 3 ? ch : 0)];
-    img_free(im);
-    *im = out;
     return 0;
 }
 
@@ -148,14 +101,14 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
     memset(im, 0, sizeof *im);
     if (rc == GLINT_ENOTFOUND) {
         *version = 0;
-        return store_scene_base(a->store, scene_id, k, im, e);
+        return scenes_base(a, scene_id, k, im, e);
     }
     if (rc)
         return rc;
     rc = img_read_mem(exr, len, im, e);
     free(exr);
     if (!rc)
-        rc = to_rgb(im, e);
+        rc = img_to_rgb(im, e);
     if (rc)
         glint_err_prefix(e, "stored painting of view %d", k);
     return rc;
@@ -199,200 +152,275 @@ static json_t *session_public(app *a, const json_t *doc, int paint)
     return o;
 }
 
-static http_resp session_create(http_req *req)
+static int session_create_do(http_req *req, json_t **out, char id[33], glint_err *e)
 {
     app *a = req->app;
-    http_resp deny, fail;
-    json_t *body, *doc, *jscene, *scene_doc = NULL;
+    json_t *body = NULL, *doc = NULL, *jscene, *scene_doc = NULL, *v;
+    char pt[33], vt[33], now[GLINT_TIME_LEN];
     const char *k;
-    json_t *v;
-    char id[33], pt[33], vt[33], now[32];
-    glint_err e;
+    int rc;
 
-    if (auth_require_key(req, &deny))
-        return deny;
+    if ((rc = auth_require_key(req, e)))
+        return rc;
     if (req->body_too_large)
-        return api_body_too_large(req, "the session request");
-    body = http_body_json(req, &fail);
-    if (!body)
-        return fail;
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the session request exceeds the request body limit of %zu bytes "
+                          "(max_body, glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if ((rc = api_body_json(req, &body, e)))
+        return rc;
     json_object_foreach(body, k, v)
         if (strcmp(k, "scene_id") != 0) {
-            fail = http_problem(422, "invalid-input", "unknown key \"%.64s\" (known: scene_id)", k);
-            json_decref(body);
-            return fail;
+            rc = api_reject(e, GLINT_EINVAL, "invalid-input",
+                            "unknown key \"%.64s\" (known: scene_id)", k);
+            goto done;
         }
     jscene = json_object_get(body, "scene_id");
     if (!json_is_string(jscene)) {
-        fail = http_problem(422, "invalid-input", "scene_id: %s",
-                            jscene ? "expected a string (a scene's id)" : "missing");
-        json_decref(body);
-        return fail;
+        rc = api_reject(e, GLINT_EINVAL, "invalid-input", "scene_id: %s",
+                        jscene ? "expected a string (a scene's id)" : "missing");
+        goto done;
     }
-    if (store_scene_get(a->store, json_string_value(jscene), &scene_doc, &e)) {
-        fail = e.code == GLINT_ENOTFOUND
-                   ? http_problem(422, "unknown-scene", "scene_id: %s", e.msg)
-                   : api_fail(&e, "scene");
-        json_decref(body);
-        return fail;
+    if ((rc = store_scene_get(a->store, json_string_value(jscene), &scene_doc, e))) {
+        if (rc == GLINT_ENOTFOUND)
+            rc = api_reject(e, GLINT_EINVAL, "unknown-scene", "scene_id: %.400s", e->msg);
+        goto done;
     }
-    json_decref(scene_doc);
-    if (store_new_id(id, &e) || store_new_id(pt, &e) || store_new_id(vt, &e)) {
-        json_decref(body);
-        return api_fail(&e, "creating a session");
-    }
-    store_now(now);
+    if ((rc = glint_id_new(id, e)) || (rc = glint_id_new(pt, e)) || (rc = glint_id_new(vt, e)))
+        goto done;
+    glint_time_iso_ms(now);
     doc = json_pack("{s:s, s:O, s:s, s:s, s:s}", "id", id, "scene_id", jscene, "paint_token", pt,
                     "view_token", vt, "created", now);
-    json_decref(body);
-    if (!doc)
-        return http_problem(500, NULL, "out of memory");
-    if (store_session_put(a->store, id, doc, &e)) {
-        json_decref(doc);
-        return e.code == GLINT_ENOTFOUND ? http_problem(422, "unknown-scene", "scene_id: %s", e.msg)
-                                         : api_fail(&e, "storing the session");
+    if (!doc) {
+        rc = glint_err_set(e, GLINT_ENOMEM, "out of memory");
+        goto done;
+    }
+    if ((rc = store_session_put(a->store, id, doc, e))) {
+        if (rc == GLINT_ENOTFOUND)
+            rc = api_reject(e, GLINT_EINVAL, "unknown-scene", "scene_id: %.400s", e->msg);
+        goto done;
     }
     json_object_set_new(doc, "last_seq", json_integer(0));
-    {
-        char loc[96];
-        http_resp r;
-        json_t *pub = session_public(a, doc, 1);
-        json_decref(doc);
-        snprintf(loc, sizeof loc, "/api/v1/sessions/%s", id);
-        r = http_json(201, pub);
-        http_header(&r, "Location", loc);
-        return r;
-    }
+    *out = session_public(a, doc, 1);
+done:
+    json_decref(doc);
+    json_decref(scene_doc);
+    json_decref(body);
+    return rc;
+}
+
+static http_resp session_create(http_req *req)
+{
+    json_t *pub = NULL;
+    char id[33], loc[96];
+    glint_err e;
+    http_resp r;
+    if (session_create_do(req, &pub, id, &e))
+        return api_error(&e);
+    snprintf(loc, sizeof loc, "/api/v1/sessions/%s", id);
+    r = http_json(201, pub);
+    http_header(&r, "Location", loc);
+    return r;
 }
 
 static http_resp session_get(http_req *req)
 {
     app *a = req->app;
     json_t *doc;
-    http_resp r = session_load(req, 0, &doc);
-    http_resp probe = {0, NULL};
-    int paint;
-    if (r.r)
-        return r;
-    /* paint access: ask auth whether this request could write */
-    paint = auth_session(req, doc, 1, &probe) == 0;
-    if (!paint && probe.r)
-        MHD_destroy_response(probe.r);
-    r = http_json(200, session_public(a, doc, paint));
+    glint_err e, probe;
+    http_resp r;
+    if (api_session(req, req->param[0], 0, &doc, &e))
+        return api_error(&e);
+    /* paint access: could this request write? */
+    r = http_json(200, session_public(a, doc, auth_session(req, doc, 1, &probe) == 0));
     json_decref(doc);
     return r;
 }
 
 /* ---- paintings ---------------------------------------------------------------------- */
 
+/* The body as a painting of w x h: a PNG, JPEG or OpenEXR image.  OUT:
+ * *im (RGB, finite). */
+/* The image formats a painting may come in: what their bytes begin with and
+ * the media types that name them. */
+static const struct {
+    const char *name, *magic, *types[3];
+    size_t magic_len;
+} painting_formats[] = {
+    {"PNG", "\x89PNG\r\n\x1a\n", {"image/png", NULL}, 8},
+    {"JPEG", "\xff\xd8\xff", {"image/jpeg", "image/jpg", NULL}, 3},
+    {"OpenEXR", "\x76\x2f\x31\x01", {"image/x-exr", "image/exr", NULL}, 4},
+};
+enum { PAINTING_NFORMATS = sizeof painting_formats / sizeof painting_formats[0] };
+
+/* The body's format by its first bytes (-1: none of them). */
+static int painting_sniff(const void *body, size_t len)
+{
+    for (int i = 0; i < PAINTING_NFORMATS; i++)
+        if (len >= painting_formats[i].magic_len &&
+            memcmp(body, painting_formats[i].magic, painting_formats[i].magic_len) == 0)
+            return i;
+    return -1;
+}
+
+/* Content-Type against the body: none or application/octet-stream leaves
+ * the bytes to tell; an image type must name the format the bytes are in;
+ * anything else is refused (415).  Only PNG, JPEG and OpenEXR bytes reach the
+ * image decoder. */
+static int painting_check_type(http_req *req, int w, int h, glint_err *e)
+{
+    const char *ct = http_header_in(req, "Content-Type");
+    int f = painting_sniff(req->body, req->body_len);
+    char type[64];
+    size_t n = 0;
+
+    if (ct) {
+        while (*ct == ' ')
+            ct++;
+        while (ct[n] && ct[n] != ';' && ct[n] != ' ' && n + 1 < sizeof type) {
+            type[n] = (char)tolower((unsigned char)ct[n]);
+            n++;
+        }
+        type[n] = 0;
+    }
+    if (ct && n && strcmp(type, "application/octet-stream")) {
+        int named = -1;
+        for (int i = 0; i < PAINTING_NFORMATS && named < 0; i++)
+            for (int j = 0; painting_formats[i].types[j]; j++)
+                if (strcmp(type, painting_formats[i].types[j]) == 0)
+                    named = i;
+        if (named < 0)
+            return api_reject(e, GLINT_EUNSUPPORTED, "unsupported-media-type",
+                              "Content-Type \"%.64s\" is not a painting's: send image/png, "
+                              "image/jpeg, image/x-exr or application/octet-stream", ct);
+        if (f != named)
+            return api_reject(e, GLINT_EUNSUPPORTED, "unsupported-media-type",
+                              "Content-Type says %s but the body is %s", type,
+                              f < 0 ? "none of PNG, JPEG or OpenEXR" : painting_formats[f].name);
+    }
+    if (f < 0)
+        return api_reject(e, GLINT_EINVAL, "invalid-image",
+                          "the body is not a PNG, JPEG or OpenEXR image (its first bytes say "
+                          "none of them); this view expects %dx%d", w, h);
+    return 0;
+}
+
+static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_err *e)
+{
+    app *a = req->app;
+    int rc;
+
+    memset(im, 0, sizeof *im);
+    if (req->body_too_large)
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the painting exceeds the request body limit of %zu bytes "
+                          "(max_body, glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if (req->body_len == 0)
+        return api_reject(e, GLINT_EINVAL, "empty-body",
+                          "the body must be the painting: PNG, JPEG or OpenEXR bytes, %dx%d", w,
+                          h);
+    if ((rc = painting_check_type(req, w, h, e)))
+        return rc;
+    rc = img_read_mem(req->body, req->body_len, im, e);
+    if (rc == GLINT_ENONFINITE)
+        return api_reject(e, rc, "non-finite", "the painting has non-finite pixels: %.400s",
+                          e->msg);
+    if (rc == GLINT_ENOMEM)
+        return glint_err_prefix(e, "decoding the painting");
+    if (rc)
+        return api_reject(e, GLINT_EINVAL, "invalid-image",
+                          "the body is not a readable PNG, JPEG or OpenEXR image: %.400s",
+                          e->msg);
+    if (im->width > a->cfg.lim.max_image_dim || im->height > a->cfg.lim.max_image_dim)
+        rc = api_reject(e, GLINT_ETOOBIG, "image-too-large",
+                        "the painting is %dx%d, beyond the limit of %d pixels a side "
+                        "(max_image_dim, glintd --max-image-dim); this view expects %dx%d",
+                        im->width, im->height, a->cfg.lim.max_image_dim, w, h);
+    else if (im->width != w || im->height != h)
+        rc = api_reject(e, GLINT_EINVAL, "wrong-size",
+                        "the painting is %dx%d; view %d of this scene expects exactly %dx%d "
+                        "(the scene's raster size)",
+                        im->width, im->height, k, w, h);
+    else if ((rc = img_to_rgb(im, e)) || (rc = img_check_finite(im, e)))
+        rc = rc == GLINT_ENONFINITE ? api_reject(e, rc, "non-finite",
+                                                 "the painting has non-finite pixels: %.400s",
+                                                 e->msg)
+                                    : rc;
+    if (rc)
+        img_free(im);
+    return rc;
+}
+
+/* Conditional replace: If-Match names the painting version the client built
+ * its image from ("0" for a view never painted).  Called under the session
+ * lock, so no stroke can slip in between. */
+static int if_match(http_req *req, int k, glint_err *e)
+{
+    app *a = req->app;
+    const char *hdr = http_header_in(req, "If-Match");
+    const char *p = hdr && hdr[0] == '"' ? hdr + 1 : hdr;
+    json_t *list = NULL, *it;
+    long long want;
+    int64_t cur = 0;
+    char *end;
+    size_t i;
+
+    if (!hdr)
+        return 0;
+    want = strtoll(p, &end, 10);
+    if (end == p || want < 0)
+        return api_reject(e, GLINT_EINVAL, "bad-if-match",
+                          "If-Match must be a painting version (a whole number), got '%.40s'",
+                          hdr);
+    if (store_paintings_list(a->store, req->param[0], &list, e) == 0) {
+        json_array_foreach(list, i, it) {
+            if (json_integer_value(json_object_get(it, "view")) == k)
+                cur = json_integer_value(json_object_get(it, "version"));
+        }
+        json_decref(list);
+    }
+    if (cur != want)
+        return api_reject(e, GLINT_ECONFLICT, "painting-changed",
+                          "view %d is at painting version %lld, not %lld (If-Match): someone "
+                          "changed it; read it again", k, (long long)cur, want);
+    return 0;
+}
+
 static http_resp painting_put(http_req *req)
 {
     app *a = req->app;
     json_t *sdoc = NULL, *scene_doc = NULL;
-    http_resp r;
-    img im;
+    http_resp r = {0, NULL};
+    img im = {0};
     void *exr = NULL;
     size_t len = 0;
     int64_t version = 0, seq = 0;
     glint_err e;
     int k, w, h, rc;
 
-    memset(&im, 0, sizeof im);
-    r = session_load(req, 1, &sdoc);
-    if (r.r)
-        return r;
-    r = session_view(req, sdoc, &scene_doc, &k, &w, &h);
-    if (r.r)
+    if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)) ||
+        (rc = painting_decode(req, k, w, h, &im, &e)))
         goto done;
-    if (req->body_too_large) {
-        r = api_body_too_large(req, "the painting");
-        goto done;
-    }
-    if (req->body_len == 0) {
-        r = http_problem(400, "empty-body",
-                         "the body must be the painting: PNG, JPEG or OpenEXR bytes, %dx%d", w, h);
-        goto done;
-    }
-    rc = img_read_mem(req->body, req->body_len, &im, &e);
-    if (rc == GLINT_ENONFINITE) {
-        r = http_problem(422, "non-finite", "the painting has non-finite pixels: %s", e.msg);
-        goto done;
-    } else if (rc == GLINT_ENOMEM) {
-        r = api_fail(&e, "decoding the painting");
-        goto done;
-    } else if (rc) {
-        r = http_problem(422, "invalid-image",
-                         "the body is not a readable PNG, JPEG or OpenEXR image: %s", e.msg);
-        goto done;
-    }
-    if (im.width > a->cfg.lim.max_image_dim || im.height > a->cfg.lim.max_image_dim) {
-        r = http_problem(413, "image-too-large",
-                         "the painting is %dx%d, beyond the limit of %d pixels a side "
-                         "(max_image_dim, glintd --max-image-dim); this view expects %dx%d",
-                         im.width, im.height, a->cfg.lim.max_image_dim, w, h);
-        goto done;
-    }
-    if (im.width != w || im.height != h) {
-        r = http_problem(422, "wrong-size",
-                         "the painting is %dx%d; view %d of this scene expects exactly %dx%d "
-                         "(the scene's raster size)",
-                         im.width, im.height, k, w, h);
-        goto done;
-    }
-    if ((rc = to_rgb(&im, &e)) || (rc = img_check_finite(&im, &e)) ||
-        (rc = img_write_mem("exr", &im, &exr, &len, &e))) {
-        r = rc == GLINT_ENONFINITE
-                ? http_problem(422, "non-finite", "the painting has non-finite pixels: %s", e.msg)
-                : api_fail(&e, "encoding the painting");
+    if ((rc = img_write_mem("exr", &im, &exr, &len, &e))) {
+        glint_err_prefix(&e, "encoding the painting");
         goto done;
     }
     pthread_mutex_lock(session_lock(req->param[0]));
-    {
-        /* Conditional replace: If-Match names the painting version the client
-         * built its image from ("0" for a view never painted).  Checked under
-         * the session lock, so no stroke can slip in between. */
-        const char *im_hdr = http_header_in(req, "If-Match");
-        if (im_hdr) {
-            char *end;
-            long long want = strtoll(im_hdr + (im_hdr[0] == '"'), &end, 10);
-            int64_t cur = 0;
-            json_t *list = NULL;
-            if (end == im_hdr + (im_hdr[0] == '"') || want < 0) {
-                pthread_mutex_unlock(session_lock(req->param[0]));
-                r = http_problem(400, "bad-if-match",
-                                 "If-Match must be a painting version (a whole number), got '%s'",
-                                 im_hdr);
-                goto done;
-            }
-            if (store_paintings_list(a->store, req->param[0], &list, &e) == 0) {
-                size_t i;
-                json_t *it;
-                json_array_foreach(list, i, it) {
-                    if (json_integer_value(json_object_get(it, "view")) == k)
-                        cur = json_integer_value(json_object_get(it, "version"));
-                }
-                json_decref(list);
-            }
-            if (cur != want) {
-                pthread_mutex_unlock(session_lock(req->param[0]));
-                r = http_problem(412, "painting-changed",
-                                 "view %d is at painting version %lld, not %lld (If-Match): "
-                                 "someone changed it; read it again", k, (long long)cur, want);
-                goto done;
-            }
-        }
-    }
-    rc = store_painting_put(a->store, req->param[0], k, exr, len, &version, &seq, &e);
+    rc = if_match(req, k, &e);
+    if (!rc && (rc = store_painting_put(a->store, req->param[0], k, exr, len, &version, &seq, &e)))
+        glint_err_prefix(&e, "storing the painting");
     pthread_mutex_unlock(session_lock(req->param[0]));
-    if (rc) {
-        r = api_fail(&e, "storing the painting");
+    if (rc)
         goto done;
-    }
-    fitsvc_painting_offer(a->fits, req->param[0], k, (long long)version, &im);
+    memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &im);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I}", "view", k, "version", (json_int_t)version,
                                  "seq", (json_int_t)seq));
 done:
+    if (rc)
+        r = api_error(&e);
     free(exr);
     img_free(&im);
     json_decref(scene_doc);
@@ -405,25 +433,21 @@ static http_resp painting_get(http_req *req)
     app *a = req->app;
     json_t *sdoc = NULL, *scene_doc = NULL;
     const char *fmt = http_query(req, "format");
-    http_resp r;
+    http_resp r = {0, NULL};
     void *exr = NULL, *data = NULL;
     size_t len = 0;
     int64_t version = 0;
     char vbuf[32];
     glint_err e;
-    img im;
+    img im = {0};
     int k, w, h, rc;
 
-    memset(&im, 0, sizeof im);
     if (!fmt)
         fmt = "png";
     if (strcmp(fmt, "png") && strcmp(fmt, "exr"))
         return http_problem(422, "invalid-input", "format \"%.16s\" is not png or exr", fmt);
-    r = session_load(req, 0, &sdoc);
-    if (r.r)
-        return r;
-    r = session_view(req, sdoc, &scene_doc, &k, &w, &h);
-    if (r.r)
+    if ((rc = api_session(req, req->param[0], 0, &sdoc, &e)) ||
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
         goto done;
     rc = store_painting_get(a->store, req->param[0], k, &exr, &len, &version, &e);
     if (rc == 0 && strcmp(fmt, "exr") == 0) {
@@ -431,15 +455,14 @@ static http_resp painting_get(http_req *req)
         exr = NULL;
     } else if (rc == 0 || rc == GLINT_ENOTFOUND) {
         const char *scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
-        rc = rc == 0 ? img_read_mem(exr, len, &im, &e)
-                     : store_scene_base(a->store, scene_id, k, &im, &e);
+        rc = rc == 0 ? img_read_mem(exr, len, &im, &e) : scenes_base(a, scene_id, k, &im, &e);
         if (rc || (rc = img_write_mem(fmt, &im, &data, &len, &e))) {
-            r = api_fail(&e, "painting");
+            glint_err_prefix(&e, "painting");
             goto done;
         }
         r = http_bytes_owned(200, strcmp(fmt, "exr") ? "image/png" : "image/x-exr", data, len);
     } else {
-        r = api_fail(&e, "painting");
+        glint_err_prefix(&e, "painting");
         goto done;
     }
     snprintf(vbuf, sizeof vbuf, "%lld", (long long)version);
@@ -447,6 +470,8 @@ static http_resp painting_get(http_req *req)
     http_header(&r, "X-Glint-Version", vbuf);
     http_header(&r, "Cache-Control", "no-store");
 done:
+    if (rc)
+        r = api_error(&e);
     free(exr);
     img_free(&im);
     json_decref(scene_doc);
@@ -456,107 +481,131 @@ done:
 
 /* ---- strokes ------------------------------------------------------------------------ */
 
+/* The strokes of the body, validated and in canonical form.  OUT: *list, *n,
+ * *canon (the stroke objects to store). */
+static int strokes_parse(http_req *req, stroke **list, int *n, json_t **canon, glint_err *e)
+{
+    app *a = req->app;
+    stroke_limits lim = {a->cfg.lim.max_strokes, a->cfg.lim.max_stroke_points};
+    json_t *body = NULL, *v;
+    const char *key;
+    int rc;
+
+    *list = NULL;
+    *n = 0;
+    *canon = NULL;
+    if (req->body_too_large)
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the strokes exceed the request body limit of %zu bytes "
+                          "(max_body, glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if ((rc = api_body_json(req, &body, e)))
+        return rc;
+    json_object_foreach(body, key, v)
+        if (strcmp(key, "strokes") != 0) {
+            rc = api_reject(e, GLINT_EINVAL, "invalid-input",
+                            "unknown key \"%.64s\" (known: strokes)", key);
+            goto done;
+        }
+    if (!json_object_get(body, "strokes")) {
+        rc = api_reject(e, GLINT_EINVAL, "invalid-input",
+                        "strokes: missing (an array of strokes)");
+        goto done;
+    }
+    rc = stroke_list_from_json(json_object_get(body, "strokes"), &lim, list, n, e);
+    if (rc == GLINT_ERANGE) {
+        rc = api_reject(e, GLINT_ETOOBIG, "too-many-strokes",
+                        "%.300s (limits: max_strokes %d per request, glintd --max-strokes; "
+                        "max_stroke_points %d per stroke)",
+                        e->msg, lim.max_strokes, lim.max_points);
+        goto done;
+    }
+    if (rc) {
+        if (rc != GLINT_ENOMEM)
+            glint_err_kind(e, rc == GLINT_ENONFINITE ? "non-finite" : "invalid-stroke");
+        goto done;
+    }
+    *canon = json_array();
+    for (int i = 0; i < *n && !rc; i++) {
+        json_t *j = stroke_to_json(&(*list)[i]);
+        if (!j || json_array_append_new(*canon, j))
+            rc = glint_err_set(e, GLINT_ENOMEM, "out of memory");
+    }
+done:
+    json_decref(body);
+    return rc;
+}
+
 static http_resp strokes_post(http_req *req)
 {
     app *a = req->app;
-    json_t *sdoc = NULL, *scene_doc = NULL, *body = NULL, *canon = NULL;
+    json_t *sdoc = NULL, *scene_doc = NULL, *canon = NULL;
     stroke *list = NULL;
     int n = 0, k, w, h, rc, need_base = 0, locked = 0;
-    stroke_limits lim = {a->cfg.lim.max_strokes, a->cfg.lim.max_stroke_points};
-    img cur, base;
+    img cur = {0}, base = {0};
     void *exr = NULL;
     size_t len = 0;
     int64_t first = 0, last = 0, version = 0;
     long pixels = 0;
     const char *scene_id;
     glint_err e;
-    http_resp r;
+    http_resp r = {0, NULL};
 
-    memset(&cur, 0, sizeof cur);
-    memset(&base, 0, sizeof base);
-    r = session_load(req, 1, &sdoc);
-    if (r.r)
-        return r;
-    r = session_view(req, sdoc, &scene_doc, &k, &w, &h);
-    if (r.r)
+    if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)) ||
+        (rc = strokes_parse(req, &list, &n, &canon, &e)))
         goto done;
-    if (req->body_too_large) {
-        r = api_body_too_large(req, "the strokes");
-        goto done;
-    }
-    body = http_body_json(req, &r);
-    if (!body)
-        goto done;
-    r.r = NULL;
+    for (int i = 0; i < n; i++)
+        need_base |= list[i].mode == STROKE_ERASE;
     {
-        const char *key;
-        json_t *v;
-        json_object_foreach(body, key, v)
-            if (strcmp(key, "strokes") != 0) {
-                r = http_problem(422, "invalid-input", "unknown key \"%.64s\" (known: strokes)",
-                                 key);
-                goto done;
-            }
-    }
-    if (!json_object_get(body, "strokes")) {
-        r = http_problem(422, "invalid-input", "strokes: missing (an array of strokes)");
-        goto done;
-    }
-    rc = stroke_list_from_json(json_object_get(body, "strokes"), &lim, &list, &n, &e);
-    if (rc == GLINT_ERANGE) {
-        r = http_problem(413, "too-many-strokes",
-                         "%s (limits: max_strokes %d per request, glintd --max-strokes; "
-                         "max_stroke_points %d per stroke)",
-                         e.msg, lim.max_strokes, lim.max_points);
-        goto done;
-    } else if (rc) {
-        r = http_problem(rc == GLINT_ENOMEM ? 500 : 422,
-                         rc == GLINT_ENONFINITE ? "non-finite" : "invalid-stroke", "%s", e.msg);
-        goto done;
-    }
-    canon = json_array();
-    for (int i = 0; i < n; i++) {
-        json_t *j = stroke_to_json(&list[i]);
-        if (!j || json_array_append_new(canon, j)) {
-            r = http_problem(500, NULL, "out of memory");
+        /* bound the work before taking the session's lock */
+        double cost = stroke_list_cost(list, n, w, h);
+        if (cost > a->cfg.lim.max_stroke_work) {
+            rc = api_reject(&e, GLINT_ETOOBIG, "too-much-brush-work",
+                            "these strokes need %.3g brush evaluations (points times the pixels "
+                            "their diameter covers), over the limit of %.3g per request "
+                            "(max_stroke_work, glintd --max-stroke-work %.0f): send fewer points "
+                            "or a smaller diameter, or split the request",
+                            cost, a->cfg.lim.max_stroke_work, a->cfg.lim.max_stroke_work / 1e6);
             goto done;
         }
-        need_base |= list[i].mode == STROKE_ERASE;
     }
     scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
 
     pthread_mutex_lock(session_lock(req->param[0]));
     locked = 1;
     if ((rc = view_current(a, req->param[0], scene_id, k, &cur, &version, &e))) {
-        r = api_fail(&e, "reading the view's image");
+        glint_err_prefix(&e, "reading the view's image");
         goto done;
     }
-    if (need_base && (rc = store_scene_base(a->store, scene_id, k, &base, &e))) {
-        r = api_fail(&e, "base render");
+    if (need_base && (rc = scenes_base(a, scene_id, k, &base, &e))) {
+        glint_err_prefix(&e, "base render");
         goto done;
     }
     if (cur.width != w || cur.height != h) {
-        r = http_problem(500, NULL, "the stored image of view %d is %dx%d, not %dx%d", k,
-                         cur.width, cur.height, w, h);
+        rc = glint_err_set(&e, GLINT_EINTERNAL, "the stored image of view %d is %dx%d, not %dx%d",
+                           k, cur.width, cur.height, w, h);
         goto done;
     }
-    rc = stroke_apply_list(list, n, &cur, need_base ? &base : NULL, &pixels, &e);
-    if (rc) {
-        r = http_problem(rc == GLINT_ENOMEM ? 500 : 422,
-                         rc == GLINT_ENONFINITE ? "non-finite" : "invalid-stroke",
-                         "%s (nothing was applied)", e.msg);
+    if ((rc = stroke_apply_list(list, n, &cur, need_base ? &base : NULL, &pixels, &e))) {
+        if (rc != GLINT_ENOMEM) {
+            char msg[GLINT_ERR_MSG_MAX];
+            snprintf(msg, sizeof msg, "%.400s (nothing was applied)", e.msg);
+            api_reject(&e, rc, rc == GLINT_ENONFINITE ? "non-finite" : "invalid-stroke", "%s",
+                       msg);
+        }
         goto done;
     }
     if ((rc = img_write_mem("exr", &cur, &exr, &len, &e)) ||
         (rc = store_strokes_append(a->store, req->param[0], k, canon, exr, len, &first, &last,
                                    &version, &e))) {
-        r = api_fail(&e, "storing the strokes");
+        glint_err_prefix(&e, "storing the strokes");
         goto done;
     }
     pthread_mutex_unlock(session_lock(req->param[0]));
     locked = 0;
-    /* the fit service keeps the decoded image, so a fit need not decode it */
-    fitsvc_painting_offer(a->fits, req->param[0], k, (long long)version, &cur);
+    /* the memo keeps the decoded image, so a fit need not decode it */
+    memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &cur);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I, s:I, s:i, s:I}", "view", k, "first_seq",
                                  (json_int_t)first, "last_seq", (json_int_t)last, "version",
@@ -565,12 +614,13 @@ static http_resp strokes_post(http_req *req)
 done:
     if (locked)
         pthread_mutex_unlock(session_lock(req->param[0]));
+    if (rc)
+        r = api_error(&e);
     free(exr);
     img_free(&cur);
     img_free(&base);
     stroke_list_free(list, n);
     json_decref(canon);
-    json_decref(body);
     json_decref(scene_doc);
     json_decref(sdoc);
     return r;
@@ -585,7 +635,6 @@ static http_resp strokes_get(http_req *req)
     int64_t last = 0;
     int more = 0;
     glint_err e;
-    http_resp r;
 
     if (since_q && api_parse_count(since_q, &since))
         return http_problem(422, "invalid-input",
@@ -594,9 +643,8 @@ static http_resp strokes_get(http_req *req)
     if (limit_q && (api_parse_count(limit_q, &limit) || limit < 1 || limit > STROKES_PAGE_MAX))
         return http_problem(422, "invalid-input", "limit \"%.32s\" is not a whole number in 1..%d",
                             limit_q, STROKES_PAGE_MAX);
-    r = session_load(req, 0, &sdoc);
-    if (r.r)
-        return r;
+    if (api_session(req, req->param[0], 0, &sdoc, &e))
+        return api_error(&e);
     json_decref(sdoc);
     if (store_strokes_page(a->store, req->param[0], since, (int)limit, &arr, &more, &last, &e))
         return api_fail(&e, "strokes");
@@ -613,7 +661,7 @@ static http_resp events_get(http_req *req)
     const char *since_q = http_query(req, "since");
     const char *last_id = http_header_in(req, "Last-Event-ID");
     long long since = 0;
-    http_resp r;
+    glint_err e;
 
     /* a reconnecting EventSource sends Last-Event-ID: it wins over ?since */
     if (last_id && *last_id) {
@@ -625,9 +673,8 @@ static http_resp events_get(http_req *req)
                             "since \"%.32s\" is not a whole number >= 0 (a sequence number)",
                             since_q);
     }
-    r = session_load(req, 0, &sdoc);
-    if (r.r)
-        return r;
+    if (api_session(req, req->param[0], 0, &sdoc, &e))
+        return api_error(&e);
     json_decref(sdoc);
     return events_stream(a->events, req, req->param[0], since, http_query(req, "name"));
 }

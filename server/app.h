@@ -1,9 +1,11 @@
 /* app.h: glintd's shared state, handed to every handler as req->app.
  *
  * Modules: http (transport), store (SQLite metadata + blob files in the data
- * directory), the api_* handlers.  Numerics stay in core/: handlers call
- * core's stages (scene, raster, fit, material, glr) and never compute
- * themselves. */
+ * directory), events (session streams), fitsvc (the precomputation cache,
+ * jobs and fits), scenes (core scenes and base renders), the api_*
+ * handlers, admit (expensive work against a memory budget).  Numerics stay in core/: the server reaches them through the
+ * method (method.h), pipeline (prep.h), material (material.h) and render
+ * (render.h) interfaces only. */
 #ifndef GLINTD_APP_H
 #define GLINTD_APP_H
 
@@ -19,6 +21,7 @@ typedef struct app_limits {
     int max_mesh_tris;        /* triangles of an uploaded mesh */
     int max_strokes;          /* strokes in one request */
     int max_stroke_points;    /* points in one stroke */
+    double max_stroke_work;   /* distance evaluations of one request's strokes (stroke_cost) */
     int max_views;            /* views of a scene */
 } app_limits;
 
@@ -28,9 +31,17 @@ typedef struct app_config {
     char data_dir[4096];
     char web_dir[4096];
     size_t cache_bytes;       /* in-memory budget for precomputations */
+    size_t work_bytes;        /* memory budget of expensive work in flight (admit.h) */
+    int work_slots;           /* ... pieces of it at once */
+    int work_wait_s;          /* how long a request waits for room (admit.h) */
     int worker_threads;       /* background jobs */
-    unsigned timeout_s;       /* idle connection timeout */
-    unsigned max_connections;
+    unsigned timeout_s;       /* idle timeout of a kept-alive connection */
+    unsigned max_connections; /* connections served at once (health reserve aside) */
+    unsigned max_connections_per_ip; /* ... per client */
+    unsigned max_waiting_per_ip;     /* connections of a client waiting for their request head */
+    unsigned health_reserve;  /* extra connections for health checks */
+    unsigned header_timeout_s;       /* the request head must arrive within this */
+    unsigned min_body_rate;   /* bytes/s a request body must keep up (0: no minimum) */
     char api_key[256];        /* "" = none */
     int quiet;
     app_limits lim;
@@ -39,7 +50,8 @@ typedef struct app_config {
 struct store;
 struct events;
 struct fitsvc;
-struct glr;
+struct render;
+struct admit;
 
 typedef struct app {
     app_config cfg;
@@ -47,10 +59,9 @@ typedef struct app {
     http_server *http;
     struct store *store;      /* store.h: SQLite + blobs */
     struct events *events;    /* events.h: per-session SSE streams */
-    struct fitsvc *fits;      /* fitsvc.h: precomputation cache, jobs */
-    struct glr *gl;           /* glr.h: EGL renderer, opened lazily; */
-    pthread_mutex_t gl_lock;  /* one thread at a time uses it */
-    int gl_failed;            /* 1 after glr_open failed (previews then use the CPU) */
+    struct fitsvc *fits;      /* fitsvc.h: the cache, jobs, fits */
+    struct render *render;    /* core render.h: previews (EGL opened on first use) */
+    struct admit *work;       /* admit.h: renders, G-buffers and fits against a budget */
 } app;
 
 /* Routes of each api module (defined in api_*.c). */
@@ -60,7 +71,11 @@ extern const http_route api_scenes_routes[];     /* scenes, meshes */
 extern const int api_scenes_nroutes;
 extern const http_route api_sessions_routes[];   /* sessions, paintings, strokes, events */
 extern const int api_sessions_nroutes;
-extern const http_route api_fits_routes[];       /* fits, jobs, materials, methods */
+extern const http_route api_fits_routes[];       /* fits, jobs */
 extern const int api_fits_nroutes;
+extern const http_route api_materials_routes[];  /* materials, previews, exports */
+extern const int api_materials_nroutes;
+extern const http_route api_methods_routes[];    /* the methods catalogue */
+extern const int api_methods_nroutes;
 
 #endif

@@ -1,23 +1,11 @@
 /* auth.c: the API key and session tokens (auth.h). */
 #include "auth.h"
 
+#include <ctype.h>
 #include <string.h>
 
 #include "app.h"
-#include "events.h"
-
-/* Constant-time string equality: the time depends on the lengths only. */
-static int auth_equal(const char *a, const char *b)
-{
-    size_t la = strlen(a), lb = strlen(b), n = la > lb ? la : lb;
-    unsigned char diff = (unsigned char)(la != lb);
-    for (size_t i = 0; i < n; i++) {
-        unsigned char ca = i < la ? (unsigned char)a[i] : 0;
-        unsigned char cb = i < lb ? (unsigned char)b[i] : 0;
-        diff |= (unsigned char)(ca ^ cb);
-    }
-    return diff == 0;
-}
+#include "ids.h"
 
 /* The API key the request presents, or NULL. */
 static const char *auth_key_given(http_req *req)
@@ -32,72 +20,107 @@ static const char *auth_key_given(http_req *req)
     return http_header_in(req, "X-Api-Key");
 }
 
-/* 1 when an API key is configured and the request presents it. */
-static int auth_has_key(http_req *req)
+int auth_has_key(http_req *req)
 {
     app *a = req->app;
     const char *k;
     if (!a->cfg.api_key[0])
         return 0;
     k = auth_key_given(req);
-    return k && auth_equal(k, a->cfg.api_key);
+    return k && glint_secret_equal(k, a->cfg.api_key);
 }
 
-int auth_require_key(http_req *req, http_resp *deny)
+int auth_require_key(http_req *req, glint_err *err)
 {
     app *a = req->app;
     const char *k;
     if (!a->cfg.api_key[0])
         return 0;
     k = auth_key_given(req);
-    if (k && auth_equal(k, a->cfg.api_key))
+    if (k && glint_secret_equal(k, a->cfg.api_key))
         return 0;
-    *deny = http_problem(401, "api-key-required",
-                         k ? "the API key presented does not match this daemon's key"
-                           : "this daemon requires its API key for %s %s: send "
-                             "\"Authorization: Bearer KEY\" or \"X-Api-Key: KEY\"",
-                         req->method, req->path);
-    http_header(deny, "WWW-Authenticate", "Bearer realm=\"glintd\"");
-    return -1;
+    if (k)
+        glint_err_set(err, GLINT_EAUTH, "the API key presented does not match this daemon's key");
+    else
+        glint_err_set(err, GLINT_EAUTH,
+                      "this daemon requires its API key for %s %s: send \"Authorization: Bearer "
+                      "KEY\" or \"X-Api-Key: KEY\"", req->method, req->path);
+    return glint_err_kind(err, "api-key-required");
 }
 
-int auth_session(http_req *req, const json_t *session_doc, int need_paint, http_resp *deny)
+int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err)
 {
-    app *a = req->app;
     const char *tok = http_header_in(req, "X-Glint-Token");
     const char *paint = json_string_value(json_object_get(session_doc, "paint_token"));
     const char *view = json_string_value(json_object_get(session_doc, "view_token"));
-
-    /* Every handler that touches a session passes here with the app: the
-     * events module learns the store from it (see events_attach_store). */
-    events_attach_store(a->events, a->store);
 
     if (!tok)
         tok = http_query(req, "token");
     if (auth_has_key(req))
         return 0;
-    if (!paint || !view) {
-        *deny = http_problem(500, NULL, "session record has no tokens");
-        return -1;
-    }
+    if (!paint || !view)
+        return glint_err_set(err, GLINT_EINTERNAL, "session record has no tokens");
     if (!tok || !*tok) {
-        *deny = http_problem(401, "token-required",
-                             "this session needs its token: send \"X-Glint-Token: TOKEN\" or "
-                             "?token=TOKEN (the paint token from the session's share link, or "
-                             "the view token for reading)");
-        http_header(deny, "WWW-Authenticate", "Bearer realm=\"glint-session\"");
-        return -1;
+        glint_err_set(err, GLINT_EAUTH,
+                      "this session needs its token: send \"X-Glint-Token: TOKEN\" or "
+                      "?token=TOKEN (the paint token from the session's share link, or the "
+                      "view token for reading)");
+        return glint_err_kind(err, "token-required");
     }
-    if (auth_equal(tok, paint))
+    if (glint_secret_equal(tok, paint))
         return 0;
-    if (auth_equal(tok, view)) {
+    if (glint_secret_equal(tok, view)) {
         if (!need_paint)
             return 0;
-        *deny = http_problem(403, "read-only-token",
-                             "the view token grants reading only: %s %s needs the paint token",
-                             req->method, req->path);
-        return -1;
+        glint_err_set(err, GLINT_EDENIED,
+                      "the view token grants reading only: %s %s needs the paint token",
+                      req->method, req->path);
+        return glint_err_kind(err, "read-only-token");
     }
-    *deny = http_problem(403, "wrong-token", "the token does not grant access to this session");
-    return -1;
+    glint_err_set(err, GLINT_EDENIED, "the token does not grant access to this session");
+    return glint_err_kind(err, "wrong-token");
+}
+
+int auth_owner_key(http_req *req, const char **key, glint_err *err)
+{
+    const char *k = http_header_in(req, "X-Glint-Owner");
+    size_t n = 0;
+
+    *key = NULL;
+    if (!k)
+        return 0;
+    for (; k[n]; n++)
+        if (!isalnum((unsigned char)k[n]) && k[n] != '_' && k[n] != '-')
+            break;
+    if (k[n] || n < AUTH_OWNER_MIN || n > AUTH_OWNER_MAX) {
+        glint_err_set(err, GLINT_EINVAL,
+                      "X-Glint-Owner must be %d to %d characters of A-Z a-z 0-9 _ - "
+                      "(a secret you keep: it lists and deletes your scenes)",
+                      AUTH_OWNER_MIN, AUTH_OWNER_MAX);
+        return glint_err_kind(err, "invalid-owner-key");
+    }
+    *key = k;
+    return 0;
+}
+
+int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err)
+{
+    const char *owner = json_string_value(json_object_get(scene_doc, "owner"));
+    const char *k;
+    int rc;
+
+    if (auth_has_key(req))
+        return 0;
+    if ((rc = auth_owner_key(req, &k, err)))
+        return rc;
+    if (!k) {
+        glint_err_set(err, GLINT_EAUTH,
+                      "%s %s needs the scene's owner key (\"X-Glint-Owner: KEY\", answered when "
+                      "the scene was created) or the daemon's API key", req->method, req->path);
+        return glint_err_kind(err, "owner-key-required");
+    }
+    if (owner && glint_secret_equal(k, owner))
+        return 0;
+    glint_err_set(err, GLINT_EDENIED, "the owner key does not own this scene");
+    return glint_err_kind(err, "not-owner");
 }

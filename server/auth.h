@@ -8,6 +8,13 @@
  *   its materials); the view token grants reading only.  Sent as
  *   "X-Glint-Token: TOKEN" or "?token=TOKEN".  The API key, when set, also
  *   grants everything.
+ * - A scene belongs to the owner key it was created with: a secret the
+ *   client chooses (16 to 128 characters of A-Z a-z 0-9 _ -), sent as
+ *   "X-Glint-Owner: KEY"; when a creation sends none, the daemon makes one
+ *   (32 hex digits) and answers it once.  Listing scenes shows the caller's
+ *   own (everything with the API key); deleting one needs its owner key or
+ *   the API key.  Reading a scene by id needs nothing: ids are 128 random
+ *   bits, and only their owners can list them.
  * Comparisons are constant-time.  Without the right token nothing of a
  * session is readable or writable (404 for unknown ids, 401 without a token,
  * 403 with a token that does not grant the access). */
@@ -16,13 +23,32 @@
 
 #include <jansson.h>
 
+#include "err.h"
 #include "http.h"
 
-/* 0 if allowed; else -1 and *deny holds the 401 problem. */
-int auth_require_key(http_req *req, http_resp *deny);
+/* Length bounds of an owner key (characters). */
+#define AUTH_OWNER_MIN 16
+#define AUTH_OWNER_MAX 128
+
+/* 0 if allowed; else GLINT_EAUTH (kind "api-key-required"). */
+int auth_require_key(http_req *req, glint_err *err);
+
+/* 1 when a key is configured and the request presents it. */
+int auth_has_key(http_req *req);
 
 /* Access to a session (doc from store_session_get).  need_paint: 1 for
- * writes.  0 if allowed; else -1 and *deny holds a 401/403 problem. */
-int auth_session(http_req *req, const json_t *session_doc, int need_paint, http_resp *deny);
+ * writes.  0 if allowed; else GLINT_EAUTH (kind "token-required") or
+ * GLINT_EDENIED (kinds "read-only-token", "wrong-token"). */
+int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err);
+
+/* The owner key the request presents (X-Glint-Owner): *key NULL when none
+ * is sent; GLINT_EINVAL (kind "invalid-owner-key") when it is malformed. */
+int auth_owner_key(http_req *req, const char **key, glint_err *err);
+
+/* Whether the request may delete/administer a scene (doc from
+ * store_scene_get): the API key, or the scene's owner key.  0 if allowed;
+ * else GLINT_EAUTH (kind "owner-key-required") or GLINT_EDENIED (kind
+ * "not-owner"). */
+int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err);
 
 #endif

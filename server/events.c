@@ -3,11 +3,12 @@
  * One hub per session with listeners: a generation counter bumped by every
  * publish and the presence list.  A stream runs on its connection's own
  * thread (libmicrohttpd thread per connection): MHD calls the content
- * reader, which hands out buffered bytes or, when it has none, reads the
- * session's log after the last sequence number it sent, the presence list
- * when it changed, or waits on the module's condition variable.  Waits are
- * short (EVENTS_POLL_MS) so a stream notices at once when its client has
- * gone (the socket reads EOF or hangs up) or the daemon stops. */
+ * reader (stream_read), which asks events_stream_next for the next bytes:
+ * buffered bytes or, when it has none, the session's log after the last
+ * sequence number it sent, the presence list when it changed, or a wait on
+ * the module's condition variable.  Waits are short (EVENTS_POLL_MS) so a
+ * stream notices at once when its client has gone (the socket reads EOF or
+ * hangs up) or the daemon stops. */
 #include "events.h"
 
 #include <errno.h>
@@ -22,13 +23,12 @@
 #include <time.h>
 
 #include "app.h"
+#include "buf.h"
+#include "ids.h"
+#include "log.h"
 #include "store.h"
 
-#define EVENTS_POLL_MS 250
 #define EVENTS_BATCH 64        /* log rows read per wake-up */
-#define EVENTS_NAME_MAX 64
-
-typedef struct ev_stream ev_stream;
 
 typedef struct ev_hub {
     char session[33];
@@ -57,18 +57,19 @@ struct ev_stream {
     int started;
     char id[17];               /* this listener's id in presence */
     char name[EVENTS_NAME_MAX + 1];
-    char *buf;                 /* pending output */
-    size_t len, off, cap;
+    glint_buf buf;             /* pending output */
+    size_t off;
     struct timespec last_write;
 };
 
-int events_open(events **out)
+int events_open(store *st, events **out)
 {
     events *ev = calloc(1, sizeof *ev);
     pthread_condattr_t ca;
     *out = NULL;
     if (!ev)
         return GLINT_ENOMEM;
+    ev->st = st;
     pthread_mutex_init(&ev->lock, NULL);
     pthread_condattr_init(&ca);
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -101,15 +102,6 @@ void events_close(events *ev)
     pthread_cond_destroy(&ev->cond);
     pthread_mutex_destroy(&ev->lock);
     free(ev);
-}
-
-void events_attach_store(events *ev, store *s)
-{
-    if (!ev || !s)
-        return;
-    pthread_mutex_lock(&ev->lock);
-    ev->st = s;
-    pthread_mutex_unlock(&ev->lock);
 }
 
 /* The hub of a session (created on demand); ev->lock held. */
@@ -176,18 +168,12 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
         json_decref(data);
         return;
     }
-    pthread_mutex_lock(&ev->lock);
     st = ev->st;
-    pthread_mutex_unlock(&ev->lock);
-    if (!st) {
-        fprintf(stderr, "glintd: events: no store attached, \"%s\" event of session %s lost\n",
-                type, session);
-    } else if (!json_is_object(data)) {
-        fprintf(stderr, "glintd: events: \"%s\" event of session %s has no JSON object, lost\n",
-                type, session);
+    if (!json_is_object(data)) {
+        log_line("events: \"%s\" event of session %s has no JSON object, lost", type,
+                 session);
     } else if (store_event_append(st, session, type, -1, data, NULL, &e)) {
-        fprintf(stderr, "glintd: events: \"%s\" event of session %s lost: %s\n", type, session,
-                e.msg);
+        log_line("events: \"%s\" event of session %s lost: %s", type, session, e.msg);
     } else {
         events_notify(ev, session);
     }
@@ -198,39 +184,6 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
 /* Streams                                                                   */
 /* ------------------------------------------------------------------------ */
 
-static int stream_append(ev_stream *s, const char *text, size_t n)
-{
-    if (s->len + n + 1 > s->cap) {
-        size_t cap = s->cap ? s->cap : 4096;
-        char *b;
-        while (cap < s->len + n + 1)
-            cap *= 2;
-        b = realloc(s->buf, cap);
-        if (!b)
-            return -1;
-        s->buf = b;
-        s->cap = cap;
-    }
-    memcpy(s->buf + s->len, text, n);
-    s->len += n;
-    s->buf[s->len] = '\0';
-    return 0;
-}
-
-static int stream_appendf(ev_stream *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static int stream_appendf(ev_stream *s, const char *fmt, ...)
-{
-    char tmp[256];
-    va_list ap;
-    int n;
-    va_start(ap, fmt);
-    n = vsnprintf(tmp, sizeof tmp, fmt, ap);
-    va_end(ap);
-    if (n < 0 || (size_t)n >= sizeof tmp)
-        return -1;
-    return stream_append(s, tmp, (size_t)n);
-}
-
 /* One SSE event: optional id, type, one line of JSON. */
 static int stream_event(ev_stream *s, long long id, const char *type, const json_t *data)
 {
@@ -238,9 +191,8 @@ static int stream_event(ev_stream *s, long long id, const char *type, const json
     int rc;
     if (!text)
         return -1;
-    rc = (id > 0 ? stream_appendf(s, "id: %lld\n", id) : 0) ||
-         stream_appendf(s, "event: %s\ndata: ", type) || stream_append(s, text, strlen(text)) ||
-         stream_append(s, "\n\n", 2);
+    rc = (id > 0 ? glint_buf_printf(&s->buf, "id: %lld\n", id) : 0) ||
+         glint_buf_printf(&s->buf, "event: %s\ndata: %s\n\n", type, text);
     free(text);
     return rc ? -1 : 0;
 }
@@ -290,7 +242,7 @@ static int stream_read_log(ev_stream *s, store *st)
     int n;
 
     if (store_events_since(st, s->hub->session, s->last, EVENTS_BATCH, &arr, NULL, &e)) {
-        fprintf(stderr, "glintd: events of session %s: %s\n", s->hub->session, e.msg);
+        log_line("events of session %s: %s", s->hub->session, e.msg);
         return -1;
     }
     n = (int)json_array_size(arr);
@@ -307,25 +259,26 @@ static int stream_read_log(ev_stream *s, store *st)
     return n;
 }
 
-static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
+ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
 {
-    ev_stream *s = cls;
     events *ev = s->ev;
-    (void)pos;
+    int waited = 0;
 
     for (;;) {
         unsigned long gen, presence;
         int stopping, gone;
         store *st;
 
-        if (s->off < s->len) {
-            size_t n = s->len - s->off;
+        if (s->off < s->buf.len) {
+            size_t n = s->buf.len - s->off;
             if (n > max)
                 n = max;
-            memcpy(out, s->buf + s->off, n);
+            memcpy(out, s->buf.data + s->off, n);
             s->off += n;
-            if (s->off == s->len)
-                s->off = s->len = 0;
+            if (s->off == s->buf.len) {
+                s->off = 0;
+                glint_buf_clear(&s->buf);
+            }
             clock_gettime(CLOCK_MONOTONIC, &s->last_write);
             return (ssize_t)n;
         }
@@ -336,8 +289,12 @@ static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
         presence = s->hub->presence;
         st = ev->st;
         if (!stopping && s->started && gen == s->seen_gen && presence == s->seen_presence) {
-            /* nothing new: wait a little, then check the client and the clock */
             struct timespec until;
+            if (waited) { /* a whole wait without news: let the caller decide */
+                pthread_mutex_unlock(&ev->lock);
+                return 0;
+            }
+            /* nothing new: wait a little, then check the client and the clock */
             clock_gettime(CLOCK_MONOTONIC, &until);
             until.tv_nsec += (long)EVENTS_POLL_MS * 1000000L;
             if (until.tv_nsec >= 1000000000L) {
@@ -345,29 +302,28 @@ static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
                 until.tv_nsec -= 1000000000L;
             }
             pthread_cond_timedwait(&ev->cond, &ev->lock, &until);
+            waited = 1;
             stopping = ev->stopping;
             gen = s->hub->gen;
             presence = s->hub->presence;
         }
         pthread_mutex_unlock(&ev->lock);
         if (stopping)
-            return MHD_CONTENT_READER_END_OF_STREAM;
+            return EVENTS_STREAM_END;
 
         if (!s->started) {
             s->started = 1;
-            if (stream_appendf(s, "retry: 2000\n: glintd session %s\n\n", s->hub->session))
-                return MHD_CONTENT_READER_END_WITH_ERROR;
+            if (glint_buf_printf(&s->buf, "retry: 2000\n: glintd session\n\n"))
+                return EVENTS_STREAM_ERROR;
             s->seen_gen = gen - 1; /* read the log at once (replay) */
         }
         if (gen != s->seen_gen) {
             /* Note the generation before reading: a publish after this
              * point bumps it again and triggers another read. */
             int n;
-            if (!st)
-                return MHD_CONTENT_READER_END_WITH_ERROR;
             n = stream_read_log(s, st);
             if (n < 0)
-                return MHD_CONTENT_READER_END_WITH_ERROR;
+                return EVENTS_STREAM_ERROR;
             if (n < EVENTS_BATCH)
                 s->seen_gen = gen;
         }
@@ -379,34 +335,36 @@ static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
             pthread_mutex_unlock(&ev->lock);
             if (!p || stream_event(s, 0, "presence", p)) {
                 json_decref(p);
-                return MHD_CONTENT_READER_END_WITH_ERROR;
+                return EVENTS_STREAM_ERROR;
             }
             json_decref(p);
         }
-        if (s->len > 0)
+        if (s->buf.len > 0)
             continue;
         gone = stream_client_gone(s);
-        if (gone) /* (END_WITH_ERROR would log an "application error") */
-            return MHD_CONTENT_READER_END_OF_STREAM;
+        if (gone)
+            return EVENTS_STREAM_END;
         {
             struct timespec now;
             clock_gettime(CLOCK_MONOTONIC, &now);
             if ((double)(now.tv_sec - s->last_write.tv_sec) +
                     1e-9 * (double)(now.tv_nsec - s->last_write.tv_nsec) >=
                 EVENTS_KEEPALIVE_S) {
-                if (stream_append(s, ": keep-alive\n\n", 14))
-                    return MHD_CONTENT_READER_END_WITH_ERROR;
+                if (glint_buf_printf(&s->buf, ": keep-alive\n\n"))
+                    return EVENTS_STREAM_ERROR;
             }
         }
     }
 }
 
-static void stream_free(void *cls)
+void events_stream_close(ev_stream *s)
 {
-    ev_stream *s = cls;
-    events *ev = s->ev;
+    events *ev;
     ev_stream **p;
 
+    if (!s)
+        return;
+    ev = s->ev;
     pthread_mutex_lock(&ev->lock);
     for (p = &s->hub->listeners; *p; p = &(*p)->next)
         if (*p == s) {
@@ -417,7 +375,7 @@ static void stream_free(void *cls)
     pthread_cond_broadcast(&ev->cond);
     events_hub_release(ev, s->hub);
     pthread_mutex_unlock(&ev->lock);
-    free(s->buf);
+    glint_buf_free(&s->buf);
     free(s);
 }
 
@@ -441,30 +399,27 @@ static void events_clean_name(const char *in, char *out)
         snprintf(out, EVENTS_NAME_MAX + 1, "anonymous");
 }
 
-http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
-                        const char *client_name)
+int events_stream_open(events *ev, const char *session, long long since, const char *name,
+                       int fd, ev_stream **out)
 {
-    app *a = req->app;
     ev_stream *s;
-    const union MHD_ConnectionInfo *ci;
     char id[33];
-    http_resp r;
+    int rc;
 
-    events_attach_store(ev, a->store);
+    *out = NULL;
     s = calloc(1, sizeof *s);
-    if (!s || store_new_id(id, NULL)) {
+    if (!s)
+        return GLINT_ENOMEM;
+    if ((rc = glint_id_new(id, NULL))) {
         free(s);
-        return http_problem(500, NULL, "out of memory opening an event stream");
+        return rc;
     }
     s->ev = ev;
-    s->fd = -1;
-    ci = MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CONNECTION_FD);
-    if (ci)
-        s->fd = ci->connect_fd;
+    s->fd = fd;
     s->last = since > 0 ? since : 0;
     memcpy(s->id, id, 16);
     s->id[16] = '\0';
-    events_clean_name(client_name, s->name);
+    events_clean_name(name, s->name);
     clock_gettime(CLOCK_MONOTONIC, &s->last_write);
 
     pthread_mutex_lock(&ev->lock);
@@ -472,7 +427,7 @@ http_resp events_stream(events *ev, http_req *req, const char *session, long lon
     if (!s->hub) {
         pthread_mutex_unlock(&ev->lock);
         free(s);
-        return http_problem(500, NULL, "out of memory opening an event stream");
+        return GLINT_ENOMEM;
     }
     s->next = s->hub->listeners;
     s->hub->listeners = s;
@@ -480,10 +435,46 @@ http_resp events_stream(events *ev, http_req *req, const char *session, long lon
     s->seen_presence = s->hub->presence - 1; /* send presence first thing */
     pthread_cond_broadcast(&ev->cond);
     pthread_mutex_unlock(&ev->lock);
+    *out = s;
+    return 0;
+}
 
+/* MHD's content reader: the stream's next bytes, waiting as long as it
+ * takes (events_stream_next returns 0 after each quiet poll). */
+static ssize_t stream_read(void *cls, uint64_t pos, char *out, size_t max)
+{
+    ssize_t n;
+    (void)pos;
+    while ((n = events_stream_next(cls, out, max)) == 0)
+        ;
+    if (n == EVENTS_STREAM_END) /* (END_WITH_ERROR would log an "application error") */
+        return MHD_CONTENT_READER_END_OF_STREAM;
+    if (n < 0)
+        return MHD_CONTENT_READER_END_WITH_ERROR;
+    return n;
+}
+
+static void stream_free(void *cls)
+{
+    events_stream_close(cls);
+}
+
+http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
+                        const char *client_name)
+{
+    const union MHD_ConnectionInfo *ci;
+    ev_stream *s;
+    http_resp r;
+    int fd = -1;
+
+    ci = MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (ci)
+        fd = ci->connect_fd;
+    if (events_stream_open(ev, session, since, client_name, fd, &s))
+        return http_problem(500, NULL, "out of memory opening an event stream");
     r = http_stream(200, "text/event-stream", stream_read, s, stream_free);
     if (!r.r) {
-        stream_free(s);
+        events_stream_close(s);
         return http_problem(500, NULL, "cannot create the event stream");
     }
     http_header(&r, "X-Accel-Buffering", "no");

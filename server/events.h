@@ -27,6 +27,7 @@
 #define GLINTD_EVENTS_H
 
 #include <jansson.h>
+#include <sys/types.h>
 
 #include "http.h"
 
@@ -35,13 +36,9 @@
 typedef struct events events;
 struct store;
 
-int events_open(events **out);
+/* st: the store holding the sessions' event logs (it must outlive ev). */
+int events_open(struct store *st, events **out);
 void events_close(events *ev);
-
-/* The store holding the sessions' event logs.  Call once after both are
- * open (glintd.c); until then the module learns it from the first
- * events_stream or auth_session call (both see the app). */
-void events_attach_store(events *ev, struct store *s);
 
 /* End every stream promptly (call before http_server_stop, so stopping
  * does not wait for the streams' next keep-alive). */
@@ -59,9 +56,44 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
 /* Wake the session's streams after its log grew. */
 void events_notify(events *ev, const char *session);
 
+/* ---- a stream without its transport ------------------------------------------ */
+/* The core of one client's stream, which events_stream() serves over HTTP
+ * (and tests drive directly).  One thread at a time per stream. */
+#define EVENTS_POLL_MS 250           /* longest single wait of events_stream_next */
+#define EVENTS_STREAM_END (-1)       /* events_stream_next: the stream is over */
+#define EVENTS_STREAM_ERROR (-2)     /* events_stream_next: it failed (logged) */
+#define EVENTS_NAME_MAX 64           /* bytes of a presence name */
+
+typedef struct ev_stream ev_stream;
+
+/* Join the session's listeners (every listener of the session gets a new
+ * presence event) and start after sequence number `since` (<= 0: the
+ * whole log).  name: shown in presence (may be NULL), cleaned: control
+ * characters dropped, at most EVENTS_NAME_MAX bytes of valid UTF-8,
+ * "anonymous" when nothing is left.  fd: the client's socket, polled for
+ * hang-ups, or -1.  The session is not checked (the caller has).  OUT:
+ * *out, released with events_stream_close.  0, GLINT_ENOMEM, or the error
+ * of the random id. */
+int events_stream_open(events *ev, const char *session, long long since, const char *name,
+                       int fd, ev_stream **out);
+
+/* The stream's next bytes into out[0..max) (max > 0), in wire format: the
+ * "retry:" preamble first, then the log after `since` and the presence
+ * list, then what comes, with a keep-alive after EVENTS_KEEPALIVE_S quiet
+ * seconds.  Returns the number of bytes written (> 0); 0 when nothing came
+ * within one wait of up to EVENTS_POLL_MS (call again); EVENTS_STREAM_END
+ * once events_shutdown was called or the client on fd went away;
+ * EVENTS_STREAM_ERROR when the log cannot be read or memory ran out. */
+ssize_t events_stream_next(ev_stream *s, char *out, size_t max);
+
+/* Leave the session's listeners (the others get a new presence event) and
+ * free the stream.  Accepts NULL. */
+void events_stream_close(ev_stream *s);
+
 /* An SSE response for a session (used by GET /sessions/{id}/events):
  * replays the log after `since`, then follows it live.  client_name (may
- * be NULL) is shown in presence.  The caller has checked access. */
+ * be NULL) is shown in presence.  The caller has checked access.  The
+ * response streams with events_stream_open / _next / _close above. */
 http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
                         const char *client_name);
 

@@ -15,10 +15,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "admit.h"
 #include "app.h"
 #include "events.h"
 #include "fitsvc.h"
 #include "fsio.h"
+#include "log.h"
+#include "render.h"
 #include "store.h"
 
 static void usage(FILE *f)
@@ -30,12 +33,26 @@ static void usage(FILE *f)
           "  --web-dir DIR         static files served at / (./web)\n"
           "  --cache-mb N          in-memory precomputation cache budget (512)\n"
           "  --threads N           background job threads (2)\n"
-          "  --timeout S           idle connection timeout in seconds (30)\n"
-          "  --max-connections N   (256)\n"
+          "  --work-mb N           memory for expensive work in flight: previews, base\n"
+          "                        renders, G-buffers, fits; beyond it 503, or 413 for one\n"
+          "                        piece that can never fit (2048)\n"
+          "  --work-slots N        ... pieces of such work at once (4)\n"
+          "  --work-wait S         how long a request waits for room before 503 (10)\n"
+          "  --timeout S           idle timeout of a kept-alive connection, seconds (30)\n"
+          "  --max-connections N   connections served at once, health checks aside (256)\n"
+          "  --max-connections-per-ip N\n"
+          "                        ... of them for one client (IPv4 address, IPv6 /64) (64)\n"
+          "  --max-waiting-per-ip N  connections of one client waiting for their request\n"
+          "                        head; the oldest is dropped beyond (256)\n"
+          "  --health-reserve N    extra connections for GET /healthz only (4)\n"
+          "  --header-timeout S    a request head must arrive within S seconds (10)\n"
+          "  --min-body-rate B     a request body must keep up B bytes/s after a grace of\n"
+          "                        --header-timeout; 0 for no minimum (1024)\n"
           "  --max-body-mb N       request body limit (32)\n"
           "  --max-image-dim N     largest upload / raster side (4096)\n"
           "  --max-mesh-tris N     largest uploaded mesh (2000000)\n"
           "  --max-strokes N       strokes per request (1000)\n"
+          "  --max-stroke-work N   millions of brush evaluations per stroke request (50)\n"
           "  --api-key KEY         require this key for creation and scripting\n"
           "  --config FILE         JSON config file (keys as the long options, '-' as '_')\n"
           "  --port-file FILE      write the bound port there once listening\n"
@@ -52,13 +69,22 @@ static void config_default(app_config *c)
     strcpy(c->web_dir, "web");
     c->cache_bytes = (size_t)512 << 20;
     c->worker_threads = 2;
+    c->work_bytes = (size_t)2048 << 20;
+    c->work_slots = 4;
+    c->work_wait_s = 10;
     c->timeout_s = 30;
     c->max_connections = 256;
+    c->max_connections_per_ip = 64;
+    c->max_waiting_per_ip = 256;
+    c->health_reserve = 4;
+    c->header_timeout_s = 10;
+    c->min_body_rate = 1024;
     c->lim.max_body = (size_t)32 << 20;
     c->lim.max_image_dim = 4096;
     c->lim.max_mesh_tris = 2000000;
     c->lim.max_strokes = 1000;
     c->lim.max_stroke_points = 10000;
+    c->lim.max_stroke_work = 5e7;
     c->lim.max_views = 64;
 }
 
@@ -107,12 +133,36 @@ static int apply_opt(app_config *c, const char *name, const char *val)
     } else if (!strcmp(name, "threads")) {
         if (parse_long(val, "--threads", 1, 64, &v)) return -1;
         c->worker_threads = (int)v;
+    } else if (!strcmp(name, "work-mb")) {
+        if (parse_long(val, "--work-mb", 64, 1 << 22, &v)) return -1;
+        c->work_bytes = (size_t)v << 20;
+    } else if (!strcmp(name, "work-slots")) {
+        if (parse_long(val, "--work-slots", 1, 1024, &v)) return -1;
+        c->work_slots = (int)v;
+    } else if (!strcmp(name, "work-wait")) {
+        if (parse_long(val, "--work-wait", 0, 3600, &v)) return -1;
+        c->work_wait_s = (int)v;
     } else if (!strcmp(name, "timeout")) {
         if (parse_long(val, "--timeout", 1, 3600, &v)) return -1;
         c->timeout_s = (unsigned)v;
     } else if (!strcmp(name, "max-connections")) {
         if (parse_long(val, "--max-connections", 1, 100000, &v)) return -1;
         c->max_connections = (unsigned)v;
+    } else if (!strcmp(name, "max-connections-per-ip")) {
+        if (parse_long(val, "--max-connections-per-ip", 1, 100000, &v)) return -1;
+        c->max_connections_per_ip = (unsigned)v;
+    } else if (!strcmp(name, "max-waiting-per-ip")) {
+        if (parse_long(val, "--max-waiting-per-ip", 1, 1000000, &v)) return -1;
+        c->max_waiting_per_ip = (unsigned)v;
+    } else if (!strcmp(name, "health-reserve")) {
+        if (parse_long(val, "--health-reserve", 0, 1000, &v)) return -1;
+        c->health_reserve = (unsigned)v;
+    } else if (!strcmp(name, "header-timeout")) {
+        if (parse_long(val, "--header-timeout", 1, 3600, &v)) return -1;
+        c->header_timeout_s = (unsigned)v;
+    } else if (!strcmp(name, "min-body-rate")) {
+        if (parse_long(val, "--min-body-rate", 0, 1L << 30, &v)) return -1;
+        c->min_body_rate = (unsigned)v;
     } else if (!strcmp(name, "max-body-mb")) {
         if (parse_long(val, "--max-body-mb", 1, 4096, &v)) return -1;
         c->lim.max_body = (size_t)v << 20;
@@ -125,6 +175,9 @@ static int apply_opt(app_config *c, const char *name, const char *val)
     } else if (!strcmp(name, "max-strokes")) {
         if (parse_long(val, "--max-strokes", 1, 1000000, &v)) return -1;
         c->lim.max_strokes = (int)v;
+    } else if (!strcmp(name, "max-stroke-work")) {
+        if (parse_long(val, "--max-stroke-work", 1, 100000, &v)) return -1;
+        c->lim.max_stroke_work = (double)v * 1e6;
     } else {
         fprintf(stderr, "glintd: unknown option '%s'\n", name);
         return -1;
@@ -188,8 +241,13 @@ int main(int argc, char **argv)
         {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
         {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
         {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
+        {"max-connections-per-ip", required_argument, 0, 1},
+        {"max-waiting-per-ip", required_argument, 0, 1}, {"health-reserve", required_argument, 0, 1},
+        {"header-timeout", required_argument, 0, 1}, {"min-body-rate", required_argument, 0, 1},
         {"max-body-mb", required_argument, 0, 1}, {"max-image-dim", required_argument, 0, 1},
         {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
+        {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
+        {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
         {"api-key", required_argument, 0, 1}, {"config", required_argument, 0, 2},
         {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
@@ -245,28 +303,44 @@ int main(int argc, char **argv)
 
     {
         char cache_dir[4200];
+        fitsvc_config fc = {cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, NULL};
         snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
-        if (store_open(a.cfg.data_dir, &a.store, &ge) || events_open(&a.events) ||
-            fitsvc_open(cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, &a.fits, &ge)) {
+        if (admit_open(a.cfg.work_bytes, a.cfg.work_slots, a.cfg.work_wait_s, &a.work, &ge)) {
+            fprintf(stderr, "glintd: %s\n", ge.msg);
+            return 1;
+        }
+        fc.work = a.work;
+        if (store_open(a.cfg.data_dir, &a.store, &ge) || events_open(a.store, &a.events) ||
+            fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
+            render_open(8, 0, &a.render, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
         }
     }
-    events_attach_store(a.events, a.store);
-    pthread_mutex_init(&a.gl_lock, NULL);
+    /* error details never show where the data lives */
+    log_private_path(a.cfg.data_dir);
+    {
+        char real[PATH_MAX];
+        if (realpath(a.cfg.data_dir, real))
+            log_private_path(real);
+        if (realpath(a.cfg.web_dir, real))
+            log_private_path(real);
+    }
 
     {
         const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
-                                      api_fits_routes};
+                                      api_fits_routes, api_materials_routes,
+                                      api_methods_routes};
         const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
-                              api_fits_nroutes};
+                              api_fits_nroutes, api_materials_nroutes, api_methods_nroutes};
+        const int ntables = (int)(sizeof counts / sizeof counts[0]);
         int total = 0;
-        for (int i = 0; i < 4; i++)
+        for (int i = 0; i < ntables; i++)
             total += counts[i];
         routes = calloc((size_t)total, sizeof *routes);
         if (!routes)
             return 1;
-        for (int i = 0; i < 4; i++) {
+        for (int i = 0; i < ntables; i++) {
             memcpy(routes + nroutes, tables[i], (size_t)counts[i] * sizeof *routes);
             nroutes += counts[i];
         }
@@ -278,6 +352,11 @@ int main(int argc, char **argv)
     hc.max_body = a.cfg.lim.max_body;
     hc.timeout_s = a.cfg.timeout_s;
     hc.max_connections = a.cfg.max_connections;
+    hc.max_connections_per_ip = a.cfg.max_connections_per_ip;
+    hc.max_waiting_per_ip = a.cfg.max_waiting_per_ip;
+    hc.health_reserve = a.cfg.health_reserve;
+    hc.header_timeout_s = a.cfg.header_timeout_s;
+    hc.min_body_rate = a.cfg.min_body_rate;
     hc.static_dir = a.cfg.web_dir;
     hc.quiet = a.cfg.quiet;
     a.started = time(NULL);
@@ -302,9 +381,10 @@ int main(int argc, char **argv)
     http_server_stop(a.http);
     free(routes);
     fitsvc_close(a.fits);
+    render_close(a.render);
     events_close(a.events);
     store_close(a.store);
-    pthread_mutex_destroy(&a.gl_lock);
+    admit_close(a.work);
     fprintf(stderr, "glintd: stopped\n");
     return 0;
 }

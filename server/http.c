@@ -1,38 +1,64 @@
-/* http.c: libmicrohttpd glue, routing, responses, request log, stats. */
+/* http.c: libmicrohttpd glue behind the connection front, routing,
+ * responses, request log, stats. */
 #include "http.h"
 
 #include <arpa/inet.h>
+#include <errno.h>
 #include <netinet/in.h>
 #include <pthread.h>
-#include <sys/socket.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
-#define JSON_MAX_DEPTH 32
+#include "http_front.h"
+#include "http_head.h"
+
+#define HTTP_MAX_HEAD_DEFAULT (16u << 10)  /* libmicrohttpd's 32 KiB pool holds it with room */
+#define HTTP_MAX_TARGET_DEFAULT (8u << 10)
+#define HTTP_MAX_FIELDS 100
+#define HTTP_FD_HEADROOM 256               /* descriptors kept for files, SQLite, pipes */
+#define HTTP_LOG_TARGET 1024               /* bytes of a target in the request log */
 
 const double http_latency_bounds[12] = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025,
                                         0.05,   0.1,   0.25,   0.5,   1.0,  2.5};
 
 struct http_server {
     struct MHD_Daemon *d;
+    http_front *front;
     http_config cfg;
     const http_route *routes;
     int nroutes;
     void *app;
     pthread_mutex_t lock;
     http_stats stats;
+    /* Leases of connections handed to MHD_add_connection and not yet
+     * started (MHD_CONNECTION_NOTIFY_STARTED), by descriptor: the
+     * notification takes them from here into the connection's socket
+     * context. */
+    http_front_lease **parked;
+    size_t nparked;
 };
 
-/* Per-request state kept between MHD's calls. */
+/* Per-request state kept between MHD's calls, made by the URI log callback
+ * (uri_seen) for every request and freed by on_completed. */
 typedef struct req_ctx {
+    char *target;       /* the request target as sent (percent-encoded, query included) */
+    char method[16];    /* for a line logged after on_request (cut short) */
     char *body;
     size_t len, cap;
     int too_large;
-    double t0;
+    int started;        /* on_request saw the headers */
+    int answered;       /* a response was queued (and logged) */
+    int body_paced;     /* the minimum body rate is being enforced */
+    double t0;          /* the request line was read */
+    double body_t0;     /* the headers were read */
+    size_t received;    /* body bytes so far */
 } req_ctx;
 
 static double now_s(void)
@@ -84,7 +110,7 @@ http_resp http_json(int status, json_t *j)
     return http_bytes_owned(status, "application/json", text, strlen(text));
 }
 
-static const char *status_title(int status)
+const char *http_status_title(int status)
 {
     switch (status) {
     case 400: return "Bad Request";
@@ -92,36 +118,59 @@ static const char *status_title(int status)
     case 403: return "Forbidden";
     case 404: return "Not Found";
     case 405: return "Method Not Allowed";
+    case 408: return "Request Timeout";
     case 409: return "Conflict";
+    case 411: return "Length Required";
     case 412: return "Precondition Failed";
     case 413: return "Content Too Large";
+    case 414: return "URI Too Long";
     case 415: return "Unsupported Media Type";
     case 422: return "Unprocessable Content";
     case 429: return "Too Many Requests";
+    case 431: return "Request Header Fields Too Large";
     case 500: return "Internal Server Error";
     case 503: return "Service Unavailable";
+    case 505: return "HTTP Version Not Supported";
     default: return "Error";
     }
 }
 
-http_resp http_problem(int status, const char *slug, const char *fmt, ...)
+static char *problem_vjson(int status, const char *slug, const char *fmt, va_list ap)
 {
     char detail[1024], type[128];
-    va_list ap;
     json_t *j;
     char *text;
 
-    va_start(ap, fmt);
     vsnprintf(detail, sizeof detail, fmt, ap);
-    va_end(ap);
     if (slug)
         snprintf(type, sizeof type, "/problems/%s", slug);
     else
         snprintf(type, sizeof type, "about:blank");
-    j = json_pack("{s:s, s:s, s:i, s:s}", "type", type, "title", status_title(status),
+    j = json_pack("{s:s, s:s, s:i, s:s}", "type", type, "title", http_status_title(status),
                   "status", status, "detail", detail);
     text = j ? json_dumps(j, JSON_COMPACT) : NULL;
     json_decref(j);
+    return text;
+}
+
+char *http_problem_json(int status, const char *slug, const char *fmt, ...)
+{
+    va_list ap;
+    char *text;
+    va_start(ap, fmt);
+    text = problem_vjson(status, slug, fmt, ap);
+    va_end(ap);
+    return text;
+}
+
+http_resp http_problem(int status, const char *slug, const char *fmt, ...)
+{
+    va_list ap;
+    char *text;
+
+    va_start(ap, fmt);
+    text = problem_vjson(status, slug, fmt, ap);
+    va_end(ap);
     if (!text)
         return http_text(status, "application/problem+json", "{\"type\":\"about:blank\"}");
     return http_bytes_owned(status, "application/problem+json", text, strlen(text));
@@ -156,93 +205,6 @@ const char *http_header_in(const http_req *req, const char *name)
     return MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND, name);
 }
 
-static int json_depth(const json_t *j)
-{
-    int best = 0;
-    if (json_is_object(j)) {
-        const char *k;
-        json_t *v;
-        json_object_foreach((json_t *)j, k, v) {
-            int d = json_depth(v);
-            if (d > best)
-                best = d;
-        }
-        return best + 1;
-    }
-    if (json_is_array(j)) {
-        size_t i;
-        json_t *v;
-        json_array_foreach(j, i, v) {
-            int d = json_depth(v);
-            if (d > best)
-                best = d;
-        }
-        return best + 1;
-    }
-    return 0;
-}
-
-/* Nesting depth of JSON text, counted before parsing (so a hostile document
- * cannot make the parser recurse deeply). */
-static int text_depth(const char *s, size_t n)
-{
-    int depth = 0, best = 0, in_str = 0;
-    for (size_t i = 0; i < n; i++) {
-        char c = s[i];
-        if (in_str) {
-            if (c == '\\')
-                i++;
-            else if (c == '"')
-                in_str = 0;
-        } else if (c == '"') {
-            in_str = 1;
-        } else if (c == '{' || c == '[') {
-            if (++depth > best)
-                best = depth;
-        } else if (c == '}' || c == ']') {
-            depth--;
-        }
-    }
-    return best;
-}
-
-json_t *http_body_json(http_req *req, http_resp *problem)
-{
-    json_error_t e;
-    json_t *j;
-    const char *ct = http_header_in(req, MHD_HTTP_HEADER_CONTENT_TYPE);
-
-    if (req->body_too_large) {
-        *problem = http_problem(413, "body-too-large", "request body exceeds the limit");
-        return NULL;
-    }
-    if (ct && strncmp(ct, "application/json", 16) != 0) {
-        *problem = http_problem(415, "unsupported-media-type",
-                                "expected Content-Type application/json, got %s", ct);
-        return NULL;
-    }
-    if (req->body_len == 0) {
-        *problem = http_problem(400, "invalid-json", "empty body: a JSON object is required");
-        return NULL;
-    }
-    if (text_depth(req->body, req->body_len) > JSON_MAX_DEPTH) {
-        *problem = http_problem(413, "json-too-deep", "JSON nesting deeper than the limit of %d",
-                                JSON_MAX_DEPTH);
-        return NULL;
-    }
-    j = json_loadb(req->body, req->body_len, JSON_REJECT_DUPLICATES, &e);
-    if (!j) {
-        *problem = http_problem(400, "invalid-json", "malformed JSON at line %d column %d: %s",
-                                e.line, e.column, e.text);
-        return NULL;
-    }
-    if (!json_is_object(j) || json_depth(j) > JSON_MAX_DEPTH) {
-        json_decref(j);
-        *problem = http_problem(422, "invalid-json", "the body must be a JSON object");
-        return NULL;
-    }
-    return j;
-}
 
 /* ---- routing ------------------------------------------------------------------------ */
 
@@ -356,6 +318,104 @@ void http_stats_get(http_server *s, http_stats *out)
     pthread_mutex_unlock(&s->lock);
 }
 
+/* One request log line, "METHOD TARGET STATUS TIMEms" (the target as
+ * http_head_log_target writes it), and the counters. */
+static void log_request(http_server *s, const char *method, size_t mlen, const char *target,
+                        size_t tlen, int status, double dt)
+{
+    char m[4 * 32 + 1], t[HTTP_LOG_TARGET];
+    size_t k = 0;
+
+    record(s, status, dt);
+    if (s->cfg.quiet)
+        return;
+    if (!method || !mlen)
+        m[k++] = '-';
+    for (size_t i = 0; method && i < mlen && i < 32; i++) {
+        unsigned char c = (unsigned char)method[i];
+        if (c < 0x21 || c > 0x7e || c == '\\')
+            k += (size_t)snprintf(m + k, sizeof m - k, "\\x%02x", c);
+        else
+            m[k++] = (char)c;
+    }
+    m[k] = '\0';
+    if (target && tlen)
+        http_head_log_target(target, tlen, t, sizeof t);
+    else
+        snprintf(t, sizeof t, "-");
+    fprintf(stderr, "%s %s %d %.3fms\n", m, t, status, 1e3 * dt);
+    fflush(stderr);
+}
+
+/* The front answered a request itself (http_front_config.answered). */
+static void front_answered(void *cls, const char *method, size_t method_len, const char *target,
+                           size_t target_len, int status, double seconds)
+{
+    log_request(cls, method, method_len, target, target_len, status, seconds);
+}
+
+/* The lease of the connection (NULL if it has none). */
+static http_front_lease *conn_lease(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    return ci ? ci->socket_context : NULL;
+}
+
+/* What the front refuses in a head, refused again for the requests that
+ * reach libmicrohttpd without it (the later ones of a kept-alive
+ * connection).  resp.r is NULL when the request is acceptable. */
+static http_resp check_request(const req_ctx *ctx, struct MHD_Connection *conn)
+{
+    const char *te = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                 MHD_HTTP_HEADER_TRANSFER_ENCODING);
+    const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                 MHD_HTTP_HEADER_CONTENT_LENGTH);
+    http_resp none = {0, NULL};
+
+    if (ctx->target && strstr(ctx->target, "%00"))
+        return http_problem(400, "bad-request-target",
+                            "the request target holds %%00 (a NUL byte)");
+    if (te && cl)
+        return http_problem(400, "bad-framing",
+                            "Content-Length and Transfer-Encoding together: the body's length "
+                            "is ambiguous");
+    if (te)
+        return http_problem(411, "length-required",
+                            "request bodies must come with a Content-Length (Transfer-Encoding, "
+                            "e.g. chunked, is not accepted)");
+    return none;
+}
+
+/* Seconds left before the body falls behind min_body_rate (after its grace
+ * of header_timeout_s); <= 0 when it has. */
+static double body_slack(const http_server *s, const req_ctx *ctx, double now)
+{
+    return ctx->body_t0 + (double)s->cfg.header_timeout_s +
+           (double)ctx->received / (double)s->cfg.min_body_rate - now;
+}
+
+/* libmicrohttpd's timeout is an idle one: set to the slack after each piece
+ * of body, it closes the connection once the body falls behind even when
+ * nothing more arrives. */
+static void body_pace(struct MHD_Connection *conn, double slack)
+{
+    unsigned t = slack < 1.0 ? 1u : (unsigned)(slack + 0.999);
+    MHD_set_connection_option(conn, MHD_CONNECTION_OPTION_TIMEOUT, t);
+}
+
+static void *uri_seen(void *cls, const char *uri, struct MHD_Connection *conn)
+{
+    req_ctx *ctx = calloc(1, sizeof *ctx);
+    (void)cls;
+    (void)conn;
+    if (!ctx)
+        return NULL;
+    ctx->t0 = now_s();
+    ctx->target = strdup(uri ? uri : "");
+    return ctx;
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
                                   const char *method, const char *version,
                                   const char *upload_data, size_t *upload_data_size,
@@ -365,21 +425,55 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     req_ctx *ctx = *con_cls;
     http_req req;
     http_resp resp = {0, NULL};
+    http_front_lease *lease;
     char pbuf[1024];
     int matched_path = 0;
     enum MHD_Result ret;
 
-    if (!ctx) {
-        /* First call: headers only.  Queue nothing now (this libmicrohttpd
-         * answers "Connection: close" to responses queued on the first call). */
+    if (!ctx) { /* uri_seen could not allocate */
         ctx = calloc(1, sizeof *ctx);
         if (!ctx)
             return MHD_NO;
         ctx->t0 = now_s();
         *con_cls = ctx;
+    }
+    if (!ctx->started) {
+        /* First call: headers only.  Queue nothing now unless refusing (this
+         * libmicrohttpd answers "Connection: close" to responses queued on
+         * the first call, which a refusal wants). */
+        const char *cl;
+        ctx->started = 1;
+        snprintf(ctx->method, sizeof ctx->method, "%s", method);
+        resp = check_request(ctx, conn);
+        if (resp.r) {
+            ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
+            MHD_destroy_response(resp.r);
+            ctx->answered = 1;
+            log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
+                        strlen(ctx->target ? ctx->target : url), resp.status, now_s() - ctx->t0);
+            return ret;
+        }
+        cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+        if (s->cfg.min_body_rate && cl && strcmp(cl, "0") != 0) {
+            ctx->body_paced = 1;
+            ctx->body_t0 = now_s();
+            body_pace(conn, body_slack(s, ctx, ctx->body_t0));
+        }
         return MHD_YES;
     }
     if (*upload_data_size) {
+        if (ctx->body_paced) {
+            double now = now_s(), slack;
+            ctx->received += *upload_data_size;
+            slack = body_slack(s, ctx, now);
+            if (slack <= 0) {
+                ctx->answered = 1;
+                log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
+                            strlen(ctx->target ? ctx->target : url), 408, now - ctx->t0);
+                return MHD_NO; /* libmicrohttpd cannot answer in the middle of a body: close */
+            }
+            body_pace(conn, slack);
+        }
         if (!ctx->too_large) {
             size_t n = *upload_data_size;
             if (ctx->len + n > s->cfg.max_body) {
@@ -406,6 +500,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         }
         *upload_data_size = 0;
         return MHD_YES;
+    }
+    if (ctx->body_paced) { /* the body is in: back to the idle timeout */
+        MHD_set_connection_option(conn, MHD_CONNECTION_OPTION_TIMEOUT, s->cfg.timeout_s);
+        ctx->body_paced = 0;
     }
 
     memset(&req, 0, sizeof req);
@@ -442,16 +540,16 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         return MHD_NO;
     if (resp.status == 405)
         MHD_add_response_header(resp.r, MHD_HTTP_HEADER_ALLOW, "GET, POST, PUT, DELETE");
+    /* a health check's reserve connection, and any connection while the
+     * limits are nearly reached, is not kept alive */
+    lease = conn_lease(conn);
+    if (lease && (http_front_lease_is_reserve(lease) || http_front_busy(s->front, lease)))
+        MHD_add_response_header(resp.r, MHD_HTTP_HEADER_CONNECTION, "close");
     ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
     MHD_destroy_response(resp.r);
-    {
-        double dt = now_s() - ctx->t0;
-        record(s, resp.status, dt);
-        if (!s->cfg.quiet) {
-            fprintf(stderr, "%s %s %d %.3fms\n", method, url, resp.status, 1e3 * dt);
-            fflush(stderr);
-        }
-    }
+    ctx->answered = 1;
+    log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
+                strlen(ctx->target ? ctx->target : url), resp.status, now_s() - ctx->t0);
     (void)version;
     return ret;
 }
@@ -459,89 +557,240 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
                          enum MHD_RequestTerminationCode toe)
 {
+    http_server *s = cls;
     req_ctx *ctx = *con_cls;
-    (void)cls;
     (void)conn;
-    (void)toe;
     if (ctx) {
+        if (!ctx->answered && ctx->body_paced && toe == MHD_REQUEST_TERMINATED_TIMEOUT_REACHED)
+            log_request(s, ctx->method, strlen(ctx->method), ctx->target,
+                        ctx->target ? strlen(ctx->target) : 0, 408, now_s() - ctx->t0);
+        free(ctx->target);
         free(ctx->body);
         free(ctx);
         *con_cls = NULL;
     }
 }
 
+/* MHD_OPTION_NOTIFY_CONNECTION: a started connection takes its lease from
+ * s->parked; a closed one gives it back to the front. */
+static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
+                          enum MHD_ConnectionNotificationCode code)
+{
+    http_server *s = cls;
+    if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+        int fd = ci ? ci->connect_fd : -1;
+        *socket_context = fd >= 0 && (size_t)fd < s->nparked
+                              ? __atomic_exchange_n(&s->parked[fd], NULL, __ATOMIC_ACQ_REL)
+                              : NULL;
+    } else if (*socket_context) {
+        http_front_release(s->front, *socket_context);
+        *socket_context = NULL;
+    }
+}
+
+/* http_front_config.deliver: park the lease under the descriptor and hand
+ * the socket to libmicrohttpd, whose thread starts the connection. */
+static void deliver(void *cls, int fd, const struct sockaddr *addr, socklen_t addrlen,
+                    http_front_lease *lease)
+{
+    http_server *s = cls;
+    http_front_lease *stale;
+
+    if (fd < 0 || (size_t)fd >= s->nparked) {
+        close(fd);
+        http_front_release(s->front, lease);
+        return;
+    }
+    /* a lease still parked under this descriptor is one libmicrohttpd
+     * dropped (and closed) before starting its connection */
+    stale = __atomic_exchange_n(&s->parked[fd], lease, __ATOMIC_ACQ_REL);
+    http_front_release(s->front, stale);
+    if (MHD_add_connection(s->d, fd, addr, addrlen) != MHD_YES)
+        http_front_release(s->front,
+                           __atomic_exchange_n(&s->parked[fd], NULL, __ATOMIC_ACQ_REL));
+}
+
+/* Raise the soft open-files limit to the hard one (waiting connections
+ * cost a descriptor each).  Returns the limit now in force. */
+static unsigned long raise_nofile(void)
+{
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_NOFILE, &rl) != 0)
+        return 1024;
+    if (rl.rlim_cur != rl.rlim_max) {
+        struct rlimit want = rl;
+        want.rlim_cur = rl.rlim_max == RLIM_INFINITY ? (rlim_t)1 << 20 : rl.rlim_max;
+        if (setrlimit(RLIMIT_NOFILE, &want) == 0)
+            rl = want;
+    }
+    return rl.rlim_cur == RLIM_INFINITY ? 1ul << 20 : (unsigned long)rl.rlim_cur;
+}
+
+/* A bound, listening TCP socket for addr:port.  OUT: *port_out. */
+static int listen_on(const char *addr, int port, int *port_out, char *err, size_t errlen)
+{
+    struct sockaddr_storage ss;
+    socklen_t sl;
+    int fd, one = 1;
+
+    memset(&ss, 0, sizeof ss);
+    if (strchr(addr, ':')) {
+        struct sockaddr_in6 *a6 = (struct sockaddr_in6 *)&ss;
+        a6->sin6_family = AF_INET6;
+        a6->sin6_port = htons((uint16_t)port);
+        if (inet_pton(AF_INET6, addr, &a6->sin6_addr) != 1) {
+            snprintf(err, errlen, "invalid IPv6 address '%s'", addr);
+            return -1;
+        }
+        sl = sizeof *a6;
+    } else {
+        struct sockaddr_in *a4 = (struct sockaddr_in *)&ss;
+        a4->sin_family = AF_INET;
+        a4->sin_port = htons((uint16_t)port);
+        if (inet_pton(AF_INET, addr, &a4->sin_addr) != 1) {
+            snprintf(err, errlen, "invalid IPv4 address '%s'", addr);
+            return -1;
+        }
+        sl = sizeof *a4;
+    }
+    fd = socket(ss.ss_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) {
+        snprintf(err, errlen, "socket: %s", strerror(errno));
+        return -1;
+    }
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    if (ss.ss_family == AF_INET6)
+        setsockopt(fd, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one);
+    if (bind(fd, (struct sockaddr *)&ss, sl) != 0 || listen(fd, SOMAXCONN) != 0) {
+        snprintf(err, errlen, "cannot listen on %s port %d: %s", addr, port, strerror(errno));
+        close(fd);
+        return -1;
+    }
+    sl = sizeof ss;
+    if (getsockname(fd, (struct sockaddr *)&ss, &sl) != 0) {
+        snprintf(err, errlen, "getsockname: %s", strerror(errno));
+        close(fd);
+        return -1;
+    }
+    *port_out = ntohs(ss.ss_family == AF_INET6 ? ((struct sockaddr_in6 *)&ss)->sin6_port
+                                               : ((struct sockaddr_in *)&ss)->sin_port);
+    return fd;
+}
+
 int http_server_start(const http_config *cfg, const http_route *routes, int n, void *app,
                       http_server **out, int *port_out, char *err, size_t errlen)
 {
     http_server *s = calloc(1, sizeof *s);
-    struct sockaddr_storage ss;
-    socklen_t sl;
-    const union MHD_DaemonInfo *info;
-    unsigned flags = MHD_USE_THREAD_PER_CONNECTION | MHD_USE_INTERNAL_POLLING_THREAD |
-                     MHD_USE_ERROR_LOG;
+    http_front_config fc;
+    const unsigned flags = MHD_USE_THREAD_PER_CONNECTION | MHD_USE_INTERNAL_POLLING_THREAD |
+                           MHD_USE_POLL | MHD_USE_NO_LISTEN_SOCKET | MHD_USE_ITC |
+                           MHD_USE_ERROR_LOG;
     const char *addr = cfg->address ? cfg->address : "127.0.0.1";
+    unsigned long nofile;
+    unsigned reserved_fds;
+    int lfd, port = 0;
 
     *out = NULL;
     if (!s) {
         snprintf(err, errlen, "out of memory");
         return -1;
     }
-    memset(&ss, 0, sizeof ss);
-    if (strchr(addr, ':')) {
-        struct sockaddr_in6 *a6 = (struct sockaddr_in6 *)&ss;
-        a6->sin6_family = AF_INET6;
-        a6->sin6_port = htons((uint16_t)cfg->port);
-        if (inet_pton(AF_INET6, addr, &a6->sin6_addr) != 1) {
-            snprintf(err, errlen, "invalid IPv6 address '%s'", addr);
-            free(s);
-            return -1;
-        }
-        flags |= MHD_USE_IPv6;
-        sl = sizeof *a6;
-    } else {
-        struct sockaddr_in *a4 = (struct sockaddr_in *)&ss;
-        a4->sin_family = AF_INET;
-        a4->sin_port = htons((uint16_t)cfg->port);
-        if (inet_pton(AF_INET, addr, &a4->sin_addr) != 1) {
-            snprintf(err, errlen, "invalid IPv4 address '%s'", addr);
-            free(s);
-            return -1;
-        }
-        sl = sizeof *a4;
-    }
-    (void)sl;
     s->cfg = *cfg;
+    if (!s->cfg.max_connections)
+        s->cfg.max_connections = 256;
+    if (!s->cfg.max_connections_per_ip)
+        s->cfg.max_connections_per_ip = s->cfg.max_connections;
+    if (!s->cfg.max_waiting_per_ip)
+        s->cfg.max_waiting_per_ip = 256;
+    if (!s->cfg.header_timeout_s)
+        s->cfg.header_timeout_s = 10;
+    if (!s->cfg.max_head)
+        s->cfg.max_head = HTTP_MAX_HEAD_DEFAULT;
+    if (!s->cfg.max_target)
+        s->cfg.max_target = HTTP_MAX_TARGET_DEFAULT;
     s->routes = routes;
     s->nroutes = n;
     s->app = app;
     pthread_mutex_init(&s->lock, NULL);
-    s->d = MHD_start_daemon(flags, (uint16_t)cfg->port, NULL, NULL, on_request, s,
-                            MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
-                            MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)cfg->timeout_s,
-                            MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->max_connections,
+
+    nofile = raise_nofile();
+    s->nparked = nofile;
+    s->parked = calloc(s->nparked, sizeof *s->parked);
+    if (!s->parked) {
+        snprintf(err, errlen, "out of memory");
+        goto fail_parked;
+    }
+    lfd = listen_on(addr, cfg->port, &port, err, errlen);
+    if (lfd < 0)
+        goto fail_listen;
+    s->d = MHD_start_daemon(flags, 0, NULL, NULL, on_request, s,
+                            MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)s->cfg.timeout_s,
+                            /* the front enforces the limits; this one only backs them */
+                            MHD_OPTION_CONNECTION_LIMIT,
+                            s->cfg.max_connections + s->cfg.health_reserve + 16u,
                             MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
+                            MHD_OPTION_NOTIFY_CONNECTION, on_connection, s,
+                            MHD_OPTION_URI_LOG_CALLBACK, uri_seen, s,
                             MHD_OPTION_END);
     if (!s->d) {
-        snprintf(err, errlen, "cannot listen on %s port %d (address in use or not allowed)",
-                 addr, cfg->port);
-        pthread_mutex_destroy(&s->lock);
-        free(s);
-        return -1;
+        snprintf(err, errlen, "cannot start libmicrohttpd");
+        close(lfd);
+        goto fail_listen;
     }
-    info = MHD_get_daemon_info(s->d, MHD_DAEMON_INFO_BIND_PORT);
+    reserved_fds = s->cfg.max_connections + s->cfg.health_reserve + HTTP_FD_HEADROOM;
+    memset(&fc, 0, sizeof fc);
+    fc.listen_fd = lfd;
+    fc.head.max_head = s->cfg.max_head;
+    fc.head.max_target = s->cfg.max_target;
+    fc.head.max_fields = HTTP_MAX_FIELDS;
+    fc.head.max_body = s->cfg.max_body;
+    fc.header_timeout_s = s->cfg.header_timeout_s;
+    fc.max_connections = s->cfg.max_connections;
+    fc.max_per_ip = s->cfg.max_connections_per_ip;
+    fc.health_reserve = s->cfg.health_reserve;
+    fc.max_waiting_per_ip = s->cfg.max_waiting_per_ip;
+    fc.max_waiting = nofile > reserved_fds + 16 ? (unsigned)(nofile - reserved_fds) : 16;
+    fc.deliver = deliver;
+    fc.answered = front_answered;
+    fc.cls = s;
+    if (http_front_start(&fc, &s->front, err, errlen))
+        goto fail_front;
+    fprintf(stderr,
+            "glintd: open files limit %lu; connections: %u (+%u for health checks), %u per "
+            "client, %u waiting; request heads within %u s\n",
+            nofile, fc.max_connections, fc.health_reserve, fc.max_per_ip, fc.max_waiting,
+            fc.header_timeout_s);
     if (port_out)
-        *port_out = info ? info->port : cfg->port;
+        *port_out = port;
     *out = s;
     return 0;
+
+fail_front:
+    MHD_stop_daemon(s->d);
+fail_listen:
+    free(s->parked);
+fail_parked:
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+    return -1;
 }
 
 void http_server_stop(http_server *s)
 {
     if (!s)
         return;
-    /* MHD_stop_daemon closes the listening socket, then waits for the
-     * connection threads: in-flight requests finish. */
+    /* The front stops accepting and closes the connections still waiting
+     * for their head; MHD_stop_daemon then waits for the connection
+     * threads (in-flight requests finish), which give their leases back. */
+    http_front_stop(s->front);
     MHD_stop_daemon(s->d);
+    for (size_t i = 0; i < s->nparked; i++)
+        if (s->parked[i])
+            http_front_release(s->front, s->parked[i]);
+    http_front_free(s->front);
+    free(s->parked);
     pthread_mutex_destroy(&s->lock);
     free(s);
 }

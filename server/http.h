@@ -1,7 +1,35 @@
-/* http.h: glintd's HTTP layer on libmicrohttpd: request bodies with a size
- * limit, a routing table with path parameters, response helpers (JSON,
- * RFC 9457 problem+json, bytes, files, server-sent events), one log line
- * per request, and request metrics.
+/* http.h: glintd's HTTP layer on libmicrohttpd: a connection front with
+ * per-client limits and deadlines, request bodies with a size limit and a
+ * minimum rate, a routing table with path parameters, response helpers
+ * (JSON, RFC 9457 problem+json, bytes, files, server-sent events), one log
+ * line per request, and request metrics.
+ *
+ * Connections.  glintd owns the listening socket: its connection front
+ * (http_front.h) accepts every connection and keeps it, without a thread,
+ * until the request head has arrived in full (within header_timeout_s),
+ * reads that head strictly (http_head.h), answers anything wrong itself
+ * with problem+json (400, 408, 411, 413, 414, 431, 505) and hands the
+ * rest to libmicrohttpd (MHD_USE_NO_LISTEN_SOCKET + MHD_add_connection,
+ * thread per connection, poll() so that descriptors above FD_SETSIZE
+ * work), at most max_connections at once and max_connections_per_ip per
+ * client (429 / 503 beyond), plus health_reserve connections for
+ * "GET /healthz" and "GET /api/v1/healthz" only.  Idle and slow clients
+ * thus wait in the front's epoll set and cannot take libmicrohttpd's
+ * threads.  Not covered by the front: a kept-alive connection's later
+ * requests go to libmicrohttpd directly.  This layer refuses %00 in their
+ * target and Transfer-Encoding in them as the front does, but their heads
+ * have only libmicrohttpd's idle timeout (timeout_s) and its own limits and
+ * HTML error pages; to keep such connections few, answers carry
+ * "Connection: close" once three quarters of a limit is in use, and always
+ * on a health-reserve connection.  A request body must keep up an average
+ * of min_body_rate bytes/s after a grace of header_timeout_s, or the
+ * connection is closed (logged as 408).  The process's open-files limit is
+ * raised to its hard limit at start.
+ *
+ * The request log (stderr, one line per request, "METHOD TARGET STATUS
+ * TIMEms") writes the target as http_head_log_target() does: control
+ * characters escaped, ids and tokens (32 hex digits) and every query value
+ * redacted.
  *
  * A handler receives an http_req and returns an http_resp made by one of
  * the http_* constructors below; the layer queues it, logs it and destroys
@@ -50,8 +78,15 @@ typedef struct http_config {
     const char *address;    /* "127.0.0.1" (default), "0.0.0.0", "::1" */
     int port;               /* 0 = ephemeral */
     size_t max_body;        /* request body limit in bytes */
-    unsigned timeout_s;     /* idle connection timeout */
-    unsigned max_connections;
+    unsigned timeout_s;     /* idle timeout of a connection libmicrohttpd serves */
+    unsigned max_connections;        /* served at once, health reserve aside (0: 256) */
+    unsigned max_connections_per_ip; /* ... per client, IPv4 address or IPv6 /64 (0: all) */
+    unsigned max_waiting_per_ip;     /* of one client waiting for their head (0: 256) */
+    unsigned health_reserve;         /* extra connections for health checks */
+    unsigned header_timeout_s;       /* the request head must arrive within this (0: 10 s) */
+    unsigned min_body_rate;          /* bytes/s a request body keeps up (0: no minimum) */
+    size_t max_head;        /* request line + header fields, bytes (0: 16 KiB) */
+    size_t max_target;      /* request target, bytes (0: 8 KiB) */
     const char *static_dir; /* served at "/" (NULL: none) */
     int quiet;              /* no request log lines */
 } http_config;
@@ -74,6 +109,14 @@ http_resp http_json(int status, json_t *j);
  * into "https://glint.invalid/problems/<slug>" is NOT done: type is
  * "about:blank" unless slug given, then "/problems/<slug>". */
 http_resp http_problem(int status, const char *slug, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* The title of a status ("Not Found"), "Error" for one without. */
+const char *http_status_title(int status);
+
+/* The problem+json text of http_problem(), NUL-terminated, to free() (NULL
+ * when out of memory). */
+char *http_problem_json(int status, const char *slug, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
 /* Bytes copied into the response. */
@@ -101,11 +144,7 @@ const char *http_query(const http_req *req, const char *name);
 /* Request header or NULL. */
 const char *http_header_in(const http_req *req, const char *name);
 
-/* Parse the body as a JSON object with depth and size limits.  On failure
- * returns NULL and sets *problem to a 400/413/415/422 response. */
-json_t *http_body_json(http_req *req, http_resp *problem);
-
-/* Request counters for /metrics (see metrics.h). */
+/* Request counters for /metrics (api_core.c). */
 typedef struct http_stats {
     uint64_t requests;
     uint64_t by_class[6];   /* 1xx..5xx by status / 100 */

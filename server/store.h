@@ -27,7 +27,9 @@
  * a crash between the two (or temporary files of an interrupted atomic
  * write) are swept when the store opens.
  *
- * Ids are 128 random bits as 32 lowercase hex digits (getrandom).
+ * Ids are 128 random bits as 32 lowercase hex digits (ids.h); times are
+ * RFC 3339 UTC with milliseconds (clock.h).  The store keeps documents and
+ * bytes: it never renders, fits or decodes images.
  * Thread-safety: every function may be called from any thread; the store
  * serializes access internally.  Strings returned through char** and json_t**
  * are owned by the caller (free / json_decref).  Every function returns 0 or
@@ -48,16 +50,6 @@ typedef struct store store;
 int store_open(const char *data_dir, store **out, glint_err *err);
 void store_close(store *s);
 
-/* 128 random bits as 32 hex digits + NUL (OUT: id[33]). */
-int store_new_id(char id[33], glint_err *err);
-
-/* 1 if `id` has the form of an id (32 lowercase hex digits). */
-int store_id_valid(const char *id);
-
-/* The current time as RFC 3339 UTC with milliseconds
- * ("2024-05-01T12:00:00.123Z"; OUT: buf[32]). */
-void store_now(char buf[32]);
-
 /* ---- blobs (files under data_dir/blobs) ------------------------------------ */
 /* Names are relative paths of [A-Za-z0-9._-] segments separated by '/'
  * (no "..", no leading '/'); parent directories are created.  put writes
@@ -68,6 +60,9 @@ int store_blob_get(store *s, const char *name, void **data, size_t *len, glint_e
 /* Absolute path of a blob (OUT: buf). */
 int store_blob_path(store *s, const char *name, char *buf, size_t len, glint_err *err);
 int store_blob_delete(store *s, const char *name, glint_err *err);
+/* The regular files directly in the blob directory `name`, sorted (OUT:
+ * *names, an array of strings; empty when the directory does not exist). */
+int store_blob_list(store *s, const char *name, json_t **names, glint_err *err);
 
 /* ---- meshes (uploaded files) -------------------------------------------------- */
 /* info: {"format": "ply", "triangles": n, "bytes": n, ...}; the file is the
@@ -89,25 +84,6 @@ int store_scene_list(store *s, json_t **array, glint_err *err);
 /* Deletes the scene, its sessions with their events and paintings, and the
  * blobs under "scenes/<id>/" and "sessions/<session>/" (materials stay). */
 int store_scene_delete(store *s, const char *id, glint_err *err);
-
-/* The core scene of a stored scene, ready to use: doc["scene"] (the glint
- * scene JSON) with its mesh built (a built-in, doc["mesh"]) or loaded from
- * the uploaded file (doc["mesh_id"], mesh_load_mem).  Scenes never change
- * once created, so loaded scenes are shared and cached (a few, least
- * recently used evicted).  OUT: *sc, read-only, valid until
- * store_scene_release(s, *sc); the caller must not free it. */
-struct scene;
-struct img;
-int store_scene_acquire(store *s, const char *id, const struct scene **sc, glint_err *err);
-void store_scene_release(store *s, const struct scene *sc);
-
-/* The base render of view `view`: what a view looks like before anyone
- * paints it, and what erase strokes bring back.  Painted on the CPU
- * (raster_view + paint_views) with the BRDF and scale recorded in the
- * scene's doc["base"] ({"brdf": spec, "scale": s}), so it never changes
- * for a scene; cached as the blob "scenes/<id>/base<view>.exr".
- * OUT: *out, float RGB of the raster's size (caller img_free's). */
-int store_scene_base(store *s, const char *id, int view, struct img *out, glint_err *err);
 
 /* ---- sessions ------------------------------------------------------------------------- */
 /* doc holds scene_id, created, and the two tokens (paint_token, view_token).

@@ -14,8 +14,14 @@ port and prints a markdown table of:
   3. wrk -t2 -c32 -d10s --latency on /healthz and on a cached material GET:
      requests/s and p99 latency.
 
+  4. with --against OTHER_GLINTD (e.g. a build of an earlier commit): the warm
+     round trip with 1 view painted, against both daemons in alternating
+     rounds of 25 (8 rounds), so that both see the same load; the medians
+     and their ratio.
+
 usage: tests/bench/bench_daemon.py [--build DIR] [--glintd PATH] [--cli PATH]
                                    [--runs N] [--wrk-seconds S] [--threads N]
+                                   [--against GLINTD]
 """
 import argparse
 import json
@@ -136,6 +142,32 @@ def round_trips(http, base, s, pngs, runs, res):
     return times, steps, hits
 
 
+def against(d, http, pngs, tmp, a):
+    """Warm round trips (1 view painted) against this daemon and another one,
+    alternating rounds so that both see the same load."""
+    other = Daemon(a.against, tmp + "/data-against", a.threads)
+    other.start()
+    try:
+        sessions = []
+        for dd in (d, other):
+            sc = check(http.post(dd.base + "/api/v1/scenes", json={"width": 256, "height": 256}),
+                       201).json()
+            s = new_session(http, dd.base, sc["id"], tmp + "/png0", [0], "png")
+            fit(http, dd.base, s["id"], s["paint_token"], 64)
+            round_trips(http, dd.base, s, pngs, 3, 64)
+            sessions.append(s)
+        times = [[], []]
+        for _ in range(8):
+            for i, dd in enumerate((d, other)):
+                times[i] += round_trips(http, dd.base, sessions[i], pngs, 25, 64)[0]
+    finally:
+        other.stop()
+    m = [statistics.median(t) for t in times]
+    return [("warm round trip, 1 view, alternating rounds (8 x 25): this build / --against",
+             "%s / %s" % (ms(m[0]), ms(m[1])), "ms"),
+            ("... ratio this / --against", "%.3f" % (m[0] / m[1]), "")]
+
+
 def wrk(url, seconds, headers=()):
     cmd = ["wrk", "-t2", "-c32", "-d%ds" % seconds, "--latency"]
     for h in headers:
@@ -161,6 +193,7 @@ def main():
     ap.add_argument("--wrk-seconds", type=int, default=10)
     ap.add_argument("--threads", type=int, default=2, help="glintd --threads (job workers)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary directory")
+    ap.add_argument("--against", help="another glintd to compare warm round trips with")
     a = ap.parse_args()
     glintd = a.glintd or os.path.join(a.build, "server", "glintd")
     cli = a.cli or os.path.join(a.build, "core", "glint")
@@ -236,6 +269,9 @@ def main():
                              "%.2f" % p99, "ms"))
         else:
             rows.append(("wrk", "not installed", ""))
+
+        if a.against:
+            rows += against(d, http, pngs, tmp, a)
 
         # restart: the decomposition from the disk cache
         d.stop()

@@ -1,0 +1,57 @@
+/* admit.h: admission of expensive work (renders, G-buffers, fits) against a
+ * memory budget and a number of slots.
+ *
+ * Each piece of work states an upper bound of the memory it will take
+ * (render_peak_bytes, method_fit_bytes, ...) and holds that much of the
+ * budget, and one slot, while it runs.  A request that cannot enter now is
+ * waits a little (wait_s, glintd --work-wait) and is refused when no room
+ * was made by then (the API answers 503 with Retry-After); a background job
+ * waits its turn.  What can never fit, a bound beyond the whole budget, is
+ * refused as too large (413), naming the budget.  So the memory of the work
+ * in flight stays under the budget, whatever the clients send.
+ *
+ * A NULL admit admits everything (enter, wait, leave and metrics accept it).
+ * Thread-safety: every function may be called from any thread. */
+#ifndef GLINTD_ADMIT_H
+#define GLINTD_ADMIT_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "err.h"
+
+typedef struct admit admit;
+
+/* budget: bytes; slots: pieces of work at once (>= 1); wait_s: how long
+ * admit_enter waits for room, in [0, 3600] seconds. */
+int admit_open(size_t budget, int slots, double wait_s, admit **out, glint_err *err);
+/* Accepts NULL.  No work may be in flight. */
+void admit_close(admit *a);
+
+/* Enter within wait_s or not at all: 0 with `bytes` held (admit_leave
+ * them); GLINT_ETOOBIG (kind "over-budget") at once when bytes exceed the
+ * whole budget; GLINT_EBUSY (kind "busy") when the budget or the slots
+ * stayed taken.
+ * `what` names the work in messages ("a 4096x4096 preview"). */
+int admit_enter(admit *a, size_t bytes, const char *what, glint_err *err);
+
+/* Enter, waiting for room: polls cancelled(cls) (may be NULL) about every
+ * 100 ms and gives up (GLINT_EBUSY, kind "cancelled") when it says so.  Else
+ * errors as admit_enter's, but never "busy". */
+int admit_wait(admit *a, size_t bytes, const char *what, int (*cancelled)(void *), void *cls,
+               glint_err *err);
+
+void admit_leave(admit *a, size_t bytes);
+
+typedef struct admit_stats {
+    size_t budget, held, peak;   /* bytes */
+    int slots, running;
+    long long admitted, refused_busy, refused_size, waited;
+} admit_stats;
+
+void admit_get_stats(admit *a, admit_stats *out);
+
+/* Prometheus text for /metrics. */
+void admit_metrics(admit *a, FILE *out);
+
+#endif

@@ -1,0 +1,28 @@
+/* scenes.h: the core scenes behind the stored scene documents, and their
+ * base renders (what a view shows before anyone paints it, and what erase
+ * strokes bring back).
+ *
+ * Thread-safety: every function may be called from any thread. */
+#ifndef GLINTD_SCENES_H
+#define GLINTD_SCENES_H
+
+#include "app.h"
+#include "err.h"
+#include "img.h"
+#include "scene.h"
+
+/* Load the core scene of a stored scene (uncached: fitsvc_scene keeps
+ * loaded scenes): doc["scene"] (the glint scene JSON) with its mesh built
+ * (a built-in) or loaded from the uploaded file (doc["mesh_id"]).  OUT: *out
+ * (free with scenes_unload). */
+int scenes_load(struct store *st, const char *id, const scene **out, glint_err *err);
+void scenes_unload(const scene *sc);
+
+/* The base render of view `view`: rendered on the CPU (the reference, so it
+ * never changes for a scene) with the BRDF and scale of the scene's
+ * doc["base"], cached as the blob "scenes/<id>/base<view>.exr".
+ * GLINT_ENOTFOUND for an unknown scene or view.  OUT: *out, float RGB of
+ * the raster's size (img_free). */
+int scenes_base(app *a, const char *id, int view, img *out, glint_err *err);
+
+#endif

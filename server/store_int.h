@@ -1,0 +1,44 @@
+/* store_int.h: internals of the store, shared by store.c, store_blob.c and
+ * store_log.c only. */
+#ifndef GLINTD_STORE_INT_H
+#define GLINTD_STORE_INT_H
+
+#include <jansson.h>
+#include <pthread.h>
+#include <sqlite3.h>
+
+#include "store.h"
+
+#define STORE_PATH_MAX 4096
+#define STORE_BLOB_MAX ((size_t)1 << 31)
+
+struct store {
+    sqlite3 *db;
+    pthread_mutex_t lock;            /* one statement sequence at a time */
+    char dir[STORE_PATH_MAX];
+    char blobs[STORE_PATH_MAX];
+};
+
+/* GLINT_EIO with SQLite's message for `what`. */
+int store_sqlerr(store *s, glint_err *err, const char *what);
+/* Compact JSON text with every double exact (caller frees). */
+char *store_dump(const json_t *j);
+/* Parse stored JSON text (GLINT_EFORMAT naming `what` when malformed). */
+json_t *store_load(const char *text, const char *what, glint_err *err);
+/* Run SQL without results / prepare a statement (NULL with *err set). */
+int store_exec(store *s, const char *sql, glint_err *err);
+sqlite3_stmt *store_prep(store *s, const char *sql, glint_err *err);
+/* Roll back the open transaction, if any. */
+void store_rollback(store *s);
+
+/* Remove the blob directory tree `name` (best effort). */
+void store_blob_rmtree(store *s, const char *name);
+/* A name with a random part: "<prefix><16 hex><suffix>" (OUT: buf). */
+int store_random_name(char *buf, size_t len, const char *prefix, const char *suffix,
+                      glint_err *err);
+
+/* Remove painting files no row names and temporary files of interrupted
+ * writes (at open, before anyone writes). */
+void store_sweep(store *s);
+
+#endif

@@ -1,0 +1,507 @@
+/* store_log.c: the sessions' logs (store.h): paintings, strokes and
+ * events, every change numbered with the session's next sequence number
+ * and committed in one transaction with what it changed (store_log_commit),
+ * and the sweep of files a crash can leave behind. */
+#include <dirent.h>
+#include <pthread.h>
+#include <sqlite3.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "clock.h"
+#include "ids.h"
+#include "store_int.h"
+
+/* Inside a transaction: the session's last_seq (GLINT_ENOTFOUND if none). */
+static int store_tx_last_seq(store *s, const char *session, int64_t *last, glint_err *err)
+{
+    sqlite3_stmt *st = store_prep(s, "SELECT last_seq FROM sessions WHERE id = ?1", err);
+    int rc;
+    if (!st)
+        return GLINT_EIO;
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        *last = sqlite3_column_int64(st, 0);
+        rc = 0;
+    } else if (rc == SQLITE_DONE) {
+        rc = glint_err_set(err, GLINT_ENOTFOUND, "no session with id %s", session);
+    } else {
+        rc = store_sqlerr(s, err, "reading a session");
+    }
+    sqlite3_finalize(st);
+    return rc;
+}
+
+static int store_tx_set_last_seq(store *s, const char *session, int64_t last, glint_err *err)
+{
+    sqlite3_stmt *st = store_prep(s, "UPDATE sessions SET last_seq = ?2 WHERE id = ?1", err);
+    int rc;
+    if (!st)
+        return GLINT_EIO;
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int64(st, 2, last);
+    rc = sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "numbering");
+    sqlite3_finalize(st);
+    return rc;
+}
+
+/* Inside a transaction: insert one event row (data: JSON text). */
+static int store_tx_event(store *s, sqlite3_stmt *st, const char *session, int64_t seq,
+                          const char *type, int view, const char *data, const char *now,
+                          glint_err *err)
+{
+    sqlite3_reset(st);
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int64(st, 2, seq);
+    sqlite3_bind_text(st, 3, type, -1, SQLITE_TRANSIENT);
+    if (view >= 0)
+        sqlite3_bind_int(st, 4, view);
+    else
+        sqlite3_bind_null(st, 4);
+    sqlite3_bind_text(st, 5, data, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 6, now, -1, SQLITE_TRANSIENT);
+    return sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "appending an event");
+}
+
+static const char store_sql_event[] =
+    "INSERT INTO events (session, seq, type, view, data, created) VALUES (?1, ?2, ?3, ?4, ?5, ?6)";
+
+/* Inside a transaction: replace the painting row; OUT: *version, the old
+ * blob name in old[] ("" if none). */
+static int store_tx_painting(store *s, const char *session, int view, const char *blob,
+                             const char *now, int64_t *version, char *old, size_t oldlen,
+                             glint_err *err)
+{
+    sqlite3_stmt *st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 "
+                                     "AND view = ?2", err);
+    int64_t v = 0;
+    int rc;
+
+    old[0] = '\0';
+    if (!st)
+        return GLINT_EIO;
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(st, 2, view);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        v = sqlite3_column_int64(st, 0);
+        snprintf(old, oldlen, "%s", (const char *)sqlite3_column_text(st, 1));
+    } else if (rc != SQLITE_DONE) {
+        sqlite3_finalize(st);
+        return store_sqlerr(s, err, "reading a painting");
+    }
+    sqlite3_finalize(st);
+    st = store_prep(s, "INSERT OR REPLACE INTO paintings (session, view, version, blob, updated) "
+                       "VALUES (?1, ?2, ?3, ?4, ?5)", err);
+    if (!st)
+        return GLINT_EIO;
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(st, 2, view);
+    sqlite3_bind_int64(st, 3, v + 1);
+    sqlite3_bind_text(st, 4, blob, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 5, now, -1, SQLITE_TRANSIENT);
+    rc = sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "writing a painting");
+    sqlite3_finalize(st);
+    *version = v + 1;
+    return rc;
+}
+
+/* Write a new painting blob for (session, view) (OUT: name). */
+static int store_painting_blob(store *s, const char *session, int view, const void *exr,
+                               size_t len, char *name, size_t namelen, glint_err *err)
+{
+    char prefix[96];
+    if (!glint_id_valid(session))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"", session);
+    if (view < 0)
+        return glint_err_set(err, GLINT_EINVAL, "view %d is negative", view);
+    snprintf(prefix, sizeof prefix, "sessions/%s/view%d-", session, view);
+    int rc = store_random_name(name, namelen, prefix, ".exr", err);
+    return rc ? rc : store_blob_put(s, name, exr, len, err);
+}
+
+/* The one commit of a view's new image: write its blob, then in one
+ * transaction replace the painting row and append `n` events of `type`
+ * (texts[i]; for type "painting", texts is NULL and the event is
+ * {"view", "version"}) numbered after the session's last sequence number;
+ * then remove the replaced blob (or, on failure, the new one).  A crash
+ * between the steps leaves a file no row names: store_sweep removes it.
+ * OUT: *first_seq, *version (may be NULL). */
+static int store_log_commit(store *s, const char *session, int view, const void *exr,
+                            size_t len, const char *type, char *const *texts, size_t n,
+                            int64_t *first_seq, int64_t *version, glint_err *err)
+{
+    char blob[160], old[160], now[GLINT_TIME_LEN], data[64];
+    sqlite3_stmt *st = NULL;
+    int64_t last = 0, v = 0;
+    int rc;
+
+    old[0] = '\0';
+    if ((rc = store_painting_blob(s, session, view, exr, len, blob, sizeof blob, err)))
+        return rc;
+    glint_time_iso_ms(now);
+    pthread_mutex_lock(&s->lock);
+    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)) ||
+        (rc = store_tx_last_seq(s, session, &last, err)) ||
+        (rc = store_tx_painting(s, session, view, blob, now, &v, old, sizeof old, err)))
+        goto out;
+    if (!(st = store_prep(s, store_sql_event, err))) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    if (!texts)
+        snprintf(data, sizeof data, "{\"view\":%d,\"version\":%lld}", view, (long long)v);
+    for (size_t i = 0; i < n; i++)
+        if ((rc = store_tx_event(s, st, session, last + 1 + (int64_t)i, type, view,
+                                 texts ? texts[i] : data, now, err)))
+            goto out;
+    if ((rc = store_tx_set_last_seq(s, session, last + (int64_t)n, err)) ||
+        (rc = store_exec(s, "COMMIT", err)))
+        goto out;
+out:
+    sqlite3_finalize(st);
+    if (rc)
+        store_rollback(s);
+    pthread_mutex_unlock(&s->lock);
+    if (rc) {
+        store_blob_delete(s, blob, NULL);
+        return rc;
+    }
+    if (old[0])
+        store_blob_delete(s, old, NULL);
+    if (first_seq)
+        *first_seq = last + 1;
+    if (version)
+        *version = v;
+    return 0;
+}
+
+int store_painting_put(store *s, const char *session, int view, const void *exr, size_t len,
+                       int64_t *version, int64_t *seq, glint_err *err)
+{
+    return store_log_commit(s, session, view, exr, len, "painting", NULL, 1, seq, version, err);
+}
+
+int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
+                       int64_t *version, glint_err *err)
+{
+    sqlite3_stmt *st;
+    int rc;
+
+    *exr = NULL;
+    if (!glint_id_valid(session))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"", session);
+    /* under the lock, so a concurrent put cannot remove the file between
+     * reading its name and reading it */
+    pthread_mutex_lock(&s->lock);
+    st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 AND view = ?2",
+                    err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(st, 2, view);
+    rc = sqlite3_step(st);
+    if (rc == SQLITE_ROW) {
+        if (version)
+            *version = sqlite3_column_int64(st, 0);
+        rc = store_blob_get(s, (const char *)sqlite3_column_text(st, 1), exr, len, err);
+        if (rc == GLINT_ENOTFOUND) /* a row without its file: never acceptable */
+            rc = glint_err_set(err, GLINT_EIO, "painting of session %s view %d: file missing",
+                               session, view);
+    } else if (rc == SQLITE_DONE) {
+        rc = glint_err_set(err, GLINT_ENOTFOUND, "view %d of session %s has no painting", view,
+                           session);
+    } else {
+        rc = store_sqlerr(s, err, "reading a painting");
+    }
+out:
+    sqlite3_finalize(st);
+    pthread_mutex_unlock(&s->lock);
+    return rc;
+}
+
+int store_paintings_list(store *s, const char *session, json_t **array, glint_err *err)
+{
+    sqlite3_stmt *st;
+    json_t *arr = json_array();
+    int rc = 0, step;
+
+    *array = NULL;
+    if (!arr)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory listing paintings");
+    pthread_mutex_lock(&s->lock);
+    st = store_prep(s, "SELECT view, version, updated FROM paintings WHERE session = ?1 "
+                       "ORDER BY view", err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    sqlite3_bind_text(st, 1, session ? session : "", -1, SQLITE_TRANSIENT);
+    while ((step = sqlite3_step(st)) == SQLITE_ROW)
+        json_array_append_new(arr, json_pack("{s:i, s:I, s:s}", "view", sqlite3_column_int(st, 0),
+                                             "version", (json_int_t)sqlite3_column_int64(st, 1),
+                                             "updated",
+                                             (const char *)sqlite3_column_text(st, 2)));
+    if (step != SQLITE_DONE)
+        rc = store_sqlerr(s, err, "listing paintings");
+out:
+    sqlite3_finalize(st);
+    pthread_mutex_unlock(&s->lock);
+    if (rc)
+        json_decref(arr);
+    else
+        *array = arr;
+    return rc;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Strokes and events                                                        */
+/* ------------------------------------------------------------------------ */
+
+int store_strokes_append(store *s, const char *session, int view, const json_t *strokes,
+                         const void *exr, size_t len, int64_t *first_seq, int64_t *last_seq,
+                         int64_t *version, glint_err *err)
+{
+    size_t n = json_array_size(strokes), i;
+    int64_t first = 0;
+    char **texts;
+    int rc = 0;
+
+    if (!json_is_array(strokes) || n == 0)
+        return glint_err_set(err, GLINT_EINVAL, "store_strokes_append: no strokes");
+    texts = calloc(n, sizeof *texts);
+    if (!texts)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for %zu strokes", n);
+    for (i = 0; i < n && !rc; i++)
+        if (!(texts[i] = store_dump(json_array_get(strokes, i))))
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory serializing strokes");
+    if (!rc)
+        rc = store_log_commit(s, session, view, exr, len, "stroke", texts, n, &first, version,
+                              err);
+    if (!rc) {
+        if (first_seq)
+            *first_seq = first;
+        if (last_seq)
+            *last_seq = first + (int64_t)n - 1;
+    }
+    for (i = 0; i < n; i++)
+        free(texts[i]);
+    free(texts);
+    return rc;
+}
+
+int store_event_append(store *s, const char *session, const char *type, int view,
+                       const json_t *data, int64_t *seq, glint_err *err)
+{
+    char now[GLINT_TIME_LEN];
+    char *text;
+    sqlite3_stmt *st = NULL;
+    int64_t last = 0;
+    int rc;
+
+    if (!glint_id_valid(session))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"",
+                             session ? session : "");
+    if (!type || !*type || strlen(type) > 32 || !strcmp(type, "stroke") ||
+        !strcmp(type, "painting"))
+        return glint_err_set(err, GLINT_EINVAL, "event type \"%.40s\" cannot be appended here",
+                             type ? type : "");
+    text = json_is_object(data) ? store_dump(data) : NULL;
+    if (!text)
+        return glint_err_set(err, GLINT_EINVAL, "event data must be a JSON object");
+    glint_time_iso_ms(now);
+    pthread_mutex_lock(&s->lock);
+    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)) ||
+        (rc = store_tx_last_seq(s, session, &last, err)))
+        goto out;
+    st = store_prep(s, store_sql_event, err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    if ((rc = store_tx_event(s, st, session, last + 1, type, view, text, now, err)) ||
+        (rc = store_tx_set_last_seq(s, session, last + 1, err)) ||
+        (rc = store_exec(s, "COMMIT", err)))
+        goto out;
+out:
+    sqlite3_finalize(st);
+    if (rc)
+        store_rollback(s);
+    pthread_mutex_unlock(&s->lock);
+    free(text);
+    if (!rc && seq)
+        *seq = last + 1;
+    return rc;
+}
+
+/* Rows of the event log after `since` (only strokes when strokes_only),
+ * at most `limit` (<= 0: no limit).  as_stroke: records shaped
+ * {"seq","view","stroke","created"}, else {"seq","type","view","data","created"}. */
+static int store_log_read(store *s, const char *session, int64_t since, int limit,
+                          int strokes_only, json_t **array, int *more, int64_t *last_seq,
+                          glint_err *err)
+{
+    sqlite3_stmt *st = NULL;
+    json_t *arr = json_array();
+    int rc = 0, step, count = 0;
+    int64_t last_here;
+
+    *array = NULL;
+    if (!last_seq)
+        last_seq = &last_here; /* read anyway: it tells unknown sessions (ENOTFOUND) */
+    if (more)
+        *more = 0;
+    if (!arr)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory reading events");
+    if (!glint_id_valid(session)) {
+        json_decref(arr);
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"",
+                             session ? session : "");
+    }
+    pthread_mutex_lock(&s->lock);
+    /* one read transaction: the rows and last_seq agree */
+    if ((rc = store_exec(s, "BEGIN", err)))
+        goto out;
+    if ((rc = store_tx_last_seq(s, session, last_seq, err)))
+        goto out;
+    st = store_prep(s, strokes_only
+                           ? "SELECT seq, type, view, data, created FROM events WHERE session = ?1 "
+                             "AND seq > ?2 AND type = 'stroke' ORDER BY seq LIMIT ?3"
+                           : "SELECT seq, type, view, data, created FROM events WHERE session = ?1 "
+                             "AND seq > ?2 ORDER BY seq LIMIT ?3",
+                    err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int64(st, 2, since);
+    sqlite3_bind_int64(st, 3, limit > 0 ? (int64_t)limit + 1 : -1);
+    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
+        json_t *data, *rec;
+        if (limit > 0 && count == limit) {
+            if (more)
+                *more = 1;
+            break;
+        }
+        data = store_load((const char *)sqlite3_column_text(st, 3), "event", err);
+        if (!data) {
+            rc = GLINT_EFORMAT;
+            goto out;
+        }
+        rec = json_object();
+        if (!rec) {
+            json_decref(data);
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory reading events");
+            goto out;
+        }
+        json_object_set_new(rec, "seq", json_integer(sqlite3_column_int64(st, 0)));
+        if (!strokes_only)
+            json_object_set_new(rec, "type", json_string((const char *)sqlite3_column_text(st, 1)));
+        if (sqlite3_column_type(st, 2) != SQLITE_NULL)
+            json_object_set_new(rec, "view", json_integer(sqlite3_column_int(st, 2)));
+        json_object_set_new(rec, strokes_only ? "stroke" : "data", data);
+        json_object_set_new(rec, "created", json_string((const char *)sqlite3_column_text(st, 4)));
+        json_array_append_new(arr, rec);
+        count++;
+    }
+    if (step != SQLITE_DONE && step != SQLITE_ROW)
+        rc = store_sqlerr(s, err, "reading events");
+out:
+    sqlite3_finalize(st);
+    if (!sqlite3_get_autocommit(s->db))
+        sqlite3_exec(s->db, rc ? "ROLLBACK" : "COMMIT", NULL, NULL, NULL);
+    pthread_mutex_unlock(&s->lock);
+    if (rc)
+        json_decref(arr);
+    else
+        *array = arr;
+    return rc;
+}
+
+int store_strokes_since(store *s, const char *session, int64_t since, json_t **array,
+                        glint_err *err)
+{
+    return store_log_read(s, session, since, 0, 1, array, NULL, NULL, err);
+}
+
+int store_strokes_page(store *s, const char *session, int64_t since, int limit, json_t **array,
+                       int *more, int64_t *last_seq, glint_err *err)
+{
+    int m = 0;
+    int64_t last = 0;
+    int rc = store_log_read(s, session, since, limit, 1, array, &m, &last, err);
+    if (rc)
+        return rc;
+    if (m)
+        last = json_integer_value(
+            json_object_get(json_array_get(*array, json_array_size(*array) - 1), "seq"));
+    if (more)
+        *more = m;
+    if (last_seq)
+        *last_seq = last;
+    return 0;
+}
+
+int store_events_since(store *s, const char *session, int64_t since, int limit,
+                       json_t **array, int64_t *last_seq, glint_err *err)
+{
+    return store_log_read(s, session, since, limit, 0, array, NULL, last_seq, err);
+}
+
+/* Remove what a crash can leave behind under blobs/sessions: painting
+ * files no row names (written, then the commit never happened, or
+ * committed and the old file not yet removed) and temporary files of
+ * atomic writes.  Runs once at open, before anyone writes. */
+void store_sweep(store *s)
+{
+    char dir[STORE_PATH_MAX];
+    DIR *d;
+    struct dirent *e;
+    sqlite3_stmt *st;
+
+    if (snprintf(dir, sizeof dir, "%s/sessions", s->blobs) >= (int)sizeof dir)
+        return;
+    d = opendir(dir);
+    if (!d)
+        return;
+    st = store_prep(s, "SELECT 1 FROM paintings WHERE session = ?1 AND blob = ?2", NULL);
+    if (!st) {
+        closedir(d);
+        return;
+    }
+    while ((e = readdir(d))) {
+        char sdir[STORE_PATH_MAX];
+        DIR *sd;
+        struct dirent *f;
+        if (!glint_id_valid(e->d_name))
+            continue;
+        if (snprintf(sdir, sizeof sdir, "%s/%s", dir, e->d_name) >= (int)sizeof sdir)
+            continue;
+        sd = opendir(sdir);
+        if (!sd)
+            continue;
+        while ((f = readdir(sd))) {
+            char name[600], path[STORE_PATH_MAX];
+            int keep;
+            if (f->d_name[0] == '.')
+                continue;
+            snprintf(name, sizeof name, "sessions/%s/%s", e->d_name, f->d_name);
+            sqlite3_reset(st);
+            sqlite3_bind_text(st, 1, e->d_name, -1, SQLITE_TRANSIENT);
+            sqlite3_bind_text(st, 2, name, -1, SQLITE_TRANSIENT);
+            keep = sqlite3_step(st) == SQLITE_ROW;
+            if (!keep && snprintf(path, sizeof path, "%s/%s", sdir, f->d_name) < (int)sizeof path)
+                unlink(path);
+        }
+        closedir(sd);
+    }
+    sqlite3_finalize(st);
+    closedir(d);
+}
+

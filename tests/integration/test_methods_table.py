@@ -1,0 +1,101 @@
+"""The methods' parameter tables drive proto/ and the API (core/method.h):
+the JSON Schema of each method's parameters in proto/schemas is exactly
+what `glint methods --schema NAME` generates from the table, FitRequest.json
+lists exactly the registered methods, and GET /api/v1/methods describes
+them exactly as the table does (`glint methods --json`)."""
+import json
+import os
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import GLINTD, SRC, run_tests  # noqa: E402
+
+CLI = os.environ.get("GLINT_CLI") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
+SCHEMAS = os.path.join(SRC, "proto", "schemas")
+
+
+def cli_json(*args):
+    out = subprocess.run([CLI] + list(args), check=True, capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def table():
+    return cli_json("methods", "--json")["methods"]
+
+
+def test_server_includes_no_numerical_header(d):
+    """The daemon reaches numerics only through core's method, pipeline,
+    material and render interfaces: no file under server/ includes a header
+    of a numerical stage."""
+    numeric = {"raster.h", "samples.h", "paint.h", "brdf.h", "gbuf.h", "hf.h", "pcache.h",
+               "fit.h", "method_hf3.h", "glr.h"}
+    sdir = os.path.join(SRC, "server")
+    found = []
+    for name in sorted(os.listdir(sdir)):
+        if not name.endswith((".c", ".h")):
+            continue
+        with open(os.path.join(sdir, name)) as f:
+            for line in f:
+                line = line.strip()
+                if line.startswith("#include"):
+                    inc = line.split()[1].strip('"<>')
+                    if inc in numeric or inc.startswith("hf_"):
+                        found.append("%s: %s" % (name, line))
+    assert not found, found
+
+
+def test_schema_files_are_generated_from_the_tables(d):
+    methods = table()
+    assert methods and methods[0]["name"] == "hf3"
+    for m in methods:
+        generated = cli_json("methods", "--schema", m["name"])
+        path = os.path.join(SCHEMAS, generated["$id"])
+        assert os.path.exists(path), "proto/schemas/%s is missing: run glint methods --schema " \
+                                     "%s > %s" % (generated["$id"], m["name"], path)
+        with open(path) as f:
+            kept = json.load(f)
+        assert kept == generated, "proto/schemas/%s differs from the table of %s: regenerate " \
+                                  "it with glint methods --schema %s" % (
+                                      generated["$id"], m["name"], m["name"])
+        # every parameter of the table is in the schema, with its bounds
+        props = generated["properties"]
+        assert sorted(props) == sorted(p["name"] for p in m["params"])
+        for p in m["params"]:
+            for bound in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
+                assert props[p["name"]].get(bound) == p.get(bound), (p["name"], bound)
+            if "enum" in p:
+                assert props[p["name"]]["enum"] == p["enum"]
+
+
+def test_fit_request_lists_the_registered_methods(d):
+    with open(os.path.join(SCHEMAS, "FitRequest.json")) as f:
+        req = json.load(f)
+    names = [m["name"] for m in table()]
+    assert req["properties"]["method"]["enum"] == names
+    refs = {c["if"]["properties"]["method"]["const"]: c["then"]["properties"]["params"]["$ref"]
+            for c in req["allOf"]}
+    assert refs == {n: cli_json("methods", "--schema", n)["$id"] for n in names}
+
+
+def test_methods_endpoint_is_the_table(d):
+    api = d.get("/api/v1/methods", status=200, schema="Methods.json").json()["methods"]
+    assert api == table()
+    # defaults are valid values of their own schema
+    for m in api:
+        generated = cli_json("methods", "--schema", m["name"])
+        for p in m["params"]:
+            s = generated["properties"][p["name"]]
+            v = p["default"]
+            if "minimum" in s:
+                assert v >= s["minimum"], p
+            if "maximum" in s:
+                assert v <= s["maximum"], p
+            if "exclusiveMaximum" in s:
+                assert v < s["exclusiveMaximum"], p
+            if "enum" in s:
+                assert v in s["enum"], p
+
+
+run_tests(globals())
