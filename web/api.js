@@ -2,7 +2,9 @@
 //
 // Every call goes through request(): the session token travels as
 // X-Glint-Token (or ?token= where a URL must stand alone: links, SSE,
-// downloads), the optional daemon API key as Authorization: Bearer, and a
+// downloads), the optional daemon API key as Authorization: Bearer, this
+// browser's owner key as X-Glint-Owner on scene calls (it owns the scenes
+// created here: only they are listed, only they may be deleted), and a
 // refusal comes back as an ApiError carrying the problem+json body
 // (RFC 9457: type, title, status, detail) so the studio can show it.
 
@@ -22,6 +24,12 @@ export class Api {
   constructor() {
     this.token = '';
     this.apiKey = localStorage.getItem('glint.apiKey') || '';
+    this.owner = localStorage.getItem('glint.owner') || '';
+    if (!/^[A-Za-z0-9_-]{16,128}$/.test(this.owner)) {
+      const b = crypto.getRandomValues(new Uint8Array(16));
+      this.owner = Array.from(b, x => x.toString(16).padStart(2, '0')).join('');
+      localStorage.setItem('glint.owner', this.owner);
+    }
   }
 
   headers(extra) {
@@ -41,6 +49,7 @@ export class Api {
 
   async request(method, path, { body, type, query, what, signal, raw, headers } = {}) {
     const h = this.headers(headers);
+    if (path === '/scenes' || path.startsWith('/scenes/')) h['X-Glint-Owner'] = this.owner;
     let payload = body;
     if (body !== undefined && !(body instanceof Uint8Array) && !(body instanceof Blob) && !(body instanceof ArrayBuffer)) {
       payload = JSON.stringify(body);
@@ -74,6 +83,7 @@ export class Api {
   // ---- the calls the studio makes ------------------------------------------------
   createScene(spec) { return this.post('/scenes', spec, { what: 'Creating the scene' }); }
   listScenes() { return this.get('/scenes', { what: 'Listing scenes' }); }
+  deleteScene(id) { return this.request('DELETE', '/scenes/' + id, { what: 'Deleting the scene' }); }
   scene(id) { return this.get('/scenes/' + id, { what: 'Reading the scene' }); }
   uploadMesh(bytes, format) {
     return this.request('POST', '/meshes', { body: bytes, type: 'application/octet-stream', query: { format }, what: 'Uploading the mesh' });

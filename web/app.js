@@ -35,7 +35,8 @@ function showError(e) {
     const p = e.problem || {};
     toast((e.what ? e.what + ' — ' : '') + (p.title || 'Error') + (e.status ? ' (' + e.status + ')' : ''), p.detail || e.message, 'error');
   } else {
-    toast('Error', e && e.message ? e.message : String(e), 'error');
+    // an Error may carry a title of its own (fit.js says "nothing painted yet" so)
+    toast(e && e.title ? e.title : 'Error', e && e.message ? e.message : String(e), 'error');
   }
   // kept for the tests: what the person was told
   (window.glint.errors = window.glint.errors || []).push(e instanceof ApiError ? { status: e.status, ...e.problem } : { detail: String(e && e.message) });
@@ -66,6 +67,8 @@ function remember(doc, scene, token) {
 let startBound = false;
 async function showStart() {
   $('studio').classList.add('hidden');
+  $('denied').classList.add('hidden');
+  document.title = 'glint studio';
   $('start').classList.remove('hidden');
   $('share-btn').classList.add('hidden');
   $('crumbs').textContent = 'material design by painting';
@@ -103,12 +106,18 @@ async function loadScenes() {
       s.title = sc.id;
       const b = document.createElement('button'); b.textContent = 'New session';
       b.onclick = () => startSession(sc).catch(showError);
-      li.append(s, b); ul.appendChild(li);
+      const del = document.createElement('button'); del.textContent = 'Delete'; del.className = 'danger';
+      del.title = 'Delete this scene with its sessions (materials stay)';
+      del.onclick = async () => {
+        if (!confirm('Delete this scene and every session painted on it? Materials stay.')) return;
+        try { await api.deleteScene(sc.id); loadScenes(); } catch (e) { showError(e); }
+      };
+      li.append(s, b, del); ul.appendChild(li);
     }
   } catch (e) {
     ul.innerHTML = '';
     const li = document.createElement('li'); li.className = 'muted';
-    li.textContent = e.status === 401 ? 'This server needs its API key to list scenes (below).' : e.message;
+    li.textContent = e.message;
     ul.appendChild(li);
   }
 }
@@ -173,6 +182,7 @@ async function startSession(scene) {
 async function openStudio(route) {
   performance.mark('glint-open');
   $('start').classList.add('hidden');
+  $('denied').classList.add('hidden');
   $('studio').classList.remove('hidden');
   api.token = route.token;
   const S = new Session(api, route.id, route.token, myName());
@@ -181,8 +191,11 @@ async function openStudio(route) {
   try {
     k0 = await S.open(route.view);
   } catch (e) {
-    showError(e);
     $('crumbs').textContent = 'cannot open this session';
+    if (e instanceof ApiError && e.access) {
+      state.session = null;                // nothing of it is open: no stream, no panels
+      showDenied(e);
+    } else showError(e);
     return;
   }
   remember(S.doc, S.scene, route.token);
@@ -197,6 +210,31 @@ async function openStudio(route) {
   loadFitAndMaterials(S).catch(showError);
 }
 
+// The session link does not open the session (glintd refused the session
+// document: 401 no token, 403 a token that is not this session's, 404 no
+// such session): say so on a page of its own, not in a studio that cannot
+// work.
+function showDenied(e) {
+  const why = {
+    401: ['This link has no token',
+      'A session link ends in "?token=…", the key to the session. This one has none: it was probably cut short when it was copied. Ask for the link again and paste it whole.'],
+    403: ['This link\'s token does not open the session',
+      'The link may be wrong, cut short or expired: its token is not one of this session\'s. Ask whoever shared it for the link again and paste it whole.'],
+    404: ['This session does not exist',
+      'The link may be wrong or expired: there is no such session on this server (it may have been deleted). Check the link, or start a new session.'],
+  }[e.status];
+  $('studio').classList.add('hidden');
+  $('start').classList.add('hidden');
+  $('share-btn').classList.add('hidden');
+  $('conn').className = 'conn hidden';
+  $('denied-title').textContent = why[0];
+  $('denied-text').textContent = why[1];
+  const p = e.problem || {};
+  $('denied-detail').textContent = `glintd answered ${e.status}${p.detail ? ': ' + p.detail : p.title ? ': ' + p.title : ''}.`;
+  $('denied').classList.remove('hidden');
+  document.title = why[0] + ' · glint studio';
+}
+
 let uiBound = false;
 function setupStudioUI(S) {
   const sc = S.scene;
@@ -208,10 +246,9 @@ function setupStudioUI(S) {
   $('viewport').classList.toggle('readonly', !S.canPaint);
   for (const id of ['undo', 'redo']) $(id).disabled = true;
   for (const el of $('toolbar').querySelectorAll('input, button')) if (!S.canPaint && !['pick', 'pan'].includes(el.dataset.tool)) el.disabled = true;
-  for (const p of S.doc.paintings || []) if (S.views[p.view]) S.views[p.view].painted = true;
   if (!S.canPaint) state.tool = 'pan';     // a view-only link drags to look around
-  $('fit-btn').disabled = !S.canPaint;
-  $('fit-btn').title = S.canPaint ? 'Fit the painted views (F)' : 'view-only link: fitting needs the paint link';
+  $('fit-btn').disabled = true;            // the fit panel enables it (fit.js)
+  $('fit-btn').title = 'loading the fit methods…';
 
   // thumbnails
   const th = $('thumbs');
@@ -247,6 +284,7 @@ function setupStudioUI(S) {
     scheduleThumb(k);
   });
   S.addEventListener('event', e => onSessionEvent(e.detail));
+  S.addEventListener('painted', e => scheduleThumb(e.detail.k));
   S.addEventListener('presence', e => renderPresence(e.detail));
   S.addEventListener('connection', e => {
     const c = $('conn');
@@ -375,10 +413,6 @@ async function doRedo() {
 function onSessionEvent(ev) {
   const S = state.session;
   if ((ev.type === 'stroke' || ev.type === 'painting') && S.views[ev.view]) {
-    const v = S.views[ev.view];
-    const was = v.painted;
-    v.painted = true;
-    if (!was) { scheduleThumb(ev.view); if (state.fit) state.fit.renderQuality(); }
     const mine = ev.type === 'stroke' && ev.data && String(ev.data.tag || '').startsWith(S.client + '-');
     if (!mine && ev.seq > S.loadSeq) {
       const bt = $('thumbs').children[ev.view];

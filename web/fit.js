@@ -4,7 +4,7 @@
 // once when the precomputation is cached (201 with the material), or as a
 // job whose progress streams in (202, GET /jobs/{id}/events).
 
-import { API } from './api.js';
+import { API, ApiError } from './api.js';
 import { EventStream } from './sse.js';
 
 const $ = id => document.getElementById(id);
@@ -19,6 +19,17 @@ function fmtTime(s) {
 function fmtErr(e) { return e == null || !isFinite(e) ? '?' : e.toFixed(4); }
 export { fmtTime, fmtErr };
 
+// A refusal that means "paint first" (glintd's problem type no-paintings:
+// the session had no painted view when the fit arrived) said as such.
+function explain(e) {
+  if (e instanceof ApiError && e.status === 422 && /(^|\/)no-paintings$/.test(e.problem.type || '')) {
+    const n = new Error('Paint or upload at least one view, then fit again: the fit learns the material from the painted views, and this session has none yet.');
+    n.title = 'Nothing painted to fit yet';
+    return n;
+  }
+  return e;
+}
+
 export class FitPanel extends EventTarget {
   constructor(api, session) {
     super();
@@ -30,6 +41,28 @@ export class FitPanel extends EventTarget {
     this.job = null;
     this.inputs = {};
     $('fit-btn').onclick = () => this.fit();
+    // a view painted (here or by someone else, live) or a stroke of ours
+    // on its way: the fit may have become possible
+    session.addEventListener('painted', () => { this.updateButton(); this.renderQuality(); });
+    session.addEventListener('history', () => this.updateButton());
+  }
+
+  // Why a fit cannot be made now ('' when it can).
+  blocker() {
+    if (!this.method) return 'loading the fit methods…';
+    if (!this.session.canPaint) return 'view-only link: fitting needs the paint link';
+    if (!this.session.hasPainting()) return 'Paint or upload at least one view first: the fit learns the material from the painted views.';
+    return '';
+  }
+
+  // The Fit button and the hint under it follow blocker().
+  updateButton() {
+    const why = this.blocker();
+    const btn = $('fit-btn'), hint = $('fit-hint');
+    btn.disabled = this.busy || !!why;
+    btn.title = why || 'Fit the painted views (F)';
+    hint.textContent = why;
+    hint.classList.toggle('hidden', !why || !this.method);
   }
 
   emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
@@ -44,8 +77,7 @@ export class FitPanel extends EventTarget {
     const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
     this.choose(def ? def.name : null);
     this.renderQuality();
-    $('fit-btn').disabled = !this.session.canPaint;
-    if (!this.session.canPaint) $('fit-btn').title = 'view-only link: fitting needs the paint link';
+    this.updateButton();
   }
 
   // Refresh the measured points (after a fit, or when views get painted).
@@ -212,8 +244,12 @@ export class FitPanel extends EventTarget {
   }
 
   fit() {
-    if (!this.method) return Promise.resolve();   // still loading the methods
     if (this.busy) return this.running;
+    if (this.blocker()) {                          // the keyboard: say it again, do not send
+      const hint = $('fit-hint');
+      hint.classList.remove('flash'); void hint.offsetWidth; hint.classList.add('flash');
+      return Promise.resolve();
+    }
     this.running = this.run();
     return this.running;
   }
@@ -236,30 +272,30 @@ export class FitPanel extends EventTarget {
       this.refresh();
     } catch (e) {
       this.setProgress(null);
-      this.emit('error', e);
+      this.emit('error', explain(e));
     } finally {
       this.busy = false;
-      $('fit-btn').disabled = !this.session.canPaint;
+      this.updateButton();
     }
   }
 
-  // Stream a job's progress until it is done.
+  // Stream a job's progress until it is done (or failed).  The handler
+  // answers each event at once (sse.js): the job's last event closes the
+  // stream for good, and the material it names is read after that.
   follow(job, t0) {
     return new Promise((resolve, reject) => {
       const show = j => this.setProgress(j.progress, `${j.stage} ${(100 * j.progress).toFixed(0)}%` + (j.seconds != null ? ` · ${fmtTime(j.seconds)}` : ''));
       show(job);
       const es = new EventStream(`${API}/jobs/${job.id}/events`, {
         headers: { 'X-Glint-Token': this.session.token },
-        onEvent: async (type, j) => {
-          if (typeof j !== 'object') return;
-          show(j);
+        final: ['done', 'failed'],
+        onEvent: (type, j) => {
+          if (typeof j !== 'object' || j === null) return undefined;
           if (type === 'done' || j.state === 'done') {
             this.setProgress(null);
-            try {
-              const m = await this.api.material(j.material_id);
-              this.emit('material', { material: m, ms: performance.now() - t0, cached: false, job: j });
-              resolve();
-            } catch (e) { reject(e); }
+            this.api.material(j.material_id).then(
+              m => { this.emit('material', { material: m, ms: performance.now() - t0, cached: false, job: j }); resolve(); },
+              reject);
             return 'stop';
           }
           if (type === 'failed' || j.state === 'failed') {
@@ -267,10 +303,13 @@ export class FitPanel extends EventTarget {
             reject(new Error('The fit failed: ' + (j.error || 'no reason given')));
             return 'stop';
           }
+          show(j);
+          return undefined;
         },
         onState: (s, d) => { if (s === 'failed') { this.setProgress(null); reject(new Error('Following the fit job: ' + d)); } },
-      }).start();
+      });
       this.jobStream = es;
+      es.start();
     });
   }
 }

@@ -34,7 +34,7 @@ import { applyStroke, strokeBox, strokeJSON } from './brush.js';
 import { encodeEXR } from './exr.js';
 import { cloneImage, cropBox, decodeImage, pasteBox } from './image.js';
 import { EventStream } from './sse.js';
-import { API } from './api.js';
+import { API, ApiError } from './api.js';
 
 const UNDO_DEPTH = 64;
 
@@ -69,8 +69,15 @@ export class Session extends EventTarget {
   // Load the session, its scene and view `first` (the paintable view);
   // the others follow in the background (loadRest).  The scene and the
   // first view's images are read at the same time.
+  // A refusal of the session document itself (401, 403, 404: the link's
+  // token or id is wrong) comes back marked e.access, for app.js to say so.
   async open(first) {
-    this.doc = await this.api.session(this.id);
+    try {
+      this.doc = await this.api.session(this.id);
+    } catch (e) {
+      if (e instanceof ApiError && [401, 403, 404].includes(e.status)) e.access = true;
+      throw e;
+    }
     let k0 = Number.isInteger(first) && first >= 0 ? first : 0;
     const sceneP = this.loadScene(this.doc.scene_id);
     const readP = this.readView(k0, this.doc, null).catch(e => e);
@@ -79,6 +86,7 @@ export class Session extends EventTarget {
     for (let k = 0; k < n; k++)
       this.views.push({ k, conf: null, disp: null, base: null, seq: 0, version: 0, state: 'none', queue: [],
                         pending: [], history: [], undo: [], redo: [], painted: false });
+    for (const p of this.doc.paintings || []) if (this.views[p.view]) this.views[p.view].painted = true;
     this.loadSeq = this.doc.last_seq;
     if (k0 >= n) { k0 = 0; await this.loadViews([0], this.doc); return k0; }
     const got = await readP;
@@ -144,12 +152,14 @@ export class Session extends EventTarget {
     v.conf = got.im;
     v.seq = doc.last_seq;
     v.version = got.version;
+    const painted = !v.painted && got.version > 0;
     v.painted = v.painted || got.version > 0;
     v.state = 'ready';
     const q = v.queue; v.queue = [];
     for (const ev of q) this.applyViewEvent(v, ev);
     this.rebuildDisp(v);
     this.emit('view', { k: got.k, box: null });
+    if (painted) this.emit('painted', { k: got.k });
     return true;
   }
 
@@ -197,15 +207,24 @@ export class Session extends EventTarget {
     this.appliedSeq = ev.seq;
     this.activity.push(ev);
     if (this.activity.length > 300) this.activity.splice(0, this.activity.length - 300);
+    let painted = false;
     if (ev.type === 'stroke' || ev.type === 'painting') {
       const v = this.views[ev.view];
       if (v) {
+        painted = !v.painted;
+        v.painted = true;
         if (v.state === 'loading' || v.state === 'putting') v.queue.push(ev);
         else if (v.state === 'ready') this.applyViewEvent(v, ev);
       }
     }
+    if (painted) this.emit('painted', { k: ev.view });
     this.emit('event', ev);
   }
+
+  // Whether a fit has something to work with: a view glintd has as painted,
+  // or one with this client's stroke on its way there (a fit is sent after
+  // the writes before it, see FitPanel.run).
+  hasPainting() { return this.views.some(v => v.painted || v.pending.length > 0); }
 
   // Apply one event to a ready view.
   applyViewEvent(v, ev) {

@@ -7,10 +7,29 @@
 // a network error, an end of stream or a 5xx, waiting `retry` ms (the
 // server's "retry:" field, else 2 s; the first retry is quick).  A 4xx is
 // final: the token or the session is wrong and retrying cannot help.
+//
+// The handler.  onEvent(type, data, id) is called once per event, in the
+// order received, and synchronously: the stream reads on as soon as it
+// returns.  It returns 'stop' to close the stream for good (after a job's
+// last event: nothing follows it, so connecting again has nothing to
+// deliver), anything else to go on.  It must not be an
+// async function: its promise would come back before its work is done,
+// so the decision to stop would be lost and the stream would reconnect
+// forever.  Work that needs to wait (reading what the event names) is
+// started from the handler, which still returns 'stop' or not at once; a
+// handler that returns a promise anyway is a bug, and the stream stops
+// with state 'failed' saying so rather than run on unchecked.  A handler
+// that throws keeps the event unconsumed: the stream reconnects from the
+// last event handled (session.js relies on this after a gap).
+// opts.final lists event types after which the stream is closed whatever
+// the handler returns (a job's "done" and "failed").
+//
+// States (onState): connecting, open, reconnecting (detail: ms to wait),
+// failed (detail: why; final), closed (stopped; final).
 
 export class EventStream {
   // url: without since/token; opts: {headers, since, onEvent(type, data, id),
-  // onState(state, detail), query}
+  // onState(state, detail), query, final: [event types]}
   constructor(url, opts) {
     this.url = url;
     this.opts = opts;
@@ -30,11 +49,18 @@ export class EventStream {
 
   start() { this.stopped = false; this.loop(); return this; }
 
-  stop() {
+  // Close for good: no reconnection after this (state 'closed', or
+  // 'failed' with the reason when called as fail()).
+  stop() { this.halt('closed'); }
+
+  fail(detail) { this.halt('failed', detail); }
+
+  halt(state, detail) {
+    if (this.stopped && (this.state === 'closed' || this.state === 'failed')) return;
     this.stopped = true;
     if (this.ctrl) this.ctrl.abort();
     if (this.timer) clearTimeout(this.timer);
-    this.setState('closed');
+    this.setState(state, detail);
   }
 
   // Drop the connection as a network failure would (used by tests and by
@@ -71,7 +97,7 @@ export class EventStream {
     if (!r.ok) {
       let detail = r.statusText;
       try { const p = await r.json(); detail = p.detail || p.title || detail; } catch (_) { /* not JSON */ }
-      if (r.status >= 400 && r.status < 500) { this.setState('failed', detail); return 'final'; }
+      if (r.status >= 400 && r.status < 500) { this.fail(detail); return 'final'; }
       return 'retry';
     }
     this.connects++;
@@ -91,6 +117,7 @@ export class EventStream {
           buf = buf.slice(nl + (buf[nl] === '\r' && buf[nl + 1] === '\n' ? 2 : 1));
           if (line === '') {
             if (ev.data.length) this.dispatch(ev);
+            if (this.stopped) return 'final';
             ev = { type: '', data: [], id: null };
             continue;
           }
@@ -114,10 +141,15 @@ export class EventStream {
   dispatch(ev) {
     let data = ev.data.join('\n');
     try { data = JSON.parse(data); } catch (_) { /* keep text */ }
-    const stop = this.opts.onEvent(ev.type || 'message', data, ev.id);
+    const type = ev.type || 'message';
+    const ret = this.opts.onEvent(type, data, ev.id);
     // The id moves only after the event was handled, so a handler that
     // throws does not lose it.
     if (ev.id !== null) this.lastId = ev.id;
-    if (stop === 'stop') this.stop();
+    if (ret && typeof ret.then === 'function') {
+      this.fail(`the handler of "${type}" events returned a promise; it must answer at once (see sse.js)`);
+    } else if (ret === 'stop' || (this.opts.final && this.opts.final.includes(type))) {
+      this.stop();
+    }
   }
 }
