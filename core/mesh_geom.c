@@ -1,5 +1,5 @@
-/* mesh_geom.c: mesh helpers shared by the mesh modules (welding, edges,
- * sorting), smooth normals and unit-ball normalization (contract in mesh.h). */
+/* mesh_geom.c: mesh helpers shared by the mesh modules (argument checks,
+ * welding, edges, sorting), smooth normals and unit-ball normalization (contract in mesh.h). */
 #include <float.h>
 #include <limits.h>
 #include <math.h>
@@ -346,3 +346,33 @@ done:
     return rc;
 }
 
+/* Arguments every public mesh operation requires. */
+int mio_check_mesh(const mesh *m, const char *who, glint_err *err)
+{
+    if (!m)
+        return glint_err_set(err, GLINT_EINVAL, "%s: mesh is NULL", who);
+    if (m->nverts < 1 || m->ntris < 1 || !m->pos || !m->tri)
+        return glint_err_set(err, GLINT_EINVAL, "%s: empty mesh (%d vertices, %d triangles)",
+                             who, m->nverts, m->ntris);
+    if (m->nverts > INT_MAX / 3 || m->ntris > INT_MAX / 3)
+        return glint_err_set(err, GLINT_ERANGE, "%s: mesh too large", who);
+    for (size_t i = 0; i < 3 * (size_t)m->ntris; i++)
+        if (m->tri[i] >= (uint32_t)m->nverts)
+            return glint_err_set(err, GLINT_EFORMAT,
+                                 "%s: triangle %zu: vertex index %u out of range (%d vertices)",
+                                 who, i / 3, m->tri[i], m->nverts);
+    for (size_t i = 0; i < 3 * (size_t)m->nverts; i++)
+        if (!isfinite(m->pos[i]))
+            return glint_err_set(err, GLINT_ENONFINITE, "%s: vertex %zu: position not finite",
+                                 who, i / 3);
+    return 0;
+}
+
+/* The public entry of the automatic parameterization (mesh_uv.c). */
+int mesh_generate_uvs(mesh *m, glint_err *err)
+{
+    int rc = mio_check_mesh(m, "mesh_generate_uvs", err);
+    if (rc)
+        return rc;
+    return mio_uv_generate(m, NULL, err);
+}
