@@ -432,17 +432,18 @@ static int raster_view_ws(const mesh *m, const scene_view *v, int width, int hei
     return raster_rows_ws(m, v, width, height, 0, height, ws, out, err);
 }
 
-int raster_view_rows(const mesh *m, const scene_view *v, int width, int height, int row0,
-                     int nrows, gbuf *out, glint_err *err)
+/* Checks and work space around raster_rows_ws (who: the caller, for messages). */
+static int raster_rows_checked(const char *who, const mesh *m, const scene_view *v, int width,
+                               int height, int row0, int nrows, gbuf *out, glint_err *err)
 {
     raster_ws ws;
     int rc;
 
     if (!out)
-        return glint_err_set(err, GLINT_EINVAL, "raster_view_rows: output gbuf is NULL");
+        return glint_err_set(err, GLINT_EINVAL, "%s: output gbuf is NULL", who);
     memset(out, 0, sizeof *out);
     if (!m || !v)
-        return glint_err_set(err, GLINT_EINVAL, "raster_view_rows: mesh or view is NULL");
+        return glint_err_set(err, GLINT_EINVAL, "%s: mesh or view is NULL", who);
     if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE || height < SCENE_MIN_SIZE ||
         height > SCENE_MAX_SIZE)
         return glint_err_set(err, GLINT_ERANGE, "raster size %dx%d outside %d..%d", width,
@@ -456,28 +457,16 @@ int raster_view_rows(const mesh *m, const scene_view *v, int width, int height, 
     return rc;
 }
 
+int raster_view_rows(const mesh *m, const scene_view *v, int width, int height, int row0,
+                     int nrows, gbuf *out, glint_err *err)
+{
+    return raster_rows_checked("raster_view_rows", m, v, width, height, row0, nrows, out, err);
+}
+
 int raster_view(const mesh *m, const scene_view *v, int width, int height, gbuf *out,
                 glint_err *err)
 {
-    raster_ws ws;
-    int rc;
-
-    if (!out)
-        return glint_err_set(err, GLINT_EINVAL, "raster_view: output gbuf is NULL");
-    memset(out, 0, sizeof *out);
-    if (!m || !v)
-        return glint_err_set(err, GLINT_EINVAL, "raster_view: mesh or view is NULL");
-    if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE || height < SCENE_MIN_SIZE ||
-        height > SCENE_MAX_SIZE)
-        return glint_err_set(err, GLINT_ERANGE, "raster size %dx%d outside %d..%d", width,
-                             height, SCENE_MIN_SIZE, SCENE_MAX_SIZE);
-    rc = mesh_validate(m, err);
-    if (rc)
-        return rc;
-    memset(&ws, 0, sizeof ws);
-    rc = raster_view_ws(m, v, width, height, &ws, out, err);
-    raster_ws_free(&ws);
-    return rc;
+    return raster_rows_checked("raster_view", m, v, width, height, 0, height, out, err);
 }
 
 int raster_scene(const scene *s, gbuf **out, glint_err *err)
