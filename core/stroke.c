@@ -466,6 +466,16 @@ static int stroke_check(const stroke *s, glint_err *err)
     return 0;
 }
 
+/* Whether segment a-b, widened by r, may reach the tile of pixel centres
+ * [cx0, cx1] x [cy0, cy1] (its bounding box does): stroke_apply's test, and
+ * stroke_cost's count of it. */
+static int stroke_seg_near(const double *a, const double *b, double r, double cx0, double cx1,
+                           double cy0, double cy1)
+{
+    return !(fmax(a[0], b[0]) + r < cx0 || fmin(a[0], b[0]) - r > cx1 ||
+             fmax(a[1], b[1]) + r < cy0 || fmin(a[1], b[1]) - r > cy1);
+}
+
 int stroke_apply(const stroke *s, img *im, const img *base, stroke_report *rep, glint_err *err)
 {
     double r, xmin, xmax, ymin, ymax;
@@ -517,10 +527,8 @@ int stroke_apply(const stroke *s, img *im, const img *base, stroke_report *rep, 
             int nc = 0;
             for (int i = 0; i < nseg; i++) {
                 const double *a = s->pts + 2 * i, *b = stroke_seg_b(s, i);
-                if (fmax(a[0], b[0]) + r < cx0 || fmin(a[0], b[0]) - r > cx1 ||
-                    fmax(a[1], b[1]) + r < cy0 || fmin(a[1], b[1]) - r > cy1)
-                    continue;
-                cand[nc++] = i;
+                if (stroke_seg_near(a, b, r, cx0, cx1, cy0, cy1))
+                    cand[nc++] = i;
             }
             if (nc == 0)
                 continue;
@@ -598,8 +606,7 @@ double stroke_cost(const stroke *s, int width, int height)
             long nc = 0;
             for (int i = 0; i < nseg; i++) {
                 const double *a = s->pts + 2 * i, *b = stroke_seg_b(s, i);
-                nc += !(fmax(a[0], b[0]) + r < cx0 || fmin(a[0], b[0]) - r > cx1 ||
-                        fmax(a[1], b[1]) + r < cy0 || fmin(a[1], b[1]) - r > cy1);
+                nc += stroke_seg_near(a, b, r, cx0, cx1, cy0, cy1);
             }
             cost += (double)nc * (tx1 - tx + 1) * (ty1 - ty + 1);
         }
