@@ -71,8 +71,8 @@ run_daemon() {
   trap 'kill -TERM $pid 2>/dev/null; wait $pid; exit 0' INT TERM
   for _ in $(seq 100); do curl -fs "$base/healthz" >/dev/null && break; sleep 0.1; done
   demo="$data/demo-session.json"
-  sid=$(json_field id < "$demo" 2>/dev/null || true)
-  tok=$(json_field paint_token < "$demo" 2>/dev/null || true)
+  sid=$(json_field id 2>/dev/null < "$demo" || true)
+  tok=$(json_field paint_token 2>/dev/null < "$demo" || true)
   if [ -z "$sid" ] || ! curl -fs "$base/api/v1/sessions/$sid?token=$tok" >/dev/null; then
     scene=$(curl -fsS -X POST "$base/api/v1/scenes" -H 'Content-Type: application/json' \
               -d '{"mesh": "teapot", "width": 256, "height": 256}' | json_field id)
