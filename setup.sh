@@ -16,12 +16,12 @@ BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config curl
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
   libopenimageio-dev libmicrohttpd-dev libsqlite3-dev libassimp-dev
-  libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0
+  libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0 libembree-dev
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
-  python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml
+  python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt
   openimageio-tools gnuplot-nox wrk chromium jq
 )
 

@@ -76,6 +76,8 @@ typedef struct method_preset {
 typedef struct method_build_in {
     const void *params;
     const samples *s;             /* the sampling pattern */
+    const struct scene *sc;       /* the scene it came from; NULL for samples made
+                                     elsewhere (e.g. imported from a file) */
     const void *const *prev;      /* data of the method's levels before this one */
     int level;                    /* index of the level being made */
     /* progress of the whole preparation (stage name, fraction); may be NULL */
@@ -180,6 +182,9 @@ typedef struct method {
     void (*params_default)(void *params);
     /* Checks across parameters after they were set (may be NULL). */
     int (*params_check)(const void *params, glint_err *err);
+    /* Which pixels are samples (samples.h: SAMPLES_LIT, the default 0, or
+     * SAMPLES_SEEN for methods lit by an environment). */
+    int pattern_rule;
     const method_level *levels;
     int nlevels;
     int (*fit)(const method_fit_in *in, struct material *out, glint_err *err);

@@ -85,13 +85,14 @@ typedef struct pattern_ctx {
     const prep_scene *ps;
     const unsigned char *use;
     samples *given;          /* samples made by the caller, moved into the value */
+    int rule;                /* SAMPLES_LIT or SAMPLES_SEEN (the method's) */
     prep_progress_fn cb;
     void *cls;
 } pattern_ctx;
 
 static size_t samples_bytes(const samples *s)
 {
-    return sizeof *s + (size_t)s->n * (2 * sizeof(int) + 9 * sizeof(float) + 2 * sizeof(double)) +
+    return sizeof *s + (size_t)s->n * (2 * sizeof(int) + 12 * sizeof(float) + 2 * sizeof(double)) +
            (size_t)s->nviews;
 }
 
@@ -161,6 +162,7 @@ static int pattern_build(void *ctx, cache_value *out, glint_err *err)
         for (int v = 0; v < sc->nviews; v++)
             nused += x->use[v] != 0;
         rc = samples_begin(s, sc->nviews, sc->width, sc->height, err);
+        samples_set_rule(s, x->rule);
         /* views not used are left out of the pattern */
         for (int v = 0; v < sc->nviews && !rc; v++) {
             if (!x->use[v])
@@ -182,9 +184,10 @@ static int pattern_build(void *ctx, cache_value *out, glint_err *err)
     return 0;
 }
 
-void prep_pattern_key(const prep_scene *ps, const unsigned char *use, char *key)
+void prep_pattern_key(const prep_scene *ps, const unsigned char *use, int rule, char *key)
 {
-    int n = snprintf(key, CACHE_KEY_MAX, "pattern:%s:", ps->hash);
+    int n = snprintf(key, CACHE_KEY_MAX, "pattern%s:%s:", rule == SAMPLES_SEEN ? "-seen" : "",
+                     ps->hash);
     /* the used-view flags as hex digits, 4 views per digit */
     for (int v = 0; v < ps->sc->nviews && n + 2 < CACHE_KEY_MAX; v += 4) {
         int nib = 0;
@@ -266,8 +269,10 @@ void prep_release(cache *c, prep *p)
     free(p);
 }
 
-/* The method's levels after the pattern (p->pattern set). */
-static int acquire_levels(cache *c, prep *p, prep_progress_fn cb, void *cls, glint_err *err)
+/* The method's levels after the pattern (p->pattern set); sc: the scene
+ * the pattern came from, or NULL. */
+static int acquire_levels(cache *c, prep *p, const scene *sc, prep_progress_fn cb, void *cls,
+                          glint_err *err)
 {
     const samples *s = cache_data(p->pattern);
     const void *prev[METHOD_MAX_LEVELS];
@@ -283,6 +288,7 @@ static int acquire_levels(cache *c, prep *p, prep_progress_fn cb, void *cls, gli
         x.lv = ml;
         x.in.params = p->params;
         x.in.s = s;
+        x.in.sc = sc;
         x.in.prev = prev;
         x.in.level = i;
         x.in.progress = cb;
@@ -308,7 +314,7 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
                                               .build = pattern_build};
     const prep_scene *ps = cache_data(rq->scene);
-    pattern_ctx px = {ps, rq->use, NULL, cb, cls};
+    pattern_ctx px = {ps, rq->use, NULL, rq->m->pattern_rule, cb, cls};
     char key[CACHE_KEY_MAX];
     prep *p;
     int rc;
@@ -316,11 +322,11 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
     *out = NULL;
     if (!(p = prep_new(rq->m, rq->params, err)))
         return GLINT_ENOMEM;
-    prep_pattern_key(ps, rq->use, key);
+    prep_pattern_key(ps, rq->use, rq->m->pattern_rule, key);
     rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
                        &p->pattern_spent, err);
     if (!rc)
-        rc = acquire_levels(c, p, cb, cls, err);
+        rc = acquire_levels(c, p, ps->sc, cb, cls, err);
     if (rc) {
         prep_release(c, p);
         return rc;
@@ -334,7 +340,7 @@ int prep_acquire_samples(cache *c, const method *m, const void *params, samples 
 {
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
                                               .build = pattern_build};
-    pattern_ctx px = {NULL, NULL, s, cb, cls};
+    pattern_ctx px = {NULL, NULL, s, m->pattern_rule, cb, cls};
     char key[CACHE_KEY_MAX];
     prep *p;
     int rc;
@@ -347,7 +353,7 @@ int prep_acquire_samples(cache *c, const method *m, const void *params, samples 
                        &p->pattern_spent, err);
     samples_free(s); /* when the cache had them already, or the build failed */
     if (!rc)
-        rc = acquire_levels(c, p, cb, cls, err);
+        rc = acquire_levels(c, p, NULL, cb, cls, err);
     if (rc) {
         prep_release(c, p);
         return rc;
@@ -366,7 +372,7 @@ int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err)
     *out = NULL;
     if (!(p = prep_new(rq->m, rq->params, err)))
         return GLINT_ENOMEM;
-    prep_pattern_key(ps, rq->use, key);
+    prep_pattern_key(ps, rq->use, rq->m->pattern_rule, key);
     if (cache_find(c, key, &p->pattern))
         goto miss;
     s = cache_data(p->pattern);

@@ -73,8 +73,9 @@ typedef struct prep_request {
 
 typedef struct prep prep;
 
-/* The pattern key of a request (OUT: key[CACHE_KEY_MAX]). */
-void prep_pattern_key(const prep_scene *s, const unsigned char *use, char *key);
+/* The pattern key of a request (OUT: key[CACHE_KEY_MAX]); rule: the
+ * method's (samples.h). */
+void prep_pattern_key(const prep_scene *s, const unsigned char *use, int rule, char *key);
 
 /* The prepared fit if every level is in memory now (nothing is built or
  * waited for): 0 with *out, else GLINT_ENOTFOUND. */

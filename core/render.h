@@ -124,4 +124,43 @@ int render_camera_view(const scene *sc, const render_camera *c, scene_view *out,
 /* "x,y,z": three finite numbers (0, or -1). */
 int render_parse_vec3(const char *text, double v[3]);
 
+/* ---- environment lighting -------------------------------------------------------------- */
+
+/* Renders lit by an environment (env.h) instead of the view's point light:
+ * the map compressed into `lights` median-cut lights, each light's
+ * visibility from the surface cast with Embree (vis.h) unless off (or
+ * auto and the mesh is convex).  A pixel's radiance is
+ *   sum_k V_k power_k f(wi_k, wo) max(0, n.wi_k)
+ * with f the BRDF (a material's evaluation divided by n.wi, or an
+ * analytic spec).  Engines: RENDER_CPU shades every pixel exactly (its own
+ * rays per pixel: the reference); RENDER_EGL shades the mesh's vertices on
+ * the CPU (rays per vertex, cached per mesh key and lights) and lets the
+ * GPU interpolate them, which is what makes an interactive preview (the
+ * two differ where shading varies within a triangle: measured in
+ * tests/unit/test_envrender.c).  The render object keeps the compressed
+ * lights and per-vertex visibility of recent requests (a small LRU). */
+typedef struct render_env {
+    char spec[64];           /* env_resolve spec ("studio", "data:courtyard.exr") */
+    double rotation_deg;     /* about +z */
+    double intensity;        /* > 0 */
+    int lights;              /* 1..4096, default 256 */
+    int visibility;          /* -1 auto (default), 0 off, 1 on */
+} render_env;
+
+void render_env_init(render_env *e);
+/* Check a request (spec syntax, ranges): 0 or GLINT_EINVAL / GLINT_ERANGE. */
+int render_env_check(const render_env *e, glint_err *err);
+
+/* A base render under the environment: the analytic BRDF brdf_spec scaled
+ * by `scale`.  OUT: *out (RGB), *used. */
+int render_env_base(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                    const scene_view *v, int width, int height, const render_env *e,
+                    const char *brdf_spec, double scale, img *out, render_used *used,
+                    glint_err *err);
+
+/* A material preview under the environment (any method's material). */
+int render_env_material(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                        const material *mat, const scene_view *v, int width, int height,
+                        const render_env *e, img *out, render_used *used, glint_err *err);
+
 #endif

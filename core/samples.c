@@ -20,6 +20,7 @@ void samples_free(samples *s)
     free(s->wo);
     free(s->cos_i);
     free(s->intensity);
+    free(s->pos);
     memset(s, 0, sizeof *s);
 }
 
@@ -40,6 +41,7 @@ static int samples_reserve(samples *s, size_t cap, glint_err *err)
     GROW(wo, 3);
     GROW(cos_i, 1);
     GROW(intensity, 1);
+    GROW(pos, 3);
 #undef GROW
     s->cap = cap;
     return 0;
@@ -58,7 +60,7 @@ static int samples_alloc(samples *s, int n, int nviews, glint_err *err)
     return 0;
 }
 
-static int is_sample(const gbuf *g, size_t p, double *ci)
+static int is_sample(const gbuf *g, size_t p, int rule, double *ci)
 {
     const float *n = g->nrm + 3 * p, *wi = g->wi + 3 * p, *wo = g->wo + 3 * p;
     double a, b;
@@ -67,17 +69,27 @@ static int is_sample(const gbuf *g, size_t p, double *ci)
     a = (double)n[0] * wi[0] + (double)n[1] * wi[1] + (double)n[2] * wi[2];
     b = (double)n[0] * wo[0] + (double)n[1] * wo[1] + (double)n[2] * wo[2];
     *ci = a;
-    return a > 0.0 && b > 0.0;
+    return (rule == SAMPLES_SEEN || a > 0.0) && b > 0.0;
 }
 
-long samples_count(const gbuf *g)
+long samples_count_rule(const gbuf *g, int rule)
 {
     size_t np = (size_t)g->width * g->height;
     long count = 0;
     double ci;
     for (size_t p = 0; p < np; p++)
-        count += is_sample(g, p, &ci);
+        count += is_sample(g, p, rule, &ci);
     return count;
+}
+
+long samples_count(const gbuf *g)
+{
+    return samples_count_rule(g, SAMPLES_LIT);
+}
+
+void samples_set_rule(samples *s, int rule)
+{
+    s->rule = rule == SAMPLES_SEEN ? SAMPLES_SEEN : SAMPLES_LIT;
 }
 
 int samples_begin(samples *s, int nviews, int width, int height, glint_err *err)
@@ -107,10 +119,11 @@ int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity,
                              "view %d: a %dx%d band at row %d does not fit the %dx%d raster",
                              view, g->width, g->height, row0, s->width, s->height);
     s->used[view] = 1;
+    s->has_pos = 1;
     for (size_t p = 0; p < np; p++) {
         double ci;
         size_t k = (size_t)s->n;
-        if (!is_sample(g, p, &ci))
+        if (!is_sample(g, p, s->rule, &ci))
             continue;
         if (k == (size_t)SAMPLES_MAX)
             return glint_err_set(err, GLINT_ERANGE, "more than %d samples (the limit)",
@@ -122,6 +135,7 @@ int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity,
         memcpy(s->nrm + 3 * k, g->nrm + 3 * p, 3 * sizeof(float));
         memcpy(s->wi + 3 * k, g->wi + 3 * p, 3 * sizeof(float));
         memcpy(s->wo + 3 * k, g->wo + 3 * p, 3 * sizeof(float));
+        memcpy(s->pos + 3 * k, g->pos + 3 * p, 3 * sizeof(float));
         s->cos_i[k] = ci;
         s->intensity[k] = intensity;
         s->n++;
@@ -132,13 +146,16 @@ int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity,
 /* The pattern hash: the rule, the scene hash and the views used. */
 static int samples_hash(samples *s, const char scene_hash[33], glint_err *err)
 {
-    static const char rule[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
+    static const char lit[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
+    static const char seen[] = "glint-samples-v1:mask&cos_o>0";
+    const char *rule = s->rule == SAMPLES_SEEN ? seen : lit;
+    size_t rule_len = s->rule == SAMPLES_SEEN ? sizeof seen : sizeof lit;
     XXH3_state_t *st = XXH3_createState();
     XXH128_hash_t h;
     if (!st)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory hashing samples");
     XXH3_128bits_reset(st);
-    XXH3_128bits_update(st, rule, sizeof rule);
+    XXH3_128bits_update(st, rule, rule_len);
     XXH3_128bits_update(st, scene_hash ? scene_hash : "", scene_hash ? 32 : 0);
     XXH3_128bits_update(st, s->used, (size_t)s->nviews);
     h = XXH3_128bits_digest(st);
@@ -196,6 +213,8 @@ int samples_subset(const samples *all, const unsigned char *use, const char scen
 
     if ((rc = samples_begin(out, all->nviews, all->width, all->height, err)))
         return rc;
+    out->rule = all->rule;
+    out->has_pos = all->has_pos;
     for (int i = 0; i < all->n; i++)
         n += use[all->view[i]] != 0;
     if (n && (rc = samples_reserve(out, n, err)))
@@ -209,6 +228,7 @@ int samples_subset(const samples *all, const unsigned char *use, const char scen
         memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
         memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
         memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
         out->cos_i[k] = all->cos_i[i];
         out->intensity[k] = all->intensity[i];
         out->n++;
@@ -386,6 +406,7 @@ int samples_import(const char *path, samples *out, float **values, glint_err *er
             out->wo[3 * i + e] = (float)d[6 + e];
         }
         out->intensity[i] = 1.0;
+        out->pos[3 * i] = out->pos[3 * i + 1] = out->pos[3 * i + 2] = 0.0f;
         if (got == 13)
             vals[3 * i] = vals[3 * i + 1] = vals[3 * i + 2] = (float)d[9];
         out->used[v] = 1;

@@ -21,6 +21,11 @@
 #include "scene.h"
 
 #define SAMPLES_MAX (1 << 26)
+/* Which pixels are samples.  SAMPLES_LIT: mask, n.wi > 0 and n.wo > 0 (the
+ * point-light methods).  SAMPLES_SEEN: mask and n.wo > 0, lit by the view's
+ * light or not (methods lit by an environment); wi and cos_i are still the
+ * view's light's.  The rule is part of the pattern hash. */
+enum { SAMPLES_LIT = 0, SAMPLES_SEEN = 1 };
 
 typedef struct samples {
     int n;                 /* number of samples */
@@ -32,6 +37,9 @@ typedef struct samples {
     float *nrm, *wi, *wo;  /* 3n each: geometry at the sample */
     double *cos_i;         /* n: n.wi (> 0) */
     double *intensity;     /* n: the light intensity of the sample's view */
+    float *pos;            /* 3n: world position (0 for imported samples: has_pos = 0) */
+    int has_pos;           /* 1 when pos holds the surface points */
+    int rule;              /* SAMPLES_LIT (default) or SAMPLES_SEEN */
     char hash[33];         /* pattern hash: scene hash + used views + rule */
     size_t cap;            /* samples the arrays hold room for (while building) */
 } samples;
@@ -51,13 +59,17 @@ int samples_build(const gbuf *g, const scene_view *views, int nviews,
  * checks that there is a sample and computes the pattern hash.  The result
  * is exactly samples_build's.  On failure the caller samples_free()s. */
 int samples_begin(samples *s, int nviews, int width, int height, glint_err *err);
+/* The rule of a pattern being built (after samples_begin, before any
+ * samples_add; SAMPLES_LIT unless set). */
+void samples_set_rule(samples *s, int rule);
 int samples_add(samples *s, int view, const gbuf *band, int row0, double intensity,
                 glint_err *err);
 int samples_end(samples *s, const unsigned char *use, const char scene_hash[33],
                 glint_err *err);
 
-/* The samples of one G-buffer (or band). */
+/* The samples of one G-buffer (or band), by the LIT rule and by a rule. */
 long samples_count(const gbuf *g);
+long samples_count_rule(const gbuf *g, int rule);
 
 /* The samples of the views flagged in `use` out of a pattern of every view:
  * exactly the pattern samples_build would make from those views (same

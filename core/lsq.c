@@ -1,0 +1,412 @@
+/* lsq.c: constrained least squares on the Gram form (lsq.h).
+ *
+ * Primal active set (Nocedal & Wright, Algorithm 16.3) on
+ *   minimize 1/2 c'Hc - q'c  subject to c >= 0, G c <= u,
+ * which has the minimizer of ||Tc - f||^2.  The working set holds bounds
+ * (c_j = 0: j not free) and rows (G_r c = u_r).  Each iteration solves the
+ * equality-constrained problem on the free variables,
+ *   [H_FF  G_RF'] [x_F]   [q_F]
+ *   [G_RF  0    ] [mu ] = [u_R],
+ * by LU (dgesv); a singular system (H semidefinite on the free variables,
+ * or dependent rows) is solved again with H_FF + delta I and -eps I in the
+ * row block (delta, eps = 1e-12 of the largest diagonal), which keeps the
+ * step well defined.  A step to x that leaves the feasible set stops at
+ * the first constraint it meets, which joins the working set; at x itself
+ * the multipliers decide: the most negative one (rows' mu, bounds'
+ * nu = (Hc - q + G_R' mu)_j) leaves the set, and when none is negative
+ * (below -tol) c is optimal.  The iteration limit is 20 (n + m) + 100. */
+#include "lsq.h"
+
+#include <lapacke.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct lsq_work {
+    int n, m;
+    int *freev, *rows, *piv;
+    unsigned char *isfree, *inrow;
+    double *K, *rhs, *x, *p, *grad, *gp, *mu;
+    double *Q;     /* orthonormal basis of the working rows on the free variables */
+};
+
+lsq_work *lsq_work_new(int n, int m)
+{
+    lsq_work *w = calloc(1, sizeof *w);
+    size_t k = (size_t)n + (size_t)m + 1;
+    if (!w)
+        return NULL;
+    w->n = n;
+    w->m = m;
+    w->freev = malloc((n + 1) * sizeof *w->freev);
+    w->rows = malloc((m + 1) * sizeof *w->rows);
+    w->piv = malloc(k * sizeof *w->piv);
+    w->isfree = malloc(n + 1);
+    w->inrow = malloc(m + 1);
+    w->K = malloc(k * k * sizeof *w->K);
+    w->rhs = malloc(k * sizeof *w->rhs);
+    w->x = malloc((n + 1) * sizeof *w->x);
+    w->p = malloc((n + 1) * sizeof *w->p);
+    w->grad = malloc((n + 1) * sizeof *w->grad);
+    w->gp = malloc((m + 1) * sizeof *w->gp);
+    w->mu = malloc((m + 1) * sizeof *w->mu);
+    w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
+    if (!w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->inrow || !w->K || !w->rhs ||
+        !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
+        lsq_work_free(w);
+        return NULL;
+    }
+    return w;
+}
+
+void lsq_work_free(lsq_work *w)
+{
+    if (!w)
+        return;
+    free(w->freev);
+    free(w->rows);
+    free(w->piv);
+    free(w->isfree);
+    free(w->inrow);
+    free(w->K);
+    free(w->rhs);
+    free(w->x);
+    free(w->p);
+    free(w->grad);
+    free(w->gp);
+    free(w->mu);
+    free(w->Q);
+    free(w);
+}
+
+const char *lsq_mode_name(lsq_mode m)
+{
+    return m == LSQ_NONNEG ? "nonneg" : m == LSQ_NONE ? "none" : "energy";
+}
+
+const char *lsq_status_name(lsq_status s)
+{
+    return s == LSQ_INFEASIBLE ? "infeasible" : s == LSQ_MAXITER ? "max_iterations" : "optimal";
+}
+
+/* Row r of G restricted to the free variables, made orthogonal to the nq
+ * rows of Q (modified Gram-Schmidt, twice); appended to Q and 1 returned
+ * when it is independent of them (relative residual above 1e-9), else 0. */
+static int add_to_basis(const lsq_problem *pr, lsq_work *w, int nf, int r, int nq)
+{
+    double *v = w->Q + (size_t)nq * nf, n0 = 0.0, n1 = 0.0;
+    if (nq >= nf)
+        return 0;
+    for (int a = 0; a < nf; a++) {
+        v[a] = pr->G[(size_t)r * pr->n + w->freev[a]];
+        n0 += v[a] * v[a];
+    }
+    if (n0 <= 0.0)
+        return 0;
+    for (int pass = 0; pass < 2; pass++)
+        for (int q = 0; q < nq; q++) {
+            const double *u = w->Q + (size_t)q * nf;
+            double d = 0.0;
+            for (int a = 0; a < nf; a++)
+                d += u[a] * v[a];
+            for (int a = 0; a < nf; a++)
+                v[a] -= d * u[a];
+        }
+    for (int a = 0; a < nf; a++)
+        n1 += v[a] * v[a];
+    if (n1 <= 1e-18 * n0)
+        return 0;
+    n1 = sqrt(n1);
+    for (int a = 0; a < nf; a++)
+        v[a] /= n1;
+    return 1;
+}
+
+/* Solve the equality-constrained subproblem of the working set: OUT w->x
+ * (full length, zero on bounds) and w->mu[nr]. */
+static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale)
+{
+    int n = pr->n, k = nf + nr;
+    for (int attempt = 0; attempt < 2; attempt++) {
+        double delta = attempt ? 1e-12 * dscale : 0.0;
+        lapack_int info;
+        for (int a = 0; a < nf; a++) {
+            int ja = w->freev[a];
+            for (int b = 0; b < nf; b++)
+                w->K[(size_t)a * k + b] = pr->H[(size_t)ja * n + w->freev[b]];
+            w->K[(size_t)a * k + a] += delta;
+            for (int r = 0; r < nr; r++) {
+                double g = pr->G[(size_t)w->rows[r] * n + ja];
+                w->K[(size_t)a * k + nf + r] = g;
+                w->K[(size_t)(nf + r) * k + a] = g;
+            }
+            w->rhs[a] = pr->q[ja];
+        }
+        for (int r = 0; r < nr; r++) {
+            for (int s = 0; s < nr; s++)
+                w->K[(size_t)(nf + r) * k + nf + s] = (r == s) ? -delta : 0.0;
+            w->rhs[nf + r] = pr->u[w->rows[r]];
+        }
+        if (k == 0)
+            break;
+        info = LAPACKE_dgesv(LAPACK_ROW_MAJOR, k, 1, w->K, k, w->piv, w->rhs, 1);
+        if (info == 0)
+            break;
+        if (attempt)
+            return -1;
+    }
+    memset(w->x, 0, (size_t)n * sizeof *w->x);
+    for (int a = 0; a < nf; a++)
+        w->x[w->freev[a]] = w->rhs[a];
+    for (int r = 0; r < nr; r++)
+        w->mu[r] = w->rhs[nf + r];
+    return 0;
+}
+
+static int solve_none(const lsq_problem *p, double rcond, double *c, lsq_result *res,
+                      glint_err *err)
+{
+    int n = p->n, rank = 0;
+    double *A = malloc((size_t)n * n * sizeof *A), *ev = malloc((size_t)n * sizeof *ev);
+    lapack_int info;
+    if (!A || !ev) {
+        free(A);
+        free(ev);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
+    memcpy(A, p->H, (size_t)n * n * sizeof *A);
+    info = LAPACKE_dsyevd(LAPACK_ROW_MAJOR, 'V', 'U', n, A, n, ev);
+    if (info) {
+        free(A);
+        free(ev);
+        return glint_err_set(err, GLINT_ENUMERIC, "eigendecomposition failed (info %d)",
+                             (int)info);
+    }
+    memset(c, 0, (size_t)n * sizeof *c);
+    for (int k = 0; k < n; k++) {
+        double proj = 0.0;
+        if (!(ev[k] > rcond * ev[n - 1]) || ev[k] <= 0.0)
+            continue;
+        rank++;
+        for (int i = 0; i < n; i++)
+            proj += A[(size_t)i * n + k] * p->q[i];
+        proj /= ev[k];
+        for (int i = 0; i < n; i++)
+            c[i] += proj * A[(size_t)i * n + k];
+    }
+    res->rank = rank;
+    free(A);
+    free(ev);
+    return 0;
+}
+
+static void finish(const lsq_problem *p, lsq_mode mode, const double *c, lsq_result *res)
+{
+    int n = p->n;
+    double obj = p->ff, viol = 0.0, slack = INFINITY;
+    for (int i = 0; i < n; i++) {
+        double hc = 0.0;
+        for (int j = 0; j < n; j++)
+            hc += p->H[(size_t)i * n + j] * c[j];
+        obj += c[i] * hc - 2.0 * p->q[i] * c[i];
+        if (mode != LSQ_NONE && -c[i] > viol)
+            viol = -c[i];
+        res->free_vars += c[i] > 0.0;
+    }
+    if (mode == LSQ_ENERGY)
+        for (int r = 0; r < p->m; r++) {
+            double g = 0.0;
+            for (int j = 0; j < n; j++)
+                g += p->G[(size_t)r * n + j] * c[j];
+            if (g - p->u[r] > viol)
+                viol = g - p->u[r];
+            if (p->u[r] - g < slack)
+                slack = p->u[r] - g;
+        }
+    res->objective = obj < 0.0 && obj > -1e-12 * (p->ff > 0 ? p->ff : 1.0) ? 0.0 : obj;
+    res->max_violation = viol;
+    res->min_slack = mode == LSQ_ENERGY && p->m > 0 ? slack : 0.0;
+}
+
+int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, double *c,
+              lsq_result *res, glint_err *err)
+{
+    int n = p->n, m = mode == LSQ_ENERGY ? p->m : 0, own = 0, rc = 0, nf = 0, nr = 0;
+    int maxit;
+    double dscale = 0.0, qscale = 0.0, tol;
+
+    memset(res, 0, sizeof *res);
+    res->infeasible_row = -1;
+    if (n < 1 || n > LSQ_MAX_N || m < 0 || m > LSQ_MAX_M || !p->H || !p->q ||
+        (m && (!p->G || !p->u)))
+        return glint_err_set(err, GLINT_EINVAL, "lsq: %d unknowns and %d rows (1..%d, 0..%d)",
+                             n, m, LSQ_MAX_N, LSQ_MAX_M);
+    for (size_t k = 0; k < (size_t)n * n; k++)
+        if (!isfinite(p->H[k]))
+            return glint_err_set(err, GLINT_EINVAL, "lsq: H is not finite");
+    for (int k = 0; k < n; k++) {
+        if (!isfinite(p->q[k]))
+            return glint_err_set(err, GLINT_EINVAL, "lsq: q is not finite");
+        qscale = fmax(qscale, fabs(p->q[k]));
+        dscale = fmax(dscale, fabs(p->H[(size_t)k * n + k]));
+    }
+    for (size_t k = 0; k < (size_t)m * n; k++)
+        if (!isfinite(p->G[k]))
+            return glint_err_set(err, GLINT_EINVAL, "lsq: G is not finite");
+    for (int r = 0; r < m; r++)
+        if (!isfinite(p->u[r]))
+            return glint_err_set(err, GLINT_EINVAL, "lsq: u is not finite");
+    if (mode == LSQ_NONE) {
+        if ((rc = solve_none(p, rcond > 0.0 ? rcond : 1e-12, c, res, err)))
+            return rc;
+        finish(p, mode, c, res);
+        return 0;
+    }
+    /* c = 0 is the start: it must be feasible */
+    for (int r = 0; r < m; r++)
+        if (p->u[r] < 0.0) {
+            memset(c, 0, (size_t)n * sizeof *c);
+            res->status = LSQ_INFEASIBLE;
+            res->infeasible_row = r;
+            return 0;
+        }
+    if (!w) {
+        if (!(w = lsq_work_new(n, m)))
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        own = 1;
+    } else if (w->n < n || w->m < m) {
+        return glint_err_set(err, GLINT_EINVAL, "lsq: workspace for %d x %d, problem %d x %d",
+                             w->n, w->m, n, m);
+    }
+    if (dscale <= 0.0)
+        dscale = 1.0;
+    tol = 1e-11 * fmax(qscale, 1e-300);
+    memset(c, 0, (size_t)n * sizeof *c);
+    memset(w->isfree, 0, (size_t)n);
+    memset(w->inrow, 0, (size_t)m);
+    maxit = 20 * (n + m) + 100;
+    res->status = LSQ_MAXITER;
+    for (int it = 0; it < maxit; it++) {
+        double pn = 0.0, cn = 0.0, alpha = 1.0;
+        int block = -1, block_row = 0;
+        res->iterations = it + 1;
+        nf = nr = 0;
+        for (int j = 0; j < n; j++)
+            if (w->isfree[j])
+                w->freev[nf++] = j;
+        /* rows that depend on others on the free variables leave the working
+         * set: they stay satisfied with equality along any step it allows */
+        for (int r = 0; r < m; r++)
+            if (w->inrow[r]) {
+                if (add_to_basis(p, w, nf, r, nr))
+                    w->rows[nr++] = r;
+                else
+                    w->inrow[r] = 0;
+            }
+        if (eqp(p, w, nf, nr, dscale)) {
+            rc = glint_err_set(err, GLINT_ENUMERIC, "lsq: the working-set system is singular");
+            goto done;
+        }
+        for (int j = 0; j < n; j++) {
+            w->p[j] = w->x[j] - c[j];
+            pn = fmax(pn, fabs(w->p[j]));
+            cn = fmax(cn, fabs(c[j]));
+        }
+        if (pn <= 1e-10 * fmax(cn, 1e-300) || pn == 0.0) {
+            /* stationary on the working set: multipliers */
+            double worst = -tol;
+            int drop = -1, drop_row = 0;
+            for (int j = 0; j < n; j++) {
+                double gr = -p->q[j];
+                for (int k = 0; k < n; k++)
+                    gr += p->H[(size_t)j * n + k] * c[k];
+                for (int r = 0; r < nr; r++)
+                    gr += p->G[(size_t)w->rows[r] * n + j] * w->mu[r];
+                w->grad[j] = gr;
+                if (!w->isfree[j] && gr < worst) {
+                    worst = gr;
+                    drop = j;
+                    drop_row = 0;
+                }
+            }
+            for (int r = 0; r < nr; r++)
+                if (w->mu[r] < worst) {
+                    worst = w->mu[r];
+                    drop = w->rows[r];
+                    drop_row = 1;
+                }
+            if (drop < 0) {
+                double kkt = 0.0;
+                for (int j = 0; j < n; j++)
+                    if (w->isfree[j])
+                        kkt = fmax(kkt, fabs(w->grad[j]));
+                res->kkt_residual = kkt / fmax(1.0, qscale);
+                res->active_rows = nr;
+                res->status = LSQ_OK;
+                break;
+            }
+            if (drop_row)
+                w->inrow[drop] = 0;
+            else
+                w->isfree[drop] = 1;
+            continue;
+        }
+        /* step toward x, stopped by the first constraint it meets */
+        for (int a = 0; a < nf; a++) {
+            int j = w->freev[a];
+            if (w->p[j] < 0.0) {
+                double t = -c[j] / w->p[j];
+                if (t < alpha) {
+                    alpha = t;
+                    block = j;
+                    block_row = 0;
+                }
+            }
+        }
+        for (int r = 0; r < m; r++) {
+            double gp = 0.0, gc = 0.0, gabs = 0.0;
+            if (w->inrow[r])
+                continue;
+            for (int a = 0; a < nf; a++) {
+                int j = w->freev[a];
+                double g = p->G[(size_t)r * n + j];
+                gp += g * w->p[j];
+                gc += g * c[j];
+                gabs += fabs(g * w->p[j]);
+            }
+            if (gp > 1e-12 * gabs) {
+                double t = (p->u[r] - gc) / gp;
+                if (t < 0.0)
+                    t = 0.0;
+                if (t < alpha) {
+                    alpha = t;
+                    block = r;
+                    block_row = 1;
+                }
+            }
+        }
+        for (int a = 0; a < nf; a++) {
+            int j = w->freev[a];
+            c[j] += alpha * w->p[j];
+        }
+        if (block >= 0) {
+            if (block_row) {
+                if (add_to_basis(p, w, nf, block, nr))
+                    w->inrow[block] = 1;
+            }
+            else {
+                w->isfree[block] = 0;
+                c[block] = 0.0;
+            }
+        }
+    }
+    for (int j = 0; j < n; j++)
+        if (c[j] < 0.0)
+            c[j] = 0.0;
+done:
+    if (own)
+        lsq_work_free(w);
+    if (!rc)
+        finish(p, mode, c, res);
+    return rc;
+}

@@ -1,0 +1,80 @@
+/* lsq.h: constrained linear least squares on the Gram form, the solver of
+ * environment-lit BRDF fits (Iwasaki et al. eq. 17-19):
+ *
+ *   minimize  ||T c - f||^2 = c'Hc - 2 q'c + f'f,   H = T'T, q = T'f
+ *   subject to  c >= 0            (LSQ_NONNEG and LSQ_ENERGY)
+ *               G c <= u          (LSQ_ENERGY: m rows)
+ *
+ * or unconstrained (LSQ_NONE: the minimum-norm least-squares solution,
+ * through an eigendecomposition of H with a relative cut `rcond`).
+ *
+ * The constrained modes use a primal active-set method started at c = 0
+ * (feasible whenever u >= 0): each step solves the equality-constrained
+ * subproblem on the free variables with the active rows (a small dense
+ * KKT system, LAPACK), moves as far as feasibility allows, and drops the
+ * constraint with the most negative multiplier at a stationary point.  It
+ * stops at a KKT point: with H positive definite on the free variables
+ * this is the unique minimum.  Degenerate steps are guarded against
+ * cycling (Bland's rule after a stall); linearly dependent active rows are
+ * never added.
+ *
+ * Infeasibility: some u_l < 0 (a diffuse albedo >= 1) makes c >= 0,
+ * G c <= u infeasible when G >= 0: reported as LSQ_INFEASIBLE with the row,
+ * never a guess.  u_l = 0 is feasible (c = 0 on the rows' support).
+ *
+ * Thread-safety: no global state; lsq_work is one caller's scratch. */
+#ifndef GLINT_LSQ_H
+#define GLINT_LSQ_H
+
+#include "err.h"
+
+typedef enum { LSQ_ENERGY = 0, LSQ_NONNEG = 1, LSQ_NONE = 2 } lsq_mode;
+
+typedef enum {
+    LSQ_OK = 0,
+    LSQ_INFEASIBLE = 1,       /* no c satisfies the constraints */
+    LSQ_MAXITER = 2           /* stopped at the iteration limit (c feasible, not optimal) */
+} lsq_status;
+
+typedef struct lsq_problem {
+    int n;                    /* unknowns, 1..LSQ_MAX_N */
+    const double *H;          /* n x n, row-major, symmetric positive semidefinite */
+    const double *q;          /* n */
+    double ff;                /* f'f (for the objective; 0 if unknown) */
+    int m;                    /* energy rows (LSQ_ENERGY), 0..LSQ_MAX_M */
+    const double *G;          /* m x n, row-major */
+    const double *u;          /* m */
+} lsq_problem;
+
+#define LSQ_MAX_N 4096
+#define LSQ_MAX_M 8192
+
+typedef struct lsq_result {
+    lsq_status status;
+    int iterations;
+    int free_vars;            /* c_j > 0 at the end */
+    int active_rows;          /* energy rows holding with equality */
+    int infeasible_row;       /* LSQ_INFEASIBLE: the offending row, else -1 */
+    double objective;         /* ||T c - f||^2 = c'Hc - 2q'c + ff */
+    double max_violation;     /* max(0, max_l (G c - u)_l, max_j -c_j) */
+    double kkt_residual;      /* ||H c - q - multipliers' terms||_inf / max(1, ||q||_inf) */
+    double min_slack;         /* min_l (u_l - (G c)_l), energy mode; else 0 */
+    int rank;                 /* LSQ_NONE: eigenvalues kept */
+} lsq_result;
+
+/* Scratch sized for n unknowns and m rows (malloc'ed; lsq_work_free). */
+typedef struct lsq_work lsq_work;
+lsq_work *lsq_work_new(int n, int m);
+void lsq_work_free(lsq_work *w);
+
+/* Solve (OUT: c[n], *res).  w may be NULL (allocated per call).  Returns 0
+ * (see res->status: LSQ_INFEASIBLE is not an error code, so callers can
+ * report it), or GLINT_EINVAL for bad sizes or non-finite data,
+ * GLINT_ENOMEM. rcond: LSQ_NONE's cut (<= 0: 1e-12). */
+int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, double *c,
+              lsq_result *res, glint_err *err);
+
+const char *lsq_mode_name(lsq_mode m);      /* "energy", "nonneg", "none" */
+const char *lsq_status_name(lsq_status s);  /* "optimal", "infeasible", "max_iterations" */
+
+#endif

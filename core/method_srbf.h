@@ -1,0 +1,161 @@
+/* method_srbf.h: the srbf method: BRDF modeling under environment light
+ * (Iwasaki, Dobashi, Yoshimoto and Nishita 2009), inside glint's method
+ * interface (method.h).
+ *
+ * The painted views are lit by an environment map, compressed into lights
+ * (env.h); each painted pixel is a row of the transfer matrices of eq. 6
+ * (srbf.h), with the visibility of each light from each pixel cast with
+ * Embree (vis.h) unless the mesh is convex; every painted view adds rows
+ * to one system (the paper's footnote 1).  A fit solves eq. 17 per colour
+ * channel on the Gram form with c >= 0 and energy conservation (lsq.h):
+ *
+ *   minimize ||T c - (b - rho_d E)||^2 + mu ||L c||^2
+ *   subject to c >= 0, rho_d + g c <= 1 - SRBF_ENERGY_MARGIN at every energy
+ *   direction
+ *
+ * where b is the painted radiance divided by the environment's intensity,
+ * L the graph Laplacian of the lobe centres (a smoothness prior on p(h):
+ * mu = smooth x trace(H) / J), and, with a fitted diffuse, rho_d one more
+ * non-negative unknown per channel (its column E, its energy coefficient
+ * 1).
+ *
+ * Levels (each in the cache under its own key):
+ *   energy      basis, energy directions, rows g (no scene: shared by all)
+ *   lights      the environment compressed (no scene: shared by all)
+ *   rows        the fit's rows (pixels on the grid of `raster`), whether
+ *               the mesh is convex and so whether shadows are cast
+ *   transfer    visibility of each light from each row (Embree), then T
+ *               (float), E, H = T'T, T'E, E'E per channel, lobes reached
+ *               (kept on disk: a restart reads it instead of casting rays)
+ * A repaint costs T'b over the rows and three small solves.
+ *
+ * Thread-safety: as method.h. */
+#ifndef GLINT_METHOD_SRBF_H
+#define GLINT_METHOD_SRBF_H
+
+#include <stdint.h>
+
+#include "env.h"
+#include "lsq.h"
+#include "material.h"
+#include "method.h"
+#include "srbf.h"
+
+extern const method method_srbf;
+
+typedef struct srbf_raster {
+    int w, h;                  /* fit grid per view; 0 x 0: every sample */
+} srbf_raster;
+
+typedef struct srbf_diffuse {
+    int fit;                   /* 1: fitted jointly; 0: rgb given */
+    double rgb[3];
+} srbf_diffuse;
+
+typedef struct srbf_params {
+    char env[ENV_NAME_MAX];
+    double env_rotation;       /* degrees about +z */
+    double env_intensity;
+    int lights;
+    int basis_res;             /* J = 3 r^2 */
+    double sigma;              /* radians */
+    int static_term;           /* srbf_static_kind */
+    double f0;
+    double alpha;
+    int constraints;           /* lsq_mode */
+    int visibility;            /* SRBF_VIS_* */
+    srbf_raster raster;
+    srbf_diffuse diffuse;
+    double smooth;
+    int grazing;               /* rings of energy rows near the horizon */
+} srbf_params;
+
+enum { SRBF_VIS_AUTO = 0, SRBF_VIS_ON = 1, SRBF_VIS_OFF = 2 };
+
+/* The energy rows hold the albedo to 1 - SRBF_ENERGY_MARGIN: between rows
+ * (measured on a dense grid down to 0.5 degrees elevation) it rises by up
+ * to 4e-4 above the rows' value, so the margin keeps it below 1
+ * everywhere. */
+#define SRBF_ENERGY_MARGIN 1e-3
+
+/* ---- level data ---------------------------------------------------------------------- */
+
+typedef struct srbf_energy {
+    srbf_basis b;
+    srbf_static st;
+    int nl;
+    double *wo;                /* 3 nl local directions */
+    double *g;                 /* nl x J */
+    double seconds;
+} srbf_energy;
+
+typedef struct srbf_lightset {
+    env_lights l;
+    env_cut_error e;
+    char name[ENV_NAME_MAX];
+    long clamped, nonfinite;
+    int map_w, map_h;
+    double seconds;
+} srbf_lightset;
+
+typedef struct srbf_visdata {
+    int nrows;
+    int *rows;                 /* sample index of each row */
+    int convex;                /* -1: unknown (no mesh) */
+    int on;                    /* the transfer level casts shadow rays */
+    double seconds;
+} srbf_visdata;
+
+typedef struct srbf_transfer_data {
+    int nrows, J;
+    float *T;                  /* 3 x nrows x J */
+    double *E;                 /* nrows x 3 */
+    double *H;                 /* 3 x J x J */
+    double *TE;                /* 3 x J */
+    double EE[3];
+    unsigned char *reach;      /* J */
+    int nreach;
+    int *idx;                  /* nreach: the reached lobes, increasing */
+    double *LtL;               /* nreach x nreach: L'L of the centres' graph Laplacian */
+    long terms;
+    long rays;                 /* shadow rays cast (0: visibility off) */
+    double vis_seconds, seconds, gram_seconds;
+} srbf_transfer_data;
+
+/* ---- the material ----------------------------------------------------------------- */
+
+typedef struct srbf_material {
+    srbf_basis b;
+    srbf_static st;
+    double *c;                 /* 3 x J */
+    double rho[3];
+} srbf_material;
+
+/* Make a material of method srbf (takes *sm's arrays). */
+void srbf_material_init(material *m, srbf_material *sm, json_t *info);
+/* The srbf material of m, or NULL. */
+const srbf_material *srbf_material_of(const material *m);
+/* Evaluate at world unit vectors (OUT rgb). */
+void srbf_material_eval(const srbf_material *sm, const double n[3], const double wi[3],
+                        const double wo[3], double rgb[3]);
+/* Its directional albedo at a local outgoing direction, rho_d included
+ * (OUT rgb). */
+void srbf_material_albedo(const srbf_material *sm, const double wo[3], int nq, double rgb[3]);
+
+extern const material_ops srbf_material_ops;
+extern const char srbf_glsl_frag[];
+
+/* Disk layer of the energy and transfer levels (method_srbf_disk.c). */
+int srbf_energy_save(const char *dir, const char *key, const srbf_energy *x, glint_err *err);
+int srbf_energy_load(const char *dir, const char *key, srbf_energy *x, glint_err *err);
+int srbf_transfer_save(const char *dir, const char *key, const srbf_transfer_data *x,
+                       glint_err *err);
+int srbf_transfer_load(const char *dir, const char *key, srbf_transfer_data *x,
+                       glint_err *err);
+void srbf_energy_clear(srbf_energy *x);
+/* idx and LtL of a transfer level from its reach flags and the basis. */
+int srbf_transfer_reach(srbf_transfer_data *x, const srbf_basis *b, glint_err *err);
+void srbf_transfer_clear(srbf_transfer_data *x);
+size_t srbf_transfer_bytes(const srbf_transfer_data *x);
+
+#endif

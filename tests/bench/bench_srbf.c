@@ -1,0 +1,394 @@
+/* bench_srbf.c: the environment-lit method (srbf) beside seed 004's Table 1,
+ * and its speed-accuracy table.
+ *
+ *   bench_srbf [--quick] [--data DIR]
+ *
+ * Table 1: for the sphere, the bunny and the cow at 160x120 (one painted
+ * view), under two CC0 environments (DIR/envmaps: courtyard.exr and
+ * sunset.exr; the built-in "sky" and "studio" when absent), with and
+ * without visibility: pixels (rows), T_trans (visibility + transfer
+ * matrices + Gram matrices, cold), T_s (the warm fit: T'b and three
+ * constrained solves with T'T cached) and the solver alone.
+ *
+ * Speed-accuracy: a Cook-Torrance GGX 0.3 target on the sphere fitted from
+ * one view, measured on a new view with the environment rotated by 120
+ * degrees (relative RMS), against lights, basis resolution, fit grid and
+ * constraints, with the fit and precomputation times.  Truths are rendered
+ * with the lights of 1024-light median cut of the same map, so the error
+ * includes the compression's.
+ *
+ * Nothing here is asserted; the figures go to BENCHMARKS.md. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "brdf.h"
+#include "cache.h"
+#include "clock.h"
+#include "env.h"
+#include "material.h"
+#include "method_srbf.h"
+#include "prep.h"
+#include "samples.h"
+#include "scene.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static char DATA[1024] = GLINT_SOURCE_DIR "/../shared/data";
+
+static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
+{
+    struct stat st;
+    if (strncmp(spec, "data:", 5) || strchr(spec + 5, '/'))
+        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment %s", spec);
+    snprintf(path, len, "%s/envmaps/%s", DATA, spec + 5);
+    if (stat(path, &st))
+        return glint_err_set(err, GLINT_ENOTFOUND, "%s: no such file", path);
+    return 0;
+}
+
+static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    (void)id;
+    (void)err;
+    *out = cls;
+    return 0;
+}
+
+static int make_scene(const char *mesh_file, scene *sc, glint_err *e)
+{
+    scene_params p;
+    scene_params_default(&p);
+    p.width = 160;
+    p.height = 120;
+    if (strcmp(mesh_file, "sphere")) {
+        char path[1200];
+        struct stat st;
+        snprintf(path, sizeof path, "%s/meshes/%s", DATA, mesh_file);
+        if (stat(path, &st))
+            return glint_err_set(e, GLINT_ENOTFOUND, "%s absent", path);
+        snprintf(p.mesh_path, sizeof p.mesh_path, "%s", path);
+    }
+    return scene_create(&p, sc, e);
+}
+
+/* Render the samples of s under lights l with BRDF b (f cos summed). */
+static void render_brdf(const samples *s, const env_lights *l, const brdf *b, float *rgb)
+{
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wo[3], acc[3] = {0, 0, 0};
+        for (int e = 0; e < 3; e++) {
+            n[e] = s->nrm[3 * i + e];
+            wo[e] = s->wo[3 * i + e];
+        }
+        for (int k = 0; k < l->k; k++) {
+            const double *d = l->dir + 3 * k;
+            double cs = n[0] * d[0] + n[1] * d[1] + n[2] * d[2], v[3];
+            if (cs <= 0.0)
+                continue;
+            brdf_eval(b, n, d, wo, v);
+            for (int c = 0; c < 3; c++)
+                acc[c] += l->power[3 * k + c] * v[c] * cs;
+        }
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)acc[c];
+    }
+}
+
+static void render_mat(const samples *s, const env_lights *l, const srbf_material *m, float *rgb)
+{
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wo[3], acc[3] = {0, 0, 0};
+        for (int e = 0; e < 3; e++) {
+            n[e] = s->nrm[3 * i + e];
+            wo[e] = s->wo[3 * i + e];
+        }
+        for (int k = 0; k < l->k; k++) {
+            const double *d = l->dir + 3 * k;
+            double cs = n[0] * d[0] + n[1] * d[1] + n[2] * d[2], v[3];
+            if (cs <= 0.0)
+                continue;
+            srbf_material_eval(m, n, d, wo, v);
+            for (int c = 0; c < 3; c++)
+                acc[c] += l->power[3 * k + c] * v[c] * cs;
+        }
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)acc[c];
+    }
+}
+
+static int lights_of(const char *spec, int k, double rot_deg, env_lights *l, glint_err *e)
+{
+    env_map m;
+    int rc = env_resolve(spec, &m, e);
+    if (!rc)
+        rc = env_compress(&m, ENV_CUT_MEDIAN, k, rot_deg * M_PI / 180.0, 1.0, l, e);
+    env_map_free(&m);
+    return rc;
+}
+
+static double seconds_of(const material *m, const char *what)
+{
+    return json_real_value(json_object_get(json_object_get(m->info, "seconds"), what));
+}
+
+/* One cold precomputation and a few warm fits of view 0 of sc. */
+static int table1_row(const char *mesh_file, const char *env, int vis, int quick)
+{
+    scene sc;
+    cache *c = NULL;
+    cache_entry *se = NULL;
+    prep *p = NULL;
+    srbf_params par;
+    unsigned char use[SCENE_MAX_VIEWS] = {1};
+    brdf b;
+    env_lights l;
+    material m;
+    glint_err e;
+    double t0, t_prep, best = 1e30, solve = 1e30;
+    float *rgb;
+    const samples *s;
+    int reps = quick ? 3 : 10;
+    prep_scene_source src = {borrowed, NULL, &sc};
+
+    memset(&sc, 0, sizeof sc);
+    memset(&l, 0, sizeof l);
+    if (make_scene(mesh_file, &sc, &e)) {
+        printf("| %s | %s | %s | skipped: %s |\n", mesh_file, env, vis ? "on" : "off", e.msg);
+        return 0;
+    }
+    method_srbf.params_default(&par);
+    snprintf(par.env, sizeof par.env, "%.63s", env);
+    par.visibility = vis ? SRBF_VIS_ON : SRBF_VIS_OFF;
+    brdf_parse("ct:rough=0.3,kd=0.35/0.25/0.15,f0=0.25", &b, &e);
+    cache_open(NULL, (size_t)4 << 30, &c, &e);
+    prep_scene_acquire(c, mesh_file, &src, &se, &e);
+    {
+        prep_request rq = {&method_srbf, &par, se, use};
+        t0 = glint_now();
+        if (prep_acquire(c, &rq, NULL, NULL, &p, &e)) {
+            printf("| %s | %s | %s | failed: %s |\n", mesh_file, env, vis ? "on" : "off", e.msg);
+            goto done;
+        }
+        t_prep = glint_now() - t0;
+    }
+    s = prep_samples(p);
+    rgb = malloc((size_t)3 * s->n * sizeof *rgb);
+    lights_of(env, 256, 0.0, &l, &e);
+    render_brdf(s, &l, &b, rgb);
+    for (int r = 0; r < reps; r++) {
+        double sv = 0.0;
+        t0 = glint_now();
+        if (prep_fit(p, NULL, rgb, &m, &e)) {
+            printf("fit failed: %s\n", e.msg);
+            break;
+        }
+        t0 = glint_now() - t0;
+        best = t0 < best ? t0 : best;
+        {
+            const json_t *ch = json_object_get(json_object_get(m.info, "errors"), "channels");
+            for (size_t i = 0; i < json_array_size(ch); i++)
+                sv += json_real_value(json_object_get(json_array_get(ch, i), "seconds"));
+        }
+        solve = sv < solve ? sv : solve;
+        if (r == reps - 1) {
+            const json_t *pre = json_object_get(m.info, "precomputation");
+            printf("| %s | %s | %s | %lld | %d/%d | %.3f | %.3f | %.3f | %.2f | %.2f | %.4f |\n",
+                   mesh_file, env, vis ? "on" : "off",
+                   (long long)json_integer_value(json_object_get(pre, "rows")),
+                   (int)json_integer_value(json_object_get(pre, "lobes_reached")),
+                   (int)json_integer_value(json_object_get(pre, "lobes")),
+                   seconds_of(&m, "visibility"), seconds_of(&m, "transfer") +
+                   seconds_of(&m, "gram"), t_prep, best * 1e3, solve * 1e3,
+                   json_real_value(json_object_get(json_object_get(m.info, "errors"),
+                                                   "rel_rms_painted")));
+        }
+        material_free(&m);
+    }
+    free(rgb);
+done:
+    env_lights_free(&l);
+    prep_release(c, p);
+    cache_release(c, se);
+    cache_close(c);
+    scene_free(&sc);
+    return 0;
+}
+
+/* The speed-accuracy table on the sphere. */
+static void accuracy_row(scene *sc, const char *env, const srbf_params *par, const char *label)
+{
+    cache *c = NULL;
+    cache_entry *se = NULL;
+    prep *p = NULL, *pn = NULL;
+    unsigned char use[SCENE_MAX_VIEWS] = {1}, usen[SCENE_MAX_VIEWS] = {0};
+    env_lights l0, lr;
+    brdf b;
+    material m;
+    glint_err e;
+    float *rgb, *a, *t;
+    const samples *s;
+    double t0, t_prep, t_fit, num = 0, den = 0;
+    prep_scene_source src = {borrowed, NULL, sc};
+
+    usen[5] = 1;
+    memset(&l0, 0, sizeof l0);
+    memset(&lr, 0, sizeof lr);
+    brdf_parse("ct:rough=0.3,kd=0.35/0.25/0.15,f0=0.25", &b, &e);
+    cache_open(NULL, (size_t)4 << 30, &c, &e);
+    prep_scene_acquire(c, "s", &src, &se, &e);
+    {
+        prep_request rq = {&method_srbf, par, se, use}, rn = {&method_srbf, par, se, usen};
+        t0 = glint_now();
+        if (prep_acquire(c, &rq, NULL, NULL, &p, &e) || prep_acquire(c, &rn, NULL, NULL, &pn, &e)) {
+            printf("| %s | failed: %s |\n", label, e.msg);
+            goto done;
+        }
+        t_prep = glint_now() - t0;
+    }
+    lights_of(env, 1024, 0.0, &l0, &e);
+    lights_of(env, 1024, 120.0, &lr, &e);
+    s = prep_samples(p);
+    rgb = malloc((size_t)3 * s->n * sizeof *rgb);
+    render_brdf(s, &l0, &b, rgb);
+    prep_fit(p, NULL, rgb, &m, &e); /* warm the caches */
+    material_free(&m);
+    t0 = glint_now();
+    if (prep_fit(p, NULL, rgb, &m, &e)) {
+        printf("| %s | fit failed: %s |\n", label, e.msg);
+        free(rgb);
+        goto done;
+    }
+    t_fit = glint_now() - t0;
+    free(rgb);
+    s = prep_samples(pn);
+    a = malloc((size_t)3 * s->n * sizeof *a);
+    t = malloc((size_t)3 * s->n * sizeof *t);
+    render_mat(s, &lr, srbf_material_of(&m), a);
+    render_brdf(s, &lr, &b, t);
+    for (int i = 0; i < 3 * s->n; i++) {
+        num += ((double)a[i] - t[i]) * ((double)a[i] - t[i]);
+        den += (double)t[i] * t[i];
+    }
+    printf("| %s | %.3f | %.2f | %.4f | %.4f |\n", label, t_prep, t_fit * 1e3,
+           json_real_value(json_object_get(json_object_get(m.info, "errors"), "rel_rms_painted")),
+           sqrt(num / den));
+    free(a);
+    free(t);
+    material_free(&m);
+done:
+    env_lights_free(&l0);
+    env_lights_free(&lr);
+    prep_release(c, p);
+    prep_release(c, pn);
+    cache_release(c, se);
+    cache_close(c);
+}
+
+int main(int argc, char **argv)
+{
+    const char *meshes[] = {"sphere", "bunny.ply", "cow.off"};
+    const char *envs[2] = {"data:courtyard.exr", "data:sunset.exr"};
+    char envbuf[2][64];
+    int quick = 0;
+    struct stat st;
+    char probe[1200];
+
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--quick"))
+            quick = 1;
+        else if (!strcmp(argv[i], "--data") && i + 1 < argc)
+            snprintf(DATA, sizeof DATA, "%s", argv[++i]);
+        else {
+            fprintf(stderr, "usage: bench_srbf [--quick] [--data DIR]\n");
+            return 2;
+        }
+    }
+    env_set_resolver(data_resolver);
+    snprintf(probe, sizeof probe, "%s/envmaps/courtyard.exr", DATA);
+    if (stat(probe, &st)) {
+        envs[0] = "sky";
+        envs[1] = "studio";
+    }
+    for (int k = 0; k < 2; k++)
+        snprintf(envbuf[k], sizeof envbuf[k], "%s", envs[k]);
+
+    printf("## srbf beside seed 004 Table 1 (160x120, one view, 256 lights, J = 147)\n\n");
+    printf("| mesh | environment | visibility | rows | lobes reached | T_vis s | T_trans s | "
+           "cold total s | T_s (warm fit) ms | solves ms | rel RMS painted (CT 0.3) |\n");
+    printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (int mi = 0; mi < 3; mi++)
+        for (int ei = 0; ei < 2; ei++)
+            for (int v = 0; v < 2; v++) {
+                if (mi == 0 && v == 1)
+                    continue; /* the sphere is convex */
+                table1_row(meshes[mi], envbuf[ei], v, quick);
+            }
+
+    printf("\n## srbf speed-accuracy (sphere 160x120, CT GGX 0.3 target, %s; error on a new "
+           "view with the environment rotated by 120 degrees)\n\n",
+           envbuf[0]);
+    printf("| setting | cold s | warm fit ms | rel RMS painted | rel RMS new view + rotation |\n");
+    printf("|---|---|---|---|---|\n");
+    {
+        scene sc;
+        glint_err e;
+        srbf_params base, p;
+        char label[64];
+        static const int lights[] = {64, 256, 1024};
+        static const int res[] = {5, 7, 9};
+        static const char *rasters[] = {"80x60", "160x120"};
+        static const char *cons[] = {"energy", "nonneg", "none"};
+        if (make_scene("sphere", &sc, &e))
+            return 1;
+        method_srbf.params_default(&base);
+        snprintf(base.env, sizeof base.env, "%s", envbuf[0]);
+        for (int st2 = 0; st2 < 2; st2++) {
+            p = base;
+            p.static_term = st2;
+            snprintf(label, sizeof label, "static %s (default otherwise)", st2 ? "smith" : "paper");
+            accuracy_row(&sc, envbuf[0], &p, label);
+        }
+        base.static_term = SRBF_STATIC_SMITH;
+        for (size_t i = 0; i < 3; i++) {
+            p = base;
+            p.lights = lights[i];
+            snprintf(label, sizeof label, "smith, lights %d", lights[i]);
+            accuracy_row(&sc, envbuf[0], &p, label);
+        }
+        for (size_t i = 0; i < 3; i++) {
+            p = base;
+            p.basis_res = res[i];
+            snprintf(label, sizeof label, "smith, basis_res %d (J = %d)", res[i],
+                     3 * res[i] * res[i]);
+            accuracy_row(&sc, envbuf[0], &p, label);
+        }
+        for (size_t i = 0; i < 2; i++) {
+            glint_err e2;
+            p = base;
+            method_param_set_text(&method_srbf, &p, "raster", rasters[i], &e2);
+            snprintf(label, sizeof label, "smith, raster %s", rasters[i]);
+            accuracy_row(&sc, envbuf[0], &p, label);
+        }
+        for (size_t i = 0; i < 3; i++) {
+            p = base;
+            p.constraints = (int)i;
+            snprintf(label, sizeof label, "smith, constraints %s", cons[i]);
+            accuracy_row(&sc, envbuf[0], &p, label);
+        }
+        if (!quick)
+            for (int s2 = 0; s2 < 3; s2++) {
+                static const double sm[] = {0.0, 1e-3, 1e-2};
+                p = base;
+                p.smooth = sm[s2];
+                snprintf(label, sizeof label, "smith, smooth %g", sm[s2]);
+                accuracy_row(&sc, envbuf[0], &p, label);
+            }
+        scene_free(&sc);
+    }
+    return 0;
+}
