@@ -27,6 +27,7 @@ struct lsq_work {
     int *freev, *rows, *piv;
     unsigned char *isfree, *inrow;
     double *K, *rhs, *x, *p, *grad, *gp, *mu;
+    double *up;    /* the budgets tightened by distinct tiny amounts */
     double *Q;     /* orthonormal basis of the working rows on the free variables */
 };
 
@@ -50,8 +51,9 @@ lsq_work *lsq_work_new(int n, int m)
     w->grad = malloc((n + 1) * sizeof *w->grad);
     w->gp = malloc((m + 1) * sizeof *w->gp);
     w->mu = malloc((m + 1) * sizeof *w->mu);
+    w->up = malloc((m + 1) * sizeof *w->up);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
-    if (!w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->inrow || !w->K || !w->rhs ||
+    if (!w->up || !w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->inrow || !w->K || !w->rhs ||
         !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
         return NULL;
@@ -76,6 +78,7 @@ void lsq_work_free(lsq_work *w)
     free(w->gp);
     free(w->mu);
     free(w->Q);
+    free(w->up);
     free(w);
 }
 
@@ -87,6 +90,50 @@ const char *lsq_mode_name(lsq_mode m)
 const char *lsq_status_name(lsq_status s)
 {
     return s == LSQ_INFEASIBLE ? "infeasible" : s == LSQ_MAXITER ? "max_iterations" : "optimal";
+}
+
+/* Solve K x = b in place (k x k, row-major) by LU with partial pivoting:
+ * the systems here are small (free variables plus active rows), where
+ * a library call's threading costs more than the arithmetic.  Returns -1
+ * when a pivot vanishes. */
+static int lu_solve(double *K, double *b, int k, double tiny)
+{
+    for (int col = 0; col < k; col++) {
+        int piv = col;
+        double best = fabs(K[(size_t)col * k + col]);
+        for (int r = col + 1; r < k; r++)
+            if (fabs(K[(size_t)r * k + col]) > best) {
+                best = fabs(K[(size_t)r * k + col]);
+                piv = r;
+            }
+        if (!(best > tiny))
+            return -1;
+        if (piv != col) {
+            for (int c = 0; c < k; c++) {
+                double t = K[(size_t)col * k + c];
+                K[(size_t)col * k + c] = K[(size_t)piv * k + c];
+                K[(size_t)piv * k + c] = t;
+            }
+            double t = b[col];
+            b[col] = b[piv];
+            b[piv] = t;
+        }
+        for (int r = col + 1; r < k; r++) {
+            double f = K[(size_t)r * k + col] / K[(size_t)col * k + col];
+            if (f == 0.0)
+                continue;
+            for (int c = col; c < k; c++)
+                K[(size_t)r * k + c] -= f * K[(size_t)col * k + c];
+            b[r] -= f * b[col];
+        }
+    }
+    for (int r = k - 1; r >= 0; r--) {
+        double v = b[r];
+        for (int c = r + 1; c < k; c++)
+            v -= K[(size_t)r * k + c] * b[c];
+        b[r] = v / K[(size_t)r * k + r];
+    }
+    return 0;
 }
 
 /* Row r of G restricted to the free variables, made orthogonal to the nq
@@ -129,7 +176,7 @@ static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale
     int n = pr->n, k = nf + nr;
     for (int attempt = 0; attempt < 2; attempt++) {
         double delta = attempt ? 1e-12 * dscale : 0.0;
-        lapack_int info;
+        int info;
         for (int a = 0; a < nf; a++) {
             int ja = w->freev[a];
             for (int b = 0; b < nf; b++)
@@ -145,11 +192,15 @@ static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale
         for (int r = 0; r < nr; r++) {
             for (int s = 0; s < nr; s++)
                 w->K[(size_t)(nf + r) * k + nf + s] = (r == s) ? -delta : 0.0;
-            w->rhs[nf + r] = pr->u[w->rows[r]];
+            w->rhs[nf + r] = w->up[w->rows[r]];
         }
         if (k == 0)
             break;
-        info = LAPACKE_dgesv(LAPACK_ROW_MAJOR, k, 1, w->K, k, w->piv, w->rhs, 1);
+        info = lu_solve(w->K, w->rhs, k, 0.0);
+        for (int a = 0; a < k && !info; a++)
+            if (!isfinite(w->rhs[a]))
+                info = -1;
+        /* a pivot far below the diagonal's scale: singular in practice */
         if (info == 0)
             break;
         if (attempt)
@@ -280,15 +331,27 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
     }
     if (dscale <= 0.0)
         dscale = 1.0;
+    /* Degeneracy: many rows can become tight at one point (a fitted
+     * diffuse albedo enters every energy row alike), where an active-set
+     * method may cycle.  Tightening each budget by a distinct amount below
+     * 1e-10 of the largest separates them; the result holds the original
+     * budgets with that much to spare. */
+    {
+        double umax = 0.0;
+        for (int r = 0; r < m; r++)
+            umax = fmax(umax, fabs(p->u[r]));
+        for (int r = 0; r < m; r++)
+            w->up[r] = p->u[r] - 1e-10 * umax * (1.0 + (double)r / m) * (p->u[r] > 0.0);
+    }
     tol = 1e-11 * fmax(qscale, 1e-300);
     memset(c, 0, (size_t)n * sizeof *c);
     memset(w->isfree, 0, (size_t)n);
     memset(w->inrow, 0, (size_t)m);
     maxit = 20 * (n + m) + 100;
     res->status = LSQ_MAXITER;
-    for (int it = 0; it < maxit; it++) {
+    for (int it = 0, stalls = 0; it < maxit; it++) {
         double pn = 0.0, cn = 0.0, alpha = 1.0;
-        int block = -1, block_row = 0;
+        int block = -1, block_row = 0, bland = stalls > 3;
         res->iterations = it + 1;
         nf = nr = 0;
         for (int j = 0; j < n; j++)
@@ -323,14 +386,21 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 for (int r = 0; r < nr; r++)
                     gr += p->G[(size_t)w->rows[r] * n + j] * w->mu[r];
                 w->grad[j] = gr;
-                if (!w->isfree[j] && gr < worst) {
+                /* Bland's rule after stalls: the lowest index, bounds first */
+                /* a bound's multiplier counts relative to its column's
+                 * scale: ||T_j|| ||f|| (a weakly reached column gains much
+                 * from a small gradient) */
+                double tj = p->ff > 0.0 ? 1e-12 * sqrt(fmax(p->H[(size_t)j * n + j], 0.0) * p->ff)
+                                        : tol;
+                if (!w->isfree[j] && gr < -fmin(tol, tj) && (gr < worst || worst >= -tol) &&
+                    !(bland && drop >= 0)) {
                     worst = gr;
                     drop = j;
                     drop_row = 0;
                 }
             }
             for (int r = 0; r < nr; r++)
-                if (w->mu[r] < worst) {
+                if (w->mu[r] < (bland ? -tol : worst) && !(bland && drop >= 0)) {
                     worst = w->mu[r];
                     drop = w->rows[r];
                     drop_row = 1;
@@ -356,7 +426,7 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             int j = w->freev[a];
             if (w->p[j] < 0.0) {
                 double t = -c[j] / w->p[j];
-                if (t < alpha) {
+                if (t < alpha) { /* ties keep the lowest index (bounds before rows) */
                     alpha = t;
                     block = j;
                     block_row = 0;
@@ -375,7 +445,7 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 gabs += fabs(g * w->p[j]);
             }
             if (gp > 1e-12 * gabs) {
-                double t = (p->u[r] - gc) / gp;
+                double t = (w->up[r] - gc) / gp;
                 if (t < 0.0)
                     t = 0.0;
                 if (t < alpha) {
@@ -389,6 +459,8 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             int j = w->freev[a];
             c[j] += alpha * w->p[j];
         }
+        if (alpha * pn <= 1e-14 * fmax(cn, 1e-300))
+            stalls++;
         if (block >= 0) {
             if (block_row) {
                 if (add_to_basis(p, w, nf, block, nr))
