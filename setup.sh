@@ -21,7 +21,7 @@ BUILD_PKGS=(
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
-  python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt
+  python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt python3-openimageio python3-matplotlib
   openimageio-tools gnuplot-nox wrk chromium jq
 )
 
