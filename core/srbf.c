@@ -231,9 +231,15 @@ typedef struct quad {
     double *d, *w;
 } quad;
 
+/* Gauss-Legendre panels in cos theta, graded toward the horizon: near a
+ * grazing outgoing direction the static term changes on the scale of
+ * wo.n (0.009 at 0.5 degrees), which one panel resolves only slowly.
+ * Panels [0, 0.02], [0.02, 0.2], [0.2, 1] with nq/4, nq/4 and nq/2 nodes;
+ * phi by the midpoint rule with 3 nq steps. */
 static int quad_make(int nq, quad *q)
 {
-    int nphi = 3 * nq, k = 0;
+    static const double edge[4] = {0.0, 0.02, 0.2, 1.0};
+    int nphi = 3 * nq, k = 0, per[3] = {nq / 4, nq / 4, nq - 2 * (nq / 4)};
     double *x = malloc((size_t)nq * sizeof *x), *wx = malloc((size_t)nq * sizeof *wx);
     q->n = nq * nphi;
     q->d = malloc((size_t)3 * q->n * sizeof *q->d);
@@ -245,7 +251,15 @@ static int quad_make(int nq, quad *q)
         free(q->w);
         return -1;
     }
-    gauss01(nq, x, wx);
+    for (int pnl = 0, at = 0; pnl < 3; pnl++) {
+        double a = edge[pnl], len = edge[pnl + 1] - edge[pnl];
+        gauss01(per[pnl], x + at, wx + at);
+        for (int i = at; i < at + per[pnl]; i++) {
+            x[i] = a + len * x[i];
+            wx[i] *= len;
+        }
+        at += per[pnl];
+    }
     for (int i = 0; i < nq; i++) {
         double ct = x[i], st = sqrt(1.0 - ct * ct);
         for (int j = 0; j < nphi; j++) {
@@ -262,6 +276,44 @@ static int quad_make(int nq, quad *q)
     return 0;
 }
 
+/* The quadrature node k as an incident direction for outgoing wo: OUT wi,
+ * h and the weight of G(h.xi) (w s cos and the Jacobian).  Above
+ * SRBF_HSPACE_Z the nodes are incident directions; below, where a grazing
+ * wo makes h swing across the hemisphere as wi passes its mirror
+ * direction, they are half vectors: wi = 2 (wo.h) h - wo, dwi = 4 (wo.h) dh. */
+#define SRBF_HSPACE_Z 0.1
+static double node(const srbf_static *s, const quad *q, int k, const double wo[3], double wi[3],
+                   double h[3])
+{
+    const double *d = q->d + 3 * k;
+    double hl, wt;
+    if (wo[2] > SRBF_HSPACE_Z) {
+        for (int e = 0; e < 3; e++) {
+            wi[e] = d[e];
+            h[e] = d[e] + wo[e];
+        }
+        hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+        if (!(hl > 0.0))
+            return 0.0;
+        for (int e = 0; e < 3; e++)
+            h[e] /= hl;
+        return q->w[k] * srbf_static_eval(s, wi, wo) * wi[2];
+    }
+    {
+        double oh = wo[0] * d[0] + wo[1] * d[1] + wo[2] * d[2];
+        if (oh <= 0.0)
+            return 0.0;
+        for (int e = 0; e < 3; e++) {
+            h[e] = d[e];
+            wi[e] = 2.0 * oh * d[e] - wo[e];
+        }
+        if (wi[2] <= 0.0)
+            return 0.0;
+        wt = q->w[k] * 4.0 * oh;
+        return wt * srbf_static_eval(s, wi, wo) * wi[2];
+    }
+}
+
 /* One energy row: g[j] = sum_nodes w s cos G(h.xi_j). */
 static void energy_row(const srbf_basis *b, const srbf_static *s, const quad *q,
                        const double wo[3], double *g)
@@ -270,19 +322,9 @@ static void energy_row(const srbf_basis *b, const srbf_static *s, const quad *q,
     double cut = 1.0 - 40.0 / b->lambda;
     memset(g, 0, (size_t)J * sizeof *g);
     for (int k = 0; k < q->n; k++) {
-        const double *wi = q->d + 3 * k;
-        double h[3], hl, wt;
-        wt = q->w[k] * srbf_static_eval(s, wi, wo) * wi[2];
+        double wi[3], h[3], wt = node(s, q, k, wo, wi, h);
         if (wt == 0.0)
             continue;
-        for (int e = 0; e < 3; e++)
-            h[e] = wi[e] + wo[e];
-        hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-        if (hl <= 0.0)
-            continue;
-        h[0] /= hl;
-        h[1] /= hl;
-        h[2] /= hl;
         for (int j = 0; j < J; j++) {
             const double *x = b->xi + 3 * j;
             double d = h[0] * x[0] + h[1] * x[1] + h[2] * x[2];
@@ -324,7 +366,7 @@ int srbf_energy_rows(const srbf_basis *b, const srbf_static *s, int nl, const do
     erows_job jobs[64];
     if (nq <= 0)
         nq = 96;
-    if (nq > 1024 || nl < 1)
+    if (nq < 8 || nq > 1024 || nl < 1)
         return glint_err_set(err, GLINT_ERANGE, "quadrature %d or rows %d out of range", nq, nl);
     if (quad_make(nq, &q))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the quadrature");
@@ -353,16 +395,9 @@ void srbf_albedo(const srbf_basis *b, const srbf_static *s, const double *c, con
     if (quad_make(nq > 0 ? nq : 96, &q))
         return;
     for (int k = 0; k < q.n; k++) {
-        const double *wi = q.d + 3 * k;
-        double h[3], hl, wt, p[3];
-        wt = q.w[k] * srbf_static_eval(s, wi, wo) * wi[2];
+        double wi[3], h[3], p[3], wt = node(s, &q, k, wo, wi, h);
         if (wt == 0.0)
             continue;
-        for (int e = 0; e < 3; e++)
-            h[e] = wi[e] + wo[e];
-        hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-        for (int e = 0; e < 3; e++)
-            h[e] /= hl;
         srbf_p(b, c, h, p);
         for (int ch = 0; ch < 3; ch++)
             rgb[ch] += wt * p[ch];
