@@ -198,7 +198,7 @@ int write_json_file(const char *path, json_t *j)
 
 void print_json(json_t *j)
 {
-    char *text = json_dumps(j, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
+    char *text = json_dumps(j, JSON_INDENT(2) | JSON_REAL_PRECISION(17));
     if (text) {
         puts(text);
         free(text);

@@ -50,8 +50,8 @@ def wait_job(d, jid):
 
 def test_00_methods_lists_the_added_method(d):
     m = d.get("/api/v1/methods", status=200, schema="Methods.json").json()["methods"]
-    assert [x["name"] for x in m] == ["hf3", "lambert-test"], [x["name"] for x in m]
-    lam = m[1]
+    assert [x["name"] for x in m] == ["hf3", "srbf", "lambert-test"], [x["name"] for x in m]
+    lam = m[2]
     assert [p["name"] for p in lam["params"]] == ["albedo_max"]
     assert lam["params"][0]["default"] == 1.0
 

@@ -313,6 +313,8 @@ TEST(cook_torrance_with_each_static_term)
         params_default(&p);
         p.static_term = st;
         ASSERT_OK(fit_and_measure(&p, brdf_truth, &b, &r));
+        if (getenv("SRBF_VERBOSE"))
+            printf("  %s\n", json_dumps(info_get(&r.m, "errors", "channels"), JSON_COMPACT));
         printf("  ct 0.3, static %s: painted %.4f, new view %.4f, rotated %.4f\n",
                st ? "smith" : "paper", r.painted, r.new_view, r.rotated);
         ASSERT(r.painted <= (st ? 0.03 : 0.05));
