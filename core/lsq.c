@@ -28,6 +28,14 @@ struct lsq_work {
     unsigned char *isfree, *inrow;
     double *K, *rhs, *x, *p, *grad, *gp, *mu;
     double *up;    /* the budgets tightened by distinct tiny amounts */
+    double *gcu;   /* m: an upper bound of G c (exact where last computed) */
+    double *gpx;   /* m: G p of the last step, NaN where skipped */
+    double *gmax;  /* m: max |G_rj| */
+    double *R;     /* n x n: upper Cholesky factor of H over the free variables */
+    int *ord;      /* the free variables in the factor's order */
+    int *at;       /* position of each variable in ord, -1 when bound */
+    int k;         /* free variables (the factor's size) */
+    double dscale;
     double *Q;     /* orthonormal basis of the working rows on the free variables */
 };
 
@@ -52,8 +60,14 @@ lsq_work *lsq_work_new(int n, int m)
     w->gp = malloc((m + 1) * sizeof *w->gp);
     w->mu = malloc((m + 1) * sizeof *w->mu);
     w->up = malloc((m + 1) * sizeof *w->up);
+    w->R = malloc(((size_t)n * n + 1) * sizeof *w->R);
+    w->gcu = malloc((m + 1) * sizeof *w->gcu);
+    w->gpx = malloc((m + 1) * sizeof *w->gpx);
+    w->gmax = malloc((m + 1) * sizeof *w->gmax);
+    w->ord = malloc((n + 1) * sizeof *w->ord);
+    w->at = malloc((n + 1) * sizeof *w->at);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
-    if (!w->up || !w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->inrow || !w->K || !w->rhs ||
+    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->ord || !w->at || !w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->inrow || !w->K || !w->rhs ||
         !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
         return NULL;
@@ -79,6 +93,12 @@ void lsq_work_free(lsq_work *w)
     free(w->mu);
     free(w->Q);
     free(w->up);
+    free(w->R);
+    free(w->gcu);
+    free(w->gpx);
+    free(w->gmax);
+    free(w->ord);
+    free(w->at);
     free(w);
 }
 
@@ -169,48 +189,125 @@ static int add_to_basis(const lsq_problem *pr, lsq_work *w, int nf, int r, int n
     return 1;
 }
 
-/* Solve the equality-constrained subproblem of the working set: OUT w->x
- * (full length, zero on bounds) and w->mu[nr]. */
+/* ---- the factor of H over the free variables ------------------------------------- */
+
+/* Add variable j to the factor: R grows by a column (Rt y = H[ord, j]) and
+ * a diagonal sqrt(H_jj - y.y); a pivot that vanishes (a column H already
+ * spans) is raised to 1e-13 H_jj, a ridge on that variable alone. */
+static void chol_add(const lsq_problem *pr, lsq_work *w, int j)
+{
+    int n = pr->n, k = w->k;
+    double d = pr->H[(size_t)j * n + j];
+    for (int i = 0; i < k; i++) {
+        double v = pr->H[(size_t)w->ord[i] * n + j];
+        for (int l = 0; l < i; l++)
+            v -= w->R[(size_t)l * n + i] * w->R[(size_t)l * n + k];
+        v /= w->R[(size_t)i * n + i];
+        w->R[(size_t)i * n + k] = v;
+        d -= v * v;
+    }
+    {
+        double hjj = pr->H[(size_t)j * n + j], floor_ = hjj > 0.0 ? 1e-13 * hjj : 1e-12 * w->dscale;
+        if (!(d > floor_))
+            d = floor_;
+    }
+    w->R[(size_t)k * n + k] = sqrt(d);
+    w->ord[k] = j;
+    w->at[j] = k;
+    w->k = k + 1;
+}
+
+/* Remove the variable at position p: its column leaves, Givens rotations
+ * restore the triangle. */
+static void chol_remove(const lsq_problem *pr, lsq_work *w, int p)
+{
+    int n = pr->n, k = w->k;
+    w->at[w->ord[p]] = -1;
+    for (int c = p; c < k - 1; c++) {
+        for (int r = 0; r < k; r++)
+            w->R[(size_t)r * n + c] = w->R[(size_t)r * n + c + 1];
+        w->ord[c] = w->ord[c + 1];
+        w->at[w->ord[c]] = c;
+    }
+    for (int c = p; c < k - 1; c++) {
+        double a = w->R[(size_t)c * n + c], b = w->R[(size_t)(c + 1) * n + c];
+        double h = hypot(a, b), cs = h > 0 ? a / h : 1.0, sn = h > 0 ? b / h : 0.0;
+        for (int col = c; col < k - 1; col++) {
+            double x = w->R[(size_t)c * n + col], y = w->R[(size_t)(c + 1) * n + col];
+            w->R[(size_t)c * n + col] = cs * x + sn * y;
+            w->R[(size_t)(c + 1) * n + col] = -sn * x + cs * y;
+        }
+    }
+    w->k = k - 1;
+}
+
+/* v <- R^-T v and v <- R^-1 v over the factor's k variables. */
+static void solve_rt(const lsq_work *w, int n, double *v)
+{
+    for (int i = 0; i < w->k; i++) {
+        double s = v[i];
+        for (int l = 0; l < i; l++)
+            s -= w->R[(size_t)l * n + i] * v[l];
+        v[i] = s / w->R[(size_t)i * n + i];
+    }
+}
+
+static void solve_r(const lsq_work *w, int n, double *v)
+{
+    for (int i = w->k - 1; i >= 0; i--) {
+        double s = v[i];
+        for (int c = i + 1; c < w->k; c++)
+            s -= w->R[(size_t)i * n + c] * v[c];
+        v[i] = s / w->R[(size_t)i * n + i];
+    }
+}
+
+/* Solve the equality-constrained subproblem of the working set with the
+ * factor: z = R^-T q_F, W = R^-T G_RF', (W'W) mu = W'z - u_R,
+ * x_F = R^-1 (z - W mu).  OUT w->x (zero on bounds), w->mu. */
 static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale)
 {
-    int n = pr->n, k = nf + nr;
-    for (int attempt = 0; attempt < 2; attempt++) {
-        double delta = attempt ? 1e-12 * dscale : 0.0;
-        int info;
-        for (int a = 0; a < nf; a++) {
-            int ja = w->freev[a];
-            for (int b = 0; b < nf; b++)
-                w->K[(size_t)a * k + b] = pr->H[(size_t)ja * n + w->freev[b]];
-            w->K[(size_t)a * k + a] += delta;
-            for (int r = 0; r < nr; r++) {
-                double g = pr->G[(size_t)w->rows[r] * n + ja];
-                w->K[(size_t)a * k + nf + r] = g;
-                w->K[(size_t)(nf + r) * k + a] = g;
-            }
-            w->rhs[a] = pr->q[ja];
-        }
-        for (int r = 0; r < nr; r++) {
-            for (int s = 0; s < nr; s++)
-                w->K[(size_t)(nf + r) * k + nf + s] = (r == s) ? -delta : 0.0;
-            w->rhs[nf + r] = w->up[w->rows[r]];
-        }
-        if (k == 0)
-            break;
-        info = lu_solve(w->K, w->rhs, k, 0.0);
-        for (int a = 0; a < k && !info; a++)
-            if (!isfinite(w->rhs[a]))
-                info = -1;
-        /* a pivot far below the diagonal's scale: singular in practice */
-        if (info == 0)
-            break;
-        if (attempt)
-            return -1;
+    int n = pr->n, k = w->k;
+    double *z = w->rhs, *W = w->K, *S = w->K + (size_t)nr * (k + 1);
+    (void)nf;
+    (void)dscale;
+    for (int i = 0; i < k; i++)
+        z[i] = pr->q[w->ord[i]];
+    solve_rt(w, n, z);
+    for (int r = 0; r < nr; r++) {
+        double *wr = W + (size_t)r * (k + 1);
+        for (int i = 0; i < k; i++)
+            wr[i] = pr->G[(size_t)w->rows[r] * n + w->ord[i]];
+        solve_rt(w, n, wr);
     }
+    if (nr) {
+        double *rhs = w->mu;
+        for (int a = 0; a < nr; a++) {
+            const double *wa = W + (size_t)a * (k + 1);
+            double t = -w->up[w->rows[a]];
+            for (int i = 0; i < k; i++)
+                t += wa[i] * z[i];
+            rhs[a] = t;
+            for (int b = 0; b < nr; b++) {
+                const double *wb = W + (size_t)b * (k + 1);
+                double sab = 0.0;
+                for (int i = 0; i < k; i++)
+                    sab += wa[i] * wb[i];
+                S[(size_t)a * nr + b] = sab;
+            }
+        }
+        if (lu_solve(S, rhs, nr, 0.0))
+            return -1;
+        for (int a = 0; a < nr; a++) {
+            const double *wa = W + (size_t)a * (k + 1);
+            for (int i = 0; i < k; i++)
+                z[i] -= rhs[a] * wa[i];
+        }
+    }
+    solve_r(w, n, z);
     memset(w->x, 0, (size_t)n * sizeof *w->x);
-    for (int a = 0; a < nf; a++)
-        w->x[w->freev[a]] = w->rhs[a];
-    for (int r = 0; r < nr; r++)
-        w->mu[r] = w->rhs[nf + r];
+    for (int i = 0; i < k; i++)
+        w->x[w->ord[i]] = z[i];
     return 0;
 }
 
@@ -347,16 +444,26 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
     memset(c, 0, (size_t)n * sizeof *c);
     memset(w->isfree, 0, (size_t)n);
     memset(w->inrow, 0, (size_t)m);
+    w->k = 0;
+    w->dscale = dscale;
+    for (int r = 0; r < m; r++) {
+        double gm = 0.0;
+        for (int j = 0; j < n; j++)
+            gm = fmax(gm, fabs(p->G[(size_t)r * n + j]));
+        w->gmax[r] = gm * (1.0 + 1e-12);
+        w->gcu[r] = 0.0;
+    }
+    for (int j = 0; j < n; j++)
+        w->at[j] = -1;
     maxit = 20 * (n + m) + 100;
     res->status = LSQ_MAXITER;
     for (int it = 0, stalls = 0; it < maxit; it++) {
         double pn = 0.0, cn = 0.0, alpha = 1.0;
         int block = -1, block_row = 0, bland = stalls > 3;
         res->iterations = it + 1;
-        nf = nr = 0;
-        for (int j = 0; j < n; j++)
-            if (w->isfree[j])
-                w->freev[nf++] = j;
+        nf = w->k;
+        nr = 0;
+        memcpy(w->freev, w->ord, (size_t)nf * sizeof *w->freev);
         /* rows that depend on others on the free variables leave the working
          * set: they stay satisfied with equality along any step it allows */
         for (int r = 0; r < m; r++)
@@ -417,8 +524,10 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             }
             if (drop_row)
                 w->inrow[drop] = 0;
-            else
+            else {
                 w->isfree[drop] = 1;
+                chol_add(p, w, drop);
+            }
             continue;
         }
         /* step toward x, stopped by the first constraint it meets */
@@ -433,10 +542,22 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 }
             }
         }
+        /* rows: a row whose bound on G c plus the most a step can add stays
+         * under its budget cannot block; the others are computed exactly */
+        double p1 = 0.0;
+        for (int a = 0; a < nf; a++)
+            p1 += fabs(w->p[w->freev[a]]);
         for (int r = 0; r < m; r++) {
             double gp = 0.0, gc = 0.0, gabs = 0.0;
-            if (w->inrow[r])
+            if (w->inrow[r]) {
+                w->gcu[r] = w->up[r];
+                w->gpx[r] = 0.0;
                 continue;
+            }
+            if (w->gcu[r] + alpha * w->gmax[r] * p1 < w->up[r]) {
+                w->gpx[r] = NAN; /* skipped: bounded below */
+                continue;
+            }
             for (int a = 0; a < nf; a++) {
                 int j = w->freev[a];
                 double g = p->G[(size_t)r * n + j];
@@ -444,6 +565,8 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 gc += g * c[j];
                 gabs += fabs(g * w->p[j]);
             }
+            w->gcu[r] = gc;
+            w->gpx[r] = gp;
             if (gp > 1e-12 * gabs) {
                 double t = (w->up[r] - gc) / gp;
                 if (t < 0.0)
@@ -459,6 +582,8 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             int j = w->freev[a];
             c[j] += alpha * w->p[j];
         }
+        for (int r = 0; r < m; r++)
+            w->gcu[r] += isnan(w->gpx[r]) ? alpha * w->gmax[r] * p1 : alpha * w->gpx[r];
         if (alpha * pn <= 1e-14 * fmax(cn, 1e-300))
             stalls++;
         if (block >= 0) {
@@ -468,6 +593,7 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             }
             else {
                 w->isfree[block] = 0;
+                chol_remove(p, w, w->at[block]);
                 c[block] = 0.0;
             }
         }

@@ -17,7 +17,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err);
 
 typedef struct chan_report {
     lsq_result r;
-    double seconds;
+    double seconds, solve_seconds;
 } chan_report;
 
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
@@ -117,8 +117,13 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         pr.m = p->constraints == LSQ_ENERGY ? nl : 0;
         pr.G = G;
         pr.u = u;
-        if ((rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, w, c, &rep[ch].r, err)))
-            goto done;
+        {
+            double ts = glint_now();
+            rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, w, c, &rep[ch].r, err);
+            rep[ch].solve_seconds = glint_now() - ts;
+            if (rc)
+                goto done;
+        }
         if (rep[ch].r.status == LSQ_INFEASIBLE) {
             rc = glint_err_set(err, GLINT_EINVAL,
                                "channel %d: no material with a diffuse albedo of %g conserves "
@@ -157,12 +162,13 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     for (int ch = 0; ch < 3; ch++) {
         const lsq_result *r = &rep[ch].r;
         json_array_append_new(
-            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f}", "status",
+            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f}", "status",
                              lsq_status_name(r->status), "iterations", r->iterations,
                              "lobes_used", r->free_vars, "energy_rows_active", r->active_rows,
                              "objective", r->objective, "min_slack", r->min_slack,
                              "max_violation", r->max_violation, "kkt_residual",
-                             r->kkt_residual, "seconds", rep[ch].seconds));
+                             r->kkt_residual, "seconds", rep[ch].seconds, "solve_seconds",
+                             rep[ch].solve_seconds));
     }
     {
         json_t *pre = json_pack(
