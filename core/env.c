@@ -327,9 +327,9 @@ int env_spec_check(const char *spec, glint_err *err)
     for (size_t i = 0; i < n; i++) {
         char c = spec[i];
         if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              c == '.' || c == '_' || c == ':' || c == '-'))
+              c == '.' || c == '_' || c == ':' || c == '-' || c == '/'))
             return glint_err_set(err, GLINT_EINVAL,
-                                 "environment name '%s': only letters, digits and . _ : - "
+                                 "environment name '%s': only letters, digits and . _ : - / "
                                  "are allowed", spec);
     }
     return 0;

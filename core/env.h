@@ -72,7 +72,8 @@ typedef int (*env_resolver)(const char *spec, char *path, size_t len, glint_err 
 void env_set_resolver(env_resolver fn);
 int env_resolve(const char *spec, env_map *out, glint_err *err);
 /* A spec's syntax check without loading (0, or GLINT_EINVAL saying why):
- * at most ENV_NAME_MAX - 1 bytes of [A-Za-z0-9._:-]. */
+ * at most ENV_NAME_MAX - 1 bytes of [A-Za-z0-9._:/-] (what a spec names
+ * beyond that is the resolver's to check). */
 int env_spec_check(const char *spec, glint_err *err);
 
 /* Radiance in direction d (unit) of the map rotated by psi and scaled by

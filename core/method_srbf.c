@@ -108,15 +108,16 @@ static const char *const static_values[] = {"paper", "smith", NULL};
 static const char *const constraint_values[] = {"energy", "nonneg", "none", NULL};
 static const char *const vis_values[] = {"auto", "on", "off", NULL};
 static const char *const env_examples[] = {"studio", "sky", "sunset", "builtin:white",
-                                           "data:courtyard.exr", NULL};
+                                           "file:courtyard.exr", NULL};
 static const char *const raster_examples[] = {"160x120", "320x240", "full", NULL};
 static const char *const diffuse_examples[] = {"fit", "0.3", "0.35,0.25,0.15", NULL};
 
 static const method_param srbf_params_table[] = {
     {.name = "env", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
-     .description = "the environment lighting the painted views: a built-in sky, or an "
-                    "environment the server knows (data:NAME, upload:ID)",
-     .offset = offsetof(srbf_params, env), .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
+     .description = "the environment lighting the painted views: a built-in (studio, sky, "
+                    "sunset, overcast, white), or on the command line file:PATH (an HDR "
+                    "lat-long map or cube cross)",
+     .offset = offsetof(srbf_params, env), .syntax = "NAME | builtin:NAME | file:PATH",
      .examples = env_examples, .parse = env_parse, .format = env_format},
     {.name = "env_rotation", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "rotation of the environment about the up (+z) axis, degrees",

@@ -26,4 +26,16 @@ int paint_views(const brdf *b, const gbuf *g, const scene_view *views,
                 int nviews, double scale, img *out, double *scale_out,
                 glint_err *err);
 
+/* Paint nviews views under an environment's lights instead of the views'
+ * point lights: each covered pixel seen from its camera gets
+ *   scale * sum_k V_k power_k f(d_k, wo) max(0, n.d_k),
+ * V_k the visibility of light k from the pixel, cast against mesh `m`
+ * (vis.h) when `shadows` is set.  Background pixels get 0.  out as for
+ * paint_views. */
+struct env_lights;
+struct mesh;
+int paint_views_env(const brdf *b, const gbuf *g, int nviews, const struct mesh *m,
+                    const struct env_lights *l, int shadows, double scale, img *out,
+                    glint_err *err);
+
 #endif

@@ -9,6 +9,8 @@
 
 #include "brdf.h"
 #include "cli.h"
+#include "env.h"
+#include "vis.h"
 #include "fsio.h"
 #include "paint.h"
 #include "raster.h"
@@ -202,9 +204,11 @@ int cmd_paint(int argc, char **argv)
     static const struct option lo[] = {
         {"brdf", required_argument, 0, 'b'}, {"out", required_argument, 0, 'o'},
         {"scale", required_argument, 0, 's'}, {"format", required_argument, 0, 'f'},
+        {"env", required_argument, 0, 'E'}, {"env-rotation", required_argument, 0, 'R'},
+        {"lights", required_argument, 0, 'K'}, {"shadows", required_argument, 0, 'S'},
         {0, 0, 0, 0}};
-    const char *out = NULL, *fmt = "exr", *spec = NULL;
-    double scale = 0.0, used = 0.0;
+    const char *out = NULL, *fmt = "exr", *spec = NULL, *env = NULL, *shadows = "auto";
+    double scale = 0.0, used = 0.0, rot = 0.0, kl = 256;
     int c, rc;
     scene sc;
     gbuf *g = NULL;
@@ -215,6 +219,20 @@ int cmd_paint(int argc, char **argv)
     optind = 1;
     while ((c = getopt_long(argc, argv, "b:o:s:f:", lo, NULL)) != -1) {
         switch (c) {
+        case 'E': env = optarg; break;
+        case 'R':
+            if ((rc = parse_double(optarg, "--env-rotation", -360, 360, &rot)))
+                return rc;
+            break;
+        case 'K':
+            if ((rc = parse_double(optarg, "--lights", 1, 4096, &kl)))
+                return rc;
+            break;
+        case 'S':
+            if (strcmp(optarg, "auto") && strcmp(optarg, "on") && strcmp(optarg, "off"))
+                return fail(1, "--shadows '%s': auto, on or off", optarg);
+            shadows = optarg;
+            break;
         case 'b': spec = optarg; break;
         case 'o': out = optarg; break;
         case 's':
@@ -227,7 +245,7 @@ int cmd_paint(int argc, char **argv)
             fmt = optarg;
             break;
         default:
-            return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr]");
+            return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr] [--env SPEC [--env-rotation DEG] [--lights K] [--shadows auto|on|off]]");
         }
     }
     if (!out || !spec || optind != argc - 1)
@@ -243,7 +261,27 @@ int cmd_paint(int argc, char **argv)
         rc = fail(1, "out of memory");
         goto done;
     }
-    if (paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
+    if (env) {
+        env_map em;
+        env_lights el;
+        int sh = !strcmp(shadows, "on") ||
+                 (!strcmp(shadows, "auto") && !vis_mesh_convex(&sc.mesh, 1e-6));
+        memset(&el, 0, sizeof el);
+        if (env_resolve(env, &em, &e) ||
+            env_compress(&em, ENV_CUT_MEDIAN, (int)kl, rot * 3.14159265358979323846 / 180.0,
+                         1.0, &el, &e)) {
+            rc = fail_err(&e);
+            goto done;
+        }
+        env_map_free(&em);
+        used = scale > 0.0 ? scale : 1.0;
+        rc = paint_views_env(&b, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e);
+        env_lights_free(&el);
+        if (rc) {
+            rc = fail_err(&e);
+            goto done;
+        }
+    } else if (paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
         rc = fail_err(&e);
         goto done;
     }

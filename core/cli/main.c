@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "env.h"
 
 #define GLINT_VERSION "0.1.0"
 
@@ -45,6 +46,18 @@ static void usage(FILE *f)
     fit_opts_usage(f);
 }
 
+/* The command line reads the environment files its user names:
+ * "file:PATH" (relative to the working directory). */
+static int cli_env_resolver(const char *spec, char *path, size_t len, glint_err *err)
+{
+    if (strncmp(spec, "file:", 5) || !spec[5])
+        return glint_err_set(err, GLINT_ENOTFOUND,
+                             "unknown environment '%s': a built-in (%s) or file:PATH", spec,
+                             env_builtin_names());
+    snprintf(path, len, "%s", spec + 5);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static const struct { const char *name; int (*fn)(int, char **); } cmds[] = {
@@ -54,6 +67,8 @@ int main(int argc, char **argv)
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"methods", cmd_methods}};
     static char name[64];
+
+    env_set_resolver(cli_env_resolver);
 
     if (argc < 2 || strcmp(argv[1], "help") == 0 || strcmp(argv[1], "--help") == 0 ||
         strcmp(argv[1], "-h") == 0) {

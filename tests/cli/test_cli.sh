@@ -123,6 +123,22 @@ for f in glint_material.frag glint_material.vert glint_factors.exr shader.json; 
   [ -s "$T/shader/$f" ] && ok "export-shader writes $f" || bad "export-shader writes $f"
 done
 
+# environment lighting: truths painted under a built-in sky, the srbf fit, a preview
+expect_ok "paint under an environment" "$G" paint "$T/torus.json" --brdf ct:rough=0.3,kd=0.4,f0=0.25 --env sky --lights 64 -o "$T/envlit"
+expect_err "paint under an unknown environment" 1 "built-in" "$G" paint "$T/torus.json" --brdf lambert --env nosuch -o "$T/x"
+expect_ok "fit srbf" "$G" fit "$T/torus.json" --paintings "$T/envlit" --method srbf --env sky --lights 64 --basis_res 5 --static smith --no-cache -o "$T/srbfmat"
+python3 - "$T/srbfmat/material.json" <<'PY' && ok "srbf material: fits its paintings, energy holds, shadows cast" || bad "srbf material: fits its paintings, energy holds, shadows cast"
+import json, sys
+m = json.load(open(sys.argv[1]))
+i = m["info"]
+assert m["method"] == "srbf" and len(m["lobes"]) == 75, m["method"]
+assert i["errors"]["rel_rms_painted"] < 0.1, i["errors"]["rel_rms_painted"]
+assert i["errors"]["albedo_max_rows"] <= 1.0, i["errors"]["albedo_max_rows"]
+assert i["precomputation"]["visibility"] == 1 and i["precomputation"]["mesh_convex"] is False
+PY
+expect_ok "render an srbf material" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 -o "$T/srbf.png"
+expect_err "fit srbf with an impossible diffuse albedo" 1 "above 1" "$G" fit "$T/torus.json" --paintings "$T/envlit" --method srbf --diffuse 1.5 -o "$T/x"
+
 # demo (the main job before the daemon exists)
 expect_ok "demo" "$G" demo -o "$T/demo"
 [ -f "$T/demo/material/material.json" ] && ok "demo writes a material" || bad "demo writes a material"
