@@ -95,13 +95,31 @@ static int diffuse_parse(const char *text, void *field, glint_err *err)
     return 0;
 }
 
+/* The shortest spelling of x that reads back exactly. */
+static void shortest(double x, char *buf, size_t len)
+{
+    for (int prec = 1; prec <= 17; prec++) {
+        snprintf(buf, len, "%.*g", prec, x);
+        if (strtod(buf, NULL) == x)
+            return;
+    }
+}
+
 static void diffuse_format(const void *field, char *buf, size_t len)
 {
     const srbf_diffuse *d = field;
-    if (d->fit)
+    char a[32], b[32], c[32];
+    if (d->fit) {
         snprintf(buf, len, "fit");
+        return;
+    }
+    shortest(d->rgb[0], a, sizeof a);
+    shortest(d->rgb[1], b, sizeof b);
+    shortest(d->rgb[2], c, sizeof c);
+    if (d->rgb[0] == d->rgb[1] && d->rgb[1] == d->rgb[2])
+        snprintf(buf, len, "%s", a);
     else
-        snprintf(buf, len, "%.17g,%.17g,%.17g", d->rgb[0], d->rgb[1], d->rgb[2]);
+        snprintf(buf, len, "%s,%s,%s", a, b, c);
 }
 
 static const char *const static_values[] = {"paper", "smith", NULL};

@@ -181,6 +181,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
             (const char *)"rays", (json_int_t)tr->rays, "transfer_terms",
             (json_int_t)tr->terms, "diffuse_albedo_max", fmax(sm.rho[0], fmax(sm.rho[1],
                                                                                sm.rho[2])));
+        json_object_set_new(pre, "cache_key", json_string(in->keys[3] ? in->keys[3] : ""));
         json_object_set_new(pre, "mesh_convex",
                             vd->convex < 0 ? json_null() : json_boolean(vd->convex));
         json_t *tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f}", "energy",

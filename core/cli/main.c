@@ -25,6 +25,7 @@ static void usage(FILE *f)
           "  scene show scene.json               describe a scene (hash, views, samples)\n"
           "  gbuffer scene.json -o DIR [--view K] G-buffers as OpenEXR (named channels)\n"
           "  paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr]\n"
+          "        [--env SPEC [--env-rotation DEG] [--lights K] [--shadows auto|on|off]]\n"
           "                                      paint every view with an analytic BRDF\n"
           "                                      (lambert, phong, blinn, ct, ward; e.g.\n"
           "                                      'ct:rough=0.2,kd=0.5,f0=0.3')\n"

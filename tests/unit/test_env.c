@@ -200,7 +200,9 @@ TEST(bad_specs_sizes_and_counts)
     ASSERT_EQ(env_resolve("nosuch", &m, &e), GLINT_ENOTFOUND);
     ASSERT(strstr(e.msg, "studio") != NULL);
     ASSERT_EQ(env_resolve("builtin:nosuch", &m, &e), GLINT_ENOTFOUND);
-    ASSERT_EQ(env_spec_check("../etc/passwd", &e), GLINT_EINVAL);
+    ASSERT_EQ(env_spec_check("a b", &e), GLINT_EINVAL);
+    ASSERT_EQ(env_spec_check("x\\y", &e), GLINT_EINVAL);
+    ASSERT_EQ(env_resolve("file:/etc/passwd", &m, &e), GLINT_ENOTFOUND); /* no resolver */
     ASSERT_EQ(env_spec_check("", &e), GLINT_EINVAL);
     ASSERT_OK(env_builtin("studio", 64, 32, &m, &e));
     ASSERT_EQ(env_compress(&m, ENV_CUT_MEDIAN, 0, 0, 1, &l, &e), GLINT_ERANGE);

@@ -1,0 +1,124 @@
+"""The environment-lit method (srbf) through the real daemon: paintings
+made under a built-in sky by the CLI, uploaded to a session, fitted as a
+job with method srbf, then the warm fit, the material's manifest (lobes,
+diffuse, energy report), its evaluation, shader and previews, and the
+parameter checks of the method's table (an unknown environment, an
+impossible diffuse albedo, a spec with characters the table refuses)."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import GLINTD, run_tests  # noqa: E402
+
+CLI = os.environ.get("GLINT_CLI") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
+SIZE = 48
+S = {}
+PARAMS = {"env": "sky", "lights": 64, "basis_res": 5, "static": "smith"}
+
+
+def tok(t):
+    return {"X-Glint-Token": t}
+
+
+def fit(d, body, expect=(201, 202)):
+    r = d.post("/api/v1/sessions/%s/fits" % S["session"],
+               headers=dict(tok(S["paint"]), **{"Content-Type": "application/json"}),
+               data=json.dumps(body))
+    assert r.status_code in expect, r.text
+    return ("material", r.json()) if r.status_code == 201 else ("job", r.json()["job"])
+
+
+def wait_job(d, jid):
+    deadline = time.time() + 300
+    while time.time() < deadline:
+        j = d.get("/api/v1/jobs/" + jid, headers=tok(S["paint"]), status=200,
+                  schema="JobResponse.json").json()["job"]
+        if j["state"] in ("done", "failed"):
+            return j
+        time.sleep(0.2)
+    raise AssertionError("job %s did not finish" % jid)
+
+
+def test_01_setup(d):
+    tmp = tempfile.mkdtemp(prefix="glint-srbf-")
+    scene = os.path.join(tmp, "scene.json")
+    subprocess.run([CLI, "scene", "create", "--size", str(SIZE), "-o", scene], check=True,
+                   stdout=subprocess.DEVNULL)
+    subprocess.run([CLI, "paint", scene, "--brdf", "ct:rough=0.3,kd=0.4/0.3/0.2,f0=0.25",
+                    "--env", "sky", "--lights", "64", "-o", os.path.join(tmp, "paint")],
+                   check=True, stdout=subprocess.DEVNULL)
+    sc = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE}, status=201,
+                schema="Scene.json").json()
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201,
+               schema="Session.json").json()
+    S.update(scene=sc["id"], session=s["id"], paint=s["paint_token"], view=s["view_token"])
+    for k in (0, 5):
+        with open(os.path.join(tmp, "paint", "view_%02d.exr" % k), "rb") as f:
+            d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+                  headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
+                  data=f.read(), status=200)
+
+
+def test_02_the_fit_is_a_job_then_warm(d):
+    kind, job = fit(d, {"method": "srbf", "params": PARAMS}, expect=(202,))
+    j = wait_job(d, job["id"])
+    assert j["state"] == "done", j
+    m = d.get("/api/v1/materials/" + j["material_id"], headers=tok(S["view"]), status=200,
+              schema="Material.json").json()
+    assert m["method"] == "srbf"
+    levels = m["precomputation"]["cache"]["levels"]
+    assert sorted(levels) == ["energy", "lights", "pattern", "rows", "transfer"], levels
+    assert m["errors"]["rel_rms_painted"] < 0.1, m["errors"]
+    assert m["errors"]["albedo_max_rows"] <= 1.0
+    assert m["precomputation"]["mesh_convex"] is True and m["precomputation"]["visibility"] == 0
+    S["material"] = m
+    kind, m2 = fit(d, {"method": "srbf", "params": dict(PARAMS, diffuse="0.3")}, expect=(201,))
+    assert m2["precomputation"]["cache"]["memory"] == "hit"   # diffuse changes the fit only
+    assert m2["params"]["diffuse"] == "0.3" and m2["diffuse"] == [0.3, 0.3, 0.3], m2["diffuse"]
+
+
+def test_03_the_material_evaluates_and_renders(d):
+    mid, h = S["material"]["id"], tok(S["view"])
+    pkg = d.get("/api/v1/materials/%s/package" % mid, headers=h, status=200)
+    assert len(pkg.content) > 1000
+    r = d.post("/api/v1/materials/%s/eval" % mid,
+               headers=dict(h, **{"Content-Type": "application/json"}),
+               data=json.dumps({"pairs": [{"n": [0, 0, 1], "wi": [0, 0.6, 0.8],
+                                           "wo": [0, -0.6, 0.8]}]}),
+               status=200, schema="EvalResponse.json").json()["values"][0]
+    assert all(v > 0 for v in r), r
+    sh = d.get("/api/v1/materials/%s/shader" % mid, headers=h, status=200,
+               schema="Shader.json").json()
+    assert "u_lobes" in sh["fragment"]
+    gl = d.get("/api/v1/materials/%s/preview.exr?view=0" % mid, headers=h, status=200)
+    cpu = d.get("/api/v1/materials/%s/preview.exr?view=0&renderer=cpu" % mid, headers=h,
+                status=200)
+    assert gl.content[:4] == b"\x76\x2f\x31\x01" and cpu.content[:4] == b"\x76\x2f\x31\x01"
+
+
+def test_04_parameters_are_checked_by_the_table(d):
+    h = dict(tok(S["paint"]), **{"Content-Type": "application/json"})
+    url = "/api/v1/sessions/%s/fits" % S["session"]
+    r = d.post(url, headers=h, data=json.dumps({"method": "srbf",
+                                                "params": {"diffuse": "1.5"}}), status=422)
+    assert "params.diffuse" in r.json()["detail"] and "above 1" in r.json()["detail"]
+    r = d.post(url, headers=h, data=json.dumps({"method": "srbf",
+                                                "params": {"env": "a b"}}), status=422)
+    assert "params.env" in r.json()["detail"]
+    r = d.post(url, headers=h, data=json.dumps({"method": "srbf",
+                                                "params": {"lights": 0}}), status=422)
+    assert "params.lights" in r.json()["detail"]
+    # a spec the daemon cannot resolve (it reads no file a request names)
+    kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env="file:/etc/passwd")},
+                    expect=(201, 202, 404, 422))
+    if kind == "job":
+        j = wait_job(d, job["id"])
+        assert j["state"] == "failed" and "built-in" in json.dumps(j), j
+
+
+run_tests(globals())
