@@ -153,6 +153,15 @@ int srbf_transfer_save(const char *dir, const char *key, const srbf_transfer_dat
 int srbf_transfer_load(const char *dir, const char *key, srbf_transfer_data *x,
                        glint_err *err);
 void srbf_energy_clear(srbf_energy *x);
+/* The transfer level (method_srbf_transfer.c) and the shadow rays it casts
+ * (method_srbf.c). */
+int srbf_transfer_build(const method_build_in *in, cache_value *out, glint_err *err);
+int srbf_transfer_level_load(const method_build_in *in, const char *dir, const char *key,
+                       cache_value *out, glint_err *err);
+int srbf_transfer_level_save(const method_build_in *in, const char *dir, const char *key,
+                       const cache_value *v, glint_err *err);
+int srbf_cast_shadows(const method_build_in *in, const srbf_visdata *vd, const env_lights *l,
+                      uint64_t **bits, long *rays, glint_err *err);
 /* idx and LtL of a transfer level from its reach flags and the basis. */
 int srbf_transfer_reach(srbf_transfer_data *x, const srbf_basis *b, glint_err *err);
 void srbf_transfer_clear(srbf_transfer_data *x);

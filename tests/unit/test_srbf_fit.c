@@ -485,6 +485,73 @@ TEST(nothing_lit_is_a_clear_error_and_impossible_budgets_are_refused)
     }
 }
 
+/* The energy and transfer levels on disk: a new cache over the same
+ * directory loads them (no ray, no transfer rebuilt), the fit is the same,
+ * and a damaged file is rebuilt. */
+TEST(the_precomputation_survives_a_restart_on_disk)
+{
+    char dir[] = "/tmp/glint-srbf-cache-XXXXXX";
+    srbf_params p;
+    unsigned char use[SCENE_MAX_VIEWS] = {1};
+    prep_scene_source src = {borrowed, NULL, &SC};
+    material m[3];
+    float *rgb = NULL;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT(mkdtemp(dir) != NULL);
+    params_default(&p);
+    p.basis_res = 4;
+    p.lights = 32;
+    for (int round = 0; round < 3; round++) {
+        cache *c;
+        cache_entry *se;
+        prep *pp;
+        prep_request rq = {&method_srbf, &p, NULL, use};
+        const char *disk;
+        ASSERT_OK(cache_open(dir, (size_t)1 << 30, &c, &e));
+        ASSERT_OK(prep_scene_acquire(c, "sphere", &src, &se, &e));
+        rq.scene = se;
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &pp, &e));
+        if (!rgb) {
+            rgb = malloc((size_t)3 * prep_samples(pp)->n * sizeof *rgb);
+            for (int i = 0; i < 3 * prep_samples(pp)->n; i++)
+                rgb[i] = (float)(0.2 + 0.1 * sin(0.01 * i));
+        }
+        ASSERT_OK(prep_fit(pp, NULL, rgb, &m[round], &e));
+        disk = json_string_value(json_object_get(
+            json_object_get(json_object_get(m[round].info, "precomputation"), "cache"), "disk"));
+        printf("  round %d: disk %s\n", round, disk);
+        ASSERT(strcmp(disk, round == 0 ? "built" : round == 1 ? "loaded" : "rebuilt") == 0);
+        prep_release(c, pp);
+        cache_release(c, se);
+        cache_close(c);
+        if (round == 1) { /* flip a byte of every cache file */
+            char cmd[512];
+            snprintf(cmd, sizeof cmd,
+                     "for f in $(find %s -name '*.srbf'); do printf 'X' | dd of=$f bs=1 "
+                     "seek=100 conv=notrunc 2>/dev/null; done",
+                     dir);
+            ASSERT(system(cmd) == 0);
+        }
+    }
+    {
+        const srbf_material *a = srbf_material_of(&m[0]), *b = srbf_material_of(&m[1]),
+                           *c2 = srbf_material_of(&m[2]);
+        for (int j = 0; j < 3 * a->b.J; j++) {
+            ASSERT(a->c[j] == b->c[j]);
+            ASSERT(a->c[j] == c2->c[j]);
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        material_free(&m[k]);
+    free(rgb);
+    {
+        char cmd[300];
+        snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+        ASSERT(system(cmd) == 0);
+    }
+}
+
 TEST_LIST{
     TEST_ENTRY(a_known_srbf_material_is_recovered_on_new_views_and_rotations),
     TEST_ENTRY(cook_torrance_with_each_static_term),
@@ -492,6 +559,7 @@ TEST_LIST{
     TEST_ENTRY(an_all_black_target_gives_zero),
     TEST_ENTRY(a_sun_pixel_and_lobe_widths_at_the_ends_give_finite_materials),
     TEST_ENTRY(nothing_lit_is_a_clear_error_and_impossible_budgets_are_refused),
+    TEST_ENTRY(the_precomputation_survives_a_restart_on_disk),
 };
 
 TEST_MAIN()
