@@ -1,2 +1,175 @@
-/* placeholder */
-int main(void) { return 0; }
+/* test_lsq.c: the constrained least-squares solver (lsq.h) against brute
+ * force: for small problems every subset of constraints held with equality
+ * is solved, the feasible candidates compared, and the best one must be
+ * what lsq_solve finds.  Also the modes, infeasibility and bad input.
+ * (The comparison with an independent solver, cvxopt, is
+ * tests/ref/test_lsq_cvxopt.py.) */
+#include <lapacke.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "lsq.h"
+
+static double urand(void)
+{
+    return rand() / (double)RAND_MAX;
+}
+
+/* 1/2 c'Hc - q'c */
+static double f(int n, const double *H, const double *q, const double *c)
+{
+    double v = 0;
+    for (int i = 0; i < n; i++) {
+        double hc = 0;
+        for (int j = 0; j < n; j++)
+            hc += H[i * n + j] * c[j];
+        v += 0.5 * c[i] * hc - q[i] * c[i];
+    }
+    return v;
+}
+
+/* The best feasible point over every set of active constraints (bounds
+ * c_j = 0 for j in the mask's low n bits, rows G_r c = u_r for the high
+ * bits), each solved as an equality-constrained QP by LAPACK. */
+static double brute(int n, int m, const double *H, const double *q, const double *G,
+                    const double *u, double *best_c)
+{
+    double best = INFINITY;
+    for (long mask = 0; mask < (1L << (n + m)); mask++) {
+        int k = 0, free_[16], nf = 0, rows[16], nr = 0;
+        double K[32 * 32], rhs[32], c[16];
+        lapack_int piv[32];
+        for (int j = 0; j < n; j++)
+            if (!(mask >> j & 1))
+                free_[nf++] = j;
+        for (int r = 0; r < m; r++)
+            if (mask >> (n + r) & 1)
+                rows[nr++] = r;
+        k = nf + nr;
+        memset(K, 0, sizeof K);
+        for (int a = 0; a < nf; a++) {
+            for (int b = 0; b < nf; b++)
+                K[a * k + b] = H[free_[a] * n + free_[b]];
+            for (int r = 0; r < nr; r++)
+                K[a * k + nf + r] = K[(nf + r) * k + a] = G[rows[r] * n + free_[a]];
+            rhs[a] = q[free_[a]];
+        }
+        for (int r = 0; r < nr; r++)
+            rhs[nf + r] = u[rows[r]];
+        if (k && LAPACKE_dgesv(LAPACK_ROW_MAJOR, k, 1, K, k, piv, rhs, 1))
+            continue;
+        memset(c, 0, sizeof c);
+        for (int a = 0; a < nf; a++)
+            c[free_[a]] = rhs[a];
+        int ok = 1;
+        for (int j = 0; j < n; j++)
+            ok &= c[j] >= -1e-10;
+        for (int r = 0; r < m; r++) {
+            double g = 0;
+            for (int j = 0; j < n; j++)
+                g += G[r * n + j] * c[j];
+            ok &= g <= u[r] + 1e-10;
+        }
+        if (ok && f(n, H, q, c) < best) {
+            best = f(n, H, q, c);
+            memcpy(best_c, c, n * sizeof *c);
+        }
+    }
+    return best;
+}
+
+static void random_problem(int n, int m, int N, double *H, double *q, double *G, double *u)
+{
+    double A[64 * 8], b[64];
+    for (int i = 0; i < N; i++) {
+        for (int j = 0; j < n; j++)
+            A[i * n + j] = urand() - 0.3;
+        b[i] = urand() * 2 - 0.2;
+    }
+    for (int i = 0; i < n; i++) {
+        q[i] = 0;
+        for (int k = 0; k < N; k++)
+            q[i] += A[k * n + i] * b[k];
+        for (int j = 0; j < n; j++) {
+            H[i * n + j] = 0;
+            for (int k = 0; k < N; k++)
+                H[i * n + j] += A[k * n + i] * A[k * n + j];
+        }
+    }
+    for (int r = 0; r < m; r++) {
+        for (int j = 0; j < n; j++)
+            G[r * n + j] = urand();
+        u[r] = 0.05 + 0.3 * urand();
+    }
+}
+
+TEST(matches_brute_force_on_small_problems)
+{
+    srand(11);
+    for (int trial = 0; trial < 300; trial++) {
+        int n = 1 + trial % 5, m = trial % 4;
+        double H[64], q[8], G[64], u[8], c[8], cb[8], fb;
+        lsq_problem p;
+        lsq_result r;
+        glint_err e;
+        random_problem(n, m, 12, H, q, G, u);
+        p = (lsq_problem){n, H, q, 0.0, m, G, u};
+        ASSERT_OK(lsq_solve(&p, m ? LSQ_ENERGY : LSQ_NONNEG, 0, NULL, c, &r, &e));
+        ASSERT_MSG(r.status == LSQ_OK, "trial %d: %s", trial, lsq_status_name(r.status));
+        fb = brute(n, m, H, q, G, u, cb);
+        ASSERT_MSG(f(n, H, q, c) <= fb + 1e-9 * (1 + fabs(fb)),
+                   "trial %d (n %d, m %d): %.12g against brute force %.12g", trial, n, m,
+                   f(n, H, q, c), fb);
+        ASSERT(r.max_violation <= 1e-9);
+    }
+}
+
+TEST(modes_infeasibility_and_bad_input)
+{
+    double H[4] = {2, 0, 0, 1}, q[2] = {-1, 3}, G[2] = {1, 1}, u[1] = {1}, c[2];
+    lsq_problem p = {2, H, q, 0.0, 1, G, u};
+    lsq_result r;
+    glint_err e;
+    /* none: the unconstrained minimum H^-1 q */
+    ASSERT_OK(lsq_solve(&p, LSQ_NONE, 0, NULL, c, &r, &e));
+    ASSERT_NEAR(c[0], -0.5, 1e-12);
+    ASSERT_NEAR(c[1], 3.0, 1e-12);
+    ASSERT_EQ(r.rank, 2);
+    /* nonneg: c0 clamps at 0 */
+    ASSERT_OK(lsq_solve(&p, LSQ_NONNEG, 0, NULL, c, &r, &e));
+    ASSERT_NEAR(c[0], 0.0, 1e-15);
+    ASSERT_NEAR(c[1], 3.0, 1e-12);
+    /* energy: c0 + c1 <= 1 binds */
+    ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
+    ASSERT_NEAR(c[1], 1.0, 1e-8);
+    ASSERT_EQ(r.active_rows, 1);
+    /* a negative budget: infeasible, reported with its row */
+    u[0] = -0.1;
+    ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
+    ASSERT_EQ(r.status, LSQ_INFEASIBLE);
+    ASSERT_EQ(r.infeasible_row, 0);
+    /* a zero budget: c = 0 is the only point */
+    u[0] = 0.0;
+    ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
+    ASSERT(r.status == LSQ_OK && c[0] == 0.0 && c[1] == 0.0);
+    /* all-zero data: c = 0 */
+    q[0] = q[1] = 0.0;
+    u[0] = 1.0;
+    ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
+    ASSERT(c[0] == 0.0 && c[1] == 0.0);
+    H[3] = NAN;
+    ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
+    H[3] = 1;
+    p.n = 0;
+    ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
+}
+
+TEST_LIST{
+    TEST_ENTRY(matches_brute_force_on_small_problems),
+    TEST_ENTRY(modes_infeasibility_and_bad_input),
+};
+
+TEST_MAIN()
