@@ -290,9 +290,12 @@ TEST(a_known_srbf_material_is_recovered_on_new_views_and_rotations)
     material_free(&r.m);
     params_default(&p);
     ASSERT_OK(fit_and_measure(&p, srbf_truth, &truth, &r));
-    printf("  fitted diffuse (smooth %g): painted %.5f, new view %.5f, rotated %.5f, rho %s\n",
-           p.smooth, r.painted, r.new_view, r.rotated,
-           json_dumps(info_get(&r.m, "diffuse", "rgb"), JSON_COMPACT));
+    {
+        char *rho = json_dumps(info_get(&r.m, "diffuse", "rgb"), JSON_COMPACT);
+        printf("  fitted diffuse (smooth %g): painted %.5f, new view %.5f, rotated %.5f, rho %s\n",
+               p.smooth, r.painted, r.new_view, r.rotated, rho);
+        free(rho);
+    }
     ASSERT(r.painted <= 0.01);
     ASSERT(r.new_view <= 0.01);
     ASSERT(r.rotated <= 0.01);
@@ -313,8 +316,11 @@ TEST(cook_torrance_with_each_static_term)
         params_default(&p);
         p.static_term = st;
         ASSERT_OK(fit_and_measure(&p, brdf_truth, &b, &r));
-        if (getenv("SRBF_VERBOSE"))
-            printf("  %s\n", json_dumps(info_get(&r.m, "errors", "channels"), JSON_COMPACT));
+        if (getenv("SRBF_VERBOSE")) {
+            char *t = json_dumps(info_get(&r.m, "errors", "channels"), JSON_COMPACT);
+            printf("  %s\n", t);
+            free(t);
+        }
         printf("  ct 0.3, static %s: painted %.4f, new view %.4f, rotated %.4f\n",
                st ? "smith" : "paper", r.painted, r.new_view, r.rotated);
         ASSERT(r.painted <= (st ? 0.03 : 0.05));
