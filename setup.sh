@@ -66,7 +66,10 @@ run_daemon() {
   local port=${GLINT_PORT:-8080} data=${GLINT_RUN_DATA:-out/glint-data}
   local base="http://127.0.0.1:$port" demo sid tok scene
   mkdir -p "$data"
-  ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web &
+  envs=()
+  # the CC0 environment maps beside the checkout, offered as data:<file>
+  [ -d ../shared/data/envmaps ] && envs=(--env-dir ../shared/data/envmaps)
+  ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web "${envs[@]}" &
   local pid=$!
   trap 'kill -TERM $pid 2>/dev/null; wait $pid; exit 0' INT TERM
   for _ in $(seq 100); do curl -fs "$base/healthz" >/dev/null && break; sleep 0.1; done

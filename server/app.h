@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <time.h>
 
+#include "err.h"
 #include "http.h"
 
 typedef struct app_limits {
@@ -30,6 +31,7 @@ typedef struct app_config {
     int port;
     char data_dir[4096];
     char web_dir[4096];
+    char env_dir[4096];       /* HDR maps offered as data:<file> ("" = none) */
     size_t cache_bytes;       /* in-memory budget for precomputations */
     size_t work_bytes;        /* memory budget of expensive work in flight (admit.h) */
     int work_slots;           /* ... pieces of it at once */
@@ -77,5 +79,9 @@ extern const http_route api_materials_routes[];  /* materials, previews, exports
 extern const int api_materials_nroutes;
 extern const http_route api_methods_routes[];    /* the methods catalogue */
 extern const int api_methods_nroutes;
+extern const http_route api_envs_routes[];       /* the environments on offer */
+extern const int api_envs_nroutes;
+/* The environments' resolver (api_envs.c), set before threads start. */
+int api_envs_init(const char *dir, glint_err *err);
 
 #endif

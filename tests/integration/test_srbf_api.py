@@ -21,6 +21,36 @@ S = {}
 PARAMS = {"env": "sky", "lights": 64, "basis_res": 5, "static": "smith"}
 
 
+def write_hdr(path, w, h, fn):
+    """A flat (uncompressed) Radiance RGBE file."""
+    import math
+    rows = []
+    for r in range(h):
+        row = bytearray()
+        for c in range(w):
+            rgb = fn(r, c)
+            m = max(rgb)
+            if m < 1e-32:
+                row += bytes(4)
+                continue
+            mant, e = math.frexp(m)
+            scale = mant * 256.0 / m
+            row += bytes([int(v * scale) for v in rgb] + [e + 128])
+        rows.append(bytes(row))
+    with open(path, "wb") as f:
+        f.write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (h, w))
+        for row in rows:
+            f.write(row)
+
+
+ENV_DIR = tempfile.mkdtemp(prefix="glint-envs-")
+write_hdr(os.path.join(ENV_DIR, "bright.hdr"), 64, 32,
+          lambda r, c: (4.0, 3.0, 2.0) if r < 8 and 20 < c < 30 else (0.3, 0.4, 0.6) if r < 16
+          else (0.1, 0.1, 0.1))
+write_hdr(os.path.join(ENV_DIR, ".hidden.hdr"), 64, 32, lambda r, c: (1.0, 1.0, 1.0))
+os.symlink("/etc/passwd", os.path.join(ENV_DIR, "evil.hdr"))
+
+
 def tok(t):
     return {"X-Glint-Token": t}
 
@@ -101,6 +131,23 @@ def test_03_the_material_evaluates_and_renders(d):
     assert gl.content[:4] == b"\x76\x2f\x31\x01" and cpu.content[:4] == b"\x76\x2f\x31\x01"
 
 
+def test_05_environments_of_the_env_dir(d):
+    env = d.get("/api/v1/environments", status=200).json()["environments"]
+    specs = [e["spec"] for e in env]
+    assert specs[:5] == ["studio", "sky", "sunset", "overcast", "white"], specs
+    assert "data:bright.hdr" in specs and not any("hidden" in x or "evil" in x for x in specs)
+    kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env="data:bright.hdr")})
+    if kind == "job":
+        j = wait_job(d, job["id"])
+        assert j["state"] == "done", j
+    for bad in ("data:evil.hdr", "data:.hidden.hdr", "data:../bright.hdr", "data:nosuch.hdr"):
+        kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env=bad)},
+                        expect=(202, 404, 422))
+        if kind == "job":
+            j = wait_job(d, job["id"])
+            assert j["state"] == "failed" and "no environment" in json.dumps(j), (bad, j)
+
+
 def test_04_parameters_are_checked_by_the_table(d):
     h = dict(tok(S["paint"]), **{"Content-Type": "application/json"})
     url = "/api/v1/sessions/%s/fits" % S["session"]
@@ -121,4 +168,4 @@ def test_04_parameters_are_checked_by_the_table(d):
         assert j["state"] == "failed" and "built-in" in json.dumps(j), j
 
 
-run_tests(globals())
+run_tests(globals(), daemon_args=("--env-dir", ENV_DIR))
