@@ -398,6 +398,8 @@ void glr_close(glr *g)
         glr_target_release(g, &g->ct);
         if (g->mat_tex)
             glDeleteTextures(1, &g->mat_tex);
+        if (g->vcol_tex)
+            glDeleteTextures(1, &g->vcol_tex);
         for (int i = 0; i < GLR_NPROG; i++)
             if (g->prog[i])
                 glDeleteProgram(g->prog[i]);

@@ -36,6 +36,8 @@
 #ifndef GLINT_GLR_H
 #define GLINT_GLR_H
 
+#include <stdint.h>
+
 #include "brdf.h"
 #include "err.h"
 #include "gbuf.h"
@@ -97,6 +99,17 @@ int glr_base_render(glr *g, const glr_mesh *m, const scene_view *v, int width, i
  * uploaded only when the material's factors change. */
 int glr_preview(glr *g, const glr_mesh *m, const material *mat, const scene_view *v,
                 int width, int height, float background, img *out, glint_err *err);
+
+/* Draw the mesh with one colour per vertex (rgb: 3 floats for each of the
+ * mesh's nverts vertices, in the order uploaded), interpolated across each
+ * triangle (perspective-correct): how environment-lit previews are drawn
+ * (envlit.h).  Background pixels get `background`.  OUT: *out (RGB,
+ * allocated here) and, when mask is not NULL, mask[width x height]: 1
+ * where the mesh covers the pixel, 0 elsewhere.  Non-finite colours:
+ * GLINT_ENONFINITE. */
+int glr_vertex_colors(glr *g, const glr_mesh *m, const scene_view *v, int width, int height,
+                      const float *rgb, int nverts, float background, img *out, uint8_t *mask,
+                      glint_err *err);
 
 /* Write the material's shader for use in any OpenGL ES 3 / WebGL 2
  * renderer: dir/glint_material.frag and .vert (GLSL ES 3.00), the factor

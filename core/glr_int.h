@@ -12,6 +12,7 @@
  *   glr_material.c     what previews need of a material (any method): its
  *                      program, texture and uniforms (material_gpu)
  *   glr_export.c       the shader export (no GL context)
+ *   glr_vcol.c         draws with one colour per vertex (environment-lit previews)
  *   glr_shaders.h      GLSL sources of the generic stages
  *
  * Every public entry makes the context current (glr_enter), works, and
@@ -31,7 +32,7 @@
 
 #define GLR_STRIP_BYTES ((size_t)8 << 20) /* readback strip buffer */
 
-enum { GLR_PROG_GBUF = 0, GLR_PROG_BASE, GLR_NPROG };
+enum { GLR_PROG_GBUF = 0, GLR_PROG_BASE, GLR_PROG_VCOL, GLR_NPROG };
 #define GLR_MAX_MATERIAL_PROGS 8
 
 /* Uniform locations of one program (-1 where a program lacks one). */
@@ -39,6 +40,8 @@ typedef struct glr_locs {
     GLint model, normal_matrix, view_proj, eye, light, light_intensity;
     /* base */
     GLint gain, kind, kd, ks, f0, exponent, rough;
+    /* vertex colours */
+    GLint vcol, vcol_w;
 } glr_locs;
 
 /* A material program: a method's fragment stage with the shared vertex
@@ -75,6 +78,8 @@ struct glr {
     GLuint mat_tex;        /* the material texture (unit 0) */
     int mat_tex_w, mat_tex_h;
     float *mat_tex_cache;  /* what mat_tex holds: w x h x 4 floats */
+    GLuint vcol_tex;       /* per-vertex colours (unit 1), vcol_w x vcol_h */
+    int vcol_w, vcol_h;
     float *strip;     /* readback buffer, GLR_STRIP_BYTES */
     glr_stats st;
 };
@@ -84,6 +89,7 @@ struct glr_mesh {
     const glr *owner;
     GLuint vao, vbo[3], ibo;
     GLsizei nidx;
+    int nverts;
     double center[3], radius; /* bounding sphere */
     int closed; /* +1 / -1: closed, consistently wound, facing out / in; 0: open */
 };

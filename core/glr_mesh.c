@@ -197,6 +197,7 @@ static int glr_mesh_upload_in(glr *g, const mesh *msh, glr_mesh **out, glint_err
     }
     m->radius = sqrt(r2);
     m->closed = glr_mesh_closed(msh);
+    m->nverts = msh->nverts;
 
     glr_gl_drain();
     arrays[0] = msh->pos;

@@ -110,17 +110,22 @@ void glr_locs_get(GLuint p, glr_locs *l)
     l->f0 = glGetUniformLocation(p, "u_f0");
     l->exponent = glGetUniformLocation(p, "u_exponent");
     l->rough = glGetUniformLocation(p, "u_rough");
+    l->vcol = glGetUniformLocation(p, "u_vcol");
+    l->vcol_w = glGetUniformLocation(p, "u_vcol_w");
 }
 
 int glr_programs_build(glr *g, glint_err *err)
 {
-    static const char *const fs[GLR_NPROG] = {GLR_GBUF_FRAG_SRC, GLR_BASE_FRAG_SRC};
-    static const char *const names[GLR_NPROG] = {"G-buffer program", "base-render program"};
+    static const char *const vs[GLR_NPROG] = {GLR_VERT_SRC, GLR_VERT_SRC, GLR_VCOL_VERT_SRC};
+    static const char *const fs[GLR_NPROG] = {GLR_GBUF_FRAG_SRC, GLR_BASE_FRAG_SRC,
+                                              GLR_VCOL_FRAG_SRC};
+    static const char *const names[GLR_NPROG] = {"G-buffer program", "base-render program",
+                                                 "vertex-colour program"};
     static const float id4[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     static const float id3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
 
     for (int i = 0; i < GLR_NPROG; i++) {
-        g->prog[i] = glr_link(GLR_VERT_SRC, fs[i], names[i], err);
+        g->prog[i] = glr_link(vs[i], fs[i], names[i], err);
         if (!g->prog[i])
             return err ? err->code : GLINT_EFORMAT;
         g->st.gl_objects++;

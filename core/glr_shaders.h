@@ -142,4 +142,38 @@ static const char GLR_BASE_FRAG_SRC[] =
     "    o_color = vec4(c, 1.0);\n"
     "}\n";
 
+/* Vertex stage of the vertex-colour draw (glr_vertex_colors): the colour of
+ * vertex gl_VertexID is texel (id mod u_vcol_w, id / u_vcol_w) of an
+ * RGBA32F texture on unit 1, interpolated across the triangle. */
+static const char GLR_VCOL_VERT_SRC[] =
+    "#version 300 es\n"
+    "precision highp float;\n"
+    "precision highp int;\n"
+    "layout(location = 0) in vec3 a_position;\n"
+    "layout(location = 1) in vec3 a_normal;\n"
+    "layout(location = 2) in vec2 a_uv;\n"
+    "uniform mat4 u_model;\n"
+    "uniform mat3 u_normal_matrix;\n"
+    "uniform mat4 u_view_proj;\n"
+    "uniform highp sampler2D u_vcol;\n"
+    "uniform int u_vcol_w;\n"
+    "out vec3 v_col;\n"
+    "void main()\n"
+    "{\n"
+    "    int id = gl_VertexID;\n"
+    "    v_col = texelFetch(u_vcol, ivec2(id % u_vcol_w, id / u_vcol_w), 0).rgb;\n"
+    "    gl_Position = u_view_proj * (u_model * vec4(a_position, 1.0));\n"
+    "}\n";
+
+/* Fragment stage of the vertex-colour draw: the colour, alpha 1 (coverage). */
+static const char GLR_VCOL_FRAG_SRC[] =
+    "#version 300 es\n"
+    "precision highp float;\n"
+    "in vec3 v_col;\n"
+    "layout(location = 0) out vec4 o_col;\n"
+    "void main()\n"
+    "{\n"
+    "    o_col = vec4(v_col, 1.0);\n"
+    "}\n";
+
 #endif

@@ -40,6 +40,13 @@ void material_eval(const material *m, const double n[3], const double wi[3],
     m->method->mat->eval(m->data, n, wi, wo, rgb);
 }
 
+void material_eval_preview(const material *m, const double n[3], const double wi[3],
+                           const double wo[3], double rgb[3])
+{
+    const material_ops *o = m->method->mat;
+    (o->eval_preview ? o->eval_preview : o->eval)(m->data, n, wi, wo, rgb);
+}
+
 json_t *material_summary(const material *m)
 {
     return m->method->mat->summary ? m->method->mat->summary(m->data) : json_object();

@@ -49,6 +49,11 @@ const char *material_method_name(const material *m);
 void material_eval(const material *m, const double n[3], const double wi[3],
                    const double wo[3], double rgb[3]);
 
+/* The same for previews: the method's faster approximation where it has
+ * one (method.h, eval_preview), else material_eval. */
+void material_eval_preview(const material *m, const double n[3], const double wi[3],
+                           const double wo[3], double rgb[3]);
+
 /* Shade a G-buffer: RGB radiance for a light of intensity `intensity`;
  * covered pixels that are not lit and seen get 0, background pixels
  * `background`.  OUT: *out (RGB, allocated here). */

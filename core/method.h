@@ -153,6 +153,11 @@ typedef struct material_ops {
      * n.wi > 0 and n.wo > 0. */
     void (*eval)(const void *data, const double n[3], const double wi[3], const double wo[3],
                  double rgb[3]);
+    /* Optional: the same for previews, faster and approximate (the method
+     * states its error); NULL: eval.  May build caches inside data on
+     * first use, safely from several threads. */
+    void (*eval_preview)(const void *data, const double n[3], const double wi[3],
+                         const double wo[3], double rgb[3]);
     void (*free)(void *data);
     /* Write the method's members of material.json into `manifest`. */
     int (*to_json)(const void *data, json_t *manifest, glint_err *err);

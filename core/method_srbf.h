@@ -129,7 +129,23 @@ typedef struct srbf_material {
     srbf_static st;
     double *c;                 /* 3 x J */
     double rho[3];
+    float *ptab;               /* p(h) table for previews, built on first use (NULL before) */
+    int ptab_n;
 } srbf_material;
+
+/* p(h) tabulated for previews (method_srbf_table.c): RGB over the
+ * hemisphere of h in the local frame, on an N x N hemi-octahedral map
+ * (s = u + v, t = u - v with (u, v) = (x, y) / (|x| + |y| + z)), bilinear.
+ * N grows with lambda so that the interpolation error at a lobe's peak
+ * stays near SRBF_TABLE_TOL relative; above SRBF_TABLE_MAX the preview
+ * evaluates exactly.  Built once per material (about N^2 J exponentials),
+ * thread-safe. */
+#define SRBF_TABLE_TOL 5e-3
+#define SRBF_TABLE_MAX 1024
+int srbf_table_n(double lambda);
+/* f (n.wi) like the method's eval, with p(h) from the table. */
+void srbf_material_eval_preview(const srbf_material *sm, const double n[3], const double wi[3],
+                                const double wo[3], double rgb[3]);
 
 /* Make a material of method srbf (takes *sm's arrays). */
 void srbf_material_init(material *m, srbf_material *sm, json_t *info);

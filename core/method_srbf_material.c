@@ -25,6 +25,8 @@ void srbf_material_init(material *m, srbf_material *sm, json_t *info)
         return;
     }
     *d = *sm;
+    d->ptab = NULL;
+    d->ptab_n = 0;
     memset(sm, 0, sizeof *sm);
     material_init(m, &method_srbf, d, info);
 }
@@ -81,9 +83,16 @@ static void srbf_eval_op(const void *data, const double n[3], const double wi[3]
         rgb[c] *= ci > 0.0 ? ci : 0.0;
 }
 
+static void srbf_preview_op(const void *data, const double n[3], const double wi[3],
+                            const double wo[3], double rgb[3])
+{
+    srbf_material_eval_preview(data, n, wi, wo, rgb);
+}
+
 static void srbf_free_op(void *data)
 {
     srbf_material *sm = data;
+    free(sm->ptab);
     free(sm->c);
     srbf_basis_free(&sm->b);
     free(sm);
@@ -253,6 +262,7 @@ static json_t *srbf_summary(const void *data)
 
 const material_ops srbf_material_ops = {
     .eval = srbf_eval_op,
+    .eval_preview = srbf_preview_op,
     .free = srbf_free_op,
     .to_json = srbf_to_json,
     .from_json = srbf_from_json,

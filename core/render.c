@@ -13,22 +13,7 @@
 #include "lru.h"
 #include "paint.h"
 #include "raster.h"
-
-typedef struct gl_mesh {
-    char key[128];
-    glr_mesh *m;
-    lru_node lru;
-} gl_mesh;
-
-struct render {
-    pthread_mutex_t lock;      /* the EGL context: one draw at a time */
-    glr *gl;
-    int gl_tried;              /* glr_open was attempted */
-    char gl_error[GLINT_ERR_MSG_MAX];
-    int quiet;
-    int max_meshes;
-    lru_list meshes;
-};
+#include "render_int.h"
 
 int render_engine_parse(const char *text, render_engine *out, glint_err *err)
 {
@@ -51,6 +36,7 @@ int render_open(int gl_meshes, int quiet, render **out, glint_err *err)
     if (!r)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     pthread_mutex_init(&r->lock, NULL);
+    pthread_mutex_init(&r->env_lock, NULL);
     r->quiet = quiet;
     r->max_meshes = gl_meshes > 0 ? gl_meshes : 1;
     *out = r;
@@ -70,14 +56,16 @@ void render_close(render *r)
         return;
     while (r->meshes.head)
         drop_mesh(r, lru_entry(r->meshes.head, gl_mesh, lru));
+    render_env_drop_all(r);
     glr_close(r->gl);
     pthread_mutex_destroy(&r->lock);
+    pthread_mutex_destroy(&r->env_lock);
     free(r);
 }
 
 /* The EGL context (lock held), opened on first use: NULL with *err set
  * (GLINT_EUNSUPPORTED) when no platform works. */
-static glr *gl_get(render *r, glint_err *err)
+glr *render_gl_get(render *r, glint_err *err)
 {
     if (!r->gl_tried) {
         glint_err e;
@@ -98,7 +86,7 @@ static glr *gl_get(render *r, glint_err *err)
 
 /* The uploaded mesh for key (lock held); uncached when key is NULL (the
  * caller frees *tmp). */
-static int gl_mesh_get(render *r, const char *key, const mesh *m, glr_mesh **out,
+int render_gl_mesh_get(render *r, const char *key, const mesh *m, glr_mesh **out,
                        glr_mesh **tmp, glint_err *err)
 {
     gl_mesh *g;
@@ -147,11 +135,11 @@ static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
     int rc;
 
     pthread_mutex_lock(&r->lock);
-    if (!gl_get(r, err)) {
+    if (!render_gl_get(r, err)) {
         pthread_mutex_unlock(&r->lock);
         return GLINT_EUNSUPPORTED;
     }
-    rc = gl_mesh_get(r, key, m, &gm, &tmp, err);
+    rc = render_gl_mesh_get(r, key, m, &gm, &tmp, err);
     if (!rc)
         rc = d->mat ? glr_preview(r->gl, gm, d->mat, v, w, h, 0.0f, out, err)
                     : glr_base_render(r->gl, gm, v, w, h, d->b, d->scale, 0.0f, out, err);

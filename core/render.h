@@ -94,6 +94,65 @@ int render_material(render *r, render_engine eng, const char *mesh_key, const me
                     const material *mat, const scene_view *v, int width, int height, img *out,
                     render_used *used, glint_err *err);
 
+/* ---- under an environment ---------------------------------------------------------
+ * Previews and base renders lit by an environment map compressed to
+ * `lights` median-cut lights (env.h), with shadows (vis.h), for any camera
+ * and any rotation of the environment.  RENDER_EGL shades the mesh's
+ * vertices on the CPU and draws them interpolated through EGL (seed 004,
+ * equation 22: what the paper's previews do on the GPU), with the method's
+ * preview evaluation (material_eval_preview); RENDER_CPU shades every pixel
+ * with its own shadow rays and the exact evaluation (the reference;
+ * slower).  The two differ by the interpolation across triangles and the
+ * preview evaluation's error (measured in BENCHMARKS.md).
+ * The lights, the environment and the visibility of the vertices are kept
+ * per (mesh_key, environment, rotation, intensity, lights, shadows), the
+ * least recently used of RENDER_ENV_CACHE dropped; a new view of a cached
+ * entry costs the shading and the draw.  Environment renders are serialized
+ * among themselves (one cache lock). */
+
+#define RENDER_ENV_MAX_LIGHTS 1024
+#define RENDER_ENV_CACHE 4
+
+typedef struct render_env {
+    char spec[64];         /* env.h's spec: a built-in sky or what the resolver knows */
+    double rotation_deg;   /* about +z, in [-360, 360] */
+    double intensity;      /* radiance scale, (0, 1e6] */
+    int lights;            /* 1..RENDER_ENV_MAX_LIGHTS */
+    int shadows;           /* cast shadow rays (none needed on convex meshes) */
+    int background;        /* draw the environment behind the object, else 0 */
+} render_env;
+
+/* spec "studio", rotation 0, intensity 1, 256 lights, shadows and background on. */
+void render_env_init(render_env *e);
+
+/* Check the fields (GLINT_EINVAL naming the one out of range). */
+int render_env_check(const render_env *e, glint_err *err);
+
+/* What an environment render did. */
+typedef struct render_env_info {
+    int lights;            /* lights shaded with */
+    int convex;            /* shadows asked, mesh convex: no rays */
+    int cached;            /* lights and visibility came from the cache */
+    long rays;             /* shadow rays cast by this call */
+    double prepare_s;      /* loading, compressing, casting (0 when cached) */
+    double shade_s;        /* shading vertices or pixels */
+    double draw_s;         /* drawing and reading back (EGL) */
+    char env[64];          /* the environment's name */
+} render_env_info;
+
+/* A material preview under the environment (no light intensity of v: the
+ * environment is the light).  info may be NULL. */
+int render_material_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                        const material *mat, const render_env *env, const scene_view *v,
+                        int width, int height, img *out, render_env_info *info,
+                        render_used *used, glint_err *err);
+
+/* A base render under the environment: scale x B with the analytic BRDF. */
+int render_base_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                    const char *brdf_spec, double scale, const render_env *env,
+                    const scene_view *v, int width, int height, img *out,
+                    render_env_info *info, render_used *used, glint_err *err);
+
 /* The CPU G-buffer of view v as OpenEXR bytes with named channels (mask,
  * P, N, uv, wi, wo, cos_i, cos_o: gbuf.h).  OUT: *data (malloc'ed), *len. */
 int render_gbuffer_exr(const mesh *m, const scene_view *v, int width, int height, void **data,
@@ -123,44 +182,5 @@ int render_camera_view(const scene *sc, const render_camera *c, scene_view *out,
 
 /* "x,y,z": three finite numbers (0, or -1). */
 int render_parse_vec3(const char *text, double v[3]);
-
-/* ---- environment lighting -------------------------------------------------------------- */
-
-/* Renders lit by an environment (env.h) instead of the view's point light:
- * the map compressed into `lights` median-cut lights, each light's
- * visibility from the surface cast with Embree (vis.h) unless off (or
- * auto and the mesh is convex).  A pixel's radiance is
- *   sum_k V_k power_k f(wi_k, wo) max(0, n.wi_k)
- * with f the BRDF (a material's evaluation divided by n.wi, or an
- * analytic spec).  Engines: RENDER_CPU shades every pixel exactly (its own
- * rays per pixel: the reference); RENDER_EGL shades the mesh's vertices on
- * the CPU (rays per vertex, cached per mesh key and lights) and lets the
- * GPU interpolate them, which is what makes an interactive preview (the
- * two differ where shading varies within a triangle: measured in
- * tests/unit/test_envrender.c).  The render object keeps the compressed
- * lights and per-vertex visibility of recent requests (a small LRU). */
-typedef struct render_env {
-    char spec[64];           /* env_resolve spec ("studio", "data:courtyard.exr") */
-    double rotation_deg;     /* about +z */
-    double intensity;        /* > 0 */
-    int lights;              /* 1..4096, default 256 */
-    int visibility;          /* -1 auto (default), 0 off, 1 on */
-} render_env;
-
-void render_env_init(render_env *e);
-/* Check a request (spec syntax, ranges): 0 or GLINT_EINVAL / GLINT_ERANGE. */
-int render_env_check(const render_env *e, glint_err *err);
-
-/* A base render under the environment: the analytic BRDF brdf_spec scaled
- * by `scale`.  OUT: *out (RGB), *used. */
-int render_env_base(render *r, render_engine eng, const char *mesh_key, const mesh *m,
-                    const scene_view *v, int width, int height, const render_env *e,
-                    const char *brdf_spec, double scale, img *out, render_used *used,
-                    glint_err *err);
-
-/* A material preview under the environment (any method's material). */
-int render_env_material(render *r, render_engine eng, const char *mesh_key, const mesh *m,
-                        const material *mat, const scene_view *v, int width, int height,
-                        const render_env *e, img *out, render_used *used, glint_err *err);
 
 #endif

@@ -28,6 +28,16 @@ http_resp api_error(const glint_err *e);
 int api_reject(glint_err *err, int code, const char *kind, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/* The environment of a render request (api_envs.c): env=SPEC (a built-in
+ * or data:NAME), env_rotation (degrees), env_intensity, lights (1..1024),
+ * shadows and background (0 or 1).  *has: env was given; the others
+ * without env are an error.  Kind "invalid-parameter". */
+struct render_env;
+struct render_env_info;
+int api_env_query(http_req *req, struct render_env *out, int *has, glint_err *e);
+/* X-Glint-Env: what an environment render did. */
+void api_env_header(http_resp *r, const struct render_env_info *info);
+
 /* The same with context: detail "<context>: <message>". */
 http_resp api_fail(const glint_err *e, const char *context);
 

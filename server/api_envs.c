@@ -10,6 +10,7 @@
  * lies inside the directory (no traversal, no symbolic link out of it).
  * Thread-safety: the directory is set once before threads start. */
 #include <dirent.h>
+#include <math.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +20,7 @@
 #include "api_common.h"
 #include "app.h"
 #include "env.h"
+#include "render.h"
 
 static char env_dir[PATH_MAX]; /* real path, "" when none */
 
@@ -70,6 +72,69 @@ int api_envs_init(const char *dir, glint_err *err)
     }
     env_set_resolver(resolve);
     return 0;
+}
+
+static int query_num(const char *s, double lo, double hi, double *out)
+{
+    char *end;
+    double v;
+    if (!s)
+        return 0;
+    v = strtod(s, &end);
+    if (end == s || *end || !isfinite(v) || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+int api_env_query(http_req *req, render_env *out, int *has, glint_err *e)
+{
+    const char *spec = http_query(req, "env"), *rot = http_query(req, "env_rotation"),
+               *inten = http_query(req, "env_intensity"), *lights = http_query(req, "lights"),
+               *shadows = http_query(req, "shadows"), *bg = http_query(req, "background");
+    double x = 0.0;
+    render_env_init(out);
+    *has = spec != NULL;
+    if (!spec) {
+        if (rot || inten || lights || shadows || bg)
+            return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                              "env_rotation, env_intensity, lights, shadows and background "
+                              "need env=SPEC");
+        return 0;
+    }
+    if (env_spec_check(spec, e))
+        return glint_err_kind(e, "invalid-parameter");
+    snprintf(out->spec, sizeof out->spec, "%s", spec);
+    if (query_num(rot, -360.0, 360.0, &out->rotation_deg))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                          "env_rotation must be degrees in [-360, 360]");
+    if (query_num(inten, 1e-12, 1e6, &out->intensity))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                          "env_intensity must be in (0, 1e6]");
+    if (lights && (query_num(lights, 1, RENDER_ENV_MAX_LIGHTS, &x) || x != floor(x)))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                          "lights must be an integer in 1..%d", RENDER_ENV_MAX_LIGHTS);
+    if (lights)
+        out->lights = (int)x;
+    if (shadows && strcmp(shadows, "0") && strcmp(shadows, "1"))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter", "shadows must be 0 or 1");
+    if (shadows)
+        out->shadows = shadows[0] == '1';
+    if (bg && strcmp(bg, "0") && strcmp(bg, "1"))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter", "background must be 0 or 1");
+    if (bg)
+        out->background = bg[0] == '1';
+    return 0;
+}
+
+void api_env_header(http_resp *r, const render_env_info *info)
+{
+    char h[200];
+    snprintf(h, sizeof h, "env=%s; lights=%d; cached=%d; convex=%d; rays=%ld; prepare_ms=%.1f; "
+             "shade_ms=%.1f; draw_ms=%.1f",
+             info->env, info->lights, info->cached, info->convex, info->rays,
+             1e3 * info->prepare_s, 1e3 * info->shade_s, 1e3 * info->draw_s);
+    http_header(r, "X-Glint-Env", h);
 }
 
 static int cmp_str(const void *a, const void *b)

@@ -330,8 +330,8 @@ static int parse_num(const char *s, double lo, double hi, double *out)
 }
 
 /* The camera, engine and size of a preview request. */
-static int preview_args(http_req *req, const scene *sc, render_engine *eng, scene_view *v,
-                        int *w, int *h, glint_err *e)
+static int preview_args(http_req *req, const scene *sc, int has_env, render_engine *eng,
+                        scene_view *v, int *w, int *h, glint_err *e)
 {
     const char *q_view = http_query(req, "view"), *q_eye = http_query(req, "eye"),
                *q_light = http_query(req, "light"), *q_target = http_query(req, "target"),
@@ -352,9 +352,10 @@ static int preview_args(http_req *req, const scene *sc, render_engine *eng, scen
                               "size must be an integer in %d..%d", SCENE_MIN_SIZE, PREVIEW_MAX);
         size = (int)x;
     }
-    if (!q_view && !(q_eye && q_light))
+    if (!q_view && !(q_eye && (q_light || has_env)))
         return api_reject(e, GLINT_EINVAL, "invalid-parameter",
-                          "a preview needs view=K, or eye=x,y,z and light=x,y,z");
+                          has_env ? "a preview needs view=K, or eye=x,y,z"
+                                  : "a preview needs view=K, or eye=x,y,z and light=x,y,z");
     if (q_view) {
         if (parse_num(q_view, 0, sc->nviews - 1, &x) || x != floor(x))
             return api_reject(e, GLINT_EINVAL, "invalid-parameter",
@@ -373,6 +374,10 @@ static int preview_args(http_req *req, const scene *sc, render_engine *eng, scen
                           "target must be x,y,z (finite numbers)");
     c.has_eye = q_eye != NULL;
     c.has_light = q_light != NULL;
+    if (has_env && q_eye && !q_light) { /* the environment lights it: any light will do */
+        memcpy(c.light, c.eye, sizeof c.light);
+        c.has_light = 1;
+    }
     c.has_target = q_target != NULL;
     if (q_fov && parse_num(q_fov, 1.0, 170.0, &c.fov_deg))
         return api_reject(e, GLINT_EINVAL, "invalid-parameter",
@@ -410,6 +415,9 @@ static http_resp preview(http_req *req, const char *format)
     const scene *sc;
     render_engine eng;
     render_used used;
+    render_env env;
+    render_env_info info;
+    int has_env = 0;
     material m = {0};
     memo_doc doc = {{0}, {0}, NULL, 0};
     scene_view v;
@@ -430,17 +438,24 @@ static http_resp preview(http_req *req, const char *format)
         goto done;
     }
     sc = prep_scene_of(se)->sc;
-    if ((rc = preview_args(req, sc, &eng, &v, &w, &h, &e)))
+    if ((rc = api_env_query(req, &env, &has_env, &e)) ||
+        (rc = preview_args(req, sc, has_env, &eng, &v, &w, &h, &e)))
         goto done;
-    bytes = render_peak_bytes(eng, 0, w, h);
+    /* under an environment the CPU reference holds a G-buffer and shadow
+     * bits per pixel (VIS_WORDS(lights) words) */
+    bytes = has_env ? render_peak_bytes(eng, 1, w, h) +
+                          (size_t)w * h * 8 * (size_t)((env.lights + 63) / 64)
+                    : render_peak_bytes(eng, 0, w, h);
     snprintf(what, sizeof what, "a %dx%d preview", w, h);
     if ((rc = admit_enter(a->work, bytes, what, &e)))
         goto done;
     admitted = 1;
     if ((rc = material_of(a, mid, &m, &e)))
         goto done;
-    if ((rc = render_material(a->render, eng, doc.scene, &sc->mesh, &m, &v, w, h, &im, &used,
-                              &e))) {
+    if ((rc = has_env ? render_material_env(a->render, eng, doc.scene, &sc->mesh, &m, &env, &v,
+                                            w, h, &im, &info, &used, &e)
+                      : render_material(a->render, eng, doc.scene, &sc->mesh, &m, &v, w, h,
+                                        &im, &used, &e))) {
         if (rc == GLINT_EUNSUPPORTED && eng == RENDER_EGL)
             glint_err_kind(&e, "egl-unavailable");
         goto done;
@@ -450,6 +465,8 @@ static http_resp preview(http_req *req, const char *format)
     r = http_bytes_owned(200, strcmp(format, "png") == 0 ? "image/png" : "image/x-exr", data,
                          len);
     http_header(&r, "X-Glint-Renderer", used.engine);
+    if (has_env)
+        api_env_header(&r, &info);
 done:
     if (rc)
         r = api_error(&e);

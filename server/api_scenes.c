@@ -661,9 +661,12 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, g
     cache_entry *se = NULL;
     const scene *sc;
     scene_view view;
+    render_env env;
     size_t bytes;
-    int rc;
+    int rc, has_env;
 
+    if ((rc = api_env_query(req, &env, &has_env, e)))
+        return rc;
     if (!spec)
         spec = json_string_value(json_object_get(json_object_get(doc, "base"), "brdf"));
     if (!spec)
@@ -680,10 +683,14 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, g
     if (int_q && positive_query(int_q, &view.light_intensity))
         rc = api_reject(e, GLINT_EINVAL, "invalid-input",
                         "intensity \"%.32s\" is not a number in (0, 1e6]", int_q);
-    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height);
+    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height) +
+            (has_env ? (size_t)sc->width * sc->height * 8 * (size_t)((env.lights + 63) / 64) : 0);
     if (!rc && !(rc = admit_enter(a->work, bytes, "the base render", e))) {
-        if ((rc = render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, sc->width, sc->height,
-                              spec, scale, im, NULL, e)))
+        /* on the CPU: the pixels are exactly those a painting is sampled at */
+        if ((rc = has_env ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
+                                            &view, sc->width, sc->height, im, NULL, NULL, e)
+                          : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, sc->width,
+                                        sc->height, spec, scale, im, NULL, e)))
             glint_err_prefix(e, "rendering");
         admit_leave(a->work, bytes);
     }
@@ -708,7 +715,8 @@ static http_resp scene_base(http_req *req)
         return http_problem(422, "invalid-input", "format \"%.16s\" is not png or exr", fmt);
     if (scene_view_arg(req, &doc, &k, &e))
         return api_error(&e);
-    if (!http_query(req, "brdf") && !http_query(req, "scale") && !http_query(req, "intensity"))
+    if (!http_query(req, "brdf") && !http_query(req, "scale") && !http_query(req, "intensity") &&
+        !http_query(req, "env"))
         rc = scenes_base(a, req->param[0], k, &im, &e); /* what every session paints over */
     else
         rc = scene_base_custom(req, doc, k, &im, &e);

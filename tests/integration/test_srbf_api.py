@@ -148,6 +148,53 @@ def test_05_environments_of_the_env_dir(d):
             assert j["state"] == "failed" and "no environment" in json.dumps(j), (bad, j)
 
 
+def test_06_previews_under_an_environment(d):
+    mid, h = S["material"]["id"], tok(S["view"])
+    url = "/api/v1/materials/%s/preview.exr" % mid
+    a = d.get(url + "?view=0&env=sky&lights=64", headers=h, status=200)
+    info = a.headers["X-Glint-Env"]
+    assert "lights=64" in info and "cached=0" in info and "convex=1" in info, info
+    assert a.content[:4] == b"\x76\x2f\x31\x01"
+    b = d.get(url + "?view=0&env=sky&lights=64", headers=h, status=200)
+    assert "cached=1" in b.headers["X-Glint-Env"], b.headers["X-Glint-Env"]
+    cpu = d.get(url + "?view=0&env=sky&lights=64&renderer=cpu", headers=h, status=200)
+    assert cpu.headers["X-Glint-Renderer"].startswith("cpu")
+    try:
+        import numpy as np
+        import OpenImageIO as oiio
+    except ImportError:
+        np = None
+    if np is not None and "vertex shading" in a.headers["X-Glint-Renderer"]:
+        imgs = []
+        for r in (a, cpu, b):
+            path = os.path.join(ENV_DIR, "p.exr")
+            with open(path, "wb") as f:
+                f.write(r.content)
+            imgs.append(np.asarray(oiio.ImageBuf(path).get_pixels(oiio.FLOAT)))
+        # background: the same sky on both; the object: vertex against pixel shading
+        rel = np.sqrt(((imgs[0] - imgs[1]) ** 2).sum() / (imgs[1] ** 2).sum())
+        assert rel < 0.1, rel
+        assert (imgs[0] == imgs[2]).all()  # the cached lights and visibility: the same image
+    # a free camera needs no light under an environment; a map of the env dir, rotated
+    d.get(url + "?eye=0,-3,1&env=data:bright.hdr&env_rotation=90&shadows=0&background=0",
+          headers=h, status=200)
+    d.get(url + "?eye=0,-3,1", headers=h, status=422)
+    for q, code in (("env=data:evil.hdr", 404), ("env=data:../x.hdr", 404),
+                    ("env=a%20b", 422), ("view=0&env_rotation=10", 422),
+                    ("view=0&env=sky&lights=0", 422), ("view=0&env=sky&lights=5000", 422),
+                    ("view=0&env=sky&shadows=2", 422), ("view=0&env=sky&env_intensity=-1", 422),
+                    ("view=0&env=sky&env_rotation=nan", 422)):
+        if not q.startswith("view"):
+            q = "view=0&" + q
+        r = d.get(url + "?" + q, headers=h)
+        assert r.status_code == code, (q, r.status_code, r.text)
+    # the base render to paint on, under the same sky
+    base = d.get("/api/v1/scenes/%s/views/0/base.png?env=sky&lights=64&brdf=lambert:kd=0.5"
+                 % S["scene"], status=200)
+    assert base.content[:4] == b"\x89PNG"
+    d.get("/api/v1/scenes/%s/views/0/base.png?env=nosuch" % S["scene"], status=404)
+
+
 def test_04_parameters_are_checked_by_the_table(d):
     h = dict(tok(S["paint"]), **{"Content-Type": "application/json"})
     url = "/api/v1/sessions/%s/fits" % S["session"]
