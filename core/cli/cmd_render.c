@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "env.h"
 #include "glr.h"
 
 /* ---- the renderer ------------------------------------------------------------- */
@@ -33,7 +34,10 @@ void cli_render_close(void)
 
 static const char usage_render[] =
     "usage: glint render MATDIR --scene scene.json (--view K | --eye X,Y,Z --light X,Y,Z) "
-    "[--size WxH] [--engine auto|egl|cpu] -o image.png|exr";
+    "[--size WxH] [--engine auto|egl|cpu] [--env SPEC [--env-rotation DEG] "
+    "[--env-intensity X] [--lights K] [--no-shadows] [--no-background]] -o image.png|exr\n"
+    "  --env: light with an environment (a built-in sky, or file:PATH of an HDR map) "
+    "instead of the point light; --eye then needs no --light";
 
 int cmd_render(int argc, char **argv)
 {
@@ -43,11 +47,17 @@ int cmd_render(int argc, char **argv)
         {"light", required_argument, 0, 'l'}, {"fov", required_argument, 0, 'f'},
         {"intensity", required_argument, 0, 'i'}, {"size", required_argument, 0, 'z'},
         {"engine", required_argument, 0, 'g'}, {"out", required_argument, 0, 'o'},
+        {"env", required_argument, 0, 1000}, {"env-rotation", required_argument, 0, 1001},
+        {"env-intensity", required_argument, 0, 1002}, {"lights", required_argument, 0, 1003},
+        {"no-shadows", no_argument, 0, 1004}, {"no-background", no_argument, 0, 1005},
         {0, 0, 0, 0}};
     const char *scene_path = NULL, *out = NULL;
     int c, rc = 0, view = -1, w = 0, h = 0;
     render_engine engine = RENDER_AUTO;
     render_camera cam;
+    render_env env;
+    render_env_info info;
+    int has_env = 0;
     scene sc;
     material m;
     scene_view v;
@@ -56,6 +66,7 @@ int cmd_render(int argc, char **argv)
 
     memset(&sc, 0, sizeof sc);
     render_camera_init(&cam);
+    render_env_init(&env);
     optind = 1;
     while ((c = getopt_long(argc, argv, "s:v:o:", lo, NULL)) != -1) {
         switch (c) {
@@ -69,13 +80,28 @@ int cmd_render(int argc, char **argv)
         case 'z': if ((rc = parse_size(optarg, &w, &h))) return rc; break;
         case 'g': if (render_engine_parse(optarg, &engine, &e)) return fail(1, "--%s", e.msg); break;
         case 'o': out = optarg; break;
+        case 1000:
+            if (env_spec_check(optarg, &e))
+                return fail(1, "--env: %s", e.msg);
+            snprintf(env.spec, sizeof env.spec, "%s", optarg);
+            has_env = 1;
+            break;
+        case 1001: if ((rc = parse_double(optarg, "--env-rotation", -360.0, 360.0, &env.rotation_deg))) return rc; break;
+        case 1002: if ((rc = parse_double(optarg, "--env-intensity", 1e-12, 1e6, &env.intensity))) return rc; break;
+        case 1003: if ((rc = parse_int(optarg, "--lights", 1, RENDER_ENV_MAX_LIGHTS, &env.lights))) return rc; break;
+        case 1004: env.shadows = 0; break;
+        case 1005: env.background = 0; break;
         default: return fail(1, "%s", usage_render);
         }
     }
     if (!out || !scene_path || optind != argc - 1)
         return fail(1, "%s", usage_render);
-    if (view < 0 && !(cam.has_eye && cam.has_light))
-        return fail(1, "render needs --view K, or both --eye and --light");
+    if (view < 0 && !(cam.has_eye && (cam.has_light || has_env)))
+        return fail(1, "render needs --view K, or both --eye and --light (--eye alone with --env)");
+    if (has_env && cam.has_eye && !cam.has_light) { /* the environment lights it */
+        memcpy(cam.light, cam.eye, sizeof cam.light);
+        cam.has_light = 1;
+    }
     if (material_load(argv[optind], &m, &e))
         return fail_err(&e);
     if ((rc = load_scene(scene_path, &sc)))
@@ -93,12 +119,20 @@ int cmd_render(int argc, char **argv)
         w = sc.width;
         h = sc.height;
     }
-    if (render_material(cli_render(), engine, NULL, &sc.mesh, &m, &v, w, h, &im, NULL, &e) ||
+    if ((has_env ? render_material_env(cli_render(), engine, NULL, &sc.mesh, &m, &env, &v, w, h,
+                                       &im, &info, NULL, &e)
+                 : render_material(cli_render(), engine, NULL, &sc.mesh, &m, &v, w, h, &im, NULL,
+                                   &e)) ||
         img_write(out, &im, &e)) {
         rc = fail_err(&e);
         goto done;
     }
-    printf("%s\n", out);
+    if (has_env)
+        printf("%s  (%s, %d lights, shadows %s, %.0f ms shading)\n", out, info.env, info.lights,
+               !env.shadows ? "off" : info.convex ? "none: the mesh is convex" : "cast",
+               1e3 * info.shade_s);
+    else
+        printf("%s\n", out);
 done:
     img_free(&im);
     material_free(&m);

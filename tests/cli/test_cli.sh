@@ -137,6 +137,12 @@ assert i["errors"]["albedo_max_rows"] <= 1.0, i["errors"]["albedo_max_rows"]
 assert i["precomputation"]["visibility"] == 1 and i["precomputation"]["mesh_convex"] is False
 PY
 expect_ok "render an srbf material" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 -o "$T/srbf.png"
+expect_ok "render an srbf material under the sky, rotated" "$G" render "$T/srbfmat" --scene "$T/torus.json" --eye 0,-3,1.5 --env sky --env-rotation 45 --lights 64 --size 96x96 -o "$T/srbf_env.exr"
+grep -q "64 lights, shadows cast" "$T/out" && ok "render --env reports its lights and shadows" || bad "render --env reports its lights and shadows ($(cat "$T/out"))"
+expect_ok "render --env on the CPU (the reference)" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 --env sky --lights 16 --no-background --engine cpu -o "$T/srbf_env_cpu.png"
+expect_err "render --env with a bad spec" 1 "env" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 --env "a b" -o "$T/x.png"
+expect_err "render --env with too many lights" 1 "lights" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 --env sky --lights 5000 -o "$T/x.png"
+expect_err "render --env unknown environment" 1 "no environment|built-in|unknown" "$G" render "$T/srbfmat" --scene "$T/torus.json" --view 0 --env nosuch -o "$T/x.png"
 expect_err "fit srbf with an impossible diffuse albedo" 1 "above 1" "$G" fit "$T/torus.json" --paintings "$T/envlit" --method srbf --diffuse 1.5 -o "$T/x"
 
 # demo (the main job before the daemon exists)
