@@ -15,6 +15,19 @@
 
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err);
 
+/* Elevation bins of the energy profile (degrees). */
+static const double prof_edges[] = {0, 1, 3, 10, 20, 40, 60, 90};
+#define NPROF ((int)(sizeof prof_edges / sizeof prof_edges[0]) - 1)
+
+static int prof_bin(const double wo[3])
+{
+    double el = asin(wo[2] > 1.0 ? 1.0 : wo[2]) * 180.0 / M_PI;
+    for (int b = 0; b < NPROF; b++)
+        if (el <= prof_edges[b + 1])
+            return b;
+    return NPROF - 1;
+}
+
 typedef struct chan_report {
     lsq_result r;
     double seconds, solve_seconds;
@@ -31,6 +44,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     int J = tr->J, n = tr->nrows, nr = tr->nreach, nl = en->nl;
     int fitd = p->diffuse.fit, nu = nr + (fitd ? 1 : 0);
     double t0 = glint_now(), ss_res = 0.0, ss_b = 0.0, max_albedo = 0.0;
+    double prof[NPROF][3];
     const int *idx = tr->idx;
     double *f = malloc((size_t)n * sizeof *f);
     double *H = malloc((size_t)nu * nu * sizeof *H), *q = malloc((size_t)nu * sizeof *q);
@@ -45,6 +59,8 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
 
     memset(&sm, 0, sizeof sm);
     memset(rep, 0, sizeof rep);
+    for (int b = 0; b < NPROF; b++)
+        prof[b][0] = prof[b][1] = prof[b][2] = -1.0; /* no row in the bin */
     if (!f || !H || !q || !G || !u || !c || !w) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
         goto done;
@@ -153,6 +169,11 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
                 al += en->g[(size_t)l * J + idx[a]] * c[a];
             if (al > max_albedo)
                 max_albedo = al;
+            {
+                int bn = prof_bin(en->wo + 3 * (size_t)l);
+                if (al > prof[bn][ch])
+                    prof[bn][ch] = al;
+            }
         }
     }
     if ((rc = srbf_basis_make(en->b.res, en->b.sigma, &sm.b, err)))
@@ -193,6 +214,17 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
                                  ss_b > 0.0 ? sqrt(ss_res / ss_b) : 0.0, "rms_painted",
                                  sqrt(ss_res / (3.0 * n)), "albedo_max_rows", max_albedo,
                                  "channels", chans);
+        json_t *bins = json_array(), *alb = json_array();
+        for (int b = 0; b < NPROF; b++) {
+            json_array_append_new(bins, json_pack("[f,f]", prof_edges[b], prof_edges[b + 1]));
+            json_array_append_new(alb, prof[b][0] < 0.0 ? json_null()
+                                                        : json_pack("[f,f,f]", prof[b][0],
+                                                                    prof[b][1], prof[b][2]));
+        }
+        json_object_set_new(errs, "energy_profile",
+                            json_pack("{s:o, s:o, s:f, s:b}", "elevation_deg", bins,
+                                      "albedo_max", alb, "limit", 1.0 - SRBF_ENERGY_MARGIN,
+                                      "enforced", p->constraints == LSQ_ENERGY));
         json_t *diff = json_pack("{s:s, s:[f,f,f]}", "mode", fitd ? "fitted" : "given", "rgb",
                                  sm.rho[0], sm.rho[1], sm.rho[2]);
         info = json_pack("{s:o, s:o, s:o, s:o, s:o}", "params",

@@ -4,6 +4,8 @@
  * Manifest members: "basis": {"res", "J", "sigma", "lambda", "layout":
  * "hemicube"}, "static": {"term", "f0", "alpha"}, "diffuse": [r, g, b],
  * "lobes": [[c_r, c_g, c_b], ...] (J entries, centre order of srbf.h),
+ * "centres": [[x, y, z], ...] (the J unit centres in the local frame, for
+ * readers; ignored when read back: the basis defines them),
  * "frame": the shading frame's convention. */
 #include <math.h>
 #include <stdlib.h>
@@ -106,12 +108,18 @@ static const char *static_name(srbf_static_kind k)
 static int srbf_to_json(const void *data, json_t *root, glint_err *err)
 {
     const srbf_material *sm = data;
-    json_t *lobes = json_array();
-    if (!lobes)
+    json_t *lobes = json_array(), *centres = json_array();
+    if (!lobes || !centres) {
+        json_decref(lobes);
+        json_decref(centres);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the manifest");
-    for (int j = 0; j < sm->b.J; j++)
+    }
+    for (int j = 0; j < sm->b.J; j++) {
         json_array_append_new(lobes, json_pack("[f,f,f]", sm->c[j], sm->c[sm->b.J + j],
                                                sm->c[2 * sm->b.J + j]));
+        json_array_append_new(centres, json_pack("[f,f,f]", sm->b.xi[3 * j], sm->b.xi[3 * j + 1],
+                                                 sm->b.xi[3 * j + 2]));
+    }
     json_object_set_new(root, "basis",
                         json_pack("{s:i, s:i, s:f, s:f, s:s}", "res", sm->b.res, "J", sm->b.J,
                                   "sigma", sm->b.sigma, "lambda", sm->b.lambda, "layout",
@@ -121,6 +129,7 @@ static int srbf_to_json(const void *data, json_t *root, glint_err *err)
                                   sm->st.f0, "alpha", sm->st.alpha));
     json_object_set_new(root, "diffuse", json_pack("[f,f,f]", sm->rho[0], sm->rho[1], sm->rho[2]));
     json_object_set_new(root, "lobes", lobes);
+    json_object_set_new(root, "centres", centres); /* informative: from_json rebuilds them */
     json_object_set_new(root, "frame",
                         json_string("t = normalize(+z x n) (at the poles normalize(+x x n)), "
                                     "b = n x t; centres and h in (t, b, n)"));

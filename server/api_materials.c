@@ -79,6 +79,11 @@ static http_resp factors_exr(http_req *req)
     return material_file(req, "factors.exr", "image/x-exr");
 }
 
+static http_resp manifest_get(http_req *req)
+{
+    return material_file(req, "material.json", "application/json");
+}
+
 static const char *ctype_of(const char *name)
 {
     const char *dot = strrchr(name, '.');
@@ -599,6 +604,7 @@ const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}", material_get},
     {"GET", "/api/v1/materials/{id}/factors.png", factors_png},
     {"GET", "/api/v1/materials/{id}/factors.exr", factors_exr},
+    {"GET", "/api/v1/materials/{id}/material.json", manifest_get},
     {"GET", "/api/v1/materials/{id}/shader", shader_get},
     {"GET", "/api/v1/materials/{id}/shader/{file}", shader_file},
     {"GET", "/api/v1/materials/{id}/package", package_get},

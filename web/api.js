@@ -103,6 +103,7 @@ export class Api {
     return this.request('GET', `/scenes/${sceneId}/views/${k}/base.png`, { query: format ? { format } : undefined, raw: true, what: 'Reading the base render of view ' + k });
   }
   strokes(sid, since, limit) { return this.get(`/sessions/${sid}/strokes`, { query: { since, limit: limit || 1000 }, what: 'Reading strokes' }); }
+  environments() { return this.get('/environments', { what: 'Reading the environments' }); }
   methods(sid) { return this.get('/methods', { query: { session_id: sid }, what: 'Reading the fit methods' }); }
   fit(sid, body) { return this.request('POST', `/sessions/${sid}/fits`, { body, raw: true, what: 'Fitting' }); }
   job(id) { return this.get('/jobs/' + id, { what: 'Reading the job' }); }

@@ -432,7 +432,7 @@ function addActivity(ev) {
   const who = ev.type === 'stroke' && typeof d.tag === 'string' && d.tag.includes('~') ? d.tag.slice(d.tag.indexOf('~') + 1) : '';
   if (ev.type === 'stroke') what = `<b>${d.mode}</b> v${ev.view} D${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
   else if (ev.type === 'painting') what = `<b>image</b> v${ev.view}`;
-  else if (ev.type === 'fit') what = `<b>fit</b> ${d.summary ? d.summary.res + ' · ' + (+d.summary.rms_painted).toFixed(4) : ''}`;
+  else if (ev.type === 'fit') what = `<b>fit</b> ${d.summary ? (d.summary.res != null ? d.summary.res : d.summary.method || '') + ' · ' + (+d.summary.rms_painted).toFixed(4) : ''}`;
   else what = `<b>${ev.type}</b>`;
   li.innerHTML = `<span class="num">#${ev.seq}</span> ${what}`;
   const by = li.querySelector('.by');
@@ -519,6 +519,13 @@ async function loadFitAndMaterials(S) {
   else { const o = document.createElement('option'); o.value = ''; o.textContent = 'no fit yet'; $('mat-sel').appendChild(o); }
 }
 
+// A material's size in words: texels per factor, or lobes and environment.
+function matSize(m) {
+  if (m.res != null) return `${m.res} texels`;
+  if (m.method === 'srbf') return `${m.lobes} lobes · ${(m.params && m.params.env) || ''}`;
+  return m.method || '';
+}
+
 function addMaterialOption(m, select) {
   const sel = $('mat-sel');
   for (const o of [...sel.options]) if (!o.value) o.remove();
@@ -526,7 +533,7 @@ function addMaterialOption(m, select) {
     const o = document.createElement('option');
     o.value = m.id;
     const t = (m.created || '').slice(11, 19);
-    o.textContent = `${t} · ${m.res} texels · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
+    o.textContent = `${t} · ${matSize(m)} · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
     sel.appendChild(o);
   }
   if (select) sel.value = m.id;
@@ -548,7 +555,7 @@ async function onFitEvent(ev) {
     const m = await api.material(id);
     addMaterialOption(m, $('follow').checked);
     if ($('follow').checked) showMaterial(m);
-    toast('New fit', `${m.res} texels · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
+    toast('New fit', `${matSize(m)} · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
     if (state.fit) state.fit.refresh();
   } catch (e) { showError(e); }
 }

@@ -30,6 +30,22 @@ function explain(e) {
   return e;
 }
 
+// What each method can and cannot represent, in plain words.
+const METHOD_NOTES = {
+  hf3: 'One material for the whole object, fitted to views lit by their point light. Patterns (a logo, wood grain) need another method.',
+  srbf: 'One material seen under an environment: paint how the object should look under the chosen environment; the highlight is built from many small lobes, kept within energy conservation.',
+};
+
+// The size of a configuration in words (texels per factor, or lobes).
+export function sizeLabel(params) {
+  if (params.res != null) return { text: String(params.res), title: `${params.res} texels per factor` };
+  if (params.basis_res != null) {
+    const J = 3 * params.basis_res * params.basis_res;
+    return { text: `${J}`, title: `${J} lobes, ${params.lights != null ? params.lights + ' lights' : ''}` };
+  }
+  return { text: '', title: '' };
+}
+
 export class FitPanel extends EventTarget {
   constructor(api, session) {
     super();
@@ -69,15 +85,38 @@ export class FitPanel extends EventTarget {
 
   async load() {
     const m = await this.api.methods(this.session.id);
-    this.method = m.methods[0];
+    this.methods = m.methods;
     this.points = (m.scene && m.scene.points) || [];
-    $('fit-method').textContent = this.method.name;
-    $('fit-method').title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
+    try { this.envs = (await this.api.environments()).environments; } catch (_) { this.envs = null; }
+    const sel = $('fit-method');
+    sel.textContent = '';
+    for (const x of this.methods) {
+      const o = document.createElement('option');
+      o.value = x.name;
+      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name;
+      o.title = x.title;
+      sel.appendChild(o);
+    }
+    sel.onchange = () => this.setMethod(sel.value);
+    this.setMethod(this.methods[0].name);
+  }
+
+  // Switch the method: its parameters, presets and measured points.
+  setMethod(name) {
+    this.method = this.methods.find(x => x.name === name) || this.methods[0];
+    const sel = $('fit-method');
+    sel.value = this.method.name;
+    sel.title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
+    $('method-note').textContent = METHOD_NOTES[this.method.name] || this.method.title;
+    this.inputs = {};
     this.buildParams();
     const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
+    const d0 = this.defaults();
+    for (const [k, { inp }] of Object.entries(this.inputs)) inp.value = d0[k];
     this.choose(def ? def.name : null);
     this.renderQuality();
     this.updateButton();
+    this.emit('method', this.method);
   }
 
   // Refresh the measured points (after a fit, or when views get painted).
@@ -103,7 +142,10 @@ export class FitPanel extends EventTarget {
       lab.textContent = p.name;
       lab.title = p.description;
       let inp;
-      if (p.enum) {
+      if (p.name === 'env' && this.envs) {           // the environments glintd offers
+        inp = document.createElement('select');
+        for (const e of this.envs) { const o = document.createElement('option'); o.value = e.spec; o.textContent = e.name; inp.appendChild(o); }
+      } else if (p.enum) {
         inp = document.createElement('select');
         for (const v of p.enum) { const o = document.createElement('option'); o.value = o.textContent = v; inp.appendChild(o); }
       } else {
@@ -144,20 +186,29 @@ export class FitPanel extends EventTarget {
     return o;
   }
 
+  // The parameters the presets set (the quality knobs); the others (the
+  // environment, the diffuse albedo, ...) stay as the user set them.
+  presetKeys() {
+    const k = new Set();
+    for (const pr of this.method.presets) for (const n of Object.keys(pr.params)) k.add(n);
+    return k;
+  }
+
   choose(name) {
     const pr = this.method.presets.find(p => p.name === name);
     if (!pr) return;
-    const d = Object.assign(this.defaults(), pr.params);
-    for (const [k, { inp }] of Object.entries(this.inputs)) inp.value = d[k];
+    const d = this.defaults(), keys = this.presetKeys();
+    for (const [k, { inp }] of Object.entries(this.inputs))
+      if (keys.has(k)) inp.value = k in pr.params ? pr.params[k] : d[k];
     this.preset = name;
     this.renderQuality();
   }
 
   matchPreset() {
-    const v = this.values(), d = this.defaults();
+    const v = this.values(), d = this.defaults(), keys = [...this.presetKeys()];
     for (const pr of this.method.presets) {
       const want = Object.assign({}, d, pr.params);
-      if (Object.keys(want).every(k => String(want[k]) === String(v[k]))) return pr.name;
+      if (keys.every(k => String(want[k]) === String(v[k]))) return pr.name;
     }
     return null;
   }
@@ -168,7 +219,7 @@ export class FitPanel extends EventTarget {
   // same painted views (they make the sampling pattern).
   pointFor(params) {
     const views = this.paintedViews().join(',');
-    const same = p => p && p.params && Object.keys(params).every(k => p.params[k] === undefined || String(p.params[k]) === String(params[k]));
+    const same = p => p && p.params && (!p.method || p.method === this.method.name) && Object.keys(params).every(k => p.params[k] === undefined || String(p.params[k]) === String(params[k]));
     const cands = this.points.filter(same);
     const exact = cands.filter(p => p.views.join(',') === views);
     const pick = arr => arr.slice().sort((a, b) => (b.updated || '').localeCompare(a.updated || ''))[0];
@@ -180,7 +231,7 @@ export class FitPanel extends EventTarget {
   // Cold time of an unmeasured resolution, from the nearest measured one
   // (the precomputation grows as res^3, per the method's description).
   estimateCold(res) {
-    const m = this.points.filter(p => p.cold_seconds != null && p.params.res);
+    const m = this.points.filter(p => p.cold_seconds != null && p.params && p.params.res && (!p.method || p.method === this.method.name));
     if (!m.length) return null;
     m.sort((a, b) => Math.abs(Math.log(a.params.res / res)) - Math.abs(Math.log(b.params.res / res)));
     return m[0].cold_seconds * Math.pow(res / m[0].params.res, 3);
@@ -209,8 +260,9 @@ export class FitPanel extends EventTarget {
       const nm = document.createElement('span'); nm.className = 'qn';
       nm.innerHTML = '<b></b> <span class="res"></span>';
       nm.firstChild.textContent = name;
-      nm.lastChild.textContent = params.res != null ? params.res : '';
-      nm.title = `${params.res} texels per factor`;
+      const sz = sizeLabel(params);
+      nm.lastChild.textContent = sz.text;
+      nm.title = sz.title;
       row.append(r, nm);
       const found = this.pointFor(params);
       if (found) {
@@ -223,14 +275,16 @@ export class FitPanel extends EventTarget {
                    cell(`<em>${err.toFixed(3)}</em>${p.held_out_rms != null ? '<sup>ho</sup>' : ''}${other}`,
                         `RMS painted ${fmtErr(p.rms_painted)}, held-out ${fmtErr(p.held_out_rms)} (${p.samples} samples, views ${p.views.join(' ')})`));
       } else {
-        const est = this.estimateCold(params.res);
+        const est = params.res != null ? this.estimateCold(params.res) : null;
         row.append(cell('—', 'not measured on this scene yet'),
                    cell(est != null ? `≈${fmtTime(est)}` : '—', est != null ? 'estimated from the measured resolutions (the precomputation grows as res³); not measured yet' : 'not measured on this scene yet'),
                    cell('—', 'not measured on this scene yet: the first fit at this quality measures it'));
       }
       box.appendChild(row);
     };
-    for (const pr of this.method.presets) addRow(pr.name, Object.assign({}, d, pr.params), () => this.choose(pr.name), this.preset === pr.name);
+    const cur = this.values(), qd = {};
+    for (const k of this.presetKeys()) qd[k] = d[k];
+    for (const pr of this.method.presets) addRow(pr.name, Object.assign({}, d, cur, qd, pr.params), () => this.choose(pr.name), this.preset === pr.name);
     if (!this.preset) addRow('custom', this.values(), null, true);
   }
 

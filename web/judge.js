@@ -7,6 +7,7 @@
 
 import { decodeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
+import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
 
 const $ = id => document.getElementById(id);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -34,6 +35,51 @@ export class Judge extends EventTarget {
     this.bindTabs();
     $('diff-gain').onchange = () => this.showDiff(this.errView);
     $('factors-log').onchange = () => this.drawFactors();
+    this.bindEnv();
+  }
+
+  // ---- the light of the preview: the point light or an environment -------------------
+
+  bindEnv() {
+    const sel = $('preview-light');
+    this.api.environments().then(r => {
+      for (const e of r.environments) {
+        const o = document.createElement('option');
+        o.value = e.spec; o.textContent = e.name + (e.kind === 'builtin' ? ' (built-in)' : '');
+        sel.appendChild(o);
+      }
+      if (this.mat) this.envDefault(this.mat);
+    }).catch(e => this.emit('error', e));
+    sel.onchange = () => { this.showEnvBar(); this.request(); };
+    $('env-rot').oninput = () => { this.showEnvBar(); this.request(); };
+  }
+
+  // The environment of the preview ('' for the point light).
+  envSpec() { return $('preview-light').value; }
+
+  showEnvBar() {
+    const on = !!this.envSpec();
+    $('env-rot-l').classList.toggle('hidden', !on);
+    $('env-rot-v').textContent = $('env-rot').value + '°';
+    $('preview-hint').textContent = on ? 'drag: turn the environment · shift-drag: camera · wheel: zoom · dbl-click: reset'
+                                       : 'drag: light · shift-drag: camera · wheel: zoom · dbl-click: reset';
+  }
+
+  // A material fitted under an environment is previewed under it.
+  envDefault(m) {
+    const sel = $('preview-light');
+    if (m.method === 'srbf' && m.params && [...sel.options].some(o => o.value === m.params.env)) {
+      sel.value = m.params.env;
+      $('env-rot').value = String(Math.round(m.params.env_rotation || 0));
+    }
+    this.showEnvBar();
+  }
+
+  envQuery() {
+    const spec = this.envSpec();
+    if (!spec) return {};
+    const m = this.mat, lights = m && m.method === 'srbf' && m.params ? m.params.lights : 256;
+    return { env: spec, env_rotation: $('env-rot').value, lights: String(Math.min(1024, lights || 256)) };
   }
 
   emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
@@ -43,7 +89,7 @@ export class Judge extends EventTarget {
       b.onclick = () => {
         for (const o of document.querySelectorAll('.tabs button')) o.classList.toggle('on', o === b);
         for (const t of ['errors', 'factors', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
-        if (b.dataset.tab === 'factors') this.drawFactors();
+        if (b.dataset.tab === 'factors') { if (this.mat && this.mat.method === 'srbf') this.drawLobe(); else this.drawFactors(); }
       };
     }
   }
@@ -52,6 +98,12 @@ export class Judge extends EventTarget {
 
   async setMaterial(m, k) {
     this.mat = m;
+    this.envDefault(m);
+    const lobe = m.method === 'srbf';
+    $('factors-wrap').classList.toggle('hidden', lobe);
+    $('lobe-wrap').classList.toggle('hidden', !lobe);
+    $('factors-tab-btn').textContent = lobe ? 'Lobe' : 'Factors';
+    $('dl-factors').classList.toggle('hidden', lobe);
     $('preview-empty').textContent = 'rendering…';
     $('preview-empty').classList.toggle('hidden', this.frames > 0);
     this.resetCamera(k);
@@ -62,7 +114,9 @@ export class Judge extends EventTarget {
     $('dl-factors-exr').href = q('factors.exr');
     $('dl-shader').href = q('shader');
     this.factors = null;
-    this.loadFactors().catch(e => this.emit('error', e));
+    this.manifest = null;
+    if (lobe) this.loadManifest().catch(e => this.emit('error', e));
+    else this.loadFactors().catch(e => this.emit('error', e));
     this.computeErrors(k).catch(e => this.emit('error', e));
   }
 
@@ -106,6 +160,15 @@ export class Judge extends EventTarget {
   // Orbit the light or the eye about the target: horizontal drags turn
   // about the world up (+z), vertical ones tilt.
   orbit(what, dx, dy) {
+    if (what === 'light' && this.envSpec()) {          // turn the environment instead
+      const r = $('env-rot');
+      let v = +r.value + dx * 0.6;
+      v = ((v + 180) % 360 + 360) % 360 - 180;
+      r.value = String(Math.round(v / 5) * 5);
+      this.showEnvBar();
+      this.request();
+      return;
+    }
     const rel = sub(this.cam[what], this.cam.target);
     const s = toSph(rel);
     const sign = what === 'eye' ? -1 : 1;
@@ -128,7 +191,7 @@ export class Judge extends EventTarget {
   async fetchFrame() {
     const n = this.want;
     const c = this.cam, f = a => a.map(x => x.toFixed(4)).join(',');
-    const q = { eye: f(c.eye), light: f(c.light), target: f(c.target), size: '256' };
+    const q = Object.assign({ eye: f(c.eye), light: f(c.light), target: f(c.target), size: '256' }, this.envQuery());
     this.inflight = true;
     const mat = this.mat;
     try {
@@ -141,6 +204,7 @@ export class Judge extends EventTarget {
         this.frames++;
         $('preview-empty').classList.add('hidden');
         this.lastRenderer = r.headers.get('X-Glint-Renderer') || '';
+        this.lastEnv = r.headers.get('X-Glint-Env') || '';
         this.emit('frame', { n, renderer: this.lastRenderer });
       }
     } catch (e) {
@@ -173,6 +237,28 @@ export class Judge extends EventTarget {
     g.beginPath(); g.arc(cx + lx * R, cy - ly * R, 4, 0, 7); g.fill();
     g.fillStyle = 'rgba(255,255,255,.8)'; g.font = '10px system-ui';
     g.fillText(this.cam.view != null ? 'view ' + this.cam.view : 'free', 6, 250);
+  }
+
+  // ---- an environment-lit material: its lobe and its energy ----------------------------
+
+  async loadManifest() {
+    const mat = this.mat;
+    const r = await this.api.materialFile(mat.id, 'material.json');
+    const man = await r.json();
+    if (mat !== this.mat) return;
+    this.manifest = man;
+    this.drawLobe();
+  }
+
+  drawLobe() {
+    const m = this.mat, man = this.manifest;
+    drawEnergy($('energy'), m && m.errors);
+    if (!isLobeMaterial(man)) return;
+    drawLobe($('lobe'), man);
+    const d = man.diffuse || [0, 0, 0], used = m.weights_nonzero;
+    $('lobe-note').textContent = `diffuse albedo ${d.map(x => (+x).toFixed(3)).join(' / ')}` +
+      (used != null ? ` · ${used} lobe weights non-zero` : '') +
+      ` · static term ${man.static ? man.static.term : '?'}`;
   }
 
   // ---- factor curves -----------------------------------------------------------------
@@ -238,8 +324,11 @@ export class Judge extends EventTarget {
     const tb = $('err-table').querySelector('tbody');
     tb.textContent = '';
     const e = mat.errors || {};
-    $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>, max ${fmtErr(e.max_abs_painted)} over ${mat.precomputation ? mat.precomputation.samples : '?'} samples` +
-      ` · ${mat.res} texels · fit ${fmtTime(mat.seconds && mat.seconds.fit)}`;
+    const lobe = mat.method === 'srbf';
+    $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>` + (e.max_abs_painted != null ? `, max ${fmtErr(e.max_abs_painted)}` : '') +
+      ` over ${mat.precomputation ? mat.precomputation.samples : '?'} samples` +
+      ` · ${lobe ? mat.lobes + ' lobes under ' + mat.params.env : mat.res + ' texels'} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
+      (lobe && e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');
     this.rows = new Map();
     const square = sc.width === sc.height;
     const used = mat.views_used || [];
@@ -255,7 +344,10 @@ export class Judge extends EventTarget {
     }
     if (!square) { $('err-summary').innerHTML += '<br>per-view errors need a square raster (previews are square)'; return; }
     await Promise.all(used.map(async k => {
-      const r = await this.api.materialFile(mat.id, 'preview.exr', { view: String(k), renderer: 'cpu', size: String(sc.width) });
+      const q = { view: String(k), renderer: 'cpu', size: String(sc.width) };
+      if (lobe) Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
+                                    lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
+      const r = await this.api.materialFile(mat.id, 'preview.exr', q);
       const fitted = await decodeImage(await r.arrayBuffer());
       if (mat !== this.mat) return;
       const v = S.views[k];
@@ -264,7 +356,8 @@ export class Judge extends EventTarget {
       let s2 = 0, n = 0, mx = 0;
       const diff = new Float32Array(painted.w * painted.h);
       for (let i = 0; i < painted.w * painted.h; i++) {
-        const lit = base.data[3 * i] > 0 || base.data[3 * i + 1] > 0 || base.data[3 * i + 2] > 0;
+        const lit = lobe ? fitted.data[3 * i] > 0 || fitted.data[3 * i + 1] > 0 || fitted.data[3 * i + 2] > 0
+                         : base.data[3 * i] > 0 || base.data[3 * i + 1] > 0 || base.data[3 * i + 2] > 0;
         if (!lit) { diff[i] = -1; continue; }
         let dm = 0;
         for (let c = 0; c < 3; c++) {

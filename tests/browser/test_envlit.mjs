@@ -1,0 +1,91 @@
+// The environment-lit method in the studio: choosing it, its environment
+// from those glintd offers, a fit, the preview under the fit's environment
+// (turned by a slider or a drag), the lobe p(h) and the energy profile, the
+// error per view against a render under the environment, and the point
+// light still available for any material.
+import {
+  run, openStudio, drawStroke, settled, assert, assertLE, assertEq, waitFor,
+} from './harness.mjs';
+
+async function setValue(page, id, v, ev) {
+  await page.evaluate(([id, v, ev]) => {
+    const el = document.getElementById(id); el.value = v; el.dispatchEvent(new Event(ev, { bubbles: true }));
+  }, [id, String(v), ev || 'input']);
+}
+
+function previewBytes(page) {
+  return page.evaluate(() => Array.from(document.getElementById('preview').getContext('2d').getImageData(0, 0, 256, 256).data));
+}
+
+run({
+  async 'srbf in the studio: environment, fit, lobe, energy, preview under the environment'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.waitForSelector('#quality .q[data-preset]');
+    const methods = await page.evaluate(() => [...document.getElementById('fit-method').options].map(o => o.value));
+    assert(methods.includes('hf3') && methods.includes('srbf'), 'both methods offered: ' + methods);
+    await setValue(page, 'fit-method', 'srbf', 'change');
+    const note = await page.textContent('#method-note');
+    assert(/environment/.test(note), 'the method says what it represents: ' + note);
+    // the environment parameter lists what glintd offers
+    const envs = await page.evaluate(() => [...document.getElementById('param-env').options].map(o => o.value));
+    assert(envs.includes('sky') && envs.includes('studio'), 'environments offered: ' + envs);
+    await setValue(page, 'param-env', 'sky', 'change');
+    await page.click('#quality .q[data-preset="draft"] input');
+    assertEq(await page.inputValue('#param-lights'), '64', 'the draft preset sets 64 lights');
+    // a highlight painted on the top of the torus
+    await drawStroke(page, [[40, 30], [56, 30]]);
+    await settled(page, 0);
+    const before = await page.evaluate(() => window.glint.lastFit && window.glint.lastFit.id);
+    await page.click('#fit-btn');
+    await page.waitForFunction(b => window.glint.lastFit && window.glint.lastFit.id !== b, before, { timeout: 120000 });
+    const mat = await page.evaluate(() => window.glint.state.judge.mat);
+    assertEq(mat.method, 'srbf', 'an srbf material');
+    assertEq(mat.params.env, 'sky', 'fitted under the chosen environment');
+    // the preview is lit by the fit's environment
+    assertEq(await page.inputValue('#preview-light'), 'sky', 'the preview uses the fit environment');
+    await page.waitForFunction(() => window.glint.state.judge.frames > 0 && /lights=64/.test(window.glint.state.judge.lastEnv || ''), null, { timeout: 30000 });
+    const env = await page.evaluate(() => window.glint.state.judge.lastEnv);
+    t.log('preview: ' + env);
+    const a = await previewBytes(page);
+    // turning the environment renders again, differently
+    const n0 = await page.evaluate(() => window.glint.state.judge.frames);
+    await setValue(page, 'env-rot', 90);
+    await page.waitForFunction(n => window.glint.state.judge.frames > n, n0, { timeout: 30000 });
+    const b = await previewBytes(page);
+    let diff = 0;
+    for (let i = 0; i < a.length; i++) diff += Math.abs(a[i] - b[i]);
+    assert(diff / a.length > 0.5, 'turning the environment changes the preview: ' + (diff / a.length).toFixed(2));
+    // the lobe and the energy profile
+    await page.click('#factors-tab-btn');
+    assertEq(await page.textContent('#factors-tab-btn'), 'Lobe', 'the tab names the lobe');
+    assert(await page.isVisible('#lobe'), 'p(h) is drawn');
+    const worst = await page.evaluate(() => +document.getElementById('energy').dataset.worst);
+    t.log(`highest directional albedo at the energy rows: ${worst}`);
+    assert(worst > 0, 'the energy profile has values');
+    assertLE(worst, 1, 'energy is conserved at every band');
+    const lobePx = await page.evaluate(() => {
+      const d = document.getElementById('lobe').getContext('2d').getImageData(0, 0, 160, 160).data;
+      let s = 0; for (let i = 0; i < d.length; i += 4) s += d[i] + d[i + 1] + d[i + 2];
+      return s;
+    });
+    assert(lobePx > 0, 'the lobe image is not black');
+    // the error per view, against a render under the environment
+    await page.click('.tabs button[data-tab="errors"]');
+    await waitFor(() => page.evaluate(() => {
+      const td = document.querySelector('#err-table tbody tr td:nth-child(2)');
+      return td && /\d/.test(td.textContent);
+    }), 30000, 'per-view errors');
+    const rms = await page.evaluate(() => parseFloat(document.querySelector('#err-table tbody tr td:nth-child(2)').textContent));
+    t.log(`view 0 RMS against the render under the environment: ${rms}`);
+    assert(isFinite(rms) && rms < 0.5, 'a finite per-view error');
+    // the point light is still there, for any material
+    const n1 = await page.evaluate(() => window.glint.state.judge.frames);
+    await setValue(page, 'preview-light', '', 'change');
+    await page.waitForFunction(n => window.glint.state.judge.frames > n, n1, { timeout: 30000 });
+    assertEq(await page.evaluate(() => window.glint.state.judge.lastEnv), '', 'point-light preview');
+    assert(await page.isHidden('#env-rot-l'), 'no turn slider for the point light');
+    await t.shot(page, 'envlit.png');
+  },
+});
