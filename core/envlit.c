@@ -110,6 +110,7 @@ static void shade_point(const env_lights *l, const uint64_t *bits, envlit_fn fn,
 }
 
 typedef struct vjob {
+    const uint8_t *need;       /* vertices of triangles that may face the eye (NULL: all) */
     const mesh *m;
     const env_lights *l;
     const envlit_vis *vis;
@@ -125,6 +126,10 @@ static void *vertex_range(void *arg)
     const vjob *j = arg;
     for (int i = j->lo; i < j->hi; i++) {
         const float *p = j->m->pos + 3 * (size_t)i, *q = j->m->nrm + 3 * (size_t)i;
+        if (j->need && !j->need[i]) {
+            memset(j->rgb + 3 * (size_t)i, 0, 3 * sizeof *j->rgb);
+            continue;
+        }
         double n[3] = {q[0], q[1], q[2]}, wo[3], acc[3], ln, lo, c;
         for (int e = 0; e < 3; e++)
             wo[e] = j->eye[e] - p[e];
@@ -168,6 +173,7 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
 {
     vjob jobs[ENVLIT_MAX_THREADS];
     pthread_t th[ENVLIT_MAX_THREADS];
+    uint8_t *need;
     int nt, started = 0, rc;
 
     if ((rc = lights_ok(l, err)))
@@ -179,12 +185,40 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
     for (int e = 0; e < 3; e++)
         if (!isfinite(eye[e]))
             return glint_err_set(err, GLINT_ENONFINITE, "the eye is not finite");
+    /* Only vertices of triangles that may face the eye are shaded: a
+     * triangle all of whose vertex normals turn away by more than
+     * ENVLIT_CULL from the eye is not seen (closed meshes hide it; on open
+     * ones, drawn from both sides, its pixels face away and shade to 0).
+     * Skipped vertices get 0.  Without memory for the flags, all are shaded. */
+    need = calloc((size_t)m->nverts, 1);
+    if (need) {
+        uint8_t *front = malloc((size_t)m->nverts);
+        if (!front) {
+            free(need);
+            need = NULL;
+        } else {
+            for (int i = 0; i < m->nverts; i++) {
+                const float *p = m->pos + 3 * (size_t)i, *q = m->nrm + 3 * (size_t)i;
+                double d[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
+                double dl = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                double nl = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2]);
+                front[i] = !(q[0] * d[0] + q[1] * d[1] + q[2] * d[2] < -ENVLIT_CULL * dl * nl);
+            }
+            for (size_t t = 0; t < (size_t)m->ntris; t++) {
+                const uint32_t *v = m->tri + 3 * t;
+                if (front[v[0]] || front[v[1]] || front[v[2]])
+                    need[v[0]] = need[v[1]] = need[v[2]] = 1;
+            }
+            free(front);
+        }
+    }
     nt = nthreads > 0 ? nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
     nt = nt < 1 ? 1 : nt > ENVLIT_MAX_THREADS ? ENVLIT_MAX_THREADS : nt;
     if (nt > m->nverts / 256 + 1) /* not worth a thread below a few hundred vertices */
         nt = m->nverts / 256 + 1;
     for (int t = 0; t < nt; t++) {
         vjob *j = &jobs[t];
+        j->need = need;
         j->m = m;
         j->l = l;
         j->vis = vis;
@@ -206,6 +240,7 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
         vertex_range(&jobs[t]);
     for (int t = 1; t <= started; t++)
         pthread_join(th[t], NULL);
+    free(need);
     return 0;
 }
 

@@ -33,6 +33,10 @@
 #include "mesh.h"
 
 #define ENVLIT_GRAZE 0.02
+/* Vertices are shaded only for triangles that may face the eye: those with
+ * a vertex whose normal turns away from the eye by less than
+ * asin(ENVLIT_CULL) past the horizon (n.wo > -ENVLIT_CULL); others get 0. */
+#define ENVLIT_CULL 0.2
 /* Dihedral tolerance (radians) for calling a mesh convex (vis_mesh_convex). */
 #define ENVLIT_CONVEX_TOL 1e-6
 

@@ -10,13 +10,19 @@
  *
  * The constrained modes use a primal active-set method started at c = 0
  * (feasible whenever u >= 0): each step solves the equality-constrained
- * subproblem on the free variables with the active rows (a small dense
- * KKT system, LAPACK), moves as far as feasibility allows, and drops the
- * constraint with the most negative multiplier at a stationary point.  It
- * stops at a KKT point: with H positive definite on the free variables
- * this is the unique minimum.  Degenerate steps are guarded against
- * cycling (Bland's rule after a stall); linearly dependent active rows are
- * never added.
+ * subproblem on the free variables with the active rows (the Cholesky
+ * factor of H over the free variables, updated in place), moves as far as
+ * feasibility allows, and at a stationary point releases constraints by
+ * their multipliers.  Block steps: at a stationary point every bound whose
+ * multiplier is negative is released at once, and free variables at zero
+ * that the next step would take negative are bound again together, so a
+ * dense solution (a painted fit uses most lobes) takes about ten steps,
+ * not one per lobe; a block that brings no decrease of the objective by
+ * the next stationary point switches the method back to one release per
+ * step (the classic rule, which terminates).  It stops at a KKT point:
+ * with H positive definite on the free variables this is the unique
+ * minimum.  Degenerate steps are guarded against cycling (Bland's rule
+ * after a stall); linearly dependent active rows are never added.
  *
  * Infeasibility: some u_l < 0 (a diffuse albedo >= 1) makes c >= 0,
  * G c <= u infeasible when G >= 0: reported as LSQ_INFEASIBLE with the row,

@@ -3,6 +3,7 @@
  * lobes the painted pixels reach, with the diffuse albedo given or fitted
  * as one more unknown. */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,6 +34,148 @@ typedef struct chan_report {
     double seconds, solve_seconds;
 } chan_report;
 
+/* One colour channel's problem and answer: the buffers are its own, so
+ * channels are solved on threads at once. */
+typedef struct chan_job {
+    const method_fit_in *in;
+    int ch, nu;
+    double *f, *H, *q, *u, *c;
+    const double *G;           /* the energy rows on the unknowns, shared by the channels */
+    lsq_work *w;
+    chan_report rep;
+    double *csm;               /* sm.c (3 x J): this channel's J entries are written */
+    double rho;                /* the channel's diffuse albedo (fitted or given) */
+    double ss_res, ss_b, max_albedo, prof[NPROF];
+    int rc;
+    glint_err err;
+} chan_job;
+
+static void chan_free(chan_job *j)
+{
+    free(j->f);
+    free(j->H);
+    free(j->q);
+    free(j->u);
+    free(j->c);
+    lsq_work_free(j->w);
+}
+
+static void *chan_solve(void *arg)
+{
+    chan_job *j = arg;
+    const method_fit_in *in = j->in;
+    const srbf_params *p = in->params;
+    const srbf_energy *en = in->levels[0];
+    const srbf_visdata *vd = in->levels[2];
+    const srbf_transfer_data *tr = in->levels[3];
+    const samples *s = in->s;
+    int J = tr->J, n = tr->nrows, nr = tr->nreach, nl = en->nl, ch = j->ch, nu = j->nu;
+    int fitd = p->diffuse.fit;
+    const int *idx = tr->idx;
+    const double *LtL = tr->LtL;
+    const double *Hc = tr->H + (size_t)ch * J * J, *TE = tr->TE + (size_t)ch * J;
+    const float *T = tr->T + (size_t)ch * n * J;
+    double rho = fitd ? 0.0 : p->diffuse.rgb[ch], ff = 0.0, trace = 0.0, ct0 = glint_now();
+    double *f = j->f, *H = j->H, *q = j->q, *u = j->u, *c = j->c, smu = 0.0;
+    lsq_problem pr;
+
+    for (int b = 0; b < NPROF; b++)
+        j->prof[b] = -1.0; /* no row in the bin */
+    /* the painted radiance of each row, the given diffuse part off */
+    for (int i = 0; i < n; i++) {
+        int si = vd->rows[i];
+        double b = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
+        f[i] = b - rho * tr->E[3 * (size_t)i + ch];
+        ff += f[i] * f[i];
+        j->ss_b += b * b;
+    }
+    /* q = T'f, streaming T row by row (contiguous when every lobe is
+     * reached, the common case, so the loop vectorizes) */
+    memset(q, 0, (size_t)nu * sizeof *q);
+    if (nr == J) {
+        double *restrict qq = q;
+        for (int i = 0; i < n; i++) {
+            const float *restrict t = T + (size_t)i * J;
+            double fi = f[i];
+            if (fi == 0.0)
+                continue;
+            for (int a = 0; a < J; a++)
+                qq[a] += (double)t[a] * fi;
+        }
+    } else {
+        for (int i = 0; i < n; i++) {
+            const float *t = T + (size_t)i * J;
+            double fi = f[i];
+            if (fi == 0.0)
+                continue;
+            for (int a = 0; a < nr; a++)
+                q[a] += (double)t[idx[a]] * fi;
+        }
+    }
+    for (int a = 0; a < nr; a++) {
+        for (int b = 0; b < nr; b++)
+            H[(size_t)a * nu + b] = Hc[(size_t)idx[a] * J + idx[b]];
+        trace += H[(size_t)a * nu + a];
+    }
+    if (p->smooth > 0.0) {
+        smu = p->smooth * trace / nr;
+        for (int a = 0; a < nr; a++)
+            for (int b = 0; b < nr; b++)
+                H[(size_t)a * nu + b] += smu * LtL[(size_t)a * nr + b];
+    }
+    if (fitd) {
+        double ef = 0.0;
+        for (int i = 0; i < n; i++)
+            ef += tr->E[3 * (size_t)i + ch] * f[i];
+        for (int a = 0; a < nr; a++)
+            H[(size_t)a * nu + nr] = H[(size_t)nr * nu + a] = TE[idx[a]];
+        H[(size_t)nr * nu + nr] = tr->EE[ch];
+        q[nr] = ef;
+    }
+    for (int l = 0; l < nl; l++)
+        u[l] = 1.0 - SRBF_ENERGY_MARGIN - rho;
+    pr.n = nu;
+    pr.H = H;
+    pr.q = q;
+    pr.ff = ff;
+    pr.m = p->constraints == LSQ_ENERGY ? nl : 0;
+    pr.G = j->G;
+    pr.u = u;
+    {
+        double ts = glint_now();
+        j->rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, j->w, c, &j->rep.r, &j->err);
+        j->rep.solve_seconds = glint_now() - ts;
+        if (j->rc)
+            return NULL;
+    }
+    if (j->rep.r.status == LSQ_INFEASIBLE)
+        return NULL;
+    for (int a = 0; a < nr; a++)
+        j->csm[(size_t)ch * J + idx[a]] = c[a];
+    j->rho = fitd ? c[nr] : rho;
+    j->rep.seconds = glint_now() - ct0;
+    /* the painted rows' residual ||T x - f||^2 in the Gram form (no pass
+     * over T): the solver's objective less the smoothness term */
+    {
+        double pen = 0.0;
+        for (int a = 0; a < nr && smu > 0.0; a++)
+            for (int b = 0; b < nr; b++)
+                pen += c[a] * LtL[(size_t)a * nr + b] * c[b];
+        j->ss_res = fmax(0.0, j->rep.r.objective - smu * pen);
+    }
+    for (int l = 0; l < nl; l++) {
+        double al = j->rho;
+        int bn = prof_bin(en->wo + 3 * (size_t)l);
+        for (int a = 0; a < nr; a++)
+            al += en->g[(size_t)l * J + idx[a]] * c[a];
+        if (al > j->max_albedo)
+            j->max_albedo = al;
+        if (al > j->prof[bn])
+            j->prof[bn] = al;
+    }
+    return NULL;
+}
+
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
 {
     const srbf_params *p = in->params;
@@ -45,136 +188,89 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     int fitd = p->diffuse.fit, nu = nr + (fitd ? 1 : 0);
     double t0 = glint_now(), ss_res = 0.0, ss_b = 0.0, max_albedo = 0.0;
     double prof[NPROF][3];
-    const int *idx = tr->idx;
-    double *f = malloc((size_t)n * sizeof *f);
-    double *H = malloc((size_t)nu * nu * sizeof *H), *q = malloc((size_t)nu * sizeof *q);
-    double *G = malloc((size_t)nl * nu * sizeof *G), *u = malloc((size_t)nl * sizeof *u);
-    double *c = malloc((size_t)nu * sizeof *c);
-    const double *LtL = tr->LtL;
-    lsq_work *w = lsq_work_new(nu, nl);
+    chan_job jobs[3];
     chan_report rep[3];
+    double *G = NULL;
+    pthread_t th[3];
+    int started[3] = {0, 0, 0};
     srbf_material sm;
     json_t *info, *chans;
     int rc = 0;
 
     memset(&sm, 0, sizeof sm);
     memset(rep, 0, sizeof rep);
-    for (int b = 0; b < NPROF; b++)
-        prof[b][0] = prof[b][1] = prof[b][2] = -1.0; /* no row in the bin */
-    if (!f || !H || !q || !G || !u || !c || !w) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
-        goto done;
-    }
-    if (nr == 0) {
-        rc = glint_err_set(err, GLINT_EINVAL,
-                           "no lobe is reached by the painted pixels under this environment "
-                           "(nothing is lit): paint a view the environment lights, or raise "
-                           "env_intensity");
-        goto done;
-    }
+    memset(jobs, 0, sizeof jobs);
+    if (nr == 0)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "no lobe is reached by the painted pixels under this environment "
+                             "(nothing is lit): paint a view the environment lights, or raise "
+                             "env_intensity");
     if (!(sm.c = calloc((size_t)3 * J, sizeof *sm.c))) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
-    for (int ch = 0; ch < 3; ch++) {
-        const double *Hc = tr->H + (size_t)ch * J * J, *TE = tr->TE + (size_t)ch * J;
-        const float *T = tr->T + (size_t)ch * n * J;
-        double rho = fitd ? 0.0 : p->diffuse.rgb[ch], ff = 0.0, trace = 0.0, ct0 = glint_now();
-        lsq_problem pr;
-
-        /* the painted radiance of each row, the given diffuse part off */
-        for (int i = 0; i < n; i++) {
-            int si = vd->rows[i];
-            double b = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
-            f[i] = b - rho * tr->E[3 * (size_t)i + ch];
-            ff += f[i] * f[i];
-        }
-        /* q = T'f, streaming T row by row */
-        memset(q, 0, (size_t)nu * sizeof *q);
-        for (int i = 0; i < n; i++) {
-            const float *t = T + (size_t)i * J;
-            double fi = f[i];
-            if (fi == 0.0)
-                continue;
-            for (int a = 0; a < nr; a++)
-                q[a] += (double)t[idx[a]] * fi;
-        }
-        for (int a = 0; a < nr; a++) {
-            for (int b = 0; b < nr; b++)
-                H[(size_t)a * nu + b] = Hc[(size_t)idx[a] * J + idx[b]];
-            trace += H[(size_t)a * nu + a];
-        }
-        if (p->smooth > 0.0) {
-            double mu = p->smooth * trace / nr;
-            for (int a = 0; a < nr; a++)
-                for (int b = 0; b < nr; b++)
-                    H[(size_t)a * nu + b] += mu * LtL[(size_t)a * nr + b];
-        }
-        if (fitd) {
-            double ef = 0.0;
-            for (int i = 0; i < n; i++)
-                ef += tr->E[3 * (size_t)i + ch] * f[i];
-            for (int a = 0; a < nr; a++)
-                H[(size_t)a * nu + nr] = H[(size_t)nr * nu + a] = TE[idx[a]];
-            H[(size_t)nr * nu + nr] = tr->EE[ch];
-            q[nr] = ef;
-        }
+    /* the energy rows on the unknowns (the reached lobes, and the diffuse
+     * albedo when fitted): the same for every channel */
+    if ((G = malloc((size_t)nl * nu * sizeof *G)))
         for (int l = 0; l < nl; l++) {
             for (int a = 0; a < nr; a++)
-                G[(size_t)l * nu + a] = en->g[(size_t)l * J + idx[a]];
+                G[(size_t)l * nu + a] = en->g[(size_t)l * J + tr->idx[a]];
             if (fitd)
                 G[(size_t)l * nu + nr] = 1.0;
-            u[l] = 1.0 - SRBF_ENERGY_MARGIN - rho;
         }
-        pr.n = nu;
-        pr.H = H;
-        pr.q = q;
-        pr.ff = ff;
-        pr.m = p->constraints == LSQ_ENERGY ? nl : 0;
-        pr.G = G;
-        pr.u = u;
-        {
-            double ts = glint_now();
-            rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, w, c, &rep[ch].r, err);
-            rep[ch].solve_seconds = glint_now() - ts;
-            if (rc)
-                goto done;
+    for (int ch = 0; ch < 3; ch++) {
+        chan_job *j = &jobs[ch];
+        j->in = in;
+        j->ch = ch;
+        j->nu = nu;
+        j->csm = sm.c;
+        j->f = malloc((size_t)n * sizeof *j->f);
+        j->H = malloc((size_t)nu * nu * sizeof *j->H);
+        j->q = malloc((size_t)nu * sizeof *j->q);
+        j->u = malloc((size_t)nl * sizeof *j->u);
+        j->c = malloc((size_t)nu * sizeof *j->c);
+        j->w = lsq_work_new(nu, nl);
+        j->G = G;
+        if (!G || !j->f || !j->H || !j->q || !j->u || !j->c || !j->w) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
+            goto done;
         }
-        if (rep[ch].r.status == LSQ_INFEASIBLE) {
+    }
+    /* the three channels at once (on as many threads as start); the
+     * unconstrained mode calls LAPACK, which has threads of its own */
+    for (int ch = 1; ch < 3; ch++)
+        started[ch] = p->constraints != LSQ_NONE &&
+                      pthread_create(&th[ch], NULL, chan_solve, &jobs[ch]) == 0;
+    chan_solve(&jobs[0]);
+    for (int ch = 1; ch < 3; ch++) {
+        if (started[ch])
+            pthread_join(th[ch], NULL);
+        else
+            chan_solve(&jobs[ch]);
+    }
+    for (int ch = 0; ch < 3; ch++) {
+        chan_job *j = &jobs[ch];
+        if (j->rc) {
+            rc = j->rc;
+            if (err)
+                *err = j->err;
+            goto done;
+        }
+        if (j->rep.r.status == LSQ_INFEASIBLE) {
             rc = glint_err_set(err, GLINT_EINVAL,
                                "channel %d: no material with a diffuse albedo of %g conserves "
                                "energy (energy row %d): lower the diffuse albedo below 1 or "
                                "set constraints nonneg",
-                               ch, rho, rep[ch].r.infeasible_row);
+                               ch, p->diffuse.rgb[ch], j->rep.r.infeasible_row);
             goto done;
         }
-        for (int a = 0; a < nr; a++)
-            sm.c[(size_t)ch * J + idx[a]] = c[a];
-        sm.rho[ch] = fitd ? c[nr] : rho;
-        rep[ch].seconds = glint_now() - ct0;
-        /* the painted rows re-rendered */
-        for (int i = 0; i < n; i++) {
-            int si = vd->rows[i];
-            double b = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
-            double m = sm.rho[ch] * tr->E[3 * (size_t)i + ch];
-            const float *t = T + (size_t)i * J;
-            for (int a = 0; a < nr; a++)
-                m += (double)t[idx[a]] * c[a];
-            ss_res += (m - b) * (m - b);
-            ss_b += b * b;
-        }
-        for (int l = 0; l < nl; l++) {
-            double al = sm.rho[ch];
-            for (int a = 0; a < nr; a++)
-                al += en->g[(size_t)l * J + idx[a]] * c[a];
-            if (al > max_albedo)
-                max_albedo = al;
-            {
-                int bn = prof_bin(en->wo + 3 * (size_t)l);
-                if (al > prof[bn][ch])
-                    prof[bn][ch] = al;
-            }
-        }
+        rep[ch] = j->rep;
+        sm.rho[ch] = j->rho;
+        ss_res += j->ss_res;
+        ss_b += j->ss_b;
+        max_albedo = fmax(max_albedo, j->max_albedo);
+        for (int b = 0; b < NPROF; b++)
+            prof[b][ch] = j->prof[b];
     }
     if ((rc = srbf_basis_make(en->b.res, en->b.sigma, &sm.b, err)))
         goto done;
@@ -237,12 +333,8 @@ done:
         free(sm.c);
         srbf_basis_free(&sm.b);
     }
-    lsq_work_free(w);
-    free(f);
-    free(H);
-    free(q);
+    for (int ch = 0; ch < 3; ch++)
+        chan_free(&jobs[ch]);
     free(G);
-    free(u);
-    free(c);
     return rc;
 }
