@@ -109,7 +109,7 @@ case "$mode" in
     echo "== unit, CLI and integration tests"
     meson test -C build --print-errorlogs
     echo "== unit tests under AddressSanitizer + UndefinedBehaviorSanitizer"
-    build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debug
+    build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
     ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
     LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \

@@ -15,6 +15,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "asan_reexec.h"
 #include "check.h"
 #include "fit.h"
 #include "glr.h"
@@ -40,45 +41,6 @@ static inline double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-#if defined(__SANITIZE_ADDRESS__)
-/* AddressSanitizer with fast_unwind_on_malloc=0 (as ./setup.sh runs the
- * sanitizer build) deadlocks inside llvmpipe: LLVM's JIT registers
- * exception frames, libgcc's _Unwind_Find_FDE allocates while holding its
- * lock, and ASan's slow unwinder re-enters _Unwind_Find_FDE from malloc.
- * Re-run this program once with the fast unwinder (leak checking stays on). */
-static inline void asan_fast_unwind_reexec(void)
-{
-    const char *opt = getenv("ASAN_OPTIONS");
-    static char env[2048], cmd[8192];
-    char *argv[64];
-    size_t n = 0;
-    int argc = 0;
-    FILE *f;
-
-    if (!opt || !strstr(opt, "fast_unwind_on_malloc=0") || getenv("GLINT_GLR_REEXEC"))
-        return;
-    f = fopen("/proc/self/cmdline", "rb");
-    if (!f)
-        return;
-    n = fread(cmd, 1, sizeof cmd - 1, f);
-    fclose(f);
-    cmd[n] = '\0';
-    for (size_t i = 0; i < n && argc < 63; i += strlen(cmd + i) + 1)
-        argv[argc++] = cmd + i;
-    argv[argc] = NULL;
-    snprintf(env, sizeof env, "%s:fast_unwind_on_malloc=1", opt);
-    setenv("ASAN_OPTIONS", env, 1);
-    setenv("GLINT_GLR_REEXEC", "1", 1);
-    printf("  (re-running with ASAN_OPTIONS=%s: llvmpipe's JIT deadlocks with the slow "
-           "unwinder)\n",
-           env);
-    fflush(stdout);
-    execv("/proc/self/exe", argv);
-    /* exec failed: carry on (and probably hang, as before) */
-}
-#else
-static inline void asan_fast_unwind_reexec(void) {}
-#endif
 
 /* At exit: what close_everything does, when it has not run (G is NULL
  * after it).  A mesh still uploaded is reported and fails the program, as

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "asan_reexec.h"
 #include "check.h"
 #include "clock.h"
 #include "envlit.h"

@@ -328,7 +328,13 @@ TEST(repeated_previews_reuse_everything)
     ASSERT_EQ(s1.target_allocs, s0.target_allocs);
     ASSERT_EQ(s1.factor_uploads, s0.factor_uploads);
     ASSERT_EQ(s1.frames, s0.frames + 20);
+#if defined(__SANITIZE_ADDRESS__)
+    /* ASan's quarantine keeps every freed frame (1 MiB at 256^2) resident, so
+     * RSS says nothing here; LeakSanitizer checks the same promise at exit. */
+    printf("  (RSS bound not checked under AddressSanitizer: freed frames sit in its quarantine)\n");
+#else
     ASSERT_LT(rss1 - rss0, 8 * 1024);
+#endif
     /* uploading and freeing meshes leaves no GL object behind */
     glr_mesh_free(g, gm);
     glr_get_stats(g, &s2);
