@@ -3,41 +3,40 @@
  * Primal active set (Nocedal & Wright, Algorithm 16.3) on
  *   minimize 1/2 c'Hc - q'c  subject to c >= 0, G c <= u,
  * which has the minimizer of ||Tc - f||^2.  The working set holds bounds
- * (c_j = 0: j not free) and rows (G_r c = u_r).  Each iteration solves the
- * equality-constrained problem on the free variables,
- *   [H_FF  G_RF'] [x_F]   [q_F]
- *   [G_RF  0    ] [mu ] = [u_R],
- * by LU (dgesv); a singular system (H semidefinite on the free variables,
- * or dependent rows) is solved again with H_FF + delta I and -eps I in the
- * row block (delta, eps = 1e-12 of the largest diagonal), which keeps the
- * step well defined.  A step to x that leaves the feasible set stops at
- * the first constraint it meets, which joins the working set; at x itself
- * the multipliers decide: the most negative one (rows' mu, bounds'
- * nu = (Hc - q + G_R' mu)_j) leaves the set, and when none is negative
- * (below -tol) c is optimal.  The iteration limit is 20 (n + m) + 100. */
+ * (c_j = 0: j not free) and rows (G_r c = u_r).  The upper Cholesky factor
+ * R of H over the free variables is kept across iterations (a column added
+ * or removed per bound that changes, refactored when a block changes many);
+ * each iteration solves the equality-constrained problem on the free
+ * variables in the range space of R: W = R^-T G_RF', (W'W) mu = W'z - u_R,
+ * x_F = R^-1 (z - W mu) with z = R^-T q_F.  A pivot of R that vanishes (H
+ * semidefinite on the free variables) is raised to 1e-13 of its diagonal,
+ * a ridge on that variable alone, and rows that depend on others leave the
+ * working set, so each step stays well defined.  A step to x that leaves
+ * the feasible set stops at the first constraint it meets, which joins the
+ * working set; at x itself the multipliers decide: the most negative one
+ * (rows' mu, bounds' nu = (Hc - q + G_R' mu)_j) leaves the set (or every
+ * negative bound at once, a block step, while blocks make progress), and
+ * when none is negative (below -tol) c is optimal.  The iteration limit
+ * is 20 (n + m) + 100. */
 #include "lsq.h"
+#include "lsq_impl.h"
 
 #include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-struct lsq_work {
-    int n, m;
-    int *freev, *rows, *piv;
-    unsigned char *isfree, *inrow, *cand;
-    double *K, *rhs, *x, *p, *grad, *gp, *mu;
-    double *up;    /* the budgets tightened by distinct tiny amounts */
-    double *gcu;   /* m: an upper bound of G c (exact where last computed) */
-    double *gpx;   /* m: G p of the last step, NaN where skipped */
-    double *gmax;  /* m: max |G_rj| */
-    double *R;     /* n x n: upper Cholesky factor of H over the free variables */
-    int *ord;      /* the free variables in the factor's order */
-    int *at;       /* position of each variable in ord, -1 when bound */
-    int k;         /* free variables (the factor's size) */
-    double dscale;
-    double *Q;     /* orthonormal basis of the working rows on the free variables */
-};
+/* A block step that frees b variables onto a factor of k updates it one
+ * column at a time (about b k^2 flops) while that costs less than a new
+ * factor (k^3/3); one that binds b updates it while b is under 2k/3 (a
+ * removal costs about k^2/2).  LSQ_BLOCK_SCALE tunes the crossover. */
+#ifndef LSQ_BLOCK_SCALE
+#define LSQ_BLOCK_SCALE 1.0
+#endif
+static int block_incremental(int b, int k, int adding)
+{
+    return b <= 4 || b < LSQ_BLOCK_SCALE * (adding ? (k + b) / 3.0 : 2.0 * k / 3.0);
+}
 
 lsq_work *lsq_work_new(int n, int m)
 {
@@ -49,11 +48,13 @@ lsq_work *lsq_work_new(int n, int m)
     w->m = m;
     w->freev = malloc((n + 1) * sizeof *w->freev);
     w->rows = malloc((m + 1) * sizeof *w->rows);
-    w->piv = malloc(k * sizeof *w->piv);
     w->isfree = malloc(n + 1);
     w->cand = malloc(n + 1);
     w->inrow = malloc(m + 1);
-    w->K = malloc(k * k * sizeof *w->K);
+    w->noblock = calloc(m + 1, 1);
+    /* eqp's W (rows x (free + 1)) and S (rows x rows): the working rows
+     * are independent on the free variables, so at most n of them */
+    w->K = malloc(((size_t)n * (n + 1) + (size_t)n * n + 1) * sizeof *w->K);
     w->rhs = malloc(k * sizeof *w->rhs);
     w->x = malloc((n + 1) * sizeof *w->x);
     w->p = malloc((n + 1) * sizeof *w->p);
@@ -62,14 +63,17 @@ lsq_work *lsq_work_new(int n, int m)
     w->mu = malloc((m + 1) * sizeof *w->mu);
     w->up = malloc((m + 1) * sizeof *w->up);
     w->R = malloc(((size_t)n * n + 1) * sizeof *w->R);
+    w->col = malloc((n + 1) * sizeof *w->col);
+    w->gcv = malloc((m + 1) * sizeof *w->gcv);
     w->gcu = malloc((m + 1) * sizeof *w->gcu);
     w->gpx = malloc((m + 1) * sizeof *w->gpx);
     w->gmax = malloc((m + 1) * sizeof *w->gmax);
     w->ord = malloc((n + 1) * sizeof *w->ord);
     w->at = malloc((n + 1) * sizeof *w->at);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
-    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->ord || !w->at || !w->Q || !w->freev || !w->rows || !w->piv || !w->isfree || !w->cand || !w->inrow || !w->K || !w->rhs ||
-        !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
+    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->col || !w->gcv || !w->ord || !w->at ||
+        !w->Q || !w->freev || !w->rows || !w->isfree || !w->cand || !w->inrow || !w->noblock ||
+        !w->K || !w->rhs || !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
         return NULL;
     }
@@ -82,10 +86,10 @@ void lsq_work_free(lsq_work *w)
         return;
     free(w->freev);
     free(w->rows);
-    free(w->piv);
     free(w->isfree);
     free(w->cand);
     free(w->inrow);
+    free(w->noblock);
     free(w->K);
     free(w->rhs);
     free(w->x);
@@ -96,6 +100,9 @@ void lsq_work_free(lsq_work *w)
     free(w->Q);
     free(w->up);
     free(w->R);
+    free(w->col);
+    free(w->gcv);
+    free(w->Gtw);
     free(w->gcu);
     free(w->gpx);
     free(w->gmax);
@@ -191,79 +198,6 @@ static int add_to_basis(const lsq_problem *pr, lsq_work *w, int nf, int r, int n
     return 1;
 }
 
-/* ---- the factor of H over the free variables ------------------------------------- */
-
-/* Add variable j to the factor: R grows by a column (Rt y = H[ord, j]) and
- * a diagonal sqrt(H_jj - y.y); a pivot that vanishes (a column H already
- * spans) is raised to 1e-13 H_jj, a ridge on that variable alone. */
-static void chol_add(const lsq_problem *pr, lsq_work *w, int j)
-{
-    int n = pr->n, k = w->k;
-    double d = pr->H[(size_t)j * n + j];
-    for (int i = 0; i < k; i++) {
-        double v = pr->H[(size_t)w->ord[i] * n + j];
-        for (int l = 0; l < i; l++)
-            v -= w->R[(size_t)l * n + i] * w->R[(size_t)l * n + k];
-        v /= w->R[(size_t)i * n + i];
-        w->R[(size_t)i * n + k] = v;
-        d -= v * v;
-    }
-    {
-        double hjj = pr->H[(size_t)j * n + j], floor_ = hjj > 0.0 ? 1e-13 * hjj : 1e-12 * w->dscale;
-        if (!(d > floor_))
-            d = floor_;
-    }
-    w->R[(size_t)k * n + k] = sqrt(d);
-    w->ord[k] = j;
-    w->at[j] = k;
-    w->k = k + 1;
-}
-
-/* Remove the variable at position p: its column leaves, Givens rotations
- * restore the triangle. */
-static void chol_remove(const lsq_problem *pr, lsq_work *w, int p)
-{
-    int n = pr->n, k = w->k;
-    w->at[w->ord[p]] = -1;
-    for (int c = p; c < k - 1; c++) {
-        for (int r = 0; r < k; r++)
-            w->R[(size_t)r * n + c] = w->R[(size_t)r * n + c + 1];
-        w->ord[c] = w->ord[c + 1];
-        w->at[w->ord[c]] = c;
-    }
-    for (int c = p; c < k - 1; c++) {
-        double a = w->R[(size_t)c * n + c], b = w->R[(size_t)(c + 1) * n + c];
-        double h = hypot(a, b), cs = h > 0 ? a / h : 1.0, sn = h > 0 ? b / h : 0.0;
-        for (int col = c; col < k - 1; col++) {
-            double x = w->R[(size_t)c * n + col], y = w->R[(size_t)(c + 1) * n + col];
-            w->R[(size_t)c * n + col] = cs * x + sn * y;
-            w->R[(size_t)(c + 1) * n + col] = -sn * x + cs * y;
-        }
-    }
-    w->k = k - 1;
-}
-
-/* v <- R^-T v and v <- R^-1 v over the factor's k variables. */
-static void solve_rt(const lsq_work *w, int n, double *v)
-{
-    for (int i = 0; i < w->k; i++) {
-        double s = v[i];
-        for (int l = 0; l < i; l++)
-            s -= w->R[(size_t)l * n + i] * v[l];
-        v[i] = s / w->R[(size_t)i * n + i];
-    }
-}
-
-static void solve_r(const lsq_work *w, int n, double *v)
-{
-    for (int i = w->k - 1; i >= 0; i--) {
-        double s = v[i];
-        for (int c = i + 1; c < w->k; c++)
-            s -= w->R[(size_t)i * n + c] * v[c];
-        v[i] = s / w->R[(size_t)i * n + i];
-    }
-}
-
 /* Solve the equality-constrained subproblem of the working set with the
  * factor: z = R^-T q_F, W = R^-T G_RF', (W'W) mu = W'z - u_R,
  * x_F = R^-1 (z - W mu).  OUT w->x (zero on bounds), w->mu. */
@@ -275,28 +209,20 @@ static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale
     (void)dscale;
     for (int i = 0; i < k; i++)
         z[i] = pr->q[w->ord[i]];
-    solve_rt(w, n, z);
+    lsq_solve_rt(w, n, z);
     for (int r = 0; r < nr; r++) {
         double *wr = W + (size_t)r * (k + 1);
         for (int i = 0; i < k; i++)
             wr[i] = pr->G[(size_t)w->rows[r] * n + w->ord[i]];
-        solve_rt(w, n, wr);
+        lsq_solve_rt(w, n, wr);
     }
     if (nr) {
         double *rhs = w->mu;
         for (int a = 0; a < nr; a++) {
             const double *wa = W + (size_t)a * (k + 1);
-            double t = -w->up[w->rows[a]];
-            for (int i = 0; i < k; i++)
-                t += wa[i] * z[i];
-            rhs[a] = t;
-            for (int b = 0; b < nr; b++) {
-                const double *wb = W + (size_t)b * (k + 1);
-                double sab = 0.0;
-                for (int i = 0; i < k; i++)
-                    sab += wa[i] * wb[i];
-                S[(size_t)a * nr + b] = sab;
-            }
+            rhs[a] = lsq_dot4(wa, z, k) - w->up[w->rows[a]];
+            for (int b = 0; b < nr; b++)
+                S[(size_t)a * nr + b] = lsq_dot4(wa, W + (size_t)b * (k + 1), k);
         }
         if (lu_solve(S, rhs, nr, 0.0))
             return -1;
@@ -306,7 +232,7 @@ static int eqp(const lsq_problem *pr, lsq_work *w, int nf, int nr, double dscale
                 z[i] -= rhs[a] * wa[i];
         }
     }
-    solve_r(w, n, z);
+    lsq_solve_r(w, n, z);
     memset(w->x, 0, (size_t)n * sizeof *w->x);
     for (int i = 0; i < k; i++)
         w->x[w->ord[i]] = z[i];
@@ -355,9 +281,7 @@ static void finish(const lsq_problem *p, lsq_mode mode, const double *c, lsq_res
     int n = p->n;
     double obj = p->ff, viol = 0.0, slack = INFINITY;
     for (int i = 0; i < n; i++) {
-        double hc = 0.0;
-        for (int j = 0; j < n; j++)
-            hc += p->H[(size_t)i * n + j] * c[j];
+        double hc = lsq_dot4(p->H + (size_t)i * n, c, n);
         obj += c[i] * hc - 2.0 * p->q[i] * c[i];
         if (mode != LSQ_NONE && -c[i] > viol)
             viol = -c[i];
@@ -365,9 +289,7 @@ static void finish(const lsq_problem *p, lsq_mode mode, const double *c, lsq_res
     }
     if (mode == LSQ_ENERGY)
         for (int r = 0; r < p->m; r++) {
-            double g = 0.0;
-            for (int j = 0; j < n; j++)
-                g += p->G[(size_t)r * n + j] * c[j];
+            double g = lsq_dot4(p->G + (size_t)r * n, c, n);
             if (g - p->u[r] > viol)
                 viol = g - p->u[r];
             if (p->u[r] - g < slack)
@@ -376,6 +298,29 @@ static void finish(const lsq_problem *p, lsq_mode mode, const double *c, lsq_res
     res->objective = obj < 0.0 && obj > -1e-12 * (p->ff > 0 ? p->ff : 1.0) ? 0.0 : obj;
     res->max_violation = viol;
     res->min_slack = mode == LSQ_ENERGY && p->m > 0 ? slack : 0.0;
+}
+
+int lsq_rows_check(const double *G, int m, int n, double *gmax, double *Gt, glint_err *err)
+{
+    for (int r = 0; r < m; r++) {
+        const double *g = G + (size_t)r * n;
+        double gm = 0.0, z = 0.0;
+        for (int j = 0; j < n; j++) {
+            double a = fabs(g[j]);
+            z += 0.0 * g[j]; /* NaN exactly when some entry is not finite */
+            gm = a > gm ? a : gm;
+        }
+        if (z != 0.0)
+            return glint_err_set(err, GLINT_EINVAL, "lsq: G is not finite (row %d)", r);
+        if (gmax)
+            gmax[r] = gm;
+    }
+    if (Gt) /* by blocks of rows, so that the writes stay in cache */
+        for (int r0 = 0; r0 < m; r0 += 16)
+            for (int j = 0; j < n; j++)
+                for (int r = r0; r < m && r < r0 + 16; r++)
+                    Gt[(size_t)j * m + r] = G[(size_t)r * n + j];
+    return 0;
 }
 
 int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, double *c,
@@ -391,18 +336,22 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
         (m && (!p->G || !p->u)))
         return glint_err_set(err, GLINT_EINVAL, "lsq: %d unknowns and %d rows (1..%d, 0..%d)",
                              n, m, LSQ_MAX_N, LSQ_MAX_M);
-    for (size_t k = 0; k < (size_t)n * n; k++)
-        if (!isfinite(p->H[k]))
+    {
+        double z = 0.0;
+#pragma omp simd reduction(+ : z)
+        for (size_t k = 0; k < (size_t)n * n; k++)
+            z += 0.0 * p->H[k];
+        if (z != 0.0)
             return glint_err_set(err, GLINT_EINVAL, "lsq: H is not finite");
+    }
     for (int k = 0; k < n; k++) {
         if (!isfinite(p->q[k]))
             return glint_err_set(err, GLINT_EINVAL, "lsq: q is not finite");
         qscale = fmax(qscale, fabs(p->q[k]));
         dscale = fmax(dscale, fabs(p->H[(size_t)k * n + k]));
     }
-    for (size_t k = 0; k < (size_t)m * n; k++)
-        if (!isfinite(p->G[k]))
-            return glint_err_set(err, GLINT_EINVAL, "lsq: G is not finite");
+    if (m && !p->gmax && (rc = lsq_rows_check(p->G, m, n, NULL, NULL, err)))
+        return rc;
     for (int r = 0; r < m; r++)
         if (!isfinite(p->u[r]))
             return glint_err_set(err, GLINT_EINVAL, "lsq: u is not finite");
@@ -446,25 +395,39 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
     memset(c, 0, (size_t)n * sizeof *c);
     memset(w->isfree, 0, (size_t)n);
     memset(w->inrow, 0, (size_t)m);
+    memset(w->noblock, 0, (size_t)m);
     w->k = 0;
     w->dscale = dscale;
+    if (p->gmax)
+        memcpy(w->gmax, p->gmax, (size_t)m * sizeof *w->gmax);
+    /* sized for any problem the workspace fits */
+    if (m && !p->Gt && !w->Gtw && !(w->Gtw = malloc((size_t)w->n * w->m * sizeof *w->Gtw))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "lsq: out of memory for %d rows", m);
+        goto done;
+    }
+    if (!p->gmax || (m && !p->Gt))
+        lsq_rows_check(p->G, m, n, p->gmax ? NULL : w->gmax, p->Gt ? NULL : w->Gtw, NULL);
+    w->Gt = p->Gt ? p->Gt : w->Gtw;
     for (int r = 0; r < m; r++) {
-        double gm = 0.0;
-        for (int j = 0; j < n; j++)
-            gm = fmax(gm, fabs(p->G[(size_t)r * n + j]));
-        w->gmax[r] = gm * (1.0 + 1e-12);
+        w->gmax[r] *= 1.0 + 1e-12;
         w->gcu[r] = 0.0;
     }
     for (int j = 0; j < n; j++)
         w->at[j] = -1;
     maxit = 20 * (n + m) + 100;
     int multi = 1;              /* free several bounds per stationary point (see below) */
+    int nnoblock = 0, keep_noblock = 0;
     double multi_obj = HUGE_VAL;
     res->status = LSQ_MAXITER;
     for (int it = 0, stalls = 0; it < maxit; it++) {
         double pn = 0.0, cn = 0.0, alpha = 1.0;
         int block = -1, block_row = 0, bland = stalls > 3;
         res->iterations = it + 1;
+        if (nnoblock && !keep_noblock) {
+            memset(w->noblock, 0, (size_t)m);
+            nnoblock = 0;
+        }
+        keep_noblock = 0;
         nf = w->k;
         nr = 0;
         memcpy(w->freev, w->ord, (size_t)nf * sizeof *w->freev);
@@ -483,17 +446,16 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
         }
         for (int j = 0; j < n; j++) {
             w->p[j] = w->x[j] - c[j];
-            pn = fmax(pn, fabs(w->p[j]));
-            cn = fmax(cn, fabs(c[j]));
+            double ap = fabs(w->p[j]), ac = fabs(c[j]); /* finite: no fmax call */
+            pn = ap > pn ? ap : pn;
+            cn = ac > cn ? ac : cn;
         }
         if (pn <= 1e-10 * fmax(cn, 1e-300) || pn == 0.0) {
             /* stationary on the working set: multipliers */
             double worst = -tol, obj = 0.0;
             int drop = -1, drop_row = 0, nneg = 0;
             for (int j = 0; j < n; j++) {
-                double gr = -p->q[j], hc = 0.0;
-                for (int k = 0; k < n; k++)
-                    hc += p->H[(size_t)j * n + k] * c[k];
+                double gr = -p->q[j], hc = lsq_dot4(p->H + (size_t)j * n, c, n);
                 gr += hc;
                 obj += c[j] * (hc - 2.0 * p->q[j]);
                 for (int r = 0; r < nr; r++)
@@ -543,15 +505,19 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             if (drop_row)
                 w->inrow[drop] = 0;
             else if (multi && !bland && nneg > 1) {
+                int inc = block_incremental(nneg, w->k, 1);
                 multi_obj = obj;
                 for (int j = 0; j < n; j++)
                     if (w->cand[j]) {
                         w->isfree[j] = 1;
-                        chol_add(p, w, j);
+                        if (inc)
+                            lsq_chol_add(p, w, j);
                     }
+                if (!inc)
+                    lsq_chol_rebuild(p, w);
             } else {
                 w->isfree[drop] = 1;
-                chol_add(p, w, drop);
+                lsq_chol_add(p, w, drop);
             }
             continue;
         }
@@ -566,13 +532,17 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                     nz++;
             }
             if (nz > 1) {
-                for (int a = 0; a < nf; a++) {
+                int inc = block_incremental(nz, w->k, 0);
+                for (int a = nf - 1; a >= 0; a--) { /* the last first: shorter shifts */
                     int j = w->freev[a];
                     if (c[j] == 0.0 && w->p[j] < 0.0) {
                         w->isfree[j] = 0;
-                        chol_remove(p, w, w->at[j]);
+                        if (inc)
+                            lsq_chol_remove(p, w, w->at[j]);
                     }
                 }
+                if (!inc)
+                    lsq_chol_rebuild(p, w);
                 continue;
             }
         }
@@ -590,30 +560,61 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
         }
         /* rows: a row whose bound on G c plus the most a step can add stays
          * under its budget cannot block; the others are computed exactly */
-        double p1 = 0.0;
-        for (int a = 0; a < nf; a++)
+        double p1 = 0.0, x1 = 0.0;
+        int bycol = m && 2 * nf <= n;
+        for (int a = 0; a < nf; a++) {
             p1 += fabs(w->p[w->freev[a]]);
+            x1 += fabs(w->x[w->freev[a]]);
+        }
+        if (bycol) {
+            /* few free variables: G p and G c for every row at once,
+             * as sums of the free columns of G (contiguous rows of G', no
+             * reduction chain), which costs less than any row skipped */
+            double *restrict gpv = w->gp, *restrict gcv = w->gcv;
+            memset(gpv, 0, (size_t)m * sizeof *gpv);
+            memset(gcv, 0, (size_t)m * sizeof *gcv);
+            for (int a = 0; a < nf; a++) {
+                int j = w->freev[a];
+                const double *restrict gt = w->Gt + (size_t)j * m;
+                double pj = w->p[j], cj = c[j];
+#pragma omp simd
+                for (int r = 0; r < m; r++) {
+                    gpv[r] += pj * gt[r];
+                    gcv[r] += cj * gt[r];
+                }
+            }
+        }
         for (int r = 0; r < m; r++) {
-            double gp = 0.0, gc = 0.0, gabs = 0.0;
+            double gp, gc;
             if (w->inrow[r]) {
                 w->gcu[r] = w->up[r];
                 w->gpx[r] = 0.0;
                 continue;
             }
-            if (w->gcu[r] + alpha * w->gmax[r] * p1 < w->up[r]) {
-                w->gpx[r] = NAN; /* skipped: bounded below */
+            if (w->noblock[r]) {
+                w->gpx[r] = NAN;
                 continue;
             }
-            for (int a = 0; a < nf; a++) {
-                int j = w->freev[a];
-                double g = p->G[(size_t)r * n + j];
-                gp += g * w->p[j];
-                gc += g * c[j];
-                gabs += fabs(g * w->p[j]);
+            if (bycol) {
+                gp = w->gp[r];
+                gc = w->gcv[r];
+            } else if (w->gcu[r] + alpha * w->gmax[r] * p1 < w->up[r]) {
+                w->gpx[r] = NAN; /* skipped: bounded below */
+                continue;
+            } else {
+                /* many free variables; p and c are zero on the bounds:
+                 * whole rows, contiguous */
+                const double *g = p->G + (size_t)r * n;
+                gp = lsq_dot4(g, w->p, n);
+                gc = lsq_dot4(g, c, n);
             }
             w->gcu[r] = gc;
             w->gpx[r] = gp;
-            if (gp > 1e-12 * gabs) {
+            /* a gp at the rounding level of x (the step's end, whose
+             * rounding G p inherits: a row that depends on the working rows
+             * has G p = 0 up to that) has no sign, and the row cannot
+             * block; it is then crossed by at most 1e-12 gmax |x|_1 */
+            if (gp > 1e-12 * w->gmax[r] * (p1 + x1)) {
                 double t = (w->up[r] - gc) / gp;
                 if (t < 0.0)
                     t = 0.0;
@@ -634,12 +635,20 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             stalls++;
         if (block >= 0) {
             if (block_row) {
-                if (add_to_basis(p, w, nf, block, nr))
+                if (add_to_basis(p, w, nf, block, nr)) {
                     w->inrow[block] = 1;
+                } else if (alpha == 0.0) {
+                    /* a row that depends on the working rows has G p = 0:
+                     * what blocked is rounding, and it would block again
+                     * (until the working set or c changes) */
+                    w->noblock[block] = 1;
+                    nnoblock++;
+                    keep_noblock = 1;
+                }
             }
             else {
                 w->isfree[block] = 0;
-                chol_remove(p, w, w->at[block]);
+                lsq_chol_remove(p, w, w->at[block]);
                 c[block] = 0.0;
             }
         }

@@ -50,6 +50,11 @@ typedef struct lsq_problem {
     int m;                    /* energy rows (LSQ_ENERGY), 0..LSQ_MAX_M */
     const double *G;          /* m x n, row-major */
     const double *u;          /* m */
+    const double *gmax;       /* m: max_j |G_rj| from lsq_rows_check, which also vouches
+                                 that G is finite; NULL: checked and computed per call */
+    const double *Gt;         /* n x m: G transposed (lsq_rows_check); NULL: made per call */
+    const double *R0;         /* n x n: lsq_factor of this H, kept by a caller that solves
+                                 with one H many times; NULL: factors made per call */
 } lsq_problem;
 
 #define LSQ_MAX_N 4096
@@ -67,6 +72,20 @@ typedef struct lsq_result {
     double min_slack;         /* min_l (u_l - (G c)_l), energy mode; else 0 */
     int rank;                 /* LSQ_NONE: eigenvalues kept */
 } lsq_result;
+
+/* Check the rows G (m x n) once for many solves that share them (the
+ * three channels of a fit): OUT gmax[m], the largest |G_rj| of each row,
+ * and Gt[n x m], G transposed; either may be NULL.  Returns 0, or
+ * GLINT_EINVAL when some entry is not finite (Gt is then not written). */
+int lsq_rows_check(const double *G, int m, int n, double *gmax, double *Gt, glint_err *err);
+
+/* The upper Cholesky factor of H (n x n, row-major, below the diagonal
+ * zero) as lsq_solve makes it, pivots that vanish raised to 1e-13 of their
+ * diagonal: for lsq_problem.R0.  Returns 0, GLINT_EINVAL (H not finite, n
+ * out of range) or GLINT_ENOMEM. */
+int lsq_factor(const double *H, int n, double *R, glint_err *err);
+/* max |H_kk| (1 when H has no positive diagonal): the scale of the floors */
+double lsq_diag_scale(const double *H, int n);
 
 /* Scratch sized for n unknowns and m rows (malloc'ed; lsq_work_free). */
 typedef struct lsq_work lsq_work;

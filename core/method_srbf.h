@@ -33,6 +33,7 @@
 #ifndef GLINT_METHOD_SRBF_H
 #define GLINT_METHOD_SRBF_H
 
+#include <pthread.h>
 #include <stdint.h>
 
 #include "env.h"
@@ -106,6 +107,8 @@ typedef struct srbf_visdata {
     double seconds;
 } srbf_visdata;
 
+#define SRBF_KEPT_MAX 4
+
 typedef struct srbf_transfer_data {
     int nrows, J;
     float *T;                  /* 3 x nrows x J */
@@ -117,6 +120,22 @@ typedef struct srbf_transfer_data {
     int nreach;
     int *idx;                  /* nreach: the reached lobes, increasing */
     double *LtL;               /* nreach x nreach: L'L of the centres' graph Laplacian */
+    /* the energy rows on the unknowns, made with idx (not stored on disk):
+     * [0] the reached lobes (nl x nreach), [1] with the diffuse albedo's
+     * column of ones after them (nl x (nreach + 1)); their row maxima; G[1]
+     * transposed, whose first nreach rows are G[0] transposed */
+    double *G[2], *gmax[2], *Gt;
+    int nl_rows;
+    /* each channel's factor of the fit's H (lsq_factor) by (smooth, diffuse
+     * fitted), made by the first fit that needs it and kept with the level:
+     * a repaint starts from it (srbf_kept_factor) */
+    pthread_mutex_t kept_lock;
+    int kept_init, nkept;
+    struct {
+        double smooth;
+        int fitd;
+        double *R[3];
+    } kept[SRBF_KEPT_MAX];
     long terms;
     long rays;                 /* shadow rays cast (0: visibility off) */
     double vis_seconds, seconds, gram_seconds;
@@ -178,9 +197,15 @@ int srbf_transfer_level_save(const method_build_in *in, const char *dir, const c
                        const cache_value *v, glint_err *err);
 int srbf_cast_shadows(const method_build_in *in, const srbf_visdata *vd, const env_lights *l,
                       uint64_t **bits, long *rays, glint_err *err);
-/* idx and LtL of a transfer level from its reach flags and the basis. */
-int srbf_transfer_reach(srbf_transfer_data *x, const srbf_basis *b, glint_err *err);
+/* idx, LtL and the energy rows of a transfer level from its reach flags
+ * and the energy level. */
+int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err *err);
 void srbf_transfer_clear(srbf_transfer_data *x);
+/* The kept factor of channel ch's H (nu x nu) for (smooth, fitd), made from
+ * H on first use; NULL when no room is left (the solver then factors per
+ * call) or memory runs out.  OUT *kept: 1 when an earlier fit made it. */
+const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, int ch,
+                               const double *H, int nu, int *kept);
 size_t srbf_transfer_bytes(const srbf_transfer_data *x);
 
 #endif

@@ -32,6 +32,7 @@ static int prof_bin(const double wo[3])
 typedef struct chan_report {
     lsq_result r;
     double seconds, solve_seconds;
+    const char *factor;        /* "kept" (from an earlier fit), "made" (kept from now), "none" */
 } chan_report;
 
 /* One colour channel's problem and answer: the buffers are its own, so
@@ -41,6 +42,7 @@ typedef struct chan_job {
     int ch, nu;
     double *f, *H, *q, *u, *c;
     const double *G;           /* the energy rows on the unknowns, shared by the channels */
+    const double *gmax, *Gt;   /* their row maxima and transpose (lsq_rows_check), shared */
     lsq_work *w;
     chan_report rep;
     double *csm;               /* sm.c (3 x J): this channel's J entries are written */
@@ -77,7 +79,7 @@ static void *chan_solve(void *arg)
     const float *T = tr->T + (size_t)ch * n * J;
     double rho = fitd ? 0.0 : p->diffuse.rgb[ch], ff = 0.0, trace = 0.0, ct0 = glint_now();
     double *f = j->f, *H = j->H, *q = j->q, *u = j->u, *c = j->c, smu = 0.0;
-    lsq_problem pr;
+    lsq_problem pr = {0};
 
     for (int b = 0; b < NPROF; b++)
         j->prof[b] = -1.0; /* no row in the bin */
@@ -99,6 +101,7 @@ static void *chan_solve(void *arg)
             double fi = f[i];
             if (fi == 0.0)
                 continue;
+#pragma omp simd
             for (int a = 0; a < J; a++)
                 qq[a] += (double)t[a] * fi;
         }
@@ -141,6 +144,16 @@ static void *chan_solve(void *arg)
     pr.m = p->constraints == LSQ_ENERGY ? nl : 0;
     pr.G = j->G;
     pr.u = u;
+    pr.gmax = j->gmax;
+    pr.Gt = j->Gt;
+    /* the level keeps the factor of this H (the same for every repaint with
+     * these parameters); the level is shared and otherwise read-only, the
+     * factors behind its own lock */
+    {
+        int kept = 0;
+        pr.R0 = srbf_kept_factor((srbf_transfer_data *)tr, p->smooth, fitd, ch, H, nu, &kept);
+        j->rep.factor = kept ? "kept" : pr.R0 ? "made" : "none";
+    }
     {
         double ts = glint_now();
         j->rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, j->w, c, &j->rep.r, &j->err);
@@ -166,8 +179,9 @@ static void *chan_solve(void *arg)
     for (int l = 0; l < nl; l++) {
         double al = j->rho;
         int bn = prof_bin(en->wo + 3 * (size_t)l);
+        const double *g = tr->G[0] + (size_t)l * nr;
         for (int a = 0; a < nr; a++)
-            al += en->g[(size_t)l * J + idx[a]] * c[a];
+            al += g[a] * c[a];
         if (al > j->max_albedo)
             j->max_albedo = al;
         if (al > j->prof[bn])
@@ -190,7 +204,6 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     double prof[NPROF][3];
     chan_job jobs[3];
     chan_report rep[3];
-    double *G = NULL;
     pthread_t th[3];
     int started[3] = {0, 0, 0};
     srbf_material sm;
@@ -209,15 +222,6 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
-    /* the energy rows on the unknowns (the reached lobes, and the diffuse
-     * albedo when fitted): the same for every channel */
-    if ((G = malloc((size_t)nl * nu * sizeof *G)))
-        for (int l = 0; l < nl; l++) {
-            for (int a = 0; a < nr; a++)
-                G[(size_t)l * nu + a] = en->g[(size_t)l * J + tr->idx[a]];
-            if (fitd)
-                G[(size_t)l * nu + nr] = 1.0;
-        }
     for (int ch = 0; ch < 3; ch++) {
         chan_job *j = &jobs[ch];
         j->in = in;
@@ -230,8 +234,12 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         j->u = malloc((size_t)nl * sizeof *j->u);
         j->c = malloc((size_t)nu * sizeof *j->c);
         j->w = lsq_work_new(nu, nl);
-        j->G = G;
-        if (!G || !j->f || !j->H || !j->q || !j->u || !j->c || !j->w) {
+        /* the energy rows on the unknowns (the reached lobes, and the
+         * diffuse albedo when fitted), made and checked with the level */
+        j->G = tr->G[fitd ? 1 : 0];
+        j->gmax = tr->gmax[fitd ? 1 : 0];
+        j->Gt = tr->Gt;
+        if (!j->f || !j->H || !j->q || !j->u || !j->c || !j->w) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
             goto done;
         }
@@ -279,13 +287,14 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     for (int ch = 0; ch < 3; ch++) {
         const lsq_result *r = &rep[ch].r;
         json_array_append_new(
-            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f}", "status",
+            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f, s:s}", "status",
                              lsq_status_name(r->status), "iterations", r->iterations,
                              "lobes_used", r->free_vars, "energy_rows_active", r->active_rows,
                              "objective", r->objective, "min_slack", r->min_slack,
                              "max_violation", r->max_violation, "kkt_residual",
                              r->kkt_residual, "seconds", rep[ch].seconds, "solve_seconds",
-                             rep[ch].solve_seconds));
+                             rep[ch].solve_seconds, "factor",
+                             rep[ch].factor ? rep[ch].factor : "none"));
     }
     {
         json_t *pre = json_pack(
@@ -335,6 +344,5 @@ done:
     }
     for (int ch = 0; ch < 3; ch++)
         chan_free(&jobs[ch]);
-    free(G);
     return rc;
 }

@@ -29,14 +29,27 @@ void srbf_transfer_clear(srbf_transfer_data *x)
     free(x->reach);
     free(x->idx);
     free(x->LtL);
+    for (int k = 0; k < 2; k++) {
+        free(x->G[k]);
+        free(x->gmax[k]);
+    }
+    free(x->Gt);
+    for (int k = 0; k < x->nkept; k++)
+        for (int ch = 0; ch < 3; ch++)
+            free(x->kept[k].R[ch]);
+    if (x->kept_init)
+        pthread_mutex_destroy(&x->kept_lock);
     memset(x, 0, sizeof *x);
 }
 
 size_t srbf_transfer_bytes(const srbf_transfer_data *x)
 {
     size_t J = (size_t)x->J, n = (size_t)x->nrows;
+    size_t nr = (size_t)x->nreach;
     return sizeof *x + 3 * n * J * sizeof(float) + 3 * n * sizeof(double) +
-           4 * J * J * sizeof(double) + 3 * J * sizeof(double) + J * (1 + sizeof(int));
+           4 * J * J * sizeof(double) + 3 * J * sizeof(double) + J * (1 + sizeof(int)) +
+           (size_t)x->nl_rows * (3 * nr + 4) * sizeof(double) +
+           (size_t)SRBF_KEPT_MAX * 3 * (nr + 1) * (nr + 1) * sizeof(double);
 }
 
 static void transfer_free(void *d)
@@ -94,24 +107,96 @@ static void laplacian_gram(const srbf_basis *b, const int *idx, int n, double *L
     free(L);
 }
 
-int srbf_transfer_reach(srbf_transfer_data *x, const srbf_basis *b, glint_err *err)
+int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err *err)
 {
-    int k = 0;
+    int k = 0, nr, nl = en->nl, J = x->J;
+    size_t n1;
     x->nreach = 0;
-    for (int j = 0; j < x->J; j++)
+    for (int j = 0; j < J; j++)
         x->nreach += x->reach[j] != 0;
+    nr = x->nreach;
+    n1 = (size_t)nr + 1;
     free(x->idx);
     free(x->LtL);
-    x->idx = malloc((size_t)(x->nreach ? x->nreach : 1) * sizeof *x->idx);
-    x->LtL = malloc((size_t)(x->nreach ? x->nreach * x->nreach : 1) * sizeof *x->LtL);
-    if (!x->idx || !x->LtL)
+    x->idx = malloc((size_t)(nr ? nr : 1) * sizeof *x->idx);
+    x->LtL = malloc((size_t)(nr ? nr * nr : 1) * sizeof *x->LtL);
+    for (int a = 0; a < 2; a++) {
+        free(x->G[a]);
+        free(x->gmax[a]);
+        x->G[a] = malloc(((size_t)nl * n1 + 1) * sizeof *x->G[a]);
+        x->gmax[a] = malloc(((size_t)nl + 1) * sizeof *x->gmax[a]);
+    }
+    free(x->Gt);
+    x->Gt = malloc(((size_t)nl * n1 + 1) * sizeof *x->Gt);
+    x->nl_rows = nl;
+    if (!x->kept_init && pthread_mutex_init(&x->kept_lock, NULL) == 0)
+        x->kept_init = 1;
+    if (!x->kept_init || !x->idx || !x->LtL || !x->G[0] || !x->G[1] || !x->gmax[0] || !x->gmax[1] || !x->Gt)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    for (int j = 0; j < x->J; j++)
+    for (int j = 0; j < J; j++)
         if (x->reach[j])
             x->idx[k++] = j;
-    if (x->nreach)
-        laplacian_gram(b, x->idx, x->nreach, x->LtL);
-    return 0;
+    if (nr)
+        laplacian_gram(&en->b, x->idx, nr, x->LtL);
+    /* the energy rows of every fit on this level, checked once */
+    for (int l = 0; l < nl; l++) {
+        double *g0 = x->G[0] + (size_t)l * nr, *g1 = x->G[1] + (size_t)l * n1;
+        for (int a = 0; a < nr; a++)
+            g0[a] = g1[a] = en->g[(size_t)l * J + x->idx[a]];
+        g1[nr] = 1.0;
+    }
+    {
+        int rc = lsq_rows_check(x->G[0], nl, nr, x->gmax[0], NULL, err);
+        return rc ? rc : lsq_rows_check(x->G[1], nl, nr + 1, x->gmax[1], x->Gt, err);
+    }
+}
+
+const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, int ch,
+                               const double *H, int nu, int *kept)
+{
+    const double *R = NULL;
+    double *made;
+    int k, full;
+    *kept = 0;
+    if (!x->kept_init)
+        return NULL;
+    pthread_mutex_lock(&x->kept_lock);
+    for (k = 0; k < x->nkept; k++)
+        if (x->kept[k].smooth == smooth && x->kept[k].fitd == fitd)
+            break;
+    if (k < x->nkept)
+        R = x->kept[k].R[ch];
+    full = k == SRBF_KEPT_MAX;
+    pthread_mutex_unlock(&x->kept_lock);
+    *kept = R != NULL;
+    if (R || full)
+        return R;
+    /* made outside the lock (the channels make theirs at once); a factor
+     * another fit kept meanwhile wins */
+    if (!(made = malloc((size_t)nu * nu * sizeof *made)) || lsq_factor(H, nu, made, NULL)) {
+        free(made);
+        return NULL;
+    }
+    pthread_mutex_lock(&x->kept_lock);
+    for (k = 0; k < x->nkept; k++)
+        if (x->kept[k].smooth == smooth && x->kept[k].fitd == fitd)
+            break;
+    if (k == x->nkept && k < SRBF_KEPT_MAX) {
+        x->kept[k].smooth = smooth;
+        x->kept[k].fitd = fitd;
+        memset(x->kept[k].R, 0, sizeof x->kept[k].R);
+        x->nkept++;
+    }
+    if (k < x->nkept) {
+        if (!x->kept[k].R[ch]) {
+            x->kept[k].R[ch] = made;
+            made = NULL;
+        }
+        R = x->kept[k].R[ch];
+    }
+    pthread_mutex_unlock(&x->kept_lock);
+    free(made);
+    return R;
 }
 
 /* H = T'T, T'E and E'E per channel, in double, from the float T. */
@@ -208,7 +293,7 @@ int srbf_transfer_build(const method_build_in *in, cache_value *out, glint_err *
     t0 = glint_now();
     if ((rc = transfer_gram(x, err)))
         goto done;
-    rc = srbf_transfer_reach(x, &en->b, err);
+    rc = srbf_transfer_reach(x, en, err);
     x->gram_seconds = glint_now() - t0;
 done:
     free(bits);
@@ -239,7 +324,7 @@ int srbf_transfer_level_load(const method_build_in *in, const char *dir, const c
         rc = glint_err_set(err, GLINT_EFORMAT, "cached transfer %s does not match", key);
         goto fail;
     }
-    if ((rc = srbf_transfer_reach(x, &en->b, err)))
+    if ((rc = srbf_transfer_reach(x, en, err)))
         goto fail;
     out->data = x;
     out->bytes = srbf_transfer_bytes(x);

@@ -6,7 +6,10 @@
  * PROBLEM: whitespace-separated numbers: n m mode (0 energy, 1 nonneg,
  * 2 none), then H (n x n, row-major), q (n), ff, G (m x n), u (m).
  * Prints one JSON object: status, objective, iterations, max_violation,
- * kkt_residual, active_rows, ms (the best time per solve over REPEATS), c. */
+ * kkt_residual, active_rows, ms (the best time per solve over REPEATS), c,
+ * and c_kept: the solution when the caller keeps the rows' check and
+ * transpose and the factor of H (lsq_rows_check, lsq_factor), as a fit's
+ * repaints do. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -50,7 +53,7 @@ int main(int argc, char **argv)
         return 2;
     }
     fclose(f);
-    p = (lsq_problem){n, H, q, ff, m, G, u};
+    p = (lsq_problem){.n = n, .H = H, .q = q, .ff = ff, .m = m, .G = G, .u = u};
     w = lsq_work_new(n, m);
     for (int k = 0; k < (reps < 1 ? 1 : reps); k++) {
         double t0 = glint_now();
@@ -68,6 +71,31 @@ int main(int argc, char **argv)
            r.active_rows, r.infeasible_row, best * 1e3);
     for (int i = 0; i < n; i++)
         printf("%s%.17g", i ? ", " : "", c[i]);
+    printf("], \"c_kept\": [");
+    {
+        double *gmax = malloc(((size_t)m + 1) * sizeof *gmax);
+        double *Gt = malloc(((size_t)m * n + 1) * sizeof *Gt);
+        double *R0 = malloc((size_t)n * n * sizeof *R0);
+        if (!gmax || !Gt || !R0 || lsq_rows_check(G, m, n, gmax, Gt, &e) ||
+            lsq_factor(H, n, R0, &e)) {
+            printf("]}\n");
+            fprintf(stderr, "kept rows or factor failed\n");
+            return 1;
+        }
+        p.gmax = gmax;
+        p.Gt = Gt;
+        p.R0 = R0;
+        if (lsq_solve(&p, (lsq_mode)mode, 0.0, w, c, &r, &e)) {
+            printf("]}\n");
+            fprintf(stderr, "solve with the kept factor: %s\n", e.msg);
+            return 1;
+        }
+        for (int i = 0; i < n; i++)
+            printf("%s%.17g", i ? ", " : "", c[i]);
+        free(gmax);
+        free(Gt);
+        free(R0);
+    }
     printf("]}\n");
     lsq_work_free(w);
     free(H);

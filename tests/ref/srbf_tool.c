@@ -153,7 +153,7 @@ int main(int argc, char **argv)
         }
         for (int l2 = 0; l2 < NL; l2++)
             u[l2] = 1.0 - rho[ch];
-        pr = (lsq_problem){J, H, q, ff, NL, g, u};
+        pr = (lsq_problem){.n = J, .H = H, .q = q, .ff = ff, .m = NL, .G = g, .u = u};
         if (lsq_solve(&pr, LSQ_ENERGY, 0, NULL, c, &r, &e)) {
             fprintf(stderr, "solve: %s\n", e.msg);
             return 2;

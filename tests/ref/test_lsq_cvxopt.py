@@ -189,6 +189,14 @@ def main():
             viol = max(viol, float(-c.min()))
         if mode == 0 and G is not None and len(u):
             viol = max(viol, float((G @ c - u).max()) / max(1.0, float(np.abs(u).max())))
+        # the same problem with the rows and the factor of H kept by the caller
+        ck = np.array(g["c_kept"])
+        relk = (objective(H, q, ff, ck, Tf) - oc) / scale
+        if mode != 2:
+            viol = max(viol, float(-ck.min()))
+        if mode == 0 and G is not None and len(u):
+            viol = max(viol, float((G @ ck - u).max()) / max(1.0, float(np.abs(u).max())))
+        rel = max(rel, relk)
         ok = g["status"] == "optimal" and rel <= 1e-6 and viol <= 1e-9
         fails += not ok
         print(f"{name:42s} {og:22.15g} {oc:22.15g} {rel:9.1e} {viol:8.1e} {g['iterations']:4d} "

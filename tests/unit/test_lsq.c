@@ -111,13 +111,31 @@ TEST(matches_brute_force_on_small_problems)
     srand(11);
     for (int trial = 0; trial < 300; trial++) {
         int n = 1 + trial % 5, m = trial % 4;
-        double H[64], q[8], G[64], u[8], c[8], cb[8], fb;
+        double H[64], q[8], G[64], u[8], c[8], cb[8], fb, gmax[8], Gt[64], c2[8], R0[64];
         lsq_problem p;
-        lsq_result r;
+        lsq_result r, r2;
         glint_err e;
         random_problem(n, m, 12, H, q, G, u);
-        p = (lsq_problem){n, H, q, 0.0, m, G, u};
+        p = (lsq_problem){.n = n, .H = H, .q = q, .m = m, .G = G, .u = u};
         ASSERT_OK(lsq_solve(&p, m ? LSQ_ENERGY : LSQ_NONNEG, 0, NULL, c, &r, &e));
+        /* rows checked once and shared (as a fit's three channels do): the
+         * same steps, the same answer to the bit */
+        ASSERT_OK(lsq_rows_check(G, m, n, gmax, Gt, &e));
+        p.gmax = gmax;
+        p.Gt = Gt;
+        ASSERT_OK(lsq_solve(&p, m ? LSQ_ENERGY : LSQ_NONNEG, 0, NULL, c2, &r2, &e));
+        ASSERT(r2.iterations == r.iterations);
+        for (int j = 0; j < n; j++)
+            ASSERT_MSG(c2[j] == c[j], "trial %d: c[%d] %.17g with shared rows, %.17g without",
+                       trial, j, c2[j], c[j]);
+        /* and with the factor of H kept by the caller: the same optimum */
+        ASSERT_OK(lsq_factor(H, n, R0, &e));
+        p.R0 = R0;
+        ASSERT_OK(lsq_solve(&p, m ? LSQ_ENERGY : LSQ_NONNEG, 0, NULL, c2, &r2, &e));
+        ASSERT_MSG(fabs(f(n, H, q, c2) - f(n, H, q, c)) <= 1e-10 * (1 + fabs(f(n, H, q, c))),
+                   "trial %d: %.12g with the kept factor, %.12g without", trial,
+                   f(n, H, q, c2), f(n, H, q, c));
+        ASSERT(r2.max_violation <= 1e-9);
         ASSERT_MSG(r.status == LSQ_OK, "trial %d: %s", trial, lsq_status_name(r.status));
         fb = brute(n, m, H, q, G, u, cb);
         ASSERT_MSG(f(n, H, q, c) <= fb + 1e-9 * (1 + fabs(fb)),
@@ -130,7 +148,7 @@ TEST(matches_brute_force_on_small_problems)
 TEST(modes_infeasibility_and_bad_input)
 {
     double H[4] = {2, 0, 0, 1}, q[2] = {-1, 3}, G[2] = {1, 1}, u[1] = {1}, c[2];
-    lsq_problem p = {2, H, q, 0.0, 1, G, u};
+    lsq_problem p = {.n = 2, .H = H, .q = q, .m = 1, .G = G, .u = u};
     lsq_result r;
     glint_err e;
     /* none: the unconstrained minimum H^-1 q */
@@ -163,6 +181,19 @@ TEST(modes_infeasibility_and_bad_input)
     H[3] = NAN;
     ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
     H[3] = 1;
+    /* non-finite rows, each alone: G, u; and an infinite H entry */
+    G[1] = INFINITY;
+    ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
+    ASSERT_EQ(lsq_rows_check(G, 1, 2, NULL, NULL, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "not finite") != NULL);
+    G[1] = 1;
+    u[0] = NAN;
+    ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
+    u[0] = 1.0;
+    H[0] = -INFINITY;
+    ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
+    H[0] = 2;
+    ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
     p.n = 0;
     ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
 }

@@ -494,6 +494,53 @@ TEST(nothing_lit_is_a_clear_error_and_impossible_budgets_are_refused)
 /* The energy and transfer levels on disk: a new cache over the same
  * directory loads them (no ray, no transfer rebuilt), the fit is the same,
  * and a damaged file is rebuilt. */
+/* A repaint with the same parameters starts from the factor of H that the
+ * first fit made and the level keeps: the same material to the bit; other
+ * parameters (the smoothness weight) make their own. */
+TEST(a_repaint_starts_from_the_kept_factor)
+{
+    srbf_params p;
+    prep *pp = NULL;
+    material m[3];
+    float *rgb;
+    int n;
+    glint_err e;
+    static const char *want[3] = {"made", "kept", "made"};
+    ASSERT_OK(setup());
+    params_default(&p);
+    p.lights = 40; /* levels of its own: no earlier test has fitted on them */
+    ASSERT_OK(view_samples(0, &p, &pp));
+    n = prep_samples(pp)->n;
+    rgb = malloc((size_t)3 * n * sizeof *rgb);
+    for (int i = 0; i < 3 * n; i++)
+        rgb[i] = (float)(0.3 + 0.2 * sin(0.013 * i));
+    for (int k = 0; k < 3; k++) {
+        const json_t *ch;
+        if (k == 2) { /* the same levels, another smoothness weight */
+            prep_release(C, pp);
+            p.smooth *= 1.5;
+            ASSERT_OK(view_samples(0, &p, &pp));
+        }
+        ASSERT_OK(prep_fit(pp, NULL, rgb, &m[k], &e));
+        ch = json_object_get(json_object_get(m[k].info, "errors"), "channels");
+        ASSERT_EQ((int)json_array_size(ch), 3);
+        for (size_t c = 0; c < 3; c++) {
+            const char *f = json_string_value(json_object_get(json_array_get(ch, c), "factor"));
+            ASSERT_MSG(f && strcmp(f, want[k]) == 0, "fit %d channel %zu: factor %s, not %s", k,
+                       c, f ? f : "(none)", want[k]);
+        }
+    }
+    {
+        const srbf_material *a = srbf_material_of(&m[0]), *b = srbf_material_of(&m[1]);
+        for (int j = 0; j < 3 * a->b.J; j++)
+            ASSERT(a->c[j] == b->c[j]);
+    }
+    for (int k = 0; k < 3; k++)
+        material_free(&m[k]);
+    free(rgb);
+    prep_release(C, pp);
+}
+
 TEST(the_precomputation_survives_a_restart_on_disk)
 {
     char dir[] = "/tmp/glint-srbf-cache-XXXXXX";
@@ -559,6 +606,7 @@ TEST(the_precomputation_survives_a_restart_on_disk)
 }
 
 TEST_LIST{
+    TEST_ENTRY(a_repaint_starts_from_the_kept_factor),
     TEST_ENTRY(a_known_srbf_material_is_recovered_on_new_views_and_rotations),
     TEST_ENTRY(cook_torrance_with_each_static_term),
     TEST_ENTRY(energy_holds_on_a_dense_grid_when_the_target_is_too_bright),
