@@ -146,7 +146,7 @@ static int img_unrecognized(const char *what, const unsigned char *b, size_t n,
 
 /* Decode a file (path != NULL) or a buffer, then check finiteness.
  * (OUT: *pix, zeroed first; freed on failure.) */
-static int img_read_common(const char *path, const void *data, size_t len,
+static int img_read_common(const char *path, const void *data, size_t len, int max_dim,
                            int max_channels, int want_names, img_oiio_pixels *pix,
                            glint_err *err)
 {
@@ -197,7 +197,7 @@ static int img_read_common(const char *path, const void *data, size_t len,
         goto fail_file;
     }
 
-    rc = img_oiio_read(fmt, fp, data, len, what, IMG_MAX_DIM, max_channels,
+    rc = img_oiio_read(fmt, fp, data, len, what, max_dim, max_channels,
                        want_names, pix, err);
     if (fp)
         fclose(fp);
@@ -239,7 +239,7 @@ int img_read(const char *path, img *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read: empty path");
-    rc = img_read_common(path, NULL, 0, 4, 0, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
@@ -247,6 +247,11 @@ int img_read(const char *path, img *out, glint_err *err)
 }
 
 int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
+{
+    return img_read_mem_max(data, len, IMG_MAX_DIM, out, err);
+}
+
+int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err)
 {
     img_oiio_pixels pix;
     int rc;
@@ -258,7 +263,9 @@ int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
         return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL data");
     if (len == 0)
         return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
-    rc = img_read_common(NULL, data, len, 4, 0, &pix, err);
+    if (max_dim < 1 || max_dim > IMG_MAX_DIM)
+        max_dim = IMG_MAX_DIM;
+    rc = img_read_common(NULL, data, len, max_dim, 4, 0, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
@@ -275,7 +282,7 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read_named: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_NAMED_CHANNELS, 1, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, &pix, err);
     if (rc)
         return rc;
     out->width = pix.width;

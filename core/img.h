@@ -41,6 +41,9 @@ int img_read(const char *path, img *out, glint_err *err);
 
 /* Decode an image held in memory (an upload).  Same checks as img_read. */
 int img_read_mem(const void *data, size_t len, img *out, glint_err *err);
+/* The same with sides at most max_dim (1..IMG_MAX_DIM), checked from the
+ * header before any pixel is decoded: what bounds an upload's memory. */
+int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err);
 
 /* Write by file extension: .png (8-bit, clamped), .exr (half or float as
  * chosen: float), .hdr.  GLINT_EUNSUPPORTED for other extensions.

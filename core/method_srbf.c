@@ -133,9 +133,11 @@ static const char *const diffuse_examples[] = {"fit", "0.3", "0.35,0.25,0.15", N
 static const method_param srbf_params_table[] = {
     {.name = "env", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "the environment lighting the painted views: a built-in (studio, sky, "
-                    "sunset, overcast, white), or on the command line file:PATH (an HDR "
-                    "lat-long map or cube cross)",
-     .offset = offsetof(srbf_params, env), .syntax = "NAME | builtin:NAME | file:PATH",
+                    "sunset, overcast, white); on the command line file:PATH (an HDR "
+                    "lat-long map or cube cross); in glintd data:FILE of its --env-dir or "
+                    "upload:ID of POST /api/v1/environments",
+     .offset = offsetof(srbf_params, env),
+     .syntax = "NAME | builtin:NAME | file:PATH | data:FILE | upload:ID",
      .examples = env_examples, .parse = env_parse, .format = env_format},
     {.name = "env_rotation", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "rotation of the environment about the up (+z) axis, degrees",

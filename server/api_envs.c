@@ -1,14 +1,21 @@
 /* api_envs.c: the environments the daemon offers to environment-lit fits
  * (proto/openapi.yaml, "environments").
  *
- *   GET /api/v1/environments
+ *   GET    /api/v1/environments
+ *   POST   /api/v1/environments?name=LABEL   raw OpenEXR or Radiance HDR  (API key)
+ *   DELETE /api/v1/environments/{id}                                      (API key)
  *
- * The built-in skies, and the HDR maps of the directory given by --env-dir
- * (none without it), named "data:<file>".  The resolver registered here
- * (env.h) is the only way a fit's `env` parameter reaches a file: a name
- * of [A-Za-z0-9._-] not starting with '.', a regular file whose real path
- * lies inside the directory (no traversal, no symbolic link out of it).
- * Thread-safety: the directory is set once before threads start. */
+ * The built-in skies, the HDR maps of the directory given by --env-dir
+ * (none without it), named "data:<file>", and uploads, named
+ * "upload:<id>": decoded and checked before they are kept (sides at most
+ * ENV_UPLOAD_MAX_DIM, a layout env.h reads), stored in the data store as
+ * blobs environments/<id>.exr|hdr with a record environments/<id>.json.
+ * The resolver registered here (env.h) is the only way a fit's `env`
+ * parameter reaches a file: data:NAME of [A-Za-z0-9._-] not starting with
+ * '.', a regular file whose real path lies inside the directory (no
+ * traversal, no symbolic link out of it); upload:ID of a valid id whose
+ * blob is a regular file.  Thread-safety: the directories are set once
+ * before threads start. */
 #include <dirent.h>
 #include <math.h>
 #include <limits.h>
@@ -17,12 +24,23 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "admit.h"
 #include "api_common.h"
 #include "app.h"
+#include "auth.h"
+#include "clock.h"
 #include "env.h"
+#include "ids.h"
 #include "render.h"
+#include "store.h"
 
 static char env_dir[PATH_MAX]; /* real path, "" when none */
+static char up_dir[PATH_MAX];  /* the uploads' blob directory, "" before the store opens */
+
+/* An upload's sides: 4096 x 2048 lat-long (or a 4096-wide cross), which
+ * decodes in at most ENV_UPLOAD_BYTES (admitted against the work budget). */
+#define ENV_UPLOAD_MAX_DIM 4096
+#define ENV_UPLOAD_BYTES ((size_t)ENV_UPLOAD_MAX_DIM * ENV_UPLOAD_MAX_DIM * (4 + 3) * sizeof(float))
 
 static int name_ok(const char *name)
 {
@@ -54,13 +72,34 @@ static int data_file(const char *name, char *real, size_t len)
     return 0;
 }
 
+/* The file of upload:ID (OUT: path; ext: "exr" or "hdr" when not NULL), or -1. */
+static int upload_file(const char *id, char *path, size_t len, const char **ext)
+{
+    static const char *const exts[] = {"exr", "hdr"};
+    if (!up_dir[0] || !glint_id_valid(id))
+        return -1;
+    for (int i = 0; i < 2; i++) {
+        struct stat st;
+        snprintf(path, len, "%s/%s.%s", up_dir, id, exts[i]);
+        if (lstat(path, &st) == 0 && S_ISREG(st.st_mode)) {
+            if (ext)
+                *ext = exts[i];
+            return 0;
+        }
+    }
+    return -1;
+}
+
 static int resolve(const char *spec, char *path, size_t len, glint_err *err)
 {
     if (!strncmp(spec, "data:", 5) && data_file(spec + 5, path, len) == 0)
         return 0;
+    if (!strncmp(spec, "upload:", 7) && upload_file(spec + 7, path, len, NULL) == 0)
+        return 0;
     return glint_err_set(err, GLINT_ENOTFOUND,
-                         "no environment '%s': a built-in (%s)%s", spec, env_builtin_names(),
-                         env_dir[0] ? " or data:NAME of GET /api/v1/environments" : "");
+                         "no environment '%s': a built-in (%s)%s or upload:ID of POST "
+                         "/api/v1/environments", spec, env_builtin_names(),
+                         env_dir[0] ? ", data:NAME of GET /api/v1/environments" : "");
 }
 
 int api_envs_init(const char *dir, glint_err *err)
@@ -72,6 +111,14 @@ int api_envs_init(const char *dir, glint_err *err)
     }
     env_set_resolver(resolve);
     return 0;
+}
+
+int api_envs_store(store *s, glint_err *err)
+{
+    int rc = store_blob_path(s, "environments", up_dir, sizeof up_dir, err);
+    if (rc)
+        up_dir[0] = '\0';
+    return rc;
 }
 
 static int query_num(const char *s, double lo, double hi, double *out)
@@ -174,10 +221,163 @@ static http_resp envs_get(http_req *req)
             free(found[i]);
         }
     }
+    if (up_dir[0]) {
+        app *a = req->app;
+        json_t *blobs = NULL, *v;
+        size_t i;
+        if (!store_blob_list(a->store, "environments", &blobs, NULL))
+            json_array_foreach(blobs, i, v) {
+                const char *nm = json_string_value(v);
+                char blob[128];
+                void *data = NULL;
+                size_t len = 0;
+                json_t *rec;
+                if (!nm || strlen(nm) < 6 || strcmp(nm + strlen(nm) - 5, ".json"))
+                    continue;
+                snprintf(blob, sizeof blob, "environments/%s", nm);
+                if (store_blob_get(a->store, blob, &data, &len, NULL))
+                    continue;
+                if ((rec = json_loadb(data, len, 0, NULL)) && json_is_object(rec))
+                    json_array_append_new(list, rec);
+                else
+                    json_decref(rec);
+                free(data);
+            }
+        json_decref(blobs);
+    }
     return http_json(200, json_pack("{s:o}", "environments", list));
+}
+
+static int label_ok(const char *s)
+{
+    size_t n = s ? strlen(s) : 0;
+    if (n == 0 || n > 60)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if ((unsigned char)s[i] < 0x20 || s[i] == 0x7f || s[i] == '"' || s[i] == '\\')
+            return 0;
+    return 1;
+}
+
+static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint_err *e)
+{
+    app *a = req->app;
+    const char *label = http_query(req, "name"), *ext;
+    const unsigned char *b = (const unsigned char *)req->body;
+    char blob[128], now[GLINT_TIME_LEN], *txt;
+    env_map m;
+    int rc;
+
+    if ((rc = auth_require_key(req, e)))
+        return rc;
+    if (!up_dir[0])
+        return glint_err_set(e, GLINT_EINTERNAL, "no store for uploads");
+    if (req->body_too_large)
+        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
+                          "the map exceeds the request body limit of %zu bytes (max_body, "
+                          "glintd --max-body-mb %zu)",
+                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if (label && !label_ok(label))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                          "name must be 1 to 60 printable characters without quotes");
+    if (req->body_len < 4)
+        return api_reject(e, GLINT_EINVAL, "empty-body",
+                          "the body must be the map: an OpenEXR or Radiance HDR file");
+    if (!memcmp(b, "\x76\x2f\x31\x01", 4))
+        ext = "exr";
+    else if (req->body_len >= 2 && b[0] == '#' && b[1] == '?')
+        ext = "hdr";
+    else
+        return api_reject(e, GLINT_EINVAL, "invalid-environment",
+                          "the body is neither OpenEXR nor Radiance HDR (by its first bytes)");
+    if ((rc = admit_enter(a->work, ENV_UPLOAD_BYTES, "an environment upload", e)))
+        return rc;
+    rc = env_load_mem(req->body, req->body_len, label ? label : "upload", ENV_UPLOAD_MAX_DIM,
+                      &m, e);
+    admit_leave(a->work, ENV_UPLOAD_BYTES);
+    if (rc == GLINT_ENOMEM)
+        return rc;
+    if (rc)
+        return api_reject(e, GLINT_EINVAL, "invalid-environment",
+                          "the map cannot be used (sides up to %d, lat-long 2:1 or a cube "
+                          "cross): %.400s",
+                          ENV_UPLOAD_MAX_DIM, e->msg);
+    if ((rc = glint_id_new(id, e))) {
+        env_map_free(&m);
+        return rc;
+    }
+    glint_time_iso_ms(now);
+    {
+        char spec[64];
+        snprintf(spec, sizeof spec, "upload:%s", id);
+        *rec = json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:s, s:I, s:I, s:I, s:s, s:s}", "id", id,
+                         "spec", spec, "name", label ? label : id, "kind", "upload", "width",
+                         m.width, "height", m.height, "layout", m.layout, "bytes",
+                         (json_int_t)req->body_len, "clamped", (json_int_t)m.clamped,
+                         "nonfinite", (json_int_t)m.nonfinite, "format", ext, "created", now);
+    }
+    env_map_free(&m);
+    if (!*rec || !(txt = json_dumps(*rec, JSON_COMPACT))) {
+        json_decref(*rec);
+        *rec = NULL;
+        return glint_err_set(e, GLINT_ENOMEM, "cannot build the environment record");
+    }
+    /* the map first, its record last: a record names a map that is there */
+    snprintf(blob, sizeof blob, "environments/%s.%s", id, ext);
+    if (!(rc = store_blob_put(a->store, blob, req->body, req->body_len, e))) {
+        char rb[128];
+        snprintf(rb, sizeof rb, "environments/%s.json", id);
+        if ((rc = store_blob_put(a->store, rb, txt, strlen(txt), e)))
+            store_blob_delete(a->store, blob, NULL);
+    }
+    free(txt);
+    if (rc) {
+        json_decref(*rec);
+        *rec = NULL;
+        return glint_err_prefix(e, "storing the environment");
+    }
+    return 0;
+}
+
+static http_resp envs_post(http_req *req)
+{
+    json_t *rec = NULL;
+    char id[GLINT_ID_LEN], loc[96];
+    glint_err e;
+    http_resp r;
+    if (env_post_do(req, &rec, id, &e))
+        return api_error(&e);
+    snprintf(loc, sizeof loc, "/api/v1/environments/%s", id);
+    r = http_json(201, rec);
+    http_header(&r, "Location", loc);
+    return r;
+}
+
+static http_resp envs_delete(http_req *req)
+{
+    app *a = req->app;
+    const char *id = req->param[0], *ext;
+    char path[PATH_MAX + 64], blob[128];
+    glint_err e;
+    if (auth_require_key(req, &e))
+        return api_error(&e);
+    if (upload_file(id, path, sizeof path, &ext)) {
+        api_reject(&e, GLINT_ENOTFOUND, "not-found", "no uploaded environment \"%.40s\"",
+                   id ? id : "");
+        return api_error(&e);
+    }
+    /* the record first: a map without one is not listed */
+    snprintf(blob, sizeof blob, "environments/%s.json", id);
+    store_blob_delete(a->store, blob, NULL);
+    snprintf(blob, sizeof blob, "environments/%s.%s", id, ext);
+    if (store_blob_delete(a->store, blob, &e))
+        return api_error(&e);
+    return http_bytes(204, NULL, "", 0);
 }
 
 const http_route api_envs_routes[] = {
     {"GET", "/api/v1/environments", envs_get},
+    {"POST", "/api/v1/environments", envs_post},
+    {"DELETE", "/api/v1/environments/{id}", envs_delete},
 };
 const int api_envs_nroutes = sizeof api_envs_routes / sizeof api_envs_routes[0];

@@ -83,5 +83,7 @@ extern const http_route api_envs_routes[];       /* the environments on offer */
 extern const int api_envs_nroutes;
 /* The environments' resolver (api_envs.c), set before threads start. */
 int api_envs_init(const char *dir, glint_err *err);
+/* Uploaded environments live in the store's blobs (after store_open). */
+int api_envs_store(struct store *s, glint_err *err);
 
 #endif

@@ -318,7 +318,8 @@ int main(int argc, char **argv)
             return 1;
         }
         fc.work = a.work;
-        if (store_open(a.cfg.data_dir, &a.store, &ge) || events_open(a.store, &a.events) ||
+        if (store_open(a.cfg.data_dir, &a.store, &ge) || api_envs_store(a.store, &ge) ||
+            events_open(a.store, &a.events) ||
             fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
             render_open(8, 0, &a.render, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);

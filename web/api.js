@@ -104,6 +104,9 @@ export class Api {
   }
   strokes(sid, since, limit) { return this.get(`/sessions/${sid}/strokes`, { query: { since, limit: limit || 1000 }, what: 'Reading strokes' }); }
   environments() { return this.get('/environments', { what: 'Reading the environments' }); }
+  uploadEnvironment(bytes, name) {
+    return this.request('POST', '/environments', { body: bytes, type: 'application/octet-stream', query: { name }, what: 'Uploading the environment' });
+  }
   methods(sid) { return this.get('/methods', { query: { session_id: sid }, what: 'Reading the fit methods' }); }
   fit(sid, body) { return this.request('POST', `/sessions/${sid}/fits`, { body, raw: true, what: 'Fitting' }); }
   job(id) { return this.get('/jobs/' + id, { what: 'Reading the job' }); }

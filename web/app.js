@@ -496,6 +496,7 @@ async function loadFitAndMaterials(S) {
   const judge = new Judge(api, S);
   state.fit = fit; state.judge = judge;
   fit.addEventListener('error', e => showError(e.detail));
+  fit.addEventListener('envs', e => judge.addEnv(e.detail));
   judge.addEventListener('error', e => showError(e.detail));
   judge.addEventListener('reset', () => judge.resetCamera(state.k));
   judge.addEventListener('select-view', e => selectView(e.detail));

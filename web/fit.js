@@ -141,10 +141,11 @@ export class FitPanel extends EventTarget {
       const lab = document.createElement('label');
       lab.textContent = p.name;
       lab.title = p.description;
-      let inp;
+      let inp, extra = null;
       if (p.name === 'env' && this.envs) {           // the environments glintd offers
         inp = document.createElement('select');
         for (const e of this.envs) { const o = document.createElement('option'); o.value = e.spec; o.textContent = e.name; inp.appendChild(o); }
+        extra = this.envUpload(inp);
       } else if (p.enum) {
         inp = document.createElement('select');
         for (const v of p.enum) { const o = document.createElement('option'); o.value = o.textContent = v; inp.appendChild(o); }
@@ -171,10 +172,39 @@ export class FitPanel extends EventTarget {
       this.inputs[p.name] = { p, inp };
       lab.htmlFor = inp.id;
       box.append(lab, inp);
+      if (extra) box.appendChild(extra);
       const d = document.createElement('div'); d.className = 'desc';
       d.textContent = p.affects === 'precomputation' ? 'new precomputation' : p.affects === 'operator' ? 'new operator' : 'free';
       box.appendChild(d);
     }
+  }
+
+  // An HDR file of the artist's (OpenEXR or Radiance, lat-long or a cube
+  // cross): glintd decodes it before keeping it; the new environment is
+  // chosen here and offered to the previews ('envs' event).
+  envUpload(sel) {
+    const lab = document.createElement('label');
+    lab.className = 'env-upload';
+    lab.textContent = 'upload HDR…';
+    lab.title = 'an OpenEXR or Radiance HDR map, lat-long (2:1) or a cube cross, sides up to 4096';
+    const f = document.createElement('input');
+    f.type = 'file'; f.accept = '.exr,.hdr'; f.id = 'env-file'; f.hidden = true;
+    f.onchange = async () => {
+      const file = f.files && f.files[0];
+      if (!file) return;
+      try {
+        const name = file.name.replace(/[^\x20-\x7e]|["\\]/g, '_').slice(0, 60) || 'upload';
+        const e = await this.api.uploadEnvironment(new Uint8Array(await file.arrayBuffer()), name);
+        this.envs.push(e);
+        const o = document.createElement('option'); o.value = e.spec; o.textContent = e.name;
+        sel.appendChild(o); sel.value = e.spec;
+        sel.dispatchEvent(new Event('input', { bubbles: true }));
+        this.emit('envs', e);
+      } catch (err) { this.emit('error', err); }
+      f.value = '';
+    };
+    lab.appendChild(f);
+    return lab;
   }
 
   values() {

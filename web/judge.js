@@ -54,6 +54,13 @@ export class Judge extends EventTarget {
     $('env-rot').oninput = () => { this.showEnvBar(); this.request(); };
   }
 
+  // An environment uploaded in this studio: offered to the previews too.
+  addEnv(e) {
+    const o = document.createElement('option');
+    o.value = e.spec; o.textContent = e.name;
+    $('preview-light').appendChild(o);
+  }
+
   // The environment of the preview ('' for the point light).
   envSpec() { return $('preview-light').value; }
 

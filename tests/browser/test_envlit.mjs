@@ -31,6 +31,25 @@ run({
     // the environment parameter lists what glintd offers
     const envs = await page.evaluate(() => [...document.getElementById('param-env').options].map(o => o.value));
     assert(envs.includes('sky') && envs.includes('studio'), 'environments offered: ' + envs);
+    // an HDR file of the artist's, uploaded from the studio: chosen, and offered to the previews
+    const w = 32, h = 16, px = Buffer.alloc(4 * w * h);
+    for (let i = 0; i < w * h; i++) px.set(i < w * 4 ? [128, 128, 128, 130] : [128, 128, 160, 128], 4 * i);
+    const hdr = Buffer.concat([Buffer.from(`#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y ${h} +X ${w}\n`), px]);
+    await page.setInputFiles('#env-file', { name: 'my sky.hdr', mimeType: 'application/octet-stream', buffer: hdr });
+    await page.waitForFunction(() => /^upload:[0-9a-f]{32}$/.test(document.getElementById('param-env').value), null, { timeout: 30000 });
+    const upl = await page.evaluate(() => {
+      const sel = document.getElementById('param-env');
+      return { spec: sel.value, name: sel.selectedOptions[0].textContent,
+               preview: [...document.getElementById('preview-light').options].map(o => o.value) };
+    });
+    assertEq(upl.name, 'my sky.hdr', 'the upload is listed by its file name');
+    assert(upl.preview.includes(upl.spec), 'the previews offer the upload: ' + upl.preview);
+    // a file that is not a map: a clear error, nothing added
+    t.allowConsole(/environments\?name=notes\.hdr/);
+    const nEnv = await page.evaluate(() => document.getElementById('param-env').options.length);
+    await page.setInputFiles('#env-file', { name: 'notes.hdr', mimeType: 'text/plain', buffer: Buffer.from('not a map') });
+    await waitFor(() => page.evaluate(() => /OpenEXR nor Radiance/.test(document.body.textContent)), 15000, 'the upload error is shown');
+    assertEq(await page.evaluate(() => document.getElementById('param-env').options.length), nEnv, 'nothing added');
     await setValue(page, 'param-env', 'sky', 'change');
     await page.click('#quality .q[data-preset="draft"] input');
     assertEq(await page.inputValue('#param-lights'), '64', 'the draft preset sets 64 lights');

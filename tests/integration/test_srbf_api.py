@@ -195,6 +195,71 @@ def test_06_previews_under_an_environment(d):
     d.get("/api/v1/scenes/%s/views/0/base.png?env=nosuch" % S["scene"], status=404)
 
 
+def test_07_uploaded_environments(d):
+    """POST /api/v1/environments: decoded before it is kept, listed, named by
+    fits and previews as upload:<id>, refused with a reason when it cannot
+    be used, deleted."""
+    with open(os.path.join(ENV_DIR, "bright.hdr"), "rb") as f:
+        hdr = f.read()
+    oct_ = {"Content-Type": "application/octet-stream"}
+    r = d.post("/api/v1/environments?name=bright%20upload", headers=oct_, data=hdr, status=201,
+               schema="Environment.json")
+    up = r.json()
+    assert up["spec"] == "upload:" + up["id"] and up["kind"] == "upload", up
+    assert (up["width"], up["height"], up["layout"], up["format"]) == (64, 32, "latlong", "hdr")
+    assert up["name"] == "bright upload" and up["bytes"] == len(hdr)
+    assert r.headers["Location"] == "/api/v1/environments/" + up["id"]
+    listed = d.get("/api/v1/environments", status=200).json()["environments"]
+    assert [e for e in listed if e["spec"] == up["spec"]] == [up], listed
+    # a fit and a preview under it
+    kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env=up["spec"])})
+    if kind == "job":
+        j = wait_job(d, job["id"])
+        assert j["state"] == "done", j
+    mid, h = S["material"]["id"], tok(S["view"])
+    p = d.get("/api/v1/materials/%s/preview.exr?view=0&lights=32&env=%s" % (mid, up["spec"]),
+              headers=h, status=200)
+    assert ("env=" + up["spec"]) in p.headers["X-Glint-Env"], p.headers["X-Glint-Env"]
+    # shared data: an EXR from the CC0 maps when present
+    exr = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data", "envmaps",
+                       "courtyard.exr")
+    if os.path.exists(exr) and os.path.getsize(exr) < 48 << 20:
+        with open(exr, "rb") as f:
+            r = d.post("/api/v1/environments", headers=oct_, data=f.read())
+        assert r.status_code in (201, 422), r.text  # 422 only when its sides pass 4096
+        if r.status_code == 201:
+            e = r.json()
+            assert e["format"] == "exr" and e["width"] == 2 * e["height"], e
+            d.delete("/api/v1/environments/" + e["id"], status=204)
+    # refused, each with its reason
+    flat = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n"
+    cases = [
+        (b"", 400, "empty-body"),
+        (b"hello, not a map", 422, "neither OpenEXR nor Radiance"),
+        (b"\x76\x2f\x31\x01" + bytes(200), 422, "cannot be used"),
+        (flat % (40, 64) + bytes(4 * 40 * 64), 422, "cannot be used"),     # 8:5, no layout
+        (flat % (2049, 4098) + bytes(4096), 422, "4096"),  # sides above 4096: from the header
+        (hdr[:len(hdr) // 2], 422, "cannot be used"),                       # truncated
+    ]
+    for body, code, words in cases:
+        r = d.post("/api/v1/environments", headers=oct_, data=body)
+        assert r.status_code == code and words in r.text, (body[:20], r.status_code, r.text)
+    for q in ("name=", "name=a%22b", "name=" + "x" * 61):
+        r = d.post("/api/v1/environments?" + q, headers=oct_, data=hdr)
+        assert r.status_code == 422, (q, r.status_code, r.text)
+    for bad in ("upload:" + "0" * 32, "upload:../bright.hdr", "upload:" + up["id"] + ".hdr"):
+        r = d.get("/api/v1/materials/%s/preview.exr?view=0&env=%s" % (mid, bad), headers=h)
+        assert r.status_code == 404, (bad, r.status_code, r.text)
+    # deleted: no longer listed or read; a second delete is 404
+    d.delete("/api/v1/environments/" + up["id"], status=204)
+    listed = d.get("/api/v1/environments", status=200).json()["environments"]
+    assert up["spec"] not in [e["spec"] for e in listed]
+    d.get("/api/v1/materials/%s/preview.exr?view=0&env=%s" % (mid, up["spec"]), headers=h,
+          status=404)
+    d.delete("/api/v1/environments/" + up["id"], status=404)
+    d.delete("/api/v1/environments/nosuch", status=404)
+
+
 def test_04_parameters_are_checked_by_the_table(d):
     h = dict(tok(S["paint"]), **{"Content-Type": "application/json"})
     url = "/api/v1/sessions/%s/fits" % S["session"]
