@@ -37,6 +37,12 @@ struct render_env_info;
 int api_env_query(http_req *req, struct render_env *out, int *has, glint_err *e);
 /* X-Glint-Env: what an environment render did. */
 void api_env_header(http_resp *r, const struct render_env_info *info);
+/* A scene's base-render environment, {"spec", "rotation", "intensity",
+ * "lights", "shadows", "background"} (all but spec optional, defaults of
+ * render_env_init): parsed and checked (GLINT_EINVAL, kind
+ * "invalid-input", naming `what`); api_env_json writes it back whole. */
+int api_env_parse(const json_t *j, const char *what, struct render_env *out, glint_err *e);
+json_t *api_env_json(const struct render_env *env);
 
 /* The same with context: detail "<context>: <message>". */
 http_resp api_fail(const glint_err *e, const char *context);

@@ -174,6 +174,58 @@ int api_env_query(http_req *req, render_env *out, int *has, glint_err *e)
     return 0;
 }
 
+int api_env_parse(const json_t *j, const char *what, render_env *out, glint_err *e)
+{
+    const char *k;
+    json_t *v;
+    render_env_init(out);
+    if (!json_is_object(j) || !json_is_string(json_object_get(j, "spec")))
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "%s: expected {\"spec\": environment, \"rotation\", \"intensity\", "
+                          "\"lights\", \"shadows\", \"background\"}", what);
+    json_object_foreach((json_t *)j, k, v) {
+        int ok = 1;
+        if (!strcmp(k, "spec")) {
+            if (env_spec_check(json_string_value(v), e))
+                return api_reject(e, GLINT_EINVAL, "invalid-input", "%s.spec: %.300s", what,
+                                  e->msg);
+            snprintf(out->spec, sizeof out->spec, "%s", json_string_value(v));
+        } else if (!strcmp(k, "rotation") || !strcmp(k, "intensity")) {
+            ok = json_is_number(v) && isfinite(json_number_value(v));
+            if (ok)
+                *(k[0] == 'r' ? &out->rotation_deg : &out->intensity) = json_number_value(v);
+        } else if (!strcmp(k, "lights")) {
+            ok = json_is_integer(v) && json_integer_value(v) >= 1 &&
+                 json_integer_value(v) <= RENDER_ENV_MAX_LIGHTS;
+            if (ok)
+                out->lights = (int)json_integer_value(v);
+        } else if (!strcmp(k, "shadows") || !strcmp(k, "background")) {
+            ok = json_is_boolean(v);
+            if (ok)
+                *(k[0] == 's' ? &out->shadows : &out->background) = json_is_true(v);
+        } else {
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "%s: unknown field \"%.40s\" (spec, rotation, intensity, lights, "
+                              "shadows, background)", what, k);
+        }
+        if (!ok)
+            return api_reject(e, GLINT_EINVAL, "invalid-input",
+                              "%s.%s: a number (rotation, intensity), an integer 1..%d (lights) "
+                              "or true/false (shadows, background)", what, k,
+                              RENDER_ENV_MAX_LIGHTS);
+    }
+    if (render_env_check(out, e))
+        return api_reject(e, GLINT_EINVAL, "invalid-input", "%s: %.300s", what, e->msg);
+    return 0;
+}
+
+json_t *api_env_json(const render_env *env)
+{
+    return json_pack("{s:s, s:f, s:f, s:i, s:b, s:b}", "spec", env->spec, "rotation",
+                     env->rotation_deg, "intensity", env->intensity, "lights", env->lights,
+                     "shadows", env->shadows, "background", env->background);
+}
+
 void api_env_header(http_resp *r, const render_env_info *info)
 {
     char h[200];

@@ -25,6 +25,7 @@
 #include "app.h"
 #include "auth.h"
 #include "clock.h"
+#include "env.h"
 #include "fitsvc.h"
 #include "ids.h"
 #include "img.h"
@@ -403,18 +404,35 @@ static int scene_build(app *a, const json_t *body, scene *sc, char *mesh_label,
     return 0;
 }
 
-/* The base-render settings of a creation request: {"brdf", "scale"}. */
+/* The base-render settings of a creation request: {"brdf", "scale",
+ * "env"}; OUT *env: the environment's record (NULL: the views' point
+ * lights), checked to resolve. */
 static int scene_base_settings(const json_t *body, const char **spec, double *scale,
-                               glint_err *e)
+                               json_t **env, glint_err *e)
 {
     json_t *b = json_object_get(body, "base"), *j;
     *spec = API_BASE_BRDF;
     *scale = API_BASE_SCALE;
+    *env = NULL;
     if (!b)
         return 0;
     if (!json_is_object(b))
         return api_reject(e, GLINT_EINVAL, "invalid-input",
-                          "base: expected {\"brdf\": spec, \"scale\": s}");
+                          "base: expected {\"brdf\": spec, \"scale\": s, \"env\": {...}}");
+    if ((j = json_object_get(b, "env"))) {
+        render_env re;
+        env_map m;
+        int rc;
+        if ((rc = api_env_parse(j, "base.env", &re, e)))
+            return rc;
+        if ((rc = env_resolve(re.spec, &m, e)))
+            return rc == GLINT_ENOTFOUND ? api_reject(e, GLINT_ENOTFOUND, "not-found",
+                                                      "base.env: %.400s", e->msg)
+                                         : glint_err_prefix(e, "base.env");
+        env_map_free(&m);
+        if (!(*env = api_env_json(&re)))
+            return glint_err_set(e, GLINT_ENOMEM, "out of memory");
+    }
     if ((j = json_object_get(b, "brdf"))) {
         if (!json_is_string(j))
             return api_reject(e, GLINT_EINVAL, "invalid-input",
@@ -435,7 +453,8 @@ static int scene_base_settings(const json_t *body, const char **spec, double *sc
 /* The scene document: ids, sizes, views with their sample counts and links. */
 static json_t *scene_doc(const scene *sc, const char *id, const char *label,
                          const char *view_set, const long *counts, long total,
-                         const char *base_spec, double base_scale, glint_err *e)
+                         const char *base_spec, double base_scale, json_t *base_env,
+                         glint_err *e)
 {
     char hash[33], now[GLINT_TIME_LEN], *text;
     json_t *views = json_array(), *js, *doc;
@@ -473,6 +492,8 @@ static json_t *scene_doc(const scene *sc, const char *id, const char *label,
                     "created", now, "base", "brdf", base_spec, "scale", base_scale, "scene", js);
     if (doc && strcmp(label, "upload") == 0)
         json_object_set_new(doc, "mesh_id", json_string(sc->mesh_name + 7));
+    if (doc && base_env)
+        json_object_set(json_object_get(doc, "base"), "env", base_env);
     if (!doc)
         glint_err_set(e, GLINT_ENOMEM, "cannot build the scene record");
     return doc;
@@ -485,6 +506,7 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
     const char *view_set = "ico12", *base_spec, *owner;
     char label[16], made[33];
     double base_scale;
+    json_t *base_env = NULL;
     long *counts = NULL, total = 0;
     scene sc;
     int rc;
@@ -499,7 +521,7 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
                           a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
     if ((rc = api_body_json(req, &body, e)))
         return rc;
-    if ((rc = scene_base_settings(body, &base_spec, &base_scale, e)) ||
+    if ((rc = scene_base_settings(body, &base_spec, &base_scale, &base_env, e)) ||
         (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)))
         goto done;
     /* samples per view: what a fit of this scene will see */
@@ -518,7 +540,8 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
         goto done;
     if (!owner)
         owner = made;
-    if (!(doc = scene_doc(&sc, id, label, view_set, counts, total, base_spec, base_scale, e)) ||
+    if (!(doc = scene_doc(&sc, id, label, view_set, counts, total, base_spec, base_scale,
+                          base_env, e)) ||
         json_object_set_new(doc, "owner", json_string(owner))) {
         rc = doc ? glint_err_set(e, GLINT_ENOMEM, "out of memory") : e->code;
         goto done;
@@ -532,6 +555,7 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
         json_object_set_new(*pub, "owner_key", json_string(owner));
 done:
     json_decref(doc);
+    json_decref(base_env);
     free(counts);
     scene_free(&sc);
     json_decref(body);

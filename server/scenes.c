@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "admit.h"
+#include "api_common.h"
 #include "fitsvc.h"
 #include "ids.h"
 #include "mesh.h"
@@ -80,11 +81,12 @@ int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
     char name[128];
     void *data = NULL;
     size_t len = 0, bytes;
-    json_t *doc = NULL, *base;
+    json_t *doc = NULL, *base, *jenv;
     cache_entry *se = NULL;
     const scene *sc;
     const char *spec;
     double scale;
+    render_env env;
     int rc;
 
     memset(out, 0, sizeof *out);
@@ -116,11 +118,18 @@ int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
                            id);
         goto done;
     }
-    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height);
+    jenv = json_object_get(base, "env");
+    if (jenv && (rc = api_env_parse(jenv, "base.env", &env, err)))
+        goto done;
+    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height) +
+            (jenv ? (size_t)sc->width * sc->height * 8 * (size_t)((env.lights + 63) / 64) : 0);
     if ((rc = admit_enter(a->work, bytes, "the base render", err)))
         goto done;
-    rc = render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], sc->width, sc->height,
-                     spec, scale, out, NULL, err);
+    /* on the CPU: the pixels are exactly those a painting is sampled at */
+    rc = jenv ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
+                                &sc->views[view], sc->width, sc->height, out, NULL, NULL, err)
+              : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], sc->width,
+                            sc->height, spec, scale, out, NULL, err);
     admit_leave(a->work, bytes);
     if (rc)
         goto done;

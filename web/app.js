@@ -147,9 +147,17 @@ function bindStart() {
   dz.ondragover = e => { e.preventDefault(); dz.classList.add('over'); };
   dz.ondragleave = () => dz.classList.remove('over');
   dz.ondrop = e => { e.preventDefault(); dz.classList.remove('over'); if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]); };
+  api.environments().then(r => {
+    for (const e of r.environments) {
+      const o = document.createElement('option');
+      o.value = e.spec; o.textContent = e.name + (e.kind === 'builtin' ? ' (built-in sky)' : '');
+      $('base-light-sel').appendChild(o);
+    }
+  }).catch(() => { /* the point lights stay available */ });
   $('create-btn').onclick = async () => {
     const size = +$('size-sel').value;
     const spec = { width: size, height: size, views: $('viewset-sel').value };
+    if ($('base-light-sel').value) spec.base = { env: { spec: $('base-light-sel').value } };
     if (mesh === 'upload') {
       if (!meshId) { toast('No mesh yet', 'Upload a mesh file first, or pick a built-in shape.', 'error'); return; }
       spec.mesh_id = meshId;

@@ -98,7 +98,9 @@ export class FitPanel extends EventTarget {
       sel.appendChild(o);
     }
     sel.onchange = () => this.setMethod(sel.value);
-    this.setMethod(this.methods[0].name);
+    // a scene painted under an environment is fitted under it by default
+    const env = this.sceneEnv();
+    this.setMethod(env && this.methods.some(x => x.name === 'srbf') ? 'srbf' : this.methods[0].name);
   }
 
   // Switch the method: its parameters, presets and measured points.
@@ -113,6 +115,16 @@ export class FitPanel extends EventTarget {
     const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
     const d0 = this.defaults();
     for (const [k, { inp }] of Object.entries(this.inputs)) inp.value = d0[k];
+    const env = this.sceneEnv();
+    if (env && this.inputs.env) {                       // the light the views were painted under
+      const inp = this.inputs.env.inp;
+      if (inp.tagName === 'SELECT' && ![...inp.options].some(o => o.value === env.spec)) {
+        const o = document.createElement('option'); o.value = o.textContent = env.spec; inp.appendChild(o);
+      }
+      inp.value = env.spec;
+      if (this.inputs.env_rotation) this.inputs.env_rotation.inp.value = env.rotation || 0;
+      if (this.inputs.env_intensity && env.intensity) this.inputs.env_intensity.inp.value = env.intensity;
+    }
     this.choose(def ? def.name : null);
     this.renderQuality();
     this.updateButton();
@@ -126,6 +138,12 @@ export class FitPanel extends EventTarget {
       this.points = (m.scene && m.scene.points) || [];
     } catch (_) { /* keep the old figures */ }
     this.renderQuality();
+  }
+
+  // The environment the scene's base renders are lit by (null: point lights).
+  sceneEnv() {
+    const sc = this.session && this.session.scene;
+    return (sc && sc.base && sc.base.env) || null;
   }
 
   defaults() {

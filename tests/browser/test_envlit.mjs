@@ -18,6 +18,26 @@ function previewBytes(page) {
 }
 
 run({
+  async 'a scene painted under an environment: chosen on the start page, fitted under it'(t) {
+    const page = await t.page();
+    await page.goto(t.daemon.base + '/#/');
+    await page.waitForFunction(() => [...document.getElementById('base-light-sel').options].some(o => o.value === 'sky'), null, { timeout: 15000 });
+    const { scene, url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64, base: { env: { spec: 'sky', rotation: 30, lights: 32 } } });
+    assertEq(scene.base.env.spec, 'sky', 'the scene keeps its environment');
+    await openStudio(page, url);
+    await page.waitForSelector('#param-env', { state: 'attached' });
+    assertEq(await page.inputValue('#fit-method'), 'srbf', 'the environment method is chosen');
+    assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');
+    assertEq(await page.inputValue('#param-env_rotation'), '30', 'turned as the scene is');
+    // the base the artist paints on is lit by the sky, not by the view's point light
+    const lit = await page.evaluate(async id => {
+      const a = await fetch(`/api/v1/scenes/${id}/views/0/base.png?format=exr`).then(r => r.arrayBuffer());
+      const b = await fetch(`/api/v1/scenes/${id}/views/0/base.png?format=exr&env=sky&env_rotation=30&lights=32`).then(r => r.arrayBuffer());
+      const x = new Uint8Array(a), y = new Uint8Array(b);
+      return x.length === y.length && x.every((v, i) => v === y[i]);
+    }, scene.id);
+    assert(lit, 'the base render is the render under the environment');
+  },
   async 'srbf in the studio: environment, fit, lobe, energy, preview under the environment'(t) {
     const { url } = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96 });
     const page = await t.page();

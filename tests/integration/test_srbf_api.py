@@ -260,6 +260,27 @@ def test_07_uploaded_environments(d):
     d.delete("/api/v1/environments/nosuch", status=404)
 
 
+def test_08_a_scene_to_paint_under_an_environment(d):
+    """base.env at creation: the scene's base renders (what an artist paints
+    on, and what an unpainted view is) are lit by the environment."""
+    body = {"width": SIZE, "height": SIZE, "base": {"env": {"spec": "sky", "lights": 64}}}
+    sc = d.post("/api/v1/scenes", json=body, status=201, schema="Scene.json").json()
+    assert sc["base"]["env"] == {"spec": "sky", "rotation": 0, "intensity": 1, "lights": 64,
+                                 "shadows": True, "background": True}, sc["base"]
+    got = d.get("/api/v1/scenes/%s/views/0/base.png?format=exr" % sc["id"], status=200).content
+    same = d.get("/api/v1/scenes/%s/views/0/base.png?format=exr&env=sky&lights=64" % sc["id"],
+                 status=200).content
+    lamp = d.get("/api/v1/scenes/%s/views/0/base.png?format=exr" % S["scene"],
+                 status=200).content
+    assert got[:4] == b"\x76\x2f\x31\x01" and got == same and got != lamp
+    for env, code in (({"spec": "nosuch"}, 404), ({"spec": "sky", "lights": 0}, 422),
+                      ({"spec": "sky", "rotation": "x"}, 422), ({"spec": "sky", "up": 1}, 422),
+                      ({"spec": "a b"}, 422), ({"lights": 8}, 422), ("sky", 422),
+                      ({"spec": "sky", "intensity": -1}, 422), ({"spec": "sky", "shadows": 1}, 422)):
+        r = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE, "base": {"env": env}})
+        assert r.status_code == code and "base.env" in r.text, (env, r.status_code, r.text)
+
+
 def test_04_parameters_are_checked_by_the_table(d):
     h = dict(tok(S["paint"]), **{"Content-Type": "application/json"})
     url = "/api/v1/sessions/%s/fits" % S["session"]
