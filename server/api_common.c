@@ -106,6 +106,16 @@ http_resp api_fail(const glint_err *e, const char *context)
     return r;
 }
 
+http_resp api_created(json_t *body, const char *what, const char *id)
+{
+    char loc[128];
+    http_resp r;
+    snprintf(loc, sizeof loc, "/api/v1/%s/%s", what, id);
+    r = http_json(201, body);
+    http_header(&r, "Location", loc);
+    return r;
+}
+
 http_resp api_error(const glint_err *e)
 {
     return api_fail(e, NULL);

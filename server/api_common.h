@@ -22,6 +22,8 @@ int api_status(const glint_err *e);
 
 /* The problem+json answer of an error. */
 http_resp api_error(const glint_err *e);
+/* 201 with body (taken) and Location: /api/v1/<what>/<id>. */
+http_resp api_created(json_t *body, const char *what, const char *id);
 
 /* Set *err to `code` with kind `kind` and a printf-style message; returns
  * code (for "return api_reject(err, GLINT_EINVAL, "invalid-input", ...)"). */

@@ -394,15 +394,11 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
 static http_resp envs_post(http_req *req)
 {
     json_t *rec = NULL;
-    char id[GLINT_ID_LEN], loc[96];
+    char id[GLINT_ID_LEN];
     glint_err e;
-    http_resp r;
     if (env_post_do(req, &rec, id, &e))
         return api_error(&e);
-    snprintf(loc, sizeof loc, "/api/v1/environments/%s", id);
-    r = http_json(201, rec);
-    http_header(&r, "Location", loc);
-    return r;
+    return api_created(rec, "environments", id);
 }
 
 static http_resp envs_delete(http_req *req)

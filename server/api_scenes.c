@@ -66,16 +66,6 @@ static json_t *api_scene_public(const json_t *doc)
     return pub;
 }
 
-static http_resp created(json_t *body, const char *what, const char *id)
-{
-    char loc[96];
-    http_resp r;
-    snprintf(loc, sizeof loc, "/api/v1/%s/%s", what, id);
-    r = http_json(201, body);
-    http_header(&r, "Location", loc);
-    return r;
-}
-
 /* ---- meshes ------------------------------------------------------------------ */
 
 static const char *const api_mesh_formats[] = {"ply", "obj", "off", "gltf", "glb", "dae", NULL};
@@ -157,7 +147,7 @@ static http_resp mesh_create(http_req *req)
     glint_err e;
     if (mesh_create_do(req, &info, id, &e))
         return api_error(&e);
-    return created(info, "meshes", id);
+    return api_created(info, "meshes", id);
 }
 
 static http_resp mesh_get(http_req *req)
@@ -569,7 +559,7 @@ static http_resp scene_create_h(http_req *req)
     glint_err e;
     if (scene_create_do(req, &pub, id, &e))
         return api_error(&e);
-    return created(pub, "scenes", id);
+    return api_created(pub, "scenes", id);
 }
 
 static http_resp scene_list(http_req *req)

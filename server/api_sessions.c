@@ -212,15 +212,11 @@ done:
 static http_resp session_create(http_req *req)
 {
     json_t *pub = NULL;
-    char id[33], loc[96];
+    char id[33];
     glint_err e;
-    http_resp r;
     if (session_create_do(req, &pub, id, &e))
         return api_error(&e);
-    snprintf(loc, sizeof loc, "/api/v1/sessions/%s", id);
-    r = http_json(201, pub);
-    http_header(&r, "Location", loc);
-    return r;
+    return api_created(pub, "sessions", id);
 }
 
 static http_resp session_get(http_req *req)
