@@ -29,13 +29,10 @@
 /* A block step that frees b variables onto a factor of k updates it one
  * column at a time (about b k^2 flops) while that costs less than a new
  * factor (k^3/3); one that binds b updates it while b is under 2k/3 (a
- * removal costs about k^2/2).  LSQ_BLOCK_SCALE tunes the crossover. */
-#ifndef LSQ_BLOCK_SCALE
-#define LSQ_BLOCK_SCALE 1.0
-#endif
+ * removal costs about k^2/2). */
 static int block_incremental(int b, int k, int adding)
 {
-    return b <= 4 || b < LSQ_BLOCK_SCALE * (adding ? (k + b) / 3.0 : 2.0 * k / 3.0);
+    return b <= 4 || b < (adding ? (k + b) / 3.0 : 2.0 * k / 3.0);
 }
 
 lsq_work *lsq_work_new(int n, int m)
@@ -71,9 +68,9 @@ lsq_work *lsq_work_new(int n, int m)
     w->ord = malloc((n + 1) * sizeof *w->ord);
     w->at = malloc((n + 1) * sizeof *w->at);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
-    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->col || !w->gcv || !w->ord || !w->at ||
-        !w->Q || !w->freev || !w->rows || !w->isfree || !w->cand || !w->inrow || !w->noblock ||
-        !w->K || !w->rhs || !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
+    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->col || !w->gcv || !w->ord ||
+        !w->at || !w->Q || !w->freev || !w->rows || !w->isfree || !w->cand || !w->inrow ||
+        !w->noblock || !w->K || !w->rhs || !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
         return NULL;
     }

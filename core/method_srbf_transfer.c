@@ -131,7 +131,8 @@ int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err 
     x->nl_rows = nl;
     if (!x->kept_init && pthread_mutex_init(&x->kept_lock, NULL) == 0)
         x->kept_init = 1;
-    if (!x->kept_init || !x->idx || !x->LtL || !x->G[0] || !x->G[1] || !x->gmax[0] || !x->gmax[1] || !x->Gt)
+    if (!x->kept_init || !x->idx || !x->LtL || !x->G[0] || !x->G[1] || !x->gmax[0] ||
+        !x->gmax[1] || !x->Gt)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     for (int j = 0; j < J; j++)
         if (x->reach[j])
