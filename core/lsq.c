@@ -65,10 +65,14 @@ lsq_work *lsq_work_new(int n, int m)
     w->gcu = malloc((m + 1) * sizeof *w->gcu);
     w->gpx = malloc((m + 1) * sizeof *w->gpx);
     w->gmax = malloc((m + 1) * sizeof *w->gmax);
+    w->pblk = malloc(((size_t)2 * LSQ_NBLK(n) + 1) * sizeof *w->pblk);
+    w->bnz = malloc((size_t)2 * LSQ_NBLK(n) + 1);
+    w->bnd = malloc((m + 1) * sizeof *w->bnd);
     w->ord = malloc((n + 1) * sizeof *w->ord);
     w->at = malloc((n + 1) * sizeof *w->at);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
-    if (!w->gcu || !w->gpx || !w->gmax || !w->up || !w->R || !w->col || !w->gcv || !w->ord ||
+    if (!w->gcu || !w->gpx || !w->gmax || !w->pblk || !w->bnz || !w->bnd || !w->up || !w->R ||
+        !w->col || !w->gcv || !w->ord ||
         !w->at || !w->Q || !w->freev || !w->rows || !w->isfree || !w->cand || !w->inrow ||
         !w->noblock || !w->K || !w->rhs || !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
@@ -103,6 +107,10 @@ void lsq_work_free(lsq_work *w)
     free(w->gcu);
     free(w->gpx);
     free(w->gmax);
+    free(w->gblkw);
+    free(w->pblk);
+    free(w->bnz);
+    free(w->bnd);
     free(w->ord);
     free(w->at);
     free(w);
@@ -320,6 +328,51 @@ int lsq_rows_check(const double *G, int m, int n, double *gmax, double *Gt, glin
     return 0;
 }
 
+void lsq_rows_blocks(const double *G, int m, int n, double *gblk)
+{
+    int nb = LSQ_NBLK(n);
+    for (int r = 0; r < m; r++) {
+        const double *g = G + (size_t)r * n;
+        for (int b = 0; b < nb; b++) {
+            double hi = 0.0, lo = 0.0;
+            for (int j = b * LSQ_BLK; j < n && j < (b + 1) * LSQ_BLK; j++) {
+                hi = g[j] > hi ? g[j] : hi;
+                lo = -g[j] > lo ? -g[j] : lo;
+            }
+            gblk[(size_t)b * m + r] = hi;
+            gblk[(size_t)(nb + b) * m + r] = lo;
+        }
+    }
+}
+
+/* Start at p->c0 when it is feasible (c0 >= 0 and G c0 <= u, the caller's
+ * budgets): c = c0, its positive entries free, G c exact.  Rows at their
+ * budget (within the tightening of up) join the working set when the
+ * first step would cross them, as any row does.  Returns 0 (c left at 0)
+ * when c0 is not a feasible start. */
+static int warm_start(const lsq_problem *p, lsq_work *w, int m, double *c)
+{
+    int n = p->n, nfree = 0;
+    for (int j = 0; j < n; j++) {
+        if (!(p->c0[j] >= 0.0) || !isfinite(p->c0[j]))
+            return 0;
+        nfree += p->c0[j] > 0.0;
+    }
+    if (!nfree)
+        return 0;
+    for (int r = 0; r < m; r++) {
+        double g = lsq_dot4(p->G + (size_t)r * n, p->c0, n);
+        if (!(g <= p->u[r]))
+            return 0;
+        w->gcu[r] = g;
+    }
+    memcpy(c, p->c0, (size_t)n * sizeof *c);
+    for (int j = 0; j < n; j++)
+        w->isfree[j] = c[j] > 0.0;
+    lsq_chol_rebuild(p, w);
+    return 1;
+}
+
 int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, double *c,
               lsq_result *res, glint_err *err)
 {
@@ -405,12 +458,30 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
     if (!p->gmax || (m && !p->Gt))
         lsq_rows_check(p->G, m, n, p->gmax ? NULL : w->gmax, p->Gt ? NULL : w->Gtw, NULL);
     w->Gt = p->Gt ? p->Gt : w->Gtw;
+    if (m && !p->gblk) {
+        if (!w->gblkw &&
+            !(w->gblkw = malloc(((size_t)w->m * 2 * LSQ_NBLK(w->n) + 1) * sizeof *w->gblkw))) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "lsq: out of memory for %d rows", m);
+            goto done;
+        }
+        lsq_rows_blocks(p->G, m, n, w->gblkw);
+    }
+    w->gblk = p->gblk ? p->gblk : w->gblkw;
+    for (int b = 0; b < 2 * LSQ_NBLK(n) && m; b++) {
+        const double *gb = w->gblk + (size_t)b * m;
+        int nz = 0;
+        for (int r = 0; r < m && !nz; r++)
+            nz = gb[r] != 0.0;
+        w->bnz[b] = (unsigned char)nz;
+    }
     for (int r = 0; r < m; r++) {
         w->gmax[r] *= 1.0 + 1e-12;
         w->gcu[r] = 0.0;
     }
     for (int j = 0; j < n; j++)
         w->at[j] = -1;
+    if (p->c0 && warm_start(p, w, m, c))
+        res->warm = 1;
     maxit = 20 * (n + m) + 100;
     int multi = 1;              /* free several bounds per stationary point (see below) */
     int nnoblock = 0, keep_noblock = 0;
@@ -555,10 +626,12 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 }
             }
         }
-        /* rows: a row whose bound on G c plus the most a step can add stays
-         * under its budget cannot block; the others are computed exactly */
+        /* rows: a row whose bound on G c plus the most this step can add
+         * (from the rows' block maxima and the step's positive and
+         * negative mass per block) stays under its budget cannot block;
+         * the others are computed exactly */
         double p1 = 0.0, x1 = 0.0;
-        int bycol = m && 2 * nf <= n;
+        int nb = LSQ_NBLK(n), bycol = m && 2 * nf <= n;
         for (int a = 0; a < nf; a++) {
             p1 += fabs(w->p[w->freev[a]]);
             x1 += fabs(w->x[w->freev[a]]);
@@ -580,6 +653,26 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                     gcv[r] += cj * gt[r];
                 }
             }
+        } else if (m) {
+            /* the bound of every row at once: sums of the rows of gblk
+             * (contiguous, no reduction chain) */
+            double *restrict bnd = w->bnd;
+            memset(w->pblk, 0, (size_t)2 * nb * sizeof *w->pblk);
+            for (int a = 0; a < nf; a++) {
+                int j = w->freev[a];
+                double pj = w->p[j];
+                w->pblk[j / LSQ_BLK + (pj < 0.0) * nb] += fabs(pj);
+            }
+            memset(bnd, 0, (size_t)m * sizeof *bnd);
+            for (int b = 0; b < 2 * nb; b++) {
+                const double *restrict gb = w->gblk + (size_t)b * m;
+                double pb = w->pblk[b] * (1.0 + 1e-12); /* the sums' rounding */
+                if (pb == 0.0 || !w->bnz[b])
+                    continue;
+#pragma omp simd
+                for (int r = 0; r < m; r++)
+                    bnd[r] += pb * gb[r];
+            }
         }
         for (int r = 0; r < m; r++) {
             double gp, gc;
@@ -590,17 +683,21 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             }
             if (w->noblock[r]) {
                 w->gpx[r] = NAN;
+                w->gp[r] = w->gmax[r] * p1;
                 continue;
             }
             if (bycol) {
                 gp = w->gp[r];
                 gc = w->gcv[r];
-            } else if (w->gcu[r] + alpha * w->gmax[r] * p1 < w->up[r]) {
-                w->gpx[r] = NAN; /* skipped: bounded below */
-                continue;
             } else {
-                /* many free variables; p and c are zero on the bounds:
-                 * whole rows, contiguous */
+                double bound = w->bnd[r];
+                if (w->gcu[r] + alpha * bound < w->up[r]) {
+                    w->gpx[r] = NAN; /* skipped: bounded */
+                    w->gp[r] = bound;
+                    continue;
+                }
+                /* p and c are zero on the bounds: whole rows, contiguous
+                 * (two dot products vectorize; one pass with both does not) */
                 const double *g = p->G + (size_t)r * n;
                 gp = lsq_dot4(g, w->p, n);
                 gc = lsq_dot4(g, c, n);
@@ -627,7 +724,7 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             c[j] += alpha * w->p[j];
         }
         for (int r = 0; r < m; r++)
-            w->gcu[r] += isnan(w->gpx[r]) ? alpha * w->gmax[r] * p1 : alpha * w->gpx[r];
+            w->gcu[r] += alpha * (isnan(w->gpx[r]) ? w->gp[r] : w->gpx[r]);
         if (alpha * pn <= 1e-14 * fmax(cn, 1e-300))
             stalls++;
         if (block >= 0) {

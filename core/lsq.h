@@ -9,7 +9,9 @@
  * through an eigendecomposition of H with a relative cut `rcond`).
  *
  * The constrained modes use a primal active-set method started at c = 0
- * (feasible whenever u >= 0): each step solves the equality-constrained
+ * (feasible whenever u >= 0), or at a given feasible c0 (a warm start: a
+ * repaint from the previous fit's answer; the optimum is the same, the
+ * rounding of the path is not): each step solves the equality-constrained
  * subproblem on the free variables with the active rows (the Cholesky
  * factor of H over the free variables, updated in place), moves as far as
  * feasibility allows, and at a stationary point releases constraints by
@@ -53,8 +55,13 @@ typedef struct lsq_problem {
     const double *gmax;       /* m: max_j |G_rj| from lsq_rows_check, which also vouches
                                  that G is finite; NULL: checked and computed per call */
     const double *Gt;         /* n x m: G transposed (lsq_rows_check); NULL: made per call */
+    const double *gblk;       /* 2 LSQ_NBLK(n) x m: the rows' block maxima (lsq_rows_blocks);
+                                 NULL: made per call */
     const double *R0;         /* n x n: lsq_factor of this H, kept by a caller that solves
                                  with one H many times; NULL: factors made per call */
+    const double *c0;         /* n: a start (an earlier solution with the same G and u:
+                                 a warm start); used when c0 >= 0 and G c0 <= u, else
+                                 ignored; NULL: start at 0 */
 } lsq_problem;
 
 #define LSQ_MAX_N 4096
@@ -71,6 +78,7 @@ typedef struct lsq_result {
     double kkt_residual;      /* ||H c - q - multipliers' terms||_inf / max(1, ||q||_inf) */
     double min_slack;         /* min_l (u_l - (G c)_l), energy mode; else 0 */
     int rank;                 /* LSQ_NONE: eigenvalues kept */
+    int warm;                 /* 1: started at c0 (lsq_problem.c0), 0: at c = 0 */
 } lsq_result;
 
 /* Check the rows G (m x n) once for many solves that share them (the
@@ -78,6 +86,15 @@ typedef struct lsq_result {
  * and Gt[n x m], G transposed; either may be NULL.  Returns 0, or
  * GLINT_EINVAL when some entry is not finite (Gt is then not written). */
 int lsq_rows_check(const double *G, int m, int n, double *gmax, double *Gt, glint_err *err);
+
+/* The rows' maxima over blocks of LSQ_BLK consecutive unknowns, which bound
+ * G p for a step p without a pass over G: OUT gblk (2 nb x m, nb =
+ * LSQ_NBLK(n)), row b < nb holding max(0, max_j G_rj) over j in block b for
+ * each row r, row nb + b max(0, max_j -G_rj).  G must have passed
+ * lsq_rows_check. */
+#define LSQ_BLK 8
+#define LSQ_NBLK(n) (((n) + LSQ_BLK - 1) / LSQ_BLK)
+void lsq_rows_blocks(const double *G, int m, int n, double *gblk);
 
 /* The upper Cholesky factor of H (n x n, row-major, below the diagonal
  * zero) as lsq_solve makes it, pivots that vanish raised to 1e-13 of their

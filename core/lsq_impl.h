@@ -35,6 +35,11 @@ struct lsq_work {
     double *gcu;   /* m: an upper bound of G c (exact where last computed) */
     double *gpx;   /* m: G p of the last step, NaN where skipped */
     double *gmax;  /* m: max |G_rj| */
+    double *gblkw; /* 2 nb x m: the rows' block maxima when the problem brings none */
+    const double *gblk;
+    double *pblk;  /* 2 nb: a step's sums of max(p, 0) and max(-p, 0) per block */
+    unsigned char *bnz; /* 2 nb: rows of gblk with a nonzero entry */
+    double *bnd;   /* m: the step's bound on G p from gblk and pblk */
     double *R;     /* n x n: upper Cholesky factor of H over the free variables */
     double *col;   /* n: a column of R being formed (chol_add) */
     double *gcv;   /* m: G c of a step (with gp: G p), from columns */

@@ -125,6 +125,7 @@ static void diffuse_format(const void *field, char *buf, size_t len)
 static const char *const static_values[] = {"paper", "smith", NULL};
 static const char *const constraint_values[] = {"energy", "nonneg", "none", NULL};
 static const char *const vis_values[] = {"auto", "on", "off", NULL};
+static const char *const start_values[] = {"warm", "cold", NULL}; /* SRBF_START_* */
 static const char *const env_examples[] = {"studio", "sky", "sunset", "builtin:white",
                                            "file:courtyard.exr", NULL};
 static const char *const raster_examples[] = {"160x120", "320x240", "full", NULL};
@@ -192,6 +193,13 @@ static const method_param srbf_params_table[] = {
      .description = "rings of energy rows near the horizon (64 each) beside the 192 of the "
                     "hemicube, so energy holds at grazing angles too",
      .offset = offsetof(srbf_params, grazing), .min = 0, .max = 8},
+    {.name = "start", .type = METHOD_PARAM_ENUM, .affects = "fit",
+     .description = "where the constrained solver starts: cold = at zero (the same answer to "
+                    "the bit for the same painting); warm = at the scene's previous answer with "
+                    "these parameters (the same optimum, its last digits may differ): fewer "
+                    "steps when a fit from zero takes many (most lobes used, energy rows "
+                    "active), more when it takes few (see BENCHMARKS.md)",
+     .offset = offsetof(srbf_params, start), .values = start_values},
 };
 
 static const method_preset srbf_presets[] = {
@@ -220,6 +228,7 @@ static void srbf_params_default(void *pv)
     p->diffuse.fit = 1;
     p->smooth = 1e-4;
     p->grazing = 2;
+    p->start = SRBF_START_COLD;
 }
 
 /* ---- keys ------------------------------------------------------------------------------ */

@@ -69,9 +69,11 @@ typedef struct srbf_params {
     srbf_diffuse diffuse;
     double smooth;
     int grazing;               /* rings of energy rows near the horizon */
+    int start;                 /* SRBF_START_*: where the solver starts */
 } srbf_params;
 
 enum { SRBF_VIS_AUTO = 0, SRBF_VIS_ON = 1, SRBF_VIS_OFF = 2 };
+enum { SRBF_START_WARM = 0, SRBF_START_COLD = 1 };
 
 /* The energy rows hold the albedo to 1 - SRBF_ENERGY_MARGIN: between rows
  * (measured on a dense grid down to 0.5 degrees elevation) it rises by up
@@ -122,19 +124,22 @@ typedef struct srbf_transfer_data {
     double *LtL;               /* nreach x nreach: L'L of the centres' graph Laplacian */
     /* the energy rows on the unknowns, made with idx (not stored on disk):
      * [0] the reached lobes (nl x nreach), [1] with the diffuse albedo's
-     * column of ones after them (nl x (nreach + 1)); their row maxima; G[1]
-     * transposed, whose first nreach rows are G[0] transposed */
-    double *G[2], *gmax[2], *Gt;
+     * column of ones after them (nl x (nreach + 1)); their row maxima and
+     * block maxima (lsq_rows_blocks); G[1] transposed, whose first nreach
+     * rows are G[0] transposed */
+    double *G[2], *gmax[2], *gblk[2], *Gt;
     int nl_rows;
     /* each channel's factor of the fit's H (lsq_factor) by (smooth, diffuse
      * fitted), made by the first fit that needs it and kept with the level:
-     * a repaint starts from it (srbf_kept_factor) */
+     * a repaint starts from it (srbf_kept_factor); and each channel's last
+     * answer, where a warm repaint starts (srbf_kept_start) */
     pthread_mutex_t kept_lock;
     int kept_init, nkept;
     struct {
         double smooth;
         int fitd;
         double *R[3];
+        double *c[3];
     } kept[SRBF_KEPT_MAX];
     long terms;
     long rays;                 /* shadow rays cast (0: visibility off) */
@@ -206,6 +211,12 @@ void srbf_transfer_clear(srbf_transfer_data *x);
  * call) or memory runs out.  OUT *kept: 1 when an earlier fit made it. */
 const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, int ch,
                                const double *H, int nu, int *kept);
+/* The last answer (nu entries) kept for (smooth, fitd) and channel ch:
+ * copied to c0 and 1 returned, or 0 when none is kept.  srbf_kept_answer
+ * keeps c (where srbf_kept_factor made room; otherwise nothing). */
+int srbf_kept_start(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu, double *c0);
+void srbf_kept_answer(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu,
+                      const double *c);
 size_t srbf_transfer_bytes(const srbf_transfer_data *x);
 
 #endif

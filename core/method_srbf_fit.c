@@ -40,9 +40,10 @@ typedef struct chan_report {
 typedef struct chan_job {
     const method_fit_in *in;
     int ch, nu;
-    double *f, *H, *q, *u, *c;
+    double *f, *H, *q, *u, *c, *c0;
     const double *G;           /* the energy rows on the unknowns, shared by the channels */
     const double *gmax, *Gt;   /* their row maxima and transpose (lsq_rows_check), shared */
+    const double *gblk;        /* their block maxima (lsq_rows_blocks), shared */
     lsq_work *w;
     chan_report rep;
     double *csm;               /* sm.c (3 x J): this channel's J entries are written */
@@ -52,6 +53,35 @@ typedef struct chan_job {
     glint_err err;
 } chan_job;
 
+/* q = T'f, streaming T row by row (contiguous when every lobe is reached,
+ * the common case, so the loop vectorizes) */
+static void tf_rows(const float *T, const double *f, int n, int J, int nr, const int *idx,
+                    double *q, int nu)
+{
+    memset(q, 0, (size_t)nu * sizeof *q);
+    if (nr == J) {
+        double *restrict qq = q;
+        for (int i = 0; i < n; i++) {
+            const float *restrict t = T + (size_t)i * J;
+            double fi = f[i];
+            if (fi == 0.0)
+                continue;
+#pragma omp simd
+            for (int a = 0; a < J; a++)
+                qq[a] += (double)t[a] * fi;
+        }
+    } else {
+        for (int i = 0; i < n; i++) {
+            const float *t = T + (size_t)i * J;
+            double fi = f[i];
+            if (fi == 0.0)
+                continue;
+            for (int a = 0; a < nr; a++)
+                q[a] += (double)t[idx[a]] * fi;
+        }
+    }
+}
+
 static void chan_free(chan_job *j)
 {
     free(j->f);
@@ -59,6 +89,7 @@ static void chan_free(chan_job *j)
     free(j->q);
     free(j->u);
     free(j->c);
+    free(j->c0);
     lsq_work_free(j->w);
 }
 
@@ -91,30 +122,7 @@ static void *chan_solve(void *arg)
         ff += f[i] * f[i];
         j->ss_b += b * b;
     }
-    /* q = T'f, streaming T row by row (contiguous when every lobe is
-     * reached, the common case, so the loop vectorizes) */
-    memset(q, 0, (size_t)nu * sizeof *q);
-    if (nr == J) {
-        double *restrict qq = q;
-        for (int i = 0; i < n; i++) {
-            const float *restrict t = T + (size_t)i * J;
-            double fi = f[i];
-            if (fi == 0.0)
-                continue;
-#pragma omp simd
-            for (int a = 0; a < J; a++)
-                qq[a] += (double)t[a] * fi;
-        }
-    } else {
-        for (int i = 0; i < n; i++) {
-            const float *t = T + (size_t)i * J;
-            double fi = f[i];
-            if (fi == 0.0)
-                continue;
-            for (int a = 0; a < nr; a++)
-                q[a] += (double)t[idx[a]] * fi;
-        }
-    }
+    tf_rows(T, f, n, J, nr, idx, q, nu);
     for (int a = 0; a < nr; a++) {
         for (int b = 0; b < nr; b++)
             H[(size_t)a * nu + b] = Hc[(size_t)idx[a] * J + idx[b]];
@@ -145,6 +153,7 @@ static void *chan_solve(void *arg)
     pr.G = j->G;
     pr.u = u;
     pr.gmax = j->gmax;
+    pr.gblk = j->gblk;
     pr.Gt = j->Gt;
     /* the level keeps the factor of this H (the same for every repaint with
      * these parameters); the level is shared and otherwise read-only, the
@@ -154,6 +163,11 @@ static void *chan_solve(void *arg)
         pr.R0 = srbf_kept_factor((srbf_transfer_data *)tr, p->smooth, fitd, ch, H, nu, &kept);
         j->rep.factor = kept ? "kept" : pr.R0 ? "made" : "none";
     }
+    /* a warm start: the answer of the last fit on this level (any
+     * painting; the solver checks that it is feasible here) */
+    if (p->start == SRBF_START_WARM && p->constraints != LSQ_NONE &&
+        srbf_kept_start((srbf_transfer_data *)tr, p->smooth, fitd, ch, nu, j->c0))
+        pr.c0 = j->c0;
     {
         double ts = glint_now();
         j->rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, j->w, c, &j->rep.r, &j->err);
@@ -163,6 +177,8 @@ static void *chan_solve(void *arg)
     }
     if (j->rep.r.status == LSQ_INFEASIBLE)
         return NULL;
+    if (j->rep.r.status == LSQ_OK && p->constraints != LSQ_NONE)
+        srbf_kept_answer((srbf_transfer_data *)tr, p->smooth, fitd, ch, nu, c);
     for (int a = 0; a < nr; a++)
         j->csm[(size_t)ch * J + idx[a]] = c[a];
     j->rho = fitd ? c[nr] : rho;
@@ -233,13 +249,15 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         j->q = malloc((size_t)nu * sizeof *j->q);
         j->u = malloc((size_t)nl * sizeof *j->u);
         j->c = malloc((size_t)nu * sizeof *j->c);
+        j->c0 = malloc((size_t)nu * sizeof *j->c0);
         j->w = lsq_work_new(nu, nl);
         /* the energy rows on the unknowns (the reached lobes, and the
          * diffuse albedo when fitted), made and checked with the level */
         j->G = tr->G[fitd ? 1 : 0];
         j->gmax = tr->gmax[fitd ? 1 : 0];
+        j->gblk = tr->gblk[fitd ? 1 : 0];
         j->Gt = tr->Gt;
-        if (!j->f || !j->H || !j->q || !j->u || !j->c || !j->w) {
+        if (!j->f || !j->H || !j->q || !j->u || !j->c || !j->c0 || !j->w) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
             goto done;
         }
@@ -287,14 +305,16 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     for (int ch = 0; ch < 3; ch++) {
         const lsq_result *r = &rep[ch].r;
         json_array_append_new(
-            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f, s:s}", "status",
+            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f, s:s, s:s}",
+                             "status",
                              lsq_status_name(r->status), "iterations", r->iterations,
                              "lobes_used", r->free_vars, "energy_rows_active", r->active_rows,
                              "objective", r->objective, "min_slack", r->min_slack,
                              "max_violation", r->max_violation, "kkt_residual",
                              r->kkt_residual, "seconds", rep[ch].seconds, "solve_seconds",
                              rep[ch].solve_seconds, "factor",
-                             rep[ch].factor ? rep[ch].factor : "none"));
+                             rep[ch].factor ? rep[ch].factor : "none", "start",
+                             r->warm ? "warm" : "cold"));
     }
     {
         json_t *pre = json_pack(

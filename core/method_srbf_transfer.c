@@ -32,11 +32,14 @@ void srbf_transfer_clear(srbf_transfer_data *x)
     for (int k = 0; k < 2; k++) {
         free(x->G[k]);
         free(x->gmax[k]);
+        free(x->gblk[k]);
     }
     free(x->Gt);
     for (int k = 0; k < x->nkept; k++)
-        for (int ch = 0; ch < 3; ch++)
+        for (int ch = 0; ch < 3; ch++) {
             free(x->kept[k].R[ch]);
+            free(x->kept[k].c[ch]);
+        }
     if (x->kept_init)
         pthread_mutex_destroy(&x->kept_lock);
     memset(x, 0, sizeof *x);
@@ -49,7 +52,8 @@ size_t srbf_transfer_bytes(const srbf_transfer_data *x)
     return sizeof *x + 3 * n * J * sizeof(float) + 3 * n * sizeof(double) +
            4 * J * J * sizeof(double) + 3 * J * sizeof(double) + J * (1 + sizeof(int)) +
            (size_t)x->nl_rows * (3 * nr + 4) * sizeof(double) +
-           (size_t)SRBF_KEPT_MAX * 3 * (nr + 1) * (nr + 1) * sizeof(double);
+           (size_t)x->nl_rows * 4 * LSQ_NBLK(nr + 1) * sizeof(double) +
+           (size_t)SRBF_KEPT_MAX * 3 * (nr + 2) * (nr + 1) * sizeof(double);
 }
 
 static void transfer_free(void *d)
@@ -123,8 +127,10 @@ int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err 
     for (int a = 0; a < 2; a++) {
         free(x->G[a]);
         free(x->gmax[a]);
+        free(x->gblk[a]);
         x->G[a] = malloc(((size_t)nl * n1 + 1) * sizeof *x->G[a]);
         x->gmax[a] = malloc(((size_t)nl + 1) * sizeof *x->gmax[a]);
+        x->gblk[a] = malloc(((size_t)nl * 2 * LSQ_NBLK(n1) + 1) * sizeof *x->gblk[a]);
     }
     free(x->Gt);
     x->Gt = malloc(((size_t)nl * n1 + 1) * sizeof *x->Gt);
@@ -132,7 +138,7 @@ int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err 
     if (!x->kept_init && pthread_mutex_init(&x->kept_lock, NULL) == 0)
         x->kept_init = 1;
     if (!x->kept_init || !x->idx || !x->LtL || !x->G[0] || !x->G[1] || !x->gmax[0] ||
-        !x->gmax[1] || !x->Gt)
+        !x->gmax[1] || !x->gblk[0] || !x->gblk[1] || !x->Gt)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     for (int j = 0; j < J; j++)
         if (x->reach[j])
@@ -148,7 +154,13 @@ int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err 
     }
     {
         int rc = lsq_rows_check(x->G[0], nl, nr, x->gmax[0], NULL, err);
-        return rc ? rc : lsq_rows_check(x->G[1], nl, nr + 1, x->gmax[1], x->Gt, err);
+        if (!rc)
+            rc = lsq_rows_check(x->G[1], nl, nr + 1, x->gmax[1], x->Gt, err);
+        if (!rc) {
+            lsq_rows_blocks(x->G[0], nl, nr, x->gblk[0]);
+            lsq_rows_blocks(x->G[1], nl, nr + 1, x->gblk[1]);
+        }
+        return rc;
     }
 }
 
@@ -186,6 +198,7 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
         x->kept[k].smooth = smooth;
         x->kept[k].fitd = fitd;
         memset(x->kept[k].R, 0, sizeof x->kept[k].R);
+        memset(x->kept[k].c, 0, sizeof x->kept[k].c);
         x->nkept++;
     }
     if (k < x->nkept) {
@@ -198,6 +211,44 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
     pthread_mutex_unlock(&x->kept_lock);
     free(made);
     return R;
+}
+
+static int kept_find(const srbf_transfer_data *x, double smooth, int fitd)
+{
+    for (int k = 0; k < x->nkept; k++)
+        if (x->kept[k].smooth == smooth && x->kept[k].fitd == fitd)
+            return k;
+    return -1;
+}
+
+int srbf_kept_start(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu, double *c0)
+{
+    int k, got = 0;
+    if (!x->kept_init)
+        return 0;
+    pthread_mutex_lock(&x->kept_lock);
+    if ((k = kept_find(x, smooth, fitd)) >= 0 && x->kept[k].c[ch]) {
+        memcpy(c0, x->kept[k].c[ch], (size_t)nu * sizeof *c0);
+        got = 1;
+    }
+    pthread_mutex_unlock(&x->kept_lock);
+    return got;
+}
+
+void srbf_kept_answer(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu,
+                      const double *c)
+{
+    int k;
+    if (!x->kept_init)
+        return;
+    pthread_mutex_lock(&x->kept_lock);
+    if ((k = kept_find(x, smooth, fitd)) >= 0) {
+        if (!x->kept[k].c[ch])
+            x->kept[k].c[ch] = malloc((size_t)nu * sizeof *c);
+        if (x->kept[k].c[ch])
+            memcpy(x->kept[k].c[ch], c, (size_t)nu * sizeof *c);
+    }
+    pthread_mutex_unlock(&x->kept_lock);
 }
 
 /* H = T'T, T'E and E'E per channel, in double, from the float T. */

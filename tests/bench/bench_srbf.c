@@ -1,19 +1,24 @@
 /* bench_srbf.c: the environment-lit method (srbf) beside seed 004's Table 1,
  * and its speed-accuracy table.
  *
- *   bench_srbf [--quick] [--data DIR] [--table1] [--mesh NAME]
+ *   bench_srbf [--quick] [--data DIR] [--table1] [--mesh NAME] [--env NAME]
+ *              [--vis on|off] [--reps N]
  *
  * --table1: Table 1 only; --mesh NAME: only that mesh's rows (sphere,
- * bunny.ply, cow.off).
+ * bunny.ply, cow.off); --env, --vis: only the rows of that environment
+ * (a substring of its name) or visibility; --reps: fits per row.
  *
  * Table 1: for the sphere, the bunny and the cow at 160x120 (one painted
  * view), under two CC0 environments (DIR/envmaps: courtyard.exr and
  * sunset.exr; the built-in "sky" and "studio" when absent), with and
  * without visibility: pixels (rows), T_trans (visibility + transfer
- * matrices + Gram matrices, cold), T_s (the warm fit: T'b and three
- * constrained solves with T'T cached), and of the slowest of the three
- * channels (run on threads): its whole time (T'b, the solve, the report),
- * the solver's alone and its active-set steps.
+ * matrices + Gram matrices, cold), T_s (a fit with T'T cached, the solver
+ * started at zero: T'b and three constrained solves), and of the slowest
+ * of the three channels (run on threads): its whole time (T'b, the solve,
+ * the report), the solver's alone and its active-set steps; then repaints
+ * with start warm: a stroke (a tenth of the rows 30% brighter) and back,
+ * each fit starting at the other's answer (best and median, and the most
+ * steps of a channel).
  *
  * Speed-accuracy: a Cook-Torrance GGX 0.3 target on the sphere fitted from
  * one view, measured on a new view with the environment rotated by 120
@@ -141,8 +146,27 @@ static double seconds_of(const material *m, const char *what)
     return json_real_value(json_object_get(json_object_get(m->info, "seconds"), what));
 }
 
-/* One cold precomputation and a few warm fits of view 0 of sc. */
-static int table1_row(const char *mesh_file, const char *env, int vis, int quick)
+/* The slowest channel's seconds (with its T'f), solve seconds and steps. */
+static void chan_figures(const material *m, double *sv, double *sl, int *its)
+{
+    const json_t *ch = json_object_get(json_object_get(m->info, "errors"), "channels");
+    for (size_t i = 0; i < json_array_size(ch); i++) {
+        const json_t *ci = json_array_get(ch, i);
+        *sv = fmax(*sv, json_real_value(json_object_get(ci, "seconds")));
+        *sl = fmax(*sl, json_real_value(json_object_get(ci, "solve_seconds")));
+        *its = (int)fmax(*its, json_integer_value(json_object_get(ci, "iterations")));
+    }
+}
+
+static int dcmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* One cold precomputation, fits of view 0 from zero (T_s) and repaints
+ * warm from the previous answer. */
+static int table1_row(const char *mesh_file, const char *env, int vis, int reps)
 {
     scene sc;
     cache *c = NULL;
@@ -154,11 +178,10 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int quick
     env_lights l;
     material m;
     glint_err e;
-    double t0, t_prep, best = 1e30, solve = 1e30, solver = 0.0;
+    double t0, t_prep, best = 1e30, solve = 1e30, solver = 0.0, rel = 0.0;
     int iters = 0;
     float *rgb;
     const samples *s;
-    int reps = quick ? 3 : 10;
     prep_scene_source src = {borrowed, NULL, &sc};
 
     memset(&sc, 0, sizeof sc);
@@ -170,6 +193,7 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int quick
     method_srbf.params_default(&par);
     snprintf(par.env, sizeof par.env, "%.63s", env);
     par.visibility = vis ? SRBF_VIS_ON : SRBF_VIS_OFF;
+    par.start = SRBF_START_COLD; /* T_s: each fit from zero */
     brdf_parse("ct:rough=0.3,kd=0.35/0.25/0.15,f0=0.25", &b, &e);
     cache_open(NULL, (size_t)4 << 30, &c, &e);
     prep_scene_acquire(c, mesh_file, &src, &se, &e);
@@ -196,15 +220,7 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int quick
         }
         t0 = glint_now() - t0;
         best = t0 < best ? t0 : best;
-        {
-            const json_t *ch = json_object_get(json_object_get(m.info, "errors"), "channels");
-            for (size_t i = 0; i < json_array_size(ch); i++) {
-                const json_t *ci = json_array_get(ch, i);
-                sv = fmax(sv, json_real_value(json_object_get(ci, "seconds")));
-                sl = fmax(sl, json_real_value(json_object_get(ci, "solve_seconds")));
-                its = (int)fmax(its, json_integer_value(json_object_get(ci, "iterations")));
-            }
-        }
+        chan_figures(&m, &sv, &sl, &its);
         if (sv < solve) {
             solve = sv;
             solver = sl;
@@ -212,18 +228,53 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int quick
         }
         if (r == reps - 1) {
             const json_t *pre = json_object_get(m.info, "precomputation");
-            printf("| %s | %s | %s | %lld | %d/%d | %.3f | %.3f | %.3f | %.2f | %.2f | %.2f | %d "
-                   "| %.4f |\n",
+            printf("| %s | %s | %s | %lld | %d/%d | %.3f | %.3f | %.3f | %.2f | %.2f | %.2f | %d ",
                    mesh_file, env, vis ? "on" : "off",
                    (long long)json_integer_value(json_object_get(pre, "rows")),
                    (int)json_integer_value(json_object_get(pre, "lobes_reached")),
                    (int)json_integer_value(json_object_get(pre, "lobes")),
                    seconds_of(&m, "visibility"), seconds_of(&m, "transfer") +
-                   seconds_of(&m, "gram"), t_prep, best * 1e3, solve * 1e3, solver * 1e3, iters,
-                   json_real_value(json_object_get(json_object_get(m.info, "errors"),
-                                                   "rel_rms_painted")));
+                   seconds_of(&m, "gram"), t_prep, best * 1e3, solve * 1e3, solver * 1e3, iters);
+            rel = json_real_value(json_object_get(json_object_get(m.info, "errors"),
+                                                  "rel_rms_painted"));
         }
         material_free(&m);
+    }
+    /* repaints: a stroke (a band of a tenth of the rows painted 30%
+     * brighter) and back, each fit warm from the other's answer */
+    {
+        srbf_params pw = par;
+        prep *p2 = NULL;
+        float *rgb2 = malloc((size_t)3 * s->n * sizeof *rgb2);
+        double tw[2 * 10 + 2];
+        int nw = 0, wits = 0;
+        pw.start = SRBF_START_WARM;
+        prep_request rq = {&method_srbf, &pw, se, use};
+        memcpy(rgb2, rgb, (size_t)3 * s->n * sizeof *rgb2);
+        for (long i = s->n / 3; i < s->n / 3 + s->n / 10; i++)
+            for (int k = 0; k < 3; k++)
+                rgb2[3 * i + k] *= 1.3f;
+        if (!prep_acquire(c, &rq, NULL, NULL, &p2, &e) && !prep_fit(p2, NULL, rgb, &m, &e)) {
+            material_free(&m);
+            for (int r = 0; r < 2 * reps && r < 2 * 10 + 2; r++) {
+                double sv = 0, sl = 0;
+                int its = 0;
+                t0 = glint_now();
+                if (prep_fit(p2, NULL, r % 2 ? rgb : rgb2, &m, &e))
+                    break;
+                tw[nw++] = glint_now() - t0;
+                chan_figures(&m, &sv, &sl, &its);
+                wits = its > wits ? its : wits;
+                material_free(&m);
+            }
+        }
+        qsort(tw, (size_t)nw, sizeof *tw, dcmp);
+        if (nw)
+            printf("| %.2f / %.2f | %d | %.4f |\n", tw[0] * 1e3, tw[nw / 2] * 1e3, wits, rel);
+        else
+            printf("| failed: %s | | %.4f |\n", e.msg, rel);
+        prep_release(c, p2);
+        free(rgb2);
     }
     free(rgb);
 done:
@@ -310,8 +361,8 @@ int main(int argc, char **argv)
     const char *meshes[] = {"sphere", "bunny.ply", "cow.off"};
     const char *envs[2] = {"data:courtyard.exr", "data:sunset.exr"};
     char envbuf[2][64];
-    int quick = 0, only_table1 = 0;
-    const char *only_mesh = NULL;
+    int quick = 0, only_table1 = 0, reps = 0, only_vis = -1;
+    const char *only_mesh = NULL, *only_env = NULL;
     struct stat st;
     char probe[1200];
 
@@ -324,8 +375,18 @@ int main(int argc, char **argv)
             only_table1 = 1;
         else if (!strcmp(argv[i], "--mesh") && i + 1 < argc)
             only_mesh = argv[++i];
+        else if (!strcmp(argv[i], "--env") && i + 1 < argc)
+            only_env = argv[++i];
+        else if (!strcmp(argv[i], "--vis") && i + 1 < argc)
+            only_vis = !strcmp(argv[++i], "on");
+        else if (!strcmp(argv[i], "--reps") && i + 1 < argc && atoi(argv[i + 1]) > 0)
+            reps = atoi(argv[++i]);
         else {
-            fprintf(stderr, "usage: bench_srbf [--quick] [--data DIR] [--table1] [--mesh NAME]\n");
+            fprintf(stderr, "usage: bench_srbf [--quick] [--data DIR] [--table1] [--mesh NAME] "
+                            "[--env NAME] [--vis on|off] [--reps N]\n"
+                            "  --mesh, --env, --vis: only the Table 1 rows that match (--env "
+                            "matches a substring)\n  --reps: warm fits per row (best of; "
+                            "default 10, 3 with --quick)\n");
             return 2;
         }
     }
@@ -340,17 +401,18 @@ int main(int argc, char **argv)
 
     printf("## srbf beside seed 004 Table 1 (160x120, one view, 256 lights, J = 147)\n\n");
     printf("| mesh | environment | visibility | rows | lobes reached | T_vis s | T_trans s | "
-           "cold total s | T_s (warm fit) ms | channel ms | solver ms | steps | "
-           "rel RMS painted (CT 0.3) |\n");
-    printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+           "cold total s | T_s ms | channel ms | solver ms | steps | repaint ms best / median | "
+           "repaint steps | rel RMS painted (CT 0.3) |\n");
+    printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (int mi = 0; mi < 3; mi++)
         for (int ei = 0; ei < 2; ei++)
             for (int v = 0; v < 2; v++) {
                 if (mi == 0 && v == 1)
                     continue; /* the sphere is convex */
-                if (only_mesh && strcmp(only_mesh, meshes[mi]))
+                if ((only_mesh && strcmp(only_mesh, meshes[mi])) ||
+                    (only_env && !strstr(envbuf[ei], only_env)) || (only_vis >= 0 && only_vis != v))
                     continue;
-                table1_row(meshes[mi], envbuf[ei], v, quick);
+                table1_row(meshes[mi], envbuf[ei], v, reps ? reps : quick ? 3 : 10);
             }
     if (only_table1)
         return 0;

@@ -142,6 +142,49 @@ TEST(matches_brute_force_on_small_problems)
                    "trial %d (n %d, m %d): %.12g against brute force %.12g", trial, n, m,
                    f(n, H, q, c), fb);
         ASSERT(r.max_violation <= 1e-9);
+        /* warm starts: from this optimum (of another q: a repaint) and from
+         * a point that breaks the rows or the bounds (ignored): the same
+         * optimum as the brute force */
+        {
+            double q2[8], c3[8], cbad[8];
+            lsq_problem p2 = p;
+            lsq_result r3;
+            for (int j = 0; j < n; j++) {
+                q2[j] = q[j] + 0.3 * (2.0 * urand() - 1.0);
+                cbad[j] = j == 0 ? -1.0 : 1e3;
+            }
+            p2.q = q2;
+            p2.R0 = NULL;
+            for (int start = 0; start < 3; start++) {
+                double fb2;
+                p2.c0 = start == 0 ? c : start == 1 ? cbad : cbad + 1;
+                if (start == 2 && n < 2)
+                    continue;
+                ASSERT_OK(lsq_solve(&p2, m ? LSQ_ENERGY : LSQ_NONNEG, 0, NULL, c3, &r3, &e));
+                {
+                    /* usable: c0 >= 0, not all zero, G c0 <= u */
+                    int ok = 0;
+                    for (int j = 0; j < n; j++) {
+                        ok |= p2.c0[j] > 0.0;
+                        if (p2.c0[j] < 0.0)
+                            ok = -n - 1;
+                    }
+                    for (int k = 0; k < m && ok > 0; k++) {
+                        double g = 0.0;
+                        for (int j = 0; j < n; j++)
+                            g += G[k * n + j] * p2.c0[j];
+                        ok = g <= u[k];
+                    }
+                    ASSERT_MSG(r3.warm == (ok > 0), "trial %d start %d: warm %d", trial, start,
+                               r3.warm);
+                }
+                fb2 = brute(n, m, H, q2, G, u, cb);
+                ASSERT_MSG(fabs(f(n, H, q2, c3) - fb2) <= 1e-9 * (1 + fabs(fb2)),
+                           "trial %d start %d: %.12g against brute force %.12g", trial, start,
+                           f(n, H, q2, c3), fb2);
+                ASSERT(r3.max_violation <= 1e-9 && r3.status == LSQ_OK);
+            }
+        }
     }
 }
 
