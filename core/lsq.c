@@ -643,7 +643,25 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             double *restrict gpv = w->gp, *restrict gcv = w->gcv;
             memset(gpv, 0, (size_t)m * sizeof *gpv);
             memset(gcv, 0, (size_t)m * sizeof *gcv);
-            for (int a = 0; a < nf; a++) {
+            /* four columns per pass: a load and a store of each sum per
+             * four terms, not per term */
+            int a = 0;
+            for (; a + 4 <= nf; a += 4) {
+                const double *restrict g0 = w->Gt + (size_t)w->freev[a] * m;
+                const double *restrict g1 = w->Gt + (size_t)w->freev[a + 1] * m;
+                const double *restrict g2 = w->Gt + (size_t)w->freev[a + 2] * m;
+                const double *restrict g3 = w->Gt + (size_t)w->freev[a + 3] * m;
+                double p0 = w->p[w->freev[a]], p1_ = w->p[w->freev[a + 1]];
+                double p2 = w->p[w->freev[a + 2]], p3 = w->p[w->freev[a + 3]];
+                double c0 = c[w->freev[a]], c1 = c[w->freev[a + 1]];
+                double c2 = c[w->freev[a + 2]], c3 = c[w->freev[a + 3]];
+#pragma omp simd
+                for (int r = 0; r < m; r++) {
+                    gpv[r] += (p0 * g0[r] + p1_ * g1[r]) + (p2 * g2[r] + p3 * g3[r]);
+                    gcv[r] += (c0 * g0[r] + c1 * g1[r]) + (c2 * g2[r] + c3 * g3[r]);
+                }
+            }
+            for (; a < nf; a++) {
                 int j = w->freev[a];
                 const double *restrict gt = w->Gt + (size_t)j * m;
                 double pj = w->p[j], cj = c[j];
