@@ -193,6 +193,14 @@ typedef struct method {
     const method_level *levels;
     int nlevels;
     int (*fit)(const method_fit_in *in, struct material *out, glint_err *err);
+    /* Optional: the painted values the method's own model gives the
+     * pattern's samples with material m (fitted by this method), from the
+     * levels of a preparation of those samples (in->rgb unused): OUT
+     * rgb[3 n], NaN where the method models no value.  What a held-out
+     * error compares with the painting (NULL: the material evaluated under
+     * each sample's point light, times its intensity). */
+    int (*predict)(const method_fit_in *in, const struct material *m, float *rgb,
+                   glint_err *err);
     const material_ops *mat;
     /* Whether a held-out measurement (one precomputation per painted view,
      * in the background) is affordable with these parameters (NULL: yes). */

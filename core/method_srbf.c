@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <pthread.h>
 #include <xxhash.h>
 
 #include "clock.h"
@@ -20,6 +21,7 @@
 #endif
 
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err);
+int srbf_predict(const method_fit_in *in, const material *m, float *rgb, glint_err *err);
 
 static_assert(sizeof(srbf_static_kind) == sizeof(int) && sizeof(lsq_mode) == sizeof(int),
               "enum parameters are stored as int");
@@ -318,10 +320,75 @@ void srbf_energy_clear(srbf_energy *x)
     memset(x, 0, sizeof *x);
 }
 
+/* Energy rows depend on the basis, the static term and the rings, not on a
+ * scene: every cache of the process (a held-out measurement opens its own)
+ * shares one copy per parameter set while any of them holds it.  A shared
+ * copy starts with its srbf_energy, so the level's data is the same. */
+typedef struct shared_energy {
+    srbf_energy e;
+    char text[160];
+    int refs;
+    struct shared_energy *next;
+} shared_energy;
+
+static pthread_mutex_t shared_lock = PTHREAD_MUTEX_INITIALIZER;
+static shared_energy *shared_list;
+
+static shared_energy *energy_shared_get(const srbf_params *p)
+{
+    char text[160];
+    shared_energy *x;
+    energy_text(p, text, sizeof text);
+    pthread_mutex_lock(&shared_lock);
+    for (x = shared_list; x && strcmp(x->text, text); x = x->next)
+        ;
+    if (x)
+        x->refs++;
+    pthread_mutex_unlock(&shared_lock);
+    return x;
+}
+
+/* x (refs 0, not listed) joins the list, unless another thread listed the
+ * same rows meanwhile: that copy is taken and x freed. */
+static shared_energy *energy_shared_put(const srbf_params *p, shared_energy *x)
+{
+    shared_energy *y;
+    energy_text(p, x->text, sizeof x->text);
+    pthread_mutex_lock(&shared_lock);
+    for (y = shared_list; y && strcmp(y->text, x->text); y = y->next)
+        ;
+    if (!y) {
+        x->next = shared_list;
+        shared_list = x;
+        y = x;
+        x = NULL;
+    }
+    y->refs++;
+    pthread_mutex_unlock(&shared_lock);
+    if (x) {
+        srbf_energy_clear(&x->e);
+        free(x);
+    }
+    return y;
+}
+
 static void energy_free(void *d)
 {
-    srbf_energy_clear(d);
-    free(d);
+    shared_energy *x = d, **pp;
+    if (!x)
+        return;
+    pthread_mutex_lock(&shared_lock);
+    if (x->refs > 0 && --x->refs > 0) {
+        pthread_mutex_unlock(&shared_lock);
+        return;
+    }
+    for (pp = &shared_list; *pp && *pp != x; pp = &(*pp)->next)
+        ;
+    if (*pp)
+        *pp = x->next;
+    pthread_mutex_unlock(&shared_lock);
+    srbf_energy_clear(&x->e);
+    free(x);
 }
 
 static size_t energy_bytes(const srbf_energy *x)
@@ -337,15 +404,28 @@ static void static_of(const srbf_params *p, srbf_static *st)
     st->alpha = p->alpha;
 }
 
+static void energy_value(shared_energy *x, cache_value *out)
+{
+    out->data = x;
+    out->bytes = energy_bytes(&x->e);
+    out->free = energy_free;
+}
+
 static int energy_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
     const srbf_params *p = in->params;
-    srbf_energy *x = calloc(1, sizeof *x);
+    shared_energy *sx = energy_shared_get(p);
+    srbf_energy *x;
     double t0 = glint_now();
     int rc;
 
-    if (!x)
+    if (sx) {
+        energy_value(sx, out);
+        return 0;
+    }
+    if (!(sx = calloc(1, sizeof *sx)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    x = &sx->e;
     progress(in, "energy", 0.02);
     static_of(p, &x->st);
     if ((rc = srbf_basis_make(p->basis_res, p->sigma, &x->b, err)))
@@ -361,12 +441,10 @@ static int energy_build(const method_build_in *in, cache_value *out, glint_err *
     if ((rc = srbf_energy_rows(&x->b, &x->st, x->nl, x->wo, 0, x->g, 0, err)))
         goto fail;
     x->seconds = glint_now() - t0;
-    out->data = x;
-    out->bytes = energy_bytes(x);
-    out->free = energy_free;
+    energy_value(energy_shared_put(p, sx), out);
     return 0;
 fail:
-    energy_free(x);
+    energy_free(sx);
     return rc;
 }
 
@@ -374,10 +452,16 @@ static int energy_load(const method_build_in *in, const char *dir, const char *k
                        cache_value *out, glint_err *err)
 {
     const srbf_params *p = in->params;
-    srbf_energy *x = calloc(1, sizeof *x);
+    shared_energy *sx = energy_shared_get(p);
+    srbf_energy *x;
     int rc;
-    if (!x)
+    if (sx) {
+        energy_value(sx, out);
+        return 0;
+    }
+    if (!(sx = calloc(1, sizeof *sx)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    x = &sx->e;
     if ((rc = srbf_energy_load(dir, key, x, err)))
         goto fail;
     if (x->b.res != p->basis_res || x->nl != srbf_energy_dirs(p->grazing, NULL)) {
@@ -385,12 +469,10 @@ static int energy_load(const method_build_in *in, const char *dir, const char *k
         goto fail;
     }
     static_of(p, &x->st);
-    out->data = x;
-    out->bytes = energy_bytes(x);
-    out->free = energy_free;
+    energy_value(energy_shared_put(p, sx), out);
     return 0;
 fail:
-    energy_free(x);
+    energy_free(sx);
     return rc;
 }
 
@@ -398,7 +480,7 @@ static int energy_save(const method_build_in *in, const char *dir, const char *k
                        const cache_value *v, glint_err *err)
 {
     (void)in;
-    return srbf_energy_save(dir, key, v->data, err);
+    return srbf_energy_save(dir, key, &((const shared_energy *)v->data)->e, err);
 }
 
 /* ---- lights ---------------------------------------------------------------------------- */
@@ -562,10 +644,12 @@ static const method_level srbf_levels[] = {
  * lit by the environment, so that measurement would not mean anything.
  * New views and rotations are measured by tests/unit/test_srbf_fit.c and
  * tests/bench/bench_srbf.c instead. */
+/* A held-out measurement precomputes two transfer levels per painted view
+ * (the other views', and the view's own): affordable on a fit grid, not on
+ * every pixel. */
 static int srbf_holdout_ok(const void *params)
 {
-    (void)params;
-    return 0;
+    return ((const srbf_params *)params)->raster.w > 0;
 }
 
 /* Memory of a cold fit: the pattern (about 100 bytes a sample), T in float
@@ -599,8 +683,8 @@ const method method_srbf = {
         "energy conservation (directional albedo <= 1) at 192 + 64 x grazing outgoing "
         "directions. Points: fit_seconds is the warm fit, cold_seconds the precomputation, "
         "rms_painted the RMS error on the fitted pixels, held_out_rms the pooled RMS on each "
-        "painted view left out of the fit (not measured for this method: its views are lit "
-        "by the environment).",
+        "painted view left out of the fit (its pixels on the fit grid, rendered under the "
+        "environment with the transfer matrices of that view).",
     .held_out = "leave-one-view-out: for each painted view, fit the others and measure the RMS "
                 "error on that view's pixels; pooled over views",
     .schema = "FitParamsSrbf.json",
@@ -614,6 +698,7 @@ const method method_srbf = {
     .levels = srbf_levels,
     .nlevels = (int)(sizeof srbf_levels / sizeof srbf_levels[0]),
     .fit = srbf_fit,
+    .predict = srbf_predict,
     .mat = &srbf_material_ops,
     .holdout_ok = srbf_holdout_ok,
     .fit_bytes = srbf_fit_bytes,

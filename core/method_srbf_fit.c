@@ -15,6 +15,7 @@
 #endif
 
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err);
+int srbf_predict(const method_fit_in *in, const material *m, float *rgb, glint_err *err);
 
 /* Elevation bins of the energy profile (degrees). */
 static const double prof_edges[] = {0, 1, 3, 10, 20, 40, 60, 90};
@@ -379,4 +380,35 @@ done:
     for (int ch = 0; ch < 3; ch++)
         chan_free(&jobs[ch]);
     return rc;
+}
+
+/* The model's painted values (method.predict): at each row, T c + rho E per
+ * channel, in the painting's units (times env_intensity); NaN for samples
+ * outside the fit grid (not rows). */
+int srbf_predict(const method_fit_in *in, const material *m, float *rgb, glint_err *err)
+{
+    const srbf_params *p = in->params;
+    const srbf_visdata *vd = in->levels[2];
+    const srbf_transfer_data *tr = in->levels[3];
+    const srbf_material *sm = srbf_material_of(m);
+    const samples *s = in->s;
+    int J = tr->J, n = tr->nrows;
+
+    if (!sm || sm->b.J != J)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the material is not an srbf material of %d lobes", J);
+    for (size_t i = 0; i < (size_t)3 * s->n; i++)
+        rgb[i] = NAN;
+    for (int i = 0; i < n; i++) {
+        int si = vd->rows[i];
+        for (int ch = 0; ch < 3; ch++) {
+            const float *t = tr->T + ((size_t)ch * n + i) * J;
+            const double *c = sm->c + (size_t)ch * J;
+            double v = sm->rho[ch] * tr->E[3 * (size_t)i + ch];
+            for (int a = 0; a < J; a++)
+                v += (double)t[a] * c[a];
+            rgb[3 * (size_t)si + ch] = (float)(v * p->env_intensity);
+        }
+    }
+    return 0;
 }

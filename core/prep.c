@@ -468,6 +468,53 @@ json_t *prep_report(const prep *p)
     return r;
 }
 
+/* The fit's inputs from a preparation (the arrays are the caller's). */
+static void fit_in_of(const prep *p, const float *rgb, const void **levels, const char **keys,
+                      cache_disk *disk, method_fit_in *in)
+{
+    for (int i = 0; i < p->m->nlevels; i++) {
+        levels[i] = cache_data(p->lv[i]);
+        keys[i] = cache_key(p->lv[i]);
+        disk[i] = cache_disk_of(p->lv[i]);
+    }
+    memset(in, 0, sizeof *in);
+    in->params = p->params;
+    in->s = cache_data(p->pattern);
+    in->rgb = rgb;
+    in->levels = levels;
+    in->keys = keys;
+    in->how = p->how;
+    in->spent = p->spent;
+    in->disk = disk;
+    in->pattern_seconds = p->pattern_how == CACHE_HIT ? 0.0 : p->pattern_spent;
+}
+
+int prep_predict(const prep *p, const material *m, float *rgb, glint_err *err)
+{
+    const samples *s = cache_data(p->pattern);
+    const void *levels[METHOD_MAX_LEVELS];
+    const char *keys[METHOD_MAX_LEVELS];
+    cache_disk disk[METHOD_MAX_LEVELS];
+    method_fit_in in;
+
+    if (p->m->predict) {
+        fit_in_of(p, NULL, levels, keys, disk, &in);
+        return p->m->predict(&in, m, rgb, err);
+    }
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], v[3];
+        for (int c = 0; c < 3; c++) {
+            n[c] = s->nrm[3 * i + c];
+            wi[c] = s->wi[3 * i + c];
+            wo[c] = s->wo[3 * i + c];
+        }
+        material_eval(m, n, wi, wo, v);
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)(v[c] * s->intensity[i]);
+    }
+    return 0;
+}
+
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err)
 {
@@ -492,21 +539,7 @@ int prep_fit(const prep *p, const img *paintings, const float *rgb, material *ou
         }
         rgb = own;
     }
-    for (int i = 0; i < p->m->nlevels; i++) {
-        levels[i] = cache_data(p->lv[i]);
-        keys[i] = cache_key(p->lv[i]);
-        disk[i] = cache_disk_of(p->lv[i]);
-    }
-    memset(&in, 0, sizeof in);
-    in.params = p->params;
-    in.s = s;
-    in.rgb = rgb;
-    in.levels = levels;
-    in.keys = keys;
-    in.how = p->how;
-    in.spent = p->spent;
-    in.disk = disk;
-    in.pattern_seconds = p->pattern_how == CACHE_HIT ? 0.0 : p->pattern_spent;
+    fit_in_of(p, rgb, levels, keys, disk, &in);
     rc = p->m->fit(&in, out, err);
     free(own);
     if (rc)
@@ -562,31 +595,63 @@ int prep_sample_counts(const scene *sc, long *per_view, long *total, glint_err *
 /* ---- held-out error ------------------------------------------------------------------ */
 
 /* The error of m on the samples of view k: RMS and max |fitted - painted|
- * over the view's samples and RGB (radiance per the view's intensity). */
-static int error_on_view(const material *m, const samples *all, int k, const img *painting,
-                         double *rms, double *max_abs, long *count, glint_err *err)
+ * over the view's samples and RGB, the fitted values from the method's
+ * own model (prep_predict) on a preparation of view k's samples alone,
+ * made in c; samples it gives no value (NaN) are not counted. */
+static int error_on_view(const method *mt, const void *params, cache *c, const material *m,
+                         const samples *all, int k, const img *painting, double *rms,
+                         double *max_abs, long *count, glint_err *err)
 {
+    unsigned char use[SCENE_MAX_VIEWS];
+    samples one;
+    prep *p = NULL;
+    const samples *s = all;
+    float *pred = NULL;
     double ss = 0.0, mx = 0.0;
     long cnt = 0;
+    int rc = 0;
 
     if (!painting->px || painting->width != all->width || painting->height != all->height ||
         painting->channels < 1 || painting->channels == 2 || painting->channels > 4)
         return glint_err_set(err, GLINT_EINVAL, "painting of view %d does not match its view",
                              k);
-    for (int i = 0; i < all->n; i++) {
-        double n[3], wi[3], wo[3], rgb[3];
-        const float *px;
-        if (all->view[i] != k)
-            continue;
-        for (int c = 0; c < 3; c++) {
-            n[c] = all->nrm[3 * i + c];
-            wi[c] = all->wi[3 * i + c];
-            wo[c] = all->wo[3 * i + c];
+    if (mt->predict) {
+        for (int v = 0; v < SCENE_MAX_VIEWS; v++)
+            use[v] = v == k;
+        if ((rc = samples_subset(all, use, NULL, &one, err)) ||
+            (rc = prep_acquire_samples(c, mt, params, &one, NULL, NULL, &p, err)))
+            return rc;
+        s = prep_samples(p);
+    }
+    if (!(pred = malloc((size_t)3 * (s->n ? s->n : 1) * sizeof *pred))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for %d samples", s->n);
+        goto out;
+    }
+    if (p)
+        rc = prep_predict(p, m, pred, err);
+    else /* the material under each sample's point light */
+        for (int i = 0; i < s->n; i++) {
+            double n[3], wi[3], wo[3], v[3];
+            if (s->view[i] != k)
+                continue;
+            for (int ch = 0; ch < 3; ch++) {
+                n[ch] = s->nrm[3 * i + ch];
+                wi[ch] = s->wi[3 * i + ch];
+                wo[ch] = s->wo[3 * i + ch];
+            }
+            material_eval(m, n, wi, wo, v);
+            for (int ch = 0; ch < 3; ch++)
+                pred[3 * i + ch] = (float)(v[ch] * s->intensity[i]);
         }
-        material_eval(m, n, wi, wo, rgb);
-        px = painting->px + (size_t)all->pixel[i] * painting->channels;
-        for (int c = 0; c < 3; c++) {
-            double d = rgb[c] * all->intensity[i] - px[painting->channels == 1 ? 0 : c];
+    if (rc)
+        goto out;
+    for (int i = 0; i < s->n; i++) {
+        const float *px;
+        if (s->view[i] != k || isnan(pred[3 * i]))
+            continue;
+        px = painting->px + (size_t)s->pixel[i] * painting->channels;
+        for (int ch = 0; ch < 3; ch++) {
+            double d = (double)pred[3 * i + ch] - px[painting->channels == 1 ? 0 : ch];
             ss += d * d;
             if (fabs(d) > mx)
                 mx = fabs(d);
@@ -596,7 +661,11 @@ static int error_on_view(const material *m, const samples *all, int k, const img
     *rms = cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
     *max_abs = mx;
     *count = cnt;
-    return 0;
+out:
+    free(pred);
+    if (p)
+        prep_release(c, p);
+    return rc;
 }
 
 int prep_holdout(const method *m, const void *params, const samples *all,
@@ -646,7 +715,8 @@ int prep_holdout(const method *m, const void *params, const samples *all,
             prep_release(c, p);
         }
         if (rc == 0) {
-            rc = error_on_view(&mat, all, k, &paintings[k], &rms, &mabs, &cnt, err);
+            rc = error_on_view(m, params, c, &mat, all, k, &paintings[k], &rms, &mabs, &cnt,
+                               err);
             material_free(&mat);
         }
         if (rc) {

@@ -98,6 +98,12 @@ int prep_acquire_samples(cache *c, const method *m, const void *params, samples 
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err);
 
+/* The painted values the method's own model gives the preparation's
+ * samples with material m (fitted by the same method): OUT rgb[3 n], NaN
+ * where it models no value (method.predict; without one, the material
+ * under each sample's point light times its intensity). */
+int prep_predict(const prep *p, const struct material *m, float *rgb, glint_err *err);
+
 /* What the preparation found (a new object):
  * {"memory": "hit"|"built"|"joined", "disk": "loaded"|"built"|"rebuilt"|"off",
  *  "key": the last level's key, "cold_seconds": the precomputation's cold

@@ -640,6 +640,99 @@ TEST(a_warm_repaint_reaches_the_cold_optimum)
     prep_release(C, ppc);
 }
 
+/* The model's own rendering of a preparation's samples (prep_predict):
+ * on the painted rows it is what the fit's residual measures; a held-out
+ * view (prep_holdout) is rendered under the environment with that view's
+ * transfer matrices, and a known srbf material fitted from one view
+ * predicts the other to within 2%. */
+TEST(held_out_views_are_rendered_under_the_environment)
+{
+    srbf_params p;
+    srbf_material truth;
+    prep *pp = NULL;
+    unsigned char use[SCENE_MAX_VIEWS] = {0};
+    prep_request rq;
+    env_lights l;
+    material m;
+    img paint[SCENE_MAX_VIEWS];
+    float *rgb, *pred;
+    const samples *s;
+    json_t *res = NULL;
+    double ss = 0.0, sb = 0.0, sp = 0.0;
+    long rows = 0;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    params_default(&p);
+    p.lights = 52; /* levels of its own */
+    use[0] = use[5] = 1;
+    rq = (prep_request){&method_srbf, &p, SE, use};
+    ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &pp, &e));
+    s = prep_samples(pp);
+    ASSERT_OK(known_material(0.8, &truth));
+    memset(&l, 0, sizeof l);
+    ASSERT_OK(lights_for(&p, p.env_rotation, &l));
+    rgb = malloc((size_t)3 * s->n * sizeof *rgb);
+    pred = malloc((size_t)3 * s->n * sizeof *pred);
+    render_samples(s, &l, srbf_truth, &truth, rgb);
+    ASSERT_OK(prep_fit(pp, NULL, rgb, &m, &e));
+    ASSERT_OK(prep_predict(pp, &m, pred, &e));
+    for (int i = 0; i < s->n; i++) {
+        if (isnan(pred[3 * i]))
+            continue;
+        rows++;
+        for (int c = 0; c < 3; c++) {
+            double d = (double)pred[3 * i + c] - rgb[3 * i + c];
+            ASSERT(isfinite(pred[3 * i + c]));
+            ss += d * d;
+            sb += (double)rgb[3 * i + c] * rgb[3 * i + c];
+        }
+    }
+    ASSERT_EQ(rows, (long)json_integer_value(info_get(&m, "precomputation", "rows")));
+    {
+        double fit_rel = json_real_value(info_get(&m, "errors", "rel_rms_painted"));
+        printf("  painted rows %ld: rel RMS %.3e predicted, %.3e reported by the fit\n", rows,
+               sqrt(ss / sb), fit_rel);
+        ASSERT_MSG(fabs(sqrt(ss / sb) - fit_rel) <= 1e-4 + 1e-3 * fit_rel,
+                   "predicted %.6e, fit %.6e", sqrt(ss / sb), fit_rel);
+    }
+    /* the paintings of views 0 and 5 (every sample of theirs), then the
+     * leave-one-view-out measurement */
+    memset(paint, 0, sizeof paint);
+    for (int v = 0; v < s->nviews; v++)
+        ASSERT_OK(img_alloc(&paint[v], s->width, s->height, 3, &e));
+    for (int i = 0; i < s->n; i++) {
+        sp += (double)rgb[3 * i] * rgb[3 * i];
+        for (int c = 0; c < 3; c++)
+            paint[s->view[i]].px[(size_t)s->pixel[i] * 3 + c] = rgb[3 * i + c];
+    }
+    ASSERT_OK(prep_holdout(&method_srbf, &p, s, paint, NULL, NULL, NULL, &res, &e));
+    {
+        double rms = json_real_value(json_object_get(res, "rms"));
+        double ref = sqrt(sp / s->n); /* RMS of the red channel painted */
+        json_t *per = json_object_get(res, "per_view");
+        char *t = json_dumps(per, JSON_COMPACT);
+        printf("  held out: rms %.4g (%.2f%% of the painted RMS), per view %s\n", rms,
+               100.0 * rms / ref, t);
+        free(t);
+        ASSERT_EQ((int)json_array_size(per), 2);
+        for (size_t k = 0; k < 2; k++)
+            ASSERT(json_integer_value(json_object_get(json_array_get(per, k), "pixels")) > 100);
+        ASSERT(isfinite(rms) && rms > 0.0);
+        ASSERT_MSG(rms < 0.02 * ref, "held-out rms %.4g against painted %.4g", rms, ref);
+    }
+    json_decref(res);
+    for (int v = 0; v < s->nviews; v++)
+        img_free(&paint[v]);
+    free(rgb);
+    free(pred);
+    material_free(&m);
+    free(truth.c);
+    srbf_basis_free(&truth.b);
+    env_lights_free(&l);
+    prep_release(C, pp);
+}
+
 TEST(the_precomputation_survives_a_restart_on_disk)
 {
     char dir[] = "/tmp/glint-srbf-cache-XXXXXX";
@@ -713,6 +806,7 @@ TEST_LIST{
     TEST_ENTRY(a_sun_pixel_and_lobe_widths_at_the_ends_give_finite_materials),
     TEST_ENTRY(nothing_lit_is_a_clear_error_and_impossible_budgets_are_refused),
     TEST_ENTRY(a_warm_repaint_reaches_the_cold_optimum),
+    TEST_ENTRY(held_out_views_are_rendered_under_the_environment),
     TEST_ENTRY(the_precomputation_survives_a_restart_on_disk),
 };
 
