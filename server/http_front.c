@@ -297,14 +297,24 @@ static void conn_answer(http_front *f, front_conn *c, const http_head *h, int st
     linger_drain(f, c);
 }
 
+static void conn_admit(http_front *f, front_conn *c, const http_head *h, double now);
+
 /* Drop c to make room: a connection that had begun its request is told
- * (503), one that sent nothing, or one lingering, is just closed. */
+ * (503), one that sent nothing, or one lingering, is just closed.  One
+ * whose whole head has arrived (its readiness not yet handled: the front
+ * was accepting a flood) is admitted instead, as it would have been a
+ * moment later: a health check from a flooded address is answered. */
 static void conn_evict(http_front *f, front_conn *c, double now)
 {
     if (!c->lingering) {
         http_head h;
+        http_head_error e;
         size_t have;
         peek_request(f, c, &h, &have);
+        if (have && http_head_parse(f->buf, have, &f->cfg.head, &h, &e) == HTTP_HEAD_OK) {
+            conn_admit(f, c, &h, now);
+            return;
+        }
         if (have) {
             const char *m = h.method_len ? f->buf + h.method_off : NULL;
             const char *t = h.target_len ? f->buf + h.target_off : NULL;
