@@ -5,24 +5,10 @@
 #define GLINT_LSQ_IMPL_H
 
 #include "lsq.h"
+#include "vmath.h"
 
-/* a . b over n, four partial sums (independent chains: the sum is not
- * bound by the latency of one add per term, which the solver's scans over
- * H and G were) */
-static inline double lsq_dot4(const double *restrict a, const double *restrict b, int n)
-{
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    int i = 0;
-    for (; i + 4 <= n; i += 4) {
-        s0 += a[i] * b[i];
-        s1 += a[i + 1] * b[i + 1];
-        s2 += a[i + 2] * b[i + 2];
-        s3 += a[i + 3] * b[i + 3];
-    }
-    for (; i < n; i++)
-        s0 += a[i] * b[i];
-    return (s0 + s1) + (s2 + s3);
-}
+/* the scans' dot product (four partial sums) */
+#define lsq_dot4 vmath_dot4
 
 struct lsq_work {
     int n, m;

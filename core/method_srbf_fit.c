@@ -9,6 +9,7 @@
 
 #include "clock.h"
 #include "method_srbf.h"
+#include "vmath.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -53,23 +54,6 @@ typedef struct chan_job {
     int rc;
     glint_err err;
 } chan_job;
-
-/* a . b over n in four partial sums (independent chains: a scan of the
- * 832 energy rows is not bound by the latency of one add per term) */
-static double dot4(const double *restrict a, const double *restrict b, int n)
-{
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    int i = 0;
-    for (; i + 4 <= n; i += 4) {
-        s0 += a[i] * b[i];
-        s1 += a[i + 1] * b[i + 1];
-        s2 += a[i + 2] * b[i + 2];
-        s3 += a[i + 3] * b[i + 3];
-    }
-    for (; i < n; i++)
-        s0 += a[i] * b[i];
-    return (s0 + s1) + (s2 + s3);
-}
 
 /* q = T'f, streaming T row by row (contiguous when every lobe is reached,
  * the common case, so the loop vectorizes) */
@@ -206,13 +190,13 @@ static void *chan_solve(void *arg)
     {
         double pen = 0.0;
         for (int a = 0; a < nr && smu > 0.0; a++)
-            pen += c[a] * dot4(LtL + (size_t)a * nr, c, nr);
+            pen += c[a] * vmath_dot4(LtL + (size_t)a * nr, c, nr);
         j->ss_res = fmax(0.0, j->rep.r.objective - smu * pen);
     }
     for (int l = 0; l < nl; l++) {
         double al = j->rho;
         int bn = prof_bin(en->wo + 3 * (size_t)l);
-        al += dot4(tr->G[0] + (size_t)l * nr, c, nr);
+        al += vmath_dot4(tr->G[0] + (size_t)l * nr, c, nr);
         if (al > j->max_albedo)
             j->max_albedo = al;
         if (al > j->prof[bn])

@@ -489,6 +489,25 @@ static void fit_in_of(const prep *p, const float *rgb, const void **levels, cons
     in->pattern_seconds = p->pattern_how == CACHE_HIT ? 0.0 : p->pattern_spent;
 }
 
+/* The material under each sample's point light, times its intensity, for
+ * the samples of view k (every sample when k < 0; the others untouched). */
+static void point_lit(const samples *s, const material *m, int k, float *rgb)
+{
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], v[3];
+        if (k >= 0 && s->view[i] != k)
+            continue;
+        for (int c = 0; c < 3; c++) {
+            n[c] = s->nrm[3 * i + c];
+            wi[c] = s->wi[3 * i + c];
+            wo[c] = s->wo[3 * i + c];
+        }
+        material_eval(m, n, wi, wo, v);
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)(v[c] * s->intensity[i]);
+    }
+}
+
 int prep_predict(const prep *p, const material *m, float *rgb, glint_err *err)
 {
     const samples *s = cache_data(p->pattern);
@@ -501,17 +520,7 @@ int prep_predict(const prep *p, const material *m, float *rgb, glint_err *err)
         fit_in_of(p, NULL, levels, keys, disk, &in);
         return p->m->predict(&in, m, rgb, err);
     }
-    for (int i = 0; i < s->n; i++) {
-        double n[3], wi[3], wo[3], v[3];
-        for (int c = 0; c < 3; c++) {
-            n[c] = s->nrm[3 * i + c];
-            wi[c] = s->wi[3 * i + c];
-            wo[c] = s->wo[3 * i + c];
-        }
-        material_eval(m, n, wi, wo, v);
-        for (int c = 0; c < 3; c++)
-            rgb[3 * i + c] = (float)(v[c] * s->intensity[i]);
-    }
+    point_lit(s, m, -1, rgb);
     return 0;
 }
 
@@ -629,20 +638,8 @@ static int error_on_view(const method *mt, const void *params, cache *c, const m
     }
     if (p)
         rc = prep_predict(p, m, pred, err);
-    else /* the material under each sample's point light */
-        for (int i = 0; i < s->n; i++) {
-            double n[3], wi[3], wo[3], v[3];
-            if (s->view[i] != k)
-                continue;
-            for (int ch = 0; ch < 3; ch++) {
-                n[ch] = s->nrm[3 * i + ch];
-                wi[ch] = s->wi[3 * i + ch];
-                wo[ch] = s->wo[3 * i + ch];
-            }
-            material_eval(m, n, wi, wo, v);
-            for (int ch = 0; ch < 3; ch++)
-                pred[3 * i + ch] = (float)(v[ch] * s->intensity[i]);
-        }
+    else
+        point_lit(s, m, k, pred);
     if (rc)
         goto out;
     for (int i = 0; i < s->n; i++) {

@@ -1,7 +1,8 @@
 /* vmath.h: elementwise log and exp over arrays of doubles, vectorized where
  * the C library offers vector variants (glibc's libmvec on x86-64, picked at
  * run time for the CPU), plain libm loops elsewhere.  Results agree with
- * libm to a few ulp; in and out may be the same array. */
+ * libm to a few ulp; in and out may be the same array.  And the dot product
+ * the solvers' scans use. */
 #ifndef GLINT_VMATH_H
 #define GLINT_VMATH_H
 
@@ -12,5 +13,22 @@ void vmath_exp(const double *in, double *out, size_t n);
 
 /* Which implementation is in use ("libmvec-avx2", "libmvec-sse2", "libm"). */
 const char *vmath_impl(void);
+
+/* a . b over n in four partial sums: independent chains, so a long scan is
+ * not bound by the latency of one add per term (and it vectorizes). */
+static inline double vmath_dot4(const double *restrict a, const double *restrict b, int n)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        s0 += a[i] * b[i];
+        s1 += a[i + 1] * b[i + 1];
+        s2 += a[i + 2] * b[i + 2];
+        s3 += a[i + 3] * b[i + 3];
+    }
+    for (; i < n; i++)
+        s0 += a[i] * b[i];
+    return (s0 + s1) + (s2 + s3);
+}
 
 #endif

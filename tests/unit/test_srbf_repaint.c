@@ -1,0 +1,251 @@
+/* test_srbf_repaint.c: srbf fits after the first: the kept factor of H, warm
+ * starts from the previous answer, and the model's own rendering of a
+ * view (prep_predict) that held-out errors compare. */
+#include "srbf_fit_fixture.h"
+
+/* A repaint with the same parameters starts from the factor of H that the
+ * first fit made and the level keeps: from zero (start cold, the default),
+ * the same material to the bit; other parameters (the smoothness weight) make their
+ * own. */
+TEST(a_repaint_starts_from_the_kept_factor)
+{
+    srbf_params p;
+    prep *pp = NULL;
+    material m[3];
+    float *rgb;
+    int n;
+    glint_err e;
+    static const char *want[3] = {"made", "kept", "made"};
+    ASSERT_OK(setup());
+    params_default(&p);
+    p.lights = 40; /* levels of its own: no earlier test has fitted on them */
+    ASSERT_OK(view_samples(0, &p, &pp));
+    n = prep_samples(pp)->n;
+    rgb = malloc((size_t)3 * n * sizeof *rgb);
+    for (int i = 0; i < 3 * n; i++)
+        rgb[i] = (float)(0.3 + 0.2 * sin(0.013 * i));
+    for (int k = 0; k < 3; k++) {
+        const json_t *ch;
+        if (k == 2) { /* the same levels, another smoothness weight */
+            prep_release(C, pp);
+            p.smooth *= 1.5;
+            ASSERT_OK(view_samples(0, &p, &pp));
+        }
+        ASSERT_OK(prep_fit(pp, NULL, rgb, &m[k], &e));
+        ch = json_object_get(json_object_get(m[k].info, "errors"), "channels");
+        ASSERT_EQ((int)json_array_size(ch), 3);
+        for (size_t c = 0; c < 3; c++) {
+            const char *f = json_string_value(json_object_get(json_array_get(ch, c), "factor"));
+            ASSERT_MSG(f && strcmp(f, want[k]) == 0, "fit %d channel %zu: factor %s, not %s", k,
+                       c, f ? f : "(none)", want[k]);
+        }
+    }
+    {
+        const srbf_material *a = srbf_material_of(&m[0]), *b = srbf_material_of(&m[1]);
+        for (int j = 0; j < 3 * a->b.J; j++)
+            ASSERT(a->c[j] == b->c[j]);
+    }
+    for (int k = 0; k < 3; k++)
+        material_free(&m[k]);
+    free(rgb);
+    prep_release(C, pp);
+}
+
+static double chan_num(const material *m, int ch, const char *key)
+{
+    const json_t *c = json_array_get(info_get(m, "errors", "channels"), (size_t)ch);
+    const json_t *v = json_object_get(c, key);
+    return json_is_integer(v) ? (double)json_integer_value(v) : json_real_value(v);
+}
+
+static const char *chan_str(const material *m, int ch, const char *key)
+{
+    const json_t *c = json_array_get(info_get(m, "errors", "channels"), (size_t)ch);
+    return json_string_value(json_object_get(c, key));
+}
+
+/* A warm repaint (start warm) starts at the previous fit's answer: after a
+ * stroke it reaches the optimum a fit from zero reaches (objective to 1e-9
+ * relative, energy rows held); a start the solver cannot
+ * use (a brighter diffuse albedo given) falls back to zero and says so. */
+TEST(a_warm_repaint_reaches_the_cold_optimum)
+{
+    srbf_params pw, pc;
+    prep *ppw = NULL, *ppc = NULL;
+    material mw, mc, m0;
+    float *a, *b;
+    int n, steps_w = 0, steps_c = 0;
+    glint_err e;
+    ASSERT_OK(setup());
+    params_default(&pw);
+    pw.lights = 44; /* levels of its own */
+    pw.start = SRBF_START_WARM;
+    pc = pw;
+    pc.start = SRBF_START_COLD;
+    ASSERT_OK(view_samples(0, &pw, &ppw));
+    ASSERT_OK(view_samples(0, &pc, &ppc));
+    n = prep_samples(ppw)->n;
+    a = malloc((size_t)3 * n * sizeof *a);
+    b = malloc((size_t)3 * n * sizeof *b);
+    for (int i = 0; i < 3 * n; i++)
+        a[i] = b[i] = (float)(0.3 + 0.25 * sin(0.011 * i) * sin(0.0007 * i));
+    for (int i = n / 3; i < n / 3 + n / 10; i++) /* the stroke: a band 40% brighter */
+        for (int k = 0; k < 3; k++)
+            b[3 * i + k] *= 1.4f;
+    ASSERT_OK(prep_fit(ppw, NULL, a, &m0, &e));
+    for (int ch = 0; ch < 3; ch++)
+        ASSERT_MSG(!strcmp(chan_str(&m0, ch, "start"), "cold"), "first fit: %s",
+                   chan_str(&m0, ch, "start"));
+    ASSERT_OK(prep_fit(ppw, NULL, b, &mw, &e));
+    ASSERT_OK(prep_fit(ppc, NULL, b, &mc, &e));
+    for (int ch = 0; ch < 3; ch++) {
+        double ow = chan_num(&mw, ch, "objective"), oc = chan_num(&mc, ch, "objective");
+        ASSERT_MSG(!strcmp(chan_str(&mw, ch, "start"), "warm"), "repaint channel %d: %s", ch,
+                   chan_str(&mw, ch, "start"));
+        ASSERT(!strcmp(chan_str(&mc, ch, "start"), "cold"));
+        ASSERT_MSG(fabs(ow - oc) <= 1e-9 * fabs(oc), "channel %d: warm %.17g, cold %.17g", ch,
+                   ow, oc);
+        ASSERT(chan_num(&mw, ch, "max_violation") <= 1e-9);
+        steps_w += (int)chan_num(&mw, ch, "iterations");
+        steps_c += (int)chan_num(&mc, ch, "iterations");
+    }
+    /* the steps are reported, not asserted: a warm start takes fewer when
+     * the fit from zero takes many, and more when it takes few
+     * (BENCHMARKS.md) */
+    printf("  steps over the three channels: warm %d, cold %d\n", steps_w, steps_c);
+    material_free(&mw);
+    material_free(&mc);
+    material_free(&m0);
+    /* a given diffuse albedo of 0.9 leaves a budget the fitted answer
+     * (whose diffuse part was ~0.3) may exceed: a new prep with those
+     * parameters keeps its own answers (fitd differs), so seed it with a
+     * fit at 0.1 first, then ask 0.9 */
+    {
+        srbf_params pg = pw;
+        prep *pp = NULL;
+        int cold = 0;
+        pg.diffuse.fit = 0;
+        pg.diffuse.rgb[0] = pg.diffuse.rgb[1] = pg.diffuse.rgb[2] = 0.0;
+        ASSERT_OK(view_samples(0, &pg, &pp));
+        for (int i = 0; i < 3 * n; i++)
+            a[i] = (float)(5.0 + 2.0 * sin(0.011 * i)); /* far over the budget: rows active */
+        ASSERT_OK(prep_fit(pp, NULL, a, &m0, &e));
+        prep_release(C, pp);
+        pg.diffuse.rgb[0] = pg.diffuse.rgb[1] = pg.diffuse.rgb[2] = 0.9;
+        ASSERT_OK(view_samples(0, &pg, &pp));
+        ASSERT_OK(prep_fit(pp, NULL, a, &mw, &e));
+        for (int ch = 0; ch < 3; ch++) {
+            cold += !strcmp(chan_str(&mw, ch, "start"), "cold");
+            ASSERT(chan_num(&mw, ch, "max_violation") <= 1e-9);
+        }
+        ASSERT_MSG(cold == 3, "%d of 3 channels started cold from an infeasible start", cold);
+        material_free(&m0);
+        material_free(&mw);
+        prep_release(C, pp);
+    }
+    free(a);
+    free(b);
+    prep_release(C, ppw);
+    prep_release(C, ppc);
+}
+
+/* The model's own rendering of a preparation's samples (prep_predict):
+ * on the painted rows it is what the fit's residual measures; a held-out
+ * view (prep_holdout) is rendered under the environment with that view's
+ * transfer matrices, and a known srbf material fitted from one view
+ * predicts the other to within 2%. */
+TEST(held_out_views_are_rendered_under_the_environment)
+{
+    srbf_params p;
+    srbf_material truth;
+    prep *pp = NULL;
+    unsigned char use[SCENE_MAX_VIEWS] = {0};
+    prep_request rq;
+    env_lights l;
+    material m;
+    img paint[SCENE_MAX_VIEWS];
+    float *rgb, *pred;
+    const samples *s;
+    json_t *res = NULL;
+    double ss = 0.0, sb = 0.0, sp = 0.0;
+    long rows = 0;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    params_default(&p);
+    p.lights = 52; /* levels of its own */
+    use[0] = use[5] = 1;
+    rq = (prep_request){&method_srbf, &p, SE, use};
+    ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &pp, &e));
+    s = prep_samples(pp);
+    ASSERT_OK(known_material(0.8, &truth));
+    memset(&l, 0, sizeof l);
+    ASSERT_OK(lights_for(&p, p.env_rotation, &l));
+    rgb = malloc((size_t)3 * s->n * sizeof *rgb);
+    pred = malloc((size_t)3 * s->n * sizeof *pred);
+    render_samples(s, &l, srbf_truth, &truth, rgb);
+    ASSERT_OK(prep_fit(pp, NULL, rgb, &m, &e));
+    ASSERT_OK(prep_predict(pp, &m, pred, &e));
+    for (int i = 0; i < s->n; i++) {
+        if (isnan(pred[3 * i]))
+            continue;
+        rows++;
+        for (int c = 0; c < 3; c++) {
+            double d = (double)pred[3 * i + c] - rgb[3 * i + c];
+            ASSERT(isfinite(pred[3 * i + c]));
+            ss += d * d;
+            sb += (double)rgb[3 * i + c] * rgb[3 * i + c];
+        }
+    }
+    ASSERT_EQ(rows, (long)json_integer_value(info_get(&m, "precomputation", "rows")));
+    {
+        double fit_rel = json_real_value(info_get(&m, "errors", "rel_rms_painted"));
+        printf("  painted rows %ld: rel RMS %.3e predicted, %.3e reported by the fit\n", rows,
+               sqrt(ss / sb), fit_rel);
+        ASSERT_MSG(fabs(sqrt(ss / sb) - fit_rel) <= 1e-4 + 1e-3 * fit_rel,
+                   "predicted %.6e, fit %.6e", sqrt(ss / sb), fit_rel);
+    }
+    /* the paintings of views 0 and 5 (every sample of theirs), then the
+     * leave-one-view-out measurement */
+    memset(paint, 0, sizeof paint);
+    for (int v = 0; v < s->nviews; v++)
+        ASSERT_OK(img_alloc(&paint[v], s->width, s->height, 3, &e));
+    for (int i = 0; i < s->n; i++) {
+        sp += (double)rgb[3 * i] * rgb[3 * i];
+        for (int c = 0; c < 3; c++)
+            paint[s->view[i]].px[(size_t)s->pixel[i] * 3 + c] = rgb[3 * i + c];
+    }
+    ASSERT_OK(prep_holdout(&method_srbf, &p, s, paint, NULL, NULL, NULL, &res, &e));
+    {
+        double rms = json_real_value(json_object_get(res, "rms"));
+        double ref = sqrt(sp / s->n); /* RMS of the red channel painted */
+        json_t *per = json_object_get(res, "per_view");
+        char *t = json_dumps(per, JSON_COMPACT);
+        printf("  held out: rms %.4g (%.2f%% of the painted RMS), per view %s\n", rms,
+               100.0 * rms / ref, t);
+        free(t);
+        ASSERT_EQ((int)json_array_size(per), 2);
+        for (size_t k = 0; k < 2; k++)
+            ASSERT(json_integer_value(json_object_get(json_array_get(per, k), "pixels")) > 100);
+        ASSERT(isfinite(rms) && rms > 0.0);
+        ASSERT_MSG(rms < 0.02 * ref, "held-out rms %.4g against painted %.4g", rms, ref);
+    }
+    json_decref(res);
+    for (int v = 0; v < s->nviews; v++)
+        img_free(&paint[v]);
+    free(rgb);
+    free(pred);
+    material_free(&m);
+    free(truth.c);
+    srbf_basis_free(&truth.b);
+    env_lights_free(&l);
+    prep_release(C, pp);
+}
+
+TEST_LIST{
+    TEST_ENTRY(a_repaint_starts_from_the_kept_factor),
+    TEST_ENTRY(a_warm_repaint_reaches_the_cold_optimum),
+    TEST_ENTRY(held_out_views_are_rendered_under_the_environment),
+};
+
+TEST_MAIN()
