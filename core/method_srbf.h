@@ -141,6 +141,12 @@ typedef struct srbf_transfer_data {
         double *R[3];
         double *c[3];
     } kept[SRBF_KEPT_MAX];
+    /* each channel's last painted radiance b (nrows) and T'b on the reached
+     * lobes (nreach), so that a repaint passes over the rows it changed only
+     * (srbf_painted_tb); one lock per channel, taken with kept_init */
+    pthread_mutex_t tb_lock[3];
+    double *tb_b[3], *tb_q[3];
+    int tb_updates[3];         /* incremental updates since the last full pass */
     long terms;
     long rays;                 /* shadow rays cast (0: visibility off) */
     double vis_seconds, seconds, gram_seconds;
@@ -217,6 +223,16 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
 int srbf_kept_start(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu, double *c0);
 void srbf_kept_answer(srbf_transfer_data *x, double smooth, int fitd, int ch, int nu,
                       const double *c);
+/* q = T'b on the reached lobes (nreach entries, in idx order) for channel
+ * ch's painted radiance b (nrows).  Where the level keeps an earlier
+ * painting of the channel that differs in at most a quarter of the rows,
+ * q is the kept T'b plus T' of the differences on those rows (a stroke
+ * reads a stroke's rows of T, not all of them); otherwise, and after
+ * SRBF_TB_REFRESH such updates (rounding stays at a few ulps of the full
+ * sum), a full pass.  b and q are kept for the next call.  Returns the rows
+ * of T read. */
+#define SRBF_TB_REFRESH 64
+int srbf_painted_tb(srbf_transfer_data *x, int ch, const double *b, double *q);
 size_t srbf_transfer_bytes(const srbf_transfer_data *x);
 
 #endif

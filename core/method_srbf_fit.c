@@ -35,6 +35,7 @@ typedef struct chan_report {
     lsq_result r;
     double seconds, solve_seconds;
     const char *factor;        /* "kept" (from an earlier fit), "made" (kept from now), "none" */
+    int tb_rows;               /* rows of T read for T'b (srbf_painted_tb) */
 } chan_report;
 
 /* One colour channel's problem and answer: the buffers are its own, so
@@ -54,35 +55,6 @@ typedef struct chan_job {
     int rc;
     glint_err err;
 } chan_job;
-
-/* q = T'f, streaming T row by row (contiguous when every lobe is reached,
- * the common case, so the loop vectorizes) */
-static void tf_rows(const float *T, const double *f, int n, int J, int nr, const int *idx,
-                    double *q, int nu)
-{
-    memset(q, 0, (size_t)nu * sizeof *q);
-    if (nr == J) {
-        double *restrict qq = q;
-        for (int i = 0; i < n; i++) {
-            const float *restrict t = T + (size_t)i * J;
-            double fi = f[i];
-            if (fi == 0.0)
-                continue;
-#pragma omp simd
-            for (int a = 0; a < J; a++)
-                qq[a] += (double)t[a] * fi;
-        }
-    } else {
-        for (int i = 0; i < n; i++) {
-            const float *t = T + (size_t)i * J;
-            double fi = f[i];
-            if (fi == 0.0)
-                continue;
-            for (int a = 0; a < nr; a++)
-                q[a] += (double)t[idx[a]] * fi;
-        }
-    }
-}
 
 static void chan_free(chan_job *j)
 {
@@ -109,7 +81,6 @@ static void *chan_solve(void *arg)
     const int *idx = tr->idx;
     const double *LtL = tr->LtL;
     const double *Hc = tr->H + (size_t)ch * J * J, *TE = tr->TE + (size_t)ch * J;
-    const float *T = tr->T + (size_t)ch * n * J;
     double rho = fitd ? 0.0 : p->diffuse.rgb[ch], ff = 0.0, trace = 0.0, ct0 = glint_now();
     double *f = j->f, *H = j->H, *q = j->q, *u = j->u, *c = j->c, smu = 0.0;
     lsq_problem pr = {0};
@@ -119,12 +90,19 @@ static void *chan_solve(void *arg)
     /* the painted radiance of each row, the given diffuse part off */
     for (int i = 0; i < n; i++) {
         int si = vd->rows[i];
-        double b = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
+        f[i] = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
+    }
+    /* T'f = T'b - rho T'E: T'b from the rows a repaint changed, where the
+     * level keeps the last painting */
+    j->rep.tb_rows = srbf_painted_tb((srbf_transfer_data *)tr, ch, f, q);
+    for (int a = 0; a < nr && rho != 0.0; a++)
+        q[a] -= rho * TE[idx[a]];
+    for (int i = 0; i < n; i++) {
+        double b = f[i];
         f[i] = b - rho * tr->E[3 * (size_t)i + ch];
         ff += f[i] * f[i];
         j->ss_b += b * b;
     }
-    tf_rows(T, f, n, J, nr, idx, q, nu);
     for (int a = 0; a < nr; a++) {
         for (int b = 0; b < nr; b++)
             H[(size_t)a * nu + b] = Hc[(size_t)idx[a] * J + idx[b]];
@@ -304,7 +282,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     for (int ch = 0; ch < 3; ch++) {
         const lsq_result *r = &rep[ch].r;
         json_array_append_new(
-            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f, s:s, s:s}",
+            chans, json_pack("{s:s, s:i, s:i, s:i, s:f, s:f, s:f, s:f, s:f, s:f, s:s, s:i, s:s}",
                              "status",
                              lsq_status_name(r->status), "iterations", r->iterations,
                              "lobes_used", r->free_vars, "energy_rows_active", r->active_rows,
@@ -312,7 +290,8 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
                              "max_violation", r->max_violation, "kkt_residual",
                              r->kkt_residual, "seconds", rep[ch].seconds, "solve_seconds",
                              rep[ch].solve_seconds, "factor",
-                             rep[ch].factor ? rep[ch].factor : "none", "start",
+                             rep[ch].factor ? rep[ch].factor : "none", "tb_rows",
+                             rep[ch].tb_rows, "start",
                              r->warm ? "warm" : "cold"));
     }
     {

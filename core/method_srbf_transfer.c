@@ -40,8 +40,15 @@ void srbf_transfer_clear(srbf_transfer_data *x)
             free(x->kept[k].R[ch]);
             free(x->kept[k].c[ch]);
         }
-    if (x->kept_init)
+    for (int ch = 0; ch < 3; ch++) {
+        free(x->tb_b[ch]);
+        free(x->tb_q[ch]);
+    }
+    if (x->kept_init) {
         pthread_mutex_destroy(&x->kept_lock);
+        for (int ch = 0; ch < 3; ch++)
+            pthread_mutex_destroy(&x->tb_lock[ch]);
+    }
     memset(x, 0, sizeof *x);
 }
 
@@ -53,7 +60,8 @@ size_t srbf_transfer_bytes(const srbf_transfer_data *x)
            4 * J * J * sizeof(double) + 3 * J * sizeof(double) + J * (1 + sizeof(int)) +
            (size_t)x->nl_rows * (3 * nr + 4) * sizeof(double) +
            (size_t)x->nl_rows * 4 * LSQ_NBLK(nr + 1) * sizeof(double) +
-           (size_t)SRBF_KEPT_MAX * 3 * (nr + 2) * (nr + 1) * sizeof(double);
+           (size_t)SRBF_KEPT_MAX * 3 * (nr + 2) * (nr + 1) * sizeof(double) +
+           3 * (n + nr) * sizeof(double);
 }
 
 static void transfer_free(void *d)
@@ -135,8 +143,18 @@ int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err 
     free(x->Gt);
     x->Gt = malloc(((size_t)nl * n1 + 1) * sizeof *x->Gt);
     x->nl_rows = nl;
-    if (!x->kept_init && pthread_mutex_init(&x->kept_lock, NULL) == 0)
-        x->kept_init = 1;
+    if (!x->kept_init && pthread_mutex_init(&x->kept_lock, NULL) == 0) {
+        int ch = 0;
+        while (ch < 3 && pthread_mutex_init(&x->tb_lock[ch], NULL) == 0)
+            ch++;
+        if (ch == 3)
+            x->kept_init = 1;
+        else {
+            while (ch-- > 0)
+                pthread_mutex_destroy(&x->tb_lock[ch]);
+            pthread_mutex_destroy(&x->kept_lock);
+        }
+    }
     if (!x->kept_init || !x->idx || !x->LtL || !x->G[0] || !x->G[1] || !x->gmax[0] ||
         !x->gmax[1] || !x->gblk[0] || !x->gblk[1] || !x->Gt)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -249,6 +267,100 @@ void srbf_kept_answer(srbf_transfer_data *x, double smooth, int fitd, int ch, in
             memcpy(x->kept[k].c[ch], c, (size_t)nu * sizeof *c);
     }
     pthread_mutex_unlock(&x->kept_lock);
+}
+
+/* q += T_i' w_i over rows i (all n rows when rows is NULL): four rows per
+ * pass, so q is loaded and stored once per four products (a pass per row
+ * is bound by those loads and stores, not by reading T) */
+static void tb_add(const float *T, int J, int nr, const int *idx, const int *rows, int n,
+                   const double *w, double *q)
+{
+    if (nr == J) { /* every lobe reached, the common case: contiguous, vectorized */
+        double *restrict qq = q;
+        int k = 0;
+        for (; k + 4 <= n; k += 4) {
+            int i0 = rows ? rows[k] : k, i1 = rows ? rows[k + 1] : k + 1;
+            int i2 = rows ? rows[k + 2] : k + 2, i3 = rows ? rows[k + 3] : k + 3;
+            const float *restrict t0 = T + (size_t)i0 * J, *restrict t1 = T + (size_t)i1 * J,
+                                  *restrict t2 = T + (size_t)i2 * J,
+                                  *restrict t3 = T + (size_t)i3 * J;
+            double w0 = w[i0], w1 = w[i1], w2 = w[i2], w3 = w[i3];
+#pragma omp simd
+            for (int a = 0; a < J; a++)
+                qq[a] += ((double)t0[a] * w0 + (double)t1[a] * w1) +
+                         ((double)t2[a] * w2 + (double)t3[a] * w3);
+        }
+        for (; k < n; k++) {
+            int i = rows ? rows[k] : k;
+            const float *restrict t = T + (size_t)i * J;
+            double wi = w[i];
+#pragma omp simd
+            for (int a = 0; a < J; a++)
+                qq[a] += (double)t[a] * wi;
+        }
+        return;
+    }
+    for (int k = 0; k < n; k++) {
+        int i = rows ? rows[k] : k;
+        const float *t = T + (size_t)i * J;
+        double wi = w[i];
+        if (wi == 0.0)
+            continue;
+        for (int a = 0; a < nr; a++)
+            q[a] += (double)t[idx[a]] * wi;
+    }
+}
+
+int srbf_painted_tb(srbf_transfer_data *x, int ch, const double *b, double *q)
+{
+    int n = x->nrows, J = x->J, nr = x->nreach, read = n;
+    const float *T = x->T + (size_t)ch * n * J;
+    double *d = NULL;
+    int *rows = NULL;
+
+    if (!x->kept_init) {
+        memset(q, 0, (size_t)nr * sizeof *q);
+        tb_add(T, J, nr, x->idx, NULL, n, b, q);
+        return n;
+    }
+    pthread_mutex_lock(&x->tb_lock[ch]);
+    if (x->tb_b[ch] && x->tb_updates[ch] < SRBF_TB_REFRESH &&
+        (d = malloc((size_t)n * sizeof *d)) && (rows = malloc((size_t)n * sizeof *rows))) {
+        const double *ob = x->tb_b[ch];
+        int nd = 0;
+        for (int i = 0; i < n && nd <= n / 4; i++)
+            if (b[i] != ob[i]) { /* exact: an unchanged row adds nothing */
+                d[i] = b[i] - ob[i];
+                rows[nd++] = i;
+            }
+        if (nd <= n / 4) {
+            memcpy(q, x->tb_q[ch], (size_t)nr * sizeof *q);
+            tb_add(T, J, nr, x->idx, rows, nd, d, q);
+            x->tb_updates[ch] += nd > 0;
+            read = nd;
+        }
+    }
+    if (read == n) {
+        memset(q, 0, (size_t)nr * sizeof *q);
+        tb_add(T, J, nr, x->idx, NULL, n, b, q);
+        x->tb_updates[ch] = 0;
+    }
+    if (!x->tb_b[ch]) {
+        x->tb_b[ch] = malloc((size_t)n * sizeof *b);
+        x->tb_q[ch] = malloc((size_t)nr * sizeof *q + 1);
+    }
+    if (x->tb_b[ch] && x->tb_q[ch]) {
+        memcpy(x->tb_b[ch], b, (size_t)n * sizeof *b);
+        memcpy(x->tb_q[ch], q, (size_t)nr * sizeof *q);
+    } else { /* nothing kept: the next call passes over every row */
+        free(x->tb_b[ch]);
+        free(x->tb_q[ch]);
+        x->tb_b[ch] = x->tb_q[ch] = NULL;
+    }
+    pthread_mutex_unlock(&x->tb_lock[ch]);
+    free(d);
+    free(rows);
+    return read;
 }
 
 /* H = T'T, T'E and E'E per channel, in double, from the float T. */

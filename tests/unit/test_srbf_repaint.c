@@ -1,5 +1,5 @@
-/* test_srbf_repaint.c: srbf fits after the first: the kept factor of H, warm
- * starts from the previous answer, and the model's own rendering of a
+/* test_srbf_repaint.c: srbf fits after the first: the kept factor of H, T'b
+ * from the rows a repaint changed, warm starts from the previous answer, and the model's own rendering of a
  * view (prep_predict) that held-out errors compare. */
 #include "srbf_fit_fixture.h"
 
@@ -49,6 +49,84 @@ TEST(a_repaint_starts_from_the_kept_factor)
         material_free(&m[k]);
     free(rgb);
     prep_release(C, pp);
+}
+
+/* T'b against a sum in long double over every row */
+static double tb_error(const srbf_transfer_data *x, int ch, const double *b, const double *q)
+{
+    double worst = 0.0;
+    for (int a = 0; a < x->nreach; a++) {
+        long double s = 0.0L, mag = 0.0L;
+        for (int i = 0; i < x->nrows; i++) {
+            long double t = (long double)x->T[((size_t)ch * x->nrows + i) * x->J + x->idx[a]];
+            s += t * b[i];
+            mag += fabsl(t * b[i]);
+        }
+        worst = fmax(worst, (double)(fabsl((long double)q[a] - s) / (mag + 1e-300L)));
+    }
+    return worst;
+}
+
+/* A repaint's T'b passes over the rows it changed: exact for an unchanged
+ * painting, to rounding for a stroke, a full pass when more than a quarter
+ * of the rows change or after SRBF_TB_REFRESH updates; with every lobe
+ * reached and with some not. */
+TEST(a_repaint_reads_the_rows_it_changed)
+{
+    for (int reach_all = 1; reach_all >= 0; reach_all--) {
+        srbf_transfer_data x;
+        int n = 1003, J = 37;
+        double *b = malloc((size_t)n * sizeof *b), *q = malloc((size_t)J * sizeof *q);
+        double *q0 = malloc((size_t)J * sizeof *q0);
+        unsigned s = 12345u;
+        memset(&x, 0, sizeof x);
+        x.nrows = n;
+        x.J = J;
+        x.T = malloc((size_t)3 * n * J * sizeof *x.T);
+        x.idx = malloc((size_t)J * sizeof *x.idx);
+        ASSERT(b && q && q0 && x.T && x.idx);
+        for (int j = 0; j < J; j++)
+            if (reach_all || j % 3)
+                x.idx[x.nreach++] = j;
+        for (size_t k = 0; k < (size_t)3 * n * J; k++) {
+            s = s * 1103515245u + 12345u;
+            x.T[k] = (float)((s >> 8) % 1000u) / 997.0f;
+        }
+        for (int i = 0; i < n; i++)
+            b[i] = 0.5 + 0.25 * sin(0.37 * i);
+        ASSERT_OK(pthread_mutex_init(&x.kept_lock, NULL));
+        for (int ch = 0; ch < 3; ch++)
+            ASSERT_OK(pthread_mutex_init(&x.tb_lock[ch], NULL));
+        x.kept_init = 1;
+        for (int ch = 0; ch < 3; ch++) {
+            ASSERT_EQ(srbf_painted_tb(&x, ch, b, q), n); /* nothing kept: every row */
+            ASSERT_LT(tb_error(&x, ch, b, q), 1e-14);
+            memcpy(q0, q, (size_t)x.nreach * sizeof *q);
+            ASSERT_EQ(srbf_painted_tb(&x, ch, b, q), 0); /* the same painting */
+            for (int a = 0; a < x.nreach; a++)
+                ASSERT(q[a] == q0[a]);
+        }
+        /* strokes of 1..n/4 rows: those rows only, to rounding */
+        for (int k = 0; k < SRBF_TB_REFRESH; k++) {
+            int lo = (k * 37) % n, len = 1 + (k * 53) % (n / 4), got;
+            for (int i = lo; i < lo + len && i < n; i++)
+                b[i] *= 1.0 + 0.01 * (k % 7 + 1);
+            got = srbf_painted_tb(&x, 1, b, q);
+            ASSERT_MSG(got == (lo + len < n ? len : n - lo), "stroke %d: %d rows read", k, got);
+            ASSERT_LT(tb_error(&x, 1, b, q), 1e-13);
+        }
+        b[0] += 1.0; /* SRBF_TB_REFRESH updates since the last full pass */
+        ASSERT_EQ(srbf_painted_tb(&x, 1, b, q), n);
+        ASSERT_LT(tb_error(&x, 1, b, q), 1e-14);
+        for (int i = 0; i < n / 4 + 1; i++) /* more than a quarter: a full pass */
+            b[2 * i] += 0.125;
+        ASSERT_EQ(srbf_painted_tb(&x, 1, b, q), n);
+        ASSERT_LT(tb_error(&x, 1, b, q), 1e-14);
+        srbf_transfer_clear(&x); /* frees T, idx, the kept paintings and the locks */
+        free(b);
+        free(q);
+        free(q0);
+    }
 }
 
 static double chan_num(const material *m, int ch, const char *key)
@@ -244,6 +322,7 @@ TEST(held_out_views_are_rendered_under_the_environment)
 
 TEST_LIST{
     TEST_ENTRY(a_repaint_starts_from_the_kept_factor),
+    TEST_ENTRY(a_repaint_reads_the_rows_it_changed),
     TEST_ENTRY(a_warm_repaint_reaches_the_cold_optimum),
     TEST_ENTRY(held_out_views_are_rendered_under_the_environment),
 };
