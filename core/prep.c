@@ -92,7 +92,7 @@ typedef struct pattern_ctx {
 
 static size_t samples_bytes(const samples *s)
 {
-    return sizeof *s + (size_t)s->n * (2 * sizeof(int) + 12 * sizeof(float) + 2 * sizeof(double)) +
+    return sizeof *s + (size_t)s->n * (2 * sizeof(int) + 14 * sizeof(float) + 2 * sizeof(double)) +
            (size_t)s->nviews;
 }
 

@@ -21,6 +21,7 @@ void samples_free(samples *s)
     free(s->cos_i);
     free(s->intensity);
     free(s->pos);
+    free(s->uv);
     memset(s, 0, sizeof *s);
 }
 
@@ -42,6 +43,7 @@ static int samples_reserve(samples *s, size_t cap, glint_err *err)
     GROW(cos_i, 1);
     GROW(intensity, 1);
     GROW(pos, 3);
+    GROW(uv, 2);
 #undef GROW
     s->cap = cap;
     return 0;
@@ -136,6 +138,7 @@ int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity,
         memcpy(s->wi + 3 * k, g->wi + 3 * p, 3 * sizeof(float));
         memcpy(s->wo + 3 * k, g->wo + 3 * p, 3 * sizeof(float));
         memcpy(s->pos + 3 * k, g->pos + 3 * p, 3 * sizeof(float));
+        memcpy(s->uv + 2 * k, g->uv + 2 * p, 2 * sizeof(float));
         s->cos_i[k] = ci;
         s->intensity[k] = intensity;
         s->n++;
@@ -229,6 +232,7 @@ int samples_subset(const samples *all, const unsigned char *use, const char scen
         memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
         memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
         memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->uv + 2 * k, all->uv + 2 * (size_t)i, 2 * sizeof(float));
         out->cos_i[k] = all->cos_i[i];
         out->intensity[k] = all->intensity[i];
         out->n++;
@@ -407,6 +411,7 @@ int samples_import(const char *path, samples *out, float **values, glint_err *er
         }
         out->intensity[i] = 1.0;
         out->pos[3 * i] = out->pos[3 * i + 1] = out->pos[3 * i + 2] = 0.0f;
+        out->uv[2 * i] = out->uv[2 * i + 1] = 0.0f;
         if (got == 13)
             vals[3 * i] = vals[3 * i + 1] = vals[3 * i + 2] = (float)d[9];
         out->used[v] = 1;

@@ -38,7 +38,9 @@ typedef struct samples {
     double *cos_i;         /* n: n.wi (> 0) */
     double *intensity;     /* n: the light intensity of the sample's view */
     float *pos;            /* 3n: world position (0 for imported samples: has_pos = 0) */
-    int has_pos;           /* 1 when pos holds the surface points */
+    float *uv;             /* 2n: the surface's texture coordinates in [0,1]^2 (the mesh's,
+                              or its automatic atlas'); 0 for imported samples */
+    int has_pos;           /* 1 when pos and uv hold the surface's points and coordinates */
     int rule;              /* SAMPLES_LIT (default) or SAMPLES_SEEN */
     char hash[33];         /* pattern hash: scene hash + used views + rule */
     size_t cap;            /* samples the arrays hold room for (while building) */

@@ -54,6 +54,8 @@ static int same_samples(const samples *a, const samples *b)
            memcmp(a->nrm, b->nrm, (size_t)a->n * 3 * sizeof *a->nrm) == 0 &&
            memcmp(a->wi, b->wi, (size_t)a->n * 3 * sizeof *a->wi) == 0 &&
            memcmp(a->wo, b->wo, (size_t)a->n * 3 * sizeof *a->wo) == 0 &&
+           memcmp(a->pos, b->pos, (size_t)a->n * 3 * sizeof *a->pos) == 0 &&
+           memcmp(a->uv, b->uv, (size_t)a->n * 2 * sizeof *a->uv) == 0 &&
            memcmp(a->cos_i, b->cos_i, (size_t)a->n * sizeof *a->cos_i) == 0 &&
            memcmp(a->intensity, b->intensity, (size_t)a->n * sizeof *a->intensity) == 0;
 }
@@ -73,6 +75,7 @@ TEST(bands_of_rows_are_the_rows_of_the_whole_view)
                 ASSERT(memcmp(b.mask, G[v].mask + off, np) == 0);
                 ASSERT(memcmp(b.nrm, G[v].nrm + 3 * off, 3 * np * sizeof(float)) == 0);
                 ASSERT(memcmp(b.pos, G[v].pos + 3 * off, 3 * np * sizeof(float)) == 0);
+                ASSERT(memcmp(b.uv, G[v].uv + 2 * off, 2 * np * sizeof(float)) == 0);
                 ASSERT(memcmp(b.wi, G[v].wi + 3 * off, 3 * np * sizeof(float)) == 0);
                 ASSERT(memcmp(b.wo, G[v].wo + 3 * off, 3 * np * sizeof(float)) == 0);
                 gbuf_free(&b);
@@ -118,6 +121,32 @@ TEST(patterns_built_in_bands_and_subsets_equal_whole_ones)
     samples_free(&banded);
     samples_free(&all);
     samples_free(&sub);
+}
+
+/* Each sample carries the surface's texture coordinates at its pixel (the
+ * G-buffer's, from the mesh's uvs or its automatic atlas), inside the unit
+ * square and spread over it. */
+TEST(samples_carry_the_texture_coordinates_of_their_pixels)
+{
+    samples s;
+    glint_err e;
+    float lo[2] = {1.0f, 1.0f}, hi[2] = {0.0f, 0.0f};
+    ASSERT_OK(setup());
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, NULL, HASH, &s, &e));
+    ASSERT(s.has_pos);
+    for (int i = 0; i < s.n; i++) {
+        const float *g = G[s.view[i]].uv + 2 * (size_t)s.pixel[i];
+        for (int k = 0; k < 2; k++) {
+            float u = s.uv[2 * (size_t)i + k];
+            ASSERT_MSG(u == g[k], "sample %d: uv[%d] %g, the G-buffer's %g", i, k, u, g[k]);
+            ASSERT(u >= 0.0f && u <= 1.0f);
+            lo[k] = u < lo[k] ? u : lo[k];
+            hi[k] = u > hi[k] ? u : hi[k];
+        }
+    }
+    ASSERT_MSG(hi[0] - lo[0] > 0.5f && hi[1] - lo[1] > 0.25f, "uv spans [%g,%g] x [%g,%g]",
+               lo[0], hi[0], lo[1], hi[1]);
+    samples_free(&s);
 }
 
 static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
@@ -262,6 +291,7 @@ TEST(sample_counts_equal_the_pattern)
 TEST_LIST{
     TEST_ENTRY(bands_of_rows_are_the_rows_of_the_whole_view),
     TEST_ENTRY(patterns_built_in_bands_and_subsets_equal_whole_ones),
+    TEST_ENTRY(samples_carry_the_texture_coordinates_of_their_pixels),
     TEST_ENTRY(a_fit_through_the_cache_equals_the_direct_path),
     TEST_ENTRY(rendering_in_bands_equals_shading_the_whole_view),
     TEST_ENTRY(held_out_error_on_samples_equals_the_error_on_the_view),
