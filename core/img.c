@@ -111,6 +111,22 @@ int img_check_finite(const img *im, glint_err *err)
                                   "image", err);
 }
 
+int img_fill_holes(img *im, glint_err *err)
+{
+    int rc = img_validate(im, err), any = 0;
+    size_t np;
+    if (rc)
+        return rc;
+    if (im->channels < 2)
+        return glint_err_set(err, GLINT_EINVAL, "fill holes: the image needs a coverage channel");
+    np = (size_t)im->width * im->height;
+    for (size_t i = 0; i < np && !any; i++)
+        any = im->px[i * im->channels + im->channels - 1] > 0.0f;
+    if (!any)
+        return glint_err_set(err, GLINT_EINVAL, "fill holes: no pixel is covered");
+    return img_oiio_fill_holes(im->px, im->width, im->height, im->channels, err);
+}
+
 /* ---- reading ----------------------------------------------------------- */
 
 /* OpenImageIO format name from the first bytes, or NULL. */

@@ -77,6 +77,12 @@ int img_to_rgb(img *im, glint_err *err);
 
 /* Check every value is finite (GLINT_ENONFINITE naming the first bad one). */
 int img_check_finite(const img *im, glint_err *err);
+/* Fill an image's holes in place (OpenImageIO's push-pull): the last
+ * channel is the coverage in [0,1] and the others are premultiplied by it;
+ * afterwards the coverage is 1 everywhere and each uncovered pixel holds a
+ * smooth blend of its covered neighbours.  Channels 2..4; GLINT_EINVAL for
+ * fewer, or for an image with no covered pixel (nothing to fill from). */
+int img_fill_holes(img *im, glint_err *err);
 
 /* Every channel of an image file with its name, e.g. an OpenEXR file from
  * img_write_exr_named.  Channels come in the file's order, which need not

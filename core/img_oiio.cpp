@@ -12,6 +12,8 @@
 #include "img_oiio.h"
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cstdlib>
@@ -362,5 +364,35 @@ extern "C" int img_oiio_write(const char *format, FILE *fp, void **mem,
         (void)OIIO::geterror();
         return glint_err_set(err, GLINT_EINTERNAL,
                              "%s: unknown exception encoding %s", dst, format);
+    }
+}
+
+extern "C" int img_oiio_fill_holes(float *px, int width, int height, int nch,
+                                   glint_err *err)
+{
+    if (!px || width < 1 || height < 1 || nch < 2 || nch > 4)
+        return glint_err_set(err, GLINT_EINVAL, "fill holes: bad arguments");
+    try {
+        oiio_init();
+        ImageSpec spec(width, height, nch, TypeDesc::FLOAT);
+        spec.alpha_channel = nch - 1;
+        ImageBuf src(spec, px), dst;
+        if (!ImageBufAlgo::fillholes_pushpull(dst, src, ROI(), 1))
+            return glint_err_set(err, GLINT_EINTERNAL, "fill holes: %s",
+                                 one_line(dst.geterror()).c_str());
+        if (!dst.get_pixels(ROI(0, width, 0, height, 0, 1, 0, nch), TypeDesc::FLOAT, px))
+            return glint_err_set(err, GLINT_EINTERNAL, "fill holes: %s",
+                                 one_line(dst.geterror()).c_str());
+        return 0;
+    } catch (const std::bad_alloc &) {
+        return glint_err_set(err, GLINT_ENOMEM, "fill holes: out of memory for %dx%d", width,
+                             height);
+    } catch (const std::exception &e) {
+        (void)OIIO::geterror();
+        return glint_err_set(err, GLINT_EINTERNAL, "fill holes: OpenImageIO raised: %s",
+                             one_line(e.what()).c_str());
+    } catch (...) {
+        (void)OIIO::geterror();
+        return glint_err_set(err, GLINT_EINTERNAL, "fill holes: unknown exception");
     }
 }

@@ -57,6 +57,14 @@ int img_oiio_write(const char *format, FILE *fp, void **mem, size_t *mem_len,
                    const char *const *names, int u8, const void *data,
                    glint_err *err);
 
+/* Fill the holes of width x height x nch interleaved float pixels in place
+ * by OpenImageIO's push-pull (ImageBufAlgo::fillholes_pushpull): channel
+ * nch - 1 is the coverage (alpha in [0,1]), the others are premultiplied by
+ * it.  Afterwards every pixel's alpha is 1 and pixels whose alpha was below
+ * 1 hold a smooth blend of their covered neighbours at every scale.
+ * nch 2..4.  GLINT_EINTERNAL with OpenImageIO's message if it fails. */
+int img_oiio_fill_holes(float *px, int width, int height, int nch, glint_err *err);
+
 #ifdef __cplusplus
 }
 #endif
