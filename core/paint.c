@@ -7,6 +7,7 @@
 #include "paint.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* The BRDF is one brdf_eval can evaluate: a known kind, finite values. */
@@ -30,6 +31,109 @@ static int paint_check_brdf(const brdf *b, glint_err *err)
     return 0;
 }
 
+int paint_sv_check(const paint_sv *sv, glint_err *err)
+{
+    int rc;
+    if (sv->pattern != PAINT_SV_STRIPES && sv->pattern != PAINT_SV_CHECKER)
+        return glint_err_set(err, GLINT_EINVAL, "paint: unknown pattern %d", sv->pattern);
+    if (!(sv->freq > 0.0 && sv->freq <= 1024.0))
+        return glint_err_set(err, GLINT_ERANGE,
+                             "paint: pattern frequency %g outside (0, 1024] per unit of uv",
+                             sv->freq);
+    if (!(sv->duty >= 0.0 && sv->duty <= 1.0) || !(sv->soft >= 0.0 && sv->soft <= 0.5))
+        return glint_err_set(err, GLINT_ERANGE,
+                             "paint: duty %g must be in [0,1] and soft %g in [0,0.5]", sv->duty,
+                             sv->soft);
+    if ((rc = paint_check_brdf(&sv->a, err)) || (rc = paint_check_brdf(&sv->b, err)))
+        return rc;
+    return 0;
+}
+
+/* The weight of b in one period coordinate t (periods): 1 on [0, duty),
+ * 0 on [duty, 1), with linear ramps of width soft centred on the edges. */
+static double band(double t, double duty, double soft)
+{
+    double f = t - floor(t), d0, d1;
+    if (soft <= 0.0)
+        return f < duty ? 1.0 : 0.0;
+    /* signed distance into the band from its nearer edge (edges at 0 and duty, periodic) */
+    d0 = fmin(f, 1.0 - f);             /* to the edge at 0 (or 1) */
+    d1 = fabs(f - duty);               /* to the edge at duty */
+    {
+        double d = fmin(d0, d1), in = f < duty ? 1.0 : -1.0;
+        double x = 0.5 + in * d / soft;
+        return x <= 0.0 ? 0.0 : x >= 1.0 ? 1.0 : x;
+    }
+}
+
+double paint_sv_weight(const paint_sv *sv, double u, double v)
+{
+    if (sv->duty <= 0.0)
+        return 0.0;
+    if (sv->duty >= 1.0)
+        return 1.0;
+    if (sv->pattern == PAINT_SV_STRIPES)
+        return band(u * sv->freq, sv->duty, sv->soft);
+    {   /* a checker: b where exactly one of the two bands holds */
+        double a = band(u * sv->freq, 0.5, sv->soft), b = band(v * sv->freq, 0.5, sv->soft);
+        return a * (1.0 - b) + b * (1.0 - a);
+    }
+}
+
+int paint_sv_parse(const char *spec, paint_sv *out, glint_err *err)
+{
+    char buf[512], *bar1, *bar2, *pat, *kv;
+    int rc;
+    memset(out, 0, sizeof *out);
+    out->freq = 8.0;
+    out->duty = 0.5;
+    if (!spec || strlen(spec) >= sizeof buf)
+        return glint_err_set(err, GLINT_EINVAL, "paint: a pattern spec of at most %zu bytes",
+                             sizeof buf - 1);
+    strcpy(buf, spec);
+    if (!(bar1 = strchr(buf, '|')) || !(bar2 = strchr(bar1 + 1, '|')) || strchr(bar2 + 1, '|'))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "paint: expected PATTERN[:key=value,...]|BRDF|BRDF, e.g. "
+                             "\"stripes:freq=8,duty=0.3|lambert:kd=0.6/0.1/0.1|ct:rough=0.2\"");
+    *bar1 = *bar2 = '\0';
+    pat = buf;
+    if ((kv = strchr(pat, ':')))
+        *kv++ = '\0';
+    if (!strcmp(pat, "stripes"))
+        out->pattern = PAINT_SV_STRIPES;
+    else if (!strcmp(pat, "checker"))
+        out->pattern = PAINT_SV_CHECKER;
+    else
+        return glint_err_set(err, GLINT_EINVAL, "paint: unknown pattern \"%.40s\" (stripes, checker)",
+                             pat);
+    while (kv && *kv) {
+        char *next = strchr(kv, ','), *eq, *end;
+        double x;
+        if (next)
+            *next++ = '\0';
+        if (!(eq = strchr(kv, '=')))
+            return glint_err_set(err, GLINT_EINVAL, "paint: \"%.40s\" is not key=value", kv);
+        *eq++ = '\0';
+        x = strtod(eq, &end);
+        if (end == eq || *end || !isfinite(x))
+            return glint_err_set(err, GLINT_EINVAL, "paint: %.20s=\"%.40s\" is not a number", kv,
+                                 eq);
+        if (!strcmp(kv, "freq"))
+            out->freq = x;
+        else if (!strcmp(kv, "duty"))
+            out->duty = x;
+        else if (!strcmp(kv, "soft"))
+            out->soft = x;
+        else
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "paint: unknown pattern key \"%.20s\" (freq, duty, soft)", kv);
+        kv = next;
+    }
+    if ((rc = brdf_parse(bar1 + 1, &out->a, err)) || (rc = brdf_parse(bar2 + 1, &out->b, err)))
+        return rc;
+    return paint_sv_check(out, err);
+}
+
 static int paint_check_view(const gbuf *g, const scene_view *v, int k, glint_err *err)
 {
     if (g->width < 1 || g->height < 1 || !g->mask || !g->nrm || !g->wi || !g->wo)
@@ -44,8 +148,8 @@ static int paint_check_view(const gbuf *g, const scene_view *v, int k, glint_err
 /* Unscaled radiance I f cos_i of one pixel (OUT: rgb[3]); zero unless
  * mask, cos_i > 0 and cos_o > 0.  GLINT_ENONFINITE for a covered pixel with
  * non-finite geometry or a non-finite result. */
-static int paint_pixel(const brdf *b, const gbuf *g, double intensity, size_t p, int k,
-                       double rgb[3], glint_err *err)
+static int paint_pixel(const brdf *b, const paint_sv *sv, const gbuf *g, double intensity,
+                       size_t p, int k, double rgb[3], glint_err *err)
 {
     double n[3], wi[3], wo[3], ci = 0.0, co = 0.0;
 
@@ -66,7 +170,15 @@ static int paint_pixel(const brdf *b, const gbuf *g, double intensity, size_t p,
                              k, (int)(p % (size_t)g->width), (int)(p / (size_t)g->width));
     if (!(ci > 0.0 && co > 0.0))
         return 0;
-    brdf_eval(b, n, wi, wo, rgb);
+    if (sv) { /* (1 - w) a + w b, w the pattern's weight at the pixel's uv */
+        double w = paint_sv_weight(sv, g->uv[2 * p], g->uv[2 * p + 1]), fb[3];
+        brdf_eval(&sv->a, n, wi, wo, rgb);
+        brdf_eval(&sv->b, n, wi, wo, fb);
+        for (int c = 0; c < 3; c++)
+            rgb[c] = w == 0.0 ? rgb[c] : w == 1.0 ? fb[c] : (1.0 - w) * rgb[c] + w * fb[c];
+    } else {
+        brdf_eval(b, n, wi, wo, rgb);
+    }
     for (int c = 0; c < 3; c++) {
         rgb[c] *= intensity * ci;
         if (!isfinite(rgb[c]))
@@ -78,24 +190,28 @@ static int paint_pixel(const brdf *b, const gbuf *g, double intensity, size_t p,
     return 0;
 }
 
-int paint_views(const brdf *b, const gbuf *g, const scene_view *views, int nviews,
-                double scale, img *out, double *scale_out, glint_err *err)
+static int paint_any(const brdf *b, const paint_sv *sv, const gbuf *g,
+                     const scene_view *views, int nviews, double scale, img *out,
+                     double *scale_out, glint_err *err)
 {
     double rgb[3];
     int k, done = 0, rc;
 
-    if (!b || !g || !views || !out)
+    if ((!b && !sv) || !g || !views || !out)
         return glint_err_set(err, GLINT_EINVAL, "paint: NULL brdf, gbufs, views or output");
     if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
         return glint_err_set(err, GLINT_ERANGE, "paint: %d views, supported 1..%d", nviews,
                              SCENE_MAX_VIEWS);
     if (!isfinite(scale))
         return glint_err_set(err, GLINT_ENONFINITE, "paint: scale %g is not finite", scale);
-    rc = paint_check_brdf(b, err);
+    rc = sv ? paint_sv_check(sv, err) : paint_check_brdf(b, err);
     if (rc)
         return rc;
     for (k = 0; k < nviews; k++) {
         rc = paint_check_view(&g[k], &views[k], k, err);
+        if (!rc && sv && !g[k].uv)
+            rc = glint_err_set(err, GLINT_EINVAL, "paint: view %d has no texture coordinates",
+                               k);
         if (rc)
             return rc;
     }
@@ -105,7 +221,7 @@ int paint_views(const brdf *b, const gbuf *g, const scene_view *views, int nview
         for (k = 0; k < nviews; k++) {
             size_t np = (size_t)g[k].width * (size_t)g[k].height;
             for (size_t p = 0; p < np; p++) {
-                rc = paint_pixel(b, &g[k], views[k].light_intensity, p, k, rgb, err);
+                rc = paint_pixel(b, sv, &g[k], views[k].light_intensity, p, k, rgb, err);
                 if (rc)
                     return rc;
                 for (int c = 0; c < 3; c++)
@@ -126,7 +242,7 @@ int paint_views(const brdf *b, const gbuf *g, const scene_view *views, int nview
             goto fail_views;
         done = k + 1;
         for (size_t p = 0; p < np; p++) {
-            rc = paint_pixel(b, gk, views[k].light_intensity, p, k, rgb, err);
+            rc = paint_pixel(b, sv, gk, views[k].light_intensity, p, k, rgb, err);
             if (rc)
                 goto fail_views;
             for (int c = 0; c < 3; c++) {
@@ -151,4 +267,20 @@ fail_views:
     for (k = 0; k < done; k++)
         img_free(&out[k]);
     return rc;
+}
+
+int paint_views(const brdf *b, const gbuf *g, const scene_view *views, int nviews,
+                double scale, img *out, double *scale_out, glint_err *err)
+{
+    if (!b)
+        return glint_err_set(err, GLINT_EINVAL, "paint: NULL brdf");
+    return paint_any(b, NULL, g, views, nviews, scale, out, scale_out, err);
+}
+
+int paint_views_sv(const paint_sv *sv, const gbuf *g, const scene_view *views, int nviews,
+                   double scale, img *out, double *scale_out, glint_err *err)
+{
+    if (!sv)
+        return glint_err_set(err, GLINT_EINVAL, "paint: NULL spatially varying brdf");
+    return paint_any(NULL, sv, g, views, nviews, scale, out, scale_out, err);
 }

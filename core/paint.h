@@ -26,6 +26,34 @@ int paint_views(const brdf *b, const gbuf *g, const scene_view *views,
                 int nviews, double scale, img *out, double *scale_out,
                 glint_err *err);
 
+/* A spatially varying truth: two BRDFs blended over the surface's texture
+ * coordinates by a pattern, f = (1 - w(u,v)) a + w(u,v) b (gold stripes on
+ * red plastic; seed 000, section 4.2).  PAINT_SV_STRIPES: bands across u,
+ * `freq` periods per unit of u, b on the first `duty` of each period;
+ * PAINT_SV_CHECKER: squares of 1/(2 freq), b on every other one (duty 0:
+ * all a, 1: all b).  `soft`: the width of a linear blend centred on each
+ * edge, in periods (0: a hard material edge). */
+enum { PAINT_SV_STRIPES = 1, PAINT_SV_CHECKER = 2 };
+typedef struct paint_sv {
+    brdf a, b;
+    int pattern;
+    double freq;   /* (0, 1024] */
+    double duty;   /* [0, 1] */
+    double soft;   /* [0, 0.5] */
+} paint_sv;
+
+/* Parse "PATTERN[:freq=F,duty=D,soft=S]|BRDF_A|BRDF_B", PATTERN stripes or
+ * checker (defaults freq 8, duty 0.5, soft 0), the BRDFs as brdf_parse
+ * reads them. */
+int paint_sv_parse(const char *spec, paint_sv *out, glint_err *err);
+int paint_sv_check(const paint_sv *sv, glint_err *err);
+/* The weight w of b at (u, v), in [0, 1]. */
+double paint_sv_weight(const paint_sv *sv, double u, double v);
+/* paint_views with a spatially varying truth: each pixel's BRDF is the
+ * blend at its G-buffer texture coordinates. */
+int paint_views_sv(const paint_sv *sv, const gbuf *g, const scene_view *views, int nviews,
+                   double scale, img *out, double *scale_out, glint_err *err);
+
 /* Paint nviews views under an environment's lights instead of the views'
  * point lights: each covered pixel seen from its camera gets
  *   scale * sum_k V_k power_k f(d_k, wo) max(0, n.d_k),

@@ -149,6 +149,72 @@ TEST(samples_carry_the_texture_coordinates_of_their_pixels)
     samples_free(&s);
 }
 
+/* A spatially varying truth: the pattern's weight by hand, and a painting
+ * of the scene that is exactly a's painting where the weight is 0, b's
+ * where it is 1, and between them on soft edges; specs parsed and
+ * rejected with the reason. */
+TEST(spatially_varying_truths_follow_the_texture_coordinates)
+{
+    paint_sv sv;
+    img pa[12], pb[12], ps[12];
+    long na = 0, nb = 0, nmix = 0;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT_OK(paint_sv_parse("stripes:freq=4,duty=0.25|lambert:kd=0.6/0.1/0.1|"
+                             "ct:kd=0.1,f0=0.9/0.7/0.3,rough=0.2", &sv, &e));
+    ASSERT(sv.pattern == PAINT_SV_STRIPES && sv.freq == 4.0 && sv.duty == 0.25 && sv.soft == 0);
+    ASSERT(paint_sv_weight(&sv, 0.03, 0.9) == 1.0 && paint_sv_weight(&sv, 0.1, 0.1) == 0.0);
+    ASSERT(paint_sv_weight(&sv, 0.28, 0.5) == 1.0 && paint_sv_weight(&sv, 0.49, 0.5) == 0.0);
+    sv.soft = 0.1;
+    ASSERT_NEAR(paint_sv_weight(&sv, 0.0625, 0.0), 0.5, 1e-12); /* on the edge at duty */
+    ASSERT_NEAR(paint_sv_weight(&sv, 0.0625 + 0.0125, 0.0), 0.0, 1e-12);
+    sv.pattern = PAINT_SV_CHECKER;
+    sv.soft = 0.0;
+    ASSERT(paint_sv_weight(&sv, 0.05, 0.05) == 0.0 && paint_sv_weight(&sv, 0.05, 0.2) == 1.0 &&
+           paint_sv_weight(&sv, 0.2, 0.05) == 1.0 && paint_sv_weight(&sv, 0.2, 0.2) == 0.0);
+    sv.pattern = PAINT_SV_STRIPES;
+    sv.soft = 0.05;
+    memset(pa, 0, sizeof pa);
+    memset(pb, 0, sizeof pb);
+    memset(ps, 0, sizeof ps);
+    ASSERT_OK(paint_views(&sv.a, G, SC.views, SC.nviews, 1.0, pa, NULL, &e));
+    ASSERT_OK(paint_views(&sv.b, G, SC.views, SC.nviews, 1.0, pb, NULL, &e));
+    ASSERT_OK(paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, ps, NULL, &e));
+    for (int v = 0; v < SC.nviews; v++)
+        for (int p = 0; p < SC.width * SC.height; p++) {
+            double w = paint_sv_weight(&sv, G[v].uv[2 * p], G[v].uv[2 * p + 1]);
+            for (int c = 0; c < 3; c++) {
+                float a = pa[v].px[3 * p + c], b = pb[v].px[3 * p + c], x = ps[v].px[3 * p + c];
+                if (w == 0.0)
+                    ASSERT(x == a);
+                else if (w == 1.0)
+                    ASSERT(x == b);
+                else
+                    ASSERT(x >= fminf(a, b) * (1 - 1e-6f) && x <= fmaxf(a, b) * (1 + 1e-6f));
+            }
+            if (G[v].mask[p] && pa[v].px[3 * p] > 0.0f) {
+                na += w == 0.0;
+                nb += w == 1.0;
+                nmix += w > 0.0 && w < 1.0;
+            }
+        }
+    ASSERT_MSG(na > 100 && nb > 100 && nmix > 0, "pixels of a %ld, of b %ld, blended %ld", na,
+               nb, nmix);
+    for (int v = 0; v < SC.nviews; v++) {
+        img_free(&pa[v]);
+        img_free(&pb[v]);
+        img_free(&ps[v]);
+    }
+    {
+        static const char *bad[] = {"stripes|lambert", "waves|lambert|ct", "stripes:freq=0|lambert|ct",
+                                    "stripes:duty=2|lambert|ct", "stripes:hue=1|lambert|ct",
+                                    "stripes:freq=x|lambert|ct", "checker|lambert|nope",
+                                    "stripes|lambert|ct|ct"};
+        for (size_t k = 0; k < sizeof bad / sizeof *bad; k++)
+            ASSERT_MSG(paint_sv_parse(bad[k], &sv, &e) != 0, "\"%s\" accepted", bad[k]);
+    }
+}
+
 static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
 {
     (void)id;
@@ -292,6 +358,7 @@ TEST_LIST{
     TEST_ENTRY(bands_of_rows_are_the_rows_of_the_whole_view),
     TEST_ENTRY(patterns_built_in_bands_and_subsets_equal_whole_ones),
     TEST_ENTRY(samples_carry_the_texture_coordinates_of_their_pixels),
+    TEST_ENTRY(spatially_varying_truths_follow_the_texture_coordinates),
     TEST_ENTRY(a_fit_through_the_cache_equals_the_direct_path),
     TEST_ENTRY(rendering_in_bands_equals_shading_the_whole_view),
     TEST_ENTRY(held_out_error_on_samples_equals_the_error_on_the_view),
