@@ -209,7 +209,8 @@ int cmd_paint(int argc, char **argv)
         {0, 0, 0, 0}};
     const char *out = NULL, *fmt = "exr", *spec = NULL, *env = NULL, *shadows = "auto";
     double scale = 0.0, used = 0.0, rot = 0.0, kl = 256;
-    int c, rc;
+    int c, rc, is_sv;
+    paint_sv sv;
     scene sc;
     gbuf *g = NULL;
     img *imgs = NULL;
@@ -250,8 +251,13 @@ int cmd_paint(int argc, char **argv)
     }
     if (!out || !spec || optind != argc - 1)
         return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr]");
-    if (brdf_parse(spec, &b, &e))
+    /* PATTERN|BRDF|BRDF: a spatially varying truth over the texture coordinates */
+    is_sv = strchr(spec, '|') != NULL;
+    if (is_sv ? paint_sv_parse(spec, &sv, &e) : brdf_parse(spec, &b, &e))
         return fail_err(&e);
+    if (is_sv && env)
+        return fail(1, "--brdf: a spatially varying truth paints under the views' lights "
+                       "(leave out --env)");
     if ((rc = load_scene(argv[optind], &sc)))
         return rc;
     if ((rc = raster_all(&sc, &g)))
@@ -281,7 +287,8 @@ int cmd_paint(int argc, char **argv)
             rc = fail_err(&e);
             goto done;
         }
-    } else if (paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
+    } else if (is_sv ? paint_views_sv(&sv, g, sc.views, sc.nviews, scale, imgs, &used, &e)
+                     : paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
         rc = fail_err(&e);
         goto done;
     }

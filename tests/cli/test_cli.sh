@@ -49,6 +49,9 @@ expect_ok "paint ct" "$G" paint "$T/scene.json" --brdf "ct:rough=0.3,kd=0.5,f0=0
 expect_ok "paint png" "$G" paint "$T/scene.json" --brdf blinn20 --format png -o "$T/paintpng"
 expect_err "paint bad brdf" 1 "unknown|brdf" "$G" paint "$T/scene.json" --brdf velvet -o "$T/p"
 expect_err "paint bad key" 1 "rough" "$G" paint "$T/scene.json" --brdf "ct:rough=7" -o "$T/p"
+expect_ok "paint stripes" "$G" paint "$T/scene.json" --brdf "stripes:freq=4,duty=0.3|lambert:kd=0.6/0.1/0.1|ct:f0=0.9/0.7/0.3,rough=0.2" -o "$T/paintsv"
+expect_err "paint bad pattern" 1 "unknown pattern" "$G" paint "$T/scene.json" --brdf "waves|lambert|ct" -o "$T/p"
+expect_err "paint stripes under an environment" 1 "leave out --env" "$G" paint "$T/scene.json" --brdf "stripes|lambert|ct" --env sky -o "$T/p"
 
 # fit
 expect_ok "fit" "$G" fit "$T/scene.json" --paintings "$T/paint" -o "$T/mat" --cache-dir "$T/cache" -q
