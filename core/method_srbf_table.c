@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "method_srbf.h"
+#include "uvtex.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -97,21 +98,7 @@ static void table_p(const float *tab, int n, const double h[3], double p[3])
 {
     double d = fabs(h[0]) + fabs(h[1]) + (h[2] > 0.0 ? h[2] : 0.0);
     double u = h[0] / d, v = h[1] / d, s = u + v, t = u - v;
-    double x = 0.5 * (s + 1.0) * n - 0.5, y = 0.5 * (t + 1.0) * n - 0.5, fx, fy;
-    int i0, j0, i1, j1;
-    x = x < 0.0 ? 0.0 : x > n - 1 ? n - 1 : x;
-    y = y < 0.0 ? 0.0 : y > n - 1 ? n - 1 : y;
-    i0 = (int)x;
-    j0 = (int)y;
-    i1 = i0 + 1 < n ? i0 + 1 : i0;
-    j1 = j0 + 1 < n ? j0 + 1 : j0;
-    fx = x - i0;
-    fy = y - j0;
-    for (int e = 0; e < 3; e++) {
-        double a = tab[3 * ((size_t)j0 * n + i0) + e], b = tab[3 * ((size_t)j0 * n + i1) + e];
-        double c = tab[3 * ((size_t)j1 * n + i0) + e], q = tab[3 * ((size_t)j1 * n + i1) + e];
-        p[e] = (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * q);
-    }
+    uvtex_bilinear(tab, n, 3, 0.5 * (s + 1.0) * n - 0.5, 0.5 * (t + 1.0) * n - 0.5, p);
 }
 
 void srbf_material_eval_preview(const srbf_material *sm, const double n[3], const double wi[3],

@@ -42,9 +42,43 @@ typedef struct uvtex_report {
 int uvtex_from_samples(const float *uv, const float *val, int n, int ch, int res, float *tex,
                        int *hits, uvtex_report *rep, glint_err *err);
 
-/* dst = min(dst, src) per entry (len entries): coefficient textures of
- * several views merged by keeping the smallest value, so that the BRDF
- * they scale stays under every view's samples (seed 000, section 4.2). */
-void uvtex_merge_min(float *dst, const float *src, size_t len);
+/* Bilinear lookup of an n x n texture of ch interleaved channels at texel
+ * coordinates (x, y) (texel centres at integers, clamped to the border):
+ * out[ch].  uvtex_lookup reads it at texture coordinates (u, v). */
+static inline void uvtex_bilinear(const float *t, int n, int ch, double x, double y, double *out)
+{
+    double fx, fy;
+    int i0, j0, i1, j1;
+    x = x < 0.0 ? 0.0 : x > n - 1 ? n - 1 : x;
+    y = y < 0.0 ? 0.0 : y > n - 1 ? n - 1 : y;
+    i0 = (int)x;
+    j0 = (int)y;
+    i1 = i0 + 1 < n ? i0 + 1 : i0;
+    j1 = j0 + 1 < n ? j0 + 1 : j0;
+    fx = x - i0;
+    fy = y - j0;
+    for (int e = 0; e < ch; e++) {
+        double a = t[ch * ((size_t)j0 * n + i0) + e], b = t[ch * ((size_t)j0 * n + i1) + e];
+        double c = t[ch * ((size_t)j1 * n + i0) + e], q = t[ch * ((size_t)j1 * n + i1) + e];
+        out[e] = (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * q);
+    }
+}
+double uvtex_lookup(const float *t, int res, double u, double v);
+
+/* The two steps of uvtex_from_samples, for callers that merge before
+ * filling: uvtex_splat writes the means into reached texels (0 elsewhere)
+ * and the sample count of every texel into hits (both res x res); uvtex_fill
+ * fills the texels whose count is 0 (GLINT_EINVAL when none is reached). */
+int uvtex_splat(const float *uv, const float *val, int n, int ch, int res, float *tex, int *hits,
+                glint_err *err);
+int uvtex_fill(float *tex, const int *hits, int res, int ch, uvtex_report *rep, glint_err *err);
+
+/* Merge the splat of another view into dst: a texel both reach keeps the
+ * smallest value, one only src reaches takes src's, and the counts add
+ * (coefficient textures of several views, seed 000 section 4.2: the
+ * smallest keeps the component under every view's samples; a view that
+ * does not see a texel has no say in it).  Fill after merging. */
+void uvtex_merge_min(float *dst, int *dst_hits, const float *src, const int *src_hits,
+                     size_t texels, int ch);
 
 #endif

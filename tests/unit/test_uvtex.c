@@ -134,11 +134,15 @@ TEST(more_texels_than_samples_and_a_single_sample)
     free(tex);
 }
 
-TEST(the_merge_keeps_the_smallest_value)
+/* Texels both views reach keep the smaller value; one only a view reaches
+ * takes that view's; the counts add; a texel neither reaches stays a hole. */
+TEST(the_merge_keeps_the_smallest_value_where_views_reach)
 {
-    float a[5] = {1, 2, 3, -1, 0}, b[5] = {0.5f, 3, 3, 0, -2};
-    uvtex_merge_min(a, b, 5);
-    ASSERT(a[0] == 0.5f && a[1] == 2 && a[2] == 3 && a[3] == -1 && a[4] == -2);
+    float a[5] = {1, 2, 3, 0, 7}, b[5] = {0.5f, 3, 9, -2, 8};
+    int ha[5] = {1, 1, 0, 0, 2}, hb[5] = {2, 1, 1, 0, 0};
+    uvtex_merge_min(a, ha, b, hb, 5, 1);
+    ASSERT(a[0] == 0.5f && a[1] == 2 && a[2] == 9 && a[3] == 0 && a[4] == 7);
+    ASSERT(ha[0] == 3 && ha[1] == 2 && ha[2] == 1 && ha[3] == 0 && ha[4] == 2);
 }
 
 TEST(bad_input_is_named)
@@ -175,7 +179,7 @@ TEST_LIST{
     TEST_ENTRY(a_constant_fills_the_whole_texture),
     TEST_ENTRY(reached_texels_hold_means_and_holes_lie_between_them),
     TEST_ENTRY(more_texels_than_samples_and_a_single_sample),
-    TEST_ENTRY(the_merge_keeps_the_smallest_value),
+    TEST_ENTRY(the_merge_keeps_the_smallest_value_where_views_reach),
     TEST_ENTRY(bad_input_is_named),
 };
 

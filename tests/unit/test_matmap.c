@@ -1,0 +1,188 @@
+/* test_matmap.c: material maps by iterative residual factorization over a
+ * prepared three-factor fit: a two-material painting (stripes over the
+ * texture coordinates) against one material, the stop rules and bad input. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cache.h"
+#include "check.h"
+#include "fit.h"
+#include "matmap.h"
+#include "method_hf3.h"
+#include "paint.h"
+#include "prep.h"
+#include "raster.h"
+#include "samples.h"
+
+static scene SC;
+static gbuf *G;
+static cache *C;
+static cache_entry *SE;
+static prep *P;
+
+static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    (void)id;
+    (void)err;
+    *out = cls;
+    return 0;
+}
+
+static int setup(void)
+{
+    scene_params sp;
+    fit_params fp;
+    unsigned char use[SCENE_MAX_VIEWS];
+    prep_scene_source src = {borrowed, NULL, &SC};
+    glint_err e;
+    if (P)
+        return 0;
+    scene_params_default(&sp);
+    sp.width = sp.height = 64;
+    fit_params_default(&fp);
+    fp.res = 32;
+    memset(use, 0, sizeof use);
+    use[0] = 1; /* one painted view (see matmap.h on merging several) */
+    if (scene_create(&sp, &SC, &e) || raster_scene(&SC, &G, &e) ||
+        cache_open(NULL, (size_t)1 << 30, &C, &e) || prep_scene_acquire(C, "s", &src, &SE, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    {
+        prep_request rq = {&method_hf3, &fp, SE, use};
+        if (prep_acquire(C, &rq, NULL, NULL, &P, &e)) {
+            fprintf(stderr, "setup: %s\n", e.msg);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* The samples' painted values of a truth spec (one BRDF or a pattern). */
+static float *painted(const char *spec)
+{
+    img im[SCENE_MAX_VIEWS];
+    paint_sv sv;
+    brdf b;
+    glint_err e;
+    const samples *s = prep_samples(P);
+    float *rgb = malloc(3 * (size_t)s->n * sizeof *rgb);
+    int rc;
+    memset(im, 0, sizeof im);
+    if (strchr(spec, '|'))
+        rc = paint_sv_parse(spec, &sv, &e) ||
+             paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
+    else
+        rc = brdf_parse(spec, &b, &e) || paint_views(&b, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
+    if (rc || !rgb || samples_gather(s, im, rgb, &e)) {
+        fprintf(stderr, "painting %s: %s\n", spec, e.msg);
+        free(rgb);
+        rgb = NULL;
+    }
+    for (int v = 0; v < SC.nviews; v++)
+        img_free(&im[v]);
+    return rgb;
+}
+
+static double coef_mean(const matmap *mm, int k)
+{
+    double m = 0.0;
+    size_t nt = (size_t)mm->res * mm->res;
+    for (size_t t = 0; t < nt; t++)
+        m += mm->coef[(size_t)k * nt + t];
+    return m / nt;
+}
+
+/* One material: one product holds it (its coefficients near 1), and a
+ * tolerance stops the fit there. */
+TEST(one_material_is_one_product)
+{
+    matmap mm;
+    matmap_params mp;
+    float *rgb;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT((rgb = painted("lambert:kd=0.5/0.4/0.3")));
+    matmap_params_default(&mp);
+    mp.res = 64;
+    mp.tol = 0.02;
+    ASSERT_OK(matmap_fit(P, rgb, &mp, &mm, &e));
+    printf("  lambert: %d product(s), stop %s, rel rms %.4f -> %.4f, mean coefficient %.3f\n",
+           mm.k, mm.stop, mm.rel_rms[0], mm.rel_rms[mm.k], coef_mean(&mm, 0));
+    ASSERT_EQ(mm.k, 1);
+    ASSERT(strcmp(mm.stop, "tolerance") == 0);
+    ASSERT_NEAR(mm.rel_rms[0], 1.0, 1e-12);
+    ASSERT_LT(mm.rel_rms[1], 0.02);
+    ASSERT_LT(0.85, coef_mean(&mm, 0));
+    ASSERT(coef_mean(&mm, 0) <= 1.0);
+    matmap_free(&mm);
+    free(rgb);
+}
+
+/* Red plastic with gold stripes: one product cannot hold both; more
+ * products lower the residual every time, down to the most allowed. */
+TEST(two_materials_need_more_than_one_product)
+{
+    matmap mm;
+    matmap_params mp;
+    float *rgb;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT((rgb = painted("stripes:freq=3,duty=0.5|lambert:kd=0.7/0.15/0.1|"
+                          "ct:kd=0.05,f0=0.9/0.7/0.3,rough=0.25")));
+    matmap_params_default(&mp);
+    mp.components = 5;
+    mp.res = 64;
+    mp.tol = 0.0;
+    ASSERT_OK(matmap_fit(P, rgb, &mp, &mm, &e));
+    printf("  stripes: %d products, stop %s, %.3f s, rel rms:", mm.k, mm.stop, mm.seconds);
+    for (int k = 0; k <= mm.k; k++)
+        printf(" %.4f", mm.rel_rms[k]);
+    printf("\n");
+    ASSERT_EQ(mm.k, 5);
+    ASSERT(strcmp(mm.stop, "components") == 0);
+    ASSERT_LT(0.05, mm.rel_rms[1]);
+    for (int k = 1; k <= mm.k; k++)
+        ASSERT_LT(mm.rel_rms[k], mm.rel_rms[k - 1]);
+    ASSERT_LT(mm.rel_rms[5], 0.85 * mm.rel_rms[1]);
+    for (int k = 0; k < mm.k; k++) /* coefficients are scales in [0, 1] */
+        for (int t = 0; t < mm.res * mm.res; t++) {
+            float c = mm.coef[(size_t)k * mm.res * mm.res + t];
+            ASSERT(c >= -1e-6f && c <= 1.0f + 1e-6f);
+        }
+    matmap_free(&mm);
+    free(rgb);
+}
+
+TEST(bad_input_is_refused)
+{
+    matmap mm;
+    matmap_params mp;
+    float *rgb;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT((rgb = painted("lambert")));
+    matmap_params_default(&mp);
+    mp.components = 0;
+    ASSERT_EQ(matmap_fit(P, rgb, &mp, &mm, &e), GLINT_EINVAL);
+    matmap_params_default(&mp);
+    mp.res = 0;
+    ASSERT_EQ(matmap_fit(P, rgb, &mp, &mm, &e), GLINT_EINVAL);
+    matmap_params_default(&mp);
+    rgb[7] = -0.5f;
+    ASSERT_EQ(matmap_fit(P, rgb, &mp, &mm, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "sample 2") != NULL);
+    rgb[7] = NAN;
+    ASSERT_EQ(matmap_fit(P, rgb, &mp, &mm, &e), GLINT_EINVAL);
+    free(rgb);
+}
+
+TEST_LIST{
+    TEST_ENTRY(one_material_is_one_product),
+    TEST_ENTRY(two_materials_need_more_than_one_product),
+    TEST_ENTRY(bad_input_is_refused),
+};
+
+TEST_MAIN()
