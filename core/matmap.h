@@ -21,13 +21,14 @@
  * 0.1% ("no-gain"), and says which.
  *
  * Measured (tests/unit/test_matmap.c): on one painted view of the sphere a
- * Lambertian painting leaves 0.5% after one product, and red plastic with
- * gold stripes 10% after one and 8% after five.  Over twelve views the
- * smallest-value merge is too strict: where the three-factor fit
- * overshoots in one view (grazing light), that view's scale holds the
- * texel down for all, and a Lambertian painting kept 70% of its energy
- * after one product.  A better merge (or coefficients fitted jointly over
- * the views) is open.
+ * Lambertian painting leaves a relative RMS of 0.0045 after one product,
+ * and red plastic with gold stripes 0.105 after one and 0.077 after five.
+ * Over twelve views the smallest-value merge is too strict: where the
+ * three-factor fit overshoots in one view (grazing light), that view's
+ * scale holds the texel down for all.  The Lambertian painting was still at
+ * 0.147 after five products, the stripes at 0.70 after one and 0.63 after
+ * five.  A better merge (or coefficients fitted jointly over the views) is
+ * open.
  *
  * Conventions: textures as uvtex.h (res x res, row 0 at v = 0); lookups
  * bilinear between texel centres, clamped at the border.  Values per unit
