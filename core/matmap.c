@@ -12,6 +12,7 @@
 void matmap_params_default(matmap_params *mp)
 {
     mp->components = 5;
+    mp->merge = MATMAP_MERGE_LSQ;
     mp->res = 128;
     mp->tol = 0.01;
 }
@@ -67,6 +68,37 @@ static int coef_texture(const samples *s, const float *c, int res, float *tex, f
     return uvtex_fill(tex, hits, res, 1, NULL, err);
 }
 
+/* Component k's texture by least squares: per texel sum(r.f) / sum(f.f)
+ * over its samples (all views, all channels), in [0, 1]; the means of the
+ * two products per texel give the same ratio as their sums */
+static int coef_lsq(const samples *s, const float *r, const float *fk, int res, float *tex,
+                    float *two, int *hits, float *pair, glint_err *err)
+{
+    size_t nt = (size_t)res * res;
+    int rc;
+    for (int i = 0; i < s->n; i++) {
+        double rf = 0.0, ff = 0.0;
+        for (int ch = 0; ch < 3; ch++) {
+            double f = fk[3 * (size_t)i + ch];
+            if (isfinite(f)) {
+                rf += r[3 * (size_t)i + ch] * f;
+                ff += f * f;
+            }
+        }
+        pair[2 * (size_t)i] = (float)rf;
+        pair[2 * (size_t)i + 1] = (float)ff;
+    }
+    if ((rc = uvtex_splat(s->uv, pair, s->n, 2, res, two, hits, err)))
+        return rc;
+    for (size_t t = 0; t < nt; t++) {
+        double x = two[2 * t + 1] > 0.0f ? (double)two[2 * t] / two[2 * t + 1] : 0.0;
+        if (!(two[2 * t + 1] > 0.0f))
+            hits[t] = 0; /* nothing to scale here: filled from the neighbours */
+        tex[t] = (float)(x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x);
+    }
+    return uvtex_fill(tex, hits, res, 1, NULL, err);
+}
+
 int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap *out,
                glint_err *err)
 {
@@ -79,10 +111,11 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
 
     memset(out, 0, sizeof *out);
     if (!mp || mp->components < 1 || mp->components > MATMAP_MAX || mp->res < 1 ||
-        mp->res > UVTEX_MAX_RES || !(mp->tol >= 0.0))
+        mp->res > UVTEX_MAX_RES || !(mp->tol >= 0.0) ||
+        (mp->merge != MATMAP_MERGE_LSQ && mp->merge != MATMAP_MERGE_MIN))
         return glint_err_set(err, GLINT_EINVAL,
-                             "material map: components 1..%d, res 1..%d and tol >= 0",
-                             MATMAP_MAX, UVTEX_MAX_RES);
+                             "material map: components 1..%d, res 1..%d, tol >= 0 and merge "
+                             "lsq or min", MATMAP_MAX, UVTEX_MAX_RES);
     if (!s->has_pos || !s->uv)
         return glint_err_set(err, GLINT_EINVAL,
                              "material map: the samples carry no texture coordinates "
@@ -97,7 +130,7 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
     r = malloc(n3 * sizeof *r);
     fk = malloc(n3 * sizeof *fk);
     c = malloc(n * sizeof *c);
-    scratch = malloc(nt * sizeof *scratch);
+    scratch = malloc(2 * nt * sizeof *scratch);
     uvv = malloc(2 * n * sizeof *uvv);
     cv = malloc(n * sizeof *cv);
     hits = malloc(nt * sizeof *hits);
@@ -125,7 +158,7 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
         for (size_t i = 0; i < n3; i++) /* painted values: per unit light, as r */
             fk[i] = (float)(fk[i] / s->intensity[i / 3]);
         /* equation 18: the largest scale that keeps each channel >= 0 */
-        for (size_t i = 0; i < n; i++) {
+        for (size_t i = 0; i < n && mp->merge == MATMAP_MERGE_MIN; i++) {
             double ci = 1.0;
             for (int ch = 0; ch < 3; ch++) {
                 double f = fk[3 * i + ch];
@@ -138,7 +171,9 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
             }
             c[i] = (float)(ci > 0.0 ? ci : 0.0);
         }
-        if ((rc = coef_texture(s, c, mp->res, tex, scratch, hits, shits, uvv, cv, err)))
+        if ((rc = mp->merge == MATMAP_MERGE_LSQ
+                      ? coef_lsq(s, r, fk, mp->res, tex, scratch, hits, uvv, err)
+                      : coef_texture(s, c, mp->res, tex, scratch, hits, shits, uvv, cv, err)))
             goto done;
         for (size_t i = 0; i < n; i++) {
             double ct = uvtex_lookup(tex, mp->res, s->uv[2 * i], s->uv[2 * i + 1]);

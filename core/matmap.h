@@ -5,30 +5,33 @@
  * surface's texture coordinates.
  *
  * The fit (matmap_fit) is iterative residual factorization.  Starting from
- * the painting, each iteration fits the residual r, predicts it at every
- * sample (prep_predict: f_k), and takes per sample the largest scale that
- * keeps every channel of the residual non-negative (equation 18: c =
- * min(1, r / f_k) over the channels), so the next residual can be
- * factorized in log space again.  The per-sample scales become a texture
- * (uvtex: means where samples fall, push-pull between); with several views,
- * one texture per view, merged by keeping the smallest value, so that the
- * component stays under every view's samples.  The residual is then
+ * the painting, each iteration fits the residual r and predicts it at every
+ * sample (prep_predict: f_k).  The coefficient texture c_k comes from one
+ * of two rules:
+ *   MATMAP_MERGE_MIN (seed 000): per sample the largest scale that keeps
+ *     every channel of the residual non-negative (equation 18: c =
+ *     min(1, r / f_k) over the channels), so the next residual can be
+ *     factorized in log space again; the scales become a texture (uvtex:
+ *     means where samples fall), one per view, merged by keeping the
+ *     smallest value so that the component stays under every view.
+ *   MATMAP_MERGE_LSQ (the default): per texel the least-squares scale of
+ *     f_k to r over every sample in it, all views together, in [0, 1].
+ * Texels no sample reaches are filled by push-pull.  The residual is then
  * r - c_k(uv) f_k, with c_k read back from the texture (bilinear, as a
- * renderer reads it); where that interpolation overshoots, the residual is
- * clamped to 0 and the samples are counted.  It stops when the residual's
+ * renderer reads it); where it goes below 0 (interpolation, or the least
+ * squares scale) it is clamped to 0, so that it stays factorizable, and the
+ * samples are counted.  It stops when the residual's
  * relative RMS falls below a tolerance ("tolerance"), at the most
  * components ("components"), or when a component lowers it by less than
  * 0.1% ("no-gain"), and says which.
  *
- * Measured (tests/unit/test_matmap.c): on one painted view of the sphere a
- * Lambertian painting leaves a relative RMS of 0.0045 after one product,
- * and red plastic with gold stripes 0.105 after one and 0.077 after five.
- * Over twelve views the smallest-value merge is too strict: where the
+ * Why least squares by default (tests/unit/test_matmap.c prints these:
+ * relative RMS of the residual of red plastic with gold stripes, after one
+ * and after five products): with the smallest-value rule, where the
  * three-factor fit overshoots in one view (grazing light), that view's
- * scale holds the texel down for all.  The Lambertian painting was still at
- * 0.147 after five products, the stripes at 0.70 after one and 0.63 after
- * five.  A better merge (or coefficients fitted jointly over the views) is
- * open.
+ * scale holds the texel down for every view: 0.105 -> 0.077 on one painted
+ * view of the sphere, 0.70 -> 0.63 on twelve.  Least squares per texel:
+ * 0.079 -> 0.028 on one view, 0.49 -> 0.11 on twelve.
  *
  * Conventions: textures as uvtex.h (res x res, row 0 at v = 0); lookups
  * bilinear between texel centres, clamped at the border.  Values per unit
@@ -42,8 +45,11 @@
 
 #define MATMAP_MAX 32
 
+enum { MATMAP_MERGE_LSQ = 0, MATMAP_MERGE_MIN = 1 };
+
 typedef struct matmap_params {
     int components;    /* at most this many products, 1..MATMAP_MAX */
+    int merge;         /* MATMAP_MERGE_LSQ (default) or MATMAP_MERGE_MIN */
     int res;           /* coefficient texture resolution, 1..UVTEX_MAX_RES */
     double tol;        /* stop below this relative RMS of the residual, >= 0 */
 } matmap_params;
