@@ -13,25 +13,26 @@
 #include "scene.h"
 #include "vis.h"
 
-void envlit_brdf(const void *ctx, const double n[3], const double wi[3], const double wo[3],
-                 double rgb[3])
+void envlit_brdf(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3])
 {
+    (void)uv;
     double c = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
     brdf_eval(ctx, n, wi, wo, rgb);
     for (int e = 0; e < 3; e++)
         rgb[e] *= c > 0.0 ? c : 0.0;
 }
 
-void envlit_material(const void *ctx, const double n[3], const double wi[3],
-                     const double wo[3], double rgb[3])
+void envlit_material(const void *ctx, const double uv[2], const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3])
 {
-    material_eval(ctx, n, wi, wo, rgb);
+    material_eval_at(ctx, uv, n, wi, wo, rgb);
 }
 
-void envlit_material_preview(const void *ctx, const double n[3], const double wi[3],
-                             const double wo[3], double rgb[3])
+void envlit_material_preview(const void *ctx, const double uv[2], const double n[3],
+                             const double wi[3], const double wo[3], double rgb[3])
 {
-    material_eval_preview(ctx, n, wi, wo, rgb);
+    material_eval_preview_at(ctx, uv, n, wi, wo, rgb);
 }
 
 static double now_s(void)
@@ -94,7 +95,8 @@ int envlit_vis_vertices(const mesh *m, const env_lights *l, int shadows, envlit_
 /* B for one shading point: n unit, wo unit; bits the point's visibility
  * words or NULL. */
 static void shade_point(const env_lights *l, const uint64_t *bits, envlit_fn fn,
-                        const void *ctx, const double n[3], const double wo[3], double acc[3])
+                        const void *ctx, const double *uv, const double n[3],
+                        const double wo[3], double acc[3])
 {
     acc[0] = acc[1] = acc[2] = 0.0;
     for (int k = 0; k < l->k; k++) {
@@ -103,7 +105,7 @@ static void shade_point(const env_lights *l, const uint64_t *bits, envlit_fn fn,
         if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] <= 0.0 ||
             (bits && !((bits[k >> 6] >> (k & 63)) & 1)))
             continue;
-        fn(ctx, n, d, wo, r);
+        fn(ctx, uv, n, d, wo, r);
         for (int e = 0; e < 3; e++)
             acc[e] += l->power[3 * k + e] * r[e];
     }
@@ -130,7 +132,7 @@ static void *vertex_range(void *arg)
             memset(j->rgb + 3 * (size_t)i, 0, 3 * sizeof *j->rgb);
             continue;
         }
-        double n[3] = {q[0], q[1], q[2]}, wo[3], acc[3], ln, lo, c;
+        double n[3] = {q[0], q[1], q[2]}, wo[3], acc[3], ln, lo, c, uv[2] = {0.0, 0.0};
         for (int e = 0; e < 3; e++)
             wo[e] = j->eye[e] - p[e];
         ln = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -157,8 +159,12 @@ static void *vertex_range(void *arg)
                 memcpy(wo, n, sizeof wo);
             }
         }
+        if (j->m->uv) {
+            uv[0] = j->m->uv[2 * (size_t)i];
+            uv[1] = j->m->uv[2 * (size_t)i + 1];
+        }
         shade_point(j->l, j->vis->bits ? j->vis->bits + (size_t)i * j->vis->words : NULL, j->fn,
-                    j->ctx, n, wo, acc);
+                    j->ctx, j->m->uv ? uv : NULL, n, wo, acc);
         for (int e = 0; e < 3; e++)
             j->rgb[3 * (size_t)i + e] = (float)(j->scale * acc[e]);
     }
@@ -285,12 +291,17 @@ int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, 
     }
     for (size_t i = 0; i < n; i++) {
         size_t p = (size_t)pix[i];
-        double nn[3], wo[3], acc[3];
+        double nn[3], wo[3], acc[3], uv[2] = {0.0, 0.0};
         for (int e = 0; e < 3; e++) {
             nn[e] = g->nrm[3 * p + e];
             wo[e] = g->wo[3 * p + e];
         }
-        shade_point(l, bits ? bits + i * (size_t)words : NULL, fn, ctx, nn, wo, acc);
+        if (g->uv) {
+            uv[0] = g->uv[2 * p];
+            uv[1] = g->uv[2 * p + 1];
+        }
+        shade_point(l, bits ? bits + i * (size_t)words : NULL, fn, ctx, g->uv ? uv : NULL, nn,
+                    wo, acc);
         for (int e = 0; e < 3; e++)
             out->px[3 * p + e] = (float)(scale * acc[e]);
     }

@@ -40,19 +40,20 @@
 /* Dihedral tolerance (radians) for calling a mesh convex (vis_mesh_convex). */
 #define ENVLIT_CONVEX_TOL 1e-6
 
-/* Radiance per unit light R(n, wi, wo) (OUT: rgb). */
-typedef void (*envlit_fn)(const void *ctx, const double n[3], const double wi[3],
-                          const double wo[3], double rgb[3]);
+/* Radiance per unit light R(uv, n, wi, wo) at the surface point with
+ * texture coordinates uv (NULL where the surface has none) (OUT: rgb). */
+typedef void (*envlit_fn)(const void *ctx, const double uv[2], const double n[3],
+                          const double wi[3], const double wo[3], double rgb[3]);
 
-/* R for an analytic BRDF (ctx: a const brdf *). */
-void envlit_brdf(const void *ctx, const double n[3], const double wi[3], const double wo[3],
-                 double rgb[3]);
+/* R for an analytic BRDF (ctx: a const brdf *; uv unused). */
+void envlit_brdf(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3]);
 /* R for a material (ctx: a const material *): material_eval, and
  * material_eval_preview (the method's faster approximation, if any). */
-void envlit_material(const void *ctx, const double n[3], const double wi[3],
-                     const double wo[3], double rgb[3]);
-void envlit_material_preview(const void *ctx, const double n[3], const double wi[3],
-                             const double wo[3], double rgb[3]);
+void envlit_material(const void *ctx, const double uv[2], const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3]);
+void envlit_material_preview(const void *ctx, const double uv[2], const double n[3],
+                             const double wi[3], const double wo[3], double rgb[3]);
 
 /* Visibility of every light from every vertex of a mesh. */
 typedef struct envlit_vis {

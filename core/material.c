@@ -37,14 +37,31 @@ const char *material_method_name(const material *m)
 void material_eval(const material *m, const double n[3], const double wi[3],
                    const double wo[3], double rgb[3])
 {
-    m->method->mat->eval(m->data, n, wi, wo, rgb);
+    m->method->mat->eval(m->data, NULL, n, wi, wo, rgb);
+}
+
+void material_eval_at(const material *m, const double uv[2], const double n[3],
+                      const double wi[3], const double wo[3], double rgb[3])
+{
+    m->method->mat->eval(m->data, uv, n, wi, wo, rgb);
 }
 
 void material_eval_preview(const material *m, const double n[3], const double wi[3],
                            const double wo[3], double rgb[3])
 {
+    material_eval_preview_at(m, NULL, n, wi, wo, rgb);
+}
+
+void material_eval_preview_at(const material *m, const double uv[2], const double n[3],
+                              const double wi[3], const double wo[3], double rgb[3])
+{
     const material_ops *o = m->method->mat;
-    (o->eval_preview ? o->eval_preview : o->eval)(m->data, n, wi, wo, rgb);
+    (o->eval_preview ? o->eval_preview : o->eval)(m->data, uv, n, wi, wo, rgb);
+}
+
+int material_spatial(const material *m)
+{
+    return m && m->method && m->method->mat->spatial;
 }
 
 json_t *material_summary(const material *m)
@@ -67,11 +84,11 @@ int material_gpu_get(const material *m, material_gpu *out, glint_err *err)
 static void shade_pixels(const material *m, const gbuf *g, size_t p0, size_t p1,
                          double intensity, float background, float *out)
 {
-    void (*eval)(const void *, const double *, const double *, const double *, double *) =
-        m->method->mat->eval;
+    void (*eval)(const void *, const double *, const double *, const double *,
+                 const double *, double *) = m->method->mat->eval;
     for (size_t p = p0; p < p1; p++) {
         float *o = out + 3 * (p - p0);
-        double n[3], wi[3], wo[3], rgb[3];
+        double n[3], wi[3], wo[3], rgb[3], uv[2] = {0.0, 0.0};
         if (!g->mask[p]) {
             o[0] = o[1] = o[2] = background;
             continue;
@@ -81,7 +98,11 @@ static void shade_pixels(const material *m, const gbuf *g, size_t p0, size_t p1,
             wi[c] = g->wi[3 * p + c];
             wo[c] = g->wo[3 * p + c];
         }
-        eval(m->data, n, wi, wo, rgb);
+        if (g->uv) {
+            uv[0] = g->uv[2 * p];
+            uv[1] = g->uv[2 * p + 1];
+        }
+        eval(m->data, g->uv ? uv : NULL, n, wi, wo, rgb);
         for (int c = 0; c < 3; c++)
             o[c] = (float)(rgb[c] * intensity);
     }
@@ -162,9 +183,13 @@ int material_error_views(const material *m, const gbuf *g, const scene_view *vie
             return glint_err_set(err, GLINT_EINVAL, "reference image %d does not match its view",
                                  v);
         for (size_t p = 0; p < np; p++) {
-            double n[3], wi[3], wo[3], rgb[3], ci, co;
+            double n[3], wi[3], wo[3], rgb[3], ci, co, uv[2] = {0.0, 0.0};
             if (!gb->mask[p])
                 continue;
+            if (gb->uv) {
+                uv[0] = gb->uv[2 * p];
+                uv[1] = gb->uv[2 * p + 1];
+            }
             for (int c = 0; c < 3; c++) {
                 n[c] = gb->nrm[3 * p + c];
                 wi[c] = gb->wi[3 * p + c];
@@ -174,7 +199,7 @@ int material_error_views(const material *m, const gbuf *g, const scene_view *vie
             co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];
             if (!(ci > 0.0 && co > 0.0))
                 continue;
-            material_eval(m, n, wi, wo, rgb);
+            material_eval_at(m, gb->uv ? uv : NULL, n, wi, wo, rgb);
             for (int c = 0; c < 3; c++) {
                 double ref = t->px[p * t->channels + (t->channels == 1 ? 0 : c)];
                 double d = rgb[c] * I - ref;

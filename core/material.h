@@ -45,14 +45,25 @@ void material_init(material *m, const method *meth, void *data, json_t *info);
 const char *material_method_name(const material *m);
 
 /* Evaluate at a direction pair (unit vectors, OUT rgb[3], per unit light):
- * 0 unless n.wi > 0 and n.wo > 0. */
+ * 0 unless n.wi > 0 and n.wo > 0.  A material that varies over the surface
+ * (material_spatial) gives its average over the surface here. */
 void material_eval(const material *m, const double n[3], const double wi[3],
                    const double wo[3], double rgb[3]);
+/* The same at the surface point with texture coordinates uv (NULL: the
+ * average; uv outside [0,1]^2 is clamped to it). */
+void material_eval_at(const material *m, const double uv[2], const double n[3],
+                      const double wi[3], const double wo[3], double rgb[3]);
 
 /* The same for previews: the method's faster approximation where it has
  * one (method.h, eval_preview), else material_eval. */
 void material_eval_preview(const material *m, const double n[3], const double wi[3],
                            const double wo[3], double rgb[3]);
+void material_eval_preview_at(const material *m, const double uv[2], const double n[3],
+                              const double wi[3], const double wo[3], double rgb[3]);
+
+/* 1 when the material varies over the surface (its value depends on the
+ * texture coordinates), 0 when one BRDF holds everywhere. */
+int material_spatial(const material *m);
 
 /* Shade a G-buffer: RGB radiance for a light of intensity `intensity`;
  * covered pixels that are not lit and seen get 0, background pixels

@@ -15,6 +15,8 @@ void matmap_params_default(matmap_params *mp)
     mp->merge = MATMAP_MERGE_LSQ;
     mp->res = 128;
     mp->tol = 0.01;
+    mp->refine = 20;
+    mp->rounds = 8;
 }
 
 void matmap_free(matmap *m)
@@ -99,12 +101,169 @@ static int coef_lsq(const samples *s, const float *r, const float *fk, int res, 
     return uvtex_fill(tex, hits, res, 1, NULL, err);
 }
 
+/* The model's value at every sample from products' predictions F (K x 3n,
+ * per unit light) and the coefficient textures: OUT r = rgb - model, and
+ * the relative RMS of r. */
+static double model_residual(const samples *s, const float *rgb, const float *F, int K,
+                             const float *coef, int res, float *r)
+{
+    size_t n3 = 3 * (size_t)s->n, nt = (size_t)res * res;
+    for (size_t i = 0; i < n3; i++)
+        r[i] = rgb[i];
+    for (int k = 0; k < K; k++)
+        for (size_t i = 0; i < (size_t)s->n; i++) {
+            double c = uvtex_lookup(coef + k * nt, res, s->uv[2 * i], s->uv[2 * i + 1]);
+            for (int ch = 0; ch < 3; ch++) {
+                float f = F[k * n3 + 3 * i + ch];
+                if (isfinite(f))
+                    r[3 * i + ch] -= (float)(c * f);
+            }
+        }
+    return rel_rms(r, rgb, n3);
+}
+
+/* The joint refinement (matmap.h): projected coordinate descent over every
+ * texel and product on the model's squared error, the bilinear weights of
+ * each sample's four texels as uvtex_lookup reads them.  r: the residual
+ * of the current coefficients (updated).  OUT: *sweeps. */
+static int refine_joint(const samples *s, const float *rgb, const float *F, int K, int res,
+                        int max_sweeps, float *coef, float *r, int *sweeps, glint_err *err)
+{
+    size_t n = (size_t)s->n, n3 = 3 * n, nt = (size_t)res * res, ne = 0;
+    size_t *start = calloc(nt + 1, sizeof *start);
+    int *idx = malloc(4 * n * sizeof *idx);
+    float *wt = malloc(4 * n * sizeof *wt);
+    double prev = 0.0;
+    (void)rgb;
+
+    *sweeps = 0;
+    if (!start || !idx || !wt) {
+        free(start);
+        free(idx);
+        free(wt);
+        return glint_err_set(err, GLINT_ENOMEM, "material map: out of memory to refine");
+    }
+    /* counting sort of (sample, weight) by texel: two passes over the corners */
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t i = 0; i < n; i++) {
+            double x = s->uv[2 * i] * res - 0.5, y = s->uv[2 * i + 1] * res - 0.5, fx, fy;
+            int i0, j0, i1, j1;
+            x = x < 0.0 ? 0.0 : x > res - 1 ? res - 1 : x;
+            y = y < 0.0 ? 0.0 : y > res - 1 ? res - 1 : y;
+            i0 = (int)x;
+            j0 = (int)y;
+            i1 = i0 + 1 < res ? i0 + 1 : i0;
+            j1 = j0 + 1 < res ? j0 + 1 : j0;
+            fx = x - i0;
+            fy = y - j0;
+            {
+                size_t t[4] = {(size_t)j0 * res + i0, (size_t)j0 * res + i1,
+                               (size_t)j1 * res + i0, (size_t)j1 * res + i1};
+                double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+                for (int c = 0; c < 4; c++) {
+                    if (!(w[c] > 0.0))
+                        continue;
+                    if (pass == 0) {
+                        start[t[c] + 1]++;
+                    } else {
+                        size_t e = start[t[c]]++;
+                        idx[e] = (int)i;
+                        wt[e] = (float)w[c];
+                    }
+                }
+            }
+        }
+        if (pass == 0) {
+            for (size_t t = 0; t < nt; t++)
+                start[t + 1] += start[t];
+            ne = start[nt];
+        } else { /* start[t] now holds the end of t: shift back */
+            memmove(start + 1, start, nt * sizeof *start);
+            start[0] = 0;
+        }
+    }
+    (void)ne;
+    for (size_t i = 0; i < n3; i++)
+        prev += (double)r[i] * r[i];
+    for (int sw = 0; sw < max_sweeps; sw++) {
+        double now = 0.0;
+        for (size_t t = 0; t < nt; t++) {
+            if (start[t] == start[t + 1])
+                continue;
+            for (int k = 0; k < K; k++) {
+                const float *f = F + k * n3;
+                float *c = coef + k * nt + t;
+                double g = 0.0, h = 0.0, cn, d;
+                for (size_t e = start[t]; e < start[t + 1]; e++) {
+                    size_t i = (size_t)idx[e];
+                    double w = wt[e];
+                    for (int ch = 0; ch < 3; ch++) {
+                        double fv = f[3 * i + ch];
+                        if (!isfinite(fv))
+                            continue;
+                        g += w * fv * r[3 * i + ch];
+                        h += w * w * fv * fv;
+                    }
+                }
+                if (!(h > 0.0))
+                    continue;
+                cn = *c + g / h;
+                cn = cn < 0.0 ? 0.0 : cn > 1.0 ? 1.0 : cn;
+                d = cn - *c;
+                if (d == 0.0)
+                    continue;
+                *c = (float)cn;
+                for (size_t e = start[t]; e < start[t + 1]; e++) {
+                    size_t i = (size_t)idx[e];
+                    double w = wt[e];
+                    for (int ch = 0; ch < 3; ch++) {
+                        double fv = f[3 * i + ch];
+                        if (isfinite(fv))
+                            r[3 * i + ch] -= (float)(d * w * fv);
+                    }
+                }
+            }
+        }
+        for (size_t i = 0; i < n3; i++)
+            now += (double)r[i] * r[i];
+        *sweeps = sw + 1;
+        if (!(now < prev * (1.0 - 1e-4)))
+            break;
+        prev = now;
+    }
+    free(start);
+    free(idx);
+    free(wt);
+    return 0;
+}
+
+static int prep_src_fit(void *cls, const float *rgb, material *out, glint_err *err)
+{
+    return prep_fit(cls, NULL, rgb, out, err);
+}
+
+static int prep_src_predict(void *cls, const material *m, float *f, glint_err *err)
+{
+    const samples *s = prep_samples(cls);
+    int rc = prep_predict(cls, m, f, err);
+    for (size_t i = 0; rc == 0 && i < 3 * (size_t)s->n; i++) /* per unit light */
+        f[i] = (float)(f[i] / s->intensity[i / 3]);
+    return rc;
+}
+
 int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap *out,
                glint_err *err)
 {
-    const samples *s = prep_samples(p);
+    matmap_source src = {prep_samples(p), prep_src_fit, prep_src_predict, (void *)p};
+    return matmap_fit_source(&src, rgb, mp, out, err);
+}
+
+int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_params *mp,
+                      matmap *out, glint_err *err)
+{
+    const samples *s = src->s;
     size_t n = (size_t)s->n, n3 = 3 * n, nt;
-    float *r = NULL, *fk = NULL, *c = NULL, *scratch = NULL, *uvv = NULL, *cv = NULL;
+    float *r = NULL, *fk = NULL, *c = NULL, *scratch = NULL, *uvv = NULL, *cv = NULL, *F = NULL;
     int *hits = NULL, *shits = NULL;
     double t0 = glint_now();
     int rc = 0;
@@ -112,10 +271,13 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
     memset(out, 0, sizeof *out);
     if (!mp || mp->components < 1 || mp->components > MATMAP_MAX || mp->res < 1 ||
         mp->res > UVTEX_MAX_RES || !(mp->tol >= 0.0) ||
-        (mp->merge != MATMAP_MERGE_LSQ && mp->merge != MATMAP_MERGE_MIN))
+        (mp->merge != MATMAP_MERGE_LSQ && mp->merge != MATMAP_MERGE_MIN) || mp->refine < 0 ||
+        mp->refine > MATMAP_REFINE_MAX || mp->rounds < 0 || mp->rounds > MATMAP_ROUNDS_MAX ||
+        (mp->rounds > 0 && mp->refine < 1))
         return glint_err_set(err, GLINT_EINVAL,
-                             "material map: components 1..%d, res 1..%d, tol >= 0 and merge "
-                             "lsq or min", MATMAP_MAX, UVTEX_MAX_RES);
+                             "material map: components 1..%d, res 1..%d, tol >= 0, merge "
+                             "lsq or min, refine 0..%d and rounds 0..%d (rounds need refine)",
+                             MATMAP_MAX, UVTEX_MAX_RES, MATMAP_REFINE_MAX, MATMAP_ROUNDS_MAX);
     if (!s->has_pos || !s->uv)
         return glint_err_set(err, GLINT_EINVAL,
                              "material map: the samples carry no texture coordinates "
@@ -136,6 +298,12 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
     hits = malloc(nt * sizeof *hits);
     shits = malloc(nt * sizeof *shits);
     out->coef = malloc((size_t)mp->components * nt * sizeof *out->coef);
+    out->refine = mp->refine > 0 ? "skipped: memory" : "off";
+    {
+        size_t fb = (size_t)mp->components * n3 * sizeof *F;
+        if (fb / mp->components / sizeof *F == n3 && fb <= MATMAP_REFINE_MAX_BYTES)
+            F = malloc(fb);
+    }
     if (!r || !fk || !c || !scratch || !uvv || !cv || !hits || !shits || !out->coef) {
         rc = glint_err_set(err, GLINT_ENOMEM, "material map: out of memory for %zu samples", n);
         goto done;
@@ -146,17 +314,17 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
     for (int k = 0; k < mp->components; k++) {
         float *tex = out->coef + (size_t)k * nt;
         double now;
-        if (out->rel_rms[k] <= mp->tol) {
+        if (k > 0 && out->rel_rms[k] <= mp->tol) { /* one product at least: a material */
             out->stop = "tolerance";
             break;
         }
-        if ((rc = prep_fit(p, NULL, r, &out->comp[k], err)))
+        if ((rc = src->fit(src->cls, r, &out->comp[k], err)))
             goto done;
         out->k = k + 1;
-        if ((rc = prep_predict(p, &out->comp[k], fk, err)))
+        if ((rc = src->predict(src->cls, &out->comp[k], fk, err)))
             goto done;
-        for (size_t i = 0; i < n3; i++) /* painted values: per unit light, as r */
-            fk[i] = (float)(fk[i] / s->intensity[i / 3]);
+        if (F)
+            memcpy(F + (size_t)k * n3, fk, n3 * sizeof *F);
         /* equation 18: the largest scale that keeps each channel >= 0 */
         for (size_t i = 0; i < n && mp->merge == MATMAP_MERGE_MIN; i++) {
             double ci = 1.0;
@@ -196,6 +364,56 @@ int matmap_fit(const prep *p, const float *rgb, const matmap_params *mp, matmap 
             break;
         }
     }
+    if (F)
+        out->model_rel_rms[0] = out->model_rel_rms[1] =
+            model_residual(s, rgb, F, out->k, out->coef, mp->res, r);
+    else /* without the predictions kept the model's residual is not measured */
+        out->model_rel_rms[0] = out->model_rel_rms[1] = -1.0;
+    if (F && mp->refine > 0) {
+        if ((rc = refine_joint(s, rgb, F, out->k, mp->res, mp->refine, out->coef, r,
+                               &out->refine_sweeps, err)))
+            goto done;
+        out->round_rel_rms[0] = rel_rms(r, rgb, n3);
+        for (int round = 0; round < mp->rounds; round++) {
+            int sweeps;
+            for (int k = 0; k < out->k; k++) {
+                float *Fk = F + (size_t)k * n3;
+                const float *tex = out->coef + (size_t)k * nt;
+                material m;
+                /* product k's target: what the others leave, per unit of its
+                 * coefficient where that is large enough to say; elsewhere
+                 * its own prediction, which does not pull it */
+                for (size_t i = 0; i < n; i++) {
+                    double ct = uvtex_lookup(tex, mp->res, s->uv[2 * i], s->uv[2 * i + 1]);
+                    for (int ch = 0; ch < 3; ch++) {
+                        double f = isfinite(Fk[3 * i + ch]) ? Fk[3 * i + ch] : 0.0, t;
+                        t = ct >= MATMAP_BACKFIT_MIN_COEF ? (r[3 * i + ch] + ct * f) / ct : f;
+                        fk[3 * i + ch] = (float)(t > 0.0 ? t : 0.0);
+                    }
+                }
+                if ((rc = src->fit(src->cls, fk, &m, err)))
+                    goto done;
+                material_free(&out->comp[k]);
+                out->comp[k] = m;
+                if ((rc = src->predict(src->cls, &out->comp[k], Fk, err)))
+                    goto done;
+                model_residual(s, rgb, F, out->k, out->coef, mp->res, r);
+            }
+            if ((rc = refine_joint(s, rgb, F, out->k, mp->res,
+                                   mp->refine < MATMAP_ROUND_SWEEPS ? mp->refine
+                                                                    : MATMAP_ROUND_SWEEPS,
+                                   out->coef, r, &sweeps, err)))
+                goto done;
+            out->refine_sweeps += sweeps;
+            out->rounds = round + 1;
+            out->round_rel_rms[round + 1] = rel_rms(r, rgb, n3);
+            if (!(out->round_rel_rms[round + 1] <
+                  out->round_rel_rms[round] * (1.0 - MATMAP_ROUND_MIN_GAIN)))
+                break;
+        }
+        out->model_rel_rms[1] = rel_rms(r, rgb, n3);
+        out->refine = "done";
+    }
     out->seconds = glint_now() - t0;
 done:
     free(r);
@@ -206,6 +424,7 @@ done:
     free(cv);
     free(hits);
     free(shits);
+    free(F);
     if (rc)
         matmap_free(out);
     return rc;

@@ -149,15 +149,19 @@ typedef struct material_gpu {
 void material_gpu_free(material_gpu *g);
 
 typedef struct material_ops {
-    /* The material at unit vectors (OUT rgb[3], per unit light): 0 unless
-     * n.wi > 0 and n.wo > 0. */
-    void (*eval)(const void *data, const double n[3], const double wi[3], const double wo[3],
-                 double rgb[3]);
+    /* The material at the surface point with texture coordinates uv (NULL:
+     * its average over the surface; ignored by materials that do not vary)
+     * and unit vectors (OUT rgb[3], per unit light): 0 unless n.wi > 0 and
+     * n.wo > 0. */
+    void (*eval)(const void *data, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3]);
     /* Optional: the same for previews, faster and approximate (the method
      * states its error); NULL: eval.  May build caches inside data on
      * first use, safely from several threads. */
-    void (*eval_preview)(const void *data, const double n[3], const double wi[3],
-                         const double wo[3], double rgb[3]);
+    void (*eval_preview)(const void *data, const double uv[2], const double n[3],
+                         const double wi[3], const double wo[3], double rgb[3]);
+    /* 1 when the material varies over the surface (reads uv). */
+    int spatial;
     void (*free)(void *data);
     /* Write the method's members of material.json into `manifest`. */
     int (*to_json)(const void *data, json_t *manifest, glint_err *err);

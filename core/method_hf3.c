@@ -1,6 +1,7 @@
 /* method_hf3.c: the hf3 method: parameters, precomputation levels, fit
  * (method_hf3.h).  Its material operations are in method_hf3_material.c. */
 #include "method_hf3.h"
+#include "method_hf3_int.h"
 
 #include <assert.h>
 #include <stddef.h>
@@ -12,73 +13,41 @@
 #include "clock.h"
 #include "pcache.h"
 
-extern const material_ops hf3_material_ops;
-
 static_assert(sizeof(hf_model) == sizeof(int) && sizeof(hf_precision) == sizeof(int) &&
                   sizeof(hf_route) == sizeof(int),
               "enum parameters are stored as int");
 
 /* ---- parameters -------------------------------------------------------------------- */
 
-static int reg_parse(const char *text, void *field, glint_err *err)
+int hf3_reg_parse(const char *text, void *field, glint_err *err)
 {
     return hf_reg_parse(text, field, err);
 }
 
-static void reg_format(const void *field, char *buf, size_t len)
+void hf3_reg_format(const void *field, char *buf, size_t len)
 {
     hf_reg_format(field, buf, len);
 }
 
-static int map_parse(const char *text, void *field, glint_err *err)
+int hf3_map_parse(const char *text, void *field, glint_err *err)
 {
     return hf_map_parse(text, field, err);
 }
 
-static void map_format(const void *field, char *buf, size_t len)
+void hf3_map_format(const void *field, char *buf, size_t len)
 {
     hf_map_format(field, buf, len);
 }
 
-static const char *const model_values[] = {"radiance", "brdf", NULL};
-static const char *const precision_values[] = {"double", "single", NULL};
-static const char *const route_values[] = {"eig", "svd", NULL};
-static const char *const reg_examples[] = {"trunc:full", "trunc:50%", "trunc:rel1e-3",
-                                           "tikhonov:rel1e-2", "linear:40", NULL};
-static const char *const map_examples[] = {"log", "add:0.1", "sub:0.01", "add:0.05,eps=1e-4",
-                                           NULL};
+const char *const hf3_model_values[] = {"radiance", "brdf", NULL};
+const char *const hf3_precision_values[] = {"double", "single", NULL};
+const char *const hf3_route_values[] = {"eig", "svd", NULL};
+const char *const hf3_reg_examples[] = {"trunc:full", "trunc:50%", "trunc:rel1e-3",
+                                        "tikhonov:rel1e-2", "linear:40", NULL};
+const char *const hf3_map_examples[] = {"log", "add:0.1", "sub:0.01", "add:0.05,eps=1e-4",
+                                        NULL};
 
-static const method_param hf3_params[] = {
-    {.name = "res", .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "texels per factor: accuracy up to about 128 at a 128x128 raster; "
-                    "precomputation grows as res^3",
-     .offset = offsetof(fit_params, res), .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "lambda", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "weight of the Laplacian smoothing rows",
-     .offset = offsetof(fit_params, lambda), .min = 0.0, .max = HF_LAMBDA_MAX},
-    {.name = "regularization", .option = "reg", .type = METHOD_PARAM_TEXT,
-     .affects = "operator",
-     .description = "regularized pseudo-inverse (paper eq. 6-8); full rank is the measured best",
-     .offset = offsetof(fit_params, reg),
-     .syntax = "trunc[:full|:K|:P%|:relT] | tikhonov:ALPHA|:relT | linear[:full|:K|:P%]",
-     .examples = reg_examples, .parse = reg_parse, .format = reg_format},
-    {.name = "mapping", .option = "map", .type = METHOD_PARAM_TEXT, .affects = "fit",
-     .description = "mapping to log space (section 3.4)", .offset = offsetof(fit_params, map),
-     .syntax = "log | add[:a] | sub[:margin], optionally ,eps=E", .examples = map_examples,
-     .parse = map_parse, .format = map_format},
-    {.name = "model", .type = METHOD_PARAM_ENUM, .affects = "fit",
-     .description = "radiance: factors approximate the painted value; brdf: painted / cos_i",
-     .offset = offsetof(fit_params, model), .values = model_values},
-    {.name = "precision", .type = METHOD_PARAM_ENUM, .affects = "operator",
-     .description = "precision of the stored operator", .offset = offsetof(fit_params, prec),
-     .values = precision_values},
-    {.name = "route", .type = METHOD_PARAM_ENUM, .affects = "precomputation",
-     .description = "eig: eigendecomposition of B^T B (fast); svd: dense SVD of B (reference)",
-     .offset = offsetof(fit_params, route), .values = route_values},
-    {.name = "rcond", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "relative singular-value cutoff of the numerical rank",
-     .offset = offsetof(fit_params, rcond), .min = 1e-16, .max = 1.0, .max_exclusive = 1},
-};
+static const method_param hf3_params[] = {HF3_PARAM_ROWS(fit_params, )};
 
 static const method_preset hf3_presets[] = {
     {"draft", "{\"res\": 32}"},
@@ -265,7 +234,7 @@ static int op_build(const method_build_in *in, cache_value *out, glint_err *err)
     return 0;
 }
 
-static const method_level hf3_levels[] = {
+const method_level hf3_levels[HF3_NLEVELS] = {
     {.name = "decomposition", .progress = 0.3, .key = decomp_key, .build = decomp_build,
      .load = decomp_load, .save = decomp_save},
     {.name = "operator", .progress = 0.85, .key = op_key, .build = op_build},
@@ -343,7 +312,7 @@ static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
 
 /* The svd route's dense matrices make one decomposition per painted view
  * too costly for a background measurement. */
-static int hf3_holdout_ok(const void *params)
+int hf3_holdout_ok(const void *params)
 {
     return ((const fit_params *)params)->route == HF_ROUTE_EIG;
 }
@@ -354,7 +323,7 @@ static int hf3_holdout_ok(const void *params)
  * 512^2 rasters, res 32 to 512); the svd route adds its dense constraint
  * matrix and a working copy, 16 bytes per sample and factor texel.  The
  * bound leaves a third on top. */
-static size_t hf3_fit_bytes(const void *params, long nsamples)
+size_t hf3_fit_bytes(const void *params, long nsamples)
 {
     const fit_params *fp = params;
     double n = (double)nsamples, res = fp->res, b = 320.0 * n + 192.0 * res * res;
@@ -388,7 +357,7 @@ const method method_hf3 = {
     .npresets = (int)(sizeof hf3_presets / sizeof hf3_presets[0]),
     .params_default = hf3_params_default,
     .levels = hf3_levels,
-    .nlevels = (int)(sizeof hf3_levels / sizeof hf3_levels[0]),
+    .nlevels = HF3_NLEVELS,
     .fit = hf3_fit,
     .mat = &hf3_material_ops,
     .holdout_ok = hf3_holdout_ok,

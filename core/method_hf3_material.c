@@ -28,9 +28,10 @@ void hf3_material_init(material *m, hf_factors *fac, json_t *info)
     material_init(m, &method_hf3, f, info);
 }
 
-static void hf3_eval(const void *data, const double n[3], const double wi[3],
-                     const double wo[3], double rgb[3])
+static void hf3_eval(const void *data, const double uv[2], const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3])
 {
+    (void)uv;
     hf_factors_eval(data, n, wi, wo, rgb);
 }
 

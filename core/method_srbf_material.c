@@ -76,18 +76,20 @@ void srbf_material_albedo(const srbf_material *sm, const double wo[3], int nq, d
 }
 
 /* The method interface's evaluation is radiance per unit light: f (n.wi). */
-static void srbf_eval_op(const void *data, const double n[3], const double wi[3],
-                         const double wo[3], double rgb[3])
+static void srbf_eval_op(const void *data, const double uv[2], const double n[3],
+                         const double wi[3], const double wo[3], double rgb[3])
 {
+    (void)uv;
     double ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
     srbf_material_eval(data, n, wi, wo, rgb);
     for (int c = 0; c < 3; c++)
         rgb[c] *= ci > 0.0 ? ci : 0.0;
 }
 
-static void srbf_preview_op(const void *data, const double n[3], const double wi[3],
-                            const double wo[3], double rgb[3])
+static void srbf_preview_op(const void *data, const double uv[2], const double n[3],
+                            const double wi[3], const double wo[3], double rgb[3])
 {
+    (void)uv;
     srbf_material_eval_preview(data, n, wi, wo, rgb);
 }
 

@@ -494,7 +494,7 @@ static void fit_in_of(const prep *p, const float *rgb, const void **levels, cons
 static void point_lit(const samples *s, const material *m, int k, float *rgb)
 {
     for (int i = 0; i < s->n; i++) {
-        double n[3], wi[3], wo[3], v[3];
+        double n[3], wi[3], wo[3], v[3], uv[2] = {0.0, 0.0};
         if (k >= 0 && s->view[i] != k)
             continue;
         for (int c = 0; c < 3; c++) {
@@ -502,7 +502,11 @@ static void point_lit(const samples *s, const material *m, int k, float *rgb)
             wi[c] = s->wi[3 * i + c];
             wo[c] = s->wo[3 * i + c];
         }
-        material_eval(m, n, wi, wo, v);
+        if (s->uv) {
+            uv[0] = s->uv[2 * (size_t)i];
+            uv[1] = s->uv[2 * (size_t)i + 1];
+        }
+        material_eval_at(m, s->uv ? uv : NULL, n, wi, wo, v);
         for (int c = 0; c < 3; c++)
             rgb[3 * i + c] = (float)(v[c] * s->intensity[i]);
     }

@@ -209,13 +209,17 @@ static int eval_samples(material *m, const char *eval, const char *eval_out)
         return rc;
     }
     for (int i = 0; i < es.n; i++) {
-        double n[3], wi[3], wo[3], rgb[3], d;
+        double n[3], wi[3], wo[3], rgb[3], d, uv[2] = {0.0, 0.0};
         for (int k = 0; k < 3; k++) {
             n[k] = es.nrm[3 * i + k];
             wi[k] = es.wi[3 * i + k];
             wo[k] = es.wo[3 * i + k];
         }
-        material_eval(m, n, wi, wo, rgb);
+        if (es.uv) {
+            uv[0] = es.uv[2 * (size_t)i];
+            uv[1] = es.uv[2 * (size_t)i + 1];
+        }
+        material_eval_at(m, es.uv ? uv : NULL, n, wi, wo, rgb);
         d = rgb[0] - ev[3 * i];
         ss += d * d;
         if (fabs(d) > mx)

@@ -93,35 +93,41 @@ int main(int argc, char **argv)
         printf("## material maps beside seed 000 Table 3 (sphere 64x64, %d views, %d samples, "
                "three factors at res %d, prepared in %.3f s)\n\n", nv, s->n, fp.res, t0);
     }
-    printf("| rule | products asked | coefficient res | products made | stop | seconds "
-           "(best of %d) | rel RMS after 1 | rel RMS after the last |\n", reps);
-    printf("|---|---|---|---|---|---|---|---|\n");
+    printf("| rule | products asked | coefficient res | stage | products made | stop | "
+           "seconds (best of %d) | rel RMS after 1 | model rel RMS |\n", reps);
+    printf("|---|---|---|---|---|---|---|---|---|\n");
     for (int rule = 0; rule < 2; rule++)
         for (int ri = 0; ri < 2; ri++)
-            for (int ki = 0; ki < 4; ki++) {
-                matmap_params mp;
-                matmap mm;
-                double best = 1e30, r1 = 0.0, rl = 0.0;
-                int made = 0;
-                const char *stop = "";
-                matmap_params_default(&mp);
-                mp.merge = rule ? MATMAP_MERGE_MIN : MATMAP_MERGE_LSQ;
-                mp.components = ks[ki];
-                mp.res = resv[ri];
-                mp.tol = 0.0;
-                for (int r = 0; r < reps; r++) {
-                    if (matmap_fit(p, rgb, &mp, &mm, &e))
-                        goto fail;
-                    best = mm.seconds < best ? mm.seconds : best;
-                    made = mm.k;
-                    stop = mm.stop;
-                    r1 = mm.rel_rms[1];
-                    rl = mm.rel_rms[mm.k];
-                    matmap_free(&mm);
+            for (int stage = 0; stage < (rule ? 1 : 2); stage++)
+                for (int ki = 0; ki < 4; ki++) {
+                    matmap_params mp;
+                    matmap mm;
+                    double best = 1e30, r1 = 0.0, rl = 0.0;
+                    int made = 0, rounds = 0;
+                    const char *stop = "";
+                    matmap_params_default(&mp);
+                    mp.merge = rule ? MATMAP_MERGE_MIN : MATMAP_MERGE_LSQ;
+                    mp.components = ks[ki];
+                    mp.res = resv[ri];
+                    mp.tol = 0.0;
+                    if (stage == 0) /* the greedy products alone */
+                        mp.refine = mp.rounds = 0;
+                    for (int r = 0; r < reps; r++) {
+                        if (matmap_fit(p, rgb, &mp, &mm, &e))
+                            goto fail;
+                        best = mm.seconds < best ? mm.seconds : best;
+                        made = mm.k;
+                        stop = mm.stop;
+                        r1 = mm.rel_rms[1];
+                        rl = mm.model_rel_rms[1];
+                        rounds = mm.rounds;
+                        matmap_free(&mm);
+                    }
+                    printf("| %s | %d | %d | %s | %d | %s | %.4f | %.4f | %.4f |\n",
+                           rule ? "min" : "lsq", ks[ki], resv[ri],
+                           stage ? (rounds ? "refined, back-fitted" : "refined") : "greedy",
+                           made, stop, best, r1, rl);
                 }
-                printf("| %s | %d | %d | %d | %s | %.4f | %.4f | %.4f |\n", rule ? "min" : "lsq",
-                       ks[ki], resv[ri], made, stop, best, r1, rl);
-            }
     free(rgb);
     for (int v = 0; v < sc.nviews; v++)
         img_free(&im[v]);

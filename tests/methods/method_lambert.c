@@ -101,9 +101,10 @@ static int fit(const method_fit_in *in, material *out, glint_err *err)
     return 0;
 }
 
-static void eval(const void *data, const double n[3], const double wi[3], const double wo[3],
-                 double rgb[3])
+static void eval(const void *data, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3])
 {
+    (void)uv;
     const double *albedo = data;
     double ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
     double co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];

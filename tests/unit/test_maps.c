@@ -1,0 +1,392 @@
+/* test_maps.c: material maps as a method ("maps", method_maps.h) through
+ * the pipeline every method uses (prep.h): a two-material painting against
+ * the one-material method, what the refinement and the back-fitting rounds
+ * gain, a uniform and an all-black painting, the material's files read
+ * back (and refused when damaged), evaluation with and without texture
+ * coordinates, and the GPU evaluation against the CPU (skipped without
+ * EGL). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cache.h"
+#include "check.h"
+#include "fsio.h"
+#include "glr.h"
+#include "img.h"
+#include "method_hf3.h"
+#include "method_maps.h"
+#include "paint.h"
+#include "prep.h"
+#include "raster.h"
+#include "samples.h"
+
+#define STRIPES "stripes:freq=3,duty=0.5|lambert:kd=0.7/0.15/0.1|ct:kd=0.05,f0=0.9/0.7/0.3,rough=0.25"
+
+static scene SC;
+static gbuf *G;
+static cache *C;
+static cache_entry *SE;
+
+static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    (void)id;
+    (void)err;
+    *out = cls;
+    return 0;
+}
+
+static int setup(void)
+{
+    scene_params sp;
+    prep_scene_source src = {borrowed, NULL, &SC};
+    glint_err e;
+    if (SE)
+        return 0;
+    scene_params_default(&sp);
+    sp.width = sp.height = 64;
+    if (scene_create(&sp, &SC, &e) || raster_scene(&SC, &G, &e) ||
+        cache_open(NULL, (size_t)1 << 30, &C, &e) || prep_scene_acquire(C, "s", &src, &SE, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+static void small(maps_params *mp)
+{
+    method_maps.params_default(mp);
+    mp->hf.res = 32;
+    mp->map_res = 32;
+}
+
+/* A prep of method m with params p over every view. */
+static prep *prepare(const method *m, const void *p)
+{
+    unsigned char all[SCENE_MAX_VIEWS];
+    prep_request rq = {m, p, SE, all};
+    prep *out = NULL;
+    glint_err e;
+    memset(all, 1, sizeof all);
+    if (prep_acquire(C, &rq, NULL, NULL, &out, &e)) {
+        fprintf(stderr, "prep: %s\n", e.msg);
+        return NULL;
+    }
+    return out;
+}
+
+/* The samples' painted values of a truth spec (one BRDF or a pattern). */
+static float *painted(const prep *pp, const char *spec)
+{
+    img im[SCENE_MAX_VIEWS];
+    paint_sv sv;
+    brdf b;
+    glint_err e;
+    const samples *s = prep_samples(pp);
+    float *rgb = malloc(3 * (size_t)s->n * sizeof *rgb);
+    int rc;
+    memset(im, 0, sizeof im);
+    if (strchr(spec, '|'))
+        rc = paint_sv_parse(spec, &sv, &e) ||
+             paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
+    else
+        rc = brdf_parse(spec, &b, &e) || paint_views(&b, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
+    if (rc || !rgb || samples_gather(s, im, rgb, &e)) {
+        fprintf(stderr, "painting %s: %s\n", spec, e.msg);
+        free(rgb);
+        rgb = NULL;
+    }
+    for (int v = 0; v < SC.nviews; v++)
+        img_free(&im[v]);
+    return rgb;
+}
+
+static double info_num(const material *m, const char *obj, const char *key)
+{
+    return json_number_value(json_object_get(json_object_get(m->info, obj), key));
+}
+
+/* Fit `spec` with maps params mp (NULL: hf3 at res 32): the material. */
+static int fit(const maps_params *mp, const char *spec, material *out)
+{
+    fit_params fp;
+    prep *p;
+    float *rgb;
+    glint_err e;
+    int rc = -1;
+    fit_params_default(&fp);
+    fp.res = 32;
+    if (!(p = prepare(mp ? &method_maps : &method_hf3, mp ? (const void *)mp : &fp)))
+        return -1;
+    if ((rgb = painted(p, spec)) && (rc = prep_fit(p, NULL, rgb, out, &e)))
+        fprintf(stderr, "fit: %s\n", e.msg);
+    free(rgb);
+    prep_release(C, p);
+    return rc;
+}
+
+/* Red plastic with gold stripes: one three-factor material cannot hold it;
+ * the maps, each stage reported, end far below it. */
+TEST(two_materials_beat_one)
+{
+    maps_params mp;
+    material one, maps;
+    json_t *stop;
+    ASSERT_OK(setup());
+    small(&mp);
+    ASSERT_OK(fit(NULL, STRIPES, &one));
+    ASSERT_OK(fit(&mp, STRIPES, &maps));
+    ASSERT(strcmp(material_method_name(&maps), "maps") == 0);
+    ASSERT(material_spatial(&maps) && !material_spatial(&one));
+    stop = json_object_get(maps.info, "stop");
+    printf("  stripes, 12 views: hf3 rms %.4f; maps rms %.4f (%d products, stop %s, model "
+           "rel rms greedy %.3f, refined %.3f, after %d rounds %.3f), %.2f s\n",
+           info_num(&one, "errors", "rms_painted"), info_num(&maps, "errors", "rms_painted"),
+           (int)json_integer_value(json_object_get(stop, "components")),
+           json_string_value(json_object_get(stop, "reason")),
+           json_number_value(json_object_get(stop, "model_rel_rms_greedy")),
+           json_number_value(json_object_get(stop, "model_rel_rms_per_round") ? json_array_get(
+               json_object_get(stop, "model_rel_rms_per_round"), 0) : NULL),
+           (int)json_integer_value(json_object_get(stop, "rounds")),
+           json_number_value(json_object_get(stop, "model_rel_rms_refined")),
+           info_num(&maps, "seconds", "fit"));
+    ASSERT_LT(info_num(&maps, "errors", "rms_painted"),
+              0.5 * info_num(&one, "errors", "rms_painted"));
+    /* the refinement and every round lower the model's error */
+    ASSERT_LE(json_number_value(json_array_get(json_object_get(stop, "model_rel_rms_per_round"),
+                                               0)),
+              json_number_value(json_object_get(stop, "model_rel_rms_greedy")) + 1e-12);
+    {
+        json_t *rr = json_object_get(stop, "model_rel_rms_per_round");
+        ASSERT(json_array_size(rr) >= 2);
+        for (size_t i = 1; i < json_array_size(rr); i++)
+            ASSERT_LT(json_number_value(json_array_get(rr, i)),
+                      json_number_value(json_array_get(rr, i - 1)));
+    }
+    /* the precomputation is hf3's: the same cached decomposition */
+    ASSERT(strcmp(json_string_value(json_object_get(
+                      json_object_get(maps.info, "precomputation"), "cache_key")),
+                  json_string_value(json_object_get(
+                      json_object_get(one.info, "precomputation"), "cache_key"))) == 0);
+    material_free(&one);
+    material_free(&maps);
+}
+
+/* With the refinement and rounds off the greedy products remain; each
+ * stage lowers the painted-view error. */
+TEST(each_stage_lowers_the_error)
+{
+    maps_params mp;
+    material m[3];
+    double rms[3];
+    ASSERT_OK(setup());
+    for (int i = 0; i < 3; i++) {
+        small(&mp);
+        mp.refine = i == 0 ? 0 : mp.refine;
+        mp.rounds = i < 2 ? 0 : mp.rounds;
+        ASSERT_OK(fit(&mp, STRIPES, &m[i]));
+        rms[i] = info_num(&m[i], "errors", "rms_painted");
+    }
+    printf("  rms painted: greedy %.4f, refined %.4f, back-fitted %.4f\n", rms[0], rms[1],
+           rms[2]);
+    ASSERT_LE(rms[1], rms[0] * 1.0001);
+    ASSERT_LT(rms[2], 0.8 * rms[1]);
+    for (int i = 0; i < 3; i++)
+        material_free(&m[i]);
+}
+
+/* One material painted: the maps are as good as the one-material fit, and
+ * the first product carries it. */
+TEST(uniform_painting)
+{
+    maps_params mp;
+    material one, maps;
+    const matmap *mm;
+    ASSERT_OK(setup());
+    small(&mp);
+    ASSERT_OK(fit(NULL, "ct:kd=0.3/0.2/0.1,f0=0.1,rough=0.3", &one));
+    ASSERT_OK(fit(&mp, "ct:kd=0.3/0.2/0.1,f0=0.1,rough=0.3", &maps));
+    mm = maps_matmap(&maps);
+    ASSERT(mm);
+    printf("  uniform ct: hf3 rms %.5f, maps rms %.5f, %d products, stop %s, first "
+           "coefficient mean %.3f\n",
+           info_num(&one, "errors", "rms_painted"), info_num(&maps, "errors", "rms_painted"),
+           mm->k, mm->stop, ((const maps_material *)maps.data)->mean[0]);
+    ASSERT_LE(info_num(&maps, "errors", "rms_painted"),
+              1.02 * info_num(&one, "errors", "rms_painted"));
+    ASSERT_LT(0.8, ((const maps_material *)maps.data)->mean[0]);
+    material_free(&one);
+    material_free(&maps);
+}
+
+/* Nothing painted (all black): one product, a black material. */
+TEST(all_black_painting)
+{
+    maps_params mp;
+    material m;
+    double n[3] = {0, 0, 1}, wi[3] = {0.6, 0, 0.8}, wo[3] = {-0.6, 0, 0.8}, uv[2] = {0.3, 0.7},
+           rgb[3];
+    ASSERT_OK(setup());
+    small(&mp);
+    ASSERT_OK(fit(&mp, "lambert:kd=0", &m));
+    ASSERT_EQ(maps_matmap(&m)->k, 1);
+    material_eval_at(&m, uv, n, wi, wo, rgb);
+    printf("  black: %d product, stop %s, value %.2e\n", maps_matmap(&m)->k,
+           maps_matmap(&m)->stop, rgb[0]);
+    for (int c = 0; c < 3; c++)
+        ASSERT(isfinite(rgb[c]) && fabs(rgb[c]) < 1e-3);
+    material_free(&m);
+}
+
+static int write_tmp_dir(char *dir, size_t len)
+{
+    snprintf(dir, len, "/tmp/glint_test_maps_XXXXXX");
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+/* Saved and read back: the same values everywhere; without texture
+ * coordinates the mean coefficients; damaged files refused. */
+TEST(files_round_trip_and_damage)
+{
+    maps_params mp;
+    material m, back;
+    char dir[64], path[128];
+    glint_err e;
+    unsigned seed = 7;
+    img c;
+    ASSERT_OK(setup());
+    small(&mp);
+    mp.components = 3;
+    ASSERT_OK(fit(&mp, STRIPES, &m));
+    ASSERT_OK(write_tmp_dir(dir, sizeof dir));
+    ASSERT_OK(material_save(&m, dir, &e));
+    ASSERT_MSG(material_load(dir, &back, &e) == 0, "%s", e.msg);
+    for (int t = 0; t < 2000; t++) {
+        double n[3] = {0, 0, 1}, wi[3], wo[3], uv[2], a[3], b[3], mean[3] = {0, 0, 0};
+        double th = 1.5 * rand_r(&seed) / RAND_MAX, ph = 6.28 * rand_r(&seed) / RAND_MAX;
+        const maps_material *x = m.data;
+        wi[0] = sin(th) * cos(ph), wi[1] = sin(th) * sin(ph), wi[2] = cos(th);
+        th = 1.5 * rand_r(&seed) / RAND_MAX;
+        wo[0] = sin(th), wo[1] = 0.0, wo[2] = cos(th);
+        uv[0] = (double)rand_r(&seed) / RAND_MAX;
+        uv[1] = (double)rand_r(&seed) / RAND_MAX;
+        material_eval_at(&m, uv, n, wi, wo, a);
+        material_eval_at(&back, uv, n, wi, wo, b);
+        for (int ch = 0; ch < 3; ch++)
+            ASSERT_NEAR(a[ch], b[ch], 1e-12 * (1.0 + fabs(a[ch])));
+        material_eval(&m, n, wi, wo, a);
+        for (int k = 0; k < x->mm.k; k++) {
+            double v[3];
+            material_eval(&x->mm.comp[k], n, wi, wo, v);
+            for (int ch = 0; ch < 3; ch++)
+                mean[ch] += x->mean[k] * v[ch];
+        }
+        for (int ch = 0; ch < 3; ch++)
+            ASSERT_NEAR(a[ch], mean[ch], 1e-12 * (1.0 + fabs(a[ch])));
+    }
+    material_free(&back);
+    /* a coefficient outside [0, 1] */
+    snprintf(path, sizeof path, "%s/coefficients.exr", dir);
+    ASSERT_OK(img_read(path, &c, &e));
+    c.px[5] = 2.0f;
+    ASSERT_OK(img_write(path, &c, &e));
+    ASSERT_EQ(material_load(dir, &back, &e), GLINT_EFORMAT);
+    printf("  out of range: %s\n", e.msg);
+    ASSERT(strstr(e.msg, "outside [0, 1]"));
+    img_free(&c);
+    /* the wrong size */
+    ASSERT_OK(img_alloc(&c, 5, 5, 1, &e));
+    ASSERT_OK(img_write(path, &c, &e));
+    ASSERT_EQ(material_load(dir, &back, &e), GLINT_EFORMAT);
+    printf("  wrong size: %s\n", e.msg);
+    img_free(&c);
+    /* missing */
+    ASSERT_OK(unlink(path) == 0 ? 0 : -1);
+    ASSERT(material_load(dir, &back, &e) != 0);
+    printf("  missing: %s\n", e.msg);
+    material_free(&m);
+    for (int i = 0; i < 4; i++) {
+        static const char *const left[] = {"material.json", "coefficients.png", "factors.exr",
+                                           "factors.png"};
+        snprintf(path, sizeof path, "%s/%s", dir, left[i]);
+        unlink(path);
+    }
+    ASSERT_OK(rmdir(dir) == 0 ? 0 : -1);
+}
+
+/* Parameters across each other: rounds need the refinement; texture rows
+ * bounded. */
+TEST(parameters_are_checked)
+{
+    void *p = method_params_new(&method_maps);
+    glint_err e;
+    ASSERT(p);
+    ASSERT_OK(method_param_set_text(&method_maps, p, "rounds", "3", &e));
+    ASSERT_OK(method_param_set_text(&method_maps, p, "refine", "0", &e));
+    ASSERT_EQ(method_maps.params_check(p, &e), GLINT_EINVAL);
+    printf("  %s\n", e.msg);
+    ASSERT_OK(method_param_set_text(&method_maps, p, "refine", "5", &e));
+    ASSERT_OK(method_param_set_text(&method_maps, p, "components", "32", &e));
+    ASSERT_OK(method_param_set_text(&method_maps, p, "map_res", "1024", &e));
+    ASSERT_EQ(method_maps.params_check(p, &e), GLINT_EINVAL);
+    printf("  %s\n", e.msg);
+    ASSERT(method_param_set_text(&method_maps, p, "map_res", "1", &e) != 0);
+    free(p);
+}
+
+/* The GPU evaluates what the CPU does (llvmpipe without a GPU). */
+TEST(gpu_matches_cpu)
+{
+    maps_params mp;
+    material m;
+    glr *g = NULL;
+    glr_mesh *gm = NULL;
+    mesh sph;
+    glint_err e;
+    ASSERT_OK(setup());
+    if (glr_open(&g, &e)) {
+        printf("  skipped: %s\n", e.msg);
+        return;
+    }
+    small(&mp);
+    mp.components = 4; /* two coefficient blocks: channels and blocks both read */
+    ASSERT_OK(fit(&mp, STRIPES, &m));
+    ASSERT_OK(mesh_sphere_default(&sph, &e));
+    ASSERT_OK(glr_mesh_upload(g, &sph, &gm, &e));
+    for (int v = 0; v < 3; v++) {
+        img ref, out;
+        double d = 0.0, mx = 0.0;
+        const scene_view *sv = &SC.views[v * 4];
+        ASSERT_OK(material_render(&m, &sph, sv, 128, 128, &ref, &e));
+        ASSERT_MSG(glr_preview(g, gm, &m, sv, 128, 128, 0.0f, &out, &e) == 0, "%s", e.msg);
+        for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
+            d += fabs(ref.px[i] - out.px[i]);
+            mx = ref.px[i] > mx ? ref.px[i] : mx;
+        }
+        d /= 128.0 * 128 * 3;
+        printf("  view %d: mean |gl - cpu| %.2e (1/255 = %.2e), max value %.3f\n", v * 4, d,
+               1.0 / 255, mx);
+        ASSERT_LT(d, 1.0 / 255);
+        ASSERT_LT(0.05, mx);
+        img_free(&ref);
+        img_free(&out);
+    }
+    glr_mesh_free(g, gm);
+    glr_close(g);
+    mesh_free(&sph);
+    material_free(&m);
+}
+
+TEST_LIST{
+    TEST_ENTRY(two_materials_beat_one),
+    TEST_ENTRY(each_stage_lowers_the_error),
+    TEST_ENTRY(uniform_painting),
+    TEST_ENTRY(all_black_painting),
+    TEST_ENTRY(files_round_trip_and_damage),
+    TEST_ENTRY(parameters_are_checked),
+    TEST_ENTRY(gpu_matches_cpu),
+};
+
+TEST_MAIN()
