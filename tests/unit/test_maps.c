@@ -316,6 +316,67 @@ TEST(files_round_trip_and_damage)
     ASSERT_OK(rmdir(dir) == 0 ? 0 : -1);
 }
 
+/* The extremes: one view of ~1,500 samples under a 256^2 coefficient
+ * texture (most texels reached by no sample: filled, finite, in [0, 1]);
+ * a painting black but for one bright sample; a painting of one huge
+ * value (HDR 1e3). */
+TEST(extremes)
+{
+    maps_params mp;
+    unsigned char one[SCENE_MAX_VIEWS];
+    prep_request rq = {&method_maps, &mp, NULL, one};
+    prep *p = NULL;
+    material m;
+    float *rgb;
+    glint_err e;
+    const samples *s;
+    ASSERT_OK(setup());
+    small(&mp);
+    mp.map_res = 256;
+    memset(one, 0, sizeof one);
+    one[0] = 1;
+    rq.scene = SE;
+    ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &p, &e));
+    s = prep_samples(p);
+    ASSERT((rgb = painted(p, STRIPES)));
+    ASSERT_MSG(prep_fit(p, NULL, rgb, &m, &e) == 0, "%s", e.msg);
+    {
+        const matmap *mm = maps_matmap(&m);
+        size_t nt = (size_t)mm->res * mm->res;
+        printf("  %d samples, %zu texels per texture: %d products, rms %.4f\n", s->n, nt,
+               mm->k, info_num(&m, "errors", "rms_painted"));
+        ASSERT_LT((size_t)s->n, nt / 10);
+        for (size_t t = 0; t < (size_t)mm->k * nt; t++)
+            ASSERT(mm->coef[t] >= 0.0f && mm->coef[t] <= 1.0f);
+        ASSERT_FINITE(info_num(&m, "errors", "rms_painted"));
+    }
+    material_free(&m);
+    /* black but one sample */
+    memset(rgb, 0, 3 * (size_t)s->n * sizeof *rgb);
+    rgb[3 * (s->n / 2)] = rgb[3 * (s->n / 2) + 1] = rgb[3 * (s->n / 2) + 2] = 0.8f;
+    ASSERT_MSG(prep_fit(p, NULL, rgb, &m, &e) == 0, "%s", e.msg);
+    printf("  one bright sample: %d products, stop %s, rms %.5f, max %.4f\n",
+           maps_matmap(&m)->k, maps_matmap(&m)->stop, info_num(&m, "errors", "rms_painted"),
+           info_num(&m, "errors", "max_abs_painted"));
+    ASSERT_FINITE(info_num(&m, "errors", "rms_painted"));
+    ASSERT_LE(info_num(&m, "errors", "max_abs_painted"), 0.8 + 1e-6);
+    material_free(&m);
+    /* HDR: every value 1e3 */
+    for (size_t i = 0; i < 3 * (size_t)s->n; i++)
+        rgb[i] = 1e3f;
+    ASSERT_MSG(prep_fit(p, NULL, rgb, &m, &e) == 0, "%s", e.msg);
+    printf("  HDR 1e3: rms %.4g (%.2e of the value)\n", info_num(&m, "errors", "rms_painted"),
+           info_num(&m, "errors", "rms_painted") / 1e3);
+    ASSERT_LT(info_num(&m, "errors", "rms_painted"), 1e3 * 0.05);
+    material_free(&m);
+    /* NaN refused, naming the sample */
+    rgb[5] = NAN;
+    ASSERT_EQ(prep_fit(p, NULL, rgb, &m, &e), GLINT_EINVAL);
+    printf("  NaN: %s\n", e.msg);
+    free(rgb);
+    prep_release(C, p);
+}
+
 /* Parameters across each other: rounds need the refinement; texture rows
  * bounded. */
 TEST(parameters_are_checked)
@@ -385,6 +446,7 @@ TEST_LIST{
     TEST_ENTRY(uniform_painting),
     TEST_ENTRY(all_black_painting),
     TEST_ENTRY(files_round_trip_and_damage),
+    TEST_ENTRY(extremes),
     TEST_ENTRY(parameters_are_checked),
     TEST_ENTRY(gpu_matches_cpu),
 };
