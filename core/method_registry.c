@@ -2,6 +2,7 @@
  * /api/v1/methods lists them (the first is the default).  Adding a method
  * is one line here (and its core file). */
 #include "method_hf3.h"
+#include "method_hf4.h"
 #include "method_maps.h"
 #include "method_srbf.h"
 
@@ -10,6 +11,7 @@ extern const method *const method_builtin[];
 const method *const method_builtin[] = {
     &method_hf3,
     &method_srbf,
+    &method_hf4,
     &method_maps,
     NULL,
 };

@@ -531,6 +531,7 @@ async function loadFitAndMaterials(S) {
 // A material's size in words: texels per factor, or lobes and environment.
 function matSize(m) {
   if (m.method === 'maps') return `${m.components} materials · ${m.res} texels`;
+  if (m.method === 'hf4') return `${m.res} texels · ${m.s_res}² spatial`;
   if (m.res != null) return `${m.res} texels`;
   if (m.method === 'srbf') return `${m.lobes} lobes · ${(m.params && m.params.env) || ''}`;
   return m.method || '';

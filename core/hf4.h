@@ -1,0 +1,129 @@
+/* hf4.h: the four-factor product (Jaroszkiewicz & McCool 2003, section
+ * 4.2): a three-factor BRDF times a spatial factor over the surface's
+ * texture coordinates,
+ *
+ *     f(x, wi, wo) ~ p(pi_p) q(pi_q) r(pi_r) s(u, v),
+ *
+ * fitted in log space like hf.h's three factors (the same projections,
+ * hats, mappings and models), with the spatial factor's log on an S x S
+ * grid of nodes.
+ *
+ * Conventions
+ *  - Unknowns y = [log p (R), log q (R), log r (R), log s (S^2)],
+ *    n = 3R + S^2; s's node (i, j) (column i, row j) at u = i / (S-1),
+ *    v = j / (S-1), index 3R + j S + i; bilinear hats between the four
+ *    nodes around (u, v) (clamped to [0,1]^2), the 2D analogue of hf_hat.
+ *  - Smoothing: hf.h's second differences [1 -2 1] on p, q, r weighted by
+ *    lambda, and the grid's graph Laplacian on s weighted by lambda_s: a
+ *    row per node, its neighbours (4 inside, 3 on an edge, 2 at a corner)
+ *    minus as many times the node, so that every node is tied to its
+ *    neighbours; data rows unweighted.  A zero weight adds no rows.
+ *  - Gauge: a constant moves freely between the four factors, so B has an
+ *    exact 3-dimensional null space; nodes of s that no sample reaches add
+ *    null directions when lambda_s = 0 (with lambda_s > 0 the Laplacian
+ *    fills them from their neighbours, harmonically; a 1D texel that no
+ *    sample reaches likewise with lambda).  Both are cut with
+ *    every direction whose singular value is at or below rcond s_max, so
+ *    the solution is the minimum-norm one on the rest; it is then shifted
+ *    into the canonical gauge: equal mean log over each factor's nodes,
+ *    channel by channel (the product is unchanged).  Reports count them:
+ *    gauge_dims 3, null_dims the rest of the cut.
+ *  - Form of the decomposition: the operator is B^+ = V diag(1/s^2) V^T
+ *    A^T with V, s from either
+ *      "normal": the eigendecomposition of B^T B (n x n, LAPACK dsyevd), or
+ *      "dense":  the SVD of B itself (rows x n, rows = samples + smoothing
+ *                rows, LAPACK dgesdd),
+ *    whichever matrix is smaller (the dense one only when a scene has
+ *    fewer rows than unknowns: a large S over few samples); the
+ *    decomposition says which (form).  The normal form squares the
+ *    condition number: rcond defaults to 1e-6 as for hf.h's eig route,
+ *    and the normal form raises a smaller one to sqrt(n eps), the smallest
+ *    relative singular value its eigenvalues resolve (the decomposition
+ *    reports the rcond it used).
+ *  - Range: each log-factor is clamped to +-HF4_LOG_MAX (the product of
+ *    four stays a finite float), and the fit counts the values it clamped.
+ *
+ * Sizes: HF4_SRES_MAX bounds S (S^2 = 4096 unknowns: the normal form is
+ * 150 MB at R = 64 and its decomposition takes tens of seconds here).
+ *
+ * Thread-safety: a decomposition is read-only once built; fits may share
+ * it. */
+#ifndef GLINT_HF4_H
+#define GLINT_HF4_H
+
+#include <stdint.h>
+
+#include "err.h"
+#include "hf.h"
+#include "samples.h"
+
+#define HF4_SRES_MIN 2
+#define HF4_SRES_MAX 64
+#define HF4_LOG_MAX 22.0 /* 4 x 22 = 88 < log FLT_MAX */
+
+typedef struct hf4_design {
+    hf_design d;         /* the three 1D factors (hf.h) */
+    int sres;            /* S */
+    int32_t *ij;         /* 2n: node (i0, j0) below each sample's uv */
+    double *txy;         /* 2n: bilinear weights of i0 + 1 and j0 + 1 */
+} hf4_design;
+
+/* GLINT_EINVAL: samples without texture coordinates; GLINT_ERANGE: res
+ * or sres out of range. */
+int hf4_design_build(const samples *s, int res, int sres, hf4_design *out, glint_err *err);
+void hf4_design_free(hf4_design *d);
+
+typedef struct hf4_decomp {
+    int res, sres, n, nsamples;
+    int rows;            /* of B: samples + smoothing rows */
+    const char *form;    /* "normal" or "dense" */
+    double lambda, lambda_s, rcond;
+    int rank;            /* directions kept */
+    int gauge_dims;      /* 3 */
+    int null_dims;       /* other directions cut (s_i <= rcond s_max) */
+    double s_max, s_min_kept;
+    double *s2;          /* rank: s_i^2, descending */
+    double *V;           /* n x rank, column-major */
+    double seconds;
+} hf4_decomp;
+
+/* Decompose B = [A; lambda L1; lambda_s L2] (rcond <= 0: 1e-6).
+ * GLINT_ERANGE: lambda or lambda_s negative, non-finite or above
+ * HF_LAMBDA_MAX; GLINT_ENUMERIC when LAPACK fails. */
+int hf4_decomp_build(const hf4_design *d, double lambda, double lambda_s, double rcond,
+                     hf4_decomp *out, glint_err *err);
+void hf4_decomp_free(hf4_decomp *dc);
+
+typedef struct hf4_factors {
+    int res, sres;
+    hf_model model;
+    hf_map map;
+    double a_used[3];
+    double *logf;        /* 3R x 3: (j R + k) * 3 + c, as hf_factors */
+    double *logs;        /* S^2 x 3: (j S + i) * 3 + c */
+    double mean_s[3];    /* mean of s (linear) over its nodes: the value without uv */
+} hf4_factors;
+
+typedef struct hf4_fit_stats {
+    int clamped[3];      /* samples floored at eps before the log, per channel */
+    long log_clamped;    /* log-factor values clamped to +-HF4_LOG_MAX */
+    double log_max;      /* largest |log-factor| returned */
+    double log_residual; /* RMS of A y - f~ over samples and channels (log space) */
+    double rms, max_abs; /* reconstruction - sample, linear */
+    double seconds;      /* the fit (mapping, application, gauge) */
+} hf4_fit_stats;
+
+/* Fit RGB samples (3 n, sample-major, per unit light).  OUT: *fac, *st (may
+ * be NULL).  GLINT_ENONFINITE for a non-finite value. */
+int hf4_fit(const hf4_design *d, const hf4_decomp *dc, const hf_map *map, hf_model model,
+            const float *rgb, hf4_factors *fac, hf4_fit_stats *st, glint_err *err);
+
+/* The material at uv (NULL: mean_s) and unit vectors (OUT rgb[3]); 0
+ * unless n.wi > 0 and n.wo > 0. */
+void hf4_factors_eval(const hf4_factors *f, const double uv[2], const double n[3],
+                      const double wi[3], const double wo[3], double rgb[3]);
+/* mean_s from logs. */
+void hf4_factors_means(hf4_factors *f);
+void hf4_factors_free(hf4_factors *f);
+
+#endif
