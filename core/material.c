@@ -314,6 +314,10 @@ int material_load(const char *path, material *out, glint_err *err)
         glint_err_set(err, rc, "%s: unsupported method (this glint knows %s)", file, names);
         goto fail;
     }
+    if (!meth->mat) {
+        glint_err_set(err, rc, "%s: method %s makes no materials of its own", file, meth->name);
+        goto fail;
+    }
     if ((rc = meth->mat->from_json(root, file, &data, err)))
         goto fail;
     v = json_object_get(root, "info");

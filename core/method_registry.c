@@ -1,6 +1,7 @@
 /* method_registry.c: the methods of every build, in the order GET
  * /api/v1/methods lists them (the first is the default).  Adding a method
  * is one line here (and its core file). */
+#include "method_auto.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
 #include "method_maps.h"
@@ -13,5 +14,6 @@ const method *const method_builtin[] = {
     &method_srbf,
     &method_hf4,
     &method_maps,
+    &method_auto,
     NULL,
 };

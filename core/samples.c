@@ -247,6 +247,57 @@ fail:
     return rc;
 }
 
+void samples_derived_hash(const char hash[33], const char *tag, char out[33])
+{
+    char buf[128];
+    XXH128_hash_t h;
+    int len = snprintf(buf, sizeof buf, "%.32s/%s", hash, tag);
+    h = XXH3_128bits(buf, (size_t)(len < (int)sizeof buf ? len : (int)sizeof buf - 1));
+    snprintf(out, 33, "%016llx%016llx", (unsigned long long)h.high64,
+             (unsigned long long)h.low64);
+}
+
+int samples_pick(const samples *all, const unsigned char *keep, const char *tag, samples *out,
+                 glint_err *err)
+{
+    size_t n = 0;
+    char derived[33];
+    int rc;
+
+    if ((rc = samples_begin(out, all->nviews, all->width, all->height, err)))
+        return rc;
+    out->rule = all->rule;
+    out->has_pos = all->has_pos;
+    for (int i = 0; i < all->n; i++)
+        n += keep[i] != 0;
+    if (n && (rc = samples_reserve(out, n, err)))
+        goto fail;
+    for (int i = 0; i < all->n; i++) {
+        size_t k = (size_t)out->n;
+        if (!keep[i])
+            continue;
+        out->view[k] = all->view[i];
+        out->pixel[k] = all->pixel[i];
+        memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
+        memcpy(out->uv + 2 * k, all->uv + 2 * (size_t)i, 2 * sizeof(float));
+        out->cos_i[k] = all->cos_i[i];
+        out->intensity[k] = all->intensity[i];
+        out->n++;
+    }
+    memcpy(out->used, all->used, (size_t)all->nviews);
+    /* the pattern's hash, derived: samples_end hashes it with the views */
+    samples_derived_hash(all->hash, tag, derived);
+    if ((rc = samples_end(out, NULL, derived, err)))
+        goto fail;
+    return 0;
+fail:
+    samples_free(out);
+    return rc;
+}
+
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
 {
     for (int v = 0; v < s->nviews; v++) {

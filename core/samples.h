@@ -76,6 +76,15 @@ long samples_count_rule(const gbuf *g, int rule);
 /* The samples of the views flagged in `use` out of a pattern of every view:
  * exactly the pattern samples_build would make from those views (same
  * order, same hash for the same scene_hash). */
+/* The samples flagged in keep[all->n], in order (a held-out split of a
+ * pattern's pixels): a pattern of its own, hashed from all's hash and
+ * `tag` (samples_derived_hash), so that its precomputations are keyed
+ * apart from all's.  GLINT_EINVAL when none is kept. */
+int samples_pick(const samples *all, const unsigned char *keep, const char *tag, samples *out,
+                 glint_err *err);
+/* A 32-hex-digit hash derived from another and a tag (OUT: out). */
+void samples_derived_hash(const char hash[33], const char *tag, char out[33]);
+
 int samples_subset(const samples *all, const unsigned char *use, const char scene_hash[33],
                    samples *out, glint_err *err);
 

@@ -373,6 +373,8 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     json_object_set(d, "errors", json_object_get(m.info, "errors"));
     json_object_set(d, "seconds", json_object_get(m.info, "seconds"));
     json_object_set(d, "precomputation", pre);
+    if (json_object_get(m.info, "choice")) /* method auto: what it chose and why */
+        json_object_set(d, "choice", json_object_get(m.info, "choice"));
     json_object_set_new(d, "links", fitsvc_material_links(mid, t->session_id, t->scene_id));
     if ((rc = store_material_put(f->st, mid, t->session_id, d, err)))
         goto done;

@@ -136,4 +136,20 @@ def test_04_parameters_are_checked(d):
         assert word in r.json()["detail"], (params, r.json())
 
 
+def test_05_auto_chooses_and_says_why(d):
+    m = material(d, {"method": "auto", "params": {"res": 32, "s_res": 16, "components": 3}})
+    assert m["method"] == "auto"
+    c = m["choice"]
+    assert c["chosen"] in ("hf3", "hf4", "maps") and c["held_out"] == "views"
+    assert [x["method"] for x in c["candidates"]] == ["hf3", "hf4", "maps"]
+    assert c["candidates"][0]["taken"] is True
+    man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=tok(S["view"]),
+                status=200).json()
+    assert man["method"] == c["chosen"]     # the material is the chosen method's
+    print("  auto chose %s: %s" % (c["chosen"], [(x["method"], round(x["held_out_rms"], 4))
+                                                  for x in c["candidates"]]))
+    d.get("/api/v1/materials/%s/preview.png?view=1" % m["id"], headers=tok(S["view"]),
+          status=200)
+
+
 run_tests(globals())

@@ -1,0 +1,433 @@
+/* method_auto.c: "auto", the model a painting requires (method_auto.h). */
+#include "method_auto.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clock.h"
+#include "method_hf3.h"
+#include "method_hf4.h"
+#include "method_maps.h"
+#include "scene.h"
+
+static const method_param auto_params_table[] = {
+    {.name = "res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+     .description = "texels per 1D factor of every candidate",
+     .offset = offsetof(auto_params, res), .min = HF_RES_MIN, .max = HF_RES_MAX},
+    {.name = "s_res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+     .description = "nodes per side of the four-factor candidate's spatial factor",
+     .offset = offsetof(auto_params, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
+    {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",
+     .description = "at most this many products in the material-maps candidate",
+     .offset = offsetof(auto_params, components), .min = 1, .max = MATMAP_MAX},
+    {.name = "threshold", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "a richer model is taken only when it lowers the held-out RMS by more "
+                    "than this fraction of the current choice's",
+     .offset = offsetof(auto_params, threshold), .min = 0.0, .max = 1.0},
+    {.name = "floor", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "nor by less than this (held-out RMS, per unit light): below it a gain is "
+                    "within an 8-bit painting's quantization",
+     .offset = offsetof(auto_params, floor), .min = 0.0, .max = 1.0},
+    {.name = "every", .type = METHOD_PARAM_INT, .affects = "precomputation",
+     .description = "one painted view in this many (one pixel, when one view is painted) is "
+                    "held out to judge the candidates, which are fitted to the rest",
+     .offset = offsetof(auto_params, every), .min = 2, .max = 64},
+};
+
+static const method_preset auto_presets[] = {
+    {"draft", "{\"res\": 32, \"s_res\": 16, \"components\": 3}"},
+    {"default", "{}"},
+};
+
+static void auto_params_default(void *params)
+{
+    auto_params *p = params;
+    memset(p, 0, sizeof *p);
+    p->res = 32;
+    p->sres = 32;
+    p->components = 5;
+    p->threshold = 0.1;
+    p->floor = 1.0 / 255.0 / 4.0;
+    p->every = 4;
+}
+
+/* The candidates' parameters. */
+static void candidates(const auto_params *p, fit_params *fp, hf4_params_t *hp, maps_params *mp)
+{
+    fit_params_default(fp);
+    fp->res = p->res;
+    method_hf4.params_default(hp);
+    hp->res = p->res;
+    hp->sres = p->sres;
+    method_maps.params_default(mp);
+    mp->hf = *fp;
+    mp->components = p->components;
+}
+
+/* ---- levels: the split, then each candidate's precomputation on the kept pixels ---------- */
+
+typedef struct split {
+    samples train;
+    unsigned char *held;   /* per sample of the pattern: 1 held out */
+    int nheld;
+    int by_views;          /* 1: whole views held out; 0: pixels */
+    unsigned char held_view[SCENE_MAX_VIEWS];
+} split;
+
+/* Held out by pixel (one view painted): tiles of HELD_TILE x HELD_TILE
+ * pixels, one in `every` by a hash of the tile, so the split is the same
+ * for every painting of a pattern and a spatial model cannot fill a held
+ * pixel from painted neighbours a pixel away. */
+#define HELD_TILE 8
+static int pixel_held(int view, int pixel, int width, int every)
+{
+    unsigned h = (unsigned)view << 24 ^ (unsigned)(pixel / width / HELD_TILE) << 12 ^
+                 (unsigned)(pixel % width / HELD_TILE);
+    h ^= h >> 16; /* murmur3's finalizer */
+    h *= 0x85ebca6bu;
+    h ^= h >> 13;
+    h *= 0xc2b2ae35u;
+    h ^= h >> 16;
+    return h % (unsigned)every == 0;
+}
+
+static void split_free(void *data)
+{
+    split *x = data;
+    samples_free(&x->train);
+    free(x->held);
+    free(x);
+}
+
+static void split_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    (void)prev_key;
+    snprintf(key, len, "auto-split:%s:%d", s->hash, ((const auto_params *)params)->every);
+}
+
+static int split_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    const auto_params *p = in->params;
+    const samples *s = in->s;
+    split *x = calloc(1, sizeof *x);
+    unsigned char *keep = NULL;
+    char tag[32];
+    int rc;
+    if (!x || !(x->held = malloc((size_t)s->n)) || !(keep = malloc((size_t)s->n))) {
+        free(keep);
+        if (x)
+            free(x->held);
+        free(x);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
+    {
+        /* whole views when two or more are painted: one in `every` of them,
+         * at least one, at most all but one; else one pixel in `every` */
+        int used[SCENE_MAX_VIEWS], nu = 0, nh = 0;
+        for (int v = 0; v < s->nviews && v < SCENE_MAX_VIEWS; v++)
+            if (s->used[v])
+                used[nu++] = v;
+        x->by_views = nu >= 2;
+        for (int k = 0; k < nu && x->by_views; k++)
+            if (k % p->every == p->every / 2 || (nh == 0 && k == nu - 1)) {
+                x->held_view[used[k]] = 1;
+                nh++;
+            }
+        for (int i = 0; i < s->n; i++) {
+            x->held[i] = (unsigned char)(x->by_views ? x->held_view[s->view[i]]
+                                                     : pixel_held(s->view[i], s->pixel[i],
+                                                                  s->width, p->every));
+            keep[i] = !x->held[i];
+            x->nheld += x->held[i];
+        }
+    }
+    snprintf(tag, sizeof tag, "auto-train-%d", p->every);
+    if (x->nheld < 1 || x->nheld == s->n)
+        rc = glint_err_set(err, GLINT_EINVAL,
+                           "%d painted samples are too few to hold one in %d out: paint more "
+                           "views or use a method directly", s->n, p->every);
+    else
+        rc = samples_pick(s, keep, tag, &x->train, err);
+    free(keep);
+    if (rc) {
+        free(x->held);
+        free(x);
+        return rc;
+    }
+    out->data = x;
+    out->bytes = sizeof *x + (size_t)s->n + (size_t)x->train.n * 80;
+    out->free = split_free;
+    return 0;
+}
+
+/* A candidate level: its method's level k, built on the kept pixels. */
+static int candidate_build(const method_build_in *in, const method *m, int k,
+                           const void *const *prev, const void *params, cache_value *out,
+                           glint_err *err)
+{
+    method_build_in c = *in;
+    c.params = params;
+    c.s = &((const split *)in->prev[0])->train;
+    c.prev = prev;
+    c.level = k;
+    return m->levels[k].build(&c, out, err);
+}
+
+static void hf3d_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    const auto_params *p = params;
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    candidates(p, &fp, &hp, &mp);
+    snprintf(key, len, "%s/hf3:%d:%.17g:%d:%.17g", prev_key, fp.res, fp.lambda, (int)fp.route,
+             fp.rcond);
+    (void)s;
+}
+
+static int hf3d_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    candidates(in->params, &fp, &hp, &mp);
+    return candidate_build(in, &method_hf3, 0, NULL, &fp, out, err);
+}
+
+static void hf3o_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    (void)params;
+    (void)s;
+    snprintf(key, len, "%s/operator", prev_key);
+}
+
+static int hf3o_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    candidates(in->params, &fp, &hp, &mp);
+    return candidate_build(in, &method_hf3, 1, in->prev + 1, &fp, out, err);
+}
+
+static void hf4d_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    const auto_params *p = params;
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    const char *split_key_end = strchr(prev_key, '/');
+    candidates(p, &fp, &hp, &mp);
+    /* keyed from the split, not from hf3's levels before it */
+    snprintf(key, len, "%.*s/hf4:%d:%d:%.17g:%.17g:%.17g",
+             split_key_end ? (int)(split_key_end - prev_key) : (int)strlen(prev_key), prev_key,
+             hp.res, hp.sres, hp.lambda, hp.lambda_s, hp.rcond);
+    (void)s;
+}
+
+static int hf4d_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    candidates(in->params, &fp, &hp, &mp);
+    return candidate_build(in, &method_hf4, 0, NULL, &hp, out, err);
+}
+
+static const method_level auto_levels[] = {
+    {.name = "split", .progress = 0.2, .key = split_key, .build = split_build},
+    {.name = "decomposition", .progress = 0.3, .key = hf3d_key, .build = hf3d_build},
+    {.name = "operator", .progress = 0.5, .key = hf3o_key, .build = hf3o_build},
+    {.name = "spatial decomposition", .progress = 0.6, .key = hf4d_key, .build = hf4d_build},
+};
+
+/* ---- the fit ------------------------------------------------------------------------ */
+
+/* The held-out RMS of material m: per unit light, RGB, over the held
+ * samples. */
+static double held_rms(const material *m, const samples *s, const split *x, const float *rgb)
+{
+    double ss = 0.0;
+    long cnt = 0;
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], uv[2], v[3];
+        if (!x->held[i])
+            continue;
+        for (int c = 0; c < 3; c++) {
+            n[c] = s->nrm[3 * (size_t)i + c];
+            wi[c] = s->wi[3 * (size_t)i + c];
+            wo[c] = s->wo[3 * (size_t)i + c];
+        }
+        uv[0] = s->uv ? s->uv[2 * (size_t)i] : 0.0;
+        uv[1] = s->uv ? s->uv[2 * (size_t)i + 1] : 0.0;
+        material_eval_at(m, s->uv ? uv : NULL, n, wi, wo, v);
+        for (int c = 0; c < 3; c++) {
+            double d = v[c] - rgb[3 * (size_t)i + c];
+            ss += d * d;
+        }
+        cnt++;
+    }
+    return cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
+}
+
+static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
+{
+    const auto_params *p = in->params;
+    const split *x = in->levels[0];
+    const samples *s = in->s, *tr = &x->train;
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    float *trgb = NULL;
+    material cand[3];
+    const method *ms[3] = {&method_hf3, &method_hf4, &method_maps};
+    const void *ps[3] = {&fp, &hp, &mp};
+    double held[3], secs[3], t0 = glint_now();
+    int chosen = 0, rc = 0;
+    json_t *list, *choice;
+
+    memset(out, 0, sizeof *out);
+    memset(cand, 0, sizeof cand);
+    candidates(p, &fp, &hp, &mp);
+    /* coefficient texels no more than a sixteenth of the samples: finer
+     * textures hold texels that few samples reach, fitted to the painted
+     * views' own residuals (tests/unit/test_auto.c) */
+    mp.map_res = (int)floor(sqrt(tr->n / 16.0));
+    mp.map_res = mp.map_res < 8 ? 8 : mp.map_res > 128 ? 128 : mp.map_res;
+    if (!(trgb = malloc(3 * (size_t)tr->n * sizeof *trgb)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    for (int i = 0, k = 0; i < s->n; i++)
+        if (!x->held[i]) {
+            memcpy(trgb + 3 * (size_t)k, in->rgb + 3 * (size_t)i, 3 * sizeof *trgb);
+            k++;
+        }
+    for (int c = 0; c < 3; c++) {
+        method_fit_in ci = *in;
+        const void *lv[2];
+        const char *ky[2];
+        cache_how how[2];
+        double spent[2];
+        cache_disk disk[2];
+        int base = c == 1 ? 3 : 1, nl = c == 1 ? 1 : 2;
+        for (int l = 0; l < nl; l++) {
+            lv[l] = in->levels[base + l];
+            ky[l] = in->keys[base + l];
+            how[l] = in->how[base + l];
+            spent[l] = in->spent[base + l];
+            disk[l] = in->disk[base + l];
+        }
+        ci.params = ps[c];
+        ci.s = tr;
+        ci.rgb = trgb;
+        ci.levels = lv;
+        ci.keys = ky;
+        ci.how = how;
+        ci.spent = spent;
+        ci.disk = disk;
+        secs[c] = glint_now();
+        if ((rc = ms[c]->fit(&ci, &cand[c], err))) {
+            glint_err_prefix(err, "auto, candidate %s", ms[c]->name);
+            goto done;
+        }
+        secs[c] = glint_now() - secs[c];
+        held[c] = held_rms(&cand[c], s, x, in->rgb);
+    }
+    /* cheapest first; a richer candidate is taken when it beats the current
+     * choice by more than the threshold (hf4 and maps are alternatives:
+     * each is measured against the choice so far) */
+    list = json_array();
+    for (int c = 0; c < 3; c++) {
+        int take = c > 0 && held[c] < held[chosen] * (1.0 - p->threshold) &&
+                   held[chosen] - held[c] > p->floor;
+        json_array_append_new(
+            list, json_pack("{s:s, s:f, s:f, s:f, s:b}", "method", ms[c]->name, "held_out_rms",
+                            held[c], "rms_painted",
+                            json_number_value(json_object_get(
+                                json_object_get(cand[c].info, "errors"), "rms_painted")),
+                            "fit_seconds", secs[c], "taken", c == 0 || take));
+        if (take)
+            chosen = c;
+    }
+    choice = json_pack("{s:s, s:o, s:f, s:f, s:s, s:i, s:i, s:i, s:s}", "chosen",
+                       ms[chosen]->name, "candidates", list, "threshold", p->threshold, "floor",
+                       p->floor, "held_out",
+                       x->by_views ? "views" : "pixels", "held_out_every", p->every,
+                       "held_out_samples", x->nheld, "fitted_samples", tr->n,
+                       "rule",
+                       "cheapest first (hf3, hf4, maps); a richer one is taken when its "
+                       "held-out RMS is below the current choice's by more than the "
+                       "threshold (a fraction) and the floor; the material is the chosen "
+                       "candidate's fit of the samples not held out");
+    if (x->by_views) {
+        json_t *hv = json_array();
+        for (int v = 0; v < SCENE_MAX_VIEWS; v++)
+            if (x->held_view[v])
+                json_array_append_new(hv, json_integer(v));
+        json_object_set_new(choice, "held_out_views", hv);
+    }
+    *out = cand[chosen];
+    memset(&cand[chosen], 0, sizeof cand[chosen]);
+    if (!out->info)
+        out->info = json_object();
+    json_object_set(out->info, "chosen_params", json_object_get(out->info, "params"));
+    json_object_set_new(out->info, "params", method_params_to_json(&method_auto, p));
+    json_object_set_new(out->info, "choice", choice);
+    json_object_set_new(json_object_get(out->info, "seconds"), "auto", json_real(glint_now() - t0));
+done:
+    for (int c = 0; c < 3; c++)
+        material_free(&cand[c]);
+    free(trgb);
+    return rc;
+}
+
+static size_t auto_fit_bytes(const void *params, long nsamples)
+{
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    size_t b = 0;
+    candidates(params, &fp, &hp, &mp);
+    b += method_fit_bytes(&method_hf3, &fp, nsamples);
+    b += method_fit_bytes(&method_hf4, &hp, nsamples);
+    b += method_fit_bytes(&method_maps, &mp, nsamples);
+    return b;
+}
+
+static int auto_holdout_ok(const void *params)
+{
+    return ((const auto_params *)params)->sres <= 32;
+}
+
+const method method_auto = {
+    .name = "auto",
+    .title = "Automatic: the simplest model that the painting needs",
+    .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
+    .description =
+        "Fits one material (hf3), one material with a colour texture (hf4) and material maps "
+        "(maps) to the painted pixels but one in `every`, and keeps the cheapest whose error "
+        "on the held-out pixels is not beaten by a richer one by more than `threshold`. The "
+        "material is the chosen method's; info.choice lists every candidate's held-out and "
+        "painted RMS and why it was or was not taken.",
+    .held_out = "leave-one-view-out: for each painted view, fit the others and measure the RMS "
+                "error on that view's painted pixels; pooled over views",
+    .schema = "FitParamsAuto.json",
+    .params_size = sizeof(auto_params),
+    .params = auto_params_table,
+    .nparams = (int)(sizeof auto_params_table / sizeof auto_params_table[0]),
+    .presets = auto_presets,
+    .npresets = (int)(sizeof auto_presets / sizeof auto_presets[0]),
+    .params_default = auto_params_default,
+    .levels = auto_levels,
+    .nlevels = (int)(sizeof auto_levels / sizeof auto_levels[0]),
+    .fit = auto_fit,
+    .mat = NULL,
+    .holdout_ok = auto_holdout_ok,
+    .fit_bytes = auto_fit_bytes,
+};

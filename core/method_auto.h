@@ -1,0 +1,50 @@
+/* method_auto.h: "auto", the model a painting requires (seed 000 offers
+ * the models; the choice among them is glint's).
+ *
+ * One painted view in `every` is held out (the views at every/2,
+ * every/2 + every, ... of the painted ones: lights and directions inside
+ * the painted range, not its ends); with one view painted, one tile of
+ * 8x8 pixels in `every` (a hash of the tile: the same split for every
+ * painting of a pattern).  The candidates, cheapest first, are fitted to
+ * the rest:
+ *   hf3   one material (method_hf3.h)
+ *   hf4   one material times a spatial factor s(u, v) (method_hf4.h)
+ *   maps  a sum of products weighted by coefficient textures (method_maps.h)
+ * and each is measured on the held-out pixels (RMS, per unit light, RGB,
+ * the material evaluated at each pixel's texture coordinates).  The choice
+ * starts at hf3; a richer candidate replaces it only when its held-out RMS
+ * is below the current choice's by more than `threshold` (a fraction) and
+ * by more than `floor` (a quarter of an 8-bit step by default: a smaller
+ * gain is within a painting's quantization).  Held-out views are the
+ * measure that matters: on held-out pixels of painted views a spatial
+ * model fills a pixel from its painted neighbours, and on a uniform
+ * painting of 12 views hf4 and maps fit the painted views 2-5 times
+ * better than hf3 and the held-out views worse or barely better
+ * (tests/unit/test_auto.c prints every candidate).
+ * hf4 and maps are alternatives, not steps of one chain, so each is
+ * measured against the choice so far.  The material is the chosen
+ * candidate's own (its manifest names that method); info.choice lists
+ * every candidate's held-out and painted RMS, fit time and whether it was
+ * taken, and info.chosen_params its parameters.
+ *
+ * Levels (every one on the kept pixels, a pattern of its own:
+ * samples_pick): split, hf3's decomposition and operator, hf4's
+ * decomposition; maps reuses hf3's.  The auto method makes no material of
+ * its own (method.mat is NULL). */
+#ifndef GLINT_METHOD_AUTO_H
+#define GLINT_METHOD_AUTO_H
+
+#include "method.h"
+
+extern const method method_auto;
+
+typedef struct auto_params {
+    int res;           /* texels per 1D factor, every candidate */
+    int sres;          /* hf4's spatial nodes per side */
+    int components;    /* maps' most products */
+    double threshold;  /* fraction a richer model must gain on held-out pixels */
+    double floor;      /* and at least this much (RMS per unit light) */
+    int every;         /* one pixel in this many held out */
+} auto_params;
+
+#endif
