@@ -3,6 +3,7 @@
  * glint_material.frag.  It must evaluate exactly what hf_factors_eval()
  * evaluates on the CPU (tests/unit/test_glr.c compares them). */
 
+#include "glsl_parts.h"
 #include "method_hf3.h"
 
 const char hf3_glsl_frag[] =
@@ -34,46 +35,19 @@ const char hf3_glsl_frag[] =
     "//   uniform vec3  u_light          point light position, world space\n"
     "//   uniform float u_light_intensity  light intensity (no distance fall-off)\n"
     "//   out location 0  o_color        vec4(radiance RGB, 1)\n"
-    "precision highp float;\n"
-    "precision highp int;\n"
-    "precision highp sampler2D;\n"
+    GLSL_PRECISION
     "uniform highp sampler2D u_factors;\n"
     "uniform int u_res;\n"
     "uniform int u_map_kind;\n"
     "uniform vec3 u_a;\n"
     "uniform int u_model_brdf;\n"
-    "uniform vec3 u_eye;\n"
-    "uniform vec3 u_light;\n"
-    "uniform float u_light_intensity;\n"
-    "in vec3 v_pos;\n"
-    "in vec3 v_nrm;\n"
-    "in vec2 v_uv;\n"
-    "layout(location = 0) out vec4 o_color;\n"
-    "\n"
-    "vec3 glint_unit(vec3 v)\n"
-    "{\n"
-    "    float l = length(v);\n"
-    "    return l > 0.0 ? v / l : v;\n"
-    "}\n"
-    "\n"
+    GLSL_STAGE_IO
+    GLSL_UNIT
     "// Length of v projected on the plane orthogonal to the unit normal n.\n"
-    "float glint_tangent_len(vec3 v, vec3 n)\n"
-    "{\n"
-    "    return clamp(length(v - n * dot(v, n)), 0.0, 1.0);\n"
-    "}\n"
-    "\n"
+    GLSL_TANGENT_LEN
     "// Log-factor of row `row` at u in [0, 1]: hat interpolation between\n"
     "// node texels k0 = min(floor(u (res-1)), res-2) and k0 + 1.\n"
-    "vec3 glint_factor(int row, float u)\n"
-    "{\n"
-    "    float x = clamp(u, 0.0, 1.0) * float(u_res - 1);\n"
-    "    int k = min(int(floor(x)), u_res - 2);\n"
-    "    float t = x - float(k);\n"
-    "    vec3 a = texelFetch(u_factors, ivec2(k, row), 0).rgb;\n"
-    "    vec3 b = texelFetch(u_factors, ivec2(k + 1, row), 0).rgb;\n"
-    "    return (1.0 - t) * a + t * b;\n"
-    "}\n"
-    "\n"
+    GLSL_FACTOR("u_factors")
     "// The material at unit n, wi, wo (per unit light intensity).\n"
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
@@ -90,10 +64,4 @@ const char hf3_glsl_frag[] =
     "    return u_model_brdf == 1 ? v * ci : v;\n"
     "}\n"
     "\n"
-    "void main()\n"
-    "{\n"
-    "    vec3 n = glint_unit(v_nrm);\n"
-    "    vec3 wi = glint_unit(u_light - v_pos);\n"
-    "    vec3 wo = glint_unit(u_eye - v_pos);\n"
-    "    o_color = vec4(glint_material(n, wi, wo) * u_light_intensity, 1.0);\n"
-    "}\n";
+    GLSL_MAIN;

@@ -3,6 +3,7 @@
  * must evaluate what maps_eval() evaluates on the CPU (tests/unit/
  * test_maps.c compares them). */
 
+#include "glsl_parts.h"
 #include "method_maps.h"
 
 const char maps_glsl_frag[] =
@@ -22,44 +23,17 @@ const char maps_glsl_frag[] =
     "// block b the coefficients of products 3b..3b+2 in R, G, B (row 0 at\n"
     "// v = 0; bilinear between texel centres, clamped).  u_map_kind: 0 log,\n"
     "// 1 add (pqr - a), 2 sub (a - pqr); u_model_brdf 1: times n.wi.\n"
-    "precision highp float;\n"
-    "precision highp int;\n"
-    "precision highp sampler2D;\n"
+    GLSL_PRECISION
     "uniform highp sampler2D u_maps;\n"
     "uniform int u_res;\n"
     "uniform int u_map_res;\n"
     "uniform int u_k;\n"
     "uniform int u_map_kind;\n"
     "uniform int u_model_brdf;\n"
-    "uniform vec3 u_eye;\n"
-    "uniform vec3 u_light;\n"
-    "uniform float u_light_intensity;\n"
-    "in vec3 v_pos;\n"
-    "in vec3 v_nrm;\n"
-    "in vec2 v_uv;\n"
-    "layout(location = 0) out vec4 o_color;\n"
-    "\n"
-    "vec3 glint_unit(vec3 v)\n"
-    "{\n"
-    "    float l = length(v);\n"
-    "    return l > 0.0 ? v / l : v;\n"
-    "}\n"
-    "\n"
-    "float glint_tangent_len(vec3 v, vec3 n)\n"
-    "{\n"
-    "    return clamp(length(v - n * dot(v, n)), 0.0, 1.0);\n"
-    "}\n"
-    "\n"
-    "vec3 glint_factor(int row, float u)\n"
-    "{\n"
-    "    float x = clamp(u, 0.0, 1.0) * float(u_res - 1);\n"
-    "    int k = min(int(floor(x)), u_res - 2);\n"
-    "    float t = x - float(k);\n"
-    "    vec3 a = texelFetch(u_maps, ivec2(k, row), 0).rgb;\n"
-    "    vec3 b = texelFetch(u_maps, ivec2(k + 1, row), 0).rgb;\n"
-    "    return (1.0 - t) * a + t * b;\n"
-    "}\n"
-    "\n"
+    GLSL_STAGE_IO
+    GLSL_UNIT
+    GLSL_TANGENT_LEN
+    GLSL_FACTOR("u_maps")
     "// The coefficients of products 3b..3b+2 at uv (bilinear between texel\n"
     "// centres, clamped at the border).\n"
     "vec3 glint_coefs(int b, vec2 uv)\n"
@@ -105,10 +79,4 @@ const char maps_glsl_frag[] =
     "    return u_model_brdf == 1 ? acc * ci : acc;\n"
     "}\n"
     "\n"
-    "void main()\n"
-    "{\n"
-    "    vec3 n = glint_unit(v_nrm);\n"
-    "    vec3 wi = glint_unit(u_light - v_pos);\n"
-    "    vec3 wo = glint_unit(u_eye - v_pos);\n"
-    "    o_color = vec4(glint_material(n, wi, wo) * u_light_intensity, 1.0);\n"
-    "}\n";
+    GLSL_MAIN;

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glsl_parts.h"
 #include "method_srbf.h"
 
 #ifndef M_PI
@@ -290,9 +291,7 @@ const char srbf_glsl_frag[] =
     "// normalize(+x x n)), b = n x t.  glint_material returns f (n.wi), the\n"
     "// radiance for a unit point light; main scales it by u_light_intensity.\n"
     "// Binding contract in shader.json.\n"
-    "precision highp float;\n"
-    "precision highp int;\n"
-    "precision highp sampler2D;\n"
+    GLSL_PRECISION
     "uniform highp sampler2D u_lobes;\n"
     "uniform int u_lobes_n;\n"
     "uniform float u_lambda;\n"
@@ -300,20 +299,8 @@ const char srbf_glsl_frag[] =
     "uniform int u_static;\n"
     "uniform float u_f0;\n"
     "uniform float u_alpha;\n"
-    "uniform vec3 u_eye;\n"
-    "uniform vec3 u_light;\n"
-    "uniform float u_light_intensity;\n"
-    "in vec3 v_pos;\n"
-    "in vec3 v_nrm;\n"
-    "in vec2 v_uv;\n"
-    "layout(location = 0) out vec4 o_color;\n"
-    "\n"
-    "vec3 glint_unit(vec3 v)\n"
-    "{\n"
-    "    float l = length(v);\n"
-    "    return l > 0.0 ? v / l : v;\n"
-    "}\n"
-    "\n"
+    GLSL_STAGE_IO
+    GLSL_UNIT
     "float glint_g1(float x, float a2)\n"
     "{\n"
     "    return sqrt(a2 + (1.0 - a2) * x * x);\n"
@@ -355,10 +342,4 @@ const char srbf_glsl_frag[] =
     "    return (u_rho / 3.14159265358979 + p * glint_static(li, lo, h)) * li.z;\n"
     "}\n"
     "\n"
-    "void main()\n"
-    "{\n"
-    "    vec3 n = glint_unit(v_nrm);\n"
-    "    vec3 wi = glint_unit(u_light - v_pos);\n"
-    "    vec3 wo = glint_unit(u_eye - v_pos);\n"
-    "    o_color = vec4(glint_material(n, wi, wo) * u_light_intensity, 1.0);\n"
-    "}\n";
+    GLSL_MAIN;

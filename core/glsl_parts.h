@@ -1,0 +1,68 @@
+/* glsl_parts.h: pieces of text the methods' fragment stages share (GLSL ES
+ * 3.00, string literals to concatenate at compile time), so that every
+ * method projects, interpolates and shades its inputs the same way.
+ *   GLSL_PRECISION   highp float, int and sampler2D
+ *   GLSL_STAGE_IO    the renderer's uniforms (u_eye, u_light,
+ *                    u_light_intensity), the vertex stage's outputs (v_pos,
+ *                    v_nrm, v_uv) and o_color
+ *   GLSL_UNIT        glint_unit(v): v normalized (0 stays 0)
+ *   GLSL_TANGENT_LEN glint_tangent_len(v, n): |v projected on the tangent
+ *                    plane|, clamped to [0, 1] (hf_project)
+ *   GLSL_FACTOR(S)   glint_factor(row, u): row `row` of sampler S read with
+ *                    hf.h's node hats (hf_hat)
+ *   GLSL_MAIN        main(): glint_material(n, wi, wo) for the point light */
+#ifndef GLINT_GLSL_PARTS_H
+#define GLINT_GLSL_PARTS_H
+
+#define GLSL_PRECISION                                                                          \
+    "precision highp float;\n"                                                                  \
+    "precision highp int;\n"                                                                    \
+    "precision highp sampler2D;\n"
+
+#define GLSL_STAGE_IO                                                                           \
+    "uniform vec3 u_eye;\n"                                                                     \
+    "uniform vec3 u_light;\n"                                                                   \
+    "uniform float u_light_intensity;\n"                                                        \
+    "in vec3 v_pos;\n"                                                                          \
+    "in vec3 v_nrm;\n"                                                                          \
+    "in vec2 v_uv;\n"                                                                           \
+    "layout(location = 0) out vec4 o_color;\n"                                                  \
+    "\n"
+
+#define GLSL_UNIT                                                                               \
+    "vec3 glint_unit(vec3 v)\n"                                                                 \
+    "{\n"                                                                                       \
+    "    float l = length(v);\n"                                                                \
+    "    return l > 0.0 ? v / l : v;\n"                                                         \
+    "}\n"                                                                                       \
+    "\n"
+
+#define GLSL_TANGENT_LEN                                                                        \
+    "float glint_tangent_len(vec3 v, vec3 n)\n"                                                 \
+    "{\n"                                                                                       \
+    "    return clamp(length(v - n * dot(v, n)), 0.0, 1.0);\n"                                  \
+    "}\n"                                                                                       \
+    "\n"
+
+#define GLSL_FACTOR(S)                                                                          \
+    "vec3 glint_factor(int row, float u)\n"                                                     \
+    "{\n"                                                                                       \
+    "    float x = clamp(u, 0.0, 1.0) * float(u_res - 1);\n"                                    \
+    "    int k = min(int(floor(x)), u_res - 2);\n"                                              \
+    "    float t = x - float(k);\n"                                                             \
+    "    vec3 a = texelFetch(" S ", ivec2(k, row), 0).rgb;\n"                                   \
+    "    vec3 b = texelFetch(" S ", ivec2(k + 1, row), 0).rgb;\n"                               \
+    "    return (1.0 - t) * a + t * b;\n"                                                       \
+    "}\n"                                                                                       \
+    "\n"
+
+#define GLSL_MAIN                                                                               \
+    "void main()\n"                                                                             \
+    "{\n"                                                                                       \
+    "    vec3 n = glint_unit(v_nrm);\n"                                                         \
+    "    vec3 wi = glint_unit(u_light - v_pos);\n"                                              \
+    "    vec3 wo = glint_unit(u_eye - v_pos);\n"                                                \
+    "    o_color = vec4(glint_material(n, wi, wo) * u_light_intensity, 1.0);\n"                \
+    "}\n"
+
+#endif
