@@ -18,24 +18,17 @@
 #include "paint.h"
 #include "prep.h"
 #include "raster.h"
+#include "sv_fixture.h"
 
 static scene SC;
 static gbuf *G;
 static cache *C;
 static cache_entry *SE;
 
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
-
 static int setup(void)
 {
     scene_params sp;
-    prep_scene_source src = {borrowed, NULL, &SC};
+    prep_scene_source src = {sv_borrowed, NULL, &SC};
     glint_err e;
     if (SE)
         return 0;
@@ -58,8 +51,6 @@ static const char *choose(const char *spec, const unsigned char *use, material *
     prep_request rq = {&method_auto, &ap, NULL, use ? use : all};
     prep *p = NULL;
     img im[SCENE_MAX_VIEWS];
-    paint_sv sv;
-    brdf b;
     glint_err e;
     json_t *choice;
     int rc;
@@ -68,10 +59,7 @@ static const char *choose(const char *spec, const unsigned char *use, material *
     memset(im, 0, sizeof im);
     method_auto.params_default(&ap);
     rq.scene = SE;
-    rc = strchr(spec, '|') ? (paint_sv_parse(spec, &sv, &e) ||
-                              paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e))
-                           : (brdf_parse(spec, &b, &e) ||
-                              paint_views(&b, G, SC.views, SC.nviews, 1.0, im, NULL, &e));
+    rc = sv_paint(spec, &SC, G, im, &e);
     rc = rc || prep_acquire(C, &rq, NULL, NULL, &p, &e) || prep_fit(p, im, NULL, out, &e);
     for (int v = 0; v < SC.nviews; v++)
         img_free(&im[v]);

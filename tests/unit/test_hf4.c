@@ -23,6 +23,7 @@
 #include "prep.h"
 #include "raster.h"
 #include "samples.h"
+#include "sv_fixture.h"
 
 static scene SC;
 static gbuf *G;
@@ -303,14 +304,6 @@ TEST(samples_without_uv_are_refused)
 
 /* ---- through the method ------------------------------------------------------------ */
 
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
-
 /* Fit `spec` over every view with method m and params p. */
 static int fit_spec(cache *c, cache_entry *se, const method *m, const void *p, const char *spec,
                     material *out)
@@ -319,14 +312,10 @@ static int fit_spec(cache *c, cache_entry *se, const method *m, const void *p, c
     prep_request rq = {m, p, se, all};
     prep *pp = NULL;
     img im[SCENE_MAX_VIEWS];
-    paint_sv sv;
     glint_err e;
     int rc;
     memset(all, 1, sizeof all);
-    memset(im, 0, sizeof im);
-    rc = paint_sv_parse(spec, &sv, &e) ||
-         paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e) ||
-         prep_acquire(c, &rq, NULL, NULL, &pp, &e) || prep_fit(pp, im, NULL, out, &e);
+    rc = sv_paint(spec, &SC, G, im, &e) || prep_acquire(c, &rq, NULL, NULL, &pp, &e) || prep_fit(pp, im, NULL, out, &e);
     if (rc)
         fprintf(stderr, "fit: %s\n", e.msg);
     for (int v = 0; v < SC.nviews; v++)
@@ -345,7 +334,7 @@ TEST(the_method_fits_a_varying_colour)
 {
     cache *c;
     cache_entry *se;
-    prep_scene_source src = {borrowed, NULL, &SC};
+    prep_scene_source src = {sv_borrowed, NULL, &SC};
     fit_params fp;
     hf4_params_t hp;
     material one, four, back;

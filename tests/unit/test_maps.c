@@ -22,6 +22,7 @@
 #include "prep.h"
 #include "raster.h"
 #include "samples.h"
+#include "sv_fixture.h"
 
 #define STRIPES "stripes:freq=3,duty=0.5|lambert:kd=0.7/0.15/0.1|ct:kd=0.05,f0=0.9/0.7/0.3,rough=0.25"
 
@@ -30,18 +31,10 @@ static gbuf *G;
 static cache *C;
 static cache_entry *SE;
 
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
-
 static int setup(void)
 {
     scene_params sp;
-    prep_scene_source src = {borrowed, NULL, &SC};
+    prep_scene_source src = {sv_borrowed, NULL, &SC};
     glint_err e;
     if (SE)
         return 0;
@@ -77,32 +70,6 @@ static prep *prepare(const method *m, const void *p)
     return out;
 }
 
-/* The samples' painted values of a truth spec (one BRDF or a pattern). */
-static float *painted(const prep *pp, const char *spec)
-{
-    img im[SCENE_MAX_VIEWS];
-    paint_sv sv;
-    brdf b;
-    glint_err e;
-    const samples *s = prep_samples(pp);
-    float *rgb = malloc(3 * (size_t)s->n * sizeof *rgb);
-    int rc;
-    memset(im, 0, sizeof im);
-    if (strchr(spec, '|'))
-        rc = paint_sv_parse(spec, &sv, &e) ||
-             paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
-    else
-        rc = brdf_parse(spec, &b, &e) || paint_views(&b, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
-    if (rc || !rgb || samples_gather(s, im, rgb, &e)) {
-        fprintf(stderr, "painting %s: %s\n", spec, e.msg);
-        free(rgb);
-        rgb = NULL;
-    }
-    for (int v = 0; v < SC.nviews; v++)
-        img_free(&im[v]);
-    return rgb;
-}
-
 static double info_num(const material *m, const char *obj, const char *key)
 {
     return json_number_value(json_object_get(json_object_get(m->info, obj), key));
@@ -120,7 +87,7 @@ static int fit(const maps_params *mp, const char *spec, material *out)
     fp.res = 32;
     if (!(p = prepare(mp ? &method_maps : &method_hf3, mp ? (const void *)mp : &fp)))
         return -1;
-    if ((rgb = painted(p, spec)) && (rc = prep_fit(p, NULL, rgb, out, &e)))
+    if ((rgb = sv_painted(p, spec, &SC, G)) && (rc = prep_fit(p, NULL, rgb, out, &e)))
         fprintf(stderr, "fit: %s\n", e.msg);
     free(rgb);
     prep_release(C, p);
@@ -338,7 +305,7 @@ TEST(extremes)
     rq.scene = SE;
     ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &p, &e));
     s = prep_samples(p);
-    ASSERT((rgb = painted(p, STRIPES)));
+    ASSERT((rgb = sv_painted(p, STRIPES, &SC, G)));
     ASSERT_MSG(prep_fit(p, NULL, rgb, &m, &e) == 0, "%s", e.msg);
     {
         const matmap *mm = maps_matmap(&m);

@@ -15,6 +15,7 @@
 #include "prep.h"
 #include "raster.h"
 #include "samples.h"
+#include "sv_fixture.h"
 
 static scene SC;
 static gbuf *G;
@@ -23,20 +24,12 @@ static cache_entry *SE;
 static prep *P;    /* view 0 painted */
 static prep *PA;   /* every view painted */
 
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
-
 static int setup(void)
 {
     scene_params sp;
     fit_params fp;
     unsigned char use[SCENE_MAX_VIEWS];
-    prep_scene_source src = {borrowed, NULL, &SC};
+    prep_scene_source src = {sv_borrowed, NULL, &SC};
     glint_err e;
     if (P)
         return 0;
@@ -65,32 +58,6 @@ static int setup(void)
     return 0;
 }
 
-/* The samples' painted values of a truth spec (one BRDF or a pattern). */
-static float *painted(const prep *pp, const char *spec)
-{
-    img im[SCENE_MAX_VIEWS];
-    paint_sv sv;
-    brdf b;
-    glint_err e;
-    const samples *s = prep_samples(pp);
-    float *rgb = malloc(3 * (size_t)s->n * sizeof *rgb);
-    int rc;
-    memset(im, 0, sizeof im);
-    if (strchr(spec, '|'))
-        rc = paint_sv_parse(spec, &sv, &e) ||
-             paint_views_sv(&sv, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
-    else
-        rc = brdf_parse(spec, &b, &e) || paint_views(&b, G, SC.views, SC.nviews, 1.0, im, NULL, &e);
-    if (rc || !rgb || samples_gather(s, im, rgb, &e)) {
-        fprintf(stderr, "painting %s: %s\n", spec, e.msg);
-        free(rgb);
-        rgb = NULL;
-    }
-    for (int v = 0; v < SC.nviews; v++)
-        img_free(&im[v]);
-    return rgb;
-}
-
 static double coef_mean(const matmap *mm, int k)
 {
     double m = 0.0;
@@ -109,7 +76,7 @@ TEST(one_material_is_one_product)
     float *rgb;
     glint_err e;
     ASSERT_OK(setup());
-    ASSERT((rgb = painted(P, "lambert:kd=0.5/0.4/0.3")));
+    ASSERT((rgb = sv_painted(P, "lambert:kd=0.5/0.4/0.3", &SC, G)));
     matmap_params_default(&mp);
     mp.res = 64;
     mp.tol = 0.02;
@@ -142,7 +109,7 @@ TEST(two_materials_need_more_than_one_product)
         glint_err e;
         ASSERT_OK(setup());
         pp = views ? PA : P;
-        ASSERT((rgb = painted(pp, spec)));
+        ASSERT((rgb = sv_painted(pp, spec, &SC, G)));
         for (int merge = 0; merge < 2; merge++) {
             matmap mm;
             matmap_params mp;
@@ -183,7 +150,7 @@ TEST(bad_input_is_refused)
     float *rgb;
     glint_err e;
     ASSERT_OK(setup());
-    ASSERT((rgb = painted(P, "lambert")));
+    ASSERT((rgb = sv_painted(P, "lambert", &SC, G)));
     matmap_params_default(&mp);
     mp.components = 0;
     ASSERT_EQ(matmap_fit(P, rgb, &mp, &mm, &e), GLINT_EINVAL);
