@@ -17,6 +17,7 @@ void matmap_params_default(matmap_params *mp)
     mp->tol = 0.01;
     mp->refine = 20;
     mp->rounds = 8;
+    mp->smooth = 0.1;
 }
 
 void matmap_free(matmap *m)
@@ -127,8 +128,10 @@ static double model_residual(const samples *s, const float *rgb, const float *F,
  * each sample's four texels as uvtex_lookup reads them.  r: the residual
  * of the current coefficients (updated).  OUT: *sweeps. */
 static int refine_joint(const samples *s, const float *rgb, const float *F, int K, int res,
-                        int max_sweeps, float *coef, float *r, int *sweeps, glint_err *err)
+                        int max_sweeps, double smooth, float *coef, float *r, int *sweeps,
+                        glint_err *err)
 {
+    double mu = 0.0;
     size_t n = (size_t)s->n, n3 = 3 * n, nt = (size_t)res * res, ne = 0;
     size_t *start = calloc(nt + 1, sizeof *start);
     int *idx = malloc(4 * n * sizeof *idx);
@@ -185,10 +188,29 @@ static int refine_joint(const samples *s, const float *rgb, const float *F, int 
     (void)ne;
     for (size_t i = 0; i < n3; i++)
         prev += (double)r[i] * r[i];
+    if (smooth > 0.0) { /* mu: smooth times the mean data weight of a reached texel */
+        double hs = 0.0;
+        long cnt = 0;
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < K; k++) {
+                double h = 0.0;
+                for (size_t e = start[t]; e < start[t + 1]; e++)
+                    for (int ch = 0; ch < 3; ch++) {
+                        double fv = F[k * n3 + 3 * (size_t)idx[e] + ch];
+                        if (isfinite(fv))
+                            h += (double)wt[e] * wt[e] * fv * fv;
+                    }
+                if (h > 0.0) {
+                    hs += h;
+                    cnt++;
+                }
+            }
+        mu = cnt ? smooth * hs / (double)cnt : 0.0;
+    }
     for (int sw = 0; sw < max_sweeps; sw++) {
         double now = 0.0;
         for (size_t t = 0; t < nt; t++) {
-            if (start[t] == start[t + 1])
+            if (start[t] == start[t + 1] && mu == 0.0)
                 continue;
             for (int k = 0; k < K; k++) {
                 const float *f = F + k * n3;
@@ -204,6 +226,21 @@ static int refine_joint(const samples *s, const float *rgb, const float *F, int 
                         g += w * fv * r[3 * i + ch];
                         h += w * w * fv * fv;
                     }
+                }
+                if (mu > 0.0) { /* mu sum over grid neighbours of (c - c')^2 */
+                    const float *ck = coef + k * nt;
+                    int ti = (int)(t % (size_t)res), tj = (int)(t / (size_t)res), deg = 0;
+                    double sd = 0.0;
+                    if (ti > 0)
+                        sd += *c - ck[t - 1], deg++;
+                    if (ti + 1 < res)
+                        sd += *c - ck[t + 1], deg++;
+                    if (tj > 0)
+                        sd += *c - ck[t - res], deg++;
+                    if (tj + 1 < res)
+                        sd += *c - ck[t + res], deg++;
+                    g -= mu * sd;
+                    h += mu * deg;
                 }
                 if (!(h > 0.0))
                     continue;
@@ -273,11 +310,13 @@ int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_p
         mp->res > UVTEX_MAX_RES || !(mp->tol >= 0.0) ||
         (mp->merge != MATMAP_MERGE_LSQ && mp->merge != MATMAP_MERGE_MIN) || mp->refine < 0 ||
         mp->refine > MATMAP_REFINE_MAX || mp->rounds < 0 || mp->rounds > MATMAP_ROUNDS_MAX ||
+        !(mp->smooth >= 0.0 && mp->smooth <= MATMAP_SMOOTH_MAX) ||
         (mp->rounds > 0 && mp->refine < 1))
         return glint_err_set(err, GLINT_EINVAL,
                              "material map: components 1..%d, res 1..%d, tol >= 0, merge "
-                             "lsq or min, refine 0..%d and rounds 0..%d (rounds need refine)",
-                             MATMAP_MAX, UVTEX_MAX_RES, MATMAP_REFINE_MAX, MATMAP_ROUNDS_MAX);
+                             "lsq or min, refine 0..%d, rounds 0..%d (rounds need refine) and "
+                             "smooth 0..%g", MATMAP_MAX, UVTEX_MAX_RES, MATMAP_REFINE_MAX,
+                             MATMAP_ROUNDS_MAX, MATMAP_SMOOTH_MAX);
     if (!s->has_pos || !s->uv)
         return glint_err_set(err, GLINT_EINVAL,
                              "material map: the samples carry no texture coordinates "
@@ -370,8 +409,8 @@ int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_p
     else /* without the predictions kept the model's residual is not measured */
         out->model_rel_rms[0] = out->model_rel_rms[1] = -1.0;
     if (F && mp->refine > 0) {
-        if ((rc = refine_joint(s, rgb, F, out->k, mp->res, mp->refine, out->coef, r,
-                               &out->refine_sweeps, err)))
+        if ((rc = refine_joint(s, rgb, F, out->k, mp->res, mp->refine, mp->smooth, out->coef,
+                               r, &out->refine_sweeps, err)))
             goto done;
         out->round_rel_rms[0] = rel_rms(r, rgb, n3);
         for (int round = 0; round < mp->rounds; round++) {
@@ -402,7 +441,7 @@ int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_p
             if ((rc = refine_joint(s, rgb, F, out->k, mp->res,
                                    mp->refine < MATMAP_ROUND_SWEEPS ? mp->refine
                                                                     : MATMAP_ROUND_SWEEPS,
-                                   out->coef, r, &sweeps, err)))
+                                   mp->smooth, out->coef, r, &sweeps, err)))
                 goto done;
             out->refine_sweeps += sweeps;
             out->rounds = round + 1;

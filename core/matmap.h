@@ -35,6 +35,16 @@
  * sweep gains less than 1e-4 of the error.  The greedy products leave
  * their texels fitted one at a time to a clamped residual; the refinement
  * lets them share the painting (tests/unit/test_maps.c prints both).
+ * With smooth > 0 the refinement also minimizes
+ * mu sum_k sum_{neighbouring texels t, t'} (c_k(t) - c_k(t'))^2, mu =
+ * smooth times the mean data weight of a reached texel (sum of w^2 f^2
+ * over its samples), and moves the texels no sample reaches with their
+ * neighbours.  A texel sees a few directions only, and without it the
+ * coefficients of five products fit those few: on 12 views of the sphere
+ * at 64x64, held-out views (tests/unit/test_auto.c) went from 0.0285 to
+ * 0.0101 RMS on a one-material painting and from 0.0079 to 0.0050 on soft
+ * stripes of two colours with smooth 0.1 (the default), the painted views'
+ * barely moving (0.0015 -> 0.0030, 0.0013 -> 0.0017).
  *
  * Back-fitting ("rounds", after the refinement): the greedy products were
  * each fitted to a clamped residual and never revisited.  A round refits
@@ -76,7 +86,10 @@ typedef struct matmap_params {
     double tol;        /* stop below this relative RMS of the residual, >= 0 */
     int refine;        /* sweeps of the joint refinement, 0..MATMAP_REFINE_MAX (0: none) */
     int rounds;        /* back-fitting rounds, 0..MATMAP_ROUNDS_MAX (need refine > 0) */
+    double smooth;     /* smoothness of the coefficients in the refinement, 0..MATMAP_SMOOTH_MAX */
 } matmap_params;
+
+#define MATMAP_SMOOTH_MAX 1e3
 
 #define MATMAP_ROUNDS_MAX 50
 /* Back-fitting: a product is refitted to the samples where its coefficient

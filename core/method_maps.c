@@ -43,6 +43,11 @@ static const method_param maps_params_table[] = {
                     "then the coefficients again; stops early when a round gains under 1% "
                     "(0: none; needs refine)",
      .offset = offsetof(maps_params, rounds), .min = 0, .max = MATMAP_ROUNDS_MAX},
+    {.name = "smooth", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "how strongly neighbouring coefficient texels are held together in the "
+                    "refinement: higher predicts new views better, lower fits the painted "
+                    "ones closer (0: not at all)",
+     .offset = offsetof(maps_params, smooth), .min = 0.0, .max = MATMAP_SMOOTH_MAX},
 };
 
 static const method_preset maps_presets[] = {
@@ -65,6 +70,7 @@ static void maps_params_default(void *p)
     mp->tol = d.tol;
     mp->refine = d.refine;
     mp->rounds = d.rounds;
+    mp->smooth = d.smooth;
 }
 
 static int maps_params_check(const void *params, glint_err *err)
@@ -159,6 +165,7 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
     q.tol = mp->tol;
     q.refine = mp->refine;
     q.rounds = mp->rounds;
+    q.smooth = mp->smooth;
     if ((rc = matmap_fit_source(&src, in->rgb, &q, &mm, err)))
         return rc;
     /* the products' own reports: the first holds the precomputation's */

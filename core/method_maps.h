@@ -22,6 +22,7 @@
  *   refine      sweeps of the joint refinement of the coefficients (0: none)
  *   rounds      back-fitting rounds: every product refitted to what the others
  *               leave (0: none)
+ *   smooth      smoothness of the coefficient textures in the refinement
  * The mapping of each product's fit defaults to hf3's add:a: the residuals
  * after the first product are clamped at 0 over much of the surface, and a
  * pure log mapping would make those near-zero values dominate the fit
@@ -60,6 +61,7 @@ typedef struct maps_params {
     double tol;
     int refine;        /* sweeps of the joint refinement (matmap.h) */
     int rounds;        /* back-fitting rounds (matmap.h) */
+    double smooth;     /* smoothness of the coefficient textures (matmap.h) */
 } maps_params;
 
 typedef struct maps_material {

@@ -121,16 +121,20 @@ TEST(two_materials_beat_one)
            info_num(&maps, "seconds", "fit"));
     ASSERT_LT(info_num(&maps, "errors", "rms_painted"),
               0.5 * info_num(&one, "errors", "rms_painted"));
-    /* the refinement and every round lower the model's error */
+    /* the refinement lowers the model's error, and every round but the
+     * last (which stops the rounds when it gains under 1%) */
     ASSERT_LE(json_number_value(json_array_get(json_object_get(stop, "model_rel_rms_per_round"),
                                                0)),
               json_number_value(json_object_get(stop, "model_rel_rms_greedy")) + 1e-12);
     {
         json_t *rr = json_object_get(stop, "model_rel_rms_per_round");
-        ASSERT(json_array_size(rr) >= 2);
-        for (size_t i = 1; i < json_array_size(rr); i++)
+        size_t nr = json_array_size(rr);
+        ASSERT(nr >= 2);
+        for (size_t i = 1; i + 1 < nr; i++)
             ASSERT_LT(json_number_value(json_array_get(rr, i)),
                       json_number_value(json_array_get(rr, i - 1)));
+        ASSERT_LT(json_number_value(json_array_get(rr, nr - 1)),
+                  json_number_value(json_array_get(rr, 0)));
     }
     /* the precomputation is hf3's: the same cached decomposition */
     ASSERT(strcmp(json_string_value(json_object_get(
