@@ -207,6 +207,7 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
                      method_params_to_json(&method_maps, mp), "precomputation",
                      pre ? pre : json_object(), "seconds", tim, "errors", errs, "components",
                      comps, "stop", stops);
+    json_decref(out->info); /* material_init's empty object */
     out->info = info;
     return 0;
 }

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "asan_reexec.h" /* the GPU test drives llvmpipe */
 #include "cache.h"
 #include "check.h"
 #include "glr.h"

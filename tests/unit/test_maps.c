@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "asan_reexec.h" /* the GPU test drives llvmpipe */
 #include "cache.h"
 #include "check.h"
 #include "fsio.h"
