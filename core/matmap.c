@@ -424,6 +424,7 @@ int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_p
                  * its own prediction, which does not pull it */
                 for (size_t i = 0; i < n; i++) {
                     double ct = uvtex_lookup(tex, mp->res, s->uv[2 * i], s->uv[2 * i + 1]);
+                    c[i] = (float)ct;
                     for (int ch = 0; ch < 3; ch++) {
                         double f = isfinite(Fk[3 * i + ch]) ? Fk[3 * i + ch] : 0.0, t;
                         t = ct >= MATMAP_BACKFIT_MIN_COEF ? (r[3 * i + ch] + ct * f) / ct : f;
@@ -434,9 +435,14 @@ int matmap_fit_source(const matmap_source *src, const float *rgb, const matmap_p
                     goto done;
                 material_free(&out->comp[k]);
                 out->comp[k] = m;
-                if ((rc = src->predict(src->cls, &out->comp[k], Fk, err)))
+                if ((rc = src->predict(src->cls, &out->comp[k], fk, err)))
                     goto done;
-                model_residual(s, rgb, F, out->k, out->coef, mp->res, r);
+                /* the residual without the old product k, with the new one */
+                for (size_t i = 0; i < n3; i++) {
+                    double fo = isfinite(Fk[i]) ? Fk[i] : 0.0, fn = isfinite(fk[i]) ? fk[i] : 0.0;
+                    r[i] = (float)(r[i] + c[i / 3] * (fo - fn));
+                    Fk[i] = fk[i];
+                }
             }
             if ((rc = refine_joint(s, rgb, F, out->k, mp->res,
                                    mp->refine < MATMAP_ROUND_SWEEPS ? mp->refine
