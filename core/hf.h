@@ -237,6 +237,15 @@ typedef struct hf_map {
 } hf_map;
 
 void hf_map_default(hf_map *m, hf_map_kind kind);
+/* The offset a of a channel whose largest value is vmax (ADD: m->a; SUB:
+ * (1 + margin) vmax, at most FLT_MAX, 1 when vmax <= 0; LOG: 0). */
+double hf_map_offset(const hf_map *m, double vmax);
+/* The argument of the log for value v (ADD: a + v; SUB: a - v; LOG: v),
+ * before the floor at eps. */
+double hf_map_arg(const hf_map *m, double a, double v);
+/* Back to linear from a product of factors: max(prod - a, 0) (ADD),
+ * max(a - prod, 0) (SUB), max(prod, 0) (LOG). */
+double hf_map_inverse(const hf_map *m, double a, double prod);
 /* Parse "log", "add", "add:0.05", "sub", "sub:0.02" (margin), with
  * ",eps=1e-4" optionally appended.  Values must be finite and in range. */
 int hf_map_parse(const char *spec, hf_map *out, glint_err *err);

@@ -314,13 +314,7 @@ void hf4_factors_means(hf4_factors *f)
 
 static double map_inverse(const hf4_factors *f, int c, double prod)
 {
-    double v;
-    switch (f->map.kind) {
-    case HF_MAP_ADD: v = prod - f->a_used[c]; break;
-    case HF_MAP_SUB: v = f->a_used[c] - prod; break;
-    default: v = prod; break;
-    }
-    return v > 0.0 ? v : 0.0;
+    return hf_map_inverse(&f->map, f->a_used[c], prod);
 }
 
 void hf4_factors_eval(const hf4_factors *f, const double uv[2], const double n[3],
@@ -409,17 +403,11 @@ int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_mod
             f[3 * (size_t)i + c] = v;
             vmax = v > vmax ? v : vmax;
         }
-        fac->a_used[c] = map->kind == HF_MAP_ADD   ? map->a
-                         : map->kind == HF_MAP_SUB ? (vmax > 0.0 ? fmin((1.0 + map->margin) * vmax,
-                                                                         FLT_MAX)
-                                                                 : 1.0)
-                                                   : 0.0;
+        fac->a_used[c] = hf_map_offset(map, vmax);
     }
     for (size_t i = 0; i < 3 * (size_t)N; i++) {
         int c = (int)(i % 3);
-        double v = f[i], arg = map->kind == HF_MAP_ADD   ? fac->a_used[c] + v
-                               : map->kind == HF_MAP_SUB ? fac->a_used[c] - v
-                                                         : v;
+        double arg = hf_map_arg(map, fac->a_used[c], f[i]);
         if (!(arg > map->eps)) {
             arg = map->eps;
             st.clamped[c]++;

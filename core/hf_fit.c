@@ -78,13 +78,7 @@ void hf_factors_canonicalize(double *logf, int res)
 
 static double map_inverse(const hf_factors *fac, int c, double prod)
 {
-    double v;
-    switch (fac->map.kind) {
-    case HF_MAP_ADD: v = prod - fac->a_used[c]; break;
-    case HF_MAP_SUB: v = fac->a_used[c] - prod; break;
-    default: v = prod; break;
-    }
-    return v > 0.0 ? v : 0.0;
+    return hf_map_inverse(&fac->map, fac->a_used[c], prod);
 }
 
 static double clamp_exp(double x)
@@ -314,22 +308,12 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
             if (v > vmax)
                 vmax = v;
         }
-        if (map->kind == HF_MAP_ADD)
-            fac->a_used[c] = map->a;
-        else if (map->kind == HF_MAP_SUB)
-            fac->a_used[c] = vmax > 0.0 ? fmin((1.0 + map->margin) * vmax, FLT_MAX) : 1.0;
-        else
-            fac->a_used[c] = 0.0;
+        fac->a_used[c] = hf_map_offset(map, vmax);
     }
     /* Forward mapping; samples at or below the floor are clamped, counted. */
     for (int i = 0; i < N; i++) {
         for (int c = 0; c < 3; c++) {
-            double v = f[3 * i + c], arg;
-            switch (map->kind) {
-            case HF_MAP_ADD: arg = fac->a_used[c] + v; break;
-            case HF_MAP_SUB: arg = fac->a_used[c] - v; break;
-            default: arg = v; break;
-            }
+            double arg = hf_map_arg(map, fac->a_used[c], f[3 * i + c]);
             if (!(arg > map->eps)) {
                 arg = map->eps;
                 st.clamped[c]++;

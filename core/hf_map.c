@@ -1,4 +1,5 @@
 /* hf_map.c: mappings between linear and log space (section 3.4). */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -71,4 +72,33 @@ void hf_map_format(const hf_map *m, char *buf, size_t len)
     case HF_MAP_SUB: snprintf(buf, len, "sub:%g,eps=%g", m->margin, m->eps); break;
     default: snprintf(buf, len, "log,eps=%g", m->eps); break;
     }
+}
+
+double hf_map_offset(const hf_map *m, double vmax)
+{
+    if (m->kind == HF_MAP_ADD)
+        return m->a;
+    if (m->kind == HF_MAP_SUB)
+        return vmax > 0.0 ? fmin((1.0 + m->margin) * vmax, FLT_MAX) : 1.0;
+    return 0.0;
+}
+
+double hf_map_arg(const hf_map *m, double a, double v)
+{
+    switch (m->kind) {
+    case HF_MAP_ADD: return a + v;
+    case HF_MAP_SUB: return a - v;
+    default: return v;
+    }
+}
+
+double hf_map_inverse(const hf_map *m, double a, double prod)
+{
+    double v;
+    switch (m->kind) {
+    case HF_MAP_ADD: v = prod - a; break;
+    case HF_MAP_SUB: v = a - prod; break;
+    default: v = prod; break;
+    }
+    return v > 0.0 ? v : 0.0;
 }
