@@ -564,11 +564,25 @@ static int eval_pairs(app *a, const char *mid, const json_t *body, json_t **valu
         return rc;
     *values = json_array();
     json_array_foreach(pairs, i, p) {
-        double d[3][3], rgb[3];
-        if (!json_is_object(p) || json_object_size(p) != 3) {
+        double d[3][3], rgb[3], uv[2];
+        json_t *juv = json_object_get(p, "uv");
+        if (!json_is_object(p) || json_object_size(p) != (juv ? 4u : 3u)) {
             rc = api_reject(e, GLINT_EINVAL, "invalid-parameter",
-                            "pairs[%zu] must be an object with exactly n, wi and wo", i);
+                            "pairs[%zu] must be an object with exactly n, wi and wo, and "
+                            "optionally uv", i);
             break;
+        }
+        if (juv) { /* texture coordinates in [0, 1]^2 */
+            for (int j = 0; j < 2; j++) {
+                json_t *ux = json_array_get(juv, (size_t)j);
+                uv[j] = json_is_number(ux) ? json_number_value(ux) : NAN;
+            }
+            if (!json_is_array(juv) || json_array_size(juv) != 2 || !(uv[0] >= 0.0) ||
+                !(uv[0] <= 1.0) || !(uv[1] >= 0.0) || !(uv[1] <= 1.0)) {
+                rc = api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                                "pairs[%zu].uv must be [u, v] with both in [0, 1]", i);
+                break;
+            }
         }
         for (int j = 0; j < 3 && !rc; j++) {
             int u = unit_vec(json_object_get(p, names[j]), d[j]);
@@ -582,7 +596,7 @@ static int eval_pairs(app *a, const char *mid, const json_t *body, json_t **valu
         }
         if (rc)
             break;
-        material_eval(&m, d[0], d[1], d[2], rgb);
+        material_eval_at(&m, juv ? uv : NULL, d[0], d[1], d[2], rgb);
         json_array_append_new(*values, json_pack("[f, f, f]", rgb[0], rgb[1], rgb[2]));
     }
     material_free(&m);

@@ -125,6 +125,20 @@ def test_03_coefficients_and_files(d):
     d.get("/api/v1/materials/%s/coefficients.png" % other["id"], headers=h, status=404)
 
 
+def test_03b_eval_at_texture_coordinates(d):
+    mid, h = S["maps"]["id"], dict(tok(S["view"]), **{"Content-Type": "application/json"})
+    pair = {"n": [0, 0, 1], "wi": [0.3, 0, 1], "wo": [-0.2, 0.1, 1]}
+    body = {"pairs": [dict(pair, uv=[u, 0.5]) for u in (0.05, 0.15, 0.25, 0.35)] + [pair]}
+    vals = d.post("/api/v1/materials/%s/eval" % mid, headers=h, data=json.dumps(body),
+                  status=200, schema="EvalResponse.json").json()["values"]
+    assert len({tuple(round(x, 9) for x in v) for v in vals[:4]}) > 1, vals  # it varies
+    assert all(x >= 0 for v in vals for x in v)
+    for bad in ([0.5], [1.5, 0.2], ["a", 0.1], None):
+        r = d.post("/api/v1/materials/%s/eval" % mid, headers=h,
+                   data=json.dumps({"pairs": [dict(pair, uv=bad)]}))
+        assert r.status_code == 422 and "uv" in r.json()["detail"], (bad, r.text)
+
+
 def test_04_parameters_are_checked(d):
     for params, word in (({"components": 0}, "components"), ({"map_res": 4096}, "map_res"),
                          ({"merge": "max"}, "merge"), ({"rounds": 2, "refine": 0}, "refine"),
