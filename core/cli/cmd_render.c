@@ -158,7 +158,7 @@ int cmd_eval(int argc, char **argv)
         else return fail(1, "usage: glint eval MATDIR --dirs FILE [-o OUT]");
     }
     if (argc < 2 || !dirs)
-        return fail(1, "usage: glint eval MATDIR --dirs FILE [-o OUT]  (FILE: lines 'nx ny nz wix wiy wiz wox woy woz', or 'wix wiy wiz wox woy woz' with n = +z)");
+        return fail(1, "usage: glint eval MATDIR --dirs FILE [-o OUT]  (FILE: lines 'nx ny nz wix wiy wiz wox woy woz [u v]', or 'wix wiy wiz wox woy woz' with n = +z; u v: texture coordinates, for materials that vary over the surface)");
     if (material_load(argv[1], &m, &e))
         return fail_err(&e);
     in = strcmp(dirs, "-") == 0 ? stdin : fopen(dirs, "r");
@@ -171,15 +171,19 @@ int cmd_eval(int argc, char **argv)
         goto done;
     }
     while (fgets(line, sizeof line, in)) {
-        double v[9], n[3], wi[3], wo[3], rgb[3];
+        double v[11], n[3], wi[3], wo[3], rgb[3];
         int got;
         lineno++;
         if (line[0] == '#' || line[strspn(line, " \t\r\n")] == '\0')
             continue;
-        got = sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3],
-                     &v[4], &v[5], &v[6], &v[7], &v[8]);
-        if (got != 6 && got != 9) {
-            rc = fail(1, "%s line %ld: expected 6 or 9 numbers", dirs, lineno);
+        got = sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2],
+                     &v[3], &v[4], &v[5], &v[6], &v[7], &v[8], &v[9], &v[10]);
+        if (got != 6 && got != 9 && got != 11) {
+            rc = fail(1, "%s line %ld: expected 6, 9 or 11 numbers", dirs, lineno);
+            goto done;
+        }
+        if (got == 11 && !(v[9] >= 0.0 && v[9] <= 1.0 && v[10] >= 0.0 && v[10] <= 1.0)) {
+            rc = fail(1, "%s line %ld: texture coordinates u v must be in [0, 1]", dirs, lineno);
             goto done;
         }
         for (int k = 0; k < got; k++)
@@ -208,7 +212,7 @@ int cmd_eval(int argc, char **argv)
                     vs[k][c] /= l;
             }
         }
-        material_eval(&m, n, wi, wo, rgb);
+        material_eval_at(&m, got == 11 ? v + 9 : NULL, n, wi, wo, rgb);
         fprintf(outf, "%.9g %.9g %.9g\n", rgb[0], rgb[1], rgb[2]);
     }
 done:

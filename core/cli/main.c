@@ -39,7 +39,7 @@ static void usage(FILE *f)
           "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH]\n"
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
-          "  eval MATDIR --dirs FILE [-o OUT]    evaluate at direction pairs\n"
+          "  eval MATDIR --dirs FILE [-o OUT]    evaluate at direction pairs (and u v)\n"
           "  export-samples scene.json [--paintings DIR] [--channel C] -o samples.txt\n"
           "  fit-samples samples.txt -o MATDIR [--eval samples.txt [--eval-out F]] [fit options]\n"
           "  demo [-o DIR]                       paint the sphere, fit, render new views\n"

@@ -91,7 +91,16 @@ expect_ok "eval" "$G" eval "$T/mat" --dirs "$T/dirs.txt"
 printf '0 0 1 nan 0 0.8 0 0 1\n' > "$T/dirsnan.txt"
 expect_err "eval non-finite direction" 1 "not finite" "$G" eval "$T/mat" --dirs "$T/dirsnan.txt"
 printf '0 0 1 1 2\n' > "$T/dirsshort.txt"
-expect_err "eval malformed line" 1 "expected 6 or 9 numbers" "$G" eval "$T/mat" --dirs "$T/dirsshort.txt"
+expect_err "eval malformed line" 1 "expected 6, 9 or 11 numbers" "$G" eval "$T/mat" --dirs "$T/dirsshort.txt"
+# several materials over the texture coordinates: maps, and eval at u v
+expect_ok "fit maps" "$G" fit "$T/scene.json" --paintings "$T/paintsv" --method maps --res 16 --map_res 16 --components 2 --rounds 1 -o "$T/matsv" --cache-dir "$T/cache" -q
+[ -f "$T/matsv/coefficients.exr" ] && ok "maps writes its coefficient textures" || bad "maps writes its coefficient textures"
+printf '0 0 1  0.3 0 1  -0.2 0.1 1  0.05 0.5\n0 0 1  0.3 0 1  -0.2 0.1 1  0.17 0.5\n0 0 1  0.3 0 1  -0.2 0.1 1\n' > "$T/dirsuv.txt"
+expect_ok "eval at texture coordinates" "$G" eval "$T/matsv" --dirs "$T/dirsuv.txt"
+[ "$(sed -n 1p "$T/out")" != "$(sed -n 2p "$T/out")" ] && ok "a map varies over the surface" || bad "a map varies over the surface"
+printf '0 0 1  0.3 0 1  -0.2 0.1 1  1.5 0.5\n' > "$T/dirsbaduv.txt"
+expect_err "eval texture coordinates out of range" 1 "u v must be in" "$G" eval "$T/matsv" --dirs "$T/dirsbaduv.txt"
+expect_err "maps rounds without refine" 1 "needs refine" "$G" fit "$T/scene.json" --paintings "$T/paintsv" --method maps --rounds 2 --refine 0 -o "$T/x" -q
 printf '{"format":"glint-material","version":1,"method":"hf3","res":64' > "$T/mat3/material.json"
 expect_err "corrupt material" 1 "material.json" "$G" eval "$T/mat3" --dirs "$T/dirs.txt"
 
