@@ -208,6 +208,22 @@ int samples_build(const gbuf *g, const scene_view *views, int nviews,
     return rc;
 }
 
+/* Append sample i of `all` to out (room reserved). */
+static void copy_sample(samples *out, const samples *all, int i)
+{
+    size_t k = (size_t)out->n;
+    out->view[k] = all->view[i];
+    out->pixel[k] = all->pixel[i];
+    memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
+    memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
+    memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
+    memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
+    memcpy(out->uv + 2 * k, all->uv + 2 * (size_t)i, 2 * sizeof(float));
+    out->cos_i[k] = all->cos_i[i];
+    out->intensity[k] = all->intensity[i];
+    out->n++;
+}
+
 int samples_subset(const samples *all, const unsigned char *use, const char scene_hash[33],
                    samples *out, glint_err *err)
 {
@@ -223,19 +239,9 @@ int samples_subset(const samples *all, const unsigned char *use, const char scen
     if (n && (rc = samples_reserve(out, n, err)))
         goto fail;
     for (int i = 0; i < all->n; i++) {
-        size_t k = (size_t)out->n;
         if (!use[all->view[i]])
             continue;
-        out->view[k] = all->view[i];
-        out->pixel[k] = all->pixel[i];
-        memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->uv + 2 * k, all->uv + 2 * (size_t)i, 2 * sizeof(float));
-        out->cos_i[k] = all->cos_i[i];
-        out->intensity[k] = all->intensity[i];
-        out->n++;
+        copy_sample(out, all, i);
     }
     for (int v = 0; v < all->nviews; v++)
         out->used[v] = use[v] && all->used[v];
@@ -273,19 +279,9 @@ int samples_pick(const samples *all, const unsigned char *keep, const char *tag,
     if (n && (rc = samples_reserve(out, n, err)))
         goto fail;
     for (int i = 0; i < all->n; i++) {
-        size_t k = (size_t)out->n;
         if (!keep[i])
             continue;
-        out->view[k] = all->view[i];
-        out->pixel[k] = all->pixel[i];
-        memcpy(out->nrm + 3 * k, all->nrm + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->wi + 3 * k, all->wi + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->wo + 3 * k, all->wo + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->pos + 3 * k, all->pos + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out->uv + 2 * k, all->uv + 2 * (size_t)i, 2 * sizeof(float));
-        out->cos_i[k] = all->cos_i[i];
-        out->intensity[k] = all->intensity[i];
-        out->n++;
+        copy_sample(out, all, i);
     }
     memcpy(out->used, all->used, (size_t)all->nviews);
     /* the pattern's hash, derived: samples_end hashes it with the views */
