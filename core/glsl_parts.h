@@ -10,6 +10,7 @@
  *                    plane|, clamped to [0, 1] (hf_project)
  *   GLSL_FACTOR(S)   glint_factor(row, u): row `row` of sampler S read with
  *                    hf.h's node hats (hf_hat)
+ *   GLSL_NODES(S)    glint_nodes(r0, uv): a spatial factor's log nodes, bilinear
  *   GLSL_MAIN        main(): glint_material(n, wi, wo) for the point light */
 #ifndef GLINT_GLSL_PARTS_H
 #define GLINT_GLSL_PARTS_H
@@ -53,6 +54,23 @@
     "    vec3 a = texelFetch(" S ", ivec2(k, row), 0).rgb;\n"                                   \
     "    vec3 b = texelFetch(" S ", ivec2(k + 1, row), 0).rgb;\n"                               \
     "    return (1.0 - t) * a + t * b;\n"                                                       \
+    "}\n"                                                                                       \
+    "\n"
+
+/* glint_nodes(r0, uv): bilinear between the u_sres x u_sres nodes of a
+ * spatial factor stored from row r0 of texture S (node (i, j) at row
+ * r0 + j, column i, at (u, v) = (i, j) / (u_sres - 1)); uv clamped. */
+#define GLSL_NODES(S)                                                                           \
+    "vec3 glint_nodes(int r0, vec2 uv)\n"                                                       \
+    "{\n"                                                                                       \
+    "    vec2 x = clamp(uv, 0.0, 1.0) * float(u_sres - 1);\n"                                   \
+    "    int i = min(int(floor(x.x)), u_sres - 2), j = r0 + min(int(floor(x.y)), u_sres - 2);\n" \
+    "    vec2 t = x - vec2(float(i), float(j - r0));\n"                                          \
+    "    vec3 a = texelFetch(" S ", ivec2(i, j), 0).rgb;\n"                                      \
+    "    vec3 b = texelFetch(" S ", ivec2(i + 1, j), 0).rgb;\n"                                  \
+    "    vec3 c = texelFetch(" S ", ivec2(i, j + 1), 0).rgb;\n"                                  \
+    "    vec3 d = texelFetch(" S ", ivec2(i + 1, j + 1), 0).rgb;\n"                              \
+    "    return (1.0 - t.y) * ((1.0 - t.x) * a + t.x * b) + t.y * ((1.0 - t.x) * c + t.x * d);\n" \
     "}\n"                                                                                       \
     "\n"
 

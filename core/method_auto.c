@@ -10,6 +10,7 @@
 #include "clock.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
+#include "method_hybrid.h"
 #include "method_maps.h"
 #include "scene.h"
 
@@ -18,10 +19,12 @@ static const method_param auto_params_table[] = {
      .description = "texels per 1D factor of every candidate",
      .offset = offsetof(auto_params, res), .min = HF_RES_MIN, .max = HF_RES_MAX},
     {.name = "s_res", .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "nodes per side of the four-factor candidate's spatial factor",
+     .description = "nodes per side of the spatial factor of the four-factor candidates "
+                    "(hf4, hybrid)",
      .offset = offsetof(auto_params, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
     {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "at most this many products in the material-maps candidate",
+     .description = "at most this many products in the material-maps candidates (maps, "
+                    "hybrid)",
      .offset = offsetof(auto_params, components), .min = 1, .max = MATMAP_MAX},
     {.name = "threshold", .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "a richer model is taken only when it lowers the held-out RMS by more "
@@ -55,16 +58,26 @@ static void auto_params_default(void *params)
 }
 
 /* The candidates' parameters. */
-static void candidates(const auto_params *p, fit_params *fp, hf4_params_t *hp, maps_params *mp)
+typedef struct cands {
+    fit_params fp;
+    hf4_params_t hp;
+    maps_params mp;
+    hybrid_params yp;
+} cands;
+
+static void candidates(const auto_params *p, cands *c)
 {
-    fit_params_default(fp);
-    fp->res = p->res;
-    method_hf4.params_default(hp);
-    hp->res = p->res;
-    hp->sres = p->sres;
-    method_maps.params_default(mp);
-    mp->hf = *fp;
-    mp->components = p->components;
+    fit_params_default(&c->fp);
+    c->fp.res = p->res;
+    method_hf4.params_default(&c->hp);
+    c->hp.res = p->res;
+    c->hp.sres = p->sres;
+    method_maps.params_default(&c->mp);
+    c->mp.hf = c->fp;
+    c->mp.components = p->components;
+    method_hybrid.params_default(&c->yp);
+    c->yp.h = c->hp; /* hf4's decomposition serves the hybrid's products */
+    c->yp.components = p->components;
 }
 
 /* ---- levels: the split, then each candidate's precomputation on the kept pixels ---------- */
@@ -181,22 +194,18 @@ static void hf3d_key(const void *params, const samples *s, const char *prev_key,
                      size_t len)
 {
     const auto_params *p = params;
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
-    candidates(p, &fp, &hp, &mp);
-    snprintf(key, len, "%s/hf3:%d:%.17g:%d:%.17g", prev_key, fp.res, fp.lambda, (int)fp.route,
-             fp.rcond);
+    cands cs;
+    candidates(p, &cs);
+    snprintf(key, len, "%s/hf3:%d:%.17g:%d:%.17g", prev_key, cs.fp.res, cs.fp.lambda,
+             (int)cs.fp.route, cs.fp.rcond);
     (void)s;
 }
 
 static int hf3d_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
-    candidates(in->params, &fp, &hp, &mp);
-    return candidate_build(in, &method_hf3, 0, NULL, &fp, out, err);
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_hf3, 0, NULL, &cs.fp, out, err);
 }
 
 static void hf3o_key(const void *params, const samples *s, const char *prev_key, char *key,
@@ -209,36 +218,30 @@ static void hf3o_key(const void *params, const samples *s, const char *prev_key,
 
 static int hf3o_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
-    candidates(in->params, &fp, &hp, &mp);
-    return candidate_build(in, &method_hf3, 1, in->prev + 1, &fp, out, err);
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_hf3, 1, in->prev + 1, &cs.fp, out, err);
 }
 
 static void hf4d_key(const void *params, const samples *s, const char *prev_key, char *key,
                      size_t len)
 {
     const auto_params *p = params;
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
+    cands cs;
     const char *split_key_end = strchr(prev_key, '/');
-    candidates(p, &fp, &hp, &mp);
+    candidates(p, &cs);
     /* keyed from the split, not from hf3's levels before it */
     snprintf(key, len, "%.*s/hf4:%d:%d:%.17g:%.17g:%.17g",
              split_key_end ? (int)(split_key_end - prev_key) : (int)strlen(prev_key), prev_key,
-             hp.res, hp.sres, hp.lambda, hp.lambda_s, hp.rcond);
+             cs.hp.res, cs.hp.sres, cs.hp.lambda, cs.hp.lambda_s, cs.hp.rcond);
     (void)s;
 }
 
 static int hf4d_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
-    candidates(in->params, &fp, &hp, &mp);
-    return candidate_build(in, &method_hf4, 0, NULL, &hp, out, err);
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_hf4, 0, NULL, &cs.hp, out, err);
 }
 
 static const method_level auto_levels[] = {
@@ -249,6 +252,8 @@ static const method_level auto_levels[] = {
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
+
+#define NCAND 4 /* hf3, hf4, maps, hybrid: cheapest first */
 
 /* The held-out RMS of material m: per unit light, RGB, over the held
  * samples. */
@@ -282,25 +287,24 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
     const auto_params *p = in->params;
     const split *x = in->levels[0];
     const samples *s = in->s, *tr = &x->train;
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
+    cands cs;
     float *trgb = NULL;
-    material cand[3];
-    const method *ms[3] = {&method_hf3, &method_hf4, &method_maps};
-    const void *ps[3] = {&fp, &hp, &mp};
-    double held[3], secs[3], t0 = glint_now();
+    material cand[NCAND];
+    const method *ms[NCAND] = {&method_hf3, &method_hf4, &method_maps, &method_hybrid};
+    const void *ps[NCAND] = {&cs.fp, &cs.hp, &cs.mp, &cs.yp};
+    double held[NCAND], secs[NCAND], t0 = glint_now();
     int chosen = 0, rc = 0;
     json_t *list, *choice;
 
     memset(out, 0, sizeof *out);
     memset(cand, 0, sizeof cand);
-    candidates(p, &fp, &hp, &mp);
+    candidates(p, &cs);
     /* coefficient texels no more than a sixteenth of the samples: finer
      * textures hold texels that few samples reach, fitted to the painted
      * views' own residuals (tests/unit/test_auto.c) */
-    mp.map_res = (int)floor(sqrt(tr->n / 16.0));
-    mp.map_res = mp.map_res < 8 ? 8 : mp.map_res > 128 ? 128 : mp.map_res;
+    cs.mp.map_res = (int)floor(sqrt(tr->n / 16.0));
+    cs.mp.map_res = cs.mp.map_res < 8 ? 8 : cs.mp.map_res > 128 ? 128 : cs.mp.map_res;
+    cs.yp.map_res = cs.mp.map_res;
     if (!(trgb = malloc(3 * (size_t)tr->n * sizeof *trgb)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     for (int i = 0, k = 0; i < s->n; i++)
@@ -308,14 +312,15 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
             memcpy(trgb + 3 * (size_t)k, in->rgb + 3 * (size_t)i, 3 * sizeof *trgb);
             k++;
         }
-    for (int c = 0; c < 3; c++) {
+    for (int c = 0; c < NCAND; c++) {
         method_fit_in ci = *in;
         const void *lv[2];
         const char *ky[2];
         cache_how how[2];
         double spent[2];
         cache_disk disk[2];
-        int base = c == 1 ? 3 : 1, nl = c == 1 ? 1 : 2;
+        int spatial = ms[c]->levels == method_hf4.levels; /* hf4, hybrid */
+        int base = spatial ? 3 : 1, nl = spatial ? 1 : 2;
         for (int l = 0; l < nl; l++) {
             lv[l] = in->levels[base + l];
             ky[l] = in->keys[base + l];
@@ -343,7 +348,7 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
      * choice by more than the threshold (hf4 and maps are alternatives:
      * each is measured against the choice so far) */
     list = json_array();
-    for (int c = 0; c < 3; c++) {
+    for (int c = 0; c < NCAND; c++) {
         int take = c > 0 && held[c] < held[chosen] * (1.0 - p->threshold) &&
                    held[chosen] - held[c] > p->floor;
         json_array_append_new(
@@ -361,7 +366,7 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
                        x->by_views ? "views" : "pixels", "held_out_every", p->every,
                        "held_out_samples", x->nheld, "fitted_samples", tr->n,
                        "rule",
-                       "cheapest first (hf3, hf4, maps); a richer one is taken when its "
+                       "cheapest first (hf3, hf4, maps, hybrid); a richer one is taken when its "
                        "held-out RMS is below the current choice's by more than the "
                        "threshold (a fraction) and the floor; the material is the chosen "
                        "candidate's fit of the samples not held out");
@@ -381,7 +386,7 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
     json_object_set_new(out->info, "choice", choice);
     json_object_set_new(json_object_get(out->info, "seconds"), "auto", json_real(glint_now() - t0));
 done:
-    for (int c = 0; c < 3; c++)
+    for (int c = 0; c < NCAND; c++)
         material_free(&cand[c]);
     free(trgb);
     return rc;
@@ -389,14 +394,13 @@ done:
 
 static size_t auto_fit_bytes(const void *params, long nsamples)
 {
-    fit_params fp;
-    hf4_params_t hp;
-    maps_params mp;
+    cands cs;
     size_t b = 0;
-    candidates(params, &fp, &hp, &mp);
-    b += method_fit_bytes(&method_hf3, &fp, nsamples);
-    b += method_fit_bytes(&method_hf4, &hp, nsamples);
-    b += method_fit_bytes(&method_maps, &mp, nsamples);
+    candidates(params, &cs);
+    b += method_fit_bytes(&method_hf3, &cs.fp, nsamples);
+    b += method_fit_bytes(&method_hf4, &cs.hp, nsamples);
+    b += method_fit_bytes(&method_maps, &cs.mp, nsamples);
+    b += method_fit_bytes(&method_hybrid, &cs.yp, nsamples);
     return b;
 }
 
@@ -410,8 +414,8 @@ const method method_auto = {
     .title = "Automatic: the simplest model that the painting needs",
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =
-        "Fits one material (hf3), one material with a colour texture (hf4) and material maps "
-        "(maps) to the painted pixels but one in `every`, and keeps the cheapest whose error "
+        "Fits one material (hf3), one material with a colour texture (hf4), material maps "
+        "(maps) and maps of textured materials (hybrid) to the painted pixels but one in `every`, and keeps the cheapest whose error "
         "on the held-out pixels is not beaten by a richer one by more than `threshold`. The "
         "material is the chosen method's; info.choice lists every candidate's held-out and "
         "painted RMS and why it was or was not taken.",

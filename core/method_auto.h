@@ -10,6 +10,7 @@
  *   hf3   one material (method_hf3.h)
  *   hf4   one material times a spatial factor s(u, v) (method_hf4.h)
  *   maps  a sum of products weighted by coefficient textures (method_maps.h)
+ *   hybrid  maps whose products are hf4's (method_hybrid.h)
  * and each is measured on the held-out pixels (RMS, per unit light, RGB,
  * the material evaluated at each pixel's texture coordinates).  The choice
  * starts at hf3; a richer candidate replaces it only when its held-out RMS
@@ -21,15 +22,15 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * hf4 and maps are alternatives, not steps of one chain, so each is
- * measured against the choice so far.  The material is the chosen
+ * hf4, maps and hybrid are alternatives, not steps of one chain, so each
+ * is measured against the choice so far.  The material is the chosen
  * candidate's own (its manifest names that method); info.choice lists
  * every candidate's held-out and painted RMS, fit time and whether it was
  * taken, and info.chosen_params its parameters.
  *
  * Levels (every one on the kept pixels, a pattern of its own:
  * samples_pick): split, hf3's decomposition and operator, hf4's
- * decomposition; maps reuses hf3's.  The auto method makes no material of
+ * decomposition; maps reuses hf3's, hybrid hf4's.  The auto method makes no material of
  * its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
@@ -40,8 +41,8 @@ extern const method method_auto;
 
 typedef struct auto_params {
     int res;           /* texels per 1D factor, every candidate */
-    int sres;          /* hf4's spatial nodes per side */
-    int components;    /* maps' most products */
+    int sres;          /* hf4's (and hybrid's) spatial nodes per side */
+    int components;    /* maps' and hybrid's most products */
     double threshold;  /* fraction a richer model must gain on held-out pixels */
     double floor;      /* and at least this much (RMS per unit light) */
     int every;         /* one pixel in this many held out */

@@ -12,39 +12,12 @@
 #include "hf4.h"
 #include "img.h"
 #include "material.h"
-#include "method_hf3_int.h"
-#include "method_hf4.h"
+#include "method_hf4_int.h"
 
 /* ---- parameters ------------------------------------------------------------------ */
 
 static const method_param hf4_params[] = {
-    {.name = "res", .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "texels per 1D factor (p, q, r)", .offset = offsetof(hf4_params_t, res),
-     .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "s_res", .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "nodes per side of the spatial factor s(u, v) over the texture "
-                    "coordinates: the unknowns grow as s_res^2 and the precomputation as "
-                    "their cube",
-     .offset = offsetof(hf4_params_t, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
-    {.name = "lambda", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "weight of the smoothing rows of p, q and r",
-     .offset = offsetof(hf4_params_t, lambda), .min = 0.0, .max = HF_LAMBDA_MAX},
-    {.name = "lambda_s", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "weight of the 2D Laplacian of s: it also fills the nodes no sample "
-                    "reaches",
-     .offset = offsetof(hf4_params_t, lambda_s), .min = 0.0, .max = HF_LAMBDA_MAX},
-    {.name = "mapping", .option = "map", .type = METHOD_PARAM_TEXT, .affects = "fit",
-     .description = "mapping to log space (section 3.4)",
-     .offset = offsetof(hf4_params_t, map), .syntax = "log | add[:a] | sub[:margin], "
-                                                      "optionally ,eps=E",
-     .examples = hf3_map_examples, .parse = hf3_map_parse, .format = hf3_map_format},
-    {.name = "model", .type = METHOD_PARAM_ENUM, .affects = "fit",
-     .description = "radiance: factors approximate the painted value; brdf: painted / cos_i",
-     .offset = offsetof(hf4_params_t, model), .values = hf3_model_values},
-    {.name = "rcond", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "relative singular-value cutoff: the gauge and nodes no sample or "
-                    "smoothing reaches fall under it",
-     .offset = offsetof(hf4_params_t, rcond), .min = 1e-16, .max = 1.0, .max_exclusive = 1},
+    HF4_PARAM_ROWS(hf4_params_t, ),
 };
 
 static const method_preset hf4_presets[] = {
@@ -119,13 +92,11 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
     return 0;
 }
 
-static const method_level hf4_levels[] = {
+const method_level hf4_levels[HF4_NLEVELS] = {
     {.name = "decomposition", .progress = 0.3, .key = level_key, .build = level_build},
 };
 
 /* ---- the fit -------------------------------------------------------------------------- */
-
-extern const material_ops hf4_material_ops;
 
 static int hf4_fit_op(const method_fit_in *in, material *out, glint_err *err)
 {
@@ -169,7 +140,7 @@ static int hf4_fit_op(const method_fit_in *in, material *out, glint_err *err)
 
 /* Memory of a cold fit: the normal (or dense) matrix and the eigenvectors,
  * the design, the pattern. */
-static size_t hf4_fit_bytes(const void *params, long nsamples)
+size_t hf4_fit_bytes(const void *params, long nsamples)
 {
     const hf4_params_t *p = params;
     double n = 3.0 * p->res + (double)p->sres * p->sres, N = (double)nsamples;
@@ -177,7 +148,7 @@ static size_t hf4_fit_bytes(const void *params, long nsamples)
     return b >= (double)SIZE_MAX ? SIZE_MAX : (size_t)b;
 }
 
-static int hf4_holdout_ok(const void *params)
+int hf4_holdout_ok(const void *params)
 {
     return ((const hf4_params_t *)params)->sres <= 32;
 }
@@ -203,7 +174,7 @@ const method method_hf4 = {
     .npresets = (int)(sizeof hf4_presets / sizeof hf4_presets[0]),
     .params_default = hf4_params_default,
     .levels = hf4_levels,
-    .nlevels = 1,
+    .nlevels = HF4_NLEVELS,
     .fit = hf4_fit_op,
     .mat = &hf4_material_ops,
     .holdout_ok = hf4_holdout_ok,

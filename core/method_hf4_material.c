@@ -242,18 +242,7 @@ const char hf4_glsl_frag[] =
     GLSL_UNIT
     GLSL_TANGENT_LEN
     GLSL_FACTOR("u_factors")
-    "vec3 glint_spatial(vec2 uv)\n"
-    "{\n"
-    "    vec2 x = clamp(uv, 0.0, 1.0) * float(u_sres - 1);\n"
-    "    int i = min(int(floor(x.x)), u_sres - 2), j = min(int(floor(x.y)), u_sres - 2);\n"
-    "    vec2 t = x - vec2(float(i), float(j));\n"
-    "    vec3 a = texelFetch(u_factors, ivec2(i, 3 + j), 0).rgb;\n"
-    "    vec3 b = texelFetch(u_factors, ivec2(i + 1, 3 + j), 0).rgb;\n"
-    "    vec3 c = texelFetch(u_factors, ivec2(i, 4 + j), 0).rgb;\n"
-    "    vec3 d = texelFetch(u_factors, ivec2(i + 1, 4 + j), 0).rgb;\n"
-    "    return (1.0 - t.y) * ((1.0 - t.x) * a + t.x * b) + t.y * ((1.0 - t.x) * c + t.x * d);\n"
-    "}\n"
-    "\n"
+    GLSL_NODES("u_factors")
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
     "    float ci = dot(n, wi), co = dot(n, wo);\n"
@@ -262,7 +251,7 @@ const char hf4_glsl_frag[] =
     "    vec3 h = glint_unit(wi + wo);\n"
     "    vec3 s = glint_factor(0, glint_tangent_len(wi, n)) +\n"
     "             glint_factor(1, glint_tangent_len(h, n)) +\n"
-    "             glint_factor(2, glint_tangent_len(wo, n)) + glint_spatial(v_uv);\n"
+    "             glint_factor(2, glint_tangent_len(wo, n)) + glint_nodes(3, v_uv);\n"
     "    vec3 prod = exp(min(s, vec3(88.0)));\n"
     "    vec3 v = u_map_kind == 1 ? prod - u_a : (u_map_kind == 2 ? u_a - prod : prod);\n"
     "    v = max(v, vec3(0.0));\n"

@@ -9,45 +9,14 @@
 
 #include "clock.h"
 #include "method_hf3_int.h"
+#include "method_maps_int.h"
 #include "uvtex.h"
 
-extern const material_ops maps_material_ops;
-
-static const char *const merge_values[] = {"lsq", "min", NULL};
+const char *const maps_merge_values[] = {"lsq", "min", NULL};
 
 static const method_param maps_params_table[] = {
     HF3_PARAM_ROWS(maps_params, hf.),
-    {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "at most this many products (materials) summed over the surface; each "
-                    "costs one fit on the cached operator",
-     .offset = offsetof(maps_params, components), .min = 1, .max = MATMAP_MAX},
-    {.name = "merge", .type = METHOD_PARAM_ENUM, .affects = "fit",
-     .description = "how per-sample scales become a coefficient texture: lsq, least squares "
-                    "per texel over every view (the measured best); min, the smallest value "
-                    "over views (seed 000)",
-     .offset = offsetof(maps_params, merge), .values = merge_values},
-    {.name = "map_res", .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "coefficient texture resolution (texels per side) over the surface's "
-                    "texture coordinates",
-     .offset = offsetof(maps_params, map_res), .min = MAPS_RES_MIN, .max = MAPS_RES_MAX},
-    {.name = "tolerance", .type = METHOD_PARAM_NUMBER, .affects = "fit",
-     .description = "stop adding products once the residual's RMS falls below this fraction "
-                    "of the painting's",
-     .offset = offsetof(maps_params, tol), .min = 0.0, .max = 1.0},
-    {.name = "refine", .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "sweeps of the joint refinement: every coefficient of every product "
-                    "adjusted together to the painting once the products are found (0: none)",
-     .offset = offsetof(maps_params, refine), .min = 0, .max = MATMAP_REFINE_MAX},
-    {.name = "rounds", .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "back-fitting rounds: every product refitted to what the others leave, "
-                    "then the coefficients again; stops early when a round gains under 1% "
-                    "(0: none; needs refine)",
-     .offset = offsetof(maps_params, rounds), .min = 0, .max = MATMAP_ROUNDS_MAX},
-    {.name = "smooth", .type = METHOD_PARAM_NUMBER, .affects = "fit",
-     .description = "how strongly neighbouring coefficient texels are held together in the "
-                    "refinement: higher predicts new views better, lower fits the painted "
-                    "ones closer (0: not at all)",
-     .offset = offsetof(maps_params, smooth), .min = 0.0, .max = MATMAP_SMOOTH_MAX},
+    MAPS_PARAM_ROWS(maps_params),
 };
 
 static const method_preset maps_presets[] = {
@@ -73,24 +42,31 @@ static void maps_params_default(void *p)
     mp->smooth = d.smooth;
 }
 
-static int maps_params_check(const void *params, glint_err *err)
+int maps_knobs_check(const matmap_params *q, glint_err *err)
 {
-    const maps_params *mp = params;
-    if (mp->rounds > 0 && mp->refine < 1)
+    if (q->rounds > 0 && q->refine < 1)
         return glint_err_set(err, GLINT_EINVAL,
                              "rounds %d needs refine >= 1: back-fitting refines the "
-                             "coefficients after every round", mp->rounds);
-    if ((long)mp->components * mp->map_res > MAPS_ROWS_MAX)
+                             "coefficients after every round", q->rounds);
+    if ((long)q->components * q->res > MAPS_ROWS_MAX)
         return glint_err_set(err, GLINT_EINVAL,
                              "components x map_res = %ld exceeds %d: lower one of them",
-                             (long)mp->components * mp->map_res, MAPS_ROWS_MAX);
+                             (long)q->components * q->res, MAPS_ROWS_MAX);
     return 0;
+}
+
+static int maps_params_check(const void *params, glint_err *err)
+{
+    matmap_params q;
+    MAPS_KNOBS(&q, (const maps_params *)params);
+    return maps_knobs_check(&q, err);
 }
 
 /* ---- fit ------------------------------------------------------------------------------ */
 
 typedef struct src_ctx {
     const method_fit_in *in;
+    const method *product;
 } src_ctx;
 
 static int src_fit(void *cls, const float *rgb, material *out, glint_err *err)
@@ -98,22 +74,25 @@ static int src_fit(void *cls, const float *rgb, material *out, glint_err *err)
     const src_ctx *x = cls;
     method_fit_in in = *x->in;
     in.rgb = rgb;
-    return method_hf3.fit(&in, out, err);
+    return x->product->fit(&in, out, err);
 }
 
-/* A product per unit light at every sample: what its fit fitted. */
+/* A product per unit light at every sample, at the sample's texture
+ * coordinates: what its fit fitted. */
 static int src_predict(void *cls, const material *m, float *f, glint_err *err)
 {
     const samples *s = ((const src_ctx *)cls)->in->s;
     (void)err;
     for (int i = 0; i < s->n; i++) {
-        double n[3], wi[3], wo[3], v[3];
+        double n[3], wi[3], wo[3], v[3], uv[2];
         for (int c = 0; c < 3; c++) {
             n[c] = s->nrm[3 * (size_t)i + c];
             wi[c] = s->wi[3 * (size_t)i + c];
             wo[c] = s->wo[3 * (size_t)i + c];
         }
-        material_eval(m, n, wi, wo, v);
+        uv[0] = s->uv[2 * (size_t)i];
+        uv[1] = s->uv[2 * (size_t)i + 1];
+        material_eval_at(m, uv, n, wi, wo, v);
         for (int c = 0; c < 3; c++)
             f[3 * (size_t)i + c] = (float)v[c];
     }
@@ -147,26 +126,18 @@ static void painted_errors(const material *m, const samples *s, const float *rgb
     *max_abs = mx;
 }
 
-static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
+int maps_fit_with(const method_fit_in *in, const method *self, const method *product,
+                  const matmap_params *q, material *out, glint_err *err)
 {
-    const maps_params *mp = in->params;
-    src_ctx x = {in};
+    src_ctx x = {in, product};
     matmap_source src = {in->s, src_fit, src_predict, &x};
-    matmap_params q;
     matmap mm;
     json_t *info, *pre, *comps, *tim, *errs, *stops;
     double t0 = glint_now(), rms, mx;
     int rc;
 
     memset(out, 0, sizeof *out);
-    q.components = mp->components;
-    q.merge = mp->merge;
-    q.res = mp->map_res;
-    q.tol = mp->tol;
-    q.refine = mp->refine;
-    q.rounds = mp->rounds;
-    q.smooth = mp->smooth;
-    if ((rc = matmap_fit_source(&src, in->rgb, &q, &mm, err)))
+    if ((rc = matmap_fit_source(&src, in->rgb, q, &mm, err)))
         return rc;
     /* the products' own reports: the first holds the precomputation's */
     pre = json_deep_copy(json_object_get(mm.comp[0].info, "precomputation"));
@@ -183,7 +154,7 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
     }
     stops = json_pack("{s:s, s:f, s:i, s:f, s:s, s:i, s:f, s:f, s:i}", "reason", mm.stop,
                       "residual_rel_rms", mm.rel_rms[mm.k], "components", mm.k, "tolerance",
-                      mp->tol, "refine", mm.refine, "refine_sweeps", mm.refine_sweeps,
+                      q->tol, "refine", mm.refine, "refine_sweeps", mm.refine_sweeps,
                       "model_rel_rms_greedy", mm.model_rel_rms[0], "model_rel_rms_refined",
                       mm.model_rel_rms[1], "rounds", mm.rounds);
     if (stops && mm.rounds > 0) {
@@ -192,7 +163,7 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
             json_array_append_new(rr, json_real(mm.round_rel_rms[i]));
         json_object_set_new(stops, "model_rel_rms_per_round", rr);
     }
-    if ((rc = maps_material_init(out, &mm, NULL, err))) {
+    if ((rc = maps_material_init(out, self, &mm, NULL, err))) {
         matmap_free(&mm);
         json_decref(pre);
         json_decref(comps);
@@ -203,13 +174,26 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
     errs = json_pack("{s:f, s:f, s:f}", "rms_painted", rms, "max_abs_painted", mx,
                      "residual_rel_rms", maps_matmap(out)->rel_rms[maps_matmap(out)->k]);
     tim = json_pack("{s:f, s:f}", "maps", maps_matmap(out)->seconds, "fit", glint_now() - t0);
-    info = json_pack("{s:o, s:o, s:o, s:o, s:o, s:o}", "params",
-                     method_params_to_json(&method_maps, mp), "precomputation",
+    info = json_pack("{s:o, s:o, s:o, s:o, s:o, s:o, s:s}", "params",
+                     method_params_to_json(self, in->params), "precomputation",
                      pre ? pre : json_object(), "seconds", tim, "errors", errs, "components",
-                     comps, "stop", stops);
+                     comps, "stop", stops, "product", product->name);
     json_decref(out->info); /* material_init's empty object */
     out->info = info;
     return 0;
+}
+
+static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
+{
+    matmap_params q;
+    MAPS_KNOBS(&q, (const maps_params *)in->params);
+    return maps_fit_with(in, &method_maps, &method_hf3, &q, out, err);
+}
+
+/* residual, prediction, scales and pairs per sample; textures */
+size_t maps_extra_bytes(const matmap_params *q, long nsamples)
+{
+    return (size_t)nsamples * 64 + (size_t)(q->components + 2) * q->res * q->res * 8;
 }
 
 /* The maps need texture coordinates: samples imported without them are
@@ -217,10 +201,9 @@ static int maps_fit(const method_fit_in *in, material *out, glint_err *err)
 static size_t maps_fit_bytes(const void *params, long nsamples)
 {
     const maps_params *mp = params;
-    size_t b = hf3_fit_bytes(&mp->hf, nsamples);
-    /* residual, prediction, scales and pairs per sample; textures */
-    b += (size_t)nsamples * 64 + (size_t)(mp->components + 2) * mp->map_res * mp->map_res * 8;
-    return b;
+    matmap_params q;
+    MAPS_KNOBS(&q, mp);
+    return hf3_fit_bytes(&mp->hf, nsamples) + maps_extra_bytes(&q, nsamples);
 }
 
 static int maps_holdout_ok(const void *params)

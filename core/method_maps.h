@@ -65,16 +65,20 @@ typedef struct maps_params {
 } maps_params;
 
 typedef struct maps_material {
-    matmap mm;                   /* products (hf3 materials) and coefficient textures */
+    matmap mm;                   /* products (hf3 or hf4 materials) and coefficient textures */
+    const method *product;       /* the products' method */
     double mean[MATMAP_MAX];     /* each texture's mean: the coefficients without uv */
 } maps_material;
 
-/* The maps of a maps material (NULL for another method's). */
+/* The maps of a material of maps (method maps or hybrid; NULL for another
+ * method's). */
 const matmap *maps_matmap(const material *m);
 
-/* A maps material from a fitted matmap (moved: *mm is zeroed) and info
- * (one reference stolen; may be NULL).  GLINT_ENOMEM leaves *m empty. */
-int maps_material_init(material *m, matmap *mm, json_t *info, glint_err *err);
+/* A material of method `self` (maps or hybrid) from a fitted matmap
+ * (moved: *mm is zeroed; its products all of one method) and info (one
+ * reference stolen; may be NULL).  GLINT_ENOMEM leaves *m empty. */
+int maps_material_init(material *m, const method *self, matmap *mm, json_t *info,
+                       glint_err *err);
 
 /* The fragment stage of a maps material (GLSL ES 3.00). */
 extern const char maps_glsl_frag[];

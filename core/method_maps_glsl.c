@@ -8,21 +8,13 @@
 
 const char maps_glsl_frag[] =
     "#version 300 es\n"
-    "// glint_material.frag: a glint material map (GLSL ES 3.00): a sum of\n"
-    "// three-factor products, each weighted by a coefficient texture over the\n"
-    "// surface's texture coordinates.  Pair it with glint_material.vert.\n"
-    "//\n"
-    "// f = sum_k c_k(uv) inverse_map_k(p_k(pi_p) q_k(pi_q) r_k(pi_r)), where\n"
-    "// pi_p, pi_q, pi_r are the lengths of wi, h = normalize(wi + wo) and wo\n"
-    "// projected on the tangent plane.  Output: linear radiance for a point\n"
-    "// light of intensity u_light_intensity; 0 unless n.wi > 0 and n.wo > 0.\n"
-    "//\n"
-    "// Bindings (shader.json says more): u_maps, RGB float, NEAREST: rows\n"
-    "// 3k..3k+2 log p, q, r of product k (node texels); row 3K texel k the\n"
-    "// mapping offset a of product k; from row 3K+1 blocks of u_map_res rows,\n"
-    "// block b the coefficients of products 3b..3b+2 in R, G, B (row 0 at\n"
-    "// v = 0; bilinear between texel centres, clamped).  u_map_kind: 0 log,\n"
-    "// 1 add (pqr - a), 2 sub (a - pqr); u_model_brdf 1: times n.wi.\n"
+    "// glint_material.frag: a glint material map (GLSL ES 3.00), for\n"
+    "// glint_material.vert: f = sum_k c_k(uv) inverse_map_k(p_k(pi_p)\n"
+    "// q_k(pi_q) r_k(pi_r) [s_k(uv)]), pi_* the lengths of wi, h, wo on the\n"
+    "// tangent plane; radiance for u_light_intensity.  u_maps (RGB float,\n"
+    "// NEAREST; shader.json has the layout): log p, q, r per product, the\n"
+    "// mapping offsets, the coefficients (3 products per block), then\n"
+    "// (u_sres > 0) u_sres rows of log s per product.\n"
     GLSL_PRECISION
     "uniform highp sampler2D u_maps;\n"
     "uniform int u_res;\n"
@@ -30,6 +22,7 @@ const char maps_glsl_frag[] =
     "uniform int u_k;\n"
     "uniform int u_map_kind;\n"
     "uniform int u_model_brdf;\n"
+    "uniform int u_sres;\n"
     GLSL_STAGE_IO
     GLSL_UNIT
     GLSL_TANGENT_LEN
@@ -52,6 +45,7 @@ const char maps_glsl_frag[] =
     "    return (1.0 - fy) * ((1.0 - fx) * a + fx * c) + fy * ((1.0 - fx) * d + fx * e);\n"
     "}\n"
     "\n"
+    GLSL_NODES("u_maps")
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
     "    float ci = dot(n, wi), co = dot(n, wo);\n"
@@ -61,6 +55,7 @@ const char maps_glsl_frag[] =
     "    float up = glint_tangent_len(wi, n), uq = glint_tangent_len(h, n),\n"
     "          ur = glint_tangent_len(wo, n);\n"
     "    vec3 acc = vec3(0.0), cs = vec3(0.0);\n"
+    "    int r0 = 3 * u_k + 1 + ((u_k + 2) / 3) * u_map_res;\n"
     "    for (int k = 0; k < 32; k++) {\n"
     "        if (k >= u_k)\n"
     "            break;\n"
@@ -71,6 +66,8 @@ const char maps_glsl_frag[] =
     "            continue;\n"
     "        vec3 s = glint_factor(3 * k, up) + glint_factor(3 * k + 1, uq) +\n"
     "                 glint_factor(3 * k + 2, ur);\n"
+    "        if (u_sres > 1)\n"
+    "            s += glint_nodes(r0 + k * u_sres, v_uv);\n"
     "        vec3 prod = exp(min(s, vec3(88.0)));\n"
     "        vec3 a = texelFetch(u_maps, ivec2(k, 3 * u_k), 0).rgb;\n"
     "        vec3 v = u_map_kind == 1 ? prod - a : (u_map_kind == 2 ? a - prod : prod);\n"

@@ -8,7 +8,8 @@
 #include "fsio.h"
 #include "img.h"
 #include "method_hf3_int.h"
-#include "method_maps.h"
+#include "method_hf4_int.h"
+#include "method_maps_int.h"
 #include "uvtex.h"
 
 #define COEF_EXR "coefficients.exr"
@@ -16,8 +17,34 @@
 
 const matmap *maps_matmap(const material *m)
 {
-    return m && m->method == &method_maps && m->data ? &((const maps_material *)m->data)->mm
-                                                     : NULL;
+    return m && m->method && m->method->mat == &maps_material_ops && m->data
+               ? &((const maps_material *)m->data)->mm
+               : NULL;
+}
+
+/* A product's factors whichever its method: the 1D ones (hf_factors'
+ * layout) and, for hf4 products, the spatial factor's log nodes. */
+typedef struct prod_view {
+    int res, sres; /* sres 0: no spatial factor */
+    hf_map_kind kind;
+    hf_model model;
+    const double *logf, *logs, *a_used;
+} prod_view;
+
+static prod_view view_of(const maps_material *x, int k)
+{
+    prod_view v;
+    memset(&v, 0, sizeof v);
+    if (x->product == &method_hf4) {
+        const hf4_factors *f = x->mm.comp[k].data;
+        v.res = f->res, v.sres = f->sres, v.kind = f->map.kind, v.model = f->model;
+        v.logf = f->logf, v.logs = f->logs, v.a_used = f->a_used;
+    } else {
+        const hf_factors *f = x->mm.comp[k].data;
+        v.res = f->res, v.kind = f->map.kind, v.model = f->model;
+        v.logf = f->logf, v.a_used = f->a_used;
+    }
+    return v;
 }
 
 static void means(maps_material *x)
@@ -32,7 +59,8 @@ static void means(maps_material *x)
     }
 }
 
-int maps_material_init(material *m, matmap *mm, json_t *info, glint_err *err)
+int maps_material_init(material *m, const method *self, matmap *mm, json_t *info,
+                       glint_err *err)
 {
     maps_material *x = calloc(1, sizeof *x);
     if (!x) {
@@ -41,9 +69,10 @@ int maps_material_init(material *m, matmap *mm, json_t *info, glint_err *err)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     }
     x->mm = *mm;
+    x->product = mm->k > 0 && mm->comp[0].method ? mm->comp[0].method : &method_hf3;
     memset(mm, 0, sizeof *mm);
     means(x);
-    material_init(m, &method_maps, x, info);
+    material_init(m, self, x, info);
     return 0;
 }
 
@@ -57,7 +86,7 @@ static void maps_eval(const void *data, const double uv[2], const double n[3],
         double c = at ? matmap_coef(&x->mm, k, uv[0], uv[1]) : x->mean[k], v[3];
         if (!(c > 0.0))
             continue;
-        material_eval(&x->mm.comp[k], n, wi, wo, v);
+        material_eval_at(&x->mm.comp[k], at ? uv : NULL, n, wi, wo, v);
         for (int e = 0; e < 3; e++)
             rgb[e] += c * v[e];
     }
@@ -82,7 +111,7 @@ static int maps_to_json(const void *data, json_t *root, glint_err *err)
     }
     for (int k = 0; k < x->mm.k && !rc; k++) {
         json_t *p = json_object();
-        if (!p || (rc = hf3_material_ops.to_json(x->mm.comp[k].data, p, err))) {
+        if (!p || (rc = x->product->mat->to_json(x->mm.comp[k].data, p, err))) {
             json_decref(p);
             rc = rc ? rc : glint_err_set(err, GLINT_ENOMEM, "out of memory for the manifest");
             goto fail;
@@ -105,8 +134,12 @@ static int maps_to_json(const void *data, json_t *root, glint_err *err)
                   "bilinearly between texel centres, clamped at the border",
                   "mean", mean));
     json_object_set_new(root, "products", prods);
+    json_object_set_new(root, "product", json_string(x->product->name));
     json_object_set_new(root, "model",
-                        json_string("sum over k of coefficient_k(uv) x product_k(wi, wo)"));
+                        json_string(x->product == &method_hf4
+                                        ? "sum over k of coefficient_k(uv) x product_k(uv, wi, "
+                                          "wo), each product a four-factor one (p q r s(u, v))"
+                                        : "sum over k of coefficient_k(uv) x product_k(wi, wo)"));
     return 0;
 fail:
     json_decref(prods);
@@ -184,6 +217,15 @@ static int maps_from_json(const json_t *root, const char *file, void **data, gli
         goto fail;
     }
     x->mm.res = (int)json_integer_value(v);
+    v = json_object_get(root, "product"); /* absent in files of hf3 products only */
+    if (!v || (json_is_string(v) && strcmp(json_string_value(v), "hf3") == 0)) {
+        x->product = &method_hf3;
+    } else if (json_is_string(v) && strcmp(json_string_value(v), "hf4") == 0) {
+        x->product = &method_hf4;
+    } else {
+        glint_err_set(err, rc, "%s: product must be \"hf3\" or \"hf4\"", file);
+        goto fail;
+    }
     if (!json_is_array(prods) || json_array_size(prods) < 1 ||
         json_array_size(prods) > MATMAP_MAX ||
         json_array_size(prods) * (size_t)x->mm.res > MAPS_ROWS_MAX) {
@@ -195,9 +237,9 @@ static int maps_from_json(const json_t *root, const char *file, void **data, gli
         void *d = NULL;
         char where[4200];
         snprintf(where, sizeof where, "%s: products[%zu]", file, k);
-        if ((rc = hf3_material_ops.from_json(json_array_get(prods, k), where, &d, err)))
+        if ((rc = x->product->mat->from_json(json_array_get(prods, k), where, &d, err)))
             goto fail;
-        material_init(&x->mm.comp[k], &method_hf3, d, NULL);
+        material_init(&x->mm.comp[k], x->product, d, NULL);
         x->mm.k = (int)k + 1;
     }
     v = json_object_get(root, "stop");
@@ -218,9 +260,59 @@ fail:
     return rc;
 }
 
+/* Every product's spatial factor (hf4 products): spatial.exr, linear,
+ * s_res wide, K s_res high, product k's nodes in rows k s_res ..
+ * (k + 1) s_res - 1 (node (i, j) at row j, column i); spatial.png each
+ * product's channel over its maximum (spatial_png_scale[product][channel]). */
+static int save_spatial(const maps_material *x, const char *dir, json_t *root, glint_err *err)
+{
+    int K = x->mm.k, S = view_of(x, 0).sres, rc;
+    char path[4096];
+    img lin = {0}, png = {0};
+    json_t *scales = json_array();
+
+    if (!scales)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if ((rc = img_alloc(&lin, S, K * S, 3, err)) || (rc = img_alloc(&png, S, K * S, 3, err)))
+        goto done;
+    for (int k = 0; k < K; k++) {
+        prod_view v = view_of(x, k);
+        float *l = lin.px + (size_t)k * S * S * 3, *q = png.px + (size_t)k * S * S * 3;
+        double mx[3] = {0, 0, 0};
+        for (int t = 0; t < S * S; t++)
+            for (int c = 0; c < 3; c++) {
+                double e = exp(v.logs[3 * t + c] > 80.0 ? 80.0 : v.logs[3 * t + c]);
+                l[3 * t + c] = (float)e;
+                mx[c] = e > mx[c] ? e : mx[c];
+            }
+        for (int t = 0; t < S * S; t++)
+            for (int c = 0; c < 3; c++)
+                q[3 * t + c] = mx[c] > 0.0 ? (float)(l[3 * t + c] / mx[c]) : 0.0f;
+        json_array_append_new(scales, json_pack("[f,f,f]", mx[0], mx[1], mx[2]));
+    }
+    json_object_set(root, "spatial_png_scale", scales);
+    json_object_set_new(root, "spatial_layout",
+                        json_string("spatial.exr: RGB float, s_res wide, s_res rows per "
+                                    "product (node (i, j) at row j, column i, at u = i / "
+                                    "(s_res - 1), v = j / (s_res - 1)), product 0 first; "
+                                    "spatial.png: each product's channel over its maximum "
+                                    "(spatial_png_scale[product][channel])"));
+    if ((rc = fsio_join(path, sizeof path, dir, "spatial.exr", err)) ||
+        (rc = img_write(path, &lin, err)) ||
+        (rc = fsio_join(path, sizeof path, dir, "spatial.png", err)) ||
+        (rc = img_write(path, &png, err)))
+        goto done;
+done:
+    json_decref(scales);
+    img_free(&lin);
+    img_free(&png);
+    return rc;
+}
+
 /* coefficients.exr / .png (method_maps.h), and factors.exr / .png: every
  * product's linear factors, 3 rows each (p, q, r), res wide; the PNG's rows
- * over their maximum as hf3 writes them (png_scale per product). */
+ * over their maximum as hf3 writes them (png_scale per product); spatial
+ * factors of hf4 products as save_spatial writes them. */
 static int maps_save_files(const void *data, const char *dir, json_t *root, glint_err *err)
 {
     const maps_material *x = data;
@@ -231,8 +323,8 @@ static int maps_save_files(const void *data, const char *dir, json_t *root, glin
     json_t *scales = json_array();
 
     for (int k = 0; k < K; k++) {
-        const hf_factors *f = x->mm.comp[k].data;
-        R = f->res > R ? f->res : R;
+        prod_view v = view_of(x, k);
+        R = v.res > R ? v.res : R;
     }
     if (!scales)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -241,20 +333,20 @@ static int maps_save_files(const void *data, const char *dir, json_t *root, glin
         goto done;
     memcpy(c.px, x->mm.coef, (size_t)K * nt * sizeof *c.px);
     for (int k = 0; k < K; k++) {
-        const hf_factors *f = x->mm.comp[k].data;
+        prod_view f = view_of(x, k);
         json_t *sk = json_array();
         for (int j = 0; j < 3; j++) {
             json_t *sc = json_array();
             for (int ch = 0; ch < 3; ch++) {
                 double mx = 0.0;
                 float *row = lin.px + (size_t)(3 * k + j) * R * 3, *prow;
-                for (int t = 0; t < f->res; t++) {
-                    double v = exp(f->logf[(j * f->res + t) * 3 + ch]);
+                for (int t = 0; t < f.res; t++) {
+                    double v = exp(f.logf[(j * f.res + t) * 3 + ch]);
                     row[3 * t + ch] = (float)v;
                     mx = v > mx ? v : mx;
                 }
                 prow = png.px + (size_t)(3 * k + j) * R * 3;
-                for (int t = 0; t < f->res; t++)
+                for (int t = 0; t < f.res; t++)
                     prow[3 * t + ch] = mx > 0.0 ? (float)(row[3 * t + ch] / mx) : 0.0f;
                 json_array_append_new(sc, json_real(mx));
             }
@@ -274,6 +366,8 @@ static int maps_save_files(const void *data, const char *dir, json_t *root, glin
         (rc = fsio_join(path, sizeof path, dir, "factors.png", err)) ||
         (rc = img_write(path, &png, err)))
         goto done;
+    if (K > 0 && view_of(x, 0).sres > 0)
+        rc = save_spatial(x, dir, root, err);
 done:
     json_decref(scales);
     img_free(&c);
@@ -285,37 +379,46 @@ done:
 static json_t *maps_summary(const void *data)
 {
     const maps_material *x = data;
-    const hf_factors *f = x->mm.k ? x->mm.comp[0].data : NULL;
-    return json_pack("{s:i, s:i, s:i, s:s}", "res", f ? f->res : 0, "components", x->mm.k,
-                     "map_res", x->mm.res, "stop", x->mm.stop ? x->mm.stop : "components");
+    prod_view f = x->mm.k ? view_of(x, 0) : (prod_view){0};
+    json_t *o = json_pack("{s:i, s:i, s:i, s:s, s:s}", "res", f.res, "components", x->mm.k,
+                          "map_res", x->mm.res, "stop", x->mm.stop ? x->mm.stop : "components",
+                          "product", x->product->name);
+    if (o && f.sres > 0)
+        json_object_set_new(o, "s_res", json_integer(f.sres));
+    return o;
 }
 
-/* The GPU texture (RGB float), width max(res, map_res, K):
+/* The GPU texture (RGB float), width max(res, map_res, K, s_res):
  *   rows 3k .. 3k+2   product k's log-factors p, q, r (res texels)
  *   row 3K            texel k: product k's mapping offset a_used
  *   rows 3K+1+b M ..  block b of coefficient rows: texel (i, j) holds the
- *                     coefficients of products 3b, 3b+1, 3b+2 in R, G, B */
+ *                     coefficients of products 3b, 3b+1, 3b+2 in R, G, B
+ *   then, for hf4 products, s_res rows per product: log s, node (i, j) at
+ *                     row j, column i of product k's block */
 static int maps_gpu(const void *data, material_gpu *g, glint_err *err)
 {
     const maps_material *x = data;
-    const hf_factors *f0;
-    int K = x->mm.k, M = x->mm.res, R, W, H, B = (K + 2) / 3;
+    prod_view f0;
+    int K = x->mm.k, M = x->mm.res, R, S, W, H, B = (K + 2) / 3, base;
 
     memset(g, 0, sizeof *g);
     if (K < 1 || !x->mm.coef)
         return glint_err_set(err, GLINT_EINVAL, "material has no products");
-    f0 = x->mm.comp[0].data;
-    R = f0->res;
+    f0 = view_of(x, 0);
+    R = f0.res;
+    S = f0.sres;
     for (int k = 1; k < K; k++) {
-        const hf_factors *f = x->mm.comp[k].data;
-        if (f->res != R || f->map.kind != f0->map.kind || f->model != f0->model)
+        prod_view f = view_of(x, k);
+        if (f.res != R || f.sres != S || f.kind != f0.kind || f.model != f0.model)
             return glint_err_set(err, GLINT_EUNSUPPORTED,
-                                 "the products differ in res, mapping or model: the GPU "
-                                 "evaluation needs one of each");
+                                 "the products differ in res, s_res, mapping or model: the "
+                                 "GPU evaluation needs one of each");
     }
     W = R > M ? R : M;
     W = W > K ? W : K;
-    H = 3 * K + 1 + B * M;
+    W = W > S ? W : S;
+    base = 3 * K + 1 + B * M;
+    H = base + K * S;
     g->program = "maps";
     g->frag_src = maps_glsl_frag;
     g->tex_uniform = "u_maps";
@@ -324,36 +427,45 @@ static int maps_gpu(const void *data, material_gpu *g, glint_err *err)
     if (!(g->tex = calloc((size_t)W * H * 3, sizeof *g->tex)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the material texture");
     for (int k = 0; k < K; k++) {
-        const hf_factors *f = x->mm.comp[k].data;
+        prod_view f = view_of(x, k);
         for (int j = 0; j < 3; j++)
             for (int t = 0; t < R; t++)
                 for (int c = 0; c < 3; c++)
                     g->tex[((size_t)(3 * k + j) * W + t) * 3 + c] =
-                        (float)f->logf[(j * R + t) * 3 + c];
+                        (float)f.logf[(j * R + t) * 3 + c];
         for (int c = 0; c < 3; c++)
-            g->tex[((size_t)(3 * K) * W + k) * 3 + c] = (float)f->a_used[c];
+            g->tex[((size_t)(3 * K) * W + k) * 3 + c] = (float)f.a_used[c];
         for (int j = 0; j < M; j++)
             for (int i = 0; i < M; i++)
                 g->tex[((size_t)(3 * K + 1 + (k / 3) * M + j) * W + i) * 3 + k % 3] =
                     x->mm.coef[(size_t)k * M * M + (size_t)j * M + i];
+        for (int j = 0; j < S; j++)
+            for (int i = 0; i < S; i++)
+                for (int c = 0; c < 3; c++)
+                    g->tex[((size_t)(base + k * S + j) * W + i) * 3 + c] =
+                        (float)f.logs[((size_t)j * S + i) * 3 + c];
     }
-    g->nuniforms = 5;
+    g->nuniforms = 6;
     g->uniform[0] = (material_gpu_uniform){"u_res", "int", {R, 0, 0}, "texels per factor"};
     g->uniform[1] = (material_gpu_uniform){"u_map_res", "int", {M, 0, 0},
                                            "coefficient texels per side"};
     g->uniform[2] = (material_gpu_uniform){"u_k", "int", {K, 0, 0}, "products"};
-    g->uniform[3] = (material_gpu_uniform){"u_map_kind", "int", {(int)f0->map.kind, 0, 0},
+    g->uniform[3] = (material_gpu_uniform){"u_map_kind", "int", {(int)f0.kind, 0, 0},
                                            "inverse mapping: 0 log, 1 add, 2 sub"};
     g->uniform[4] = (material_gpu_uniform){"u_model_brdf", "int",
-                                           {f0->model == HF_MODEL_BRDF, 0, 0},
+                                           {f0.model == HF_MODEL_BRDF, 0, 0},
                                            "1: multiply by n.wi (brdf model)"};
+    g->uniform[5] = (material_gpu_uniform){"u_sres", "int", {S, 0, 0},
+                                           "nodes per side of each product's spatial factor "
+                                           "(0: three-factor products)"};
     g->manifest = json_pack(
-        "{s:s, s:i, s:i, s:i}", "texture_layout",
-        "u_maps: RGB float, width max(res, map_res, K); rows 3k..3k+2 product k's log-factors "
-        "p, q, r; row 3K texel k product k's mapping offset; from row 3K+1, blocks of map_res "
-        "rows, block b holding the coefficients of products 3b, 3b+1, 3b+2 in R, G, B (row 0 "
-        "of a block at v = 0)",
-        "products", K, "res", R, "map_res", M);
+        "{s:s, s:i, s:i, s:i, s:i}", "texture_layout",
+        "u_maps: RGB float, width max(res, map_res, K, s_res); rows 3k..3k+2 product k's "
+        "log-factors p, q, r; row 3K texel k product k's mapping offset; from row 3K+1, blocks "
+        "of map_res rows, block b holding the coefficients of products 3b, 3b+1, 3b+2 in R, G, "
+        "B (row 0 of a block at v = 0); then (s_res > 0) s_res rows per product of log s, node "
+        "(i, j) at row j, column i of the product's block",
+        "products", K, "res", R, "map_res", M, "s_res", S);
     if (!g->manifest) {
         material_gpu_free(g);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");

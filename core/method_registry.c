@@ -4,6 +4,7 @@
 #include "method_auto.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
+#include "method_hybrid.h"
 #include "method_maps.h"
 #include "method_srbf.h"
 
@@ -14,6 +15,7 @@ const method *const method_builtin[] = {
     &method_srbf,
     &method_hf4,
     &method_maps,
+    &method_hybrid,
     &method_auto,
     NULL,
 };

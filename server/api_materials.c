@@ -4,6 +4,7 @@
  *   GET  /api/v1/materials/{id}            the material object
  *   GET  /api/v1/materials/{id}/factors.png|factors.exr   (files of methods that have them)
  *   GET  /api/v1/materials/{id}/coefficients.png|.exr     (material maps' textures)
+ *   GET  /api/v1/materials/{id}/spatial.png|.exr          (spatial factors: hf4, hybrid)
  *   GET  /api/v1/materials/{id}/shader     GLSL sources + binding manifest (JSON)
  *   GET  /api/v1/materials/{id}/shader/{file}
  *   GET  /api/v1/materials/{id}/package    tar of every file of the material and its shader
@@ -84,6 +85,16 @@ static http_resp factors_exr(http_req *req)
 static http_resp coefficients_png(http_req *req)
 {
     return material_file(req, "coefficients.png", "image/png");
+}
+
+static http_resp spatial_png(http_req *req)
+{
+    return material_file(req, "spatial.png", "image/png");
+}
+
+static http_resp spatial_exr(http_req *req)
+{
+    return material_file(req, "spatial.exr", "image/x-exr");
 }
 
 static http_resp coefficients_exr(http_req *req)
@@ -632,6 +643,8 @@ const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}/factors.exr", factors_exr},
     {"GET", "/api/v1/materials/{id}/coefficients.png", coefficients_png},
     {"GET", "/api/v1/materials/{id}/coefficients.exr", coefficients_exr},
+    {"GET", "/api/v1/materials/{id}/spatial.png", spatial_png},
+    {"GET", "/api/v1/materials/{id}/spatial.exr", spatial_exr},
     {"GET", "/api/v1/materials/{id}/material.json", manifest_get},
     {"GET", "/api/v1/materials/{id}/shader", shader_get},
     {"GET", "/api/v1/materials/{id}/shader/{file}", shader_file},

@@ -36,6 +36,7 @@ const METHOD_NOTES = {
   hf4: 'One material whose colour and brightness vary over the surface (a faded print, dirt, a painted pattern on one finish): the point-light material times a texture. Different highlights in different places need material maps.',
   auto: 'Lets glint choose: one material, one material with varying colour, or several materials, whichever predicts views you painted but it did not fit best, keeping the simplest unless a richer one is clearly better. The result says what it chose and why.',
   maps: 'Several materials on one object (a logo on plastic, stripes, veins): a few point-light materials blended over the surface by textures. Paint each region the way it should look; the fit finds the materials and where each one is.',
+  hybrid: 'Several materials on one object, each free to change colour and brightness within its region (worn gold on red plastic): material maps whose materials each carry their own texture. The richest and slowest point-light model.',
   srbf: 'One material seen under an environment: paint how the object should look under the chosen environment; the highlight is built from many small lobes, kept within energy conservation.',
 };
 
@@ -96,7 +97,7 @@ export class FitPanel extends EventTarget {
     for (const x of this.methods) {
       const o = document.createElement('option');
       o.value = x.name;
-      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name === 'maps' ? 'several materials (maps)' : x.name === 'hf4' ? 'one material, varying colour (hf4)' : x.name === 'auto' ? 'choose for me (auto)' : x.name;
+      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name === 'maps' ? 'several materials (maps)' : x.name === 'hf4' ? 'one material, varying colour (hf4)' : x.name === 'auto' ? 'choose for me (auto)' : x.name === 'hybrid' ? 'several materials, varying colour (hybrid)' : x.name;
       o.title = x.title;
       sel.appendChild(o);
     }

@@ -1,6 +1,7 @@
 /* bench_maps: accuracy beside seed 000, Table 4: a spatially varying
  * material on the triceratops, fitted with one three-factor material and
- * with the four-factor product and with material maps of 1 to 5 products.
+ * with the four-factor product, with material maps of 1 to 5 products and
+ * with the hybrid (maps of 1 to 5 four-factor products).
  *
  *   bench_maps [--data DIR] [--size N] [--res R] [--map-res M]
  *
@@ -29,6 +30,7 @@
 #include "material.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
+#include "method_hybrid.h"
 #include "method_maps.h"
 #include "paint.h"
 #include "prep.h"
@@ -232,6 +234,28 @@ int main(int argc, char **argv)
             prep_release(c, p);
             p = NULL;
         }
+    for (int k = 1; k <= 5; k++) {
+        hybrid_params yp;
+        prep_request rq = {&method_hybrid, &yp, se, all};
+        material m;
+        char name[96];
+        method_hybrid.params_default(&yp);
+        yp.h.res = res < 64 ? res : 64;
+        yp.map_res = map_res;
+        yp.components = k;
+        yp.tol = 0.0;
+        if (prep_acquire(c, &rq, NULL, NULL, &p, &e))
+            goto fail;
+        t0 = glint_now();
+        if (prep_fit(p, NULL, rgb, &m, &e))
+            goto fail;
+        snprintf(name, sizeof name, "hybrid, %d product%s (s_res %d), refined + 8 rounds", k,
+                 k > 1 ? "s" : "", yp.h.sres);
+        row(name, &m, glint_now() - t0, &pv, &nv);
+        material_free(&m);
+        prep_release(c, p);
+        p = NULL;
+    }
     free(rgb);
     cache_release(c, se);
     cache_close(c);

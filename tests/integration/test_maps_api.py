@@ -4,7 +4,8 @@ coordinates) uploaded to a session and fitted as a job; the material's
 products, stop report and errors against a one-material fit of the same
 paintings; the coefficient textures served; previews, shader and package;
 the precomputation shared with hf3 (a later hf3 fit at the same res is
-warm); the method's parameter checks."""
+warm); the method's parameter checks; the hybrid (maps of four-factor
+products) with its spatial factors served and hf4's decomposition shared."""
 import io
 import json
 import os
@@ -154,8 +155,8 @@ def test_05_auto_chooses_and_says_why(d):
     m = material(d, {"method": "auto", "params": {"res": 32, "s_res": 16, "components": 3}})
     assert m["method"] == "auto"
     c = m["choice"]
-    assert c["chosen"] in ("hf3", "hf4", "maps") and c["held_out"] == "views"
-    assert [x["method"] for x in c["candidates"]] == ["hf3", "hf4", "maps"]
+    assert c["chosen"] in ("hf3", "hf4", "maps", "hybrid") and c["held_out"] == "views"
+    assert [x["method"] for x in c["candidates"]] == ["hf3", "hf4", "maps", "hybrid"]
     assert c["candidates"][0]["taken"] is True
     man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=tok(S["view"]),
                 status=200).json()
@@ -164,6 +165,38 @@ def test_05_auto_chooses_and_says_why(d):
                                                   for x in c["candidates"]]))
     d.get("/api/v1/materials/%s/preview.png?view=1" % m["id"], headers=tok(S["view"]),
           status=200)
+
+
+def test_06_hybrid_maps_of_four_factor_products(d):
+    params = {"res": 32, "s_res": 8, "map_res": 32, "components": 2}
+    m = material(d, {"method": "hybrid", "params": params})
+    h = tok(S["view"])
+    assert m["method"] == "hybrid" and m["components"] == 2 and m["product"] == "hf4"
+    assert m["s_res"] == 8 and m["map_res"] == 32
+    # hf4 at the same res and s_res reads the decomposition the hybrid built
+    kind, four = fit(d, {"method": "hf4", "params": {"res": 32, "s_res": 8}}, expect=(201,))
+    assert four["precomputation"]["cache"]["memory"] == "hit"
+    assert four["precomputation"]["cache_key"] == m["precomputation"]["cache_key"]
+    print("  rms painted: hf4 %.4f, hybrid %.4f, maps (4 products) %.4f" % (
+        four["errors"]["rms_painted"], m["errors"]["rms_painted"],
+        S["maps"]["errors"]["rms_painted"]))
+    assert m["errors"]["rms_painted"] < 0.6 * four["errors"]["rms_painted"]
+    png = d.get("/api/v1/materials/%s/spatial.png" % m["id"], headers=h, status=200)
+    assert struct.unpack(">II", png.content[16:24]) == (8, 2 * 8)
+    exr = d.get("/api/v1/materials/%s/spatial.exr" % m["id"], headers=h, status=200)
+    assert exr.content[:4] == b"\x76\x2f\x31\x01", "not OpenEXR"
+    png = d.get("/api/v1/materials/%s/coefficients.png" % m["id"], headers=h, status=200)
+    assert struct.unpack(">II", png.content[16:24]) == (32, 2 * 32)
+    man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=h, status=200).json()
+    assert man["product"] == "hf4" and all(len(p["log_s"]) == 64 for p in man["products"])
+    d.get("/api/v1/materials/%s/spatial.png" % four["id"], headers=h, status=200)
+    d.get("/api/v1/materials/%s/spatial.png" % S["maps"]["id"], headers=h, status=404)
+    r = d.get("/api/v1/materials/%s/preview.png?view=2" % m["id"], headers=h, status=200)
+    assert r.content[:8] == b"\x89PNG\r\n\x1a\n"
+    r = d.post("/api/v1/sessions/%s/fits" % S["session"],
+               headers=dict(tok(S["paint"]), **{"Content-Type": "application/json"}),
+               data=json.dumps({"method": "hybrid", "params": {"s_res": 1}}))
+    assert r.status_code == 422 and "s_res" in r.json()["detail"], r.text
 
 
 run_tests(globals())
