@@ -80,7 +80,11 @@ static void candidates(const auto_params *p, cands *c)
     c->yp.components = p->components;
 }
 
-/* ---- levels: the split, then each candidate's precomputation on the kept pixels ---------- */
+/* ---- levels: the split, each candidate's precomputation on the kept pixels, then on all -- */
+
+/* auto's levels: the split; hf3's two and hf4's one on the kept pixels;
+ * hf3's two and hf4's one on every sample */
+enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_N };
 
 typedef struct split {
     samples train;
@@ -140,9 +144,15 @@ static int split_build(const method_build_in *in, cache_value *out, glint_err *e
     {
         /* whole views when two or more are painted: one in `every` of them,
          * at least one, at most all but one; else one pixel in `every` */
+        /* views that hold samples: a painted view whose pixels are all
+         * unlit or hidden is no measure */
         int used[SCENE_MAX_VIEWS], nu = 0, nh = 0;
+        unsigned char has[SCENE_MAX_VIEWS] = {0};
+        for (int i = 0; i < s->n; i++)
+            if (s->view[i] >= 0 && s->view[i] < SCENE_MAX_VIEWS)
+                has[s->view[i]] = 1;
         for (int v = 0; v < s->nviews && v < SCENE_MAX_VIEWS; v++)
-            if (s->used[v])
+            if (s->used[v] && has[v])
                 used[nu++] = v;
         x->by_views = nu >= 2;
         for (int k = 0; k < nu && x->by_views; k++)
@@ -244,11 +254,97 @@ static int hf4d_build(const method_build_in *in, cache_value *out, glint_err *er
     return candidate_build(in, &method_hf4, 0, NULL, &cs.hp, out, err);
 }
 
+/* The full pattern's levels: the chosen candidate is refitted to every
+ * painted sample.  Keyed and built exactly as hf3 and hf4 key and build
+ * their own (the disk layer too), so they are the same cache entries as a
+ * direct hf3 or hf4 fit of these views. */
+static int full_build(const method_build_in *in, const method *m, int k, const void *const *prev,
+                      const void *params, cache_value *out, glint_err *err)
+{
+    method_build_in c = *in;
+    c.params = params;
+    c.prev = prev;
+    c.level = k;
+    return m->levels[k].build(&c, out, err);
+}
+
+static void fhf3d_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    candidates(params, &cs);
+    method_hf3.levels[0].key(&cs.fp, s, prev_key, key, len);
+}
+
+static int fhf3d_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_hf3, 0, NULL, &cs.fp, out, err);
+}
+
+static int fhf3d_load(const method_build_in *in, const char *dir, const char *key,
+                      cache_value *out, glint_err *err)
+{
+    cands cs;
+    method_build_in c = *in;
+    candidates(in->params, &cs);
+    c.params = &cs.fp;
+    c.prev = NULL;
+    return method_hf3.levels[0].load(&c, dir, key, out, err);
+}
+
+static int fhf3d_save(const method_build_in *in, const char *dir, const char *key,
+                      const cache_value *v, glint_err *err)
+{
+    cands cs;
+    method_build_in c = *in;
+    candidates(in->params, &cs);
+    c.params = &cs.fp;
+    c.prev = NULL;
+    return method_hf3.levels[0].save(&c, dir, key, v, err);
+}
+
+static void fhf3o_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    candidates(params, &cs);
+    method_hf3.levels[1].key(&cs.fp, s, prev_key, key, len); /* prev: the full decomposition */
+}
+
+static int fhf3o_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_hf3, 1, in->prev + LV_FULL_HF3, &cs.fp, out, err);
+}
+
+static void fhf4d_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    candidates(params, &cs);
+    method_hf4.levels[0].key(&cs.hp, s, prev_key, key, len);
+}
+
+static int fhf4d_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_hf4, 0, NULL, &cs.hp, out, err);
+}
+
 static const method_level auto_levels[] = {
-    {.name = "split", .progress = 0.2, .key = split_key, .build = split_build},
-    {.name = "decomposition", .progress = 0.3, .key = hf3d_key, .build = hf3d_build},
-    {.name = "operator", .progress = 0.5, .key = hf3o_key, .build = hf3o_build},
-    {.name = "spatial decomposition", .progress = 0.6, .key = hf4d_key, .build = hf4d_build},
+    {.name = "split", .progress = 0.05, .key = split_key, .build = split_build},
+    {.name = "decomposition", .progress = 0.1, .key = hf3d_key, .build = hf3d_build},
+    {.name = "operator", .progress = 0.2, .key = hf3o_key, .build = hf3o_build},
+    {.name = "spatial decomposition", .progress = 0.3, .key = hf4d_key, .build = hf4d_build},
+    {.name = "full decomposition", .progress = 0.5, .key = fhf3d_key, .build = fhf3d_build,
+     .load = fhf3d_load, .save = fhf3d_save},
+    {.name = "full operator", .progress = 0.6, .key = fhf3o_key, .build = fhf3o_build},
+    {.name = "full spatial decomposition", .progress = 0.7, .key = fhf4d_key,
+     .build = fhf4d_build},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
@@ -282,6 +378,36 @@ static double held_rms(const material *m, const samples *s, const split *x, cons
     return cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
 }
 
+/* Fit method m (params mp) to samples s, values rgb, with auto's levels
+ * from `base` (hf3's two, or hf4's one). */
+static int fit_on(const method_fit_in *in, const method *m, const void *mp, const samples *s,
+                  const float *rgb, int base, material *out, glint_err *err)
+{
+    method_fit_in ci = *in;
+    const void *lv[2];
+    const char *ky[2];
+    cache_how how[2];
+    double spent[2];
+    cache_disk disk[2];
+    int nl = m->nlevels < 2 ? m->nlevels : 2;
+    for (int l = 0; l < nl; l++) {
+        lv[l] = in->levels[base + l];
+        ky[l] = in->keys[base + l];
+        how[l] = in->how[base + l];
+        spent[l] = in->spent[base + l];
+        disk[l] = in->disk[base + l];
+    }
+    ci.params = mp;
+    ci.s = s;
+    ci.rgb = rgb;
+    ci.levels = lv;
+    ci.keys = ky;
+    ci.how = how;
+    ci.spent = spent;
+    ci.disk = disk;
+    return m->fit(&ci, out, err);
+}
+
 static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
 {
     const auto_params *p = in->params;
@@ -313,31 +439,10 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
             k++;
         }
     for (int c = 0; c < NCAND; c++) {
-        method_fit_in ci = *in;
-        const void *lv[2];
-        const char *ky[2];
-        cache_how how[2];
-        double spent[2];
-        cache_disk disk[2];
         int spatial = ms[c]->levels == method_hf4.levels; /* hf4, hybrid */
-        int base = spatial ? 3 : 1, nl = spatial ? 1 : 2;
-        for (int l = 0; l < nl; l++) {
-            lv[l] = in->levels[base + l];
-            ky[l] = in->keys[base + l];
-            how[l] = in->how[base + l];
-            spent[l] = in->spent[base + l];
-            disk[l] = in->disk[base + l];
-        }
-        ci.params = ps[c];
-        ci.s = tr;
-        ci.rgb = trgb;
-        ci.levels = lv;
-        ci.keys = ky;
-        ci.how = how;
-        ci.spent = spent;
-        ci.disk = disk;
         secs[c] = glint_now();
-        if ((rc = ms[c]->fit(&ci, &cand[c], err))) {
+        if ((rc = fit_on(in, ms[c], ps[c], tr, trgb, spatial ? LV_HF4 : LV_HF3, &cand[c],
+                         err))) {
             glint_err_prefix(err, "auto, candidate %s", ms[c]->name);
             goto done;
         }
@@ -364,12 +469,12 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
                        ms[chosen]->name, "candidates", list, "threshold", p->threshold, "floor",
                        p->floor, "held_out",
                        x->by_views ? "views" : "pixels", "held_out_every", p->every,
-                       "held_out_samples", x->nheld, "fitted_samples", tr->n,
+                       "held_out_samples", x->nheld, "candidate_samples", tr->n,
                        "rule",
                        "cheapest first (hf3, hf4, maps, hybrid); a richer one is taken when its "
                        "held-out RMS is below the current choice's by more than the "
                        "threshold (a fraction) and the floor; the material is the chosen "
-                       "candidate's fit of the samples not held out");
+                       "method refitted to every painted sample");
     if (x->by_views) {
         json_t *hv = json_array();
         for (int v = 0; v < SCENE_MAX_VIEWS; v++)
@@ -377,8 +482,19 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
                 json_array_append_new(hv, json_integer(v));
         json_object_set_new(choice, "held_out_views", hv);
     }
-    *out = cand[chosen];
-    memset(&cand[chosen], 0, sizeof cand[chosen]);
+    /* the chosen model refitted to every painted sample: the candidates saw
+     * all but the held-out ones */
+    {
+        int spatial = ms[chosen]->levels == method_hf4.levels;
+        double tf = glint_now();
+        if ((rc = fit_on(in, ms[chosen], ps[chosen], s, in->rgb,
+                         spatial ? LV_FULL_HF4 : LV_FULL_HF3, out, err))) {
+            json_decref(choice);
+            glint_err_prefix(err, "auto, %s refitted to every sample", ms[chosen]->name);
+            goto done;
+        }
+        json_object_set_new(choice, "refit_seconds", json_real(glint_now() - tf));
+    }
     if (!out->info)
         out->info = json_object();
     json_object_set(out->info, "chosen_params", json_object_get(out->info, "params"));

@@ -24,14 +24,17 @@
  * (tests/unit/test_auto.c prints every candidate).
  * hf4, maps and hybrid are alternatives, not steps of one chain, so each
  * is measured against the choice so far.  The material is the chosen
- * candidate's own (its manifest names that method); info.choice lists
+ * method refitted to every painted sample, held-out ones included (its
+ * manifest names that method); info.choice lists
  * every candidate's held-out and painted RMS, fit time and whether it was
  * taken, and info.chosen_params its parameters.
  *
- * Levels (every one on the kept pixels, a pattern of its own:
- * samples_pick): split, hf3's decomposition and operator, hf4's
- * decomposition; maps reuses hf3's, hybrid hf4's.  The auto method makes no material of
- * its own (method.mat is NULL). */
+ * Levels: split; on the kept pixels (a pattern of its own: samples_pick)
+ * hf3's decomposition and operator and hf4's decomposition (maps reuses
+ * hf3's, hybrid hf4's); then the same three on every sample, keyed and
+ * built as hf3 and hf4 key and build them (the same cache entries, on disk
+ * too, as a direct fit of either), for the refit.  The auto method makes
+ * no material of its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
 

@@ -5,7 +5,9 @@
 //            no compression (every reader accepts it; loopback makes size moot).
 // decodeEXR: single-part scanline files with NONE, ZIPS or ZIP compression
 //            (what OpenImageIO writes for glintd), HALF / FLOAT / UINT channels;
-//            returns {w, h, data: Float32Array RGB} (Y-only files are grey).
+//            returns {w, h, data: Float32Array RGB} (Y-only files are grey);
+//            with pick = [three channel names] those channels instead of
+//            R, G, B (a G-buffer's uv.U, uv.V, mask).
 // Zip blocks are inflated with the browser's DecompressionStream('deflate').
 
 const MAGIC = 20000630;
@@ -84,7 +86,7 @@ function halfToFloat(hh) {
   return s * (1 + f / 1024) * 2 ** (e - 15);
 }
 
-export async function decodeEXR(buf) {
+export async function decodeEXR(buf, pick) {
   const dv = new DataView(buf), u8 = new Uint8Array(buf);
   if (dv.getInt32(0, true) !== MAGIC) throw new Error('not an OpenEXR file');
   const flags = dv.getUint32(4, true);
@@ -118,8 +120,9 @@ export async function decodeEXR(buf) {
   const lineBytes = channels.reduce((a, c) => a + c.size * w, 0);
   const idx = { R: -1, G: -1, B: -1, Y: -1 };
   channels.forEach((c, i) => { const k = c.name.split('.').pop(); if (k in idx && idx[k] < 0) idx[k] = i; });
-  const src = idx.R >= 0 ? [idx.R, idx.G, idx.B] : [idx.Y, idx.Y, idx.Y];
-  if (src.some(i => i < 0)) throw new Error('EXR has no R, G, B (or Y) channels');
+  const src = pick ? pick.map(n => channels.findIndex(c => c.name === n))
+    : idx.R >= 0 ? [idx.R, idx.G, idx.B] : [idx.Y, idx.Y, idx.Y];
+  if (src.some(i => i < 0)) throw new Error(pick ? 'EXR lacks one of the channels ' + pick.join(', ') : 'EXR has no R, G, B (or Y) channels');
   const nblocks = Math.ceil(h / lpb);
   // where each channel's samples start within a line, and which of R, G, B it feeds
   const chOff = [];

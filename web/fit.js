@@ -102,9 +102,10 @@ export class FitPanel extends EventTarget {
       sel.appendChild(o);
     }
     sel.onchange = () => this.setMethod(sel.value);
-    // a scene painted under an environment is fitted under it by default
-    const env = this.sceneEnv();
-    this.setMethod(env && this.methods.some(x => x.name === 'srbf') ? 'srbf' : this.methods[0].name);
+    // a scene painted under an environment is fitted under it by default;
+    // else glint chooses the model the painting needs (auto), when offered
+    const env = this.sceneEnv(), has = n => this.methods.some(x => x.name === n);
+    this.setMethod(env && has('srbf') ? 'srbf' : has('auto') ? 'auto' : this.methods[0].name);
   }
 
   // Switch the method: its parameters, presets and measured points.

@@ -8,6 +8,7 @@
 import { decodeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
+import { SurfacePanel } from './surface.js';
 
 const $ = id => document.getElementById(id);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -35,6 +36,8 @@ export class Judge extends EventTarget {
     this.bindTabs();
     $('diff-gain').onchange = () => this.showDiff(this.errView);
     $('factors-log').onchange = () => this.drawFactors();
+    this.surface = new SurfacePanel(api, session);
+    this.surface.onProduct = () => this.drawFactors();
     this.bindEnv();
   }
 
@@ -124,6 +127,7 @@ export class Judge extends EventTarget {
     this.manifest = null;
     if (lobe) this.loadManifest().catch(e => this.emit('error', e));
     else this.loadFactors().catch(e => this.emit('error', e));
+    this.surface.set(m, k != null ? k : (m.views_used || [])[0]).catch(e => this.emit('error', e));
     this.computeErrors(k).catch(e => this.emit('error', e));
   }
 
@@ -275,7 +279,7 @@ export class Judge extends EventTarget {
     const r = await this.api.materialFile(mat.id, 'factors.exr');
     const im = await decodeImage(await r.arrayBuffer());
     if (mat !== this.mat) return;
-    this.factors = im;             // 3 rows (p, q, r) x res texels, RGB, linear
+    this.factors = im;             // 3 rows (p, q, r) per product x res texels, RGB, linear
     this.drawFactors();
   }
 
@@ -287,10 +291,13 @@ export class Judge extends EventTarget {
     const log = $('factors-log').checked;
     const names = [['p(π_p)', 'light: |wi| on the tangent plane'], ['q(π_q)', 'half vector'], ['r(π_r)', 'view: |wo| on the tangent plane']];
     const H = c.height / 3, L = 34, Rm = 6, W = c.width - L - Rm;
+    // a material map's product k: rows 3k .. 3k + 2
+    const k = Math.min(this.surface.product || 0, Math.floor(im.h / 3) - 1), row0 = 3 * Math.max(0, k);
     for (let j = 0; j < 3; j++) {
+      const r = row0 + j;
       const y0 = j * H + 14, h = H - 30;
       const vals = [];
-      for (let x = 0; x < im.w; x++) for (let ch = 0; ch < 3; ch++) vals.push(im.data[3 * (j * im.w + x) + ch]);
+      for (let x = 0; x < im.w; x++) for (let ch = 0; ch < 3; ch++) vals.push(im.data[3 * (r * im.w + x) + ch]);
       const tf = v => log ? Math.log10(Math.max(v, 1e-6)) : v;
       let lo = Math.min(...vals.map(tf)), hi = Math.max(...vals.map(tf));
       if (!log) lo = Math.min(0, lo);
@@ -309,7 +316,7 @@ export class Judge extends EventTarget {
         g.strokeStyle = cols[ch]; g.lineWidth = 1.3; g.globalCompositeOperation = 'lighter';
         g.beginPath();
         for (let x = 0; x < im.w; x++) {
-          const v = tf(im.data[3 * (j * im.w + x) + ch]);
+          const v = tf(im.data[3 * (r * im.w + x) + ch]);
           const px = L + W * x / Math.max(1, im.w - 1), py = y0 + h - h * (v - lo) / (hi - lo);
           if (x) g.lineTo(px, py); else g.moveTo(px, py);
         }
@@ -336,6 +343,13 @@ export class Judge extends EventTarget {
       ` over ${mat.precomputation ? mat.precomputation.samples : '?'} samples` +
       ` · ${lobe ? mat.lobes + ' lobes under ' + mat.params.env : mat.res + ' texels'} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
       (lobe && e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');
+    if (mat.choice && mat.choice.candidates) {
+      // what the automatic choice weighed: each model's error on what it did not fit
+      const c = mat.choice;
+      $('err-summary').innerHTML += `<div id="auto-choice" class="small">chose <b>${c.chosen}</b>: error on the ${c.held_out === 'views' ? 'views' : 'pixels'} held out, ` +
+        c.candidates.map(x => `${x.method} ${fmtErr(x.held_out_rms)}`).join(' · ') +
+        ` <span class="muted" title="${c.rule || ''}">(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)</span></div>`;
+    }
     this.rows = new Map();
     const square = sc.width === sc.height;
     const used = mat.views_used || [];
@@ -397,6 +411,7 @@ export class Judge extends EventTarget {
     const row = this.rows && this.rows.get(k);
     if (!row) return;
     this.errView = k;
+    if (k !== this.surface.view) this.surface.setView(k).catch(e => this.emit('error', e));
     for (const tr of $('err-table').querySelectorAll('tr')) tr.classList.toggle('on', +tr.dataset.view === k);
     $('diff-wrap').classList.remove('hidden');
     const { painted, fitted, diff } = row;

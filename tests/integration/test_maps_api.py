@@ -161,6 +161,9 @@ def test_05_auto_chooses_and_says_why(d):
     man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=tok(S["view"]),
                 status=200).json()
     assert man["method"] == c["chosen"]     # the material is the chosen method's
+    # refitted to every painted sample, the held-out views' too
+    assert m["precomputation"]["samples"] == S["maps"]["precomputation"]["samples"]
+    assert c["candidate_samples"] + c["held_out_samples"] == m["precomputation"]["samples"]
     print("  auto chose %s: %s" % (c["chosen"], [(x["method"], round(x["held_out_rms"], 4))
                                                   for x in c["candidates"]]))
     d.get("/api/v1/materials/%s/preview.png?view=1" % m["id"], headers=tok(S["view"]),

@@ -63,12 +63,24 @@ static const char *choose(const char *spec, const unsigned char *use, material *
     rc = rc || prep_acquire(C, &rq, NULL, NULL, &p, &e) || prep_fit(p, im, NULL, out, &e);
     for (int v = 0; v < SC.nviews; v++)
         img_free(&im[v]);
-    prep_release(C, p);
     if (rc) {
+        prep_release(C, p);
         fprintf(stderr, "auto: %s\n", e.msg);
         return NULL;
     }
     choice = json_object_get(out->info, "choice");
+    /* the chosen method refitted to every painted sample, held-out ones too */
+    if (json_integer_value(json_object_get(json_object_get(out->info, "precomputation"),
+                                           "samples")) != prep_samples(p)->n) {
+        fprintf(stderr, "auto: the material was fitted to %lld samples, not all %d\n",
+                (long long)json_integer_value(
+                    json_object_get(json_object_get(out->info, "precomputation"), "samples")),
+                prep_samples(p)->n);
+        prep_release(C, p);
+        material_free(out);
+        return NULL;
+    }
+    prep_release(C, p);
     printf("  %s\n    chose %s (held out: %s):", spec,
            json_string_value(json_object_get(choice, "chosen")),
            json_string_value(json_object_get(choice, "held_out")));
@@ -166,7 +178,7 @@ TEST(one_view_holds_out_pixels)
     ASSERT(strcmp(json_string_value(json_object_get(choice, "held_out")), "pixels") == 0);
     ASSERT_LT(0, json_integer_value(json_object_get(choice, "held_out_samples")));
     ASSERT_LT(json_integer_value(json_object_get(choice, "held_out_samples")),
-              json_integer_value(json_object_get(choice, "fitted_samples")) / 2);
+              json_integer_value(json_object_get(choice, "candidate_samples")) / 2);
     ASSERT(strcmp(material_method_name(&m), "hf3") == 0);
     check_rule(&m);
     material_free(&m);

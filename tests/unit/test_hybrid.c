@@ -3,7 +3,8 @@
  * the surface against the maps of one-BRDF products and against one
  * four-factor product; the cache level shared with hf4; the files read
  * back (spatial factors included) and refused when damaged; the GPU
- * evaluation against the CPU (skipped without EGL). */
+ * evaluation against the CPU (skipped without EGL); a painted view with
+ * no valid pixel, for every method that varies over the surface. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +15,7 @@
 #include "check.h"
 #include "glr.h"
 #include "img.h"
+#include "method_auto.h"
 #include "method_hf4.h"
 #include "method_hybrid.h"
 #include "method_maps.h"
@@ -280,11 +282,85 @@ TEST(parameters_are_checked)
     free(p);
 }
 
+/* A painted view whose light is behind the object as its camera sees it
+ * (the sphere's lit and visible halves do not meet: no pixel is a sample):
+ * with other views it adds nothing and every spatially varying method fits
+ * the rest; alone it is refused with a message saying why. */
+TEST(a_view_with_no_valid_pixels)
+{
+    scene_params sp;
+    scene dark;
+    gbuf *g = NULL;
+    cache_entry *se = NULL;
+    prep_scene_source src = {sv_borrowed, NULL, &dark};
+    hf4_params_t fp;
+    maps_params mp;
+    hybrid_params hp;
+    auto_params ap;
+    const method *ms[4] = {&method_hf4, &method_maps, &method_hybrid, &method_auto};
+    const void *ps[4] = {&fp, &mp, &hp, &ap};
+    glint_err e;
+    const int V = 2; /* the view auto would hold out of views 0-5 were it not dark */
+    ASSERT_OK(setup());
+    scene_params_default(&sp);
+    sp.width = sp.height = 48;
+    ASSERT_OK(scene_create(&sp, &dark, &e));
+    for (int c = 0; c < 3; c++) /* the light opposite the camera, as far */
+        dark.views[V].light[c] = 2.0 * dark.views[V].target[c] - dark.views[V].eye[c];
+    ASSERT_OK(raster_scene(&dark, &g, &e));
+    ASSERT(samples_count(&g[V]) == 0);
+    ASSERT_OK(prep_scene_acquire(C, "dark", &src, &se, &e));
+    method_hf4.params_default(&fp);
+    fp.res = 16, fp.sres = 8;
+    method_maps.params_default(&mp);
+    mp.hf.res = 16, mp.map_res = 16, mp.components = 2;
+    small(&hp);
+    method_auto.params_default(&ap);
+    ap.res = 16, ap.sres = 8, ap.components = 2;
+    for (int k = 0; k < 4; k++) {
+        unsigned char use[SCENE_MAX_VIEWS] = {0};
+        prep_request rq = {ms[k], ps[k], se, use};
+        prep *p = NULL;
+        material m;
+        float *rgb;
+        int n_dark = 0;
+        for (int v = 0; v < 6; v++)
+            use[v] = 1;
+        ASSERT_MSG(prep_acquire(C, &rq, NULL, NULL, &p, &e) == 0, "%s: %s", ms[k]->name, e.msg);
+        for (int i = 0; i < prep_samples(p)->n; i++)
+            n_dark += prep_samples(p)->view[i] == V;
+        ASSERT_EQ(n_dark, 0);
+        ASSERT((rgb = sv_painted(p, STRIPES, &dark, g)));
+        ASSERT_MSG(prep_fit(p, NULL, rgb, &m, &e) == 0, "%s: %s", ms[k]->name, e.msg);
+        printf("  %s, views 0-5 with view %d dark: %d samples, rms %.4f\n", ms[k]->name, V,
+               prep_samples(p)->n, info_num(&m, "errors", "rms_painted"));
+        ASSERT_FINITE(info_num(&m, "errors", "rms_painted"));
+        if (ms[k] == &method_auto) { /* a view with samples is held out instead */
+            json_t *hv = json_object_get(json_object_get(m.info, "choice"), "held_out_views");
+            ASSERT(json_array_size(hv) == 1 && json_integer_value(json_array_get(hv, 0)) != V);
+        }
+        material_free(&m);
+        free(rgb);
+        prep_release(C, p);
+        /* the dark view alone */
+        memset(use, 0, sizeof use);
+        use[V] = 1;
+        p = NULL;
+        ASSERT_EQ(prep_acquire(C, &rq, NULL, NULL, &p, &e), GLINT_EINVAL);
+        printf("  %s, view %d alone: %s\n", ms[k]->name, V, e.msg);
+        ASSERT(strstr(e.msg, "no lit, visible pixel"));
+    }
+    cache_release(C, se);
+    raster_free_all(g, dark.nviews);
+    scene_free(&dark);
+}
+
 TEST_LIST{
     TEST_ENTRY(drifting_materials),
     TEST_ENTRY(files_round_trip),
     TEST_ENTRY(gpu_matches_cpu),
     TEST_ENTRY(parameters_are_checked),
+    TEST_ENTRY(a_view_with_no_valid_pixels),
 };
 
 TEST_MAIN()
