@@ -220,7 +220,7 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
                      hf4_decomp *dc, glint_err *err)
 {
     int R = x->d.res, S = x->sres, n = 3 * R + S * S, N = x->d.n;
-    int col[ROW_MAX], rc, ns;
+    int col[ROW_MAX], rc, ns, nr = 0, *idx;
     double w[ROW_MAX], t0 = glint_now();
     size_t rows;
 
@@ -229,7 +229,7 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
         return glint_err_set(err, GLINT_ERANGE, "lambda %g and lambda_s %g must be in 0..%g",
                              lambda, lambda_s, HF_LAMBDA_MAX);
     if (!(rcond > 0.0))
-        rcond = 1e-6;
+        rcond = HF4_RCOND_DEFAULT;
     if (!(rcond < 1.0) || !isfinite(rcond))
         return glint_err_set(err, GLINT_ERANGE, "rcond %g must be below 1", rcond);
     ns = smooth_rows(R, S, lambda, lambda_s);
@@ -243,44 +243,78 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
     dc->lambda_s = lambda_s;
     dc->rcond = rcond;
     dc->gauge_dims = 3;
-    if (rows < (size_t)n) { /* the dense rows x n matrix is the smaller */
-        double *B = calloc(rows * (size_t)n, sizeof *B);
+    /* unknowns no row reaches (nodes of s without samples or smoothing, a
+     * 1D texel no sample lands on with lambda 0) are exactly null: left out
+     * of the decomposition (a smaller matrix, and no rounding left to sort
+     * them from the weak directions), their rows of V zero */
+    if (!(idx = malloc((size_t)n * sizeof *idx)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    for (int t = 0; t < n; t++)
+        idx[t] = -1;
+    for (size_t r = 0; r < rows; r++) {
+        int m = r < (size_t)N ? data_row(x, (int)r, col, w)
+                              : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
+        for (int a = 0; a < m; a++)
+            if (w[a] != 0.0)
+                idx[col[a]] = 0;
+    }
+    for (int t = 0; t < n; t++)
+        if (idx[t] == 0)
+            idx[t] = nr++;
+    dc->unreached = n - nr;
+    if (rows < (size_t)nr) { /* the dense rows x n matrix is the smaller */
+        double *B = calloc(rows * (size_t)nr, sizeof *B);
         dc->form = "dense";
-        if (!B)
+        if (!B) {
+            free(idx);
             return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %zux%d matrix", rows,
-                                 n);
-        for (int i = 0; i < N; i++) {
-            int m = data_row(x, i, col, w);
-            for (int a = 0; a < m; a++)
-                B[(size_t)i + rows * col[a]] += w[a];
+                                 nr);
         }
-        for (int r = 0; r < ns; r++) {
-            int m = smooth_row(R, S, lambda, lambda_s, r, col, w);
+        for (size_t r = 0; r < rows; r++) {
+            int m = r < (size_t)N ? data_row(x, (int)r, col, w)
+                                  : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
             for (int a = 0; a < m; a++)
-                B[(size_t)(N + r) + rows * col[a]] += w[a];
+                if (w[a] != 0.0)
+                    B[r + rows * idx[col[a]]] += w[a];
         }
-        rc = decomp_dense(B, (int)rows, n, rcond, dc, err);
+        rc = decomp_dense(B, (int)rows, nr, rcond, dc, err);
         free(B);
     } else {
-        double *G = calloc((size_t)n * n, sizeof *G);
+        double *G = calloc((size_t)nr * nr, sizeof *G);
         dc->form = "normal";
-        if (!G)
-            return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", n, n);
+        if (!G) {
+            free(idx);
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", nr, nr);
+        }
         for (size_t r = 0; r < rows; r++) {
             int m = r < (size_t)N ? data_row(x, (int)r, col, w)
                                   : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
             for (int a = 0; a < m; a++)
                 for (int b = 0; b < m; b++)
-                    if (col[a] <= col[b])
-                        G[col[a] + (size_t)n * col[b]] += w[a] * w[b];
+                    if (w[a] != 0.0 && w[b] != 0.0 && idx[col[a]] <= idx[col[b]])
+                        G[idx[col[a]] + (size_t)nr * idx[col[b]]] += w[a] * w[b];
         }
         /* rounding reaches the eigenvalues of B^T B at about n eps e_max: the
          * normal form resolves singular values down to sqrt(n eps) s_max */
-        if (rcond < sqrt(n * DBL_EPSILON))
-            dc->rcond = rcond = sqrt(n * DBL_EPSILON);
-        rc = decomp_normal(G, n, rcond, dc, err);
+        if (rcond < sqrt(nr * DBL_EPSILON))
+            dc->rcond = rcond = sqrt(nr * DBL_EPSILON);
+        rc = decomp_normal(G, nr, rcond, dc, err);
         free(G);
     }
+    if (!rc && nr < n) { /* V back to every unknown: zero rows where none reaches */
+        double *V = calloc((size_t)n * (dc->rank ? dc->rank : 1), sizeof *V);
+        if (!V) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
+        } else {
+            for (int k = 0; k < dc->rank; k++)
+                for (int t = 0; t < n; t++)
+                    if (idx[t] >= 0)
+                        V[(size_t)n * k + t] = dc->V[(size_t)nr * k + idx[t]];
+            free(dc->V);
+            dc->V = V;
+        }
+    }
+    free(idx);
     if (rc) {
         hf4_decomp_free(dc);
         return rc;

@@ -36,7 +36,7 @@ static void hf4_params_default(void *params)
     p->lambda_s = 0.1;
     hf_map_default(&p->map, HF_MAP_ADD);
     p->model = HF_MODEL_RADIANCE;
-    p->rcond = 1e-6;
+    p->rcond = HF4_RCOND_DEFAULT;
 }
 
 /* ---- the decomposition level -------------------------------------------------------- */
@@ -121,6 +121,7 @@ static int hf4_fit_op(const method_fit_in *in, material *out, glint_err *err)
                     "numerical_rank", x->dc.rank, "gauge_dims", x->dc.gauge_dims, "null_dims",
                     x->dc.null_dims, "rcond", x->dc.rcond, "s_max", x->dc.s_max,
                     "s_min_kept", x->dc.s_min_kept);
+    json_object_set_new(pre, "unreached", json_integer(x->dc.unreached));
     json_object_set_new(pre, "operator_bytes",
                         json_integer((json_int_t)((size_t)x->dc.n * x->dc.rank * 8)));
     tim = json_pack("{s:f, s:f, s:f, s:f}", "samples", in->pattern_seconds, "design",
