@@ -283,26 +283,55 @@ static int fhf3d_build(const method_build_in *in, cache_value *out, glint_err *e
     return full_build(in, &method_hf3, 0, NULL, &cs.fp, out, err);
 }
 
+/* A candidate method's disk layer under auto's params: its own params. */
+static int full_load(const method_build_in *in, const method *m, const void *params,
+                     const char *dir, const char *key, cache_value *out, glint_err *err)
+{
+    method_build_in c = *in;
+    c.params = params;
+    c.prev = NULL;
+    return m->levels[0].load(&c, dir, key, out, err);
+}
+
+static int full_save(const method_build_in *in, const method *m, const void *params,
+                     const char *dir, const char *key, const cache_value *v, glint_err *err)
+{
+    method_build_in c = *in;
+    c.params = params;
+    c.prev = NULL;
+    return m->levels[0].save(&c, dir, key, v, err);
+}
+
 static int fhf3d_load(const method_build_in *in, const char *dir, const char *key,
                       cache_value *out, glint_err *err)
 {
     cands cs;
-    method_build_in c = *in;
     candidates(in->params, &cs);
-    c.params = &cs.fp;
-    c.prev = NULL;
-    return method_hf3.levels[0].load(&c, dir, key, out, err);
+    return full_load(in, &method_hf3, &cs.fp, dir, key, out, err);
 }
 
 static int fhf3d_save(const method_build_in *in, const char *dir, const char *key,
                       const cache_value *v, glint_err *err)
 {
     cands cs;
-    method_build_in c = *in;
     candidates(in->params, &cs);
-    c.params = &cs.fp;
-    c.prev = NULL;
-    return method_hf3.levels[0].save(&c, dir, key, v, err);
+    return full_save(in, &method_hf3, &cs.fp, dir, key, v, err);
+}
+
+static int fhf4d_load(const method_build_in *in, const char *dir, const char *key,
+                      cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_load(in, &method_hf4, &cs.hp, dir, key, out, err);
+}
+
+static int fhf4d_save(const method_build_in *in, const char *dir, const char *key,
+                      const cache_value *v, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_save(in, &method_hf4, &cs.hp, dir, key, v, err);
 }
 
 static void fhf3o_key(const void *params, const samples *s, const char *prev_key, char *key,
@@ -344,7 +373,7 @@ static const method_level auto_levels[] = {
      .load = fhf3d_load, .save = fhf3d_save},
     {.name = "full operator", .progress = 0.6, .key = fhf3o_key, .build = fhf3o_build},
     {.name = "full spatial decomposition", .progress = 0.7, .key = fhf4d_key,
-     .build = fhf4d_build},
+     .build = fhf4d_build, .load = fhf4d_load, .save = fhf4d_save},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */

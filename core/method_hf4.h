@@ -5,7 +5,9 @@
  * factor's nodes per side), lambda and lambda_s (smoothing), mapping and
  * model (as hf3), rcond.  One level after the sampling pattern:
  *   decomposition  key "hf4:<pattern hash>:res:s_res:lambda:lambda_s:rcond":
- *                  the design and the kept directions of B (memory only)
+ *                  the design and the kept directions of B; on disk (the
+ *                  cache directory's <XXH3-128 of the key>.hf4, checksummed:
+ *                  method_hf4.c) the decomposition, the design rebuilt
  * The material's data is an hf4_factors.  On disk: material.json holds
  * the log-factors at full precision (log_factors p, q, r as hf3 writes
  * them, log_s: s_res^2 rows [r, g, b], row j s_res + i for node (i, j));

@@ -535,6 +535,68 @@ TEST(the_method_fits_a_varying_colour)
     cache_close(c);
 }
 
+/* The decomposition on disk: a fresh cache over the same directory (a
+ * restart) reads it instead of building it, and the fit is the same to
+ * the last bit; a flipped byte is caught and the level rebuilt. */
+TEST(decomposition_on_disk)
+{
+    char dir[] = "/tmp/glint_test_hf4_cache_XXXXXX", cmd[256];
+    prep_scene_source src = {sv_borrowed, NULL, &SC};
+    hf4_params_t hp;
+    material m[3];
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT(mkdtemp(dir));
+    method_hf4.params_default(&hp);
+    hp.res = 16;
+    hp.sres = 24;
+    for (int round = 0; round < 3; round++) {
+        cache *c;
+        cache_entry *se;
+        unsigned char all[SCENE_MAX_VIEWS];
+        prep_request rq = {&method_hf4, &hp, NULL, all};
+        prep *pp = NULL;
+        img im[SCENE_MAX_VIEWS];
+        json_t *rep;
+        memset(all, 1, sizeof all);
+        ASSERT_OK(cache_open(dir, (size_t)1 << 30, &c, &e));
+        ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
+        rq.scene = se;
+        ASSERT_OK(sv_paint(SCALED, &SC, G, im, &e));
+        ASSERT_MSG(prep_acquire(c, &rq, NULL, NULL, &pp, &e) == 0, "%s", e.msg);
+        ASSERT_OK(prep_fit(pp, im, NULL, &m[round], &e));
+        rep = prep_report(pp);
+        printf("  round %d: disk %s, cold %.3f s\n", round,
+               json_string_value(json_object_get(rep, "disk")), prep_cold_seconds(pp));
+        ASSERT_EQ(prep_from_disk(pp), round == 1);
+        if (round == 2) /* the damaged file was not trusted */
+            ASSERT(strcmp(json_string_value(json_object_get(rep, "disk")), "rebuilt") == 0);
+        json_decref(rep);
+        for (int v = 0; v < SC.nviews; v++)
+            img_free(&im[v]);
+        prep_release(c, pp);
+        cache_release(c, se);
+        cache_close(c);
+        if (round == 1) { /* flip one byte in the middle of every .hf4 file */
+            snprintf(cmd, sizeof cmd,
+                     "for f in $(find %s -name '*.hf4'); do printf 'X' | dd of=$f bs=1 "
+                     "seek=$(( $(stat -c %%s $f) / 2 )) conv=notrunc status=none; done", dir);
+            ASSERT_EQ(system(cmd), 0);
+        }
+    }
+    {
+        const hf4_factors *a = hf4_of(&m[0]), *b = hf4_of(&m[1]), *c3 = hf4_of(&m[2]);
+        ASSERT(a && b && c3);
+        ASSERT(memcmp(a->logf, b->logf, 9 * (size_t)a->res * sizeof *a->logf) == 0);
+        ASSERT(memcmp(a->logs, b->logs, 3 * (size_t)a->sres * a->sres * sizeof *a->logs) == 0);
+        ASSERT(memcmp(a->logs, c3->logs, 3 * (size_t)a->sres * a->sres * sizeof *a->logs) == 0);
+    }
+    for (int k = 0; k < 3; k++)
+        material_free(&m[k]);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    ASSERT_EQ(system(cmd), 0);
+}
+
 TEST_LIST{
     TEST_ENTRY(a_product_is_recovered),
     TEST_ENTRY(equals_a_dense_least_squares_solve),
@@ -542,6 +604,7 @@ TEST_LIST{
     TEST_ENTRY(few_samples_no_smoothing_of_s),
     TEST_ENTRY(samples_without_uv_are_refused),
     TEST_ENTRY(the_method_fits_a_varying_colour),
+    TEST_ENTRY(decomposition_on_disk),
 };
 
 TEST_MAIN()
