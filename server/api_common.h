@@ -66,6 +66,18 @@ http_resp api_body_too_large(http_req *req, const char *what);
  * GLINT_EDENIED. */
 int api_session(http_req *req, const char *sid, int need_paint, json_t **doc, glint_err *err);
 
+/* The public form of a session doc for the access granted (paint 1: with
+ * the paint token and link).  api_sessions.c. */
+struct app;
+json_t *api_session_public(struct app *a, const json_t *doc, int paint);
+
+/* A session's link lifetime: expires_in seconds from now (expires,
+ * expires_unix set in doc) or null (never: removed).  GLINT_EINVAL (kind
+ * invalid-input) otherwise.  api_tokens.c. */
+#define API_EXPIRES_MIN 1
+#define API_EXPIRES_MAX 315360000 /* ten years */
+int api_expiry_parse(const json_t *v, json_t *doc, glint_err *e);
+
 /* The material `mid` if the request may read its session.  OUT: *doc (free
  * doc->text). */
 int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err);

@@ -116,8 +116,8 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
 
 /* ---- sessions --------------------------------------------------------------------- */
 
-/* The public form of a session for the access granted. */
-static json_t *session_public(app *a, const json_t *doc, int paint)
+/* The public form of a session for the access granted (api_common.h). */
+json_t *api_session_public(app *a, const json_t *doc, int paint)
 {
     const char *id = json_string_value(json_object_get(doc, "id"));
     const char *pt = json_string_value(json_object_get(doc, "paint_token"));
@@ -147,6 +147,8 @@ static json_t *session_public(app *a, const json_t *doc, int paint)
     snprintf(link, sizeof link, "/api/v1/sessions/%s/events", id);
     json_object_set_new(links, "events", json_string(link));
     json_object_set_new(o, "links", links);
+    if (json_is_string(json_object_get(doc, "expires")))
+        json_object_set(o, "expires", json_object_get(doc, "expires"));
     if (a && store_paintings_list(a->store, id, &paintings, &e) == 0)
         json_object_set_new(o, "paintings", paintings);
     return o;
@@ -170,9 +172,9 @@ static int session_create_do(http_req *req, json_t **out, char id[33], glint_err
     if ((rc = api_body_json(req, &body, e)))
         return rc;
     json_object_foreach(body, k, v)
-        if (strcmp(k, "scene_id") != 0) {
+        if (strcmp(k, "scene_id") != 0 && strcmp(k, "expires_in") != 0) {
             rc = api_reject(e, GLINT_EINVAL, "invalid-input",
-                            "unknown key \"%.64s\" (known: scene_id)", k);
+                            "unknown key \"%.64s\" (known: scene_id, expires_in)", k);
             goto done;
         }
     jscene = json_object_get(body, "scene_id");
@@ -195,13 +197,15 @@ static int session_create_do(http_req *req, json_t **out, char id[33], glint_err
         rc = glint_err_set(e, GLINT_ENOMEM, "out of memory");
         goto done;
     }
+    if ((v = json_object_get(body, "expires_in")) && (rc = api_expiry_parse(v, doc, e)))
+        goto done;
     if ((rc = store_session_put(a->store, id, doc, e))) {
         if (rc == GLINT_ENOTFOUND)
             rc = api_reject(e, GLINT_EINVAL, "unknown-scene", "scene_id: %.400s", e->msg);
         goto done;
     }
     json_object_set_new(doc, "last_seq", json_integer(0));
-    *out = session_public(a, doc, 1);
+    *out = api_session_public(a, doc, 1);
 done:
     json_decref(doc);
     json_decref(scene_doc);
@@ -228,7 +232,7 @@ static http_resp session_get(http_req *req)
     if (api_session(req, req->param[0], 0, &doc, &e))
         return api_error(&e);
     /* paint access: could this request write? */
-    r = http_json(200, session_public(a, doc, auth_session(req, doc, 1, &probe) == 0));
+    r = http_json(200, api_session_public(a, doc, auth_session(req, doc, 1, &probe) == 0));
     json_decref(doc);
     return r;
 }

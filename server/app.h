@@ -73,6 +73,8 @@ extern const http_route api_scenes_routes[];     /* scenes, meshes */
 extern const int api_scenes_nroutes;
 extern const http_route api_sessions_routes[];   /* sessions, paintings, strokes, events */
 extern const int api_sessions_nroutes;
+extern const http_route api_tokens_routes[];     /* a session's links: revoke, expiry */
+extern const int api_tokens_nroutes;
 extern const http_route api_fits_routes[];       /* fits, jobs */
 extern const int api_fits_nroutes;
 extern const http_route api_materials_routes[];  /* materials, previews, exports */

@@ -3,6 +3,7 @@
 
 #include <ctype.h>
 #include <string.h>
+#include <time.h>
 
 #include "app.h"
 #include "ids.h"
@@ -60,6 +61,17 @@ int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint
         return 0;
     if (!paint || !view)
         return glint_err_set(err, GLINT_EINTERNAL, "session record has no tokens");
+    {
+        json_t *ex = json_object_get(session_doc, "expires_unix");
+        if (json_is_integer(ex) && (json_int_t)time(NULL) >= json_integer_value(ex) && tok &&
+            (glint_secret_equal(tok, paint) || glint_secret_equal(tok, view))) {
+            glint_err_set(err, GLINT_EDENIED,
+                          "this session's links expired at %s: its scene's owner key or the "
+                          "API key can issue new ones (POST /api/v1/sessions/{id}/tokens)",
+                          json_string_value(json_object_get(session_doc, "expires")));
+            return glint_err_kind(err, "link-expired");
+        }
+    }
     if (!tok || !*tok) {
         glint_err_set(err, GLINT_EAUTH,
                       "this session needs its token: send \"X-Glint-Token: TOKEN\" or "

@@ -15,6 +15,11 @@
  *   own (everything with the API key); deleting one needs its owner key or
  *   the API key.  Reading a scene by id needs nothing: ids are 128 random
  *   bits, and only their owners can list them.
+ * - A session's links may expire (created with expires_in): after that
+ *   both tokens are refused (403, kind "link-expired"); and its tokens may
+ *   be revoked and replaced (POST /sessions/{id}/tokens, by the paint
+ *   token, the scene's owner key or the API key): the old links are then
+ *   refused (403 "wrong-token") and open event streams end.
  * Comparisons are constant-time.  Without the right token nothing of a
  * session is readable or writable (404 for unknown ids, 401 without a token,
  * 403 with a token that does not grant the access). */
@@ -38,7 +43,7 @@ int auth_has_key(http_req *req);
 
 /* Access to a session (doc from store_session_get).  need_paint: 1 for
  * writes.  0 if allowed; else GLINT_EAUTH (kind "token-required") or
- * GLINT_EDENIED (kinds "read-only-token", "wrong-token"). */
+ * GLINT_EDENIED (kinds "read-only-token", "wrong-token", "link-expired"). */
 int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err);
 
 /* The owner key the request presents (X-Glint-Owner): *key NULL when none

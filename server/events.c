@@ -34,6 +34,7 @@ typedef struct ev_hub {
     char session[33];
     unsigned long gen;         /* bumped by every publish / notify */
     unsigned long presence;    /* bumped when a listener joins or leaves */
+    unsigned long revoked;     /* bumped when the session's tokens are revoked */
     ev_stream *listeners;
     struct ev_hub *next;
 } ev_hub;
@@ -54,6 +55,7 @@ struct ev_stream {
     int64_t last;              /* last sequence number sent */
     unsigned long seen_gen;
     unsigned long seen_presence;
+    unsigned long revoked;     /* the hub's count when this stream opened */
     int started;
     char id[17];               /* this listener's id in presence */
     char name[EVENTS_NAME_MAX + 1];
@@ -134,6 +136,19 @@ static void events_hub_release(events *ev, ev_hub *hub)
             free(hub);
             return;
         }
+}
+
+void events_revoke(events *ev, const char *session)
+{
+    ev_hub *h;
+    pthread_mutex_lock(&ev->lock);
+    for (h = ev->hubs; h; h = h->next)
+        if (strcmp(h->session, session) == 0) {
+            h->revoked++;
+            break;
+        }
+    pthread_cond_broadcast(&ev->cond);
+    pthread_mutex_unlock(&ev->lock);
 }
 
 void events_notify(events *ev, const char *session)
@@ -284,7 +299,7 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
         }
 
         pthread_mutex_lock(&ev->lock);
-        stopping = ev->stopping;
+        stopping = ev->stopping || s->hub->revoked != s->revoked;
         gen = s->hub->gen;
         presence = s->hub->presence;
         st = ev->st;
@@ -303,7 +318,7 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
             }
             pthread_cond_timedwait(&ev->cond, &ev->lock, &until);
             waited = 1;
-            stopping = ev->stopping;
+            stopping = ev->stopping || s->hub->revoked != s->revoked;
             gen = s->hub->gen;
             presence = s->hub->presence;
         }
@@ -429,6 +444,7 @@ int events_stream_open(events *ev, const char *session, long long since, const c
         free(s);
         return GLINT_ENOMEM;
     }
+    s->revoked = s->hub->revoked;
     s->next = s->hub->listeners;
     s->hub->listeners = s;
     s->hub->presence++;

@@ -55,6 +55,9 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
 
 /* Wake the session's streams after its log grew. */
 void events_notify(events *ev, const char *session);
+/* The session's tokens were revoked: every stream open now ends (a client
+ * still holding a valid token reconnects with it, from its Last-Event-ID). */
+void events_revoke(events *ev, const char *session);
 
 /* ---- a stream without its transport ------------------------------------------ */
 /* The core of one client's stream, which events_stream() serves over HTTP

@@ -499,6 +499,42 @@ out:
     return rc;
 }
 
+int store_session_update(store *s, const char *id, const json_t *doc, glint_err *err)
+{
+    json_t *copy = json_copy((json_t *)doc);
+    sqlite3_stmt *st;
+    char *text = NULL;
+    int rc;
+
+    if (!glint_id_valid(id))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"", id ? id : "");
+    if (copy)
+        json_object_del(copy, "last_seq"); /* the log's, added by get */
+    text = copy ? store_dump(copy) : NULL;
+    json_decref(copy);
+    if (!text)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory serializing a session");
+    pthread_mutex_lock(&s->lock);
+    st = store_prep(s, "UPDATE sessions SET doc = ?2 WHERE id = ?1", err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(st, 2, text, -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(st) != SQLITE_DONE)
+        rc = store_sqlerr(s, err, "updating a session");
+    else if (sqlite3_changes(s->db) == 0)
+        rc = glint_err_set(err, GLINT_ENOTFOUND, "no session with id %s", id);
+    else
+        rc = 0;
+out:
+    sqlite3_finalize(st);
+    pthread_mutex_unlock(&s->lock);
+    free(text);
+    return rc;
+}
+
 int store_session_get(store *s, const char *id, json_t **doc, glint_err *err)
 {
     sqlite3_stmt *st;

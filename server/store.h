@@ -86,11 +86,15 @@ int store_scene_list(store *s, json_t **array, glint_err *err);
 int store_scene_delete(store *s, const char *id, glint_err *err);
 
 /* ---- sessions ------------------------------------------------------------------------- */
-/* doc holds scene_id, created, and the two tokens (paint_token, view_token).
+/* doc holds scene_id, created, the two tokens (paint_token, view_token)
+ * and, for links that expire, expires (ISO time) and expires_unix.
  * put: GLINT_ENOTFOUND if the scene does not exist.  get: the stored doc
  * with "last_seq" (the session's last sequence number, 0 if none) added. */
 int store_session_put(store *s, const char *id, const json_t *doc, glint_err *err);
 int store_session_get(store *s, const char *id, json_t **doc, glint_err *err);
+/* Replace a session's doc (its tokens, its expiry), durably; "last_seq" is
+ * not stored.  GLINT_ENOTFOUND if there is no such session. */
+int store_session_update(store *s, const char *id, const json_t *doc, glint_err *err);
 
 /* Paintings: the current image of view `view` of a session, as OpenEXR
  * bytes (float RGB, the raster's size).  version increments on each put

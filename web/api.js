@@ -90,6 +90,7 @@ export class Api {
   }
   createSession(sceneId) { return this.post('/sessions', { scene_id: sceneId }, { what: 'Creating the session' }); }
   session(id) { return this.get('/sessions/' + id, { what: 'Reading the session' }); }
+  replaceTokens(sid, body) { return this.post(`/sessions/${sid}/tokens`, body, { what: 'Replacing the links' }); }
   postStrokes(sid, k, strokes) {
     return this.post(`/sessions/${sid}/views/${k}/strokes`, { strokes }, { what: 'Sending the stroke' });
   }

@@ -223,7 +223,7 @@ async function openStudio(route) {
 // such session): say so on a page of its own, not in a studio that cannot
 // work.
 function showDenied(e) {
-  const why = {
+  let why = {
     401: ['This link has no token',
       'A session link ends in "?token=…", the key to the session. This one has none: it was probably cut short when it was copied. Ask for the link again and paste it whole.'],
     403: ['This link\'s token does not open the session',
@@ -231,6 +231,9 @@ function showDenied(e) {
     404: ['This session does not exist',
       'The link may be wrong or expired: there is no such session on this server (it may have been deleted). Check the link, or start a new session.'],
   }[e.status];
+  if (e.status === 403 && /(^|\/)link-expired$/.test((e.problem || {}).type || ''))
+    why = ['This link has expired',
+      'The session\'s links were set to stop working after a while, and this one has. Ask whoever shared it for new links: the scene\'s owner can issue them.'];
   $('studio').classList.add('hidden');
   $('start').classList.add('hidden');
   $('share-btn').classList.add('hidden');
@@ -667,7 +670,20 @@ function bindStudioControls() {
     $('link-paint').value = L.paint ? abs(L.paint) : '(this is a view-only link)';
     $('link-view').value = L.view ? abs(L.view) : '';
     $('my-name').value = myName();
+    $('links-manage').classList.toggle('hidden', !L.paint);
+    $('links-expiry').textContent = S.doc.expires ? `(these expire ${new Date(S.doc.expires).toLocaleString()})` : '(these never expire)';
     $('share-dlg').classList.remove('hidden');
+  };
+  // new tokens for the session: the old links stop working at once (and
+  // their live streams end); this studio reopens on the new paint link
+  $('links-replace').onclick = async () => {
+    const S = state.session, v = $('links-expires-in').value;
+    try {
+      const doc = await api.replaceTokens(S.id, { revoke: 'both', expires_in: v ? +v : null });
+      toast('Links replaced', 'The old links no longer open this session.' + (doc.expires ? ' The new ones expire ' + new Date(doc.expires).toLocaleString() + '.' : ''));
+      $('share-dlg').classList.add('hidden');
+      location.hash = sessionHash(S.id, doc.paint_token, state.k);
+    } catch (e) { showError(e); }
   };
   $('share-close').onclick = () => $('share-dlg').classList.add('hidden');
   for (const b of document.querySelectorAll('[data-copy]')) {

@@ -187,4 +187,31 @@ run({
     assertLE(maxDiff(await canvasPixels(page), await serverPixels(page, 0)), 1, 'in step with the restarted server');
     t.log(`reconnected after the restart (${await page.evaluate(() => window.glint.state.session.stream.connects)} connections in all)`);
   },
+
+  async 'replacing the share links: the old view link stops, the studio reopens on the new one'(t) {
+    const { url, viewUrl, session } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const ana = await named(t, 'ana'), viewer = await named(t, 'viewer');
+    t.allowConsole(/403|Forbidden/);
+    await openStudio(ana, url);
+    await openStudio(viewer, viewUrl);
+    await viewer.waitForFunction(() => document.getElementById('conn').textContent === 'live');
+    await ana.click('#share-btn');
+    assert(await ana.isVisible('#links-replace'), 'the paint link may replace the links');
+    await ana.selectOption('#links-expires-in', '86400');
+    await ana.click('#links-replace');
+    await ana.waitForFunction(t0 => window.glint && window.glint.state.session && window.glint.state.session.token !== t0 && window.glint.paintableMs != null, session.paint_token, { timeout: 20000 });
+    const doc = await ana.evaluate(() => window.glint.state.session.doc);
+    assert(doc.paint_token !== session.paint_token && doc.expires, 'new tokens, expiring');
+    t.log(`new links expire ${doc.expires}`);
+    // the viewer's live stream ended and was refused on reconnecting
+    await viewer.waitForFunction(() => document.getElementById('conn').textContent === 'disconnected', null, { timeout: 15000 });
+    const old = await fetch(`${t.daemon.base}/api/v1/sessions/${session.id}`, { headers: { 'X-Glint-Token': session.view_token } });
+    assertEq(old.status, 403, 'the old view link is refused');
+    // the new paint link paints
+    await drawStroke(ana, [[20, 30], [44, 30]]);
+    await settled(ana, 0);
+    await ana.click('#share-btn');
+    assert((await ana.textContent('#links-expiry')).includes('expire'), 'the dialog says when the links expire');
+    await t.shot(ana, '25-links-replaced.png');
+  },
 });
