@@ -45,6 +45,7 @@ typedef struct app_config {
     unsigned header_timeout_s;       /* the request head must arrive within this */
     unsigned min_body_rate;   /* bytes/s a request body must keep up (0: no minimum) */
     char api_key[256];        /* "" = none */
+    char allow_origin[1024];  /* other web origins admitted (http.h); "" = none */
     int quiet;
     app_limits lim;
 } app_config;

@@ -55,6 +55,9 @@ static void usage(FILE *f)
           "  --max-strokes N       strokes per request (1000)\n"
           "  --max-stroke-work N   millions of brush evaluations per stroke request (50)\n"
           "  --api-key KEY         require this key for creation and scripting\n"
+          "  --allow-origin LIST   web origins besides glintd's own whose pages may call the\n"
+          "                        API (comma-separated, e.g. https://tools.example.com;\n"
+          "                        none by default)\n"
           "  --config FILE         JSON config file (keys as the long options, '-' as '_')\n"
           "  --port-file FILE      write the bound port there once listening\n"
           "  --quiet               no request log\n",
@@ -127,6 +130,8 @@ static int apply_opt(app_config *c, const char *name, const char *val)
         return copy_str(c->env_dir, sizeof c->env_dir, val, "--env-dir");
     if (!strcmp(name, "api-key"))
         return copy_str(c->api_key, sizeof c->api_key, val, "--api-key");
+    if (!strcmp(name, "allow-origin"))
+        return copy_str(c->allow_origin, sizeof c->allow_origin, val, "--allow-origin");
     if (!strcmp(name, "port")) {
         if (parse_long(val, "--port", 0, 65535, &v)) return -1;
         c->port = (int)v;
@@ -252,7 +257,8 @@ int main(int argc, char **argv)
         {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
         {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
         {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
-        {"api-key", required_argument, 0, 1}, {"config", required_argument, 0, 2},
+        {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
+        {"config", required_argument, 0, 2},
         {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     app a;
@@ -368,6 +374,7 @@ int main(int argc, char **argv)
     hc.header_timeout_s = a.cfg.header_timeout_s;
     hc.min_body_rate = a.cfg.min_body_rate;
     hc.static_dir = a.cfg.web_dir;
+    hc.allow_origin = a.cfg.allow_origin[0] ? a.cfg.allow_origin : NULL;
     hc.quiet = a.cfg.quiet;
     a.started = time(NULL);
     if (http_server_start(&hc, routes, nroutes, &a, &a.http, &port, err, sizeof err)) {

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -18,6 +19,7 @@
 
 #include "http_front.h"
 #include "http_head.h"
+#include "http_origin.h"
 
 #define HTTP_MAX_HEAD_DEFAULT (16u << 10)  /* libmicrohttpd's 32 KiB pool holds it with room */
 #define HTTP_MAX_TARGET_DEFAULT (8u << 10)
@@ -427,7 +429,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     http_resp resp = {0, NULL};
     http_front_lease *lease;
     char pbuf[1024];
-    int matched_path = 0;
+    int matched_path = 0, cors = 0;
+    const char *origin;
     enum MHD_Result ret;
 
     if (!ctx) { /* uri_seen could not allocate */
@@ -506,6 +509,20 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         ctx->body_paced = 0;
     }
 
+    origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Origin");
+    if (origin && !http_same_origin(origin, MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                                   MHD_HTTP_HEADER_HOST))) {
+        int safe = strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0;
+        if (http_origin_allowed(s->cfg.allow_origin, origin))
+            cors = 1;
+        else if (!safe)
+            resp = http_problem(403, "cross-origin",
+                                "requests from the web origin %.200s are not admitted: glintd "
+                                "answers its own studio's pages (glintd --allow-origin admits "
+                                "others)", origin);
+    }
+    if (!resp.r && strcmp(method, "OPTIONS") == 0) /* a preflight, or a probe of the methods */
+        resp = http_preflight(cors);
     memset(&req, 0, sizeof req);
     req.method = method;
     req.path = url;
@@ -514,7 +531,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     req.body_len = ctx->len;
     req.body_too_large = ctx->too_large;
     req.app = s->app;
-    for (int i = 0; i < s->nroutes; i++) {
+    for (int i = 0; i < s->nroutes && !resp.r; i++) {
         if (!match(s->routes[i].pattern, url, &req, pbuf, sizeof pbuf))
             continue;
         matched_path = 1;
@@ -540,6 +557,13 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         return MHD_NO;
     if (resp.status == 405)
         MHD_add_response_header(resp.r, MHD_HTTP_HEADER_ALLOW, "GET, POST, PUT, DELETE");
+    if (cors) {
+        MHD_add_response_header(resp.r, "Access-Control-Allow-Origin", origin);
+        MHD_add_response_header(resp.r, "Access-Control-Expose-Headers",
+                                "Location, ETag, Content-Disposition, X-Glint-Env");
+    }
+    if (origin)
+        MHD_add_response_header(resp.r, MHD_HTTP_HEADER_VARY, "Origin");
     /* a health check's reserve connection, and any connection while the
      * limits are nearly reached, is not kept alive */
     lease = conn_lease(conn);

@@ -88,6 +88,15 @@ typedef struct http_config {
     size_t max_head;        /* request line + header fields, bytes (0: 16 KiB) */
     size_t max_target;      /* request target, bytes (0: 8 KiB) */
     const char *static_dir; /* served at "/" (NULL: none) */
+    /* Web origins besides the daemon's own (comma-separated, "scheme://host
+     * [:port]"; NULL: none).  A request whose Origin header names another
+     * origin (a page elsewhere calling the API) is refused (403,
+     * "cross-origin") unless it is a GET or HEAD, which is answered without
+     * CORS headers, so the browser keeps the answer from that page; an
+     * admitted origin gets Access-Control-Allow-Origin and its preflights
+     * (OPTIONS) are answered.  The daemon's own origin is the request's
+     * Host under http or https. */
+    const char *allow_origin;
     int quiet;              /* no request log lines */
 } http_config;
 
