@@ -114,7 +114,17 @@ case "$mode" in
     LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       meson test -C build-asan --suite unit --print-errorlogs
-    python3 tests/summary.py build/meson-logs/testlog.json build-asan/meson-logs/testlog.json
+    # the daemon under the sanitizers, driven by the integration tests (a
+    # sanitizer report in its log fails the test: tests/integration/harness.py);
+    # its previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung under ASan)
+    echo "== integration tests: glintd under AddressSanitizer + UndefinedBehaviorSanitizer"
+    GLINT_EGL=off ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
+    LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      meson test -C build-asan --suite integration --no-suite unsanitized --print-errorlogs \
+        --logbase testlog-integration
+    python3 tests/summary.py build/meson-logs/testlog.json build-asan/meson-logs/testlog.json \
+      build-asan/meson-logs/testlog-integration.json
     ;;
   *)
     echo "usage: ./setup.sh run | ./setup.sh test" >&2

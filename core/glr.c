@@ -300,6 +300,9 @@ int glr_open(glr **out, glint_err *err)
     if (!out)
         return glint_err_set(err, GLINT_EINVAL, "glr_open: NULL output");
     *out = NULL;
+    env = getenv("GLINT_EGL");
+    if (env && strcmp(env, "off") == 0)
+        return glint_err_set(err, GLINT_EUNSUPPORTED, "EGL is turned off (GLINT_EGL=off)");
     env = getenv("GLINT_EGL_DEVICE");
     if (env && *env) {
         char *end;

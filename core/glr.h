@@ -8,6 +8,9 @@
  * and a Mesa driver (package libgl1-mesa-dri) or a vendor EGL driver;
  * EGL_PLATFORM need not be set.  GLINT_EGL_DEVICE=N picks the N-th device
  * of eglQueryDevicesEXT (from 0); then only that device is tried.
+ * GLINT_EGL=off makes glr_open fail (GLINT_EUNSUPPORTED) so that automatic
+ * renders take the CPU: the sanitizer build's daemon runs so in the test
+ * command (llvmpipe's JIT hung a preview under AddressSanitizer).
  *
  * A glr holds one context and the compiled programs; create it once per
  * process and reuse it (rendering never pays for context creation).  A glr

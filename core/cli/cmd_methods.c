@@ -32,10 +32,14 @@ int cmd_methods(int argc, char **argv)
     if (argc == 3 && strcmp(argv[1], "--schema") == 0)
         return print_schema(argv[2]);
     if (argc == 2 && strcmp(argv[1], "--json") == 0) {
-        json_t *a = json_array();
+        json_t *a = json_array(), *doc;
         for (int i = 0; i < method_count(); i++)
             json_array_append_new(a, method_describe(method_at(i)));
-        print_json(json_pack("{s:o}", "methods", a));
+        doc = json_pack("{s:o}", "methods", a);
+        if (!doc)
+            return fail(1, "out of memory");
+        print_json(doc);
+        json_decref(doc);
         return 0;
     }
     if (argc != 1)

@@ -45,6 +45,26 @@ def validate(body, schema_name):
     jsonschema.Draft202012Validator(schema, resolver=resolver).validate(body)
 
 
+# What a sanitizer build of glintd reported (AddressSanitizer, LeakSanitizer,
+# UndefinedBehaviorSanitizer write to its stderr, which is the log): each
+# finding fails the run (run_tests).
+SANITIZER_MARKS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:")
+sanitizer_findings = {}
+
+
+def sanitizer_check(log_path):
+    try:
+        with open(log_path, "rb") as f:
+            text = f.read().decode("utf-8", "replace")
+    except OSError:
+        return
+    for mark in SANITIZER_MARKS:
+        at = text.find(mark)
+        if at >= 0:
+            sanitizer_findings[log_path] = text[max(0, at - 200):at + 3000]
+            return
+
+
 class Daemon:
     """A running glintd; stop() sends SIGTERM and waits."""
 
@@ -82,11 +102,12 @@ class Daemon:
         if self.proc and self.proc.poll() is None:
             self.proc.send_signal(sig)
             try:
-                self.proc.wait(timeout=20)
+                self.proc.wait(timeout=60)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
         self.log.close()
+        sanitizer_check(os.path.join(self.tmp, "glintd.log"))
 
     def kill9(self):
         self.stop(signal.SIGKILL)
@@ -139,5 +160,8 @@ def run_tests(namespace, daemon_args=()):
             sys.stdout.flush()
     finally:
         d.stop()
+    for path, excerpt in sorted(sanitizer_findings.items()):
+        print("FAIL sanitizer report in %s:\n%s" % (path, excerpt))
+        failed += 1
     print("%d passed, %d failed" % (passed, failed))
     sys.exit(1 if failed else 0)
