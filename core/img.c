@@ -434,6 +434,20 @@ static int img_encode(const img_fmt *f, const img *im, const char *path, void **
     return rc;
 }
 
+int img_write_pair(const char *dir, const char *stem, const img *lin, const img *png,
+                   glint_err *err)
+{
+    char name[256], path[4096];
+    int rc;
+    snprintf(name, sizeof name, "%s.exr", stem);
+    if ((rc = fsio_join(path, sizeof path, dir, name, err)) || (rc = img_write(path, lin, err)))
+        return rc;
+    snprintf(name, sizeof name, "%s.png", stem);
+    if ((rc = fsio_join(path, sizeof path, dir, name, err)) || (rc = img_write(path, png, err)))
+        return rc;
+    return 0;
+}
+
 int img_write(const char *path, const img *im, glint_err *err)
 {
     const char *base, *dot;

@@ -171,7 +171,6 @@ static int hf3_save_files(const void *data, const char *dir, json_t *root, glint
 {
     const hf_factors *f = data;
     int R = f->res, rc;
-    char path[4096];
     img lin = {0}, png = {0};
     json_t *scales = json_object();
 
@@ -197,12 +196,7 @@ static int hf3_save_files(const void *data, const char *dir, json_t *root, glint
         json_object_set_new(scales, factor_names[j], sc);
     }
     json_object_set(root, "png_scale", scales);
-    if ((rc = fsio_join(path, sizeof path, dir, "factors.exr", err)) ||
-        (rc = img_write(path, &lin, err)))
-        goto done;
-    if ((rc = fsio_join(path, sizeof path, dir, "factors.png", err)) ||
-        (rc = img_write(path, &png, err)))
-        goto done;
+    rc = img_write_pair(dir, "factors", &lin, &png, err);
 done:
     json_decref(scales);
     img_free(&lin);

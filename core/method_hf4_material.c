@@ -126,7 +126,6 @@ static int hf4_save_files(const void *data, const char *dir, json_t *root, glint
     const hf4_factors *f = data;
     hf_factors h = as_hf3(f);
     int S = f->sres, rc;
-    char path[4096];
     img lin = {0}, png = {0};
     double mx[3] = {0, 0, 0};
 
@@ -144,11 +143,7 @@ static int hf4_save_files(const void *data, const char *dir, json_t *root, glint
         for (int c = 0; c < 3; c++)
             png.px[3 * t + c] = mx[c] > 0.0 ? (float)(lin.px[3 * t + c] / mx[c]) : 0.0f;
     json_object_set_new(root, "spatial_png_scale", json_pack("[f,f,f]", mx[0], mx[1], mx[2]));
-    if ((rc = fsio_join(path, sizeof path, dir, "spatial.exr", err)) ||
-        (rc = img_write(path, &lin, err)) ||
-        (rc = fsio_join(path, sizeof path, dir, "spatial.png", err)) ||
-        (rc = img_write(path, &png, err)))
-        goto done;
+    rc = img_write_pair(dir, "spatial", &lin, &png, err);
 done:
     img_free(&lin);
     img_free(&png);

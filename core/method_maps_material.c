@@ -267,7 +267,6 @@ fail:
 static int save_spatial(const maps_material *x, const char *dir, json_t *root, glint_err *err)
 {
     int K = x->mm.k, S = view_of(x, 0).sres, rc;
-    char path[4096];
     img lin = {0}, png = {0};
     json_t *scales = json_array();
 
@@ -297,11 +296,7 @@ static int save_spatial(const maps_material *x, const char *dir, json_t *root, g
                                     "(s_res - 1), v = j / (s_res - 1)), product 0 first; "
                                     "spatial.png: each product's channel over its maximum "
                                     "(spatial_png_scale[product][channel])"));
-    if ((rc = fsio_join(path, sizeof path, dir, "spatial.exr", err)) ||
-        (rc = img_write(path, &lin, err)) ||
-        (rc = fsio_join(path, sizeof path, dir, "spatial.png", err)) ||
-        (rc = img_write(path, &png, err)))
-        goto done;
+    rc = img_write_pair(dir, "spatial", &lin, &png, err);
 done:
     json_decref(scales);
     img_free(&lin);
@@ -318,7 +313,6 @@ static int maps_save_files(const void *data, const char *dir, json_t *root, glin
     const maps_material *x = data;
     int K = x->mm.k, M = x->mm.res, R = 0, rc;
     size_t nt = (size_t)M * M;
-    char path[4096];
     img c = {0}, lin = {0}, png = {0};
     json_t *scales = json_array();
 
@@ -359,12 +353,8 @@ static int maps_save_files(const void *data, const char *dir, json_t *root, glin
                         json_string("factors.exr: RGB float, res wide, 3 rows per product "
                                     "(p, q, r), product 0 first; factors.png: each row over its "
                                     "maximum per channel (png_scale[product][row][channel])"));
-    if ((rc = fsio_join(path, sizeof path, dir, COEF_EXR, err)) || (rc = img_write(path, &c, err)) ||
-        (rc = fsio_join(path, sizeof path, dir, COEF_PNG, err)) || (rc = img_write(path, &c, err)) ||
-        (rc = fsio_join(path, sizeof path, dir, "factors.exr", err)) ||
-        (rc = img_write(path, &lin, err)) ||
-        (rc = fsio_join(path, sizeof path, dir, "factors.png", err)) ||
-        (rc = img_write(path, &png, err)))
+    if ((rc = img_write_pair(dir, "coefficients", &c, &c, err)) ||
+        (rc = img_write_pair(dir, "factors", &lin, &png, err)))
         goto done;
     if (K > 0 && view_of(x, 0).sres > 0)
         rc = save_spatial(x, dir, root, err);
