@@ -104,6 +104,7 @@ run({
     t.log(`material 2: mean weight ${on1.mean.toFixed(3)}; factor plot ink ${curves0} -> ${curves1}`);
     assert(Math.abs(on1.mean - on0.mean) > 1e-3, 'another product, other weights');
     assert(curves1 !== curves0, 'the factor curves follow the product');
+    await page.locator('#surface-view').scrollIntoViewIfNeeded();
     await t.shot(page, '30-surface-maps.png');
   },
 
@@ -131,6 +132,7 @@ run({
     assertEq(sp.w, 8, 'the spatial factor at s_res');
     assertGE(sp.distinct, 4, 'the spatial factor varies');
     assertGE(on.covered, 500, 'laid over the object');
+    await page.locator('#surface-view').scrollIntoViewIfNeeded();
     await t.shot(page, '31-surface-hybrid.png');
   },
 });
