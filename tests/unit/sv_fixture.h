@@ -11,7 +11,9 @@
 
 #include "brdf.h"
 #include "paint.h"
+#include "cache.h"
 #include "prep.h"
+#include "raster.h"
 
 /* prep_scene_source.load lending the scene in cls. */
 static inline int sv_borrowed(void *cls, const char *id, const scene **out, glint_err *err)
@@ -19,6 +21,26 @@ static inline int sv_borrowed(void *cls, const char *id, const scene **out, glin
     (void)id;
     (void)err;
     *out = cls;
+    return 0;
+}
+
+/* The fixture of the tests of spatially varying models: the default scene
+ * at size x size, its G-buffers, a cache of 1 GiB and the scene's entry in
+ * it (id "s", lending *sc).  Once: a second call with *se set does nothing. */
+static inline int sv_setup(int size, scene *sc, gbuf **g, cache **c, cache_entry **se)
+{
+    scene_params sp;
+    prep_scene_source src = {sv_borrowed, NULL, sc};
+    glint_err e;
+    if (*se)
+        return 0;
+    scene_params_default(&sp);
+    sp.width = sp.height = size;
+    if (scene_create(&sp, sc, &e) || raster_scene(sc, g, &e) ||
+        cache_open(NULL, (size_t)1 << 30, c, &e) || prep_scene_acquire(*c, "s", &src, se, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
     return 0;
 }
 

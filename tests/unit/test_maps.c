@@ -33,19 +33,7 @@ static cache_entry *SE;
 
 static int setup(void)
 {
-    scene_params sp;
-    prep_scene_source src = {sv_borrowed, NULL, &SC};
-    glint_err e;
-    if (SE)
-        return 0;
-    scene_params_default(&sp);
-    sp.width = sp.height = 64;
-    if (scene_create(&sp, &SC, &e) || raster_scene(&SC, &G, &e) ||
-        cache_open(NULL, (size_t)1 << 30, &C, &e) || prep_scene_acquire(C, "s", &src, &SE, &e)) {
-        fprintf(stderr, "setup: %s\n", e.msg);
-        return -1;
-    }
-    return 0;
+    return sv_setup(64, &SC, &G, &C, &SE);
 }
 
 static void small(maps_params *mp)

@@ -26,24 +26,17 @@ static prep *PA;   /* every view painted */
 
 static int setup(void)
 {
-    scene_params sp;
     fit_params fp;
     unsigned char use[SCENE_MAX_VIEWS];
-    prep_scene_source src = {sv_borrowed, NULL, &SC};
     glint_err e;
     if (P)
         return 0;
-    scene_params_default(&sp);
-    sp.width = sp.height = 64;
     fit_params_default(&fp);
     fp.res = 32;
     memset(use, 0, sizeof use);
     use[0] = 1; /* one painted view (see matmap.h on merging several) */
-    if (scene_create(&sp, &SC, &e) || raster_scene(&SC, &G, &e) ||
-        cache_open(NULL, (size_t)1 << 30, &C, &e) || prep_scene_acquire(C, "s", &src, &SE, &e)) {
-        fprintf(stderr, "setup: %s\n", e.msg);
+    if (sv_setup(64, &SC, &G, &C, &SE))
         return -1;
-    }
     {
         prep_request rq = {&method_hf3, &fp, SE, use};
         unsigned char all[SCENE_MAX_VIEWS];
