@@ -73,6 +73,10 @@
  * misfit on the samples that reach it is barely reached, and cut. */
 #define HF_GAIN_MAX HF_LOG_FACTOR_MAX
 
+/* Samples the error diagnostics of a fit are computed over, at most
+ * (hf_fit_stats). */
+#define HF_DIAG_SAMPLES 65536
+
 /* ---- Design: the sparse data rows of A ----------------------------------- */
 
 typedef struct hf_design {
@@ -265,14 +269,23 @@ typedef struct hf_fit_stats {
     double log_max_undamped; /* largest |log-factor| of the operator's own solution */
     double damping;        /* Tikhonov alpha the fit added to stay within
                               HF_LOG_FACTOR_MAX (0: none was needed) */
+    /* Diagnostics: over every sample when there are at most HF_DIAG_SAMPLES,
+     * else over samples 0, s, 2s, ... (s = diag_stride = ceil(n /
+     * HF_DIAG_SAMPLES)): an estimate whose relative standard error is
+     * about 1 / sqrt(3 diag_samples) for the RMS figures, and a lower bound
+     * for max_abs. */
     double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
     double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
     double max_abs;        /* max |reconstruction - sample| */
-    double map_seconds;    /* forward mapping (logs) */
-    double apply_seconds;  /* operator application alone (A^T f, then M t) */
-    double total_seconds;  /* the fast factorization: mapping + application + gauge
+    long diag_samples;     /* samples the three figures above are over */
+    long diag_stride;      /* 1: every sample */
+    double map_seconds;    /* the mapping's offsets (SUB: a pass for the largest values) */
+    double stream_seconds; /* the pass over the samples: mapping, logs and A^T f, fused */
+    double op_seconds;     /* M t */
+    double apply_seconds;  /* stream + op: the operator's application to the painting */
+    double total_seconds;  /* the fast factorization: offsets + application + gauge
                               (+ damping, when needed) */
-    double diag_seconds;   /* the diagnostics above (residual, errors), not in total */
+    double diag_seconds;   /* the diagnostics above, not in total */
 } hf_fit_stats;
 
 /* The fitted log-factors in the canonical gauge, with what is needed to

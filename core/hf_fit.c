@@ -264,9 +264,10 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
 {
     double t0 = hf_now(), t1, t2;
     int n, N, rc = 0;
-    double *f = NULL, *t = NULL, *y = NULL, *ly = NULL;
-    float *yf = NULL, *rec = NULL;
+    double *t = NULL, *y = NULL;
+    float *yf = NULL;
     hf_fit_stats st;
+    hf_stream x;
 
     memset(fac, 0, sizeof *fac);
     memset(&st, 0, sizeof st);
@@ -279,17 +280,12 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
         return glint_err_set(err, GLINT_EINVAL, "invalid mapping parameters");
     n = op->n;
     N = d->n;
-    for (long i = 0; i < 3L * N; i++)
-        if (!isfinite(rgb[i]))
-            return glint_err_set(err, GLINT_ENONFINITE,
-                                 "sample %ld channel %ld is not finite", i / 3, i % 3);
 
-    f = malloc((size_t)3 * N * sizeof *f);
     t = malloc((size_t)3 * n * sizeof *t);
     y = malloc((size_t)3 * n * sizeof *y);
     yf = malloc((size_t)3 * n * sizeof *yf);
     fac->logf = malloc((size_t)3 * n * sizeof *fac->logf);
-    if (!f || !t || !y || !yf || !fac->logf) {
+    if (!t || !y || !yf || !fac->logf) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
         goto fail;
     }
@@ -297,34 +293,47 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
     fac->model = model;
     fac->map = *map;
 
-    /* Values of the model's quantity, and the mapping offsets. */
-    for (int c = 0; c < 3; c++) {
-        double vmax = 0.0;
+    /* The mapping's offsets: SUB's needs the largest value per channel. */
+    if (map->kind == HF_MAP_SUB) {
+        double vmax[3] = {0.0, 0.0, 0.0};
         for (int i = 0; i < N; i++) {
-            double v = rgb[3 * i + c];
-            if (model == HF_MODEL_BRDF)
-                v /= d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
-            f[3 * i + c] = v;
-            if (v > vmax)
-                vmax = v;
-        }
-        fac->a_used[c] = hf_map_offset(map, vmax);
-    }
-    /* Forward mapping; samples at or below the floor are clamped, counted. */
-    for (int i = 0; i < N; i++) {
-        for (int c = 0; c < 3; c++) {
-            double arg = hf_map_arg(map, fac->a_used[c], f[3 * i + c]);
-            if (!(arg > map->eps)) {
-                arg = map->eps;
-                st.clamped[c]++;
+            double cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
+            for (int c = 0; c < 3; c++) {
+                double v = rgb[3 * i + c];
+                if (model == HF_MODEL_BRDF)
+                    v /= cosd;
+                if (v > vmax[c])
+                    vmax[c] = v;
             }
-            f[3 * i + c] = arg;
         }
+        for (int c = 0; c < 3; c++)
+            fac->a_used[c] = hf_map_offset(map, vmax[c]);
+    } else {
+        for (int c = 0; c < 3; c++)
+            fac->a_used[c] = hf_map_offset(map, 0.0);
     }
-    vmath_log(f, f, (size_t)3 * N);
     t1 = hf_now();
     st.map_seconds = t1 - t0;
-    hf_At_f(d, f, t);
+    x.d = d;
+    x.rgb = rgb;
+    x.map = map;
+    x.model = model;
+    x.a = fac->a_used;
+    if ((rc = hf_stream_forward(&x, t, st.clamped)) < 0) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
+        goto fail;
+    }
+    if (rc > 0) { /* a non-finite sample: name the first */
+        for (long i = 0; i < 3L * N; i++)
+            if (!isfinite(rgb[i])) {
+                rc = glint_err_set(err, GLINT_ENONFINITE, "sample %ld channel %ld is not finite",
+                                   i / 3, i % 3);
+                goto fail;
+            }
+        rc = 0;
+    }
+    t2 = hf_now();
+    st.stream_seconds = t2 - t1;
     if (op->prec == HF_F32) {
         apply_f32(op->Mf, n, t, yf);
         for (int c = 0; c < 3; c++)
@@ -336,8 +345,8 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
             for (int k = 0; k < n; k++)
                 fac->logf[3 * k + c] = y[c * n + k];
     }
-    t2 = hf_now();
-    st.apply_seconds = t2 - t1;
+    st.op_seconds = hf_now() - t2;
+    st.apply_seconds = hf_now() - t1;
     hf_factors_canonicalize(fac->logf, d->res);
     for (int c = 0; c < 3; c++)
         st.a_used[c] = fac->a_used[c];
@@ -358,41 +367,19 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
         st.log_max = log_abs_max(fac->logf, 3 * n);
     }
     st.total_seconds = hf_now() - t0;
-    t1 = hf_now();
 
-    /* Diagnostics (not part of the timed fit): log residual and linear error. */
-    ly = malloc((size_t)3 * N * sizeof *ly);
-    rec = malloc((size_t)3 * N * sizeof *rec);
-    if (ly && rec) {
-        double ss = 0.0, se = 0.0, mx = 0.0;
-        hf_A_y(d, fac->logf, ly);
-        for (long i = 0; i < 3L * N; i++) {
-            double e = ly[i] - f[i];
-            ss += e * e;
-        }
-        hf_factors_eval_design(fac, d, rec);
-        for (long i = 0; i < 3L * N; i++) {
-            double e = (double)rec[i] - (double)rgb[i];
-            se += e * e;
-            if (fabs(e) > mx)
-                mx = fabs(e);
-        }
-        st.log_residual = sqrt(ss / (3.0 * N));
-        st.rms = sqrt(se / (3.0 * N));
-        st.max_abs = mx;
-    }
-    free(ly);
-    free(rec);
-    st.diag_seconds = hf_now() - t1;
-    if (stats)
+    /* Diagnostics (not part of the timed fit), only when asked for. */
+    if (stats) {
+        t1 = hf_now();
+        hf_stream_diagnostics(&x, fac, &st);
+        st.diag_seconds = hf_now() - t1;
         *stats = st;
-    free(f);
+    }
     free(t);
     free(y);
     free(yf);
     return 0;
 fail:
-    free(f);
     free(t);
     free(y);
     free(yf);

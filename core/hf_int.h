@@ -30,6 +30,34 @@ void hf_At_f(const hf_design *d, const double *f, double *t);
  * OUT: out[3 * n]). */
 void hf_A_y(const hf_design *d, const double *y, double *out);
 
+/* ---- the sample-level passes of a fit (hf_stream.c) ---- */
+
+/* Chunks of the sample-level passes: at most HF_MAX_CHUNKS of at least
+ * HF_MIN_CHUNK samples, a function of the count alone (so results do not
+ * depend on the number of threads). */
+#define HF_MIN_CHUNK 4096
+#define HF_MAX_CHUNKS 32
+void hf_chunking(long n, int *chunk, int *nchunks);
+
+/* What a pass reads: the design, the RGB samples, the mapping with its
+ * offsets a[3] (a_used) and the model. */
+typedef struct hf_stream {
+    const hf_design *d;
+    const float *rgb;
+    const hf_map *map;
+    hf_model model;
+    const double *a;
+} hf_stream;
+
+/* t = A^T f~ with f~ the log-mapped samples (OUT: t[9R], clamped[3]:
+ * samples floored at eps per channel).  -1 when out of memory, 1 when a
+ * sample is not finite (t is then meaningless), else 0. */
+int hf_stream_forward(const hf_stream *x, double *t, int clamped[3]);
+
+/* log_residual, rms, max_abs, diag_samples and diag_stride of *st for the
+ * factors fac (hf.h).  -1 when out of memory (st untouched). */
+int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stats *st);
+
 /* Monotonic clock in seconds. */
 double hf_now(void);
 

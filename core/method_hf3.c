@@ -271,15 +271,18 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
     json_object_set_new(pre, "gain_max", json_real(pp->dc->gain_max));
     json_object_set_new(pre, "gain_kept", json_real(pp->dc->gain_kept));
     json_object_set_new(pre, "s_weak", json_real(pp->dc->s_weak));
-    tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}", "samples", pp->t_samples,
-                    "design", pp->t_design, "decomposition", pp->t_decomp, "operator",
-                    pp->t_op, "map", st.map_seconds, "apply", st.apply_seconds,
+    tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}", "samples",
+                    pp->t_samples, "design", pp->t_design, "decomposition", pp->t_decomp,
+                    "operator", pp->t_op, "map", st.map_seconds, "stream", st.stream_seconds,
+                    "apply_operator", st.op_seconds, "apply", st.apply_seconds,
                     "factorization", st.total_seconds, "diagnostics", st.diag_seconds, "fit",
                     glint_now() - t_start);
     errs = json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:f}", "rms_painted", st.rms,
                      "max_abs_painted", st.max_abs, "log_residual_rms", st.log_residual,
                      "clamped", st.clamped[0], st.clamped[1], st.clamped[2], "log_max",
                      st.log_max, "damping", st.damping);
+    /* over every sample, or an evenly strided subsample (hf.h) */
+    json_object_set_new(errs, "diagnostic_samples", json_integer(st.diag_samples));
     info = json_pack("{s:o, s:o, s:o, s:o}", "params",
                      method_params_to_json(&method_hf3, pp->params), "precomputation", pre,
                      "seconds", tim, "errors", errs);

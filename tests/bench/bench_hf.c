@@ -12,7 +12,12 @@
  * on 20 novel views, writes a CSV and (with gnuplot) a PNG of error against
  * fit time.
  *
- * usage: bench_hf [--quick] [--out DIR]   (DIR default: bench-out)
+ * Part 0 (--warm alone) times the warm fit of a painter's stroke at the
+ * full 128x128 raster (98,434 samples): the pass over the samples, the
+ * operator, the diagnostics, against the bytes read at the bandwidth
+ * measured in the same run.
+ *
+ * usage: bench_hf [--quick] [--warm] [--out DIR]   (DIR default: bench-out)
  * Timings are medians of repeated runs; the machine is shared and noisy. */
 #include <math.h>
 #include <stdio.h>
@@ -26,6 +31,8 @@
 #include "fsio.h"
 #include "hf.h"
 #include "paint.h"
+#include "par.h"
+#include "vmath.h"
 #include "raster.h"
 #include "scene.h"
 
@@ -80,6 +87,53 @@ static double triad_bandwidth(void)
     free(a);
     free(b);
     free(c);
+    return best;
+}
+
+typedef struct triad_ctx {
+    double *a, *b, *c;
+    size_t n;
+    int parts;
+} triad_ctx;
+
+static void triad_part(void *ctx, int k)
+{
+    triad_ctx *t = ctx;
+    size_t lo = t->n * (size_t)k / (size_t)t->parts, hi = t->n * (size_t)(k + 1) / (size_t)t->parts;
+    for (size_t i = lo; i < hi; i++)
+        t->a[i] = t->b[i] + 3.0 * t->c[i];
+}
+
+/* The triad on every thread of the pool (par.h): what the fit's own
+ * threads can draw, bytes/s. */
+static double triad_bandwidth_pool(void)
+{
+    triad_ctx t;
+    double best = 0.0;
+    t.n = (size_t)1 << 24;
+    t.parts = par_threads();
+    t.a = malloc(t.n * sizeof *t.a);
+    t.b = malloc(t.n * sizeof *t.b);
+    t.c = malloc(t.n * sizeof *t.c);
+    if (!t.a || !t.b || !t.c)
+        return 0.0;
+    for (size_t i = 0; i < t.n; i++) {
+        t.a[i] = 0.0;
+        t.b[i] = 1.0;
+        t.c[i] = 2.0;
+    }
+    for (int r = 0; r < 5; r++) {
+        double t0 = now(), dt;
+        par_run(t.parts, triad_part, &t);
+        dt = now() - t0;
+        if (3.0 * t.n * sizeof(double) / dt > best)
+            best = 3.0 * t.n * sizeof(double) / dt;
+    }
+    if (t.a[t.n / 2] != 7.0)
+        best = 0.0;
+    free(t.a);
+    free(t.b);
+    free(t.c);
     return best;
 }
 
@@ -245,6 +299,101 @@ static void table1(FILE *md, int quick)
            " factorization: log mapping + apply + gauge, the fast factorization of Table 1;\n"
            " fit_run: also reading the painting and the error diagnostics;\n"
            " bound: operator bytes (M and the sparse rows of A) / 30 GB/s)\n");
+}
+
+/* ---- Part 0: the warm path at the full raster ---------------------------------------- */
+
+static double secs(const material *m, const char *key)
+{
+    return json_real_value(json_object_get(json_object_get(m->info, "seconds"), key));
+}
+
+/* The fast factorization of one RGB painting of the 128x128 x 12-view
+ * sphere (98,434 samples), the warm fit of a painter's stroke, against the
+ * bytes it must read at the bandwidth measured in the same run. */
+static void warm(FILE *md, int quick)
+{
+    static const int res[] = {16, 64, 128};
+    int reps = quick ? 51 : 201;
+    brdf b;
+    setup s;
+    double bw1 = triad_bandwidth(), bwp = triad_bandwidth_pool();
+
+    brdf_parse("ct0.2", &b, NULL);
+    setup_make(&s, 128, 128, SCENE_VIEWS_ICO12, 0, &b, 0.0);
+    printf("\n== The warm fit at the full raster: 128x128 x 12 views, one RGB painting (ct0.2)\n");
+    printf("threads %d (GLINT_THREADS), vector math %s; memory bandwidth (triad) one thread "
+           "%.1f GB/s, %d threads %.1f GB/s\n",
+           par_threads(), vmath_impl(), bw1 / 1e9, par_threads(), bwp / 1e9);
+    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n", "res",
+           "N", "stream", "M t", "factor.", "f32", "diag", "fit_run", "MB read", "bound",
+           "ratio", "diag N", "RMS");
+    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n", "", "",
+           "ms", "ms", "ms", "ms", "ms", "ms", "", "ms", "", "", "painted");
+    fprintf(md, "\nThe warm fit at the full raster (128x128 x 12 views, one RGB painting): "
+                "threads %d, %s, triad %.1f GB/s (one thread) and %.1f GB/s (%d threads)\n\n",
+            par_threads(), vmath_impl(), bw1 / 1e9, bwp / 1e9, par_threads());
+    fprintf(md, "| res | samples | stream (ms) | M t (ms) | factorization, double (ms) | "
+                "factorization, single (ms) | diagnostics (ms) | fit_run (ms) | MB read | "
+                "bound (ms) | factorization / bound | diagnostic samples | RMS painted |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
+        double st[201], mt[201], fa[201], f32[201], dg[201], run[201], bytes, bound, rms = 0.0;
+        long dn = 0;
+        fit_params p;
+        fit_prep fp, fp32;
+        glint_err e;
+        fit_params_default(&p);
+        p.res = res[r];
+        if (fit_prepare(&fp, &s.sc, s.g, NULL, &p, NULL, &e))
+            die("prepare", &e);
+        p.prec = HF_F32;
+        if (fit_prepare(&fp32, &s.sc, s.g, NULL, &p, NULL, &e))
+            die("prepare f32", &e);
+        for (int k = 0; k < reps; k++) {
+            material m;
+            double t0 = now();
+            if (fit_run(&fp, s.paint, NULL, &m, &e))
+                die("fit", &e);
+            run[k] = now() - t0;
+            st[k] = secs(&m, "stream");
+            mt[k] = secs(&m, "apply_operator");
+            fa[k] = secs(&m, "factorization");
+            dg[k] = secs(&m, "diagnostics");
+            rms = json_real_value(json_object_get(json_object_get(m.info, "errors"),
+                                                  "rms_painted"));
+            dn = (long)json_integer_value(json_object_get(json_object_get(m.info, "errors"),
+                                                          "diagnostic_samples"));
+            material_free(&m);
+            if (fit_run(&fp32, s.paint, NULL, &m, &e))
+                die("fit f32", &e);
+            f32[k] = secs(&m, "factorization");
+            material_free(&m);
+        }
+        /* the bytes the factorization reads: RGB (float), texel indices
+         * (int32) and weights (double) per sample and factor, the operator */
+        bytes = (double)fp.s.n * (3 * 4 + 3 * 4 + 3 * 8) + (double)hf_op_bytes(&fp.op, NULL);
+        bound = bytes / bwp;
+        {
+            double ms = median(st, reps), mm = median(mt, reps), mf = median(fa, reps);
+            double m32 = median(f32, reps), md_ = median(dg, reps), mr = median(run, reps);
+            printf("%-4d %-6d | %-9.3f %-9.3f %-9.3f %-9.3f | %-9.3f %-9.3f | %-8.2f %-8.3f %-7.2f "
+                   "| %-7ld %-8.4f\n",
+                   res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * md_, 1e3 * mr,
+                   bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
+            fprintf(md, "| %d | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f "
+                        "| %ld | %.4f |\n",
+                    res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * md_, 1e3 * mr,
+                    bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
+        }
+        fit_prep_free(&fp);
+        fit_prep_free(&fp32);
+    }
+    printf("(stream: the pass over the samples (mapping, logs, A^T f); M t: the operator; "
+           "factorization: both + offsets + gauge;\n diag: the error diagnostics; fit_run: also "
+           "reading the painting; bound: MB read / the %d-thread bandwidth)\n",
+           par_threads());
+    free_setup(&s);
 }
 
 /* ---- Part 2: speed-accuracy sweep -------------------------------------------------- */
@@ -445,7 +594,7 @@ static int sweep(FILE *md, const char *outdir, int quick, const char *spec)
 
 int main(int argc, char **argv)
 {
-    int quick = 0;
+    int quick = 0, parts = 7;
     const char *out = "bench-out";
     char mdpath[4096];
     FILE *md;
@@ -456,8 +605,11 @@ int main(int argc, char **argv)
             quick = 1;
         else if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
             out = argv[++i];
+        else if (strcmp(argv[i], "--warm") == 0)
+            parts = 1;
         else {
-            fprintf(stderr, "usage: bench_hf [--quick] [--out DIR]\n");
+            fprintf(stderr, "usage: bench_hf [--quick] [--warm] [--out DIR]\n"
+                            "  --warm: only the warm fit at the full raster\n");
             return 1;
         }
     }
@@ -467,10 +619,13 @@ int main(int argc, char **argv)
     md = fopen(mdpath, "w");
     if (!md)
         die("cannot write the markdown table", NULL);
-    table1(md, quick);
-    sweep(md, out, quick, "ct0.2");
-    if (!quick)
-        sweep(md, out, quick, "ct0.5");
+    warm(md, quick);
+    if (parts & 2) {
+        table1(md, quick);
+        sweep(md, out, quick, "ct0.2");
+        if (!quick)
+            sweep(md, out, quick, "ct0.5");
+    }
     fclose(md);
     printf("\nmarkdown tables: %s\n", mdpath);
     return 0;

@@ -1,0 +1,267 @@
+/* hf_stream.c: the sample-level passes of a fit (hf_fit), streamed.
+ *
+ * The forward pass maps every sample's RGB value to log space and scatters
+ * it into t = A^T f in one sweep: the samples are cut into chunks whose
+ * size depends only on the sample count (hf_chunking), each chunk maps a
+ * block of HF_BLOCK samples at a time into a buffer that stays in L1
+ * (values, floor, logs) and scatters the block into four interleaved
+ * partial sums (sample i into copy i % 4, which breaks the chains of
+ * dependent read-modify-writes on a texel that neighbouring samples share).
+ * Chunks run on the pool's threads (par.h); each chunk's sum is kept apart
+ * and the chunks are added in chunk order, so t is the same bits on one
+ * thread or many.  Nothing of size n is written: the pass reads the RGB
+ * values, the design's texel indices and weights (and n.wi for the BRDF
+ * model) once.
+ *
+ * The diagnostics pass (log residual, linear RMS and maximum error) runs
+ * the same way over every sample, or over an evenly strided subsample of
+ * HF_DIAG_SAMPLES when there are more (see hf.h, hf_fit_stats). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hf_int.h"
+#include "par.h"
+#include "vmath.h"
+
+#define HF_BLOCK 256
+#define COS_FLOOR 1e-6
+
+void hf_chunking(long n, int *chunk, int *nchunks)
+{
+    long c = (n + HF_MAX_CHUNKS - 1) / HF_MAX_CHUNKS;
+    if (c < HF_MIN_CHUNK)
+        c = HF_MIN_CHUNK;
+    *chunk = (int)c;
+    *nchunks = (int)((n + c - 1) / c);
+}
+
+/* The log-mapped values of samples idx[0..nb-1] (or first..first+nb-1 when
+ * idx is NULL) into buf[3 nb]; counts floored values into clamped[3]. */
+static void map_block(const hf_stream *x, const int *idx, int first, int nb, double *buf,
+                      int *clamped, int *bad)
+{
+    const hf_design *d = x->d;
+    const float *rgb = x->rgb;
+    const double eps = x->map->eps;
+    for (int b = 0; b < nb; b++) {
+        int i = idx ? idx[b] : first + b;
+        double cosd = 1.0;
+        if (x->model == HF_MODEL_BRDF)
+            cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
+        for (int c = 0; c < 3; c++) {
+            double v = rgb[3 * i + c], arg;
+            *bad |= !isfinite(v);
+            if (x->model == HF_MODEL_BRDF)
+                v /= cosd;
+            switch (x->map->kind) {
+            case HF_MAP_ADD: arg = x->a[c] + v; break;
+            case HF_MAP_SUB: arg = x->a[c] - v; break;
+            default: arg = v; break;
+            }
+            if (!(arg > eps)) {
+                arg = eps;
+                clamped[c]++;
+            }
+            buf[3 * b + c] = arg;
+        }
+    }
+    vmath_log(buf, buf, (size_t)3 * nb);
+}
+
+typedef struct fwd_task {
+    const hf_stream *x;
+    int chunk, nchunks;
+    double *part;        /* nchunks x 9R */
+    int *clamped;        /* nchunks x 3 */
+    int *bad;            /* nchunks: a non-finite sample was seen */
+    int oom;
+} fwd_task;
+
+static void fwd_run(void *ctx, int c)
+{
+    fwd_task *w = ctx;
+    const hf_design *d = w->x->d;
+    int R = d->res, i0 = c * w->chunk, i1 = i0 + w->chunk;
+    size_t len = (size_t)9 * R;
+    double buf[3 * HF_BLOCK], *acc = calloc(4 * len, sizeof *acc), *out = w->part + c * len;
+    int *clamped = w->clamped + 3 * c;
+
+    if (i1 > d->n)
+        i1 = d->n;
+    if (!acc) {
+        w->oom = 1;
+        return;
+    }
+    for (int b0 = i0; b0 < i1; b0 += HF_BLOCK) {
+        int nb = i1 - b0 < HF_BLOCK ? i1 - b0 : HF_BLOCK;
+        map_block(w->x, NULL, b0, nb, buf, clamped, w->bad + c);
+        for (int b = 0; b < nb; b++) {
+            int i = b0 + b;
+            const double *fi = buf + 3 * b;
+            const int32_t *k0 = d->k0 + 3 * (size_t)i;
+            const double *tt = d->t + 3 * (size_t)i;
+            double *base = acc + (size_t)(i & 3) * len;
+            for (int j = 0; j < 3; j++) {
+                double *tk = base + 3 * (j * R + k0[j]);
+                double w1 = tt[j], w0 = 1.0 - w1;
+                tk[0] += w0 * fi[0];
+                tk[1] += w0 * fi[1];
+                tk[2] += w0 * fi[2];
+                tk[3] += w1 * fi[0];
+                tk[4] += w1 * fi[1];
+                tk[5] += w1 * fi[2];
+            }
+        }
+    }
+    for (size_t k = 0; k < len; k++)
+        out[k] = (acc[k] + acc[len + k]) + (acc[2 * len + k] + acc[3 * len + k]);
+    free(acc);
+}
+
+int hf_stream_forward(const hf_stream *x, double *t, int clamped[3])
+{
+    const hf_design *d = x->d;
+    size_t len = (size_t)9 * d->res;
+    fwd_task w;
+    int rc = 0;
+
+    memset(&w, 0, sizeof w);
+    w.x = x;
+    hf_chunking(d->n, &w.chunk, &w.nchunks);
+    w.part = malloc((size_t)w.nchunks * len * sizeof *w.part);
+    w.clamped = calloc((size_t)w.nchunks * 3, sizeof *w.clamped);
+    w.bad = calloc((size_t)w.nchunks, sizeof *w.bad);
+    if (!w.part || !w.clamped || !w.bad) {
+        rc = -1;
+        goto done;
+    }
+    if (par_worth((size_t)3 * d->n))
+        par_run(w.nchunks, fwd_run, &w);
+    else
+        for (int c = 0; c < w.nchunks; c++)
+            fwd_run(&w, c);
+    if (w.oom) {
+        rc = -1;
+        goto done;
+    }
+    memcpy(t, w.part, len * sizeof *t);
+    for (int c = 1; c < w.nchunks; c++)
+        for (size_t k = 0; k < len; k++)
+            t[k] += w.part[c * len + k];
+    clamped[0] = clamped[1] = clamped[2] = 0;
+    for (int c = 0; c < w.nchunks; c++) {
+        for (int ch = 0; ch < 3; ch++)
+            clamped[ch] += w.clamped[3 * c + ch];
+        rc |= w.bad[c];
+    }
+done:
+    free(w.part);
+    free(w.clamped);
+    free(w.bad);
+    return rc;
+}
+
+/* ---- diagnostics ---------------------------------------------------------------------- */
+
+typedef struct diag_task {
+    const hf_stream *x;
+    const hf_factors *fac;
+    long stride, count;  /* samples j * stride, j < count */
+    int chunk, nchunks;
+    double *ss, *se, *mx; /* per chunk */
+} diag_task;
+
+static void diag_run(void *ctx, int c)
+{
+    diag_task *w = ctx;
+    const hf_stream *x = w->x;
+    const hf_design *d = x->d;
+    const hf_factors *fac = w->fac;
+    int R = d->res, idx[HF_BLOCK], clamped[3] = {0, 0, 0}, bad = 0;
+    long j0 = (long)c * w->chunk, j1 = j0 + w->chunk;
+    double fb[3 * HF_BLOCK], lb[3 * HF_BLOCK], ss = 0.0, se = 0.0, mx = 0.0;
+
+    if (j1 > w->count)
+        j1 = w->count;
+    for (long b0 = j0; b0 < j1; b0 += HF_BLOCK) {
+        int nb = j1 - b0 < HF_BLOCK ? (int)(j1 - b0) : HF_BLOCK;
+        for (int b = 0; b < nb; b++)
+            idx[b] = (int)((b0 + b) * w->stride);
+        map_block(x, idx, 0, nb, fb, clamped, &bad);
+        for (int b = 0; b < nb; b++) {
+            int i = idx[b];
+            double acc[3] = {0.0, 0.0, 0.0};
+            for (int j = 0; j < 3; j++) {
+                const double *yk = fac->logf + 3 * (j * R + d->k0[3 * i + j]);
+                double w1 = d->t[3 * i + j], w0 = 1.0 - w1;
+                for (int ch = 0; ch < 3; ch++)
+                    acc[ch] += w0 * yk[ch] + w1 * yk[3 + ch];
+            }
+            for (int ch = 0; ch < 3; ch++) {
+                double e = acc[ch] - fb[3 * b + ch];
+                ss += e * e;
+                lb[3 * b + ch] = acc[ch] > 700.0 ? 700.0 : acc[ch];
+            }
+        }
+        vmath_exp(lb, lb, (size_t)3 * nb);
+        for (int b = 0; b < nb; b++) {
+            int i = idx[b];
+            double wgt = fac->model == HF_MODEL_BRDF ? d->cos_i[i] : 1.0;
+            for (int ch = 0; ch < 3; ch++) {
+                float rec = (float)(wgt * hf_map_inverse(&fac->map, fac->a_used[ch],
+                                                          lb[3 * b + ch]));
+                double e = (double)rec - (double)x->rgb[3 * i + ch];
+                se += e * e;
+                if (fabs(e) > mx)
+                    mx = fabs(e);
+            }
+        }
+    }
+    w->ss[c] = ss;
+    w->se[c] = se;
+    w->mx[c] = mx;
+}
+
+int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stats *st)
+{
+    long n = x->d->n;
+    diag_task w;
+    double ss = 0.0, se = 0.0, mx = 0.0;
+    int rc = 0;
+
+    memset(&w, 0, sizeof w);
+    w.x = x;
+    w.fac = fac;
+    w.stride = n > HF_DIAG_SAMPLES ? (n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES : 1;
+    w.count = (n + w.stride - 1) / w.stride;
+    hf_chunking(w.count, &w.chunk, &w.nchunks);
+    w.ss = malloc((size_t)w.nchunks * sizeof *w.ss);
+    w.se = malloc((size_t)w.nchunks * sizeof *w.se);
+    w.mx = malloc((size_t)w.nchunks * sizeof *w.mx);
+    if (!w.ss || !w.se || !w.mx) {
+        rc = -1;
+        goto done;
+    }
+    if (par_worth((size_t)3 * w.count))
+        par_run(w.nchunks, diag_run, &w);
+    else
+        for (int c = 0; c < w.nchunks; c++)
+            diag_run(&w, c);
+    for (int c = 0; c < w.nchunks; c++) {
+        ss += w.ss[c];
+        se += w.se[c];
+        if (w.mx[c] > mx)
+            mx = w.mx[c];
+    }
+    st->log_residual = sqrt(ss / (3.0 * w.count));
+    st->rms = sqrt(se / (3.0 * w.count));
+    st->max_abs = mx;
+    st->diag_samples = w.count;
+    st->diag_stride = w.stride;
+done:
+    free(w.ss);
+    free(w.se);
+    free(w.mx);
+    return rc;
+}

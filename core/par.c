@@ -1,0 +1,132 @@
+/* par.c: the worker pool of par.h. */
+#include "par.h"
+
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+static struct {
+    pthread_mutex_t lock;
+    pthread_cond_t go, done;
+    int nworkers;        /* started */
+    int started;         /* start attempted */
+    unsigned long gen;   /* run generation */
+    int open;            /* the current run still takes workers */
+    int working;         /* workers inside the current run */
+    par_fn fn;
+    void *ctx;
+    int ntasks;
+    atomic_int next;     /* next task to claim */
+    atomic_int busy;     /* a run holds the pool */
+} P = {.lock = PTHREAD_MUTEX_INITIALIZER, .go = PTHREAD_COND_INITIALIZER, .done = PTHREAD_COND_INITIALIZER};
+
+static int nthreads = -1;
+static pthread_once_t threads_once = PTHREAD_ONCE_INIT;
+
+static void threads_init(void)
+{
+    const char *env = getenv("GLINT_THREADS");
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    if (env && *env) {
+        char *end;
+        long v = strtol(env, &end, 10);
+        if (*end == '\0' && v >= 1)
+            n = v;
+    }
+    if (n < 1)
+        n = 1;
+    if (n > PAR_MAX_THREADS)
+        n = PAR_MAX_THREADS;
+    nthreads = (int)n;
+}
+
+int par_threads(void)
+{
+    pthread_once(&threads_once, threads_init);
+    return nthreads;
+}
+
+static void claim_loop(par_fn fn, void *ctx, int ntasks)
+{
+    int t;
+    while ((t = atomic_fetch_add(&P.next, 1)) < ntasks)
+        fn(ctx, t);
+}
+
+static void *worker(void *arg)
+{
+    unsigned long seen = 0;
+    (void)arg;
+    pthread_mutex_lock(&P.lock);
+    for (;;) {
+        par_fn fn;
+        void *ctx;
+        int ntasks;
+        while (!(P.open && P.gen != seen))
+            pthread_cond_wait(&P.go, &P.lock);
+        seen = P.gen;
+        P.working++;
+        fn = P.fn;
+        ctx = P.ctx;
+        ntasks = P.ntasks;
+        pthread_mutex_unlock(&P.lock);
+        claim_loop(fn, ctx, ntasks);
+        pthread_mutex_lock(&P.lock);
+        if (--P.working == 0)
+            pthread_cond_broadcast(&P.done);
+    }
+    return NULL;
+}
+
+/* Under P.lock.  Workers block every signal: signals go to the threads the
+ * program made itself. */
+static void start_workers(void)
+{
+    sigset_t all, old;
+    P.started = 1;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
+    for (int i = 0; i < par_threads() - 1; i++) {
+        pthread_t th;
+        pthread_attr_t at;
+        pthread_attr_init(&at);
+        pthread_attr_setdetachstate(&at, PTHREAD_CREATE_DETACHED);
+        if (pthread_create(&th, &at, worker, NULL) == 0)
+            P.nworkers++;
+        pthread_attr_destroy(&at);
+    }
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+}
+
+void par_run(int ntasks, par_fn fn, void *ctx)
+{
+    if (ntasks <= 0)
+        return;
+    if (ntasks == 1 || par_threads() == 1 || atomic_exchange(&P.busy, 1)) {
+        for (int t = 0; t < ntasks; t++)
+            fn(ctx, t);
+        return;
+    }
+    pthread_mutex_lock(&P.lock);
+    if (!P.started)
+        start_workers();
+    P.fn = fn;
+    P.ctx = ctx;
+    P.ntasks = ntasks;
+    atomic_store(&P.next, 0);
+    P.gen++;
+    P.open = P.nworkers > 0;
+    if (P.open)
+        pthread_cond_broadcast(&P.go);
+    pthread_mutex_unlock(&P.lock);
+    claim_loop(fn, ctx, ntasks);
+    /* workers that have not woken by now are not waited for */
+    pthread_mutex_lock(&P.lock);
+    P.open = 0;
+    while (P.working > 0)
+        pthread_cond_wait(&P.done, &P.lock);
+    pthread_mutex_unlock(&P.lock);
+    atomic_store(&P.busy, 0);
+}
