@@ -40,6 +40,82 @@ static void sync_dir(const char *path)
     free(dir);
 }
 
+static __thread fsio_group *cur_group;
+
+void fsio_group_begin(fsio_group *g)
+{
+    memset(g, 0, sizeof *g);
+    cur_group = g;
+}
+
+static void group_add(fsio_group *g, const char *path)
+{
+    char *p;
+    if (g->n == g->cap) {
+        int ncap = g->cap ? 2 * g->cap : 8;
+        char **np = realloc(g->paths, (size_t)ncap * sizeof *np);
+        if (!np) {
+            g->failed = 1;
+            return;
+        }
+        g->paths = np;
+        g->cap = ncap;
+    }
+    if (!(p = strdup(path))) {
+        g->failed = 1;
+        return;
+    }
+    g->paths[g->n++] = p;
+}
+
+static int sync_path(const char *path, int dir)
+{
+    int fd = open(path, (dir ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC), rc;
+    if (fd < 0)
+        return -1;
+    rc = fsync(fd);
+    close(fd);
+    return rc;
+}
+
+int fsio_group_end(fsio_group *g, glint_err *err)
+{
+    int rc = 0, nfiles;
+    cur_group = NULL;
+    if (g->failed)
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory making files durable");
+    for (int i = 0; i < g->n && !rc; i++)
+        if (sync_path(g->paths[i], 0) != 0)
+            rc = glint_err_set(err, GLINT_EIO, "%s: fsync failed: %s", g->paths[i],
+                               strerror(errno));
+    /* then each directory once (best effort, as sync_dir) */
+    nfiles = g->n;
+    for (int i = 0; i < nfiles && !rc; i++) {
+        char *slash = strrchr(g->paths[i], '/');
+        int seen = 0;
+        if (slash)
+            *slash = '\0';
+        for (int j = 0; j < i && !seen; j++)
+            seen = strcmp(g->paths[j], g->paths[i]) == 0;
+        if (!seen) {
+            /* the directory, then its parent: the group's directory may be
+             * new (a material's), and its own entry must last too */
+            char *up = slash ? strrchr(g->paths[i], '/') : NULL;
+            (void)sync_path(slash ? g->paths[i] : ".", 1);
+            if (up) {
+                *up = '\0';
+                (void)sync_path(up == g->paths[i] ? "/" : g->paths[i], 1);
+                *up = '/';
+            }
+        }
+    }
+    for (int i = 0; i < g->n; i++)
+        free(g->paths[i]);
+    free(g->paths);
+    memset(g, 0, sizeof *g);
+    return rc;
+}
+
 void fsio_atomic_abort(fsio_atomic *a)
 {
     if (!a)
@@ -99,7 +175,7 @@ int fsio_atomic_commit(fsio_atomic *a, glint_err *err)
     if (fflush(a->fp) != 0 || ferror(a->fp))
         goto fail;
     what = "fsync";
-    if (fsync(fileno(a->fp)) != 0)
+    if (!cur_group && fsync(fileno(a->fp)) != 0)
         goto fail;
     what = "close";
     rc = fclose(a->fp);
@@ -109,7 +185,10 @@ int fsio_atomic_commit(fsio_atomic *a, glint_err *err)
     what = "rename";
     if (rename(a->tmp, a->path) != 0)
         goto fail;
-    sync_dir(a->path);
+    if (cur_group)
+        group_add(cur_group, a->path);
+    else
+        sync_dir(a->path);
     free(a->tmp);
     a->tmp = NULL; /* nothing to unlink */
     fsio_atomic_abort(a);

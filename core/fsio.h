@@ -28,6 +28,25 @@ void fsio_atomic_abort(fsio_atomic *a);
 /* Write len bytes atomically to path (open + fwrite + commit). */
 int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err *err);
 
+/* A group of files written together (the files of a new material): between
+ * fsio_group_begin and fsio_group_end, atomic writes on this thread are
+ * renamed into place at once but made durable together by
+ * fsio_group_end, which fsyncs every file of the group and then each of
+ * their directories and its parent once (n + 2d fsyncs instead of 2n, and
+ * a new directory's own entry is durable too).  A crash before
+ * fsio_group_end has returned may leave any of the group's files empty or
+ * missing, so nothing may name them durably before it has (glintd records
+ * a material only after).  fsio_group_end returns the first failure;
+ * without a group, commits are durable one by one.  Groups do not nest. */
+typedef struct fsio_group {
+    char **paths;    /* files committed, then their directories */
+    int n, cap;
+    int failed;      /* out of memory recording a path: end reports it */
+} fsio_group;
+
+void fsio_group_begin(fsio_group *g);
+int fsio_group_end(fsio_group *g, glint_err *err);
+
 /* Read a whole file (at most max_len bytes, else GLINT_ERANGE) into a
  * malloc'ed buffer with a NUL appended (OUT: *data, *len). */
 int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len,

@@ -249,6 +249,7 @@ int material_save(const material *m, const char *dir, glint_err *err)
     char path[4096];
     json_t *root = NULL;
     char *text = NULL;
+    fsio_group grp;
     int rc;
 
     if (!m->method)
@@ -257,6 +258,8 @@ int material_save(const material *m, const char *dir, glint_err *err)
         return rc;
     if (!(root = manifest_of(m, err)))
         return err && err->code ? err->code : GLINT_ENOMEM;
+    /* the files are made durable together, at the end (fsio.h) */
+    fsio_group_begin(&grp);
     if (m->method->mat->save_files && (rc = m->method->mat->save_files(m->data, dir, root, err)))
         goto done;
     text = json_dumps(root, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
@@ -268,6 +271,15 @@ int material_save(const material *m, const char *dir, glint_err *err)
         goto done;
     rc = fsio_write_atomic(path, text, strlen(text), err);
 done:
+    {
+        glint_err gerr;
+        int grc = fsio_group_end(&grp, &gerr);
+        if (!rc && grc) {
+            rc = grc;
+            if (err)
+                *err = gerr;
+        }
+    }
     free(text);
     json_decref(root);
     return rc;
