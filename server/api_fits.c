@@ -99,7 +99,7 @@ static http_resp fits_create(http_req *req)
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);
         goto done;
     }
-    if ((rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &e)))
+    if ((rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
         goto done;
     if (doc) { /* fitted now */
         snprintf(loc, sizeof loc, "/api/v1/materials/%s",

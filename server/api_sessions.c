@@ -308,6 +308,7 @@ static int painting_check_type(http_req *req, int w, int h, glint_err *e)
 static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_err *e)
 {
     app *a = req->app;
+    double t0;
     int rc;
 
     memset(im, 0, sizeof *im);
@@ -322,7 +323,9 @@ static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_er
                           h);
     if ((rc = painting_check_type(req, w, h, e)))
         return rc;
+    t0 = glint_now();
     rc = img_read_mem(req->body, req->body_len, im, e);
+    t0 = srv_timing_step(&req->timing, "decode", t0);
     if (rc == GLINT_ENONFINITE)
         return api_reject(e, rc, "non-finite", "the painting has non-finite pixels: %.400s",
                           e->msg);
@@ -347,6 +350,7 @@ static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_er
                                                  "the painting has non-finite pixels: %.400s",
                                                  e->msg)
                                     : rc;
+    srv_timing_step(&req->timing, "validate", t0);
     if (rc)
         img_free(im);
     return rc;
@@ -393,35 +397,37 @@ static http_resp painting_put(http_req *req)
     json_t *sdoc = NULL, *scene_doc = NULL;
     http_resp r = {0, NULL};
     img im = {0};
-    void *exr = NULL;
-    size_t len = 0;
     int64_t version = 0, seq = 0;
     glint_err e;
+    double t0 = glint_now();
     int k, w, h, rc;
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
-        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)) ||
-        (rc = painting_decode(req, k, w, h, &im, &e)))
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
         goto done;
-    if ((rc = img_write_mem("exr", &im, &exr, &len, &e))) {
-        glint_err_prefix(&e, "encoding the painting");
+    srv_timing_step(&req->timing, "session", t0);
+    if ((rc = painting_decode(req, k, w, h, &im, &e)))
         goto done;
-    }
+    /* the upload is stored as it came: it was decoded and checked above,
+     * and decodes to the same pixels whenever it is read */
+    t0 = glint_now();
     pthread_mutex_lock(session_lock(req->param[0]));
     rc = if_match(req, k, &e);
-    if (!rc && (rc = store_painting_put(a->store, req->param[0], k, exr, len, &version, &seq, &e)))
+    if (!rc && (rc = store_painting_put(a->store, req->param[0], k, req->body, req->body_len,
+                                        &version, &seq, &e)))
         glint_err_prefix(&e, "storing the painting");
     pthread_mutex_unlock(session_lock(req->param[0]));
     if (rc)
         goto done;
+    t0 = srv_timing_step(&req->timing, "store", t0);
     memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &im);
     events_notify(a->events, req->param[0]);
+    srv_timing_step(&req->timing, "notify", t0);
     r = http_json(200, json_pack("{s:i, s:I, s:I}", "view", k, "version", (json_int_t)version,
                                  "seq", (json_int_t)seq));
 done:
     if (rc)
         r = api_error(&e);
-    free(exr);
     img_free(&im);
     json_decref(scene_doc);
     json_decref(sdoc);
@@ -450,13 +456,13 @@ static http_resp painting_get(http_req *req)
         (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
         goto done;
     rc = store_painting_get(a->store, req->param[0], k, &exr, &len, &version, &e);
-    if (rc == 0 && strcmp(fmt, "exr") == 0) {
+    if (rc == 0 && strcmp(fmt, "exr") == 0 && len >= 4 && memcmp(exr, "\x76\x2f\x31\x01", 4) == 0) {
         r = http_bytes_owned(200, "image/x-exr", exr, len);
         exr = NULL;
     } else if (rc == 0 || rc == GLINT_ENOTFOUND) {
         const char *scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
         rc = rc == 0 ? img_read_mem(exr, len, &im, &e) : scenes_base(a, scene_id, k, &im, &e);
-        if (rc || (rc = img_write_mem(fmt, &im, &data, &len, &e))) {
+        if (rc || (rc = img_to_rgb(&im, &e)) || (rc = img_write_mem(fmt, &im, &data, &len, &e))) {
             glint_err_prefix(&e, "painting");
             goto done;
         }

@@ -27,6 +27,7 @@ struct fitsvc {
     admit *work;                     /* NULL: no admission */
     pthread_mutex_t lock;
     unsigned long long hits, misses; /* fit requests: precomputation in memory or not */
+    json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
 };
 
 /* ---- scenes ----------------------------------------------------------------------- */
@@ -119,6 +120,7 @@ typedef struct fit_task {
     unsigned char *use;      /* nviews: painted */
     long long *versions;     /* nviews: painting versions used */
     size_t bytes;            /* the fit's memory bound (admit.h) */
+    srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
 } fit_task;
 
 static void task_free(void *p)
@@ -141,24 +143,31 @@ static void task_free(void *p)
     free(t);
 }
 
-/* Read the session's paintings (a snapshot).  OUT: t->paintings, use,
- * versions. */
-static int task_read_paintings(fit_task *t, glint_err *err)
+/* The views' paintings (task_read_paintings); listed[nviews]: scratch. */
+static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *err)
 {
-    const scene *sc = prep_scene_of(t->scene)->sc;
+    json_t *list = NULL, *it;
+    size_t i;
     int rc;
 
-    t->nviews = sc->nviews;
-    t->paintings = calloc((size_t)sc->nviews, sizeof *t->paintings);
-    t->use = calloc((size_t)sc->nviews, 1);
-    t->versions = calloc((size_t)sc->nviews, sizeof *t->versions);
-    t->pins = calloc((size_t)sc->nviews, sizeof *t->pins);
-    if (!t->paintings || !t->use || !t->versions || !t->pins)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    /* the versions first, in one query: a painting the memo holds at its
+     * version is not read from the store at all */
+    if ((rc = store_paintings_list(t->f->st, t->session_id, &list, err)))
+        return rc;
+    json_array_foreach(list, i, it) {
+        int v = (int)json_integer_value(json_object_get(it, "view"));
+        if (v >= 0 && v < sc->nviews)
+            listed[v] = json_integer_value(json_object_get(it, "version"));
+    }
+    json_decref(list);
     for (int v = 0; v < sc->nviews; v++) {
         void *data = NULL;
         size_t len = 0;
-        int64_t version = 0;
+        int64_t version = listed[v];
+        if (version > 0 &&
+            memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
+            goto check;
+        /* not in the memo (or painted since the list): read and decode */
         rc = store_painting_get(t->f->st, t->session_id, v, &data, &len, &version, err);
         if (rc == GLINT_ENOTFOUND)
             continue; /* never painted: not in the pattern */
@@ -167,6 +176,8 @@ static int task_read_paintings(fit_task *t, glint_err *err)
         if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) != 0) {
             img im;
             rc = img_read_mem(data, len, &im, err);
+            if (!rc && (rc = img_to_rgb(&im, err)))
+                img_free(&im);
             if (rc) {
                 free(data);
                 glint_err_prefix(err, "painting of view %d", v);
@@ -176,6 +187,7 @@ static int task_read_paintings(fit_task *t, glint_err *err)
                 t->paintings[v] = im; /* not kept by the memo: the task's own */
         }
         free(data);
+    check:
         if (t->pins[v]) /* shared read-only with the memo */
             t->paintings[v] = *memo_painting_img(t->pins[v]);
         if (t->paintings[v].width != sc->width || t->paintings[v].height != sc->height) {
@@ -195,6 +207,29 @@ static int task_read_paintings(fit_task *t, glint_err *err)
         return glint_err_kind(err, "no-paintings");
     }
     return 0;
+}
+
+/* Read the session's paintings (a snapshot).  OUT: t->paintings, use,
+ * versions. */
+static int task_read_paintings(fit_task *t, glint_err *err)
+{
+    const scene *sc = prep_scene_of(t->scene)->sc;
+    int64_t *listed;
+    int rc;
+
+    t->nviews = sc->nviews;
+    t->paintings = calloc((size_t)sc->nviews, sizeof *t->paintings);
+    t->use = calloc((size_t)sc->nviews, 1);
+    t->versions = calloc((size_t)sc->nviews, sizeof *t->versions);
+    t->pins = calloc((size_t)sc->nviews, sizeof *t->pins);
+    listed = calloc((size_t)sc->nviews, sizeof *listed);
+    if (!t->paintings || !t->use || !t->versions || !t->pins || !listed) {
+        free(listed);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
+    rc = read_views(t, sc, listed, err);
+    free(listed);
+    return rc;
 }
 
 /* The fit's memory bound: the method's for the samples of the painted views
@@ -236,7 +271,8 @@ typedef struct holdout_task {
     void *params;
     cache_entry *pattern;    /* the fit's: every painted view's samples */
     int nviews;
-    img *paintings;          /* copies of the painted views */
+    img *paintings;          /* the painted views: shared with the memo, or copies */
+    memo_painting **pins;    /* nviews: the memo's (NULL: paintings[v] is a copy) */
     char scene_hash[33];
     char material_id[33];
     char key[1024];
@@ -248,9 +284,21 @@ static void holdout_free(void *p)
     holdout_task *h = p;
     if (!h)
         return;
-    for (int v = 0; h->paintings && v < h->nviews; v++)
-        img_free(&h->paintings[v]);
+    for (int v = 0; h->paintings && v < h->nviews; v++) {
+        if (h->pins && h->pins[v])
+            memo_painting_release(h->f->memo, h->pins[v]);
+        else
+            img_free(&h->paintings[v]);
+    }
+    if (h->key[0]) { /* no longer scheduled */
+        char k[1100];
+        snprintf(k, sizeof k, "%s/%s", h->scene_hash, h->key);
+        pthread_mutex_lock(&h->f->lock);
+        json_object_del(h->f->holdouts, k);
+        pthread_mutex_unlock(&h->f->lock);
+    }
     free(h->paintings);
+    free(h->pins);
     free(h->params);
     cache_release(h->f->cache, h->pattern);
     free(h);
@@ -299,11 +347,28 @@ static void holdout_schedule(fit_task *t, prep *p, const char *material_id, cons
     h->nviews = t->nviews;
     h->bytes = t->bytes;
     snprintf(h->material_id, sizeof h->material_id, "%s", material_id);
-    snprintf(h->key, sizeof h->key, "%s", key);
     snprintf(h->scene_hash, sizeof h->scene_hash, "%s", prep_scene_of(t->scene)->hash);
+    {
+        /* one measurement per point at a time: the fits of a painter's
+         * strokes would otherwise each schedule one while the first runs */
+        char k[1100];
+        int pending;
+        snprintf(k, sizeof k, "%s/%s", h->scene_hash, key);
+        pthread_mutex_lock(&t->f->lock);
+        pending = json_object_get(t->f->holdouts, k) != NULL;
+        if (!pending)
+            json_object_set_new(t->f->holdouts, k, json_true());
+        pthread_mutex_unlock(&t->f->lock);
+        if (pending) {
+            holdout_free(h);
+            return;
+        }
+        snprintf(h->key, sizeof h->key, "%s", key);
+    }
     h->paintings = calloc((size_t)t->nviews, sizeof *h->paintings);
+    h->pins = calloc((size_t)t->nviews, sizeof *h->pins);
     h->params = malloc(t->m->params_size);
-    if (!h->paintings || !h->params) {
+    if (!h->paintings || !h->pins || !h->params) {
         holdout_free(h);
         return;
     }
@@ -312,6 +377,12 @@ static void holdout_schedule(fit_task *t, prep *p, const char *material_id, cons
         const img *s = &t->paintings[v];
         if (!t->use[v])
             continue;
+        /* the memo's image, pinned once more (no copy), if it still has it */
+        if (t->pins[v] && memo_painting_get(t->f->memo, t->session_id, v, t->versions[v],
+                                            &h->pins[v]) == 0) {
+            h->paintings[v] = *memo_painting_img(h->pins[v]);
+            continue;
+        }
         if (img_alloc(&h->paintings[v], s->width, s->height, s->channels, &e)) {
             holdout_free(h);
             return;
@@ -344,6 +415,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     if ((rc = prep_fit(p, t->paintings, NULL, &m, err)))
         return rc;
     fit_s = glint_now() - t0;
+    t0 = srv_timing_step(t->tm, "fit", t0);
     pre = json_object_get(m.info, "precomputation");
     if ((rc = glint_id_new(mid, err)))
         goto done;
@@ -351,6 +423,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||
         (rc = material_save(&m, dir, err)))
         goto done;
+    t0 = srv_timing_step(t->tm, "save", t0);
     paintings = json_array();
     for (int v = 0; v < t->nviews; v++)
         if (t->use[v])
@@ -378,6 +451,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     json_object_set_new(d, "links", fitsvc_material_links(mid, t->session_id, t->scene_id));
     if ((rc = store_material_put(f->st, mid, t->session_id, d, err)))
         goto done;
+    t0 = srv_timing_step(t->tm, "record", t0);
     {
         char *text = json_dumps(d, JSON_COMPACT | JSON_REAL_PRECISION(17));
         if (text)
@@ -411,6 +485,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
             !points_has_holdout(f->points, ps->hash, key))
             holdout_schedule(t, p, mid, key);
     }
+    srv_timing_step(t->tm, "publish", t0);
     pthread_mutex_lock(&f->lock);
     if (was_hit)
         f->hits++;
@@ -451,11 +526,13 @@ static int fit_job(job *j, void *arg, json_t **result, glint_err *err)
 }
 
 int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const method *m,
-               const void *params, json_t **doc, char job_id[33], glint_err *err)
+               const void *params, json_t **doc, char job_id[33], srv_timing *tm,
+               glint_err *err)
 {
     fit_task *t = calloc(1, sizeof *t);
     prep *p = NULL;
     prep_request rq;
+    double t0 = glint_now();
     int rc;
 
     *doc = NULL;
@@ -476,10 +553,17 @@ int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const me
         }
         goto out;
     }
-    if ((rc = task_read_paintings(t, err)) || (rc = task_bytes(t, err)))
+    t0 = srv_timing_step(tm, "scene", t0);
+    if ((rc = task_read_paintings(t, err)))
         goto out;
+    t0 = srv_timing_step(tm, "paintings", t0);
+    if ((rc = task_bytes(t, err)))
+        goto out;
+    t0 = srv_timing_step(tm, "bound", t0);
     rq = (prep_request){m, t->params, t->scene, t->use};
     if (prep_try(f->cache, &rq, &p, NULL) == 0) { /* in memory: fit now */
+        srv_timing_step(tm, "prepared", t0);
+        t->tm = tm;
         if (!f->work || !(rc = admit_enter(f->work, t->bytes, "the fit", err))) {
             rc = fit_execute(t, p, NULL, doc, err);
             if (f->work)
@@ -529,6 +613,10 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
     f->ev = ev;
     f->work = cfg->work;
     pthread_mutex_init(&f->lock, NULL);
+    if (!(f->holdouts = json_object())) {
+        free(f);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
     if (cfg->cache_dir)
         snprintf(dir, sizeof dir, "%s/points", cfg->cache_dir);
     if ((rc = cache_open(cfg->cache_dir, cfg->budget, &f->cache, err)) ||
@@ -563,6 +651,7 @@ void fitsvc_close(fitsvc *f)
     points_close(f->points);
     memo_close(f->memo);
     cache_close(f->cache);
+    json_decref(f->holdouts);
     pthread_mutex_destroy(&f->lock);
     free(f);
 }

@@ -30,6 +30,7 @@
 #include "method.h"
 #include "points.h"
 #include "scene.h"
+#include "timing.h"
 
 struct store;
 struct events;
@@ -69,9 +70,11 @@ int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *
  * now) or job_id set (the precomputation is being built: poll the job).  GLINT_EINVAL with kind "no-paintings" when nothing is painted,
  * "invalid-painting" for a painting that cannot be used; GLINT_ENOTFOUND
  * with kind "scene-gone" when the session's scene was deleted; GLINT_EBUSY
- * when too many jobs wait. */
+ * when too many jobs wait.  tm (may be NULL) receives the steps of a fit
+ * run now (timing.h). */
 int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const method *m,
-               const void *params, json_t **doc, char job_id[33], glint_err *err);
+               const void *params, json_t **doc, char job_id[33], srv_timing *tm,
+               glint_err *err);
 
 /* Links of a material object ({"self", "factors_png", ...}; a new object). */
 json_t *fitsvc_material_links(const char *id, const char *session_id, const char *scene_id);

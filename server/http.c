@@ -240,62 +240,12 @@ static int match(const char *pattern, const char *path, http_req *req, char *buf
     return *p == '\0' && *u == '\0';
 }
 
-/* ---- static files --------------------------------------------------------------------- */
-
-static const char *mime_of(const char *path)
+static void timing_header(const srv_timing *t, http_resp *r)
 {
-    const char *dot = strrchr(path, '.');
-    static const struct { const char *ext, *type; } t[] = {
-        {".html", "text/html; charset=utf-8"}, {".js", "text/javascript; charset=utf-8"},
-        {".mjs", "text/javascript; charset=utf-8"}, {".css", "text/css; charset=utf-8"},
-        {".json", "application/json"}, {".png", "image/png"}, {".svg", "image/svg+xml"},
-        {".ico", "image/x-icon"}, {".yaml", "application/yaml"}, {".txt", "text/plain"}};
-    if (dot)
-        for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++)
-            if (strcmp(dot, t[i].ext) == 0)
-                return t[i].type;
-    return "application/octet-stream";
-}
-
-/* Static files are revalidated on every load (Cache-Control: no-cache)
- * with Last-Modified / If-Modified-Since, so an unchanged module costs a
- * 304 and no body. */
-static http_resp serve_static(const http_server *s, const char *path, const char *ims)
-{
-    char full[4096], lm[64];
-    struct stat st;
-    struct tm tm;
-    FILE *f;
-    char *data;
-    http_resp r;
-
-    if (!s->cfg.static_dir || strstr(path, "..") || strchr(path, '\\'))
-        return http_problem(404, "not-found", "no such resource: %s", path);
-    if (strcmp(path, "/") == 0)
-        path = "/index.html";
-    if (snprintf(full, sizeof full, "%s%s", s->cfg.static_dir, path) >= (int)sizeof full ||
-        stat(full, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size > (64 << 20))
-        return http_problem(404, "not-found", "no such resource: %s", path);
-    f = fopen(full, "rb");
-    data = malloc((size_t)st.st_size + 1);
-    if (!f || !data || fread(data, 1, (size_t)st.st_size, f) != (size_t)st.st_size) {
-        if (f)
-            fclose(f);
-        free(data);
-        return http_problem(500, NULL, "cannot read %s", path);
-    }
-    fclose(f);
-    gmtime_r(&st.st_mtime, &tm);
-    strftime(lm, sizeof lm, "%a, %d %b %Y %H:%M:%S GMT", &tm);
-    if (ims && strcmp(ims, lm) == 0) {
-        free(data);
-        r = http_bytes(304, NULL, "", 0);
-    } else {
-        r = http_bytes_owned(200, mime_of(full), data, (size_t)st.st_size);
-    }
-    http_header(&r, MHD_HTTP_HEADER_LAST_MODIFIED, lm);
-    http_header(&r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
-    return r;
+    char buf[SRV_TIMING_MAX * 48];
+    srv_timing_format(t, buf, sizeof buf);
+    if (buf[0])
+        http_header(r, "Server-Timing", buf);
 }
 
 /* ---- MHD callbacks ----------------------------------------------------------------------- */
@@ -545,7 +495,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
             resp = http_problem(405, "method-not-allowed", "%s is not allowed on %s", method, url);
         else if ((strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0) &&
                  strncmp(url, "/api/", 5) != 0)
-            resp = serve_static(s, url, MHD_lookup_connection_value(
+            resp = http_static_serve(s->cfg.static_dir, url, MHD_lookup_connection_value(
                                            conn, MHD_HEADER_KIND,
                                            MHD_HTTP_HEADER_IF_MODIFIED_SINCE));
         else
@@ -555,12 +505,13 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         resp = http_problem(500, NULL, "internal error building the response");
     if (!resp.r)
         return MHD_NO;
+    timing_header(&req.timing, &resp);
     if (resp.status == 405)
         MHD_add_response_header(resp.r, MHD_HTTP_HEADER_ALLOW, "GET, POST, PUT, DELETE");
     if (cors) {
         MHD_add_response_header(resp.r, "Access-Control-Allow-Origin", origin);
         MHD_add_response_header(resp.r, "Access-Control-Expose-Headers",
-                                "Location, ETag, Content-Disposition, X-Glint-Env");
+                                "Location, ETag, Content-Disposition, X-Glint-Env, Server-Timing");
     }
     if (origin)
         MHD_add_response_header(resp.r, MHD_HTTP_HEADER_VARY, "Origin");

@@ -45,6 +45,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "timing.h"
+
 #define HTTP_MAX_PARAMS 4
 
 typedef struct http_req {
@@ -57,6 +59,7 @@ typedef struct http_req {
     size_t body_len;
     int body_too_large;     /* the body exceeded the limit (handler answers 413) */
     void *app;              /* the application (http_server_start's `app`) */
+    srv_timing timing;      /* steps the handler timed: sent as Server-Timing (timing.h) */
 } http_req;
 
 typedef struct http_resp {
@@ -144,6 +147,11 @@ http_resp http_stream(int status, const char *content_type, MHD_ContentReaderCal
 
 /* Add a header to a response before it is returned. */
 void http_header(http_resp *r, const char *name, const char *value);
+
+/* A file of the static directory `dir` (NULL: none) for GET `path`
+ * ("/" is /index.html; ".." refused), revalidated on every load
+ * (Cache-Control: no-cache, Last-Modified / If-Modified-Since `ims`). */
+http_resp http_static_serve(const char *dir, const char *path, const char *ims);
 
 /* ---- request helpers ------------------------------------------------------------ */
 

@@ -96,8 +96,11 @@ int store_session_get(store *s, const char *id, json_t **doc, glint_err *err);
  * not stored.  GLINT_ENOTFOUND if there is no such session. */
 int store_session_update(store *s, const char *id, const json_t *doc, glint_err *err);
 
-/* Paintings: the current image of view `view` of a session, as OpenEXR
- * bytes (float RGB, the raster's size).  version increments on each put
+/* Paintings: the current image of view `view` of a session, as the bytes
+ * of an image file of the raster's size: the PNG, JPEG or OpenEXR a client
+ * uploaded, as it came (validated before), or the float RGB OpenEXR of a
+ * view painted by strokes; the blob's name ends in the format's extension,
+ * told by its first bytes.  version increments on each put
  * (strokes included), from 1.  put also appends a "painting" event
  * ({"view", "version"}) to the session's log in the same transaction
  * (OUT: *seq, may be NULL).  get: GLINT_ENOTFOUND when the view was never

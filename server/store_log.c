@@ -110,6 +110,17 @@ static int store_tx_painting(store *s, const char *session, int view, const char
 }
 
 /* Write a new painting blob for (session, view) (OUT: name). */
+/* The file extension of image bytes, by their magic (store.h). */
+static const char *image_suffix(const void *data, size_t len)
+{
+    const unsigned char *b = data;
+    if (len >= 8 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0)
+        return ".png";
+    if (len >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
+        return ".jpg";
+    return ".exr";
+}
+
 static int store_painting_blob(store *s, const char *session, int view, const void *exr,
                                size_t len, char *name, size_t namelen, glint_err *err)
 {
@@ -119,7 +130,7 @@ static int store_painting_blob(store *s, const char *session, int view, const vo
     if (view < 0)
         return glint_err_set(err, GLINT_EINVAL, "view %d is negative", view);
     snprintf(prefix, sizeof prefix, "sessions/%s/view%d-", session, view);
-    int rc = store_random_name(name, namelen, prefix, ".exr", err);
+    int rc = store_random_name(name, namelen, prefix, image_suffix(exr, len), err);
     return rc ? rc : store_blob_put(s, name, exr, len, err);
 }
 

@@ -117,15 +117,24 @@ def new_session(http, base, scene_id, paint_dir, views, ext):
     return s
 
 
-def round_trips(http, base, s, pngs, runs, res):
-    """Upload a PNG for view 0 (alternating contents), fit (201), GET the material."""
+def server_timing(r, into):
+    """Collect the Server-Timing steps of a response (name -> list of ms)."""
+    for part in r.headers.get("Server-Timing", "").split(","):
+        m = re.match(r"\s*([\w-]+);dur=([\d.]+)", part)
+        if m:
+            into.setdefault(m.group(1), []).append(float(m.group(2)))
+
+
+def round_trips(http, base, s, pngs, runs, res, server=None):
+    """Upload a PNG for view 0 (alternating contents), fit (201), GET the material.
+    server: dict {"put": {}, "fit": {}} receiving the Server-Timing steps."""
     times, steps, hits = [], {"put": [], "fit": [], "get": []}, 0
     h = {"X-Glint-Token": s["paint_token"]}
     for i in range(runs):
         body = pngs[i % len(pngs)]
         t0 = time.perf_counter()
-        check(http.put(base + "/api/v1/sessions/%s/views/0/painting" % s["id"],
-                       headers=dict(h, **{"Content-Type": "image/png"}), data=body), 200)
+        rp = check(http.put(base + "/api/v1/sessions/%s/views/0/painting" % s["id"],
+                            headers=dict(h, **{"Content-Type": "image/png"}), data=body), 200)
         t1 = time.perf_counter()
         r = http.post(base + "/api/v1/sessions/%s/fits" % s["id"],
                       headers=dict(h, **{"Content-Type": "application/json"}),
@@ -134,6 +143,9 @@ def round_trips(http, base, s, pngs, runs, res):
         t2 = time.perf_counter()
         check(http.get(base + r.headers["Location"], headers=h), 200)
         t3 = time.perf_counter()
+        if server is not None:
+            server_timing(rp, server.setdefault("put", {}))
+            server_timing(r, server.setdefault("fit", {}))
         times.append(t3 - t0)
         steps["put"].append(t1 - t0)
         steps["fit"].append(t2 - t1)
@@ -241,7 +253,8 @@ def main():
         # warm round trips
         for label, s in (("1 view painted", s1), ("12 views painted", s12)):
             round_trips(http, d.base, s, pngs, 3, 64)  # warm the connection and the caches
-            t, steps, hits = round_trips(http, d.base, s, pngs, a.runs, 64)
+            server = {}
+            t, steps, hits = round_trips(http, d.base, s, pngs, a.runs, 64, server)
             t.sort()
             rows.append(("warm round trip (PUT 256x256 PNG + POST fit res 64 + GET material), "
                          "%s: median of %d (cache hits %d/%d)" % (label, a.runs, hits, a.runs),
@@ -251,6 +264,11 @@ def main():
             rows.append(("... medians of the steps: PUT painting / POST fit (201) / GET material",
                          " / ".join(ms(statistics.median(steps[k])) for k in ("put", "fit", "get")),
                          "ms"))
+            for k, what in (("put", "PUT"), ("fit", "POST fit")):
+                st = server.get(k, {})
+                rows.append(("... %s inside glintd (Server-Timing medians): %s" % (
+                    what, " / ".join(st)), " / ".join(
+                        "%.2f" % statistics.median(v) for v in st.values()), "ms"))
         warm = check(http.get(d.base + "/api/v1/materials/" + m12["id"],
                               headers={"X-Glint-Token": s12["paint_token"]}), 200)
         rows.append(("material JSON size", str(len(warm.content)), "bytes"))
