@@ -17,7 +17,9 @@
  * loop streams M once, row by row, and updates three accumulators per
  * element (an axpy per row and channel; vectorizes without reassociation). */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define GLINT_CLONES __attribute__((target_clones("arch=haswell", "default")))
+/* by feature: "arch=haswell" would pick the clone by CPU model, and AMD
+ * processors with AVX2 never got it */
+#define GLINT_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define GLINT_CLONES
 #endif

@@ -8,6 +8,8 @@
 #include <string.h>
 #include <xxhash.h>
 
+#include "par.h"
+
 void samples_free(samples *s)
 {
     if (!s)
@@ -294,6 +296,41 @@ fail:
     return rc;
 }
 
+/* The gather runs in chunks on the worker pool (par.h); each sample is
+ * independent, so the result does not depend on the threads. */
+#define GATHER_CHUNK 16384
+
+typedef struct gather_ctx {
+    const samples *s;
+    const img *paintings;
+    float *rgb;
+    int chunk, nchunks;
+    int *bad; /* per chunk: 3 i + channel of its first non-finite value, or -1 */
+} gather_ctx;
+
+static void gather_run(void *ctx, int c)
+{
+    gather_ctx *g = ctx;
+    const samples *s = g->s;
+    int i0 = c * g->chunk, i1 = i0 + g->chunk;
+    if (i1 > s->n)
+        i1 = s->n;
+    g->bad[c] = -1;
+    for (int i = i0; i < i1; i++) {
+        const img *im = &g->paintings[s->view[i]];
+        const float *px = im->px + (size_t)s->pixel[i] * im->channels;
+        double inv = 1.0 / s->intensity[i];
+        for (int ch = 0; ch < 3; ch++) {
+            float v = im->channels == 1 ? px[0] : px[ch];
+            if (!isfinite(v)) {
+                g->bad[c] = 3 * i + ch;
+                return;
+            }
+            g->rgb[3 * i + ch] = (float)(v * inv);
+        }
+    }
+}
+
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
 {
     for (int v = 0; v < s->nviews; v++) {
@@ -310,21 +347,30 @@ int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err
                                  "painting of view %d has %d channels (1, 3 or 4 expected)", v,
                                  im->channels);
     }
-    for (int i = 0; i < s->n; i++) {
-        const img *im = &paintings[s->view[i]];
-        const float *px = im->px + (size_t)s->pixel[i] * im->channels;
-        double inv = 1.0 / s->intensity[i];
-        for (int c = 0; c < 3; c++) {
-            float v = im->channels == 1 ? px[0] : px[c];
-            if (!isfinite(v))
-                return glint_err_set(err, GLINT_ENONFINITE,
-                                     "painting of view %d: pixel (%d, %d) channel %d is not finite",
-                                     s->view[i], s->pixel[i] / s->width,
-                                     s->pixel[i] % s->width, c);
-            rgb[3 * i + c] = (float)(v * inv);
-        }
+    {
+        gather_ctx g = {s, paintings, rgb, 0, 0, NULL};
+        int rc = 0;
+        g.chunk = GATHER_CHUNK;
+        g.nchunks = (int)(((long)s->n + GATHER_CHUNK - 1) / GATHER_CHUNK);
+        g.bad = malloc((size_t)g.nchunks * sizeof *g.bad);
+        if (!g.bad)
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        if (par_worth((size_t)s->n))
+            par_run(g.nchunks, gather_run, &g);
+        else
+            for (int c = 0; c < g.nchunks; c++)
+                gather_run(&g, c);
+        for (int c = 0; c < g.nchunks && !rc; c++) /* the first non-finite sample */
+            if (g.bad[c] >= 0) {
+                int i = g.bad[c] / 3, ch = g.bad[c] % 3;
+                rc = glint_err_set(err, GLINT_ENONFINITE,
+                                   "painting of view %d: pixel (%d, %d) channel %d is not finite",
+                                   s->view[i], s->pixel[i] / s->width, s->pixel[i] % s->width,
+                                   ch);
+            }
+        free(g.bad);
+        return rc;
     }
-    return 0;
 }
 
 int samples_scatter(const samples *s, const float *rgb, float fill, img *imgs, glint_err *err)

@@ -97,8 +97,34 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
 {
     void *exr = NULL;
     size_t len = 0;
-    int rc = store_painting_get(a->store, session, k, &exr, &len, version, e);
+    json_t *list = NULL, *it;
+    memo_painting *pin = NULL;
+    int64_t listed = 0;
+    size_t i;
+    int rc;
+
     memset(im, 0, sizeof *im);
+    /* the memo's decoded copy of the current version, when it has it */
+    if (store_paintings_list(a->store, session, &list, NULL) == 0) {
+        json_array_foreach(list, i, it) {
+            if (json_integer_value(json_object_get(it, "view")) == k)
+                listed = json_integer_value(json_object_get(it, "version"));
+        }
+        json_decref(list);
+    }
+    if (listed > 0 &&
+        memo_painting_get(fitsvc_memo(a->fits), session, k, (long long)listed, &pin) == 0) {
+        const img *m = memo_painting_img(pin);
+        rc = img_alloc(im, m->width, m->height, m->channels, e);
+        if (!rc) {
+            memcpy(im->px, m->px, (size_t)m->width * m->height * m->channels * sizeof(float));
+            rc = img_to_rgb(im, e);
+        }
+        memo_painting_release(fitsvc_memo(a->fits), pin);
+        *version = listed;
+        return rc;
+    }
+    rc = store_painting_get(a->store, session, k, &exr, &len, version, e);
     if (rc == GLINT_ENOTFOUND) {
         *version = 0;
         return scenes_base(a, scene_id, k, im, e);
@@ -556,11 +582,15 @@ static http_resp strokes_post(http_req *req)
     const char *scene_id;
     glint_err e;
     http_resp r = {0, NULL};
+    double t0 = glint_now();
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
-        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)) ||
-        (rc = strokes_parse(req, &list, &n, &canon, &e)))
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
         goto done;
+    t0 = srv_timing_step(&req->timing, "session", t0);
+    if ((rc = strokes_parse(req, &list, &n, &canon, &e)))
+        goto done;
+    t0 = srv_timing_step(&req->timing, "parse", t0);
     for (int i = 0; i < n; i++)
         need_base |= list[i].mode == STROKE_ERASE;
     {
@@ -580,10 +610,12 @@ static http_resp strokes_post(http_req *req)
 
     pthread_mutex_lock(session_lock(req->param[0]));
     locked = 1;
+    t0 = srv_timing_step(&req->timing, "lock", t0);
     if ((rc = view_current(a, req->param[0], scene_id, k, &cur, &version, &e))) {
         glint_err_prefix(&e, "reading the view's image");
         goto done;
     }
+    t0 = srv_timing_step(&req->timing, "read", t0);
     if (need_base && (rc = scenes_base(a, scene_id, k, &base, &e))) {
         glint_err_prefix(&e, "base render");
         goto done;
@@ -602,12 +634,18 @@ static http_resp strokes_post(http_req *req)
         }
         goto done;
     }
-    if ((rc = img_write_mem("exr", &cur, &exr, &len, &e)) ||
-        (rc = store_strokes_append(a->store, req->param[0], k, canon, exr, len, &first, &last,
+    t0 = srv_timing_step(&req->timing, "apply", t0);
+    if ((rc = img_write_mem("exr", &cur, &exr, &len, &e))) {
+        glint_err_prefix(&e, "storing the strokes");
+        goto done;
+    }
+    t0 = srv_timing_step(&req->timing, "encode", t0);
+    if ((rc = store_strokes_append(a->store, req->param[0], k, canon, exr, len, &first, &last,
                                    &version, &e))) {
         glint_err_prefix(&e, "storing the strokes");
         goto done;
     }
+    t0 = srv_timing_step(&req->timing, "store", t0);
     pthread_mutex_unlock(session_lock(req->param[0]));
     locked = 0;
     /* the memo keeps the decoded image, so a fit need not decode it */

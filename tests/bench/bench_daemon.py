@@ -154,6 +154,24 @@ def round_trips(http, base, s, pngs, runs, res, server=None):
     return times, steps, hits
 
 
+def strokes(http, base, s, runs, server):
+    """POST one stroke (20 points, diameter 12) to view 1 of a session, runs
+    times: the painter's brush.  Returns the times; server receives the
+    Server-Timing steps."""
+    h = {"X-Glint-Token": s["paint_token"]}
+    times = []
+    for i in range(runs):
+        pts = [[20 + 10 * k, 40 + (i * 7) % 160] for k in range(20)]
+        body = {"strokes": [{"color": [0.2 + 0.6 * (i % 2), 0.3, 0.5], "diameter": 12,
+                             "points": pts}]}
+        t0 = time.perf_counter()
+        r = check(http.post(base + "/api/v1/sessions/%s/views/1/strokes" % s["id"], headers=h,
+                            json=body), 200)
+        times.append(time.perf_counter() - t0)
+        server_timing(r, server)
+    return times
+
+
 def against(d, http, pngs, tmp, a):
     """Warm round trips (1 view painted) against this daemon and another one,
     alternating rounds so that both see the same load."""
@@ -269,6 +287,14 @@ def main():
                 rows.append(("... %s inside glintd (Server-Timing medians): %s" % (
                     what, " / ".join(st)), " / ".join(
                         "%.2f" % statistics.median(v) for v in st.values()), "ms"))
+        # strokes on a painted view (the memo holds its image)
+        server = {}
+        strokes(http, d.base, s12, 3, {})
+        t = strokes(http, d.base, s12, a.runs, server)
+        rows.append(("stroke (20 points, diameter 12) on a painted 256x256 view: median of %d"
+                     % a.runs, ms(statistics.median(t)), "ms"))
+        rows.append(("... inside glintd (Server-Timing medians): %s" % " / ".join(server),
+                     " / ".join("%.2f" % statistics.median(v) for v in server.values()), "ms"))
         warm = check(http.get(d.base + "/api/v1/materials/" + m12["id"],
                               headers={"X-Glint-Token": s12["paint_token"]}), 200)
         rows.append(("material JSON size", str(len(warm.content)), "bytes"))

@@ -1,0 +1,289 @@
+/* test_vmath: the vectorized log and exp (core/vmath.c) against libm, over
+ * the whole double range and at the special values, and the worker pool
+ * (core/par.c) and the streamed passes of a fit, whose results must not
+ * depend on the number of threads. */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "check.h"
+#include "hf.h"
+#include "samples.h"
+#include "sphere_fixture.h"
+#include "par.h"
+#include "vmath.h"
+
+/* distance in units in the last place of b */
+static double ulps(double a, double b)
+{
+    double u;
+    if (a == b)
+        return 0.0;
+    u = nextafter(fabs(b), INFINITY) - fabs(b);
+    return fabs(a - b) / u;
+}
+
+static uint64_t rng = 88172645463325252ULL;
+static double uniform(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+}
+
+TEST(log_within_one_ulp_everywhere)
+{
+    enum { N = 1 << 20 };
+    double *x = malloc(N * sizeof *x), *y = malloc(N * sizeof *y), worst = 0.0, at = 0.0;
+    ASSERT(x && y);
+    for (int i = 0; i < N; i++) {
+        /* a quarter each: the whole exponent range, near 1, [0.5, 2), 8-bit levels */
+        switch (i & 3) {
+        case 0: x[i] = exp((uniform() - 0.5) * 1415.0); break;
+        case 1: x[i] = 1.0 + (uniform() - 0.5) * 1e-6; break;
+        case 2: x[i] = 0.5 + 1.5 * uniform(); break;
+        default: x[i] = (double)((i >> 2) % 256) / 255.0 + 1e-3; break;
+        }
+        if (!(x[i] >= DBL_MIN && x[i] <= DBL_MAX))
+            x[i] = 1.5;
+    }
+    vmath_log(x, y, N);
+    for (int i = 0; i < N; i++) {
+        double e = ulps(y[i], log(x[i]));
+        if (e > worst) {
+            worst = e;
+            at = x[i];
+        }
+    }
+    printf("  %s: worst %.2f ulp (at x = %.17g)\n", vmath_impl(), worst, at);
+    free(x);
+    free(y);
+    ASSERT_MSG(worst <= 1.0, "log off by %.2f ulp at %.17g", worst, at);
+}
+
+TEST(log_special_values_as_libm)
+{
+    /* every position in a group of four, so the vector path meets each */
+    const double sp[] = {0.0, -0.0, -1.0, INFINITY, -INFINITY, NAN, DBL_MIN, DBL_MAX,
+                         DBL_TRUE_MIN, 1e-310, 1.0, 2.0, 0.5, M_SQRT2, M_SQRT1_2, 1e-3};
+    enum { NS = sizeof sp / sizeof sp[0] };
+    for (int shift = 0; shift < 4; shift++) {
+        double x[NS + 4], y[NS + 4];
+        for (int i = 0; i < NS + 4; i++)
+            x[i] = i < shift ? 1.25 : sp[(i - shift) % NS];
+        vmath_log(x, y, NS + 4);
+        for (int i = 0; i < NS + 4; i++) {
+            double r = log(x[i]);
+            if (isnan(r))
+                ASSERT_MSG(isnan(y[i]), "log(%g) = %g, not NaN", x[i], y[i]);
+            else
+                ASSERT_MSG(y[i] == r || ulps(y[i], r) <= 1.0, "log(%.17g) = %.17g, libm %.17g",
+                           x[i], y[i], r);
+        }
+    }
+    {
+        double one = 1.0, z;
+        vmath_log(&one, &z, 1);
+        ASSERT(z == 0.0);
+    }
+}
+
+TEST(exp_matches_libm)
+{
+    enum { N = 4096 };
+    double x[N], y[N], worst = 0.0;
+    for (int i = 0; i < N; i++)
+        x[i] = (uniform() - 0.5) * 1400.0;
+    vmath_exp(x, y, N);
+    for (int i = 0; i < N; i++) {
+        double r = exp(x[i]);
+        if (r > 0.0 && r < INFINITY && ulps(y[i], r) > worst)
+            worst = ulps(y[i], r);
+    }
+    ASSERT_MSG(worst <= 4.0, "exp off by %.2f ulp", worst);
+}
+
+typedef struct sum_ctx {
+    long n;
+    double part[64];
+    int calls[64];
+} sum_ctx;
+
+static void sum_task(void *ctx, int t)
+{
+    sum_ctx *s = ctx;
+    double acc = 0.0;
+    for (long i = t; i < s->n; i += 64)
+        acc += sqrt((double)i);
+    s->part[t] = acc;
+    s->calls[t]++;
+}
+
+static void nested_task(void *ctx, int t)
+{
+    sum_ctx *inner = (sum_ctx *)ctx + 1 + t;
+    par_run(64, sum_task, inner); /* runs serially inside a task */
+}
+
+TEST(pool_runs_every_task_once)
+{
+    sum_ctx s, many[3];
+    memset(&s, 0, sizeof s);
+    s.n = 1 << 20;
+    par_run(64, sum_task, &s);
+    for (int t = 0; t < 64; t++)
+        ASSERT_EQ(s.calls[t], 1);
+    /* again: the pool is reused */
+    par_run(64, sum_task, &s);
+    for (int t = 0; t < 64; t++)
+        ASSERT_EQ(s.calls[t], 2);
+    /* a run from inside a task */
+    memset(many, 0, sizeof many);
+    many[1].n = many[2].n = 1000;
+    par_run(2, nested_task, many);
+    for (int k = 1; k < 3; k++)
+        for (int t = 0; t < 64; t++)
+            ASSERT_EQ(many[k].calls[t], 1);
+    par_run(0, sum_task, &s); /* nothing */
+    ASSERT(par_threads() >= 1);
+}
+
+typedef struct fit_ctx {
+    const hf_design *d;
+    const hf_op *op;
+    const hf_map *map;
+    const float *rgb;
+    hf_factors fac;
+    hf_fit_stats st;
+    int rc;
+} fit_ctx;
+
+static void fit_in_task(void *ctx, int t)
+{
+    fit_ctx *f = ctx;
+    if (t == 0) /* the pool is held by this run: the fit's own runs go serial */
+        f->rc = hf_fit(f->d, f->op, f->map, HF_MODEL_RADIANCE, f->rgb, &f->fac, &f->st, NULL);
+}
+
+TEST(fit_same_bits_on_any_thread_count)
+{
+    /* the streamed passes split the samples into chunks fixed by their
+     * count, so a fit on the pool and one with every chunk on one thread
+     * (what a busy pool gives) are the same bits */
+    double dirs[12][3];
+    gbuf g[12];
+    samples s;
+    hf_design d;
+    hf_decomp dc;
+    hf_op op;
+    hf_reg reg;
+    hf_map map;
+    hf_factors a;
+    hf_fit_stats sa;
+    fit_ctx f;
+    float *rgb;
+
+    fixture_ico(dirs);
+    ASSERT_OK(fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, 100, 100));
+    ASSERT_OK(samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &s, NULL));
+    for (int v = 0; v < 12; v++)
+        gbuf_free(&g[v]);
+    ASSERT(s.n > PAR_MIN_WORK / 3 && s.n > HF_DIAG_SAMPLES / 2);
+    rgb = malloc((size_t)3 * s.n * sizeof *rgb);
+    ASSERT(rgb);
+    for (int i = 0; i < 3 * s.n; i++)
+        rgb[i] = (float)(0.05 + 0.9 * uniform());
+    hf_map_default(&map, HF_MAP_LOG);
+    ASSERT_OK(hf_reg_parse("trunc:full", &reg, NULL));
+    ASSERT_OK(hf_design_build(&s, 32, &d, NULL));
+    ASSERT_OK(hf_decomp_build(&d, 0.1, HF_ROUTE_EIG, 0, &dc, NULL));
+    ASSERT_OK(hf_op_build(&dc, &reg, HF_F64, &op, NULL));
+    ASSERT_OK(hf_fit(&d, &op, &map, HF_MODEL_RADIANCE, rgb, &a, &sa, NULL));
+    memset(&f, 0, sizeof f);
+    f.d = &d;
+    f.op = &op;
+    f.map = &map;
+    f.rgb = rgb;
+    f.rc = -1;
+    par_run(2, fit_in_task, &f);
+    ASSERT_OK(f.rc);
+    ASSERT(memcmp(a.logf, f.fac.logf, (size_t)9 * d.res * sizeof *a.logf) == 0);
+    ASSERT(sa.rms == f.st.rms && sa.log_residual == f.st.log_residual);
+    ASSERT(sa.diag_samples == s.n && sa.diag_stride == 1);
+    hf_factors_free(&a);
+    hf_factors_free(&f.fac);
+    hf_op_free(&op);
+    hf_decomp_free(&dc);
+    hf_design_free(&d);
+    samples_free(&s);
+    free(rgb);
+}
+
+TEST(diagnostics_subsample_above_the_limit)
+{
+    /* more samples than HF_DIAG_SAMPLES: every k-th, counted and labelled */
+    double dirs[12][3];
+    gbuf g[12];
+    samples s;
+    hf_design d;
+    hf_decomp dc;
+    hf_op op;
+    hf_reg reg;
+    hf_map map;
+    hf_factors a;
+    hf_fit_stats st;
+    float *rgb;
+
+    fixture_ico(dirs);
+    ASSERT_OK(fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, 128, 128));
+    ASSERT_OK(samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &s, NULL));
+    for (int v = 0; v < 12; v++)
+        gbuf_free(&g[v]);
+    ASSERT(s.n > HF_DIAG_SAMPLES);
+    rgb = malloc((size_t)3 * s.n * sizeof *rgb);
+    ASSERT(rgb);
+    for (int i = 0; i < 3 * s.n; i++)
+        rgb[i] = (float)(0.05 + 0.9 * uniform());
+    hf_map_default(&map, HF_MAP_LOG);
+    ASSERT_OK(hf_reg_parse("trunc:full", &reg, NULL));
+    ASSERT_OK(hf_design_build(&s, 16, &d, NULL));
+    ASSERT_OK(hf_decomp_build(&d, 0.1, HF_ROUTE_EIG, 0, &dc, NULL));
+    ASSERT_OK(hf_op_build(&dc, &reg, HF_F64, &op, NULL));
+    ASSERT_OK(hf_fit(&d, &op, &map, HF_MODEL_RADIANCE, rgb, &a, &st, NULL));
+    ASSERT_EQ(st.diag_stride, (s.n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES);
+    ASSERT_EQ(st.diag_samples, (s.n + st.diag_stride - 1) / st.diag_stride);
+    ASSERT(st.diag_samples <= HF_DIAG_SAMPLES);
+    {
+        /* the estimate against the exact RMS over every sample */
+        float *rec = malloc((size_t)3 * s.n * sizeof *rec);
+        double se = 0.0, exact;
+        ASSERT(rec);
+        hf_factors_eval_design(&a, &d, rec);
+        for (long i = 0; i < 3L * s.n; i++)
+            se += ((double)rec[i] - rgb[i]) * ((double)rec[i] - rgb[i]);
+        exact = sqrt(se / (3.0 * s.n));
+        free(rec);
+        printf("  RMS over %ld of %d samples %.6f, over all %.6f\n", st.diag_samples, s.n,
+               st.rms, exact);
+        ASSERT_NEAR(st.rms / exact, 1.0, 0.02);
+    }
+    hf_factors_free(&a);
+    hf_op_free(&op);
+    hf_decomp_free(&dc);
+    hf_design_free(&d);
+    samples_free(&s);
+    free(rgb);
+}
+
+TEST_LIST {
+    TEST_ENTRY(log_within_one_ulp_everywhere),
+    TEST_ENTRY(log_special_values_as_libm),
+    TEST_ENTRY(exp_matches_libm),
+    TEST_ENTRY(pool_runs_every_task_once),
+    TEST_ENTRY(fit_same_bits_on_any_thread_count),
+    TEST_ENTRY(diagnostics_subsample_above_the_limit),
+};
+
+TEST_MAIN()
