@@ -16,6 +16,7 @@ import math
 import os
 import struct
 import sys
+import time
 import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -635,6 +636,84 @@ def test_restart_keeps_everything(d):
         assert r.post("%s/sessions/%s/views/0/strokes" % (API, sess["id"]), status=200, headers=h,
                       json={"strokes": [{"color": [1, 0, 1], "diameter": 5, "points": [[2, 2]]}]}
                       ).json()["first_seq"] == 2
+    finally:
+        r.stop()
+
+
+def server_timing(r):
+    """The Server-Timing steps of a response: {name: ms}."""
+    out = {}
+    for part in r.headers.get("Server-Timing", "").split(","):
+        if ";dur=" in part:
+            name, dur = part.strip().split(";dur=")
+            out[name] = float(dur)
+    return out
+
+
+def test_uploads_kept_as_sent_and_timed(d):
+    """An upload is stored as it came (PNG stays PNG, no re-encoding) and
+    reads back the same after a restart, through every path that reads it:
+    GET as PNG and as EXR, strokes on top of it (which read the memo's
+    decoded copy, or the store after a restart) and a fit.  Uploads,
+    strokes and fits say what their steps took (Server-Timing)."""
+    r = Daemon("--quiet")
+    try:
+        s = r.post(API + "/scenes", status=201, json={"width": W, "height": H}).json()
+        sess = r.post(API + "/sessions", status=201, json={"scene_id": s["id"]}).json()
+        h = tok(sess["paint_token"])
+        p = "%s/sessions/%s/views/1/painting" % (API, sess["id"])
+        pix = lambda x, y: ((x * 7) % 256, (y * 3) % 256, 200)  # noqa: E731
+        body = png_encode(W, H, pix)
+        up = r.put(p, status=200, data=body, headers=dict(h, **{"Content-Type": "image/png"}))
+        st = server_timing(up)
+        assert {"session", "decode", "validate", "store", "notify"} <= set(st), st
+        assert all(v >= 0 for v in st.values()) and "encode" not in st, st
+        stored = os.listdir(os.path.join(r.data_dir, "blobs", "sessions", sess["id"]))
+        assert [f.rsplit(".", 1)[1] for f in stored] == ["png"], stored
+        with open(os.path.join(r.data_dir, "blobs", "sessions", sess["id"], stored[0]),
+                  "rb") as f:
+            assert f.read() == body, "the upload was not stored as sent"
+        exr = r.get(p + "?format=exr", status=200, headers=h)
+        assert exr.headers["Content-Type"] == "image/x-exr"
+        assert exr.content[:4] == b"\x76\x2f\x31\x01"
+        # a stroke on top of it: read from the memo, timed step by step
+        st = post_strokes(r, sess, 1, [{"color": [1, 0, 0], "diameter": 3, "points": [[5, 5]]}])
+        steps = server_timing(st)
+        assert {"session", "parse", "lock", "read", "apply", "encode", "store"} <= set(steps)
+        _, (_, _, rows) = get_png(r, p, headers=h)
+        assert rows[5][5] == [255, 0, 0] and rows[40][40] == list(pix(40, 40))
+        # view 2: a PNG left as uploaded, for after the restart
+        p2 = "%s/sessions/%s/views/2/painting" % (API, sess["id"])
+        r.put(p2, status=200, data=body, headers=dict(h, **{"Content-Type": "image/png"}))
+        f = r.post("%s/sessions/%s/fits" % (API, sess["id"]), json={"params": {"res": 16}},
+                   headers=h)
+        assert f.status_code in (201, 202), f.text
+        r.stop()
+        r.start()
+        _, (_, _, rows) = get_png(r, p2, headers=h)
+        assert all(rows[y][x] == list(pix(x, y)) for y in range(H) for x in range(W))
+        # strokes after the restart read the stored PNG (the memo is empty)
+        post_strokes(r, sess, 2, [{"color": [0, 0, 1], "diameter": 3, "points": [[9, 9]]}])
+        _, (_, _, rows) = get_png(r, p2, headers=h)
+        assert rows[9][9] == [0, 0, 255] and rows[30][20] == list(pix(20, 30))
+        # a fit reads both views; answered at once (201) it is timed too
+        for _ in range(2):
+            f = r.post("%s/sessions/%s/fits" % (API, sess["id"]), json={"params": {"res": 16}},
+                       headers=h)
+            if f.status_code == 202:
+                job = f.json()["job"]["links"]["self"]
+                for _ in range(600):
+                    j = r.get(job, status=200, headers=h).json()["job"]
+                    if j["state"] in ("done", "failed"):
+                        break
+                    time.sleep(0.05)
+                assert j["state"] == "done", j
+        assert f.status_code == 201, f.text
+        steps = server_timing(f)
+        assert {"scene", "paintings", "fit", "save", "record", "publish"} <= set(steps), steps
+        m = f.json()
+        assert m["errors"]["diagnostic_samples"] >= 1
+        assert m["views_used"] == [1, 2]
     finally:
         r.stop()
 
