@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "hf_int.h"
+#include "par.h"
 #include "vec3.h"
 
 double hf_now(void)
@@ -48,6 +49,39 @@ void hf_hat(double u, int res, int *k0, double *t)
     *t = x - (double)k;
 }
 
+/* The design's rows, chunk by chunk on the worker pool (each sample's row
+ * is its own: the same bits on any number of threads). */
+typedef struct design_ctx {
+    const samples *s;
+    hf_design *out;
+    int chunk, nchunks;
+} design_ctx;
+
+static void design_run(void *ctx, int c)
+{
+    design_ctx *x = ctx;
+    const samples *s = x->s;
+    hf_design *out = x->out;
+    int i1 = (c + 1) * x->chunk < s->n ? (c + 1) * x->chunk : s->n;
+    for (int i = c * x->chunk; i < i1; i++) {
+        double n[3], wi[3], wo[3], pi[3];
+        for (int k = 0; k < 3; k++) {
+            n[k] = s->nrm[3 * i + k];
+            wi[k] = s->wi[3 * i + k];
+            wo[k] = s->wo[3 * i + k];
+        }
+        hf_project(n, wi, wo, pi);
+        for (int j = 0; j < 3; j++) {
+            int k;
+            double t;
+            hf_hat(pi[j], out->res, &k, &t);
+            out->k0[3 * i + j] = k;
+            out->t[3 * i + j] = t;
+        }
+        out->cos_i[i] = s->cos_i[i];
+    }
+}
+
 int hf_design_build(const samples *s, int res, hf_design *out, glint_err *err)
 {
     memset(out, 0, sizeof *out);
@@ -67,22 +101,14 @@ int hf_design_build(const samples *s, int res, hf_design *out, glint_err *err)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for a design of %d samples",
                              s->n);
     }
-    for (int i = 0; i < s->n; i++) {
-        double n[3], wi[3], wo[3], pi[3];
-        for (int c = 0; c < 3; c++) {
-            n[c] = s->nrm[3 * i + c];
-            wi[c] = s->wi[3 * i + c];
-            wo[c] = s->wo[3 * i + c];
-        }
-        hf_project(n, wi, wo, pi);
-        for (int j = 0; j < 3; j++) {
-            int k;
-            double t;
-            hf_hat(pi[j], res, &k, &t);
-            out->k0[3 * i + j] = k;
-            out->t[3 * i + j] = t;
-        }
-        out->cos_i[i] = s->cos_i[i];
+    {
+        design_ctx x = {s, out, 0, 0};
+        hf_chunking(s->n, &x.chunk, &x.nchunks);
+        if (par_worth((size_t)s->n))
+            par_run(x.nchunks, design_run, &x);
+        else
+            for (int c = 0; c < x.nchunks; c++)
+                design_run(&x, c);
     }
     return 0;
 }

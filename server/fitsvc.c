@@ -13,6 +13,7 @@
 #include "ids.h"
 #include "log.h"
 #include "material.h"
+#include "par.h"
 #include "prep.h"
 #include "scenes.h"
 #include "store.h"
@@ -143,70 +144,122 @@ static void task_free(void *p)
     free(t);
 }
 
+/* Decoding the paintings the memo does not hold, one view per task on the
+ * worker pool (par.h): after a restart a 12-view fit decodes 12 images. */
+typedef struct decode_ctx {
+    void **data;
+    size_t *len;
+    img *im;
+    int *rc;
+    glint_err *err;
+    int *views;
+} decode_ctx;
+
+static void decode_run(void *ctx, int i)
+{
+    decode_ctx *x = ctx;
+    int v = x->views[i];
+    x->rc[v] = img_read_mem(x->data[v], x->len[v], &x->im[v], &x->err[v]);
+    if (!x->rc[v] && (x->rc[v] = img_to_rgb(&x->im[v], &x->err[v])))
+        img_free(&x->im[v]);
+}
+
 /* The views' paintings (task_read_paintings); listed[nviews]: scratch. */
 static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *err)
 {
+    int nv = sc->nviews, nread = 0, rc = 0;
     json_t *list = NULL, *it;
-    size_t i;
-    int rc;
+    void **data = calloc((size_t)nv, sizeof *data);
+    size_t *len = calloc((size_t)nv, sizeof *len), i;
+    img *im = calloc((size_t)nv, sizeof *im);
+    int *rcs = calloc((size_t)nv, sizeof *rcs), *views = calloc((size_t)nv, sizeof *views);
+    glint_err *errs = calloc((size_t)nv, sizeof *errs);
 
+    if (!data || !len || !im || !rcs || !views || !errs) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        goto done;
+    }
     /* the versions first, in one query: a painting the memo holds at its
      * version is not read from the store at all */
     if ((rc = store_paintings_list(t->f->st, t->session_id, &list, err)))
-        return rc;
+        goto done;
     json_array_foreach(list, i, it) {
         int v = (int)json_integer_value(json_object_get(it, "view"));
-        if (v >= 0 && v < sc->nviews)
+        if (v >= 0 && v < nv)
             listed[v] = json_integer_value(json_object_get(it, "version"));
     }
     json_decref(list);
-    for (int v = 0; v < sc->nviews; v++) {
-        void *data = NULL;
-        size_t len = 0;
+    for (int v = 0; v < nv; v++) {
         int64_t version = listed[v];
-        if (version > 0 &&
-            memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
-            goto check;
-        /* not in the memo (or painted since the list): read and decode */
-        rc = store_painting_get(t->f->st, t->session_id, v, &data, &len, &version, err);
-        if (rc == GLINT_ENOTFOUND)
+        if (version <= 0)
             continue; /* never painted: not in the pattern */
-        if (rc)
-            return rc;
-        if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) != 0) {
-            img im;
-            rc = img_read_mem(data, len, &im, err);
-            if (!rc && (rc = img_to_rgb(&im, err)))
-                img_free(&im);
-            if (rc) {
-                free(data);
-                glint_err_prefix(err, "painting of view %d", v);
-                return glint_err_kind(err, "invalid-painting");
-            }
-            if (memo_painting_put(t->f->memo, t->session_id, v, version, &im, &t->pins[v]))
-                t->paintings[v] = im; /* not kept by the memo: the task's own */
+        if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
+            continue;
+        /* not in the memo: read it (its version may have moved on since the list) */
+        rc = store_painting_get(t->f->st, t->session_id, v, &data[v], &len[v], &version, err);
+        if (rc == GLINT_ENOTFOUND) {
+            listed[v] = 0;
+            rc = 0;
+            continue;
         }
-        free(data);
-    check:
+        if (rc)
+            goto done;
+        listed[v] = version;
+        if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
+            continue;
+        views[nread++] = v;
+    }
+    {
+        decode_ctx x = {data, len, im, rcs, errs, views};
+        par_run(nread, decode_run, &x);
+    }
+    for (int k = 0; k < nread; k++) {
+        int v = views[k];
+        if (rcs[v]) {
+            *err = errs[v];
+            glint_err_prefix(err, "painting of view %d", v);
+            rc = glint_err_kind(err, "invalid-painting");
+            goto done;
+        }
+        if (memo_painting_put(t->f->memo, t->session_id, v, listed[v], &im[v], &t->pins[v])) {
+            t->paintings[v] = im[v]; /* not kept by the memo: the task's own */
+            memset(&im[v], 0, sizeof im[v]);
+        }
+    }
+    for (int v = 0; v < nv; v++) {
+        if (listed[v] <= 0)
+            continue;
         if (t->pins[v]) /* shared read-only with the memo */
             t->paintings[v] = *memo_painting_img(t->pins[v]);
         if (t->paintings[v].width != sc->width || t->paintings[v].height != sc->height) {
             glint_err_set(err, GLINT_EINVAL,
                           "painting of view %d is %dx%d, the scene's raster is %dx%d", v,
                           t->paintings[v].width, t->paintings[v].height, sc->width, sc->height);
-            return glint_err_kind(err, "invalid-painting");
+            rc = glint_err_kind(err, "invalid-painting");
+            goto done;
         }
         t->use[v] = 1;
-        t->versions[v] = version;
+        t->versions[v] = listed[v];
         t->nused++;
     }
     if (!t->nused) {
         glint_err_set(err, GLINT_EINVAL,
                       "session %s has no painting yet: paint or upload at least one view "
                       "before fitting", t->session_id);
-        return glint_err_kind(err, "no-paintings");
+        rc = glint_err_kind(err, "no-paintings");
     }
-    return 0;
+done:
+    for (int v = 0; data && v < nv; v++)
+        free(data[v]);
+    for (int v = 0; im && v < nv; v++)
+        img_free(&im[v]);
+    free(data);
+    free(len);
+    free(im);
+    free(rcs);
+    free(views);
+    free(errs);
+    return rc;
 }
 
 /* Read the session's paintings (a snapshot).  OUT: t->paintings, use,
