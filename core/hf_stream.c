@@ -37,36 +37,47 @@ void hf_chunking(long n, int *chunk, int *nchunks)
 }
 
 /* The log-mapped values of samples idx[0..nb-1] (or first..first+nb-1 when
- * idx is NULL) into buf[3 nb]; counts floored values into clamped[3]. */
+ * idx is NULL) into buf[3 nb]; counts floored values into clamped[3] and
+ * sets *bad when a value is not finite.  The common mappings (log, add:
+ * one offset for every channel) run as flat loops over the 3 nb values,
+ * which the compiler vectorizes; the arithmetic is the same as
+ * hf_map_arg's. */
 static void map_block(const hf_stream *x, const int *idx, int first, int nb, double *buf,
                       int *clamped, int *bad)
 {
     const hf_design *d = x->d;
     const float *rgb = x->rgb;
     const double eps = x->map->eps;
-    for (int b = 0; b < nb; b++) {
-        int i = idx ? idx[b] : first + b;
-        double cosd = 1.0;
-        if (x->model == HF_MODEL_BRDF)
-            cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
-        for (int c = 0; c < 3; c++) {
-            double v = rgb[3 * i + c], arg;
-            *bad |= !isfinite(v);
-            if (x->model == HF_MODEL_BRDF)
-                v /= cosd;
-            switch (x->map->kind) {
-            case HF_MAP_ADD: arg = x->a[c] + v; break;
-            case HF_MAP_SUB: arg = x->a[c] - v; break;
-            default: arg = v; break;
-            }
-            if (!(arg > eps)) {
-                arg = eps;
-                clamped[c]++;
-            }
-            buf[3 * b + c] = arg;
-        }
+    int m = 3 * nb;
+
+    if (idx) {
+        for (int b = 0; b < nb; b++)
+            for (int c = 0; c < 3; c++)
+                buf[3 * b + c] = rgb[3 * (size_t)idx[b] + c];
+    } else {
+        const float *src = rgb + 3 * (size_t)first;
+        for (int j = 0; j < m; j++)
+            buf[j] = src[j];
     }
-    vmath_log(buf, buf, (size_t)3 * nb);
+    if (x->model == HF_MODEL_BRDF)
+        for (int b = 0; b < nb; b++) {
+            int i = idx ? idx[b] : first + b;
+            double cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
+            for (int c = 0; c < 3; c++)
+                buf[3 * b + c] /= cosd;
+        }
+    {
+        /* hf_map_arg: log v, add a + v, sub a - v (a per channel) */
+        double off[3] = {0.0, 0.0, 0.0};
+        long cl[3] = {0, 0, 0};
+        if (x->map->kind != HF_MAP_LOG)
+            for (int c = 0; c < 3; c++)
+                off[c] = x->a[c];
+        *bad |= vmath_log_map3(buf, buf, (size_t)m, off,
+                               x->map->kind == HF_MAP_SUB ? -1.0 : 1.0, eps, cl);
+        for (int c = 0; c < 3; c++)
+            clamped[c] += (int)cl[c];
+    }
 }
 
 typedef struct fwd_task {

@@ -124,6 +124,63 @@ __attribute__((target("avx2,fma"))) static void log_fma(const double *in, double
         out[i] = log(in[i]);
 }
 
+/* vmath_log_map3 on AVX2: twelve values (three vectors, four channel
+ * periods) per step, so each lane's channel is fixed: vector k lane l is
+ * channel (4k + l) % 3. */
+__attribute__((target("avx2,fma"))) static int log_map3_fma(const double *in, double *out,
+                                                            size_t n, const double off[3],
+                                                            double sign, double floor,
+                                                            long clamped[3])
+{
+    const v4d fl = {floor, floor, floor, floor};
+    v4d o[3];
+    v4l cnt[3] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}}, bad = {0, 0, 0, 0};
+    size_t i = 0;
+    int nonfinite = 0;
+    for (int k = 0; k < 3; k++)
+        for (int l = 0; l < 4; l++)
+            o[k][l] = off[(4 * k + l) % 3];
+    for (; i + 12 <= n; i += 12) {
+        v4d a[3];
+        v4u ok = {~0ULL, ~0ULL, ~0ULL, ~0ULL};
+        for (int k = 0; k < 3; k++) {
+            v4d x;
+            v4l low;
+            memcpy(&x, in + i + 4 * k, sizeof x);
+            bad |= (v4l)((x - x) != 0.0);         /* inf - inf, NaN: not 0 */
+            a[k] = o[k] + sign * x;
+            low = ~(v4l)(a[k] > fl);              /* NaN too */
+            cnt[k] -= low;
+            a[k] = (v4d)(((v4l)a[k] & ~low) | ((v4l)fl & low));
+            ok &= ((v4u)a[k] - 0x0010000000000000ULL) < 0x7fe0000000000000ULL;
+        }
+        if (ok[0] & ok[1] & ok[2] & ok[3]) {
+            for (int k = 0; k < 3; k++) {
+                v4d y = log4(a[k]);
+                memcpy(out + i + 4 * k, &y, sizeof y);
+            }
+        } else {
+            for (int k = 0; k < 3; k++)
+                for (int l = 0; l < 4; l++)
+                    out[i + 4 * k + l] = log(a[k][l]);
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        for (int l = 0; l < 4; l++)
+            clamped[(4 * k + l) % 3] += cnt[k][l];
+    nonfinite = (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
+    for (; i < n; i++) {
+        double x = in[i], arg = off[i % 3] + sign * x;
+        nonfinite |= !(x - x == 0.0);
+        if (!(arg > floor)) {
+            arg = floor;
+            clamped[i % 3]++;
+        }
+        out[i] = log(arg);
+    }
+    return nonfinite;
+}
+
 void vmath_log(const double *in, double *out, size_t n)
 {
     if (have_fma())
@@ -142,6 +199,17 @@ void vmath_exp(const double *in, double *out, size_t n)
         exp_sse2(in, out, n);
 }
 
+static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
+                            double sign, double floor, long clamped[3]);
+
+int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
+                   double floor, long clamped[3])
+{
+    if (have_fma())
+        return log_map3_fma(in, out, n, off, sign, floor, clamped);
+    return log_map3_generic(in, out, n, off, sign, floor, clamped);
+}
+
 const char *vmath_impl(void)
 {
     return have_fma() ? "log: glint-avx2-fma, exp: libmvec-avx2"
@@ -156,6 +224,15 @@ void vmath_log(const double *in, double *out, size_t n)
         out[i] = log(in[i]);
 }
 
+static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
+                            double sign, double floor, long clamped[3]);
+
+int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
+                   double floor, long clamped[3])
+{
+    return log_map3_generic(in, out, n, off, sign, floor, clamped);
+}
+
 void vmath_exp(const double *in, double *out, size_t n)
 {
     for (size_t i = 0; i < n; i++)
@@ -168,3 +245,21 @@ const char *vmath_impl(void)
 }
 
 #endif
+
+/* The portable vmath_log_map3: the mapping, then vmath_log. */
+static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
+                            double sign, double floor, long clamped[3])
+{
+    int nonfinite = 0;
+    for (size_t i = 0; i < n; i++) {
+        double x = in[i], arg = off[i % 3] + sign * x;
+        nonfinite |= !(x - x == 0.0);
+        if (!(arg > floor)) {
+            arg = floor;
+            clamped[i % 3]++;
+        }
+        out[i] = arg;
+    }
+    vmath_log(out, out, n);
+    return nonfinite;
+}

@@ -11,6 +11,18 @@
 void vmath_log(const double *in, double *out, size_t n);
 void vmath_exp(const double *in, double *out, size_t n);
 
+/* The forward mapping of glint's factorizations, fused with the log: for
+ * n values (n a multiple of 3, channel-minor: value j is of channel j % 3),
+ *     arg = off[j % 3] + sign * in[j],
+ *     out[j] = log(arg > floor ? arg : floor)   (NaN floored too),
+ * adding to clamped[c] the values of channel c that were floored.  Returns
+ * 1 when an input value is not finite (inf or NaN), else 0.  sign is +1 or
+ * -1; floor > 0.  The arithmetic is exactly that of the loop above (a sign
+ * of -1 gives off - in), so results equal the scalar loop's bit for bit
+ * except for vmath_log's own rounding; in and out may be the same array. */
+int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
+                   double floor, long clamped[3]);
+
 /* Which implementation is in use ("libmvec-avx2", "libmvec-sse2", "libm"). */
 const char *vmath_impl(void);
 

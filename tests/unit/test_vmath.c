@@ -90,6 +90,48 @@ TEST(log_special_values_as_libm)
     }
 }
 
+TEST(log_map3_as_the_scalar_mapping)
+{
+    /* the fused mapping against its definition, for the three mappings,
+     * with values below the floor, negative, NaN and inf mixed in, at
+     * lengths that are and are not multiples of the vector step (12) */
+    enum { N = 3 * 1001 };
+    static double in[N], out[N];
+    const double offs[3][3] = {{0.0, 0.0, 0.0}, {0.1, 0.1, 0.1}, {1.2, 0.9, 3.5}};
+    const double signs[3] = {1.0, 1.0, -1.0};
+    const double eps = 1e-3;
+    for (int i = 0; i < N; i++) {
+        double u = uniform();
+        in[i] = u < 0.05 ? -u : u < 0.1 ? 1e-5 * u : u < 0.12 ? 0.0 : 3.0 * u;
+    }
+    for (int mk = 0; mk < 3; mk++)
+        for (int len = 3; len <= N; len += len < 48 ? 3 : 999) {
+            long cl[3] = {0, 0, 0}, want[3] = {0, 0, 0};
+            int bad = vmath_log_map3(in, out, (size_t)len, offs[mk], signs[mk], eps, cl);
+            ASSERT(bad == 0);
+            for (int j = 0; j < len; j++) {
+                double arg = offs[mk][j % 3] + signs[mk] * in[j];
+                if (!(arg > eps)) {
+                    arg = eps;
+                    want[j % 3]++;
+                }
+                ASSERT_MSG(ulps(out[j], log(arg)) <= 1.0, "map %d len %d value %d: %.17g, %.17g",
+                           mk, len, j, out[j], log(arg));
+            }
+            for (int c = 0; c < 3; c++)
+                ASSERT_EQ(cl[c], want[c]);
+        }
+    /* a non-finite value anywhere is reported, and floored like the rest */
+    for (int at = 0; at < 30; at++) {
+        long cl[3] = {0, 0, 0};
+        double save = in[at];
+        in[at] = at % 2 ? NAN : INFINITY;
+        ASSERT(vmath_log_map3(in, out, 30, offs[0], 1.0, eps, cl) == 1);
+        ASSERT(isfinite(out[at]) || in[at] == INFINITY);
+        in[at] = save;
+    }
+}
+
 TEST(exp_matches_libm)
 {
     enum { N = 4096 };
@@ -280,6 +322,7 @@ TEST(diagnostics_subsample_above_the_limit)
 TEST_LIST {
     TEST_ENTRY(log_within_one_ulp_everywhere),
     TEST_ENTRY(log_special_values_as_libm),
+    TEST_ENTRY(log_map3_as_the_scalar_mapping),
     TEST_ENTRY(exp_matches_libm),
     TEST_ENTRY(pool_runs_every_task_once),
     TEST_ENTRY(fit_same_bits_on_any_thread_count),
