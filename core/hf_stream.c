@@ -89,7 +89,13 @@ typedef struct fwd_task {
     int oom;
 } fwd_task;
 
-static void fwd_run(void *ctx, int c)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define HF_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define HF_CLONES
+#endif
+
+HF_CLONES static void fwd_run(void *ctx, int c)
 {
     fwd_task *w = ctx;
     const hf_design *d = w->x->d;
