@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "pattern.h"
 #include "raster.h"
 
 struct prep {
@@ -133,15 +134,18 @@ static int raster_bands(const scene *sc, int v, band_fn fn, void *cls, glint_err
     return rc;
 }
 
-typedef struct add_ctx {
-    samples *s;
-    const scene *sc;
-} add_ctx;
-
-static int add_band(void *cls, int v, const gbuf *band, int row0, glint_err *err)
+static void pattern_progress(void *cls, int done, int nused)
 {
-    add_ctx *a = cls;
-    return samples_add(a->s, v, band, row0, a->sc->views[v].light_intensity, err);
+    pattern_ctx *x = cls;
+    if (x->cb)
+        x->cb(x->cls, "samples", 0.25 * done / nused);
+}
+
+static void pattern_value(samples *s, cache_value *out)
+{
+    out->data = s;
+    out->bytes = samples_bytes(s);
+    out->free = samples_free_value;
 }
 
 static int pattern_build(void *ctx, cache_value *out, glint_err *err)
@@ -156,31 +160,18 @@ static int pattern_build(void *ctx, cache_value *out, glint_err *err)
         *s = *x->given;
         memset(x->given, 0, sizeof *x->given);
     } else {
-        const scene *sc = x->ps->sc;
-        add_ctx a = {s, sc};
-        int nused = 0, done = 0;
-        for (int v = 0; v < sc->nviews; v++)
-            nused += x->use[v] != 0;
-        rc = samples_begin(s, sc->nviews, sc->width, sc->height, err);
-        samples_set_rule(s, x->rule);
-        /* views not used are left out of the pattern */
-        for (int v = 0; v < sc->nviews && !rc; v++) {
-            if (!x->use[v])
-                continue;
-            if (!(rc = raster_bands(sc, v, add_band, &a, err)) && x->cb)
-                x->cb(x->cls, "samples", 0.25 * ++done / nused);
-        }
-        if (!rc)
-            rc = samples_end(s, x->use, x->ps->hash, err);
+        /* views not used are left out of the pattern; the machine's cores
+         * rasterize the others, a view per thread at a time */
+        pattern_in in = {x->ps->sc, x->use, x->rule, x->ps->hash, PREP_BAND_PIXELS, 0,
+                         pattern_progress, x};
+        rc = pattern_raster(&in, s, err);
     }
     if (rc) {
         samples_free(s);
         free(s);
         return rc;
     }
-    out->data = s;
-    out->bytes = samples_bytes(s);
-    out->free = samples_free_value;
+    pattern_value(s, out);
     return 0;
 }
 

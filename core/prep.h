@@ -2,9 +2,12 @@
  *
  *   scene    "scene:<id>"                   the scene and its content hash
  *   pattern  "pattern:<scene hash>:<views>" the samples of the views used
- *                                           (rasterized on the CPU: the
- *                                           rasterizer defines the pattern);
+ *                                           (rasterized on the CPU, by the
+ *                                           machine's cores: the rasterizer
+ *                                           defines the pattern; pattern.h);
  *                                           <views>: the used-view flags in hex
+ *                                           ("pattern-seen:..." for the SEEN
+ *                                           rule)
  *   levels   the method's own (method.h), each keyed from the one before
  *
  * then the fit of one set of paintings.  The daemon, the command line and
@@ -15,7 +18,7 @@
  *
  * Thread-safety: every function may be called from any thread (the cache
  * serializes what must be).  Progress callbacks run on the building
- * thread. */
+ * thread (a pattern's worker threads never call them). */
 #ifndef GLINT_PREP_H
 #define GLINT_PREP_H
 
@@ -67,8 +70,9 @@ typedef struct prep_request {
     const unsigned char *use;    /* one flag per scene view: the views that take part */
 } prep_request;
 
-/* Patterns are rasterized one view at a time in bands of rows of at most
- * this many pixels: a pattern never holds more G-buffer than a band. */
+/* Patterns are rasterized a view per thread at a time in bands of rows of
+ * at most this many pixels: a thread never holds more G-buffer than a
+ * band (pattern.h). */
 #define PREP_BAND_PIXELS (1 << 18)
 
 typedef struct prep prep;
