@@ -175,6 +175,31 @@ static int pattern_build(void *ctx, cache_value *out, glint_err *err)
     return 0;
 }
 
+/* The disk layer of scene patterns (pattern.h): a file is checked against
+ * the scene and the views it was asked for. */
+static int pattern_disk_load(void *ctx, const char *dir, const char *key, cache_value *out,
+                             glint_err *err)
+{
+    pattern_ctx *x = ctx;
+    samples *s = calloc(1, sizeof *s);
+    int rc;
+    if (!s)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if ((rc = pattern_load(dir, key, x->ps->sc, x->ps->hash, x->use, x->rule, s, err))) {
+        free(s);
+        return rc;
+    }
+    pattern_value(s, out);
+    return 0;
+}
+
+static int pattern_disk_save(void *ctx, const char *dir, const char *key, const cache_value *v,
+                             glint_err *err)
+{
+    (void)ctx;
+    return pattern_save(v->data, dir, key, err);
+}
+
 void prep_pattern_key(const prep_scene *ps, const unsigned char *use, int rule, char *key)
 {
     int n = snprintf(key, CACHE_KEY_MAX, "pattern%s:%s:", rule == SAMPLES_SEEN ? "-seen" : "",
@@ -302,8 +327,11 @@ static int acquire_levels(cache *c, prep *p, const scene *sc, prep_progress_fn c
 int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cls, prep **out,
                  glint_err *err)
 {
+    /* a scene's pattern is kept on disk too */
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
-                                              .build = pattern_build};
+                                              .build = pattern_build,
+                                              .load = pattern_disk_load,
+                                              .save = pattern_disk_save};
     const prep_scene *ps = cache_data(rq->scene);
     pattern_ctx px = {ps, rq->use, NULL, rq->m->pattern_rule, cb, cls};
     char key[CACHE_KEY_MAX];
@@ -329,6 +357,7 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
                          prep_progress_fn cb, void *cls, prep **out, glint_err *err)
 {
+    /* samples of the caller's are not a scene's: memory only */
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
                                               .build = pattern_build};
     pattern_ctx px = {NULL, NULL, s, m->pattern_rule, cb, cls};
@@ -429,10 +458,10 @@ int prep_was_hit(const prep *p)
 
 static json_t *level_report(const cache_entry *e, cache_how how, double spent)
 {
-    return json_pack("{s:s, s:s, s:I, s:f, s:f}", "key", cache_key(e), "memory",
-                     cache_how_names[how], "bytes", (json_int_t)cache_bytes(e), "build_seconds",
-                     cache_build_seconds(e), "waited_seconds",
-                     how == CACHE_JOINED ? spent : 0.0);
+    return json_pack("{s:s, s:s, s:s, s:I, s:f, s:f}", "key", cache_key(e), "memory",
+                     cache_how_names[how], "disk", cache_disk_names[cache_disk_of(e)], "bytes",
+                     (json_int_t)cache_bytes(e), "build_seconds", cache_build_seconds(e),
+                     "waited_seconds", how == CACHE_JOINED ? spent : 0.0);
 }
 
 json_t *prep_report(const prep *p)
