@@ -1,9 +1,13 @@
 /* cfile.c: checksummed cache files (cfile.h). */
 #include "cfile.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <xxhash.h>
 
 #include "fsio.h"
@@ -26,6 +30,17 @@ void cfile_put(cfile_w *b, const void *src, size_t n)
     }
     memcpy(b->p + b->len, src, n);
     b->len += n;
+}
+
+void cfile_reserve(cfile_w *b, size_t total)
+{
+    unsigned char *q;
+    if (b->oom || total <= b->cap)
+        return;
+    if (!(q = realloc(b->p, total)))
+        return; /* cfile_put will try again, and remember a failure */
+    b->p = q;
+    b->cap = total;
 }
 
 void cfile_put_u32(cfile_w *b, uint32_t v)
@@ -111,6 +126,111 @@ int cfile_done(const cfile_r *r)
 void cfile_close(cfile_r *r)
 {
     free(r->data);
+    memset(r, 0, sizeof *r);
+}
+
+/* Read n bytes at the file's position (0, or -1 when it ends first or
+ * fails). */
+static int read_full(int fd, void *dst, size_t n)
+{
+    char *p = dst;
+    while (n) {
+        ssize_t got = read(fd, p, n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return -1;
+        p += got;
+        n -= (size_t)got;
+    }
+    return 0;
+}
+
+int cfile_stream_open(const char *dir, const char *name, const char magic[8], uint32_t kind,
+                      size_t max_bytes, cfile_s *r, glint_err *err)
+{
+    char path[4096], head[12];
+    struct stat st;
+    uint32_t k;
+    int rc;
+
+    memset(r, 0, sizeof *r);
+    if ((rc = fsio_join(path, sizeof path, dir, name, err)))
+        return rc;
+    if ((r->fd = open(path, O_RDONLY | O_CLOEXEC)) < 0)
+        return glint_err_set(err, errno == ENOENT ? GLINT_ENOTFOUND : GLINT_EIO,
+                             "cannot read %s: %s", path, strerror(errno));
+    if (fstat(r->fd, &st) != 0) {
+        rc = glint_err_set(err, GLINT_EIO, "cannot read %s: %s", path, strerror(errno));
+        goto fail;
+    }
+    if (!S_ISREG(st.st_mode) || (size_t)st.st_size > max_bytes ||
+        (size_t)st.st_size < 8 + 4 + 8 || read_full(r->fd, head, sizeof head) ||
+        memcmp(head, magic, 8)) {
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s is not a glint %.8s cache file", name,
+                           magic);
+        goto fail;
+    }
+    memcpy(&k, head + 8, 4);
+    if (k != kind) {
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s holds another kind of level", name);
+        goto fail;
+    }
+    if (!(r->hash = XXH64_createState())) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory reading %s", name);
+        goto fail;
+    }
+    XXH64_reset(r->hash, 0);
+    XXH64_update(r->hash, head, sizeof head);
+    r->len = (size_t)st.st_size - 8;
+    r->at = sizeof head;
+    return 0;
+fail:
+    close(r->fd);
+    memset(r, 0, sizeof *r);
+    return rc;
+}
+
+int cfile_stream_get(cfile_s *r, void *dst, size_t n)
+{
+    /* pieces small enough to be hashed while the cache holds them */
+    const size_t piece = (size_t)256 << 10;
+    char *p = dst;
+    if (!r->hash || r->len - r->at < n)
+        return -1;
+    for (size_t off = 0; off < n; off += piece) {
+        size_t k = n - off < piece ? n - off : piece;
+        if (read_full(r->fd, p + off, k))
+            return -1;
+        XXH64_update(r->hash, p + off, k);
+    }
+    r->at += n;
+    return 0;
+}
+
+size_t cfile_stream_left(const cfile_s *r)
+{
+    return r->hash ? r->len - r->at : 0;
+}
+
+int cfile_stream_end(cfile_s *r, const char *name, glint_err *err)
+{
+    uint64_t h;
+    char extra;
+    if (!r->hash || r->at != r->len || read_full(r->fd, &h, sizeof h) ||
+        read(r->fd, &extra, 1) != 0)
+        return glint_err_set(err, GLINT_EFORMAT, "%s: the file has the wrong size", name);
+    if (XXH64_digest(r->hash) != h)
+        return glint_err_set(err, GLINT_EFORMAT, "%s: checksum mismatch (damaged file)", name);
+    return 0;
+}
+
+void cfile_stream_close(cfile_s *r)
+{
+    if (r->hash) { /* open */
+        close(r->fd);
+        XXH64_freeState(r->hash);
+    }
     memset(r, 0, sizeof *r);
 }
 

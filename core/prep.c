@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "pattern.h"
 #include "raster.h"
 
 struct prep {
@@ -133,15 +134,18 @@ static int raster_bands(const scene *sc, int v, band_fn fn, void *cls, glint_err
     return rc;
 }
 
-typedef struct add_ctx {
-    samples *s;
-    const scene *sc;
-} add_ctx;
-
-static int add_band(void *cls, int v, const gbuf *band, int row0, glint_err *err)
+static void pattern_progress(void *cls, int done, int nused)
 {
-    add_ctx *a = cls;
-    return samples_add(a->s, v, band, row0, a->sc->views[v].light_intensity, err);
+    pattern_ctx *x = cls;
+    if (x->cb)
+        x->cb(x->cls, "samples", 0.25 * done / nused);
+}
+
+static void pattern_value(samples *s, cache_value *out)
+{
+    out->data = s;
+    out->bytes = samples_bytes(s);
+    out->free = samples_free_value;
 }
 
 static int pattern_build(void *ctx, cache_value *out, glint_err *err)
@@ -156,32 +160,44 @@ static int pattern_build(void *ctx, cache_value *out, glint_err *err)
         *s = *x->given;
         memset(x->given, 0, sizeof *x->given);
     } else {
-        const scene *sc = x->ps->sc;
-        add_ctx a = {s, sc};
-        int nused = 0, done = 0;
-        for (int v = 0; v < sc->nviews; v++)
-            nused += x->use[v] != 0;
-        rc = samples_begin(s, sc->nviews, sc->width, sc->height, err);
-        samples_set_rule(s, x->rule);
-        /* views not used are left out of the pattern */
-        for (int v = 0; v < sc->nviews && !rc; v++) {
-            if (!x->use[v])
-                continue;
-            if (!(rc = raster_bands(sc, v, add_band, &a, err)) && x->cb)
-                x->cb(x->cls, "samples", 0.25 * ++done / nused);
-        }
-        if (!rc)
-            rc = samples_end(s, x->use, x->ps->hash, err);
+        /* views not used are left out of the pattern; the machine's cores
+         * rasterize the others, a view per thread at a time */
+        pattern_in in = {x->ps->sc, x->use, x->rule, x->ps->hash, PREP_BAND_PIXELS, 0,
+                         pattern_progress, x};
+        rc = pattern_raster(&in, s, err);
     }
     if (rc) {
         samples_free(s);
         free(s);
         return rc;
     }
-    out->data = s;
-    out->bytes = samples_bytes(s);
-    out->free = samples_free_value;
+    pattern_value(s, out);
     return 0;
+}
+
+/* The disk layer of scene patterns (pattern.h): a file is checked against
+ * the scene and the views it was asked for. */
+static int pattern_disk_load(void *ctx, const char *dir, const char *key, cache_value *out,
+                             glint_err *err)
+{
+    pattern_ctx *x = ctx;
+    samples *s = calloc(1, sizeof *s);
+    int rc;
+    if (!s)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if ((rc = pattern_load(dir, key, x->ps->sc, x->ps->hash, x->use, x->rule, s, err))) {
+        free(s);
+        return rc;
+    }
+    pattern_value(s, out);
+    return 0;
+}
+
+static int pattern_disk_save(void *ctx, const char *dir, const char *key, const cache_value *v,
+                             glint_err *err)
+{
+    (void)ctx;
+    return pattern_save(v->data, dir, key, err);
 }
 
 void prep_pattern_key(const prep_scene *ps, const unsigned char *use, int rule, char *key)
@@ -311,8 +327,11 @@ static int acquire_levels(cache *c, prep *p, const scene *sc, prep_progress_fn c
 int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cls, prep **out,
                  glint_err *err)
 {
+    /* a scene's pattern is kept on disk too */
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
-                                              .build = pattern_build};
+                                              .build = pattern_build,
+                                              .load = pattern_disk_load,
+                                              .save = pattern_disk_save};
     const prep_scene *ps = cache_data(rq->scene);
     pattern_ctx px = {ps, rq->use, NULL, rq->m->pattern_rule, cb, cls};
     char key[CACHE_KEY_MAX];
@@ -338,6 +357,7 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
                          prep_progress_fn cb, void *cls, prep **out, glint_err *err)
 {
+    /* samples of the caller's are not a scene's: memory only */
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
                                               .build = pattern_build};
     pattern_ctx px = {NULL, NULL, s, m->pattern_rule, cb, cls};
@@ -438,10 +458,10 @@ int prep_was_hit(const prep *p)
 
 static json_t *level_report(const cache_entry *e, cache_how how, double spent)
 {
-    return json_pack("{s:s, s:s, s:I, s:f, s:f}", "key", cache_key(e), "memory",
-                     cache_how_names[how], "bytes", (json_int_t)cache_bytes(e), "build_seconds",
-                     cache_build_seconds(e), "waited_seconds",
-                     how == CACHE_JOINED ? spent : 0.0);
+    return json_pack("{s:s, s:s, s:s, s:I, s:f, s:f}", "key", cache_key(e), "memory",
+                     cache_how_names[how], "disk", cache_disk_names[cache_disk_of(e)], "bytes",
+                     (json_int_t)cache_bytes(e), "build_seconds", cache_build_seconds(e),
+                     "waited_seconds", how == CACHE_JOINED ? spent : 0.0);
 }
 
 json_t *prep_report(const prep *p)

@@ -2,9 +2,13 @@
  *
  *   scene    "scene:<id>"                   the scene and its content hash
  *   pattern  "pattern:<scene hash>:<views>" the samples of the views used
- *                                           (rasterized on the CPU: the
- *                                           rasterizer defines the pattern);
- *                                           <views>: the used-view flags in hex
+ *                                           (rasterized on the CPU, by the
+ *                                           machine's cores: the rasterizer
+ *                                           defines the pattern; pattern.h),
+ *                                           kept on disk when the cache has a
+ *                                           directory; <views>: the used-view
+ *                                           flags in hex ("pattern-seen:..."
+ *                                           for the SEEN rule)
  *   levels   the method's own (method.h), each keyed from the one before
  *
  * then the fit of one set of paintings.  The daemon, the command line and
@@ -15,7 +19,7 @@
  *
  * Thread-safety: every function may be called from any thread (the cache
  * serializes what must be).  Progress callbacks run on the building
- * thread. */
+ * thread (a pattern's worker threads never call them). */
 #ifndef GLINT_PREP_H
 #define GLINT_PREP_H
 
@@ -67,8 +71,9 @@ typedef struct prep_request {
     const unsigned char *use;    /* one flag per scene view: the views that take part */
 } prep_request;
 
-/* Patterns are rasterized one view at a time in bands of rows of at most
- * this many pixels: a pattern never holds more G-buffer than a band. */
+/* Patterns are rasterized a view per thread at a time in bands of rows of
+ * at most this many pixels: a thread never holds more G-buffer than a
+ * band (pattern.h). */
 #define PREP_BAND_PIXELS (1 << 18)
 
 typedef struct prep prep;
@@ -88,7 +93,8 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
                  glint_err *err);
 
 /* The same from samples the caller made (e.g. imported from a file): they
- * form the pattern level, keyed by their hash (*s is moved in, zeroed). */
+ * form the pattern level, keyed "samples:<their hash>", in memory only (*s
+ * is moved in, zeroed). */
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
                          prep_progress_fn cb, void *cls, prep **out, glint_err *err);
 
@@ -107,9 +113,12 @@ int prep_predict(const prep *p, const struct material *m, float *rgb, glint_err 
 /* What the preparation found (a new object):
  * {"memory": "hit"|"built"|"joined", "disk": "loaded"|"built"|"rebuilt"|"off",
  *  "key": the last level's key, "cold_seconds": the precomputation's cold
- *  time, "levels": {<name>: {"key", "memory", "bytes", "build_seconds",
- *  "waited_seconds"}}}.  "memory" is "built" if any level was built,
- * else "joined" if any was waited for, else "hit". */
+ *  time, "levels": {<name>: {"key", "memory", "disk", "bytes",
+ *  "build_seconds", "waited_seconds"}}}.  "memory" is "built" if any level
+ * was built, else "joined" if any was waited for, else "hit".  The top
+ * "disk" is the method's first disk-backed level's (the pattern's is in
+ * its own level report); a level's "disk" is what the disk layer answered
+ * when that entry was made. */
 json_t *prep_report(const prep *p);
 
 /* The precomputation's cold time: every level as it was built (disk

@@ -148,26 +148,71 @@ int samples_add(samples *s, int view, const gbuf *g, int row0, double intensity,
     return 0;
 }
 
-/* The pattern hash: the rule, the scene hash and the views used. */
-static int samples_hash(samples *s, const char scene_hash[33], glint_err *err)
+int samples_append(samples *s, const samples *part, glint_err *err)
+{
+    size_t n = (size_t)s->n, m = (size_t)part->n;
+    int rc;
+
+    if (part->nviews != s->nviews || part->width != s->width || part->height != s->height ||
+        part->rule != s->rule)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "a part of %d views %dx%d (rule %d) does not fit a pattern of %d "
+                             "views %dx%d (rule %d)", part->nviews, part->width, part->height,
+                             part->rule, s->nviews, s->width, s->height, s->rule);
+    if (n + m > (size_t)SAMPLES_MAX)
+        return glint_err_set(err, GLINT_ERANGE, "more than %d samples (the limit)",
+                             SAMPLES_MAX);
+    if (n + m > s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 4096;
+        if (cap < n + m)
+            cap = n + m;
+        if ((rc = samples_reserve(s, cap, err)))
+            return rc;
+    }
+    for (int v = 0; v < s->nviews; v++)
+        s->used[v] |= part->used[v];
+    s->has_pos |= part->has_pos;
+    if (!m)
+        return 0;
+    memcpy(s->view + n, part->view, m * sizeof *s->view);
+    memcpy(s->pixel + n, part->pixel, m * sizeof *s->pixel);
+    memcpy(s->nrm + 3 * n, part->nrm, 3 * m * sizeof *s->nrm);
+    memcpy(s->wi + 3 * n, part->wi, 3 * m * sizeof *s->wi);
+    memcpy(s->wo + 3 * n, part->wo, 3 * m * sizeof *s->wo);
+    memcpy(s->cos_i + n, part->cos_i, m * sizeof *s->cos_i);
+    memcpy(s->intensity + n, part->intensity, m * sizeof *s->intensity);
+    memcpy(s->pos + 3 * n, part->pos, 3 * m * sizeof *s->pos);
+    memcpy(s->uv + 2 * n, part->uv, 2 * m * sizeof *s->uv);
+    s->n += part->n;
+    return 0;
+}
+
+int samples_pattern_hash(int rule, const char scene_hash[33], const unsigned char *used,
+                         int nviews, char out[33], glint_err *err)
 {
     static const char lit[] = "glint-samples-v1:mask&cos_i>0&cos_o>0";
     static const char seen[] = "glint-samples-v1:mask&cos_o>0";
-    const char *rule = s->rule == SAMPLES_SEEN ? seen : lit;
-    size_t rule_len = s->rule == SAMPLES_SEEN ? sizeof seen : sizeof lit;
+    const char *name = rule == SAMPLES_SEEN ? seen : lit;
+    size_t name_len = rule == SAMPLES_SEEN ? sizeof seen : sizeof lit;
     XXH3_state_t *st = XXH3_createState();
     XXH128_hash_t h;
     if (!st)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory hashing samples");
     XXH3_128bits_reset(st);
-    XXH3_128bits_update(st, rule, rule_len);
+    XXH3_128bits_update(st, name, name_len);
     XXH3_128bits_update(st, scene_hash ? scene_hash : "", scene_hash ? 32 : 0);
-    XXH3_128bits_update(st, s->used, (size_t)s->nviews);
+    XXH3_128bits_update(st, used, (size_t)nviews);
     h = XXH3_128bits_digest(st);
     XXH3_freeState(st);
-    snprintf(s->hash, sizeof s->hash, "%016llx%016llx", (unsigned long long)h.high64,
+    snprintf(out, 33, "%016llx%016llx", (unsigned long long)h.high64,
              (unsigned long long)h.low64);
     return 0;
+}
+
+/* The pattern hash: the rule, the scene hash and the views used. */
+static int samples_hash(samples *s, const char scene_hash[33], glint_err *err)
+{
+    return samples_pattern_hash(s->rule, scene_hash, s->used, s->nviews, s->hash, err);
 }
 
 int samples_end(samples *s, const unsigned char *use, const char scene_hash[33],

@@ -68,6 +68,17 @@ int samples_add(samples *s, int view, const gbuf *band, int row0, double intensi
                 glint_err *err);
 int samples_end(samples *s, const unsigned char *use, const char scene_hash[33],
                 glint_err *err);
+/* Append the samples of `part` (begun with the same views, raster size and
+ * rule, e.g. one view's samples made on another thread) after those of s,
+ * in order, and mark part's used views as used in s: adding the views' parts
+ * in view order makes exactly the pattern samples_add would.  GLINT_ERANGE
+ * past SAMPLES_MAX. */
+int samples_append(samples *s, const samples *part, glint_err *err);
+
+/* The pattern hash samples_end gives a pattern of `rule` made from the scene
+ * of scene_hash (may be NULL) with used[nviews] (OUT: out, 32 hex digits). */
+int samples_pattern_hash(int rule, const char scene_hash[33], const unsigned char *used,
+                         int nviews, char out[33], glint_err *err);
 
 /* The samples of one G-buffer (or band), by the LIT rule and by a rule. */
 long samples_count(const gbuf *g);

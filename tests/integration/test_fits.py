@@ -238,6 +238,7 @@ def test_01_cold_fit_is_a_job_with_progress(d):
     assert cache["memory"] == "built", cache
     assert cache["levels"]["decomposition"]["memory"] == "built"
     assert cache["disk"] in ("built", "rebuilt"), cache
+    assert cache["levels"]["pattern"]["disk"] in ("built", "rebuilt"), cache
     assert cache["cold_seconds"] > 0
     assert m["seconds"]["decomposition"] > 0
     assert 0 < m["errors"]["rms_painted"] < 0.05, m["errors"]
@@ -626,6 +627,8 @@ def test_13_restart_reuses_the_disk_cache_and_rebuilds_corrupt_files(d):
     m = get_material(d, j["material_id"])
     cache = m["precomputation"]["cache"]
     assert cache["memory"] == "built" and cache["disk"] == "loaded", cache
+    assert cache["levels"]["pattern"]["disk"] == "loaded", cache  # not rasterized again
+    assert cache["levels"]["decomposition"]["disk"] == "loaded", cache
     assert m["precomputation"]["cache_hit"] == 1
     assert m["precomputation"]["cache_key"] == S["m32"]["precomputation"]["cache_key"]
     assert abs(m["errors"]["rms_painted"] - S["m32"]["errors"]["rms_painted"]) < 1e-9
@@ -635,12 +638,20 @@ def test_13_restart_reuses_the_disk_cache_and_rebuilds_corrupt_files(d):
     with open(path, "r+b") as f:
         f.seek(200)
         f.write(b"\xff" * 16)
+    # and the sampling patterns' files: cut short
+    patterns = [os.path.join(d.data_dir, "cache", n)
+                for n in os.listdir(os.path.join(d.data_dir, "cache")) if n.endswith(".pattern")]
+    assert patterns
+    for p in patterns:
+        os.truncate(p, os.path.getsize(p) // 2)
     d.stop()
     d.start()
     kind, job = fit(d, {"res": 32}, expect=202)
     j = wait_job(d, job["id"], S["paint"])
     m = get_material(d, j["material_id"])
-    assert m["precomputation"]["cache"]["disk"] == "rebuilt", m["precomputation"]["cache"]
+    cache = m["precomputation"]["cache"]
+    assert cache["disk"] == "rebuilt", cache
+    assert cache["levels"]["pattern"]["disk"] == "rebuilt", cache
     assert abs(m["errors"]["rms_painted"] - S["m32"]["errors"]["rms_painted"]) < 1e-9
     # the points were kept across the restarts
     pts = d.get("/api/v1/methods?scene_id=" + S["scene"], status=200,
