@@ -70,7 +70,7 @@ int cfile_write(cfile_w *b, const char *dir, const char *name, glint_err *err)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory writing %s", name);
     }
     if (!(rc = fsio_mkdirs(dir, err)) && !(rc = fsio_join(path, sizeof path, dir, name, err)))
-        rc = fsio_write_atomic(path, b->p, b->len, err);
+        rc = fsio_write_rebuildable(path, b->p, b->len, err);
     free(b->p);
     memset(b, 0, sizeof *b);
     return rc;

@@ -7,7 +7,8 @@
  * runs on little-endian hosts) and an XXH64 checksum of every byte before
  * it.  A short, flipped or mismatched file is GLINT_EFORMAT (the cache
  * then rebuilds the level and overwrites it); files are written atomically
- * (fsio.h). */
+ * and not fsynced (fsio_write_rebuildable, fsio.h: a crash may tear one,
+ * which its checksum then tells). */
 #ifndef GLINT_CFILE_H
 #define GLINT_CFILE_H
 

@@ -213,6 +213,21 @@ int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err 
     return fsio_atomic_commit(&a, err);
 }
 
+int fsio_write_rebuildable(const char *path, const void *data, size_t len, glint_err *err)
+{
+    /* a group that is never ended: commit renames without syncing */
+    fsio_group *saved = cur_group, g;
+    int rc;
+    memset(&g, 0, sizeof g);
+    cur_group = &g;
+    rc = fsio_write_atomic(path, data, len, err);
+    cur_group = saved;
+    for (int i = 0; i < g.n; i++)
+        free(g.paths[i]);
+    free(g.paths);
+    return rc;
+}
+
 int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len, glint_err *err)
 {
     FILE *fp = fopen(path, "rb");

@@ -47,6 +47,13 @@ typedef struct fsio_group {
 void fsio_group_begin(fsio_group *g);
 int fsio_group_end(fsio_group *g, glint_err *err);
 
+/* An atomic write without fsync, for files glint can rebuild and checks on
+ * every read (the checksummed cache files): readers never see a torn file
+ * while the machine runs, but after a crash the file may be missing, empty
+ * or torn, which its reader must detect (and the cache then rebuilds it).
+ * Saves the fsync (15-25 ms for a 31 MB sampling pattern here). */
+int fsio_write_rebuildable(const char *path, const void *data, size_t len, glint_err *err);
+
 /* Read a whole file (at most max_len bytes, else GLINT_ERANGE) into a
  * malloc'ed buffer with a NUL appended (OUT: *data, *len). */
 int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len,

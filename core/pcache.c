@@ -158,7 +158,7 @@ int pcache_decomp_save(const char *dir, const char key[33], const hf_decomp *dc,
         free(b.p);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory serializing a decomposition");
     }
-    rc = fsio_write_atomic(path, b.p, b.len, err);
+    rc = fsio_write_rebuildable(path, b.p, b.len, err);
     free(b.p);
     return rc;
 }

@@ -6,7 +6,8 @@
  * header, the payload and an XXH3-64 checksum of everything before it; a
  * file whose size, magic, key, sizes, values or checksum do not check out
  * is reported as GLINT_EFORMAT (never trusted: the caller rebuilds and
- * overwrites it).  Files are written atomically (fsio.h). */
+ * overwrites it).  Files are written atomically, without fsync
+ * (fsio_write_rebuildable, fsio.h: a crash may tear one; the checks tell). */
 #ifndef GLINT_PCACHE_H
 #define GLINT_PCACHE_H
 
