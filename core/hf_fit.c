@@ -321,6 +321,7 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
     x.map = map;
     x.model = model;
     x.a = fac->a_used;
+    x.single = op->prec == HF_F32;
     if ((rc = hf_stream_forward(&x, t, st.clamped)) < 0) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
         goto fail;

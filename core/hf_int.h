@@ -47,6 +47,7 @@ typedef struct hf_stream {
     const hf_map *map;
     hf_model model;
     const double *a;
+    int single;          /* the logs in single precision (HF_F32), summed in double */
 } hf_stream;
 
 /* t = A^T f~ with f~ the log-mapped samples (OUT: t[9R], clamped[3]:

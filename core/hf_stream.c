@@ -25,6 +25,9 @@
 #include "vmath.h"
 
 #define HF_BLOCK 256
+
+typedef double v4d __attribute__((vector_size(32)));
+typedef double v2d __attribute__((vector_size(16)));
 #define COS_FLOOR 1e-6
 
 void hf_chunking(long n, int *chunk, int *nchunks)
@@ -80,6 +83,34 @@ static void map_block(const hf_stream *x, const int *idx, int first, int nb, dou
     }
 }
 
+/* map_block in single precision (HF_F32): the values, the mapping and the
+ * logs in float (vmath_logf_map3); the sums they go into stay double. */
+static void map_block_f(const hf_stream *x, int first, int nb, float *buf, int *clamped,
+                        int *bad)
+{
+    const hf_design *d = x->d;
+    const float *src = x->rgb + 3 * (size_t)first;
+    int m = 3 * nb;
+    float off[3] = {0.0f, 0.0f, 0.0f};
+    long cl[3] = {0, 0, 0};
+
+    if (x->model == HF_MODEL_BRDF) {
+        for (int b = 0; b < nb; b++) {
+            double cosd = d->cos_i[first + b] > COS_FLOOR ? d->cos_i[first + b] : COS_FLOOR;
+            for (int c = 0; c < 3; c++)
+                buf[3 * b + c] = (float)(src[3 * b + c] / cosd);
+        }
+        src = buf;
+    }
+    if (x->map->kind != HF_MAP_LOG)
+        for (int c = 0; c < 3; c++)
+            off[c] = (float)x->a[c];
+    *bad |= vmath_logf_map3(src, buf, (size_t)m, off, x->map->kind == HF_MAP_SUB ? -1.0f : 1.0f,
+                            (float)x->map->eps, cl);
+    for (int c = 0; c < 3; c++)
+        clamped[c] += (int)cl[c];
+}
+
 typedef struct fwd_task {
     const hf_stream *x;
     int chunk, nchunks;
@@ -112,22 +143,36 @@ HF_CLONES static void fwd_run(void *ctx, int c)
     }
     for (int b0 = i0; b0 < i1; b0 += HF_BLOCK) {
         int nb = i1 - b0 < HF_BLOCK ? i1 - b0 : HF_BLOCK;
-        map_block(w->x, NULL, b0, nb, buf, clamped, w->bad + c);
+        if (w->x->single) {
+            float fbuf[3 * HF_BLOCK];
+            map_block_f(w->x, b0, nb, fbuf, clamped, w->bad + c);
+            for (int j = 0; j < 3 * nb; j++)
+                buf[j] = fbuf[j];
+        } else {
+            map_block(w->x, NULL, b0, nb, buf, clamped, w->bad + c);
+        }
         for (int b = 0; b < nb; b++) {
             int i = b0 + b;
             const double *fi = buf + 3 * b;
             const int32_t *k0 = d->k0 + 3 * (size_t)i;
             const double *tt = d->t + 3 * (size_t)i;
             double *base = acc + (size_t)(i & 3) * len;
+            /* the six sums of a hat pair (texel k: RGB, texel k + 1: RGB)
+             * are contiguous: a four- and a two-lane update, each lane
+             * the scalar w * f + sum */
+            v4d fa = {fi[0], fi[1], fi[2], fi[0]};
+            v2d fb = {fi[1], fi[2]};
             for (int j = 0; j < 3; j++) {
                 double *tk = base + 3 * (j * R + k0[j]);
                 double w1 = tt[j], w0 = 1.0 - w1;
-                tk[0] += w0 * fi[0];
-                tk[1] += w0 * fi[1];
-                tk[2] += w0 * fi[2];
-                tk[3] += w1 * fi[0];
-                tk[4] += w1 * fi[1];
-                tk[5] += w1 * fi[2];
+                v4d wa = {w0, w0, w0, w1}, sa;
+                v2d wb = {w1, w1}, sb;
+                memcpy(&sa, tk, sizeof sa);
+                memcpy(&sb, tk + 4, sizeof sb);
+                sa += wa * fa;
+                sb += wb * fb;
+                memcpy(tk, &sa, sizeof sa);
+                memcpy(tk + 4, &sb, sizeof sb);
             }
         }
     }

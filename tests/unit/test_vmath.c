@@ -132,6 +132,71 @@ TEST(log_map3_as_the_scalar_mapping)
     }
 }
 
+static double ulpsf(float a, float b)
+{
+    float u;
+    if (a == b)
+        return 0.0;
+    u = nextafterf(fabsf(b), INFINITY) - fabsf(b);
+    return fabs((double)a - (double)b) / u;
+}
+
+TEST(logf_map3_as_the_scalar_mapping)
+{
+    enum { N = 3 * 1001 };
+    static float in[N], out[N];
+    const float offs[3][3] = {{0.0f, 0.0f, 0.0f}, {0.1f, 0.1f, 0.1f}, {1.2f, 0.9f, 3.5f}};
+    const float signs[3] = {1.0f, 1.0f, -1.0f};
+    const float eps = 1e-3f;
+    double worst = 0.0;
+    for (int i = 0; i < N; i++) {
+        double u = uniform();
+        in[i] = (float)(u < 0.05 ? -u : u < 0.1 ? 1e-5 * u : u < 0.12 ? 0.0 : 3.0 * u);
+    }
+    for (int mk = 0; mk < 3; mk++)
+        for (int len = 3; len <= N; len += len < 72 ? 3 : 999) {
+            long cl[3] = {0, 0, 0}, want[3] = {0, 0, 0};
+            ASSERT(vmath_logf_map3(in, out, (size_t)len, offs[mk], signs[mk], eps, cl) == 0);
+            for (int j = 0; j < len; j++) {
+                float arg = offs[mk][j % 3] + signs[mk] * in[j];
+                if (!(arg > eps)) {
+                    arg = eps;
+                    want[j % 3]++;
+                }
+                if (ulpsf(out[j], logf(arg)) > worst)
+                    worst = ulpsf(out[j], logf(arg));
+                ASSERT_MSG(ulpsf(out[j], logf(arg)) <= 1.0, "map %d value %d: %.9g, %.9g", mk,
+                           j, out[j], logf(arg));
+            }
+            for (int c = 0; c < 3; c++)
+                ASSERT_EQ(cl[c], want[c]);
+        }
+    {
+        /* every float in [0.5, 2) at a stride, and the exponent range */
+        static float x[1 << 16], y[1 << 16];
+        long cl[3] = {0, 0, 0};
+        const float zero[3] = {0.0f, 0.0f, 0.0f};
+        for (int i = 0; i < (1 << 16); i++)
+            x[i] = i < (1 << 15) ? 0.5f + 1.5f * (float)i / (1 << 15)
+                                 : (float)exp((uniform() - 0.5) * 170.0);
+        ASSERT(vmath_logf_map3(x, y, 3 * ((1 << 16) / 3), zero, 1.0f, 1e-30f, cl) == 0);
+        for (int i = 0; i < 3 * ((1 << 16) / 3); i++) {
+            float r = logf(x[i] > 1e-30f ? x[i] : 1e-30f);
+            if (ulpsf(y[i], r) > worst)
+                worst = ulpsf(y[i], r);
+        }
+    }
+    printf("  logf: worst %.2f ulp\n", worst);
+    ASSERT(worst <= 1.0);
+    for (int at = 0; at < 48; at++) {
+        long cl[3] = {0, 0, 0};
+        float save = in[at];
+        in[at] = at % 2 ? NAN : INFINITY;
+        ASSERT(vmath_logf_map3(in, out, 48, offs[0], 1.0f, eps, cl) == 1);
+        in[at] = save;
+    }
+}
+
 TEST(exp_matches_libm)
 {
     enum { N = 4096 };
@@ -323,6 +388,7 @@ TEST_LIST {
     TEST_ENTRY(log_within_one_ulp_everywhere),
     TEST_ENTRY(log_special_values_as_libm),
     TEST_ENTRY(log_map3_as_the_scalar_mapping),
+    TEST_ENTRY(logf_map3_as_the_scalar_mapping),
     TEST_ENTRY(exp_matches_libm),
     TEST_ENTRY(pool_runs_every_task_once),
     TEST_ENTRY(fit_same_bits_on_any_thread_count),
