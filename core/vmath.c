@@ -126,6 +126,11 @@ __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static void lo
         out[i] = log(in[i]);
 }
 
+static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
+                            double sign, double floor, long clamped[3]);
+static int logf_map3_generic(const float *in, float *out, size_t n, const float off[3],
+                             float sign, float floor, long clamped[3]);
+
 /* vmath_log_map3 on AVX2: twelve values (three vectors, four channel
  * periods) per step, so each lane's channel is fixed: vector k lane l is
  * channel (4k + l) % 3. */
@@ -171,16 +176,8 @@ __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int log
         for (int l = 0; l < 4; l++)
             clamped[(4 * k + l) % 3] += cnt[k][l];
     nonfinite = (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
-    for (; i < n; i++) {
-        double x = in[i], arg = off[i % 3] + sign * x;
-        nonfinite |= !(x - x == 0.0);
-        if (!(arg > floor)) {
-            arg = floor;
-            clamped[i % 3]++;
-        }
-        out[i] = log(arg);
-    }
-    return nonfinite;
+    /* the rest (i is a multiple of 3: the channels line up) */
+    return nonfinite | log_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
 /* logf in eight lanes: the same reduction as log4 in single precision,
@@ -254,16 +251,7 @@ logf_map3_fma(const float *in, float *out, size_t n, const float off[3], float s
             clamped[(8 * k + l) % 3] += cnt[k][l];
     for (int l = 0; l < 8; l++)
         nonfinite |= bad[l] != 0;
-    for (; i < n; i++) {
-        float x = in[i], arg = off[i % 3] + sign * x;
-        nonfinite |= !(x - x == 0.0f);
-        if (!(arg > floor)) {
-            arg = floor;
-            clamped[i % 3]++;
-        }
-        out[i] = logf(arg);
-    }
-    return nonfinite;
+    return nonfinite | logf_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
 void vmath_log(const double *in, double *out, size_t n)
@@ -283,11 +271,6 @@ void vmath_exp(const double *in, double *out, size_t n)
     else
         exp_sse2(in, out, n);
 }
-
-static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
-                            double sign, double floor, long clamped[3]);
-static int logf_map3_generic(const float *in, float *out, size_t n, const float off[3],
-                             float sign, float floor, long clamped[3]);
 
 int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
                    double floor, long clamped[3])

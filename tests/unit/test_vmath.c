@@ -257,11 +257,53 @@ TEST(pool_runs_every_task_once)
     ASSERT(par_threads() >= 1);
 }
 
+/* A fit on the sphere seen from the 12 icosahedron views at size x size
+ * pixels, res texels, a random painting. */
+typedef struct fit_case {
+    samples s;
+    hf_design d;
+    hf_decomp dc;
+    hf_op op;
+    hf_map map;
+    float *rgb;
+} fit_case;
+
+static int fit_case_make(fit_case *fc, int size, int res)
+{
+    double dirs[12][3];
+    gbuf g[12];
+    hf_reg reg;
+    int rc;
+    memset(fc, 0, sizeof *fc);
+    fixture_ico(dirs);
+    if (fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, size, size))
+        return -1;
+    rc = samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &fc->s, NULL);
+    for (int v = 0; v < 12; v++)
+        gbuf_free(&g[v]);
+    if (rc || !(fc->rgb = malloc((size_t)3 * fc->s.n * sizeof *fc->rgb)))
+        return -1;
+    for (int i = 0; i < 3 * fc->s.n; i++)
+        fc->rgb[i] = (float)(0.05 + 0.9 * uniform());
+    hf_map_default(&fc->map, HF_MAP_LOG);
+    if (hf_reg_parse("trunc:full", &reg, NULL) || hf_design_build(&fc->s, res, &fc->d, NULL) ||
+        hf_decomp_build(&fc->d, 0.1, HF_ROUTE_EIG, 0, &fc->dc, NULL) ||
+        hf_op_build(&fc->dc, &reg, HF_F64, &fc->op, NULL))
+        return -1;
+    return 0;
+}
+
+static void fit_case_free(fit_case *fc)
+{
+    hf_op_free(&fc->op);
+    hf_decomp_free(&fc->dc);
+    hf_design_free(&fc->d);
+    samples_free(&fc->s);
+    free(fc->rgb);
+}
+
 typedef struct fit_ctx {
-    const hf_design *d;
-    const hf_op *op;
-    const hf_map *map;
-    const float *rgb;
+    const fit_case *fc;
     hf_factors fac;
     hf_fit_stats st;
     int rc;
@@ -270,8 +312,10 @@ typedef struct fit_ctx {
 static void fit_in_task(void *ctx, int t)
 {
     fit_ctx *f = ctx;
+    const fit_case *fc = f->fc;
     if (t == 0) /* the pool is held by this run: the fit's own runs go serial */
-        f->rc = hf_fit(f->d, f->op, f->map, HF_MODEL_RADIANCE, f->rgb, &f->fac, &f->st, NULL);
+        f->rc = hf_fit(&fc->d, &fc->op, &fc->map, HF_MODEL_RADIANCE, fc->rgb, &f->fac, &f->st,
+                       NULL);
 }
 
 TEST(fit_same_bits_on_any_thread_count)
@@ -279,109 +323,56 @@ TEST(fit_same_bits_on_any_thread_count)
     /* the streamed passes split the samples into chunks fixed by their
      * count, so a fit on the pool and one with every chunk on one thread
      * (what a busy pool gives) are the same bits */
-    double dirs[12][3];
-    gbuf g[12];
-    samples s;
-    hf_design d;
-    hf_decomp dc;
-    hf_op op;
-    hf_reg reg;
-    hf_map map;
+    fit_case fc;
     hf_factors a;
     hf_fit_stats sa;
     fit_ctx f;
-    float *rgb;
 
-    fixture_ico(dirs);
-    ASSERT_OK(fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, 100, 100));
-    ASSERT_OK(samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &s, NULL));
-    for (int v = 0; v < 12; v++)
-        gbuf_free(&g[v]);
-    ASSERT(s.n > PAR_MIN_WORK / 3 && s.n > HF_DIAG_SAMPLES / 2);
-    rgb = malloc((size_t)3 * s.n * sizeof *rgb);
-    ASSERT(rgb);
-    for (int i = 0; i < 3 * s.n; i++)
-        rgb[i] = (float)(0.05 + 0.9 * uniform());
-    hf_map_default(&map, HF_MAP_LOG);
-    ASSERT_OK(hf_reg_parse("trunc:full", &reg, NULL));
-    ASSERT_OK(hf_design_build(&s, 32, &d, NULL));
-    ASSERT_OK(hf_decomp_build(&d, 0.1, HF_ROUTE_EIG, 0, &dc, NULL));
-    ASSERT_OK(hf_op_build(&dc, &reg, HF_F64, &op, NULL));
-    ASSERT_OK(hf_fit(&d, &op, &map, HF_MODEL_RADIANCE, rgb, &a, &sa, NULL));
+    ASSERT_OK(fit_case_make(&fc, 100, 32));
+    ASSERT(fc.s.n > PAR_MIN_WORK / 3 && fc.s.n > HF_DIAG_SAMPLES / 2);
+    ASSERT_OK(hf_fit(&fc.d, &fc.op, &fc.map, HF_MODEL_RADIANCE, fc.rgb, &a, &sa, NULL));
     memset(&f, 0, sizeof f);
-    f.d = &d;
-    f.op = &op;
-    f.map = &map;
-    f.rgb = rgb;
+    f.fc = &fc;
     f.rc = -1;
     par_run(2, fit_in_task, &f);
     ASSERT_OK(f.rc);
-    ASSERT(memcmp(a.logf, f.fac.logf, (size_t)9 * d.res * sizeof *a.logf) == 0);
+    ASSERT(memcmp(a.logf, f.fac.logf, (size_t)9 * fc.d.res * sizeof *a.logf) == 0);
     ASSERT(sa.rms == f.st.rms && sa.log_residual == f.st.log_residual);
-    ASSERT(sa.diag_samples == s.n && sa.diag_stride == 1);
+    ASSERT(sa.diag_samples == fc.s.n && sa.diag_stride == 1);
     hf_factors_free(&a);
     hf_factors_free(&f.fac);
-    hf_op_free(&op);
-    hf_decomp_free(&dc);
-    hf_design_free(&d);
-    samples_free(&s);
-    free(rgb);
+    fit_case_free(&fc);
 }
 
 TEST(diagnostics_subsample_above_the_limit)
 {
     /* more samples than HF_DIAG_SAMPLES: every k-th, counted and labelled */
-    double dirs[12][3];
-    gbuf g[12];
-    samples s;
-    hf_design d;
-    hf_decomp dc;
-    hf_op op;
-    hf_reg reg;
-    hf_map map;
+    fit_case fc;
     hf_factors a;
     hf_fit_stats st;
-    float *rgb;
 
-    fixture_ico(dirs);
-    ASSERT_OK(fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, 128, 128));
-    ASSERT_OK(samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &s, NULL));
-    for (int v = 0; v < 12; v++)
-        gbuf_free(&g[v]);
-    ASSERT(s.n > HF_DIAG_SAMPLES);
-    rgb = malloc((size_t)3 * s.n * sizeof *rgb);
-    ASSERT(rgb);
-    for (int i = 0; i < 3 * s.n; i++)
-        rgb[i] = (float)(0.05 + 0.9 * uniform());
-    hf_map_default(&map, HF_MAP_LOG);
-    ASSERT_OK(hf_reg_parse("trunc:full", &reg, NULL));
-    ASSERT_OK(hf_design_build(&s, 16, &d, NULL));
-    ASSERT_OK(hf_decomp_build(&d, 0.1, HF_ROUTE_EIG, 0, &dc, NULL));
-    ASSERT_OK(hf_op_build(&dc, &reg, HF_F64, &op, NULL));
-    ASSERT_OK(hf_fit(&d, &op, &map, HF_MODEL_RADIANCE, rgb, &a, &st, NULL));
-    ASSERT_EQ(st.diag_stride, (s.n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES);
-    ASSERT_EQ(st.diag_samples, (s.n + st.diag_stride - 1) / st.diag_stride);
+    ASSERT_OK(fit_case_make(&fc, 128, 16));
+    ASSERT(fc.s.n > HF_DIAG_SAMPLES);
+    ASSERT_OK(hf_fit(&fc.d, &fc.op, &fc.map, HF_MODEL_RADIANCE, fc.rgb, &a, &st, NULL));
+    ASSERT_EQ(st.diag_stride, (fc.s.n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES);
+    ASSERT_EQ(st.diag_samples, (fc.s.n + st.diag_stride - 1) / st.diag_stride);
     ASSERT(st.diag_samples <= HF_DIAG_SAMPLES);
     {
         /* the estimate against the exact RMS over every sample */
-        float *rec = malloc((size_t)3 * s.n * sizeof *rec);
+        float *rec = malloc((size_t)3 * fc.s.n * sizeof *rec);
         double se = 0.0, exact;
         ASSERT(rec);
-        hf_factors_eval_design(&a, &d, rec);
-        for (long i = 0; i < 3L * s.n; i++)
-            se += ((double)rec[i] - rgb[i]) * ((double)rec[i] - rgb[i]);
-        exact = sqrt(se / (3.0 * s.n));
+        hf_factors_eval_design(&a, &fc.d, rec);
+        for (long i = 0; i < 3L * fc.s.n; i++)
+            se += ((double)rec[i] - fc.rgb[i]) * ((double)rec[i] - fc.rgb[i]);
+        exact = sqrt(se / (3.0 * fc.s.n));
         free(rec);
-        printf("  RMS over %ld of %d samples %.6f, over all %.6f\n", st.diag_samples, s.n,
+        printf("  RMS over %ld of %d samples %.6f, over all %.6f\n", st.diag_samples, fc.s.n,
                st.rms, exact);
         ASSERT_NEAR(st.rms / exact, 1.0, 0.02);
     }
     hf_factors_free(&a);
-    hf_op_free(&op);
-    hf_decomp_free(&dc);
-    hf_design_free(&d);
-    samples_free(&s);
-    free(rgb);
+    fit_case_free(&fc);
 }
 
 TEST_LIST {
