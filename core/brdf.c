@@ -71,7 +71,18 @@ void brdf_eval(const brdf *b, const double n[3], const double wi[3],
         double a2 = b->roughness * b->roughness;
         v3 h = v3_normalize(v3_add(I, O));
         double ch = v3_dot(N, h);
-        if (ch > 0.0) {
+        if (ch > 0.0 && b->roughness_y > 0.0 && b->roughness_y != b->roughness) {
+            /* anisotropic: alpha_x = rough along t, alpha_y = rough_y along b */
+            v3 t, bt;
+            double ax = b->roughness, ay = b->roughness_y, ht, hb, e, lobe;
+            v3_frame(N, &t, &bt);
+            ht = v3_dot(h, t) / ax;
+            hb = v3_dot(h, bt) / ay;
+            e = (ht * ht + hb * hb) / (ch * ch);
+            lobe = exp(-e) / (4.0 * M_PI * ax * ay * sqrt(ci * co));
+            for (int c = 0; c < 3; c++)
+                spec[c] = b->ks[c] * lobe;
+        } else if (ch > 0.0) {
             double c2 = ch > 1.0 ? 1.0 : ch * ch;
             double tan2 = (1.0 - c2) / c2;
             double lobe = exp(-tan2 / a2) / (4.0 * M_PI * a2 * sqrt(ci * co));
@@ -91,7 +102,7 @@ void brdf_eval(const brdf *b, const double n[3], const double wi[3],
 
 #define BRDF_SPEC_MAX 512
 
-enum { K_KD = 1, K_KS = 2, K_F0 = 4, K_E = 8, K_ROUGH = 16 };
+enum { K_KD = 1, K_KS = 2, K_F0 = 4, K_E = 8, K_ROUGH = 16, K_ROUGH_Y = 32 };
 
 typedef struct brdf_model {
     const char *name;
@@ -104,7 +115,7 @@ static const brdf_model brdf_models[] = {
     {"phong", BRDF_PHONG, K_KD | K_KS | K_E},
     {"blinn", BRDF_BLINN, K_KD | K_KS | K_E},
     {"ct", BRDF_CT, K_KD | K_F0 | K_ROUGH},
-    {"ward", BRDF_WARD, K_KD | K_KS | K_ROUGH},
+    {"ward", BRDF_WARD, K_KD | K_KS | K_ROUGH | K_ROUGH_Y},
 };
 
 static const brdf_model *brdf_model_of(brdf_kind k)
@@ -302,9 +313,11 @@ int brdf_parse(const char *spec, brdf *out, glint_err *err)
             bit = K_E;
         else if (strcmp(key, "rough") == 0)
             bit = K_ROUGH;
+        else if (strcmp(key, "rough_y") == 0)
+            bit = K_ROUGH_Y;
         else
             return glint_err_set(err, GLINT_EINVAL,
-                                 "unknown brdf key '%s' (kd, ks, f0, e, rough)", key);
+                                 "unknown brdf key '%s' (kd, ks, f0, e, rough, rough_y)", key);
         if (!(m->keys & bit))
             return glint_err_set(err, GLINT_EINVAL, "brdf key '%s' does not apply to %s",
                                  key, m->name);
@@ -335,6 +348,12 @@ int brdf_parse(const char *spec, brdf *out, glint_err *err)
                 return glint_err_set(err, GLINT_ERANGE,
                                      "brdf key 'rough' = %g outside [0.01, 1]", v[0]);
             b.roughness = v[0];
+            break;
+        case K_ROUGH_Y:
+            if (!(v[0] >= 0.01 && v[0] <= 1.0))
+                return glint_err_set(err, GLINT_ERANGE,
+                                     "brdf key 'rough_y' = %g outside [0.01, 1]", v[0]);
+            b.roughness_y = v[0];
             break;
         }
         item = next;
@@ -398,7 +417,11 @@ void brdf_format(const brdf *b, char *buf, int len)
     }
     if (m->keys & K_ROUGH) {
         brdf_fmt_num(num, sizeof num, b->roughness);
-        snprintf(tmp + pos, sizeof tmp - pos, ",rough=%s", num);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ",rough=%s", num);
+    }
+    if ((m->keys & K_ROUGH_Y) && b->roughness_y > 0.0 && b->roughness_y != b->roughness) {
+        brdf_fmt_num(num, sizeof num, b->roughness_y);
+        snprintf(tmp + pos, sizeof tmp - pos, ",rough_y=%s", num);
     }
     snprintf(buf, (size_t)len, "%s", tmp);
 }

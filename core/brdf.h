@@ -10,7 +10,10 @@
  *             separable Smith-GGX G1(x) = 2x / (x + sqrt(a^2 + (1-a^2)x^2)),
  *             Schlick F = F0 + (1-F0)(1 - h.wi)^5
  *   ward    : kd/pi + ks exp(-tan^2(th_h)/a^2) / (4 pi a^2 sqrt(cos_i cos_o))
- *             (isotropic Ward with roughness a)
+ *             (isotropic Ward with roughness a); with rough_y = b != a the
+ *             anisotropic Ward, kd/pi + ks exp(-((h.t/a)^2 + (h.b/b)^2) /
+ *             (h.n)^2) / (4 pi a b sqrt(cos_i cos_o)), t and b vec3.h's
+ *             v3_frame(n) (t runs around the world's Y axis)
  * These match ../shared/reference/hf_ref.py (lambert, phong, blinn, ct).
  *
  * A brdf is a small value (no pointers; copy it freely).  Every function is
@@ -34,12 +37,13 @@ typedef struct brdf {
     double ks[3];      /* specular weight (phong, blinn, ward) */
     double f0[3];      /* Fresnel reflectance at normal incidence (ct) */
     double exponent;   /* phong / blinn exponent, > 0 */
-    double roughness;  /* ct GGX alpha, ward alpha, in (0, 1] */
+    double roughness;  /* ct GGX alpha, ward alpha (along t), in (0, 1] */
+    double roughness_y; /* ward alpha along b; 0: isotropic (= roughness) */
 } brdf;
 
 /* Parse a spec "NAME[:key=value,...]", NAME in lambert|phong|blinn|ct|ward,
  * keys kd, ks, f0 (one number or r/g/b as "0.5/0.4/0.3"), e (exponent),
- * rough.  Defaults (the reference truths): lambert kd 0.8; phong kd 0.7
+ * rough, rough_y (ward only).  Defaults (the reference truths): lambert kd 0.8; phong kd 0.7
  * ks 0.3 e 32; blinn kd 0.7 ks 0.3 e 20; ct kd 0.5 f0 0.3 rough 0.2;
  * ward kd 0.5 ks 0.3 rough 0.2.  Also the named presets of the reference:
  * phong32, blinn20, blinn100, ct0.2, ct0.5.  Every value is range-checked

@@ -39,7 +39,7 @@ enum { GLR_PROG_GBUF = 0, GLR_PROG_BASE, GLR_PROG_VCOL, GLR_NPROG };
 typedef struct glr_locs {
     GLint model, normal_matrix, view_proj, eye, light, light_intensity;
     /* base */
-    GLint gain, kind, kd, ks, f0, exponent, rough;
+    GLint gain, kind, kd, ks, f0, exponent, rough, rough_y;
     /* vertex colours */
     GLint vcol, vcol_w;
 } glr_locs;

@@ -110,6 +110,7 @@ void glr_locs_get(GLuint p, glr_locs *l)
     l->f0 = glGetUniformLocation(p, "u_f0");
     l->exponent = glGetUniformLocation(p, "u_exponent");
     l->rough = glGetUniformLocation(p, "u_rough");
+    l->rough_y = glGetUniformLocation(p, "u_rough_y");
     l->vcol = glGetUniformLocation(p, "u_vcol");
     l->vcol_w = glGetUniformLocation(p, "u_vcol_w");
 }

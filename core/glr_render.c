@@ -169,6 +169,7 @@ static int glr_base_render_in(glr *g, const glr_mesh *m, const scene_view *v, in
     glUniform3fv(l->f0, 1, f0);
     glUniform1f(l->exponent, (float)b->exponent);
     glUniform1f(l->rough, (float)b->roughness);
+    glUniform1f(l->rough_y, (float)b->roughness_y);
     clear0[0] = clear0[1] = clear0[2] = background;
     clear0[3] = 0.0f;
     rc = glr_draw(g, g->prog[GLR_PROG_BASE], &g->loc[GLR_PROG_BASE], &g->ct, 1, m, v, width,

@@ -1,17 +1,12 @@
 /* hf4.c: the four-factor product (hf4.h). */
 #include "hf4.h"
 
-#include <cblas.h>
-#include <float.h>
-#include <lapacke.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "clock.h"
+#include "hfx.h"
 
-#define COS_FLOOR 1e-6 /* as hf_fit's BRDF model */
-#define ROW_MAX 10     /* nonzeros of a data row: 2 per 1D factor, 4 for s */
 
 void hf4_design_free(hf4_design *d)
 {
@@ -81,46 +76,34 @@ static int data_row(const hf4_design *x, int i, int *col, double *w)
 
 /* Smoothing rows: those of p, q, r when lambda > 0, those of s when
  * lambda_s > 0 (a zero weight adds no row). */
+typedef struct rows_ctx {
+    const hf4_design *x;
+    double lambda, lambda_s;
+} rows_ctx;
+
 static int rows_1d(int R, double lambda)
 {
     return lambda > 0.0 ? 3 * (R - 2) : 0;
 }
 
-static int smooth_rows(int R, int S, double lambda, double lambda_s)
+static int any_row(const void *ctx, int r, int *col, double *w)
 {
-    return rows_1d(R, lambda) + (lambda_s > 0.0 ? S * S : 0);
+    const rows_ctx *c = ctx;
+    int R = c->x->d.res;
+    if (r < c->x->d.n)
+        return data_row(c->x, r, col, w);
+    r -= c->x->d.n;
+    if (r < rows_1d(R, c->lambda))
+        return hfx_smooth_1d(r / (R - 2) * R, c->lambda, r % (R - 2), col, w);
+    return hfx_smooth_2d(3 * R, c->x->sres, c->lambda_s, r - rows_1d(R, c->lambda), col, w);
 }
 
-/* Smoothing row r (0 <= r < smooth_rows): its nonzeros, weights included. */
-static int smooth_row(int R, int S, double lambda, double lambda_s, int r, int *col, double *w)
+static hfx_rows rows_of(const rows_ctx *c)
 {
-    if (r < rows_1d(R, lambda)) {
-        int j = r / (R - 2), k = r % (R - 2);
-        col[0] = j * R + k;
-        col[1] = j * R + k + 1;
-        col[2] = j * R + k + 2;
-        w[0] = lambda;
-        w[1] = -2.0 * lambda;
-        w[2] = lambda;
-        return 3;
-    }
-    r -= rows_1d(R, lambda);
-    { /* the graph Laplacian at node (i, j): its neighbours on the grid */
-        int i = r % S, j = r / S, base = 3 * R, m = 1;
-        col[0] = base + j * S + i;
-        if (i > 0)
-            col[m++] = base + j * S + i - 1;
-        if (i + 1 < S)
-            col[m++] = base + j * S + i + 1;
-        if (j > 0)
-            col[m++] = base + (j - 1) * S + i;
-        if (j + 1 < S)
-            col[m++] = base + (j + 1) * S + i;
-        w[0] = -(double)(m - 1) * lambda_s;
-        for (int a = 1; a < m; a++)
-            w[a] = lambda_s;
-        return m;
-    }
+    int R = c->x->d.res, S = c->x->sres;
+    hfx_rows r = {.ctx = c, .n = 3 * R + S * S, .nsamples = c->x->d.n, .row = any_row};
+    r.nsmooth = rows_1d(R, c->lambda) + (c->lambda_s > 0.0 ? S * S : 0);
+    return r;
 }
 
 void hf4_decomp_free(hf4_decomp *dc)
@@ -137,92 +120,13 @@ static int lambda_ok(double l)
     return l >= 0.0 && isfinite(l) && l <= HF_LAMBDA_MAX;
 }
 
-/* The kept directions of the normal matrix G (n x n, upper triangle;
- * destroyed). */
-static int decomp_normal(double *G, int n, double rcond, hf4_decomp *dc, glint_err *err)
-{
-    double *e = malloc((size_t)n * sizeof *e), cut;
-    int info, rank = 0;
-    if (!e)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    info = (int)LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', n, G, n, e);
-    if (info != 0) {
-        free(e);
-        return glint_err_set(err, GLINT_ENUMERIC, "eigendecomposition failed (LAPACK info %d)",
-                             info);
-    }
-    dc->s_max = e[n - 1] > 0.0 ? sqrt(e[n - 1]) : 0.0;
-    cut = rcond * dc->s_max;
-    for (int i = n - 1; i >= 0 && e[i] > cut * cut && e[i] > 0.0; i--)
-        rank++;
-    dc->s2 = malloc((size_t)(rank ? rank : 1) * sizeof *dc->s2);
-    dc->V = malloc((size_t)n * (rank ? rank : 1) * sizeof *dc->V);
-    if (!dc->s2 || !dc->V) {
-        free(e);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
-    }
-    for (int k = 0; k < rank; k++) { /* descending */
-        int src = n - 1 - k;
-        dc->s2[k] = e[src];
-        memcpy(dc->V + (size_t)n * k, G + (size_t)n * src, (size_t)n * sizeof *dc->V);
-    }
-    dc->rank = rank;
-    dc->s_min_kept = rank ? sqrt(dc->s2[rank - 1]) : 0.0;
-    free(e);
-    return 0;
-}
-
-/* The kept directions from the SVD of B (rows x n, rows <= n; destroyed). */
-static int decomp_dense(double *B, int rows, int n, double rcond, hf4_decomp *dc,
-                        glint_err *err)
-{
-    int m = rows < n ? rows : n, info, rank = 0;
-    double *s = malloc((size_t)m * sizeof *s), *U = malloc((size_t)rows * m * sizeof *U),
-           *VT = malloc((size_t)m * n * sizeof *VT);
-    if (!s || !U || !VT) {
-        free(s);
-        free(U);
-        free(VT);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the SVD");
-    }
-    info = (int)LAPACKE_dgesdd(LAPACK_COL_MAJOR, 'S', rows, n, B, rows, s, U, rows, VT, m);
-    if (info != 0) {
-        free(s);
-        free(U);
-        free(VT);
-        return glint_err_set(err, GLINT_ENUMERIC, "SVD failed (LAPACK info %d)", info);
-    }
-    dc->s_max = s[0];
-    while (rank < m && s[rank] > rcond * dc->s_max && s[rank] > 0.0)
-        rank++;
-    dc->s2 = malloc((size_t)(rank ? rank : 1) * sizeof *dc->s2);
-    dc->V = malloc((size_t)n * (rank ? rank : 1) * sizeof *dc->V);
-    if (!dc->s2 || !dc->V) {
-        free(s);
-        free(U);
-        free(VT);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
-    }
-    for (int k = 0; k < rank; k++) {
-        dc->s2[k] = s[k] * s[k];
-        for (int i = 0; i < n; i++)
-            dc->V[(size_t)n * k + i] = VT[k + (size_t)m * i];
-    }
-    dc->rank = rank;
-    dc->s_min_kept = rank ? s[rank - 1] : 0.0;
-    free(s);
-    free(U);
-    free(VT);
-    return 0;
-}
-
 int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double rcond,
                      hf4_decomp *dc, glint_err *err)
 {
-    int R = x->d.res, S = x->sres, n = 3 * R + S * S, N = x->d.n;
-    int col[ROW_MAX], rc, ns, nr = 0, *idx;
-    double w[ROW_MAX], t0 = glint_now();
-    size_t rows;
+    rows_ctx c = {x, lambda, lambda_s};
+    hfx_rows r;
+    hfx_decomp g;
+    int rc;
 
     memset(dc, 0, sizeof *dc);
     if (!lambda_ok(lambda) || !lambda_ok(lambda_s))
@@ -232,97 +136,27 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
         rcond = HF4_RCOND_DEFAULT;
     if (!(rcond < 1.0) || !isfinite(rcond))
         return glint_err_set(err, GLINT_ERANGE, "rcond %g must be below 1", rcond);
-    ns = smooth_rows(R, S, lambda, lambda_s);
-    rows = (size_t)N + ns;
-    dc->res = R;
-    dc->sres = S;
-    dc->n = n;
-    dc->nsamples = N;
-    dc->rows = (int)rows;
+    r = rows_of(&c);
+    if ((rc = hfx_decomp_build(&r, rcond, 3, &g, err)))
+        return rc;
+    dc->res = x->d.res;
+    dc->sres = x->sres;
+    dc->n = g.n;
+    dc->nsamples = g.nsamples;
+    dc->rows = g.rows;
+    dc->form = g.form;
     dc->lambda = lambda;
     dc->lambda_s = lambda_s;
-    dc->rcond = rcond;
-    dc->gauge_dims = 3;
-    /* unknowns no row reaches (nodes of s without samples or smoothing, a
-     * 1D texel no sample lands on with lambda 0) are exactly null: left out
-     * of the decomposition (a smaller matrix, and no rounding left to sort
-     * them from the weak directions), their rows of V zero */
-    if (!(idx = malloc((size_t)n * sizeof *idx)))
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    for (int t = 0; t < n; t++)
-        idx[t] = -1;
-    for (size_t r = 0; r < rows; r++) {
-        int m = r < (size_t)N ? data_row(x, (int)r, col, w)
-                              : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
-        for (int a = 0; a < m; a++)
-            if (w[a] != 0.0)
-                idx[col[a]] = 0;
-    }
-    for (int t = 0; t < n; t++)
-        if (idx[t] == 0)
-            idx[t] = nr++;
-    dc->unreached = n - nr;
-    if (rows < (size_t)nr) { /* the dense rows x n matrix is the smaller */
-        double *B = calloc(rows * (size_t)nr, sizeof *B);
-        dc->form = "dense";
-        if (!B) {
-            free(idx);
-            return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %zux%d matrix", rows,
-                                 nr);
-        }
-        for (size_t r = 0; r < rows; r++) {
-            int m = r < (size_t)N ? data_row(x, (int)r, col, w)
-                                  : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
-            for (int a = 0; a < m; a++)
-                if (w[a] != 0.0)
-                    B[r + rows * idx[col[a]]] += w[a];
-        }
-        rc = decomp_dense(B, (int)rows, nr, rcond, dc, err);
-        free(B);
-    } else {
-        double *G = calloc((size_t)nr * nr, sizeof *G);
-        dc->form = "normal";
-        if (!G) {
-            free(idx);
-            return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", nr, nr);
-        }
-        for (size_t r = 0; r < rows; r++) {
-            int m = r < (size_t)N ? data_row(x, (int)r, col, w)
-                                  : smooth_row(R, S, lambda, lambda_s, (int)(r - N), col, w);
-            for (int a = 0; a < m; a++)
-                for (int b = 0; b < m; b++)
-                    if (w[a] != 0.0 && w[b] != 0.0 && idx[col[a]] <= idx[col[b]])
-                        G[idx[col[a]] + (size_t)nr * idx[col[b]]] += w[a] * w[b];
-        }
-        /* rounding reaches the eigenvalues of B^T B at about n eps e_max: the
-         * normal form resolves singular values down to sqrt(n eps) s_max */
-        if (rcond < sqrt(nr * DBL_EPSILON))
-            dc->rcond = rcond = sqrt(nr * DBL_EPSILON);
-        rc = decomp_normal(G, nr, rcond, dc, err);
-        free(G);
-    }
-    if (!rc && nr < n) { /* V back to every unknown: zero rows where none reaches */
-        double *V = calloc((size_t)n * (dc->rank ? dc->rank : 1), sizeof *V);
-        if (!V) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
-        } else {
-            for (int k = 0; k < dc->rank; k++)
-                for (int t = 0; t < n; t++)
-                    if (idx[t] >= 0)
-                        V[(size_t)n * k + t] = dc->V[(size_t)nr * k + idx[t]];
-            free(dc->V);
-            dc->V = V;
-        }
-    }
-    free(idx);
-    if (rc) {
-        hf4_decomp_free(dc);
-        return rc;
-    }
-    dc->null_dims = n - dc->gauge_dims - dc->rank;
-    if (dc->null_dims < 0)
-        dc->null_dims = 0;
-    dc->seconds = glint_now() - t0;
+    dc->rcond = g.rcond;
+    dc->rank = g.rank;
+    dc->gauge_dims = g.gauge_dims;
+    dc->null_dims = g.null_dims;
+    dc->unreached = g.unreached;
+    dc->s_max = g.s_max;
+    dc->s_min_kept = g.s_min_kept;
+    dc->s2 = g.s2;
+    dc->V = g.V;
+    dc->seconds = g.seconds;
     return 0;
 }
 
@@ -394,139 +228,47 @@ void hf4_factors_eval(const hf4_factors *f, const double uv[2], const double n[3
 }
 
 int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_model model,
-            const float *rgb, hf4_factors *fac, hf4_fit_stats *st_out, glint_err *err)
+            const float *rgb, hf4_factors *fac, hf4_fit_stats *st, glint_err *err)
 {
-    int R = x->d.res, S = x->sres, n = dc->n, N = x->d.n, k = dc->rank, rc = 0;
-    int col[ROW_MAX];
-    double w[ROW_MAX], t0 = glint_now(), *f = NULL, *b = NULL, *z = NULL, *y = NULL;
-    hf4_fit_stats st;
+    int R = x->d.res, S = x->sres, n = dc->n, rc;
+    int off[5] = {0, R, 2 * R, 3 * R, 3 * R + S * S};
+    rows_ctx c = {x, dc->lambda, dc->lambda_s};
+    hfx_rows r = rows_of(&c);
+    hfx_decomp g = {.n = dc->n, .nsamples = dc->nsamples, .rows = dc->rows, .rank = dc->rank,
+                    .s2 = dc->s2, .V = dc->V};
+    hfx_problem pb = {.map = map, .model = model, .cos_i = x->d.cos_i, .nfactors = 4,
+                      .off = off, .log_max = HF4_LOG_MAX};
+    double *y;
 
     memset(fac, 0, sizeof *fac);
-    memset(&st, 0, sizeof st);
-    if (dc->res != R || dc->sres != S || dc->nsamples != N)
+    if (dc->res != R || dc->sres != S || dc->nsamples != x->d.n)
         return glint_err_set(err, GLINT_EINVAL, "decomposition and design do not match");
-    if (!(map->eps > 0.0) || !isfinite(map->eps) || !isfinite(map->a) ||
-        !isfinite(map->margin) || map->margin < 0.0 ||
-        (map->kind == HF_MAP_ADD && !(map->a > 0.0)))
-        return glint_err_set(err, GLINT_EINVAL, "invalid mapping parameters");
-    for (long i = 0; i < 3L * N; i++)
-        if (!isfinite(rgb[i]))
-            return glint_err_set(err, GLINT_ENONFINITE, "sample %ld channel %ld is not finite",
-                                 i / 3, i % 3);
-    f = malloc(3 * (size_t)N * sizeof *f);
-    b = calloc(3 * (size_t)n, sizeof *b);
-    z = malloc(3 * (size_t)(k ? k : 1) * sizeof *z);
     y = malloc(3 * (size_t)n * sizeof *y);
     fac->logf = malloc(9 * (size_t)R * sizeof *fac->logf);
     fac->logs = malloc(3 * (size_t)S * S * sizeof *fac->logs);
-    if (!f || !b || !z || !y || !fac->logf || !fac->logs) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
-        goto done;
+    if (!y || !fac->logf || !fac->logs) {
+        free(y);
+        hf4_factors_free(fac);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", x->d.n);
     }
     fac->res = R;
     fac->sres = S;
     fac->model = model;
     fac->map = *map;
-    /* the model's quantity and the mapping, as hf_fit */
-    for (int c = 0; c < 3; c++) {
-        double vmax = 0.0;
-        for (int i = 0; i < N; i++) {
-            double v = rgb[3 * (size_t)i + c];
-            if (model == HF_MODEL_BRDF)
-                v /= x->d.cos_i[i] > COS_FLOOR ? x->d.cos_i[i] : COS_FLOOR;
-            f[3 * (size_t)i + c] = v;
-            vmax = v > vmax ? v : vmax;
-        }
-        fac->a_used[c] = hf_map_offset(map, vmax);
-    }
-    for (size_t i = 0; i < 3 * (size_t)N; i++) {
-        int c = (int)(i % 3);
-        double arg = hf_map_arg(map, fac->a_used[c], f[i]);
-        if (!(arg > map->eps)) {
-            arg = map->eps;
-            st.clamped[c]++;
-        }
-        f[i] = log(arg);
-    }
-    /* b = A^T f~ (n x 3, column per channel), z = V^T b / s^2, y = V z */
-    for (int i = 0; i < N; i++) {
-        int m = data_row(x, i, col, w);
-        for (int a = 0; a < m; a++)
-            for (int c = 0; c < 3; c++)
-                b[col[a] + (size_t)n * c] += w[a] * f[3 * (size_t)i + c];
-    }
-    if (k > 0) {
-        cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, k, 3, n, 1.0, dc->V, n, b, n, 0.0,
-                    z, k);
-        for (int c = 0; c < 3; c++)
-            for (int i = 0; i < k; i++)
-                z[i + (size_t)k * c] /= dc->s2[i];
-        cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, n, 3, k, 1.0, dc->V, n, z, k,
-                    0.0, y, n);
-    } else {
-        memset(y, 0, 3 * (size_t)n * sizeof *y);
-    }
-    /* the canonical gauge: equal mean log per factor and channel */
-    for (int c = 0; c < 3; c++) {
-        double mean[4] = {0, 0, 0, 0}, all;
-        double *yc = y + (size_t)n * c;
-        for (int j = 0; j < 3; j++) {
-            for (int t = 0; t < R; t++)
-                mean[j] += yc[j * R + t];
-            mean[j] /= R;
-        }
-        for (int t = 0; t < S * S; t++)
-            mean[3] += yc[3 * R + t];
-        mean[3] /= (double)S * S;
-        all = (mean[0] + mean[1] + mean[2] + mean[3]) / 4.0;
-        for (int t = 0; t < n; t++) {
-            int j = t < 3 * R ? t / R : 3;
-            double v = yc[t] + all - mean[j];
-            if (v > HF4_LOG_MAX || v < -HF4_LOG_MAX) {
-                v = v > 0.0 ? HF4_LOG_MAX : -HF4_LOG_MAX;
-                st.log_clamped++;
-            }
-            st.log_max = fabs(v) > st.log_max ? fabs(v) : st.log_max;
-            yc[t] = v;
-            if (t < 3 * R)
-                fac->logf[(size_t)t * 3 + c] = v;
-            else
-                fac->logs[(size_t)(t - 3 * R) * 3 + c] = v;
-        }
-    }
-    hf4_factors_means(fac);
-    st.seconds = glint_now() - t0;
-    /* diagnostics: log residual and the linear error at every sample */
-    {
-        double ss = 0.0, se = 0.0, mx = 0.0;
-        for (int i = 0; i < N; i++) {
-            int m = data_row(x, i, col, w);
-            for (int c = 0; c < 3; c++) {
-                double ly = 0.0, v, e;
-                for (int a = 0; a < m; a++)
-                    ly += w[a] * y[col[a] + (size_t)n * c];
-                e = ly - f[3 * (size_t)i + c];
-                ss += e * e;
-                v = map_inverse(fac, c, exp(ly > 700.0 ? 700.0 : ly));
-                if (model == HF_MODEL_BRDF)
-                    v *= x->d.cos_i[i];
-                e = v - rgb[3 * (size_t)i + c];
-                se += e * e;
-                mx = fabs(e) > mx ? fabs(e) : mx;
-            }
-        }
-        st.log_residual = N ? sqrt(ss / (3.0 * N)) : 0.0;
-        st.rms = N ? sqrt(se / (3.0 * N)) : 0.0;
-        st.max_abs = mx;
-    }
-done:
-    free(f);
-    free(b);
-    free(z);
-    free(y);
-    if (rc)
+    if ((rc = hfx_fit(&r, &g, &pb, rgb, y, fac->a_used, st, err))) {
+        free(y);
         hf4_factors_free(fac);
-    else if (st_out)
-        *st_out = st;
-    return rc;
+        return rc;
+    }
+    for (int ch = 0; ch < 3; ch++)
+        for (int t = 0; t < n; t++) {
+            double v = y[(size_t)n * ch + t];
+            if (t < 3 * R)
+                fac->logf[(size_t)t * 3 + ch] = v;
+            else
+                fac->logs[(size_t)(t - 3 * R) * 3 + ch] = v;
+        }
+    free(y);
+    hf4_factors_means(fac);
+    return 0;
 }

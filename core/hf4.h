@@ -55,6 +55,7 @@
 
 #include "err.h"
 #include "hf.h"
+#include "hfx.h"
 #include "samples.h"
 
 #define HF4_SRES_MIN 2
@@ -111,14 +112,9 @@ typedef struct hf4_factors {
     double mean_s[3];    /* mean of s (linear) over its nodes: the value without uv */
 } hf4_factors;
 
-typedef struct hf4_fit_stats {
-    int clamped[3];      /* samples floored at eps before the log, per channel */
-    long log_clamped;    /* log-factor values clamped to +-HF4_LOG_MAX */
-    double log_max;      /* largest |log-factor| returned */
-    double log_residual; /* RMS of A y - f~ over samples and channels (log space) */
-    double rms, max_abs; /* reconstruction - sample, linear */
-    double seconds;      /* the fit (mapping, application, gauge) */
-} hf4_fit_stats;
+/* clamped, log_clamped (beyond HF4_LOG_MAX), log_max, log_residual, rms,
+ * max_abs, seconds: hfx.h */
+typedef hfx_fit_stats hf4_fit_stats;
 
 /* Fit RGB samples (3 n, sample-major, per unit light).  OUT: *fac, *st (may
  * be NULL).  GLINT_ENONFINITE for a non-finite value. */

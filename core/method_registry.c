@@ -2,6 +2,7 @@
  * /api/v1/methods lists them (the first is the default).  Adding a method
  * is one line here (and its core file). */
 #include "method_auto.h"
+#include "method_hf2d.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
 #include "method_hybrid.h"
@@ -14,6 +15,7 @@ const method *const method_builtin[] = {
     &method_hf3,
     &method_srbf,
     &method_hf4,
+    &method_hf2d,
     &method_maps,
     &method_hybrid,
     &method_auto,

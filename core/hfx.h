@@ -1,0 +1,105 @@
+/* hfx.h: the solver that factor products with 2D factors share (hf4.h's
+ * four-factor product, hf2d.h's factors over parabolic maps): a product of
+ * J factors, each a set of nodes with hat weights, fitted in log space
+ * through a cached decomposition of
+ *
+ *     B = [A; smoothing rows],
+ *
+ * A's rows the samples' sparse hat weights.  A model supplies the rows
+ * (struct hfx_rows) and the factors' node ranges; this module owns the
+ * decomposition and the fit, so that every such model treats unreached
+ * nodes, the gauge, the rank cut and the range the same way.
+ *
+ * Conventions
+ *  - Rows: r < nsamples are data rows (unweighted), the rest smoothing
+ *    rows with their weights included; a row has at most HFX_ROW_MAX
+ *    nonzeros.
+ *  - Unknowns that no row reaches are exactly null: left out of the
+ *    decomposition, their rows of V zero (counted: unreached).
+ *  - Form: "normal" (eigendecomposition of B^T B, LAPACK dsyevd) or
+ *    "dense" (SVD of B, dgesdd), whichever matrix is smaller; the normal
+ *    form raises rcond to sqrt(n eps) (what its eigenvalues resolve) and
+ *    reports the rcond it used.
+ *  - Directions with s_i <= rcond s_max are cut (the gauge among them):
+ *    the solution is the minimum-norm one on the rest, then shifted into
+ *    the canonical gauge: equal mean log over each factor's nodes, channel
+ *    by channel (the product is unchanged), each value clamped to
+ *    +-log_max and counted.
+ *  - The mapping and model are hf.h's (hf_map, hf_model).
+ *
+ * Thread-safety: a decomposition is read-only once built; fits may share
+ * it. */
+#ifndef GLINT_HFX_H
+#define GLINT_HFX_H
+
+#include "err.h"
+#include "hf.h"
+
+#define HFX_ROW_MAX 16 /* nonzeros of a row: 4 per 2D factor, 2 per 1D one */
+#define HFX_FACTORS_MAX 4
+
+typedef struct hfx_rows {
+    const void *ctx;
+    int n;               /* unknowns */
+    int nsamples;        /* data rows */
+    int nsmooth;         /* smoothing rows after them */
+    /* row r's nonzeros (OUT: col, w; returns their count <= HFX_ROW_MAX) */
+    int (*row)(const void *ctx, int r, int *col, double *w);
+} hfx_rows;
+
+typedef struct hfx_decomp {
+    int n, nsamples;
+    int rows;            /* of B: samples + smoothing rows */
+    const char *form;    /* "normal" or "dense" */
+    double rcond;        /* the cut used */
+    int rank;            /* directions kept */
+    int gauge_dims;      /* as the model states it */
+    int null_dims;       /* other directions cut, unreached ones included */
+    int unreached;       /* unknowns no row reaches */
+    double s_max, s_min_kept;
+    double *s2;          /* rank: s_i^2, descending */
+    double *V;           /* n x rank, column-major */
+    double seconds;
+} hfx_decomp;
+
+/* Decompose B (rcond in (0, 1)).  GLINT_ENOMEM, or GLINT_ENUMERIC when
+ * LAPACK fails. */
+int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp *out,
+                     glint_err *err);
+void hfx_decomp_free(hfx_decomp *dc);
+
+typedef struct hfx_fit_stats {
+    int clamped[3];      /* samples floored at eps before the log, per channel */
+    long log_clamped;    /* log-factor values clamped to +-log_max */
+    double log_max;      /* largest |log-factor| returned */
+    double log_residual; /* RMS of A y - f~ over samples and channels (log space) */
+    double rms, max_abs; /* reconstruction - sample, linear */
+    double seconds;      /* the fit (mapping, application, gauge) */
+} hfx_fit_stats;
+
+/* What a fit needs besides the rows and the decomposition. */
+typedef struct hfx_problem {
+    const hf_map *map;
+    hf_model model;
+    const double *cos_i; /* nsamples: n.wi (the brdf model divides by it) */
+    int nfactors;        /* J */
+    const int *off;      /* J + 1: factor j's unknowns are off[j] .. off[j+1]-1 */
+    double log_max;      /* range of a returned log value */
+} hfx_problem;
+
+/* Fit RGB samples (3 nsamples, sample-major).  OUT: y (n x 3, column per
+ * channel: the log nodes in the canonical gauge), a_used[3] (the mapping's
+ * offsets), *st (may be NULL).  GLINT_EINVAL for a mismatch or bad
+ * mapping, GLINT_ENONFINITE for a non-finite value. */
+int hfx_fit(const hfx_rows *x, const hfx_decomp *dc, const hfx_problem *pb, const float *rgb,
+            double *y, double a_used[3], hfx_fit_stats *st, glint_err *err);
+
+/* Smoothing rows of one 1D factor at unknowns off.. (R nodes): R - 2
+ * second differences [1 -2 1] weighted by lambda.  Row r (0 <= r < R-2). */
+int hfx_smooth_1d(int off, double lambda, int r, int *col, double *w);
+/* Smoothing rows of an S x S grid at unknowns off.. (node (i, j) at
+ * off + j S + i): the graph Laplacian weighted by lambda, a row per node
+ * (0 <= r < S^2): its neighbours minus as many times the node. */
+int hfx_smooth_2d(int off, int S, double lambda, int r, int *col, double *w);
+
+#endif
