@@ -171,7 +171,8 @@ static int any_row(const void *ctx, int r, int *col, double *w)
 static hfx_rows rows_of(rows_ctx *c)
 {
     const hf2d_design *x = c->x;
-    hfx_rows r = {.ctx = c, .n = x->off[3], .nsamples = x->n, .row = any_row};
+    hfx_rows r = {.ctx = c, .n = x->off[3], .nsamples = x->n, .row = any_row, .nfactors = 3,
+                  .off = x->off};
     c->start[0] = 0;
     for (int j = 0; j < 3; j++) {
         int m = x->sh.dims[j] == 1 ? (c->lambda > 0.0 ? x->sh.res - 2 : 0)

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "hfx_int.h"
 
 #define COS_FLOOR 1e-6 /* as hf_fit's BRDF model */
 
@@ -48,6 +49,7 @@ void hfx_decomp_free(hfx_decomp *dc)
         return;
     free(dc->s2);
     free(dc->V);
+    free(dc->M);
     memset(dc, 0, sizeof *dc);
 }
 
@@ -179,6 +181,8 @@ int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp
         }
         rc = decomp_dense(B, (int)rows, nr, rcond, dc, err);
         free(B);
+    } else if (N < nr && (rc = hfx_kernel_build(x, idx, nr, rcond, dc, err)) != 1) {
+        /* the kernel form: done (or failed) */
     } else {
         double *G = calloc((size_t)nr * nr, sizeof *G);
         dc->form = "normal";
@@ -200,7 +204,7 @@ int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp
         rc = decomp_normal(G, nr, rcond, dc, err);
         free(G);
     }
-    if (!rc && nr < n) { /* V back to every unknown: zero rows where none reaches */
+    if (!rc && nr < n && !dc->M) { /* V back to every unknown: zero rows where none reaches */
         double *V = calloc((size_t)n * (dc->rank ? dc->rank : 1), sizeof *V);
         if (!V) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
@@ -274,6 +278,11 @@ int hfx_fit(const hfx_rows *x, const hfx_decomp *dc, const hfx_problem *pb, cons
         }
         f[i] = log(arg);
     }
+    if (dc->M) { /* the kernel form: y = M f~ (f~ is 3 x N with leading dimension 3) */
+        cblas_dgemm(CblasColMajor, CblasNoTrans, CblasTrans, n, 3, N, 1.0, dc->M, n, f, 3, 0.0,
+                    y, n);
+        goto gauge;
+    }
     /* b = A^T f~ (n x 3, column per channel), z = V^T b / s^2, y = V z */
     for (int i = 0; i < N; i++) {
         int m = x->row(x->ctx, i, col, w);
@@ -292,7 +301,7 @@ int hfx_fit(const hfx_rows *x, const hfx_decomp *dc, const hfx_problem *pb, cons
     } else {
         memset(y, 0, 3 * (size_t)n * sizeof *y);
     }
-    /* the canonical gauge: equal mean log per factor and channel */
+gauge: /* the canonical gauge: equal mean log per factor and channel */
     for (int c = 0; c < 3; c++) {
         double mean[HFX_FACTORS_MAX] = {0}, all = 0.0;
         double *yc = y + (size_t)n * c;

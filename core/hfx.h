@@ -19,7 +19,26 @@
  *  - Form: "normal" (eigendecomposition of B^T B, LAPACK dsyevd) or
  *    "dense" (SVD of B, dgesdd), whichever matrix is smaller; the normal
  *    form raises rcond to sqrt(n eps) (what its eigenvalues resolve) and
- *    reports the rcond it used.
+ *    reports the rcond it used.  "kernel" when there are fewer samples
+ *    than unknowns but the smoothing rows make B tall (few samples, fine
+ *    factors: seed 000's Table 2): with K = L^T L (the smoothing rows'
+ *    normal matrix, block diagonal by factor, each distinct block
+ *    eigendecomposed once: K = Q diag(e) Q^T) and the data rows A, the
+ *    unknowns are y = Z a + Q1 b, Z the null space of K (e = 0: constants,
+ *    and lines for second differences), Q1 the rest.  Eliminating a by
+ *    least squares (W0 = A Z, its pseudo-inverse cut at rcond, P the
+ *    projector off its range) leaves a ridge problem in b whose normal
+ *    matrix W1^T P W1 + diag(e1) (W1 = A Q1) is inverted through the
+ *    samples' side (push-through identity):
+ *        b = diag(1/e1) W1^T P (I + P W1 diag(1/e1) W1^T P)^-1 P f~,
+ *        a = W0^+ (f~ - W1 b),
+ *    an N x N Cholesky instead of an n x n eigendecomposition.  The result
+ *    is the operator itself, y = M f~ (n x N): the exact least-squares
+ *    solution with every direction the smoothing reaches kept (nothing cut
+ *    but the null directions of W0), where the normal form cuts those with
+ *    s_i <= rcond s_max.  s_max and s_min_kept are then those of the
+ *    smoothing rows alone (B's kept singular values are at least
+ *    s_min_kept).
  *  - Directions with s_i <= rcond s_max are cut (the gauge among them):
  *    the solution is the minimum-norm one on the rest, then shifted into
  *    the canonical gauge: equal mean log over each factor's nodes, channel
@@ -45,6 +64,11 @@ typedef struct hfx_rows {
     int nsmooth;         /* smoothing rows after them */
     /* row r's nonzeros (OUT: col, w; returns their count <= HFX_ROW_MAX) */
     int (*row)(const void *ctx, int r, int *col, double *w);
+    /* Optional (nfactors 0: none): the factors' unknowns, off[nfactors + 1],
+     * when every smoothing row stays within one factor; this allows the
+     * kernel form. */
+    int nfactors;
+    const int *off;
 } hfx_rows;
 
 typedef struct hfx_decomp {
@@ -58,7 +82,8 @@ typedef struct hfx_decomp {
     int unreached;       /* unknowns no row reaches */
     double s_max, s_min_kept;
     double *s2;          /* rank: s_i^2, descending */
-    double *V;           /* n x rank, column-major */
+    double *V;           /* n x rank, column-major (normal and dense forms) */
+    double *M;           /* kernel form: the operator, n x nsamples, column-major */
     double seconds;
 } hfx_decomp;
 

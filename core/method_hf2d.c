@@ -113,7 +113,8 @@ static void level_key(const void *params, const samples *s, const char *prev_key
 
 static size_t level_bytes(const hf2d_level *x)
 {
-    return sizeof *x + (size_t)x->dc.x.n * (x->dc.x.rank + 1) * sizeof(double) +
+    size_t op = x->dc.x.M ? (size_t)x->dc.x.n * x->dc.x.nsamples : (size_t)x->dc.x.n * (x->dc.x.rank + 1);
+    return sizeof *x + op * sizeof(double) +
            (size_t)x->d.n * (6 * (sizeof(int32_t) + sizeof(double)) + sizeof(double));
 }
 
@@ -147,10 +148,21 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
 
 /* The disk layer: <dir>/<hash of the key>.hf2d (cfile.h, kind 1) holds the
  * decomposition: u32 res, sres, dims[3], n, nsamples, rows, form (0 normal,
- * 1 dense), rank, gauge_dims, null_dims, unreached; doubles lambda,
- * lambda_2d, rcond, s_max, s_min_kept, seconds; s2[rank], V[n rank].  The
- * design is rebuilt from the pattern. */
+ * 1 dense, 2 kernel), rank, gauge_dims, null_dims, unreached; doubles
+ * lambda, lambda_2d, rcond, s_max, s_min_kept, seconds; then s2[rank],
+ * V[n rank], or for the kernel form the operator M[n nsamples].  The design
+ * is rebuilt from the pattern. */
 #define HF2D_MAGIC "GLHF2D01"
+
+static const char *const form_names[] = {"normal", "dense", "kernel"};
+
+static int form_code(const char *form)
+{
+    for (int i = 0; i < 3; i++)
+        if (strcmp(form, form_names[i]) == 0)
+            return i;
+    return 0;
+}
 #define NU 13
 #define ND 6
 
@@ -164,7 +176,7 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
     uint32_t u[NU] = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres, (uint32_t)dc->sh.dims[0],
                       (uint32_t)dc->sh.dims[1], (uint32_t)dc->sh.dims[2], (uint32_t)g->n,
                       (uint32_t)g->nsamples, (uint32_t)g->rows,
-                      strcmp(g->form, "dense") == 0, (uint32_t)g->rank,
+                      (uint32_t)form_code(g->form), (uint32_t)g->rank,
                       (uint32_t)g->gauge_dims, (uint32_t)g->null_dims,
                       (uint32_t)g->unreached};
     double d[ND] = {dc->lambda, dc->lambda_2d, g->rcond, g->s_max, g->s_min_kept, g->seconds};
@@ -172,8 +184,12 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
     cfile_begin(&b, HF2D_MAGIC, 1);
     cfile_put(&b, u, sizeof u);
     cfile_put(&b, d, sizeof d);
-    cfile_put(&b, g->s2, (size_t)g->rank * sizeof *g->s2);
-    cfile_put(&b, g->V, (size_t)g->n * g->rank * sizeof *g->V);
+    if (g->M) {
+        cfile_put(&b, g->M, (size_t)g->n * g->nsamples * sizeof *g->M);
+    } else {
+        cfile_put(&b, g->s2, (size_t)g->rank * sizeof *g->s2);
+        cfile_put(&b, g->V, (size_t)g->n * g->rank * sizeof *g->V);
+    }
     cfile_name(key, ".hf2d", name, sizeof name);
     return cfile_write(&b, dir, name, err);
 }
@@ -203,7 +219,7 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     if (cfile_get(&r, u, sizeof u) || cfile_get(&r, d, sizeof d) || (int)u[0] != sh.res ||
         (int)u[1] != sh.sres || (int)u[2] != sh.dims[0] || (int)u[3] != sh.dims[1] ||
         (int)u[4] != sh.dims[2] || (int)u[5] != hf2d_offsets(&sh, off) ||
-        (int)u[6] != in->s->n || u[8] > 1 || u[9] > u[5] || d[0] != p->lambda ||
+        (int)u[6] != in->s->n || u[8] > 2 || u[9] > u[5] || d[0] != p->lambda ||
         d[1] != p->lambda_2d) {
         glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
                       key);
@@ -212,19 +228,30 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     x->dc.sh = sh;
     x->dc.lambda = d[0], x->dc.lambda_2d = d[1];
     g->n = (int)u[5], g->nsamples = (int)u[6], g->rows = (int)u[7];
-    g->form = u[8] ? "dense" : "normal", g->rank = (int)u[9];
+    g->form = form_names[u[8]], g->rank = (int)u[9];
     g->gauge_dims = (int)u[10], g->null_dims = (int)u[11], g->unreached = (int)u[12];
     g->rcond = d[2], g->s_max = d[3], g->s_min_kept = d[4], g->seconds = d[5];
-    g->s2 = malloc((size_t)(g->rank ? g->rank : 1) * sizeof *g->s2);
-    g->V = malloc((size_t)g->n * (g->rank ? g->rank : 1) * sizeof *g->V);
-    if (!g->s2 || !g->V) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-        goto done;
-    }
-    if (cfile_get(&r, g->s2, (size_t)g->rank * sizeof *g->s2) ||
-        cfile_get(&r, g->V, (size_t)g->n * g->rank * sizeof *g->V) || !cfile_done(&r)) {
-        glint_err_set(err, rc, "%s: the cached decomposition has the wrong size", name);
-        goto done;
+    if (u[8] == 2) {
+        if (!(g->M = malloc((size_t)g->n * (g->nsamples ? g->nsamples : 1) * sizeof *g->M))) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+        if (cfile_get(&r, g->M, (size_t)g->n * g->nsamples * sizeof *g->M) || !cfile_done(&r)) {
+            glint_err_set(err, rc, "%s: the cached operator has the wrong size", name);
+            goto done;
+        }
+    } else {
+        g->s2 = malloc((size_t)(g->rank ? g->rank : 1) * sizeof *g->s2);
+        g->V = malloc((size_t)g->n * (g->rank ? g->rank : 1) * sizeof *g->V);
+        if (!g->s2 || !g->V) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+        if (cfile_get(&r, g->s2, (size_t)g->rank * sizeof *g->s2) ||
+            cfile_get(&r, g->V, (size_t)g->n * g->rank * sizeof *g->V) || !cfile_done(&r)) {
+            glint_err_set(err, rc, "%s: the cached decomposition has the wrong size", name);
+            goto done;
+        }
     }
     if ((rc = hf2d_design_build(in->s, &sh, &x->d, err)))
         goto done;
@@ -272,7 +299,8 @@ static int hf2d_fit_op(const method_fit_in *in, material *out, glint_err *err)
                     g->rcond, "s_max", g->s_max, "s_min_kept", g->s_min_kept);
     json_object_set_new(pre, "unreached", json_integer(g->unreached));
     json_object_set_new(pre, "operator_bytes",
-                        json_integer((json_int_t)((size_t)g->n * g->rank * 8)));
+                        json_integer((json_int_t)((size_t)g->n * (g->M ? g->nsamples : g->rank) *
+                                                  8)));
     tim = json_pack("{s:f, s:f, s:f, s:f}", "samples", in->pattern_seconds, "design",
                     in->how[0] == CACHE_BUILT ? x->t_design : 0.0, "decomposition",
                     in->how[0] != CACHE_BUILT           ? in->spent[0]

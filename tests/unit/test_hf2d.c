@@ -141,10 +141,13 @@ TEST(anisotropic_ward_truth)
     }
 }
 
-/* The fit against an independent solve of the dense system. */
-TEST(equals_a_dense_least_squares_solve)
+/* The fit of samples s with p and q 2D (S nodes per side), r 1D (R)
+ * against an independent solve of the dense system by dgelsd (its cut at
+ * rcond_ref); the form taken must be `form`. */
+static void dense_compare(const samples *ss, int R, int S, double rcond, double rcond_ref,
+                          const char *form)
 {
-    const int R = 8, S = 6, n = 2 * S * S + R;
+    const int n = 2 * S * S + R;
     const double lam = 0.3, lam2 = 0.2;
     hf2d_shape sh = {.res = R, .sres = S, .dims = {2, 2, 1}};
     hf2d_design d;
@@ -156,13 +159,12 @@ TEST(equals_a_dense_least_squares_solve)
     int rows, N, ldb, rank, r;
     double *B, *rhs, *sv, worst = 0.0;
     brdf truth;
-    ASSERT_OK(setup());
-    N = SFIT.n;
+    N = ss->n;
     ASSERT_OK(brdf_parse("ward:kd=0.3,ks=0.6,rough=0.15,rough_y=0.4", &truth, &e));
-    rgb = paint_samples(&truth, &SFIT);
+    rgb = paint_samples(&truth, ss);
     hf_map_default(&map, HF_MAP_LOG);
-    ASSERT_OK(hf2d_design_build(&SFIT, &sh, &d, &e));
-    ASSERT_OK(hf2d_decomp_build(&d, lam, lam2, 1e-6, &dc, &e));
+    ASSERT_OK(hf2d_design_build(ss, &sh, &d, &e));
+    ASSERT_OK(hf2d_decomp_build(&d, lam, lam2, rcond, &dc, &e));
     ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, NULL, &e));
     rows = N + (R - 2) + 2 * S * S;
     ldb = rows > n ? rows : n;
@@ -172,7 +174,7 @@ TEST(equals_a_dense_least_squares_solve)
     for (int i = 0; i < N; i++) {
         double nn[3], wi[3], wo[3], h[3], *vec[3] = {wi, h, wo}, hl = 0.0;
         double t[3], bb[3], l;
-        sample_dirs(&SFIT, i, nn, wi, wo);
+        sample_dirs(ss, i, nn, wi, wo);
         for (int a = 0; a < 3; a++)
             h[a] = wi[a] + wo[a], hl += h[a] * h[a];
         for (int a = 0; a < 3; a++)
@@ -232,8 +234,8 @@ TEST(equals_a_dense_least_squares_solve)
         B[r + (size_t)rows * (2 * S * S + k + 2)] = lam;
     }
     ASSERT_EQ(r, rows);
-    ASSERT_EQ(LAPACKE_dgelsd(LAPACK_COL_MAJOR, rows, n, 3, B, rows, rhs, ldb, sv, 1e-6, &rank),
-              0);
+    ASSERT_EQ(LAPACKE_dgelsd(LAPACK_COL_MAJOR, rows, n, 3, B, rows, rhs, ldb, sv, rcond_ref,
+                             &rank), 0);
     for (int c = 0; c < 3; c++) {
         int off[4] = {0, S * S, 2 * S * S, n};
         double m[3] = {0, 0, 0}, all;
@@ -253,6 +255,7 @@ TEST(equals_a_dense_least_squares_solve)
            worst);
     ASSERT_EQ(dc.x.gauge_dims, 2);
     ASSERT_EQ(rank, dc.x.rank);
+    ASSERT(strcmp(dc.x.form, form) == 0);
     ASSERT_LT(worst, 1e-6);
     free(B);
     free(rhs);
@@ -261,6 +264,41 @@ TEST(equals_a_dense_least_squares_solve)
     hf2d_factors_free(&f);
     hf2d_decomp_free(&dc);
     hf2d_design_free(&d);
+}
+
+/* Many samples: the normal form, cut at 1e-6 like dgelsd. */
+TEST(equals_a_dense_least_squares_solve)
+{
+    ASSERT_OK(setup());
+    dense_compare(&SFIT, 8, 6, 1e-6, 1e-6, "normal");
+}
+
+/* Fewer samples than unknowns, smoothing on every factor: the kernel form
+ * (an N x N Cholesky), which keeps every direction the smoothing reaches:
+ * dgelsd with a cut far below any of them gives the same solution. */
+TEST(kernel_form_equals_a_dense_least_squares_solve)
+{
+    unsigned char one[SCENE_MAX_VIEWS] = {0};
+    samples few;
+    glint_err e;
+    char h[33];
+    ASSERT_OK(setup());
+    one[3] = 1;
+    scene_hash(&SC, h);
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, one, h, &few, &e));
+    {
+        unsigned char *keep = calloc((size_t)few.n, 1);
+        samples sub;
+        for (int i = 0; i < few.n; i += 7)
+            keep[i] = 1;
+        ASSERT_OK(samples_pick(&few, keep, "every-7th", &sub, &e));
+        free(keep);
+        samples_free(&few);
+        few = sub;
+    }
+    ASSERT_LT(few.n, 2 * 12 * 12 + 8);
+    dense_compare(&few, 8, 12, 0, 1e-12, "kernel");
+    samples_free(&few);
 }
 
 /* Fit the even views with shape sh; RMS on them and on the odd views. */
@@ -538,25 +576,23 @@ TEST(the_method_saves_loads_and_renders)
     material_free(&m);
 }
 
-/* The decomposition on disk: a fresh cache over the same directory reads
- * it and the fit is the same to the last bit; a flipped byte is caught and
- * the level rebuilt. */
-TEST(decomposition_on_disk)
+/* The decomposition on disk, for scene sc (G-buffers g) and params hp: a
+ * fresh cache over the same directory reads it and the fit is the same to
+ * the last bit; a flipped byte is caught and the level rebuilt.  The form
+ * the fit reports must be `form`. */
+static void disk_rounds(const scene *sc, const gbuf *g, const hf2d_params_t *hp,
+                        const char *form)
 {
     char dir[] = "/tmp/glint_test_hf2d_cache_XXXXXX", cmd[300];
-    prep_scene_source src = {sv_borrowed, NULL, &SC};
-    hf2d_params_t hp;
+    prep_scene_source src = {sv_borrowed, NULL, (void *)sc};
     material m[3];
     glint_err e;
-    ASSERT_OK(setup());
     ASSERT(mkdtemp(dir));
-    method_hf2d.params_default(&hp);
-    hp.sres = 16;
     for (int round = 0; round < 3; round++) {
         cache *c;
         cache_entry *se;
         unsigned char all[SCENE_MAX_VIEWS];
-        prep_request rq = {&method_hf2d, &hp, NULL, all};
+        prep_request rq = {&method_hf2d, hp, NULL, all};
         prep *pp = NULL;
         img im[SCENE_MAX_VIEWS];
         json_t *rep;
@@ -564,17 +600,22 @@ TEST(decomposition_on_disk)
         ASSERT_OK(cache_open(dir, (size_t)1 << 30, &c, &e));
         ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
         rq.scene = se;
-        ASSERT_OK(sv_paint(ANISO, &SC, G, im, &e));
+        ASSERT_OK(sv_paint(ANISO, sc, g, im, &e));
         ASSERT_MSG(prep_acquire(c, &rq, NULL, NULL, &pp, &e) == 0, "%s", e.msg);
         ASSERT_OK(prep_fit(pp, im, NULL, &m[round], &e));
         rep = prep_report(pp);
-        printf("  round %d: disk %s, cold %.3f s\n", round,
+        printf("  round %d: %s form, disk %s, cold %.3f s\n", round,
+               json_string_value(json_object_get(json_object_get(m[round].info,
+                                                                 "precomputation"), "form")),
                json_string_value(json_object_get(rep, "disk")), prep_cold_seconds(pp));
+        ASSERT(strcmp(json_string_value(json_object_get(
+                          json_object_get(m[round].info, "precomputation"), "form")),
+                      form) == 0);
         ASSERT_EQ(prep_from_disk(pp), round == 1);
         if (round == 2)
             ASSERT(strcmp(json_string_value(json_object_get(rep, "disk")), "rebuilt") == 0);
         json_decref(rep);
-        for (int v = 0; v < SC.nviews; v++)
+        for (int v = 0; v < sc->nviews; v++)
             img_free(&im[v]);
         prep_release(c, pp);
         cache_release(c, se);
@@ -598,15 +639,47 @@ TEST(decomposition_on_disk)
     ASSERT_EQ(system(cmd), 0);
 }
 
+TEST(decomposition_on_disk)
+{
+    hf2d_params_t hp;
+    ASSERT_OK(setup());
+    method_hf2d.params_default(&hp);
+    hp.sres = 16;
+    disk_rounds(&SC, G, &hp, "normal");
+}
+
+/* The kernel form's operator on disk: a small raster (fewer samples than
+ * the unknowns of three 2D factors). */
+TEST(kernel_operator_on_disk)
+{
+    hf2d_params_t hp;
+    scene_params sp;
+    scene sc;
+    gbuf *g;
+    glint_err e;
+    scene_params_default(&sp);
+    sp.width = sp.height = 12;
+    ASSERT_OK(scene_create(&sp, &sc, &e));
+    ASSERT_OK(raster_scene(&sc, &g, &e));
+    method_hf2d.params_default(&hp);
+    hp.sres = 24;
+    hp.dims[0] = hp.dims[1] = hp.dims[2] = 1;
+    disk_rounds(&sc, g, &hp, "kernel");
+    raster_free_all(g, sc.nviews);
+    scene_free(&sc);
+}
+
 TEST_LIST{
     TEST_ENTRY(frame_and_parabolic_map),
     TEST_ENTRY(anisotropic_ward_truth),
     TEST_ENTRY(equals_a_dense_least_squares_solve),
+    TEST_ENTRY(kernel_form_equals_a_dense_least_squares_solve),
     TEST_ENTRY(anisotropy_needs_a_2d_factor),
     TEST_ENTRY(uniform_painting),
     TEST_ENTRY(dense_form_unreached_nodes_and_bad_shapes),
     TEST_ENTRY(the_method_saves_loads_and_renders),
     TEST_ENTRY(decomposition_on_disk),
+    TEST_ENTRY(kernel_operator_on_disk),
 };
 
 TEST_MAIN()
