@@ -535,6 +535,7 @@ async function loadFitAndMaterials(S) {
 function matSize(m) {
   if (m.method === 'maps') return `${m.components} materials · ${m.res} texels`;
   if (m.method === 'hf4') return `${m.res} texels · ${m.s_res}² spatial`;
+  if (m.method === 'hf2d') return `${m.res} texels · ${m.res_2d}² 2D (${(m.dims || []).map((d, j) => d === 2 ? 'pqr'[j] : '').join('') || 'none'})`;
   if (m.res != null) return `${m.res} texels`;
   if (m.method === 'srbf') return `${m.lobes} lobes · ${(m.params && m.params.env) || ''}`;
   return m.method || '';

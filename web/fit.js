@@ -34,6 +34,7 @@ function explain(e) {
 const METHOD_NOTES = {
   hf3: 'One material for the whole object, fitted to views lit by their point light. Patterns (a logo, wood grain) need material maps.',
   hf4: 'One material whose colour and brightness vary over the surface (a faded print, dirt, a painted pattern on one finish): the point-light material times a texture. Different highlights in different places need material maps.',
+  hf2d: 'One material whose highlight depends on direction around the surface (brushed metal, satin, hair-like sheen): the point-light material with factors that are 2D maps of the light, half and view directions. Directions are measured around the vertical axis of the object.',
   auto: 'Lets glint choose: one material, one material with varying colour, or several materials, whichever predicts views you painted but it did not fit best, keeping the simplest unless a richer one is clearly better. The result says what it chose and why.',
   maps: 'Several materials on one object (a logo on plastic, stripes, veins): a few point-light materials blended over the surface by textures. Paint each region the way it should look; the fit finds the materials and where each one is.',
   hybrid: 'Several materials on one object, each free to change colour and brightness within its region (worn gold on red plastic): material maps whose materials each carry their own texture. The richest and slowest point-light model.',
@@ -97,7 +98,7 @@ export class FitPanel extends EventTarget {
     for (const x of this.methods) {
       const o = document.createElement('option');
       o.value = x.name;
-      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name === 'maps' ? 'several materials (maps)' : x.name === 'hf4' ? 'one material, varying colour (hf4)' : x.name === 'auto' ? 'choose for me (auto)' : x.name === 'hybrid' ? 'several materials, varying colour (hybrid)' : x.name;
+      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name === 'maps' ? 'several materials (maps)' : x.name === 'hf4' ? 'one material, varying colour (hf4)' : x.name === 'hf2d' ? 'brushed / anisotropic (hf2d)' : x.name === 'auto' ? 'choose for me (auto)' : x.name === 'hybrid' ? 'several materials, varying colour (hybrid)' : x.name;
       o.title = x.title;
       sel.appendChild(o);
     }

@@ -288,6 +288,7 @@ export class Judge extends EventTarget {
     g.clearRect(0, 0, c.width, c.height);
     const im = this.factors;
     if (!im) return;
+    if (this.mat && this.mat.method === 'hf2d' && Array.isArray(this.mat.dims)) return this.drawFactors2d(g, c, im);
     const log = $('factors-log').checked;
     const names = [['p(π_p)', 'light: |wi| on the tangent plane'], ['q(π_q)', 'half vector'], ['r(π_r)', 'view: |wo| on the tangent plane']];
     const H = c.height / 3, L = 34, Rm = 6, W = c.width - L - Rm;
@@ -323,6 +324,57 @@ export class Judge extends EventTarget {
         g.stroke();
         g.globalCompositeOperation = 'source-over';
       }
+    }
+  }
+
+  // Method hf2d: a 2D factor drawn as its parabolic map (the disc is the
+  // hemisphere, the normal at its centre, t to the right, b up), a 1D one
+  // as a curve; each panel scaled to its own range.
+  drawFactors2d(g, c, im) {
+    const m = this.mat, S = m.res_2d, log = $('factors-log').checked;
+    const names = [['p', 'light direction'], ['q', 'half vector'], ['r', 'view direction']];
+    const Wp = c.width / 3, tf = v => log ? Math.log10(Math.max(v, 1e-6)) : v;
+    let row = 0;
+    for (let j = 0; j < 3; j++) {
+      const two = m.dims[j] === 2, rows = two ? S : 1, x0 = j * Wp + 6, size = Math.min(Wp - 12, c.height - 34);
+      const vals = [];
+      for (let y = 0; y < rows; y++) for (let x = 0; x < (two ? S : m.res); x++) {
+        const k = 3 * ((row + y) * im.w + x);
+        vals.push(tf((im.data[k] + im.data[k + 1] + im.data[k + 2]) / 3));
+      }
+      let lo = Math.min(...vals), hi = Math.max(...vals);
+      if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
+      g.fillStyle = '#8d94a3'; g.font = '11px system-ui'; g.textAlign = 'left';
+      g.fillText(`${names[j][0]} (${two ? '2D' : '1D'}): ${names[j][1]}`, x0, 12);
+      if (two) {
+        const cell = size / S, y0 = 18;
+        for (let y = 0; y < S; y++) for (let x = 0; x < S; x++) {
+          const k = 3 * ((row + y) * im.w + x);
+          const rgb = [0, 1, 2].map(ch => tf(im.data[k + ch]));
+          const sc = v => Math.round(255 * Math.min(1, Math.max(0, (v - lo) / (hi - lo))));
+          g.fillStyle = `rgb(${sc(rgb[0])},${sc(rgb[1])},${sc(rgb[2])})`;
+          g.fillRect(x0 + x * cell, y0 + (S - 1 - y) * cell, Math.ceil(cell), Math.ceil(cell));
+        }
+        g.strokeStyle = '#8d94a3'; g.beginPath();
+        g.arc(x0 + size / 2, y0 + size / 2, size / 2, 0, 2 * Math.PI); g.stroke();
+        g.fillStyle = '#5d6473'; g.font = '9px system-ui';
+        g.fillText('t →   b ↑   (normal at the centre)', x0, y0 + size + 11);
+      } else {
+        const y0 = 18, h = size, cols = ['#ff6b6b', '#6bd66b', '#6ba4ff'];
+        g.strokeStyle = '#323744'; g.strokeRect(x0, y0, size, h);
+        for (let ch = 0; ch < 3; ch++) {
+          g.strokeStyle = cols[ch]; g.lineWidth = 1.3; g.beginPath();
+          for (let x = 0; x < m.res; x++) {
+            const v = tf(im.data[3 * (row * im.w + x) + ch]);
+            const px = x0 + size * x / Math.max(1, m.res - 1), py = y0 + h - h * (v - lo) / (hi - lo);
+            if (x) g.lineTo(px, py); else g.moveTo(px, py);
+          }
+          g.stroke();
+        }
+        g.fillStyle = '#5d6473'; g.font = '9px system-ui';
+        g.fillText('0 … 1: length on the tangent plane', x0, y0 + h + 11);
+      }
+      row += rows;
     }
   }
 
