@@ -123,6 +123,7 @@ typedef struct rows_ctx {
     const hf2d_design *x;
     double lambda, lambda_2d;
     int start[4];        /* first smoothing row of each factor (relative), and the total */
+    int grid[3];         /* S for a 2D factor with smoothing (hfx_rows.grid) */
 } rows_ctx;
 
 static int data_row(const hf2d_design *x, int i, int *col, double *w)
@@ -172,9 +173,10 @@ static hfx_rows rows_of(rows_ctx *c)
 {
     const hf2d_design *x = c->x;
     hfx_rows r = {.ctx = c, .n = x->off[3], .nsamples = x->n, .row = any_row, .nfactors = 3,
-                  .off = x->off};
+                  .off = x->off, .grid = c->grid};
     c->start[0] = 0;
     for (int j = 0; j < 3; j++) {
+        c->grid[j] = x->sh.dims[j] == 2 && c->lambda_2d > 0.0 ? x->sh.sres : 0;
         int m = x->sh.dims[j] == 1 ? (c->lambda > 0.0 ? x->sh.res - 2 : 0)
                                    : (c->lambda_2d > 0.0 ? x->sh.sres * x->sh.sres : 0);
         c->start[j + 1] = c->start[j] + m;

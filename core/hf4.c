@@ -79,6 +79,8 @@ static int data_row(const hf4_design *x, int i, int *col, double *w)
 typedef struct rows_ctx {
     const hf4_design *x;
     double lambda, lambda_s;
+    int off[5];          /* the factors' unknowns: p, q, r, s */
+    int grid[4];         /* hfx_rows.grid: s's side when it is smoothed */
 } rows_ctx;
 
 static int rows_1d(int R, double lambda)
@@ -98,10 +100,15 @@ static int any_row(const void *ctx, int r, int *col, double *w)
     return hfx_smooth_2d(3 * R, c->x->sres, c->lambda_s, r - rows_1d(R, c->lambda), col, w);
 }
 
-static hfx_rows rows_of(const rows_ctx *c)
+static hfx_rows rows_of(rows_ctx *c)
 {
     int R = c->x->d.res, S = c->x->sres;
-    hfx_rows r = {.ctx = c, .n = 3 * R + S * S, .nsamples = c->x->d.n, .row = any_row};
+    hfx_rows r = {.ctx = c, .n = 3 * R + S * S, .nsamples = c->x->d.n, .row = any_row,
+                  .nfactors = 4, .off = c->off, .grid = c->grid};
+    for (int j = 0; j < 4; j++)
+        c->off[j] = j * R, c->grid[j] = 0;
+    c->grid[3] = c->lambda_s > 0.0 ? S : 0;
+    c->off[4] = 3 * R + S * S;
     r.nsmooth = rows_1d(R, c->lambda) + (c->lambda_s > 0.0 ? S * S : 0);
     return r;
 }
@@ -112,6 +119,7 @@ void hf4_decomp_free(hf4_decomp *dc)
         return;
     free(dc->s2);
     free(dc->V);
+    free(dc->M);
     memset(dc, 0, sizeof *dc);
 }
 
@@ -123,7 +131,7 @@ static int lambda_ok(double l)
 int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double rcond,
                      hf4_decomp *dc, glint_err *err)
 {
-    rows_ctx c = {x, lambda, lambda_s};
+    rows_ctx c = {.x = x, .lambda = lambda, .lambda_s = lambda_s};
     hfx_rows r;
     hfx_decomp g;
     int rc;
@@ -156,6 +164,7 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
     dc->s_min_kept = g.s_min_kept;
     dc->s2 = g.s2;
     dc->V = g.V;
+    dc->M = g.M;
     dc->seconds = g.seconds;
     return 0;
 }
@@ -232,10 +241,10 @@ int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_mod
 {
     int R = x->d.res, S = x->sres, n = dc->n, rc;
     int off[5] = {0, R, 2 * R, 3 * R, 3 * R + S * S};
-    rows_ctx c = {x, dc->lambda, dc->lambda_s};
+    rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_s = dc->lambda_s};
     hfx_rows r = rows_of(&c);
     hfx_decomp g = {.n = dc->n, .nsamples = dc->nsamples, .rows = dc->rows, .rank = dc->rank,
-                    .s2 = dc->s2, .V = dc->V};
+                    .s2 = dc->s2, .V = dc->V, .M = dc->M};
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->d.cos_i, .nfactors = 4,
                       .off = off, .log_max = HF4_LOG_MAX};
     double *y;

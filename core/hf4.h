@@ -34,8 +34,10 @@
  *      "dense":  the SVD of B itself (rows x n, rows = samples + smoothing
  *                rows, LAPACK dgesdd),
  *    whichever matrix is smaller (the dense one only when a scene has
- *    fewer rows than unknowns: a large S over few samples); the
- *    decomposition says which (form).  The normal form squares the
+ *    fewer rows than unknowns: a large S over few samples), or
+ *      "kernel": fewer samples than unknowns but smoothing on every
+ *                factor: hfx.h's N x N route, the operator itself;
+ *    the decomposition says which (form).  The normal form squares the
  *    condition number: rcond defaults to 1e-6 as for hf.h's eig route,
  *    and the normal form raises a smaller one to sqrt(n eps), the smallest
  *    relative singular value its eigenvalues resolve (the decomposition
@@ -85,7 +87,8 @@ typedef struct hf4_decomp {
     int unreached;       /* unknowns no row reaches: left out of the decomposition */
     double s_max, s_min_kept;
     double *s2;          /* rank: s_i^2, descending */
-    double *V;           /* n x rank, column-major */
+    double *V;           /* n x rank, column-major (normal and dense forms) */
+    double *M;           /* "kernel" form (hfx.h): the operator, n x nsamples */
     double seconds;
 } hf4_decomp;
 

@@ -23,7 +23,8 @@
  *    than unknowns but the smoothing rows make B tall (few samples, fine
  *    factors: seed 000's Table 2): with K = L^T L (the smoothing rows'
  *    normal matrix, block diagonal by factor, each distinct block
- *    eigendecomposed once: K = Q diag(e) Q^T) and the data rows A, the
+ *    eigendecomposed once, or written down for a grid's Laplacian:
+ *    K = Q diag(e) Q^T) and the data rows A, the
  *    unknowns are y = Z a + Q1 b, Z the null space of K (e = 0: constants,
  *    and lines for second differences), Q1 the rest.  Eliminating a by
  *    least squares (W0 = A Z, its pseudo-inverse cut at rcond, P the
@@ -69,6 +70,10 @@ typedef struct hfx_rows {
      * kernel form. */
     int nfactors;
     const int *off;
+    /* Optional (may be NULL): per factor, S when its smoothing rows are
+     * hfx_smooth_2d's over all of its S x S nodes (their eigenvectors are
+     * then known: products of DCT-II cosines), else 0. */
+    const int *grid;
 } hfx_rows;
 
 typedef struct hfx_decomp {
@@ -84,6 +89,8 @@ typedef struct hfx_decomp {
     double *s2;          /* rank: s_i^2, descending */
     double *V;           /* n x rank, column-major (normal and dense forms) */
     double *M;           /* kernel form: the operator, n x nsamples, column-major */
+    int grid_blocks;     /* kernel form: smoothing blocks whose eigenvectors were written
+                            down (hfx_rows.grid), not computed */
     double seconds;
 } hfx_decomp;
 

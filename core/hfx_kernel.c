@@ -10,6 +10,10 @@
 
 #include "hfx_int.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 /* Null eigenvalues of K: at or below this fraction of the largest.  The
  * smallest non-zero ones of the smoothing glint builds are far above it:
  * (pi / 512)^4 / 16 = 9e-11 for second differences over 512 texels,
@@ -26,6 +30,61 @@ typedef struct block {
     double *Q, *e;       /* eigenvectors (n x n) and eigenvalues, ascending */
     int same_as;         /* an earlier block with the same K, or -1 */
 } block;
+
+/* The eigenvectors of an S x S grid's smoothing block K = w^2 L^2 (L the
+ * graph Laplacian of hfx_smooth_2d; w from K's corner, where (L^2)_ii =
+ * deg^2 + deg = 6): products of the path graph's DCT-II vectors
+ * c_k(i) = sqrt((k ? 2 : 1) / S) cos(pi k (i + 1/2) / S), eigenvalues
+ * w^2 (mu_a + mu_b)^2 with mu_k = 2 - 2 cos(pi k / S).  Checked against
+ * K on a few vectors; 1 when K is not such a block (the caller then
+ * eigendecomposes it), -1 out of memory. */
+static int grid_eigen(block *b, int S)
+{
+    int n = b->n;
+    double w2, worst = 0.0, *c = NULL, *v = NULL;
+    if (S < 2 || n != S * S || !(b->K[0] > 0.0))
+        return 1;
+    w2 = b->K[0] / 6.0;
+    b->Q = malloc((size_t)n * n * sizeof *b->Q);
+    b->e = malloc((size_t)n * sizeof *b->e);
+    c = malloc((size_t)S * S * sizeof *c);
+    v = malloc((size_t)n * sizeof *v);
+    if (!b->Q || !b->e || !c || !v) {
+        free(c);
+        free(v);
+        return -1;
+    }
+    for (int k = 0; k < S; k++)
+        for (int i = 0; i < S; i++)
+            c[k * S + i] = sqrt((k ? 2.0 : 1.0) / S) * cos(M_PI * k * (i + 0.5) / S);
+    for (int kb = 0; kb < S; kb++)
+        for (int ka = 0; ka < S; ka++) {
+            int col = kb * S + ka;
+            double mu = 4.0 - 2.0 * cos(M_PI * ka / S) - 2.0 * cos(M_PI * kb / S);
+            double *q = b->Q + (size_t)n * col;
+            b->e[col] = w2 * mu * mu;
+            for (int jb = 0; jb < S; jb++)
+                for (int ja = 0; ja < S; ja++)
+                    q[jb * S + ja] = c[ka * S + ja] * c[kb * S + jb];
+        }
+    /* K q = e q on a spread of vectors (the highest, the lowest non-zero, a middle one) */
+    for (int t = 0; t < 4; t++) {
+        int col = t == 0 ? 1 : t == 1 ? n - 1 : t == 2 ? n / 2 : S + 1;
+        const double *q = b->Q + (size_t)n * col;
+        cblas_dgemv(CblasColMajor, CblasNoTrans, n, n, 1.0, b->K, n, q, 1, 0.0, v, 1);
+        for (int i = 0; i < n; i++)
+            worst = fmax(worst, fabs(v[i] - b->e[col] * q[i]));
+    }
+    free(c);
+    free(v);
+    if (!(worst <= 1e-9 * (w2 * 64.0))) { /* 64 w^2: the largest eigenvalue's bound */
+        free(b->Q);
+        free(b->e);
+        b->Q = b->e = NULL;
+        return 1;
+    }
+    return 0;
+}
 
 static void blocks_free(block *bl, int nb)
 {
@@ -101,7 +160,9 @@ int hfx_kernel_build(const hfx_rows *x, const int *idx, int nr, double rcond, hf
                 if (bl[i].n == n && bl[i].same_as < 0 &&
                     memcmp(bl[i].K, bl[j].K, (size_t)n * n * sizeof *bl[j].K) == 0)
                     bl[j].same_as = i;
-            ck += 2.0 * n * (double)n * N + (bl[j].same_as < 0 ? 4.0 * n * (double)n * n : 0.0);
+            ck += 2.0 * n * (double)n * N +
+                  (bl[j].same_as < 0 && !(x->grid && x->grid[j] > 0) ? 4.0 * n * (double)n * n
+                                                                      : 0.0);
         }
         if (ck >= cn)
             goto done; /* rc 1 */
@@ -115,6 +176,17 @@ int hfx_kernel_build(const hfx_rows *x, const int *idx, int nr, double rcond, hf
             bl[j].Q = bl[bl[j].same_as].Q;
             bl[j].e = bl[bl[j].same_as].e;
             continue;
+        }
+        if (x->grid && x->grid[j] > 0) {
+            int g = grid_eigen(&bl[j], x->grid[j]);
+            if (g < 0) {
+                rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+                goto done;
+            }
+            if (g == 0) {
+                dc->grid_blocks++;
+                continue;
+            }
         }
         bl[j].Q = malloc((size_t)n * n * sizeof *bl[j].Q);
         bl[j].e = malloc((size_t)n * sizeof *bl[j].e);
@@ -299,6 +371,8 @@ int hfx_kernel_build(const hfx_rows *x, const int *idx, int nr, double rcond, hf
     dc->s_min_kept = sqrt(emin_pos);
     rc = 0;
 done:
+    if (rc == 1)
+        dc->grid_blocks = 0;
     free(Mr);
     free(W);
     free(W0);

@@ -256,6 +256,8 @@ static void dense_compare(const samples *ss, int R, int S, double rcond, double 
     ASSERT_EQ(dc.x.gauge_dims, 2);
     ASSERT_EQ(rank, dc.x.rank);
     ASSERT(strcmp(dc.x.form, form) == 0);
+    if (strcmp(form, "kernel") == 0) /* p's and q's grid: one block, written down */
+        ASSERT_EQ(dc.x.grid_blocks, 1);
     ASSERT_LT(worst, 1e-6);
     free(B);
     free(rhs);

@@ -146,9 +146,10 @@ static void check_gauge(const hf4_factors *f)
  * from the samples' projections and uv, second differences and the 5-point
  * Laplacian), min ||B y - [log f; 0]|| by LAPACK's dgelsd (SVD, minimum
  * norm), shifted into the same gauge. */
-TEST(equals_a_dense_least_squares_solve)
+static void dense_compare(const samples *ss, int R, int S, double rcond, double rcond_ref,
+                          const char *form)
 {
-    const int R = 8, S = 6, n = 3 * R + S * S;
+    const int n = 3 * R + S * S;
     const double lam = 0.3, lams = 0.2;
     hf4_design d;
     hf4_decomp dc;
@@ -158,16 +159,15 @@ TEST(equals_a_dense_least_squares_solve)
     glint_err e;
     int rows, N, ldb, rank;
     double *B, *rhs, *sv, worst = 0.0;
-    ASSERT_OK(setup());
-    N = S1.n;
+    N = ss->n;
     rgb = malloc(3 * (size_t)N * sizeof *rgb);
     for (int i = 0; i < N; i++) /* a painting that is not a product */
         for (int c = 0; c < 3; c++)
-            rgb[3 * i + c] = (float)(0.2 + 0.5 * S1.uv[2 * i] * S1.uv[2 * i] + 0.1 * c +
-                                     0.8 * pow(fmax(0.0, S1.nrm[3 * i + 2]), 8.0));
+            rgb[3 * i + c] = (float)(0.2 + 0.5 * ss->uv[2 * i] * ss->uv[2 * i] + 0.1 * c +
+                                     0.8 * pow(fmax(0.0, ss->nrm[3 * i + 2]), 8.0));
     hf_map_default(&map, HF_MAP_LOG);
-    ASSERT_OK(hf4_design_build(&S1, R, S, &d, &e));
-    ASSERT_OK(hf4_decomp_build(&d, lam, lams, 1e-6, &dc, &e));
+    ASSERT_OK(hf4_design_build(ss, R, S, &d, &e));
+    ASSERT_OK(hf4_decomp_build(&d, lam, lams, rcond, &dc, &e));
     ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, NULL, &e));
     check_gauge(&f);
     rows = N + 3 * (R - 2) + S * S;
@@ -178,9 +178,9 @@ TEST(equals_a_dense_least_squares_solve)
     for (int i = 0; i < N; i++) {
         double nn[3], wi[3], wo[3], pi[3];
         for (int c = 0; c < 3; c++) {
-            nn[c] = S1.nrm[3 * i + c];
-            wi[c] = S1.wi[3 * i + c];
-            wo[c] = S1.wo[3 * i + c];
+            nn[c] = ss->nrm[3 * i + c];
+            wi[c] = ss->wi[3 * i + c];
+            wo[c] = ss->wo[3 * i + c];
         }
         hf_project(nn, wi, wo, pi);
         for (int j = 0; j < 3; j++) { /* hats: node k at k / (R - 1) */
@@ -190,8 +190,8 @@ TEST(equals_a_dense_least_squares_solve)
             B[i + (size_t)rows * (j * R + k + 1)] += x - k;
         }
         {
-            double x = fmin(fmax(S1.uv[2 * i], 0.0), 1.0) * (S - 1),
-                   y = fmin(fmax(S1.uv[2 * i + 1], 0.0), 1.0) * (S - 1);
+            double x = fmin(fmax(ss->uv[2 * i], 0.0), 1.0) * (S - 1),
+                   y = fmin(fmax(ss->uv[2 * i + 1], 0.0), 1.0) * (S - 1);
             int a = (int)floor(x) > S - 2 ? S - 2 : (int)floor(x),
                 b = (int)floor(y) > S - 2 ? S - 2 : (int)floor(y);
             double tx = x - a, ty = y - b;
@@ -226,8 +226,8 @@ TEST(equals_a_dense_least_squares_solve)
             }
         ASSERT_EQ(r, rows);
     }
-    ASSERT_EQ(LAPACKE_dgelsd(LAPACK_COL_MAJOR, rows, n, 3, B, rows, rhs, ldb, sv, 1e-6, &rank),
-              0);
+    ASSERT_EQ(LAPACKE_dgelsd(LAPACK_COL_MAJOR, rows, n, 3, B, rows, rhs, ldb, sv, rcond_ref,
+                             &rank), 0);
     for (int c = 0; c < 3; c++) {
         double m[4] = {0, 0, 0, 0}, all;
         double *y = rhs + (size_t)ldb * c;
@@ -240,9 +240,10 @@ TEST(equals_a_dense_least_squares_solve)
             worst = fabs(ref - got) > worst ? fabs(ref - got) : worst;
         }
     }
-    printf("  n %d, rows %d, dgelsd rank %d, ours %d (+%d gauge): max |difference| of the "
-           "log-factors %.2e\n", n, rows, rank, dc.rank, dc.gauge_dims, worst);
+    printf("  n %d, rows %d, dgelsd rank %d, ours %d (+%d gauge, %s form): max |difference| "
+           "of the log-factors %.2e\n", n, rows, rank, dc.rank, dc.gauge_dims, dc.form, worst);
     ASSERT_EQ(rank, dc.rank);
+    ASSERT(strcmp(dc.form, form) == 0);
     ASSERT_LT(worst, 1e-6);
     free(B);
     free(rhs);
@@ -251,6 +252,31 @@ TEST(equals_a_dense_least_squares_solve)
     hf4_factors_free(&f);
     hf4_decomp_free(&dc);
     hf4_design_free(&d);
+}
+
+TEST(equals_a_dense_least_squares_solve)
+{
+    ASSERT_OK(setup());
+    dense_compare(&S1, 8, 6, 1e-6, 1e-6, "normal");
+}
+
+/* Fewer samples than unknowns with smoothing on every factor: the kernel
+ * form (hfx.h), which keeps every direction the smoothing reaches, equals
+ * dgelsd with a cut far below them. */
+TEST(kernel_form_equals_a_dense_least_squares_solve)
+{
+    unsigned char *keep;
+    samples few;
+    glint_err e;
+    ASSERT_OK(setup());
+    keep = calloc((size_t)S1.n, 1);
+    for (int i = 0; i < S1.n; i += 9)
+        keep[i] = 1;
+    ASSERT_OK(samples_pick(&S1, keep, "every-9th", &few, &e));
+    free(keep);
+    ASSERT_LT(few.n, 3 * 32 + 14 * 14);
+    dense_compare(&few, 32, 14, 0, 1e-12, "kernel");
+    samples_free(&few);
 }
 
 /* More unknowns than rows (a fine s over one small view, no smoothing of
@@ -600,6 +626,7 @@ TEST(decomposition_on_disk)
 TEST_LIST{
     TEST_ENTRY(a_product_is_recovered),
     TEST_ENTRY(equals_a_dense_least_squares_solve),
+    TEST_ENTRY(kernel_form_equals_a_dense_least_squares_solve),
     TEST_ENTRY(dense_form_and_unreached_nodes),
     TEST_ENTRY(few_samples_no_smoothing_of_s),
     TEST_ENTRY(samples_without_uv_are_refused),
