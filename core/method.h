@@ -101,7 +101,7 @@ typedef struct method_level {
                 const cache_value *v, glint_err *err);
 } method_level;
 
-#define METHOD_MAX_LEVELS 8
+#define METHOD_MAX_LEVELS 12
 
 /* ---- fit ------------------------------------------------------------------------------ */
 

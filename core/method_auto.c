@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "method_hf2d.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
 #include "method_hybrid.h"
@@ -22,6 +23,9 @@ static const method_param auto_params_table[] = {
      .description = "nodes per side of the spatial factor of the four-factor candidates "
                     "(hf4, hybrid)",
      .offset = offsetof(auto_params, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
+    {.name = "res_2d", .type = METHOD_PARAM_INT, .affects = "precomputation",
+     .description = "nodes per side of the 2D q of the anisotropic candidate (hf2d)",
+     .offset = offsetof(auto_params, res_2d), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
     {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "at most this many products in the material-maps candidates (maps, "
                     "hybrid)",
@@ -41,7 +45,7 @@ static const method_param auto_params_table[] = {
 };
 
 static const method_preset auto_presets[] = {
-    {"draft", "{\"res\": 32, \"s_res\": 16, \"components\": 3}"},
+    {"draft", "{\"res\": 32, \"s_res\": 16, \"res_2d\": 16, \"components\": 3}"},
     {"default", "{}"},
 };
 
@@ -51,6 +55,7 @@ static void auto_params_default(void *params)
     memset(p, 0, sizeof *p);
     p->res = 32;
     p->sres = 32;
+    p->res_2d = 32;
     p->components = 5;
     p->threshold = 0.1;
     p->floor = 1.0 / 255.0 / 4.0;
@@ -60,6 +65,7 @@ static void auto_params_default(void *params)
 /* The candidates' parameters. */
 typedef struct cands {
     fit_params fp;
+    hf2d_params_t dp;
     hf4_params_t hp;
     maps_params mp;
     hybrid_params yp;
@@ -69,6 +75,9 @@ static void candidates(const auto_params *p, cands *c)
 {
     fit_params_default(&c->fp);
     c->fp.res = p->res;
+    method_hf2d.params_default(&c->dp); /* q 2D, p and r 1D */
+    c->dp.res = p->res;
+    c->dp.sres = p->res_2d;
     method_hf4.params_default(&c->hp);
     c->hp.res = p->res;
     c->hp.sres = p->sres;
@@ -83,8 +92,10 @@ static void candidates(const auto_params *p, cands *c)
 /* ---- levels: the split, each candidate's precomputation on the kept pixels, then on all -- */
 
 /* auto's levels: the split; hf3's two and hf4's one on the kept pixels;
- * hf3's two and hf4's one on every sample */
-enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_N };
+ * hf3's two and hf4's one on every sample; hf2d's one on the kept pixels
+ * and on every sample */
+enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_HF2D, LV_FULL_HF2D,
+       LV_N };
 
 typedef struct split {
     samples train;
@@ -364,6 +375,57 @@ static int fhf4d_build(const method_build_in *in, cache_value *out, glint_err *e
     return full_build(in, &method_hf4, 0, NULL, &cs.hp, out, err);
 }
 
+static void hf2dd_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    char own[CACHE_KEY_MAX], sk[CACHE_KEY_MAX];
+    candidates(params, &cs);
+    /* keyed from the split (the level before is the full hf4 decomposition,
+     * whose key does not name it): the split's key, then hf2d's own */
+    split_key(params, s, prev_key, sk, sizeof sk);
+    method_hf2d.levels[0].key(&cs.dp, s, prev_key, own, sizeof own);
+    snprintf(key, len, "%s/%s", sk, own);
+}
+
+static int hf2dd_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_hf2d, 0, NULL, &cs.dp, out, err);
+}
+
+static void fhf2dd_key(const void *params, const samples *s, const char *prev_key, char *key,
+                       size_t len)
+{
+    cands cs;
+    candidates(params, &cs);
+    method_hf2d.levels[0].key(&cs.dp, s, prev_key, key, len);
+}
+
+static int fhf2dd_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_hf2d, 0, NULL, &cs.dp, out, err);
+}
+
+static int fhf2dd_load(const method_build_in *in, const char *dir, const char *key,
+                       cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_load(in, &method_hf2d, &cs.dp, dir, key, out, err);
+}
+
+static int fhf2dd_save(const method_build_in *in, const char *dir, const char *key,
+                       const cache_value *v, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_save(in, &method_hf2d, &cs.dp, dir, key, v, err);
+}
+
 static const method_level auto_levels[] = {
     {.name = "split", .progress = 0.05, .key = split_key, .build = split_build},
     {.name = "decomposition", .progress = 0.1, .key = hf3d_key, .build = hf3d_build},
@@ -374,11 +436,15 @@ static const method_level auto_levels[] = {
     {.name = "full operator", .progress = 0.6, .key = fhf3o_key, .build = fhf3o_build},
     {.name = "full spatial decomposition", .progress = 0.7, .key = fhf4d_key,
      .build = fhf4d_build, .load = fhf4d_load, .save = fhf4d_save},
+    {.name = "anisotropic decomposition", .progress = 0.75, .key = hf2dd_key,
+     .build = hf2dd_build},
+    {.name = "full anisotropic decomposition", .progress = 0.85, .key = fhf2dd_key,
+     .build = fhf2dd_build, .load = fhf2dd_load, .save = fhf2dd_save},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
 
-#define NCAND 4 /* hf3, hf4, maps, hybrid: cheapest first */
+#define NCAND 5 /* hf3, hf2d, hf4, maps, hybrid: cheapest first */
 
 /* The held-out RMS of material m: per unit light, RGB, over the held
  * samples. */
@@ -445,8 +511,14 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
     cands cs;
     float *trgb = NULL;
     material cand[NCAND];
-    const method *ms[NCAND] = {&method_hf3, &method_hf4, &method_maps, &method_hybrid};
-    const void *ps[NCAND] = {&cs.fp, &cs.hp, &cs.mp, &cs.yp};
+    const method *ms[NCAND] = {&method_hf3, &method_hf2d, &method_hf4, &method_maps,
+                               &method_hybrid};
+    const void *ps[NCAND] = {&cs.fp, &cs.dp, &cs.hp, &cs.mp, &cs.yp};
+    /* each candidate's levels on the kept pixels and on every sample (maps
+     * reuses hf3's, hybrid hf4's) */
+    static const int train_lv[NCAND] = {LV_HF3, LV_HF2D, LV_HF4, LV_HF3, LV_HF4};
+    static const int full_lv[NCAND] = {LV_FULL_HF3, LV_FULL_HF2D, LV_FULL_HF4, LV_FULL_HF3,
+                                       LV_FULL_HF4};
     double held[NCAND], secs[NCAND], t0 = glint_now();
     int chosen = 0, rc = 0;
     json_t *list, *choice;
@@ -468,10 +540,8 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
             k++;
         }
     for (int c = 0; c < NCAND; c++) {
-        int spatial = ms[c]->levels == method_hf4.levels; /* hf4, hybrid */
         secs[c] = glint_now();
-        if ((rc = fit_on(in, ms[c], ps[c], tr, trgb, spatial ? LV_HF4 : LV_HF3, &cand[c],
-                         err))) {
+        if ((rc = fit_on(in, ms[c], ps[c], tr, trgb, train_lv[c], &cand[c], err))) {
             glint_err_prefix(err, "auto, candidate %s", ms[c]->name);
             goto done;
         }
@@ -500,7 +570,8 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
                        x->by_views ? "views" : "pixels", "held_out_every", p->every,
                        "held_out_samples", x->nheld, "candidate_samples", tr->n,
                        "rule",
-                       "cheapest first (hf3, hf4, maps, hybrid); a richer one is taken when its "
+                       "cheapest first (hf3, hf2d, hf4, maps, hybrid); a richer one is taken "
+                       "when its "
                        "held-out RMS is below the current choice's by more than the "
                        "threshold (a fraction) and the floor; the material is the chosen "
                        "method refitted to every painted sample");
@@ -514,10 +585,8 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
     /* the chosen model refitted to every painted sample: the candidates saw
      * all but the held-out ones */
     {
-        int spatial = ms[chosen]->levels == method_hf4.levels;
         double tf = glint_now();
-        if ((rc = fit_on(in, ms[chosen], ps[chosen], s, in->rgb,
-                         spatial ? LV_FULL_HF4 : LV_FULL_HF3, out, err))) {
+        if ((rc = fit_on(in, ms[chosen], ps[chosen], s, in->rgb, full_lv[chosen], out, err))) {
             json_decref(choice);
             glint_err_prefix(err, "auto, %s refitted to every sample", ms[chosen]->name);
             goto done;
@@ -543,6 +612,7 @@ static size_t auto_fit_bytes(const void *params, long nsamples)
     size_t b = 0;
     candidates(params, &cs);
     b += method_fit_bytes(&method_hf3, &cs.fp, nsamples);
+    b += method_fit_bytes(&method_hf2d, &cs.dp, nsamples);
     b += method_fit_bytes(&method_hf4, &cs.hp, nsamples);
     b += method_fit_bytes(&method_maps, &cs.mp, nsamples);
     b += method_fit_bytes(&method_hybrid, &cs.yp, nsamples);
@@ -551,7 +621,8 @@ static size_t auto_fit_bytes(const void *params, long nsamples)
 
 static int auto_holdout_ok(const void *params)
 {
-    return ((const auto_params *)params)->sres <= 32;
+    return ((const auto_params *)params)->sres <= 32 &&
+           ((const auto_params *)params)->res_2d <= 32;
 }
 
 const method method_auto = {
@@ -559,7 +630,8 @@ const method method_auto = {
     .title = "Automatic: the simplest model that the painting needs",
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =
-        "Fits one material (hf3), one material with a colour texture (hf4), material maps "
+        "Fits one material (hf3), one anisotropic material (hf2d: a 2D q), one material with "
+        "a colour texture (hf4), material maps "
         "(maps) and maps of textured materials (hybrid) to the painted pixels but one in `every`, and keeps the cheapest whose error "
         "on the held-out pixels is not beaten by a richer one by more than `threshold`. The "
         "material is the chosen method's; info.choice lists every candidate's held-out and "

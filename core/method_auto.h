@@ -8,6 +8,9 @@
  * painting of a pattern).  The candidates, cheapest first, are fitted to
  * the rest:
  *   hf3   one material (method_hf3.h)
+ *   hf2d  one material whose q is 2D over the half vector's parabolic map:
+ *         a highlight that depends on direction around the normal
+ *         (method_hf2d.h)
  *   hf4   one material times a spatial factor s(u, v) (method_hf4.h)
  *   maps  a sum of products weighted by coefficient textures (method_maps.h)
  *   hybrid  maps whose products are hf4's (method_hybrid.h)
@@ -22,8 +25,8 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * hf4, maps and hybrid are alternatives, not steps of one chain, so each
- * is measured against the choice so far.  The material is the chosen
+ * hf2d, hf4, maps and hybrid are alternatives, not steps of one chain, so
+ * each is measured against the choice so far.  The material is the chosen
  * method refitted to every painted sample, held-out ones included (its
  * manifest names that method); info.choice lists
  * every candidate's held-out and painted RMS, fit time and whether it was
@@ -33,7 +36,8 @@
  * hf3's decomposition and operator and hf4's decomposition (maps reuses
  * hf3's, hybrid hf4's); then the same three on every sample, keyed and
  * built as hf3 and hf4 key and build them (the same cache entries, on disk
- * too, as a direct fit of either), for the refit.  The auto method makes
+ * too, as a direct fit of either), for the refit; hf2d's decomposition on
+ * the kept pixels and on every sample likewise.  The auto method makes
  * no material of its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
@@ -45,6 +49,7 @@ extern const method method_auto;
 typedef struct auto_params {
     int res;           /* texels per 1D factor, every candidate */
     int sres;          /* hf4's (and hybrid's) spatial nodes per side */
+    int res_2d;        /* hf2d's q nodes per side */
     int components;    /* maps' and hybrid's most products */
     double threshold;  /* fraction a richer model must gain on held-out pixels */
     double floor;      /* and at least this much (RMS per unit light) */

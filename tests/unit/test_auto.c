@@ -1,7 +1,8 @@
 /* test_auto.c: the automatic choice (method_auto.h) on three paintings of
  * the sphere's 12 views: one material (hf3 is kept: the richer models fit
  * the painted views better but not the held-out ones), gold stripes on red
- * plastic, one finish whose colour varies (a spatial model); every choice
+ * plastic, one finish whose colour varies (a spatial model), a brushed
+ * highlight (the anisotropic candidate); every choice
  * is checked against the rule from the candidates it reports; one painted
  * view is judged on held-out pixels; a material loaded from a file naming
  * "auto" is refused. */
@@ -153,6 +154,21 @@ TEST(a_varying_colour_is_spatial)
     material_free(&m);
 }
 
+/* A highlight stretched along the surface (anisotropic Ward): the 2D q
+ * predicts the held-out views far better than hf3, and the spatial models
+ * do not beat it. */
+TEST(a_brushed_highlight_is_anisotropic)
+{
+    material m;
+    const char *c;
+    ASSERT_OK(setup());
+    ASSERT((c = choose("ward:kd=0.3/0.25/0.2,ks=0.5,rough=0.1,rough_y=0.35", NULL, &m)));
+    ASSERT(strcmp(c, "hf2d") == 0);
+    ASSERT(!material_spatial(&m));
+    check_rule(&m);
+    material_free(&m);
+}
+
 /* One painted view: pixels are held out instead of views. */
 TEST(one_view_holds_out_pixels)
 {
@@ -193,6 +209,7 @@ TEST_LIST{
     TEST_ENTRY(one_material_stays_one_material),
     TEST_ENTRY(two_materials_follow_the_rule),
     TEST_ENTRY(a_varying_colour_is_spatial),
+    TEST_ENTRY(a_brushed_highlight_is_anisotropic),
     TEST_ENTRY(one_view_holds_out_pixels),
     TEST_ENTRY(a_manifest_naming_auto_is_refused),
 };
