@@ -8,6 +8,7 @@ import { Session } from './session.js';
 import { Painter } from './painter.js';
 import { blit, bitmapToImage, decodeImage, resizeImage } from './image.js';
 import { isEXR } from './exr.js';
+import { paintThrough, viewUV } from './texmap.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -318,8 +319,11 @@ function setupStudioUI(S) {
 function selectView(k, first) {
   const S = state.session;
   if (!S || k < 0 || k >= S.views.length) return;
-  if (state.photo) cancelPhoto();
+  // a photo placed in a view belongs to it; one over the surface follows
+  const keepPhoto = state.photo && onSurface();
+  if (state.photo && !keepPhoto) cancelPhoto();
   state.k = k;
+  if (keepPhoto) renderPhoto();
   for (const t of $('thumbs').children) t.classList.toggle('on', +t.dataset.k === k);
   const v = S.views[k];
   const go = () => {
@@ -599,10 +603,35 @@ function photoImage() {
   return bitmapToImage(src.bmp, w, h, $('photo-fit').value);
 }
 
-function renderPhoto() {
+// The photo as a texture over (u, v), at its own size (at most 2048 a side).
+function photoTexture() {
+  const src = state.photo.source;
+  if (src.exr) return src.exr;
+  const s = Math.min(1, 2048 / Math.max(src.bmp.width, src.bmp.height));
+  return bitmapToImage(src.bmp, Math.max(1, Math.round(src.bmp.width * s)), Math.max(1, Math.round(src.bmp.height * s)), 'stretch');
+}
+
+const onSurface = () => $('photo-place').value === 'surface';
+
+// View k painted with the photo as a texture over the surface.
+async function photoThrough(k) {
+  const S = state.session, v = S.views[k];
+  if (!state.photo.texture) state.photo.texture = photoTexture();
+  const [uv, base] = await Promise.all([viewUV(api, S.scene.id, k), v.base || S.fetchBase(k)]);
+  return paintThrough(base, uv, state.photo.texture, $('photo-flip').checked);
+}
+
+async function renderPhoto() {
   if (!state.photo) return;
-  const img = photoImage();
+  const surf = onSurface();
+  $('photo-fit-wrap').classList.toggle('hidden', surf);
+  $('photo-flip-wrap').classList.toggle('hidden', !surf);
+  const photo = state.photo;
+  let img;
+  try { img = surf ? await photoThrough(state.k) : photoImage(); } catch (e) { showError(e); return; }
+  if (state.photo !== photo) return;
   state.photo.image = img;
+  state.photo.imageView = state.k;
   const c = $('overlay-photo');
   blit(c.getContext('2d'), img, null, state.painter.exposure);
   c.classList.remove('hidden');
@@ -620,14 +649,27 @@ function cancelPhoto() {
 }
 
 async function applyPhoto() {
-  const S = state.session, k = state.k;
-  const img = state.photo.image || photoImage();
+  const S = state.session, k = state.k, name = state.photo.name;
   $('photo-apply').disabled = true;
   try {
-    await S.uploadImage(k, img);
-    cancelPhoto();
-    toast('Painting replaced', `view ${k} now shows ${state.photo ? state.photo.name : 'the image'}`);
-  } catch (e) { showError(e); } finally { $('photo-apply').disabled = false; }
+    if (onSurface()) {
+      // every view, one after another (each its own undo step)
+      let n = 0;
+      for (const v of S.views) {
+        const img = v.k === state.photo.imageView && state.photo.image ? state.photo.image : await photoThrough(v.k);
+        await S.uploadImage(v.k, img);
+        n++;
+        $('photo-apply').textContent = `Painting ${n} of ${S.views.length}…`;
+      }
+      cancelPhoto();
+      toast('Paintings replaced', `${n} views now show ${name} over the surface`);
+    } else {
+      const img = state.photo.image || photoImage();
+      await S.uploadImage(k, img);
+      cancelPhoto();
+      toast('Painting replaced', `view ${k} now shows ${name || 'the image'}`);
+    }
+  } catch (e) { showError(e); } finally { $('photo-apply').disabled = false; $('photo-apply').textContent = 'Use as painting'; }
 }
 
 // ---- controls and keyboard ----------------------------------------------------------------------
@@ -652,6 +694,8 @@ function bindStudioControls() {
   $('exposure').onchange = () => { state.painter.setExposure(+$('exposure').value); for (const v of state.session.views) drawThumb(v.k); };
   $('photo-opacity').oninput = () => { $('overlay-photo').style.opacity = $('photo-opacity').value; };
   $('photo-fit').onchange = renderPhoto;
+  $('photo-place').onchange = renderPhoto;
+  $('photo-flip').onchange = renderPhoto;
   $('photo-apply').onclick = applyPhoto;
   $('photo-cancel').onclick = cancelPhoto;
 

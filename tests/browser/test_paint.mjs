@@ -1,7 +1,8 @@
 // Painting in the studio: the start page, strokes with the mouse in every
 // brush mode and their agreement with the server (within 1/255 on screen,
 // to the float in memory), undo and redo, reload, page-load time, the
-// eyedropper, keyboard, zoom and pan, a dropped photo, readable errors.
+// eyedropper, keyboard, zoom and pan, a dropped photo (in a view, or over
+// the surface through every view's texture coordinates), readable errors.
 import {
   run, openStudio, drawStroke, settled, canvasPixels, serverPixels, floatDiff, maxDiff,
   assert, assertLE, assertGE, assertEq, waitFor, sleep,
@@ -292,6 +293,66 @@ run({
     await settled(page, 0);
     const base = await page.evaluate(() => { const v = window.glint.state.session.views[0]; return Array.from(v.conf.data.slice(0, 300)).map((x, i) => x - v.base.data[i]); });
     assertLE(Math.max(...base.map(Math.abs)), 0, 'undo of the photo');
+  },
+
+  async 'a photo placed over the surface paints every view through its texture coordinates'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const page = await t.page();
+    await openStudio(page, url);
+    // a 64x32 texture: u < 1/2 orange, u >= 1/2 blue (8-bit values, read linearly)
+    await page.evaluate(async () => {
+      const c = new OffscreenCanvas(64, 32), g = c.getContext('2d');
+      g.fillStyle = 'rgb(255,128,64)'; g.fillRect(0, 0, 32, 32);
+      g.fillStyle = 'rgb(64,128,255)'; g.fillRect(32, 0, 32, 32);
+      const blob = await c.convertToBlob({ type: 'image/png' });
+      const dt = new DataTransfer();
+      dt.items.add(new File([blob], 'texture.png', { type: 'image/png' }));
+      const vp = document.getElementById('viewport');
+      vp.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    });
+    await page.waitForSelector('#photo-bar:not(.hidden)');
+    await page.selectOption('#photo-place', 'surface');
+    await page.waitForSelector('#photo-flip-wrap:not(.hidden)');
+    await page.waitForFunction(() => window.glint.state.photo && window.glint.state.photo.texture);
+    await t.shot(page, '06b-texture-over-surface.png');
+    await page.click('#photo-apply');
+    await page.waitForSelector('#photo-bar.hidden', { state: 'attached', timeout: 30000 });
+    const nviews = await page.evaluate(() => window.glint.state.session.views.length);
+    let checked = 0;
+    for (const k of [0, 5, nviews - 1]) {
+      await settled(page, k);
+      // expected, from the view's G-buffer and base render read here: base x colour(u)
+      const res = await page.evaluate(async k => {
+        const S = window.glint.state.session;
+        const { decodeEXR } = await import('/exr.js');
+        const get = async path => (await fetch(path, { headers: { 'X-Glint-Token': S.token } })).arrayBuffer();
+        const G = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/${k}/gbuffer.exr`), ['uv.U', 'uv.V', 'mask']);
+        const B = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/${k}/base.png?format=exr`));
+        const P = await decodeEXR(await get(`/api/v1/sessions/${S.id}/views/${k}/painting?format=exr`));
+        const A = [255 / 255, 128 / 255, 64 / 255], Bc = [64 / 255, 128 / 255, 255 / 255];
+        let n = 0, worst = 0, off = 0;
+        for (let p = 0; p < G.w * G.h; p++) {
+          const on = G.data[3 * p + 2] > 0.5, u = G.data[3 * p];
+          for (let c = 0; c < 3; c++) {
+            if (!on) { off = Math.max(off, Math.abs(P.data[3 * p + c] - B.data[3 * p + c])); continue; }
+            if (Math.abs(u - 0.5) < 0.05) continue;          // the blend across the edge
+            const want = B.data[3 * p + c] * (u < 0.5 ? A : Bc)[c];
+            worst = Math.max(worst, Math.abs(P.data[3 * p + c] - want));
+          }
+          if (on && Math.abs(u - 0.5) >= 0.05) n++;
+        }
+        return { n, worst, off };
+      }, k);
+      t.log(`view ${k}: ${res.n} surface pixels, |painting - base x texture| <= ${res.worst.toExponential(2)}, off the surface <= ${res.off}`);
+      assertGE(res.n, 100, 'the surface covers the view');
+      assertLE(res.worst, 1e-5, `view ${k} is its base render tinted by the texture`);
+      assertLE(res.off, 0, `view ${k} keeps the base render off the surface`);
+      checked++;
+    }
+    assertEq(checked, 3, 'three views checked');
+    // each view is one undo step of its own
+    await page.evaluate(() => window.glint.selectView ? window.glint.selectView(0) : null);
+    assert(await page.evaluate(() => window.glint.state.session.canUndo(0)), 'view 0 can undo the texture');
   },
 
   async 'server refusals are shown with their problem detail'(t) {

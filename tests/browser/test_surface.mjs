@@ -66,11 +66,11 @@ run({
     await page.waitForSelector('#quality .q[data-preset]');
     assertEq(await page.inputValue('#fit-method'), 'auto', 'glint chooses the model by default');
     const a = await fit(page);
-    assert(a.choice && a.choice.candidates.length === 4, 'the automatic choice reports its candidates');
+    assert(a.choice && a.choice.candidates.length === 5, 'the automatic choice reports its candidates');
     await page.waitForSelector('#auto-choice');
     const said = await page.textContent('#auto-choice');
     t.log(`auto: ${said}`);
-    assert(said.includes(a.choice.chosen) && ['hf3', 'hf4', 'maps', 'hybrid'].every(m => said.includes(m)), 'every candidate named');
+    assert(said.includes(a.choice.chosen) && ['hf3', 'hf2d', 'hf4', 'maps', 'hybrid'].every(m => said.includes(m)), 'every candidate named');
 
     // material maps of 3 products
     await setValue(page, 'fit-method', 'maps');

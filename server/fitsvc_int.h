@@ -1,0 +1,55 @@
+/* fitsvc_int.h: what the files of the fit service (fitsvc.c,
+ * fitsvc_holdout.c) share.  Not part of the server's interface. */
+#ifndef GLINT_FITSVC_INT_H
+#define GLINT_FITSVC_INT_H
+
+#include <pthread.h>
+
+#include "admit.h"
+#include "events.h"
+#include "fitsvc.h"
+#include "jobs.h"
+#include "memo.h"
+#include "points.h"
+#include "prep.h"
+#include "store.h"
+#include "timing.h"
+
+struct fitsvc {
+    cache *cache;
+    jobs *jobs;
+    memo *memo;
+    points *points;
+    store *st;
+    events *ev;
+    admit *work;                     /* NULL: no admission */
+    pthread_mutex_t lock;
+    unsigned long long hits, misses; /* fit requests: precomputation in memory or not */
+    json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
+};
+
+/* Everything a fit needs, owned by the request or by its job. */
+typedef struct fit_task {
+    fitsvc *f;
+    const method *m;
+    void *params;
+    char session_id[33], scene_id[33];
+    cache_entry *scene;      /* held */
+    int nviews, nused;
+    img *paintings;          /* nviews; views never painted are zeroed */
+    memo_painting **pins;    /* nviews: paintings shared with the memo (not ours to free) */
+    unsigned char *use;      /* nviews: painted */
+    long long *versions;     /* nviews: painting versions used */
+    size_t bytes;            /* the fit's memory bound (admit.h) */
+    srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
+} fit_task;
+
+/* Schedule the held-out measurement of a fit point (key: the point's) in
+ * the background, unless one for it is pending; failures are logged. */
+void fitsvc_holdout_schedule(fit_task *t, prep *p, const char *material_id, const char *key);
+
+/* Job callbacks for the precomputation (cls: the job). */
+int fitsvc_job_cancelled(void *cls);
+void fitsvc_job_progress(void *cls, const char *stage, double p);
+
+#endif
