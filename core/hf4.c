@@ -117,9 +117,7 @@ void hf4_decomp_free(hf4_decomp *dc)
 {
     if (!dc)
         return;
-    free(dc->s2);
-    free(dc->V);
-    free(dc->M);
+    hfx_decomp_free(&dc->x);
     memset(dc, 0, sizeof *dc);
 }
 
@@ -133,8 +131,6 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
 {
     rows_ctx c = {.x = x, .lambda = lambda, .lambda_s = lambda_s};
     hfx_rows r;
-    hfx_decomp g;
-    int rc;
 
     memset(dc, 0, sizeof *dc);
     if (!lambda_ok(lambda) || !lambda_ok(lambda_s))
@@ -145,28 +141,11 @@ int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double
     if (!(rcond < 1.0) || !isfinite(rcond))
         return glint_err_set(err, GLINT_ERANGE, "rcond %g must be below 1", rcond);
     r = rows_of(&c);
-    if ((rc = hfx_decomp_build(&r, rcond, 3, &g, err)))
-        return rc;
     dc->res = x->d.res;
     dc->sres = x->sres;
-    dc->n = g.n;
-    dc->nsamples = g.nsamples;
-    dc->rows = g.rows;
-    dc->form = g.form;
     dc->lambda = lambda;
     dc->lambda_s = lambda_s;
-    dc->rcond = g.rcond;
-    dc->rank = g.rank;
-    dc->gauge_dims = g.gauge_dims;
-    dc->null_dims = g.null_dims;
-    dc->unreached = g.unreached;
-    dc->s_max = g.s_max;
-    dc->s_min_kept = g.s_min_kept;
-    dc->s2 = g.s2;
-    dc->V = g.V;
-    dc->M = g.M;
-    dc->seconds = g.seconds;
-    return 0;
+    return hfx_decomp_build(&r, rcond, 3, &dc->x, err);
 }
 
 void hf4_factors_free(hf4_factors *f)
@@ -239,18 +218,16 @@ void hf4_factors_eval(const hf4_factors *f, const double uv[2], const double n[3
 int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_model model,
             const float *rgb, hf4_factors *fac, hf4_fit_stats *st, glint_err *err)
 {
-    int R = x->d.res, S = x->sres, n = dc->n, rc;
+    int R = x->d.res, S = x->sres, n = dc->x.n, rc;
     int off[5] = {0, R, 2 * R, 3 * R, 3 * R + S * S};
     rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_s = dc->lambda_s};
     hfx_rows r = rows_of(&c);
-    hfx_decomp g = {.n = dc->n, .nsamples = dc->nsamples, .rows = dc->rows, .rank = dc->rank,
-                    .s2 = dc->s2, .V = dc->V, .M = dc->M};
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->d.cos_i, .nfactors = 4,
                       .off = off, .log_max = HF4_LOG_MAX};
     double *y;
 
     memset(fac, 0, sizeof *fac);
-    if (dc->res != R || dc->sres != S || dc->nsamples != x->d.n)
+    if (dc->res != R || dc->sres != S || dc->x.nsamples != x->d.n)
         return glint_err_set(err, GLINT_EINVAL, "decomposition and design do not match");
     y = malloc(3 * (size_t)n * sizeof *y);
     fac->logf = malloc(9 * (size_t)R * sizeof *fac->logf);
@@ -264,7 +241,7 @@ int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_mod
     fac->sres = S;
     fac->model = model;
     fac->map = *map;
-    if ((rc = hfx_fit(&r, &g, &pb, rgb, y, fac->a_used, st, err))) {
+    if ((rc = hfx_fit(&r, &dc->x, &pb, rgb, y, fac->a_used, st, err))) {
         free(y);
         hf4_factors_free(fac);
         return rc;

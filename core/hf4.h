@@ -77,19 +77,10 @@ int hf4_design_build(const samples *s, int res, int sres, hf4_design *out, glint
 void hf4_design_free(hf4_design *d);
 
 typedef struct hf4_decomp {
-    int res, sres, n, nsamples;
-    int rows;            /* of B: samples + smoothing rows */
-    const char *form;    /* "normal" or "dense" */
-    double lambda, lambda_s, rcond;
-    int rank;            /* directions kept */
-    int gauge_dims;      /* 3 */
-    int null_dims;       /* other directions cut (s_i <= rcond s_max), unreached ones too */
-    int unreached;       /* unknowns no row reaches: left out of the decomposition */
-    double s_max, s_min_kept;
-    double *s2;          /* rank: s_i^2, descending */
-    double *V;           /* n x rank, column-major (normal and dense forms) */
-    double *M;           /* "kernel" form (hfx.h): the operator, n x nsamples */
-    double seconds;
+    int res, sres;
+    double lambda, lambda_s;
+    hfx_decomp x;        /* form, rank, gauge_dims (3), null_dims, unreached, the
+                            kept directions or the kernel operator: hfx.h */
 } hf4_decomp;
 
 /* The default relative cut of the kept singular values.  1e-6 let a fit of

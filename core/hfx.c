@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfile.h"
 #include "clock.h"
 #include "hfx_int.h"
 
@@ -355,4 +356,65 @@ done:
     if (!rc && st_out)
         *st_out = st;
     return rc;
+}
+
+static const char *const form_names[3] = {"normal", "dense", "kernel"};
+
+void hfx_decomp_put(cfile_w *b, const hfx_decomp *g)
+{
+    uint32_t form = 0, u[8];
+    double d[4] = {g->rcond, g->s_max, g->s_min_kept, g->seconds};
+    for (uint32_t i = 0; i < 3; i++)
+        if (g->form && strcmp(g->form, form_names[i]) == 0)
+            form = i;
+    u[0] = (uint32_t)g->n, u[1] = (uint32_t)g->nsamples, u[2] = (uint32_t)g->rows;
+    u[3] = form, u[4] = (uint32_t)g->rank, u[5] = (uint32_t)g->gauge_dims;
+    u[6] = (uint32_t)g->null_dims, u[7] = (uint32_t)g->unreached;
+    cfile_put(b, u, sizeof u);
+    cfile_put(b, d, sizeof d);
+    if (form == 2) {
+        cfile_put(b, g->M, (size_t)g->n * g->nsamples * sizeof *g->M);
+    } else {
+        cfile_put(b, g->s2, (size_t)g->rank * sizeof *g->s2);
+        cfile_put(b, g->V, (size_t)g->n * g->rank * sizeof *g->V);
+    }
+}
+
+int hfx_decomp_get(cfile_r *r, int n, int nsamples, hfx_decomp *g, const char *name,
+                   glint_err *err)
+{
+    uint32_t u[8];
+    double d[4];
+    memset(g, 0, sizeof *g);
+    if (cfile_get(r, u, sizeof u) || cfile_get(r, d, sizeof d) || (int)u[0] != n ||
+        (int)u[1] != nsamples || u[3] > 2 || u[4] > u[0] || u[5] > u[0] || u[6] > u[0] ||
+        u[7] > u[0])
+        return glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition does not match",
+                             name);
+    g->n = n, g->nsamples = nsamples, g->rows = (int)u[2], g->form = form_names[u[3]];
+    g->rank = (int)u[4], g->gauge_dims = (int)u[5], g->null_dims = (int)u[6];
+    g->unreached = (int)u[7];
+    g->rcond = d[0], g->s_max = d[1], g->s_min_kept = d[2], g->seconds = d[3];
+    if (u[3] == 2) {
+        size_t cnt = (size_t)n * nsamples;
+        if (!(g->M = malloc((cnt ? cnt : 1) * sizeof *g->M)))
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        if (cfile_get(r, g->M, cnt * sizeof *g->M))
+            goto short_file;
+        return 0;
+    }
+    g->s2 = malloc((size_t)(g->rank ? g->rank : 1) * sizeof *g->s2);
+    g->V = malloc((size_t)n * (g->rank ? g->rank : 1) * sizeof *g->V);
+    if (!g->s2 || !g->V) {
+        hfx_decomp_free(g);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
+    if (cfile_get(r, g->s2, (size_t)g->rank * sizeof *g->s2) ||
+        cfile_get(r, g->V, (size_t)n * g->rank * sizeof *g->V))
+        goto short_file;
+    return 0;
+short_file:
+    hfx_decomp_free(g);
+    return glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
+                         name);
 }

@@ -100,6 +100,18 @@ int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp
                      glint_err *err);
 void hfx_decomp_free(hfx_decomp *dc);
 
+/* The decomposition in a cache file (cfile.h), after the model's own
+ * fields: u32 n, nsamples, rows, form (0 normal, 1 dense, 2 kernel), rank,
+ * gauge_dims, null_dims, unreached; doubles rcond, s_max, s_min_kept,
+ * seconds; then s2[rank] and V[n rank], or for the kernel form M[n
+ * nsamples].  hfx_decomp_get checks n and nsamples against the expected
+ * ones and every count against the rest (GLINT_EFORMAT naming `name`). */
+struct cfile_w;
+struct cfile_r;
+void hfx_decomp_put(struct cfile_w *b, const hfx_decomp *g);
+int hfx_decomp_get(struct cfile_r *r, int n, int nsamples, hfx_decomp *g, const char *name,
+                   glint_err *err);
+
 typedef struct hfx_fit_stats {
     int clamped[3];      /* samples floored at eps before the log, per channel */
     long log_clamped;    /* log-factor values clamped to +-log_max */

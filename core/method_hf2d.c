@@ -147,49 +147,24 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
 }
 
 /* The disk layer: <dir>/<hash of the key>.hf2d (cfile.h, kind 1) holds the
- * decomposition: u32 res, sres, dims[3], n, nsamples, rows, form (0 normal,
- * 1 dense, 2 kernel), rank, gauge_dims, null_dims, unreached; doubles
- * lambda, lambda_2d, rcond, s_max, s_min_kept, seconds; then s2[rank],
- * V[n rank], or for the kernel form the operator M[n nsamples].  The design
- * is rebuilt from the pattern. */
+ * decomposition: u32 res, sres, dims[3]; doubles lambda, lambda_2d; then
+ * hfx.h's hfx_decomp_put.  The design is rebuilt from the pattern. */
 #define HF2D_MAGIC "GLHF2D01"
-
-static const char *const form_names[] = {"normal", "dense", "kernel"};
-
-static int form_code(const char *form)
-{
-    for (int i = 0; i < 3; i++)
-        if (strcmp(form, form_names[i]) == 0)
-            return i;
-    return 0;
-}
-#define NU 13
-#define ND 6
 
 static int level_save(const method_build_in *in, const char *dir, const char *key,
                       const cache_value *v, glint_err *err)
 {
     const hf2d_decomp *dc = &((const hf2d_level *)v->data)->dc;
-    const hfx_decomp *g = &dc->x;
     char name[64];
     cfile_w b;
-    uint32_t u[NU] = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres, (uint32_t)dc->sh.dims[0],
-                      (uint32_t)dc->sh.dims[1], (uint32_t)dc->sh.dims[2], (uint32_t)g->n,
-                      (uint32_t)g->nsamples, (uint32_t)g->rows,
-                      (uint32_t)form_code(g->form), (uint32_t)g->rank,
-                      (uint32_t)g->gauge_dims, (uint32_t)g->null_dims,
-                      (uint32_t)g->unreached};
-    double d[ND] = {dc->lambda, dc->lambda_2d, g->rcond, g->s_max, g->s_min_kept, g->seconds};
+    uint32_t u[5] = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres, (uint32_t)dc->sh.dims[0],
+                     (uint32_t)dc->sh.dims[1], (uint32_t)dc->sh.dims[2]};
+    double d[2] = {dc->lambda, dc->lambda_2d};
     (void)in;
     cfile_begin(&b, HF2D_MAGIC, 1);
     cfile_put(&b, u, sizeof u);
     cfile_put(&b, d, sizeof d);
-    if (g->M) {
-        cfile_put(&b, g->M, (size_t)g->n * g->nsamples * sizeof *g->M);
-    } else {
-        cfile_put(&b, g->s2, (size_t)g->rank * sizeof *g->s2);
-        cfile_put(&b, g->V, (size_t)g->n * g->rank * sizeof *g->V);
-    }
+    hfx_decomp_put(&b, &dc->x);
     cfile_name(key, ".hf2d", name, sizeof name);
     return cfile_write(&b, dir, name, err);
 }
@@ -200,16 +175,14 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     const hf2d_params_t *p = in->params;
     hf2d_shape sh = shape_of(p);
     hf2d_level *x = calloc(1, sizeof *x);
-    hfx_decomp *g;
     char name[64];
     cfile_r r;
-    uint32_t u[NU];
-    double d[ND], t0 = glint_now();
+    uint32_t u[5];
+    double d[2], t0 = glint_now();
     int rc, off[4];
 
     if (!x)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    g = &x->dc.x;
     cfile_name(key, ".hf2d", name, sizeof name);
     if ((rc = cfile_open(dir, name, HF2D_MAGIC, 1, (size_t)16 << 30, &r, err))) {
         free(x);
@@ -218,40 +191,19 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     rc = GLINT_EFORMAT;
     if (cfile_get(&r, u, sizeof u) || cfile_get(&r, d, sizeof d) || (int)u[0] != sh.res ||
         (int)u[1] != sh.sres || (int)u[2] != sh.dims[0] || (int)u[3] != sh.dims[1] ||
-        (int)u[4] != sh.dims[2] || (int)u[5] != hf2d_offsets(&sh, off) ||
-        (int)u[6] != in->s->n || u[8] > 2 || u[9] > u[5] || d[0] != p->lambda ||
-        d[1] != p->lambda_2d) {
+        (int)u[4] != sh.dims[2] || d[0] != p->lambda || d[1] != p->lambda_2d) {
         glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
                       key);
         goto done;
     }
     x->dc.sh = sh;
     x->dc.lambda = d[0], x->dc.lambda_2d = d[1];
-    g->n = (int)u[5], g->nsamples = (int)u[6], g->rows = (int)u[7];
-    g->form = form_names[u[8]], g->rank = (int)u[9];
-    g->gauge_dims = (int)u[10], g->null_dims = (int)u[11], g->unreached = (int)u[12];
-    g->rcond = d[2], g->s_max = d[3], g->s_min_kept = d[4], g->seconds = d[5];
-    if (u[8] == 2) {
-        if (!(g->M = malloc((size_t)g->n * (g->nsamples ? g->nsamples : 1) * sizeof *g->M))) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-            goto done;
-        }
-        if (cfile_get(&r, g->M, (size_t)g->n * g->nsamples * sizeof *g->M) || !cfile_done(&r)) {
-            glint_err_set(err, rc, "%s: the cached operator has the wrong size", name);
-            goto done;
-        }
-    } else {
-        g->s2 = malloc((size_t)(g->rank ? g->rank : 1) * sizeof *g->s2);
-        g->V = malloc((size_t)g->n * (g->rank ? g->rank : 1) * sizeof *g->V);
-        if (!g->s2 || !g->V) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-            goto done;
-        }
-        if (cfile_get(&r, g->s2, (size_t)g->rank * sizeof *g->s2) ||
-            cfile_get(&r, g->V, (size_t)g->n * g->rank * sizeof *g->V) || !cfile_done(&r)) {
-            glint_err_set(err, rc, "%s: the cached decomposition has the wrong size", name);
-            goto done;
-        }
+    if ((rc = hfx_decomp_get(&r, hf2d_offsets(&sh, off), in->s->n, &x->dc.x, name, err)))
+        goto done;
+    if (!cfile_done(&r)) {
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
+                           name);
+        goto done;
     }
     if ((rc = hf2d_design_build(in->s, &sh, &x->d, err)))
         goto done;

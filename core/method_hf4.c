@@ -52,7 +52,7 @@ typedef struct hf4_level {
 /* Doubles the decomposition holds: V and s^2, or the kernel form's M. */
 static size_t op_doubles(const hf4_decomp *dc)
 {
-    return dc->M ? (size_t)dc->n * dc->nsamples : (size_t)dc->n * (dc->rank + 1);
+    return dc->x.M ? (size_t)dc->x.n * dc->x.nsamples : (size_t)dc->x.n * (dc->x.rank + 1);
 }
 
 static void level_free(void *data)
@@ -101,12 +101,10 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
 }
 
 /* The disk layer: <dir>/<hash of the key>.hf4 (cfile.h, kind 1) holds the
- * decomposition: u32 res, sres, n, nsamples, rows, form (0 normal, 1
- * dense, 2 kernel), rank, gauge_dims, null_dims, unreached; doubles lambda,
- * lambda_s, rcond, s_max, s_min_kept, seconds; s2[rank], V[n rank], or for
- * the kernel form the operator M[n nsamples].  The design is rebuilt from
- * the pattern (a millisecond). */
-#define HF4_MAGIC "GLHF4D01"
+ * decomposition: u32 res, sres; doubles lambda, lambda_s; then hfx.h's
+ * hfx_decomp_put.  The design is rebuilt from the pattern (a
+ * millisecond). */
+#define HF4_MAGIC "GLHF4D02"
 
 static int level_save(const method_build_in *in, const char *dir, const char *key,
                       const cache_value *v, glint_err *err)
@@ -114,22 +112,13 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
     const hf4_decomp *dc = &((const hf4_level *)v->data)->dc;
     char name[64];
     cfile_w b;
-    uint32_t u[10] = {(uint32_t)dc->res, (uint32_t)dc->sres, (uint32_t)dc->n,
-                      (uint32_t)dc->nsamples, (uint32_t)dc->rows,
-                      strcmp(dc->form, "dense") == 0 ? 1u : dc->M ? 2u : 0u, (uint32_t)dc->rank,
-                      (uint32_t)dc->gauge_dims, (uint32_t)dc->null_dims,
-                      (uint32_t)dc->unreached};
-    double d[6] = {dc->lambda, dc->lambda_s, dc->rcond, dc->s_max, dc->s_min_kept, dc->seconds};
+    uint32_t u[2] = {(uint32_t)dc->res, (uint32_t)dc->sres};
+    double d[2] = {dc->lambda, dc->lambda_s};
     (void)in;
     cfile_begin(&b, HF4_MAGIC, 1);
     cfile_put(&b, u, sizeof u);
     cfile_put(&b, d, sizeof d);
-    if (dc->M) {
-        cfile_put(&b, dc->M, (size_t)dc->n * dc->nsamples * sizeof *dc->M);
-    } else {
-        cfile_put(&b, dc->s2, (size_t)dc->rank * sizeof *dc->s2);
-        cfile_put(&b, dc->V, (size_t)dc->n * dc->rank * sizeof *dc->V);
-    }
+    hfx_decomp_put(&b, &dc->x);
     cfile_name(key, ".hf4", name, sizeof name);
     return cfile_write(&b, dir, name, err);
 }
@@ -142,8 +131,8 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     hf4_decomp *dc;
     char name[64];
     cfile_r r;
-    uint32_t u[10];
-    double d[6], t0 = glint_now();
+    uint32_t u[2];
+    double d[2], t0 = glint_now();
     int rc;
 
     if (!x)
@@ -156,42 +145,18 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     }
     rc = GLINT_EFORMAT;
     if (cfile_get(&r, u, sizeof u) || cfile_get(&r, d, sizeof d) || (int)u[0] != p->res ||
-        (int)u[1] != p->sres || (int)u[2] != 3 * p->res + p->sres * p->sres ||
-        (int)u[3] != in->s->n || u[5] > 2 || u[6] > u[2] || d[0] != p->lambda ||
-        d[1] != p->lambda_s) {
+        (int)u[1] != p->sres || d[0] != p->lambda || d[1] != p->lambda_s) {
         glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
                       key);
         goto done;
     }
-    dc->res = (int)u[0], dc->sres = (int)u[1], dc->n = (int)u[2], dc->nsamples = (int)u[3];
-    dc->rows = (int)u[4], dc->rank = (int)u[6];
-    dc->form = u[5] == 2 ? "kernel" : u[5] ? "dense" : "normal";
-    dc->gauge_dims = (int)u[7], dc->null_dims = (int)u[8], dc->unreached = (int)u[9];
-    dc->lambda = d[0], dc->lambda_s = d[1], dc->rcond = d[2], dc->s_max = d[3];
-    dc->s_min_kept = d[4], dc->seconds = d[5];
-    if (u[5] == 2) {
-        if (!(dc->M = malloc((size_t)dc->n * (dc->nsamples ? dc->nsamples : 1) *
-                             sizeof *dc->M))) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-            goto done;
-        }
-        if (cfile_get(&r, dc->M, (size_t)dc->n * dc->nsamples * sizeof *dc->M) ||
-            !cfile_done(&r)) {
-            glint_err_set(err, rc, "%s: the cached operator has the wrong size", name);
-            goto done;
-        }
-    } else {
-        dc->s2 = malloc((size_t)(dc->rank ? dc->rank : 1) * sizeof *dc->s2);
-        dc->V = malloc((size_t)dc->n * (dc->rank ? dc->rank : 1) * sizeof *dc->V);
-        if (!dc->s2 || !dc->V) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
-            goto done;
-        }
-        if (cfile_get(&r, dc->s2, (size_t)dc->rank * sizeof *dc->s2) ||
-            cfile_get(&r, dc->V, (size_t)dc->n * dc->rank * sizeof *dc->V) || !cfile_done(&r)) {
-            glint_err_set(err, rc, "%s: the cached decomposition has the wrong size", name);
-            goto done;
-        }
+    dc->res = p->res, dc->sres = p->sres, dc->lambda = d[0], dc->lambda_s = d[1];
+    if ((rc = hfx_decomp_get(&r, 3 * p->res + p->sres * p->sres, in->s->n, &dc->x, name, err)))
+        goto done;
+    if (!cfile_done(&r)) {
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
+                           name);
+        goto done;
     }
     if ((rc = hf4_design_build(in->s, p->res, p->sres, &x->d, err)))
         goto done;
@@ -234,18 +199,18 @@ static int hf4_fit_op(const method_fit_in *in, material *out, glint_err *err)
     }
     pre = json_pack("{s:s, s:s, s:i, s:i, s:i, s:s, s:i, s:i, s:i, s:f, s:f, s:f}",
                     "pattern_hash", in->s->hash, "cache_key", in->keys[0], "samples", in->s->n,
-                    "unknowns", x->dc.n, "rows", x->dc.rows, "form", x->dc.form,
-                    "numerical_rank", x->dc.rank, "gauge_dims", x->dc.gauge_dims, "null_dims",
-                    x->dc.null_dims, "rcond", x->dc.rcond, "s_max", x->dc.s_max,
-                    "s_min_kept", x->dc.s_min_kept);
-    json_object_set_new(pre, "unreached", json_integer(x->dc.unreached));
+                    "unknowns", x->dc.x.n, "rows", x->dc.x.rows, "form", x->dc.x.form,
+                    "numerical_rank", x->dc.x.rank, "gauge_dims", x->dc.x.gauge_dims, "null_dims",
+                    x->dc.x.null_dims, "rcond", x->dc.x.rcond, "s_max", x->dc.x.s_max,
+                    "s_min_kept", x->dc.x.s_min_kept);
+    json_object_set_new(pre, "unreached", json_integer(x->dc.x.unreached));
     json_object_set_new(pre, "operator_bytes",
                         json_integer((json_int_t)(op_doubles(&x->dc) * 8)));
     tim = json_pack("{s:f, s:f, s:f, s:f}", "samples", in->pattern_seconds, "design",
                     in->how[0] == CACHE_BUILT ? x->t_design : 0.0, "decomposition",
                     in->how[0] != CACHE_BUILT           ? in->spent[0]
                     : in->disk[0] == CACHE_DISK_LOADED ? x->t_load
-                                                        : x->dc.seconds,
+                                                        : x->dc.x.seconds,
                     "fit",
                     glint_now() - t0);
     errs = json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:I}", "rms_painted", st.rms,

@@ -120,10 +120,10 @@ int main(int argc, char **argv)
             if (hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e))
                 goto fail;
             tf = glint_now() - t1 < tf ? glint_now() - t1 : tf;
-            n = dc.n;
-            rank = dc.rank;
-            nulls = dc.null_dims;
-            form = dc.form;
+            n = dc.x.n;
+            rank = dc.x.rank;
+            nulls = dc.x.null_dims;
+            form = dc.x.form;
             rms = st.rms;
             hf4_factors_free(&f);
             hf4_decomp_free(&dc);

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "glr.h"
+#include "gpu_check.h"
 #include "hf2d.h"
 #include "method_hf2d.h"
 #include "sv_fixture.h"
@@ -541,40 +541,7 @@ TEST(the_method_saves_loads_and_renders)
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
     ASSERT_EQ(system(cmd), 0);
     /* the GPU evaluates what the CPU does */
-    {
-        glr *g = NULL;
-        glr_mesh *gm = NULL;
-        mesh sph;
-#if defined(__SANITIZE_ADDRESS__)
-        if (1) {
-            printf("  gpu: skipped under AddressSanitizer\n");
-        } else
-#endif
-        if (glr_open(&g, &e)) {
-            printf("  gpu: skipped: %s\n", e.msg);
-        } else {
-            ASSERT_OK(mesh_sphere_default(&sph, &e));
-            ASSERT_OK(glr_mesh_upload(g, &sph, &gm, &e));
-            for (int v = 0; v < 12; v += 5) {
-                img ref, out;
-                double dsum = 0.0, rsum = 0.0;
-                ASSERT_OK(material_render(&m, &sph, &SC.views[v], 96, 96, &ref, &e));
-                ASSERT_MSG(glr_preview(g, gm, &m, &SC.views[v], 96, 96, 0.0f, &out, &e) == 0,
-                           "%s", e.msg);
-                for (size_t i = 0; i < (size_t)96 * 96 * 3; i++)
-                    dsum += fabs(ref.px[i] - out.px[i]), rsum += ref.px[i];
-                printf("  gpu view %d: mean |gl - cpu| %.2e (mean value %.3f)\n", v,
-                       dsum / (96.0 * 96 * 3), rsum / (96.0 * 96 * 3));
-                ASSERT_LT(0.02, rsum / (96.0 * 96 * 3));
-                ASSERT_LT(dsum / (96.0 * 96 * 3), 1.0 / 255);
-                img_free(&ref);
-                img_free(&out);
-            }
-            glr_mesh_free(g, gm);
-            glr_close(g);
-            mesh_free(&sph);
-        }
-    }
+    gpu_check_agrees(&m, &SC, 0, 5, 12, 96);
     material_free(&m);
 }
 

@@ -15,7 +15,7 @@
 
 #include "cache.h"
 #include "check.h"
-#include "glr.h"
+#include "gpu_check.h"
 #include "hf4.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
@@ -111,10 +111,10 @@ TEST(a_product_is_recovered)
     ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
     printf("  %d samples, n %d (%s form), rank %d, gauge %d, null %d: rms %.2e (max value "
            "%.3f), log residual %.2e\n",
-           S1.n, dc.n, dc.form, dc.rank, dc.gauge_dims, dc.null_dims, st.rms, mx,
+           S1.n, dc.x.n, dc.x.form, dc.x.rank, dc.x.gauge_dims, dc.x.null_dims, st.rms, mx,
            st.log_residual);
-    ASSERT(strcmp(dc.form, "normal") == 0);
-    ASSERT_EQ(dc.gauge_dims, 3);
+    ASSERT(strcmp(dc.x.form, "normal") == 0);
+    ASSERT_EQ(dc.x.gauge_dims, 3);
     ASSERT_LT(st.log_residual, 1e-3);
     ASSERT_LT(st.rms, 1e-3 * mx);
     hf4_factors_free(&f);
@@ -241,9 +241,9 @@ static void dense_compare(const samples *ss, int R, int S, double rcond, double 
         }
     }
     printf("  n %d, rows %d, dgelsd rank %d, ours %d (+%d gauge, %s form): max |difference| "
-           "of the log-factors %.2e\n", n, rows, rank, dc.rank, dc.gauge_dims, dc.form, worst);
-    ASSERT_EQ(rank, dc.rank);
-    ASSERT(strcmp(dc.form, form) == 0);
+           "of the log-factors %.2e\n", n, rows, rank, dc.x.rank, dc.x.gauge_dims, dc.x.form, worst);
+    ASSERT_EQ(rank, dc.x.rank);
+    ASSERT(strcmp(dc.x.form, form) == 0);
     ASSERT_LT(worst, 1e-6);
     free(B);
     free(rhs);
@@ -299,13 +299,13 @@ TEST(dense_form_and_unreached_nodes)
     ASSERT_OK(hf4_decomp_build(&d, 0.1, 0.0, 0, &dc, &e));
     ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
     printf("  %d samples, n %d (%d reached by no row), rows %d: %s form, rank %d, null %d; "
-           "rms %.2e, log max %.2f\n", S1.n, dc.n, dc.unreached, dc.rows, dc.form, dc.rank,
-           dc.null_dims, st.rms, st.log_max);
+           "rms %.2e, log max %.2f\n", S1.n, dc.x.n, dc.x.unreached, dc.x.rows, dc.x.form, dc.x.rank,
+           dc.x.null_dims, st.rms, st.log_max);
     /* the smaller form of the reached unknowns (nodes no row reaches left out) */
-    ASSERT(strcmp(dc.form, dc.rows < dc.n - dc.unreached ? "dense" : "normal") == 0);
-    ASSERT_LT(dc.rows, dc.n);
-    ASSERT_LT(dc.n / 2, dc.null_dims); /* most of the 4096 nodes see no sample */
-    ASSERT_LT(dc.n / 2, dc.unreached);
+    ASSERT(strcmp(dc.x.form, dc.x.rows < dc.x.n - dc.x.unreached ? "dense" : "normal") == 0);
+    ASSERT_LT(dc.x.rows, dc.x.n);
+    ASSERT_LT(dc.x.n / 2, dc.x.null_dims); /* most of the 4096 nodes see no sample */
+    ASSERT_LT(dc.x.n / 2, dc.x.unreached);
     ASSERT_FINITE(st.rms);
     ASSERT_LT(st.rms, 0.05);
     check_gauge(&f);
@@ -368,8 +368,8 @@ TEST(few_samples_no_smoothing_of_s)
         ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
         rms[k] = st.rms;
         printf("  %d samples, rcond %.0e: %s form, n %d, rank %d, null %d (unreached %d); "
-               "rms %.4f, log max %.2f, %ld clamped\n", few.n, dc.rcond, dc.form, dc.n,
-               dc.rank, dc.null_dims, dc.unreached, st.rms, st.log_max, st.log_clamped);
+               "rms %.4f, log max %.2f, %ld clamped\n", few.n, dc.x.rcond, dc.x.form, dc.x.n,
+               dc.x.rank, dc.x.null_dims, dc.x.unreached, st.rms, st.log_max, st.log_clamped);
         ASSERT_FINITE(st.rms);
         if (k)
             ASSERT_LT(st.rms, 0.05);
@@ -382,10 +382,10 @@ TEST(few_samples_no_smoothing_of_s)
     hf4_design_free(&d);
     ASSERT_OK(hf4_design_build(&few, 32, 64, &d, &e));
     ASSERT_OK(hf4_decomp_build(&d, 0.1, 0.0, 0.0, &dc, &e));
-    printf("  s_res 64: %s form, n %d, unreached %d, rank %d\n", dc.form, dc.n, dc.unreached,
-           dc.rank);
-    ASSERT_LT(dc.n / 2, dc.unreached);
-    ASSERT(strcmp(dc.form, "dense") == 0);
+    printf("  s_res 64: %s form, n %d, unreached %d, rank %d\n", dc.x.form, dc.x.n, dc.x.unreached,
+           dc.x.rank);
+    ASSERT_LT(dc.x.n / 2, dc.x.unreached);
+    ASSERT(strcmp(dc.x.form, "dense") == 0);
     hf4_decomp_free(&dc);
     hf4_design_free(&d);
     samples_free(&few);
@@ -522,39 +522,7 @@ TEST(the_method_fits_a_varying_colour)
         rmdir(dir);
     }
     /* the GPU evaluates what the CPU does */
-    {
-        glr *g = NULL;
-        glr_mesh *gm = NULL;
-        mesh sph;
-#if defined(__SANITIZE_ADDRESS__)
-        /* LeakSanitizer's exit scan crashed once on llvmpipe's threads (test_maps.c) */
-        if (1) {
-            printf("  gpu: skipped under AddressSanitizer\n");
-        } else
-#endif
-        if (glr_open(&g, &e)) {
-            printf("  gpu: skipped: %s\n", e.msg);
-        } else {
-            ASSERT_OK(mesh_sphere_default(&sph, &e));
-            ASSERT_OK(glr_mesh_upload(g, &sph, &gm, &e));
-            for (int v = 0; v < 12; v += 5) {
-                img ref, out;
-                double dsum = 0.0;
-                ASSERT_OK(material_render(&four, &sph, &SC.views[v], 96, 96, &ref, &e));
-                ASSERT_MSG(glr_preview(g, gm, &four, &SC.views[v], 96, 96, 0.0f, &out, &e) == 0,
-                           "%s", e.msg);
-                for (size_t i = 0; i < (size_t)96 * 96 * 3; i++)
-                    dsum += fabs(ref.px[i] - out.px[i]);
-                printf("  gpu view %d: mean |gl - cpu| %.2e\n", v, dsum / (96.0 * 96 * 3));
-                ASSERT_LT(dsum / (96.0 * 96 * 3), 1.0 / 255);
-                img_free(&ref);
-                img_free(&out);
-            }
-            glr_mesh_free(g, gm);
-            glr_close(g);
-            mesh_free(&sph);
-        }
-    }
+    gpu_check_agrees(&four, &SC, 0, 5, 12, 96);
     material_free(&one);
     material_free(&four);
     cache_release(c, se);

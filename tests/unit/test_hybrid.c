@@ -13,7 +13,7 @@
 
 #include "cache.h"
 #include "check.h"
-#include "glr.h"
+#include "gpu_check.h"
 #include "img.h"
 #include "method_auto.h"
 #include "method_hf4.h"
@@ -208,48 +208,18 @@ TEST(gpu_matches_cpu)
 {
     hybrid_params hp;
     material m;
-    glr *g = NULL;
-    glr_mesh *gm = NULL;
-    mesh sph;
-    glint_err e;
     ASSERT_OK(setup());
 #if defined(__SANITIZE_ADDRESS__)
     /* as test_maps.c: LeakSanitizer's exit scan and llvmpipe's threads */
     printf("  skipped under AddressSanitizer\n");
     return;
 #endif
-    if (glr_open(&g, &e)) {
-        printf("  skipped: %s\n", e.msg);
-        return;
-    }
     small(&hp);
     hp.components = 4;
     hp.tol = 0.0;
     ASSERT_OK(fit(&method_hybrid, &hp, &m, NULL, 0));
     printf("  %d products\n", maps_matmap(&m)->k);
-    ASSERT_OK(mesh_sphere_default(&sph, &e));
-    ASSERT_OK(glr_mesh_upload(g, &sph, &gm, &e));
-    for (int v = 0; v < 3; v++) {
-        img ref, out;
-        double d = 0.0, mx = 0.0;
-        const scene_view *sv = &SC.views[v * 4];
-        ASSERT_OK(material_render(&m, &sph, sv, 128, 128, &ref, &e));
-        ASSERT_MSG(glr_preview(g, gm, &m, sv, 128, 128, 0.0f, &out, &e) == 0, "%s", e.msg);
-        for (size_t i = 0; i < (size_t)128 * 128 * 3; i++) {
-            d += fabs(ref.px[i] - out.px[i]);
-            mx = ref.px[i] > mx ? ref.px[i] : mx;
-        }
-        d /= 128.0 * 128 * 3;
-        printf("  view %d: mean |gl - cpu| %.2e (1/255 = %.2e), max value %.3f\n", v * 4, d,
-               1.0 / 255, mx);
-        ASSERT_LT(d, 1.0 / 255);
-        ASSERT_LT(0.05, mx);
-        img_free(&ref);
-        img_free(&out);
-    }
-    glr_mesh_free(g, gm);
-    glr_close(g);
-    mesh_free(&sph);
+    gpu_check_agrees(&m, &SC, 0, 4, 12, 128);
     material_free(&m);
 }
 
