@@ -13,7 +13,7 @@
  *             (isotropic Ward with roughness a); with rough_y = b != a the
  *             anisotropic Ward, kd/pi + ks exp(-((h.t/a)^2 + (h.b/b)^2) /
  *             (h.n)^2) / (4 pi a b sqrt(cos_i cos_o)), t and b vec3.h's
- *             v3_frame(n) (t runs around the world's Y axis)
+ *             v3_frame(n) (t runs around the world's up axis, Z)
  * These match ../shared/reference/hf_ref.py (lambert, phong, blinn, ct).
  *
  * A brdf is a small value (no pointers; copy it freely).  Every function is

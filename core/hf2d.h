@@ -11,8 +11,8 @@
  * the parabolic map of the vector.
  *
  * Conventions
- *  - Frame: vec3.h's v3_frame(n): t = normalize(Y x n), b = n x t (t = +X
- *    at the poles n = +-Y).  A frame from the normal alone needs nothing
+ *  - Frame: vec3.h's v3_frame(n): t = normalize(Z x n), b = n x t (Z the
+ *    world's up axis; t = +X at the poles n = +-Z).  A frame from the normal alone needs nothing
  *    but the samples' normals: imported samples, the CPU and the GPU
  *    evaluate it alike.
  *  - Parabolic map of a unit direction d (d.n clamped to >= 0):

@@ -301,7 +301,7 @@ const method method_hf2d = {
     .description =
         "One BRDF p(wi) q(h) r(wo) whose factors may depend on the direction around the "
         "normal: each factor is 1D (the length of its vector on the tangent plane, as hf3) or "
-        "2D (the parabolic map of the vector in the tangent frame t = Y x n, b = n x t). A 2D "
+        "2D (the parabolic map of the vector in the tangent frame t = Z x n, b = n x t, Z up). A 2D "
         "q holds a highlight stretched along the surface (brushed metal, satin). The "
         "decomposition of the painted views' constraints is cached; each fit applies its "
         "pseudo-inverse in log space.",

@@ -67,7 +67,7 @@ static int to_json(const void *data, json_t *root, glint_err *err)
     }
     json_object_set_new(root, "log_nodes", nodes);
     json_object_set_new(root, "frame",
-                        json_string("t = normalize(Y x n), b = n x t; t = +X where |Y x n| "
+                        json_string("t = normalize(Z x n), b = n x t; t = +X where |Z x n| "
                                     "<= 1e-6"));
     json_object_set_new(root, "parabolic",
                         json_string("a 2D factor of unit d: (u, v) = ((d.t, d.b) / (1 + "
@@ -301,7 +301,7 @@ const char hf2d_glsl_frag[] =
     "// glint_material.frag: a glint hf2d material (GLSL ES 3.00):\n"
     "// inverse_map(p(wi) q(h) r(wo)), each factor 1D over the length of its\n"
     "// vector on the tangent plane or 2D over the vector's parabolic map in\n"
-    "// the frame t = normalize(Y x n), b = n x t.  Pair it with\n"
+    "// the frame t = normalize(Z x n), b = n x t.  Pair it with\n"
     "// glint_material.vert.  Bindings (shader.json says more): u_factors RGB\n"
     "// float log nodes, NEAREST; u_dims, u_rows: each factor's dimensions and\n"
     "// first row; u_map_kind 0 log, 1 add (pqr - a), 2 sub (a - pqr);\n"
@@ -323,7 +323,7 @@ const char hf2d_glsl_frag[] =
     GLSL_NODES("u_factors")
     "vec2 glint_parabolic(vec3 d, vec3 n)\n"
     "{\n"
-    "    vec3 a = vec3(n.z, 0.0, -n.x);\n"
+    "    vec3 a = vec3(-n.y, n.x, 0.0);\n"
     "    float l = length(a);\n"
     "    vec3 t = l > 1e-6 ? a / l : vec3(1.0, 0.0, 0.0);\n"
     "    vec3 b = cross(n, t);\n"

@@ -36,14 +36,15 @@ static inline v3 v3_rotate(v3 v, v3 k, double angle)
 
 /* glint's tangent frame at a surface point, from its unit normal alone
  * (what the 2D factors over parabolic maps and the anisotropic Ward truth
- * measure directions in): t = normalize(Y x n), Y the world's up axis, so
- * that t runs around the vertical axis (a lathe-turned, "spun" direction)
- * and, on a surface facing +Z, t = +X and b = +Y; b = n x t.  Where n is
- * within 1e-6 of the axis (the two poles, where every field of tangents has
- * a singularity) t = +X.  The GLSL of those materials repeats it. */
+ * measure directions in): t = normalize(Z x n), Z the world's up axis
+ * (scene.h), so that t runs around the vertical axis (the grooves of a
+ * lathe-turned, "spun" finish) and b = n x t along it: on a surface facing
+ * +X, t = +Y and b = +Z.  Where n is within 1e-6 of the axis (the two
+ * poles, where every field of tangents has a singularity, as a spun finish
+ * has at its centre) t = +X.  The GLSL of those materials repeats it. */
 static inline void v3_frame(v3 n, v3 *t, v3 *b)
 {
-    v3 a = v3_make(n.z, 0.0, -n.x); /* Y x n */
+    v3 a = v3_make(-n.y, n.x, 0.0); /* Z x n */
     double l = v3_len(a);
     *t = l > 1e-6 ? v3_scale(a, 1.0 / l) : v3_make(1.0, 0.0, 0.0);
     *b = v3_cross(n, *t);

@@ -9,6 +9,7 @@ import { Painter } from './painter.js';
 import { blit, bitmapToImage, decodeImage, resizeImage } from './image.js';
 import { isEXR } from './exr.js';
 import { paintThrough, viewUV } from './texmap.js';
+import { PRESETS, kdOf, presetQuery } from './presets.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -672,9 +673,51 @@ async function applyPhoto() {
   } catch (e) { showError(e); } finally { $('photo-apply').disabled = false; $('photo-apply').textContent = 'Use as painting'; }
 }
 
+// ---- finishes to start from (presets.js) ---------------------------------------------------------
+
+function presetChosen() {
+  const p = PRESETS.find(x => x.name === $('preset-sel').value) || PRESETS[0];
+  $('preset-colour').disabled = !!p.fixed;
+  $('preset-note').textContent = p.title;
+  return p;
+}
+
+// Every view painted with the server's render of the chosen finish.
+async function applyPreset() {
+  const S = state.session;
+  if (!S.canPaint) { toast('View only', 'This link cannot change paintings.', 'error'); return; }
+  const p = presetChosen(), spec = p.spec(kdOf($('preset-colour').value));
+  const btn = $('preset-apply');
+  btn.disabled = true;
+  try {
+    let n = 0;
+    for (const v of S.views) {
+      const r = await api.request('GET', `/scenes/${S.scene.id}/views/${v.k}/base.png`, { query: presetQuery(S.scene, spec), raw: true, what: `Rendering ${p.name} for view ${v.k}` });
+      await S.uploadImage(v.k, await decodeImage(await r.arrayBuffer()));
+      btn.textContent = `${++n} of ${S.views.length}…`;
+    }
+    toast('Every view painted', `${n} views now show ${p.name} (${spec}); edit them, then fit`);
+  } catch (e) { showError(e); } finally { btn.disabled = false; btn.textContent = 'Paint all views'; }
+}
+
+function bindPresets() {
+  const sel = $('preset-sel');
+  if (sel.options.length) return;
+  for (const p of PRESETS) {
+    const o = document.createElement('option');
+    o.value = o.textContent = p.name;
+    o.title = p.title;
+    sel.appendChild(o);
+  }
+  sel.onchange = presetChosen;
+  $('preset-apply').onclick = applyPreset;
+  presetChosen();
+}
+
 // ---- controls and keyboard ----------------------------------------------------------------------
 
 function bindStudioControls() {
+  bindPresets();
   // buttons do not keep the keyboard focus (Space would press them again)
   for (const b of document.querySelectorAll('#toolbar button, #statusbar button, #thumbs, .tabs button'))
     b.addEventListener('mousedown', e => { if (e.target.closest('button')) e.preventDefault(); });

@@ -355,6 +355,46 @@ run({
     assert(await page.evaluate(() => window.glint.state.session.canUndo(0)), 'view 0 can undo the texture');
   },
 
+  async 'a finish to start from paints every view with the server\'s render of it'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.selectOption('#preset-sel', 'satin');
+    await page.evaluate(() => { const c = document.getElementById('preset-colour'); c.value = '#336699'; c.dispatchEvent(new Event('input', { bubbles: true })); });
+    const note = await page.textContent('#preset-note');
+    assert(/stretched/.test(note), 'the finish is described: ' + note);
+    await page.click('#preset-apply');
+    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
+                               !document.getElementById('preset-apply').disabled, null, { timeout: 30000 });
+    await t.shot(page, '06c-finish-satin.png');
+    const nviews = await page.evaluate(() => window.glint.state.session.views.length);
+    for (const k of [0, nviews - 1]) {
+      await settled(page, k);
+      // the painting is the server's render of the satin spec with kd from the colour
+      const d = await page.evaluate(async k => {
+        const S = window.glint.state.session;
+        const { decodeEXR } = await import('/exr.js');
+        const get = async path => (await fetch(path, { headers: { 'X-Glint-Token': S.token } })).arrayBuffer();
+        // the scene's lighting and scale, as the studio asks for them
+        const { presetQuery } = await import('/presets.js');
+        const q = new URLSearchParams(presetQuery(S.scene, 'ward:kd=0.2/0.4/0.6,ks=0.4,rough=0.08,rough_y=0.3'));
+        const want = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/${k}/base.png?${q}`));
+        const got = await decodeEXR(await get(`/api/v1/sessions/${S.id}/views/${k}/painting?format=exr`));
+        const base = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/${k}/base.png?format=exr`));
+        let mx = 0, changed = 0;
+        for (let i = 0; i < got.data.length; i++) {
+          mx = Math.max(mx, Math.abs(got.data[i] - want.data[i]));
+          changed = Math.max(changed, Math.abs(got.data[i] - base.data[i]));
+        }
+        return { mx, changed };
+      }, k);
+      t.log(`view ${k}: |painting - render of the finish| <= ${d.mx}, differs from the base render by up to ${d.changed.toFixed(3)}`);
+      assertLE(d.mx, 0, `view ${k} is the server's render of the finish`);
+      assertGE(d.changed, 0.05, `view ${k} is not the base render`);
+    }
+    assert(await page.evaluate(() => window.glint.state.session.canUndo(0)), 'each view can undo the finish');
+  },
+
   async 'server refusals are shown with their problem detail'(t) {
     t.allowConsole(/status of 422/);
     const page = await t.page();

@@ -268,7 +268,7 @@ TEST(gbuffer_bunny)
 TEST(base_render_matches_paint)
 {
     static const char *const specs[] = {"lambert", "phong", "blinn:e=60", "ct", "ct0.5",
-                                        "ward"};
+                                        "ward", "ward:rough=0.1,rough_y=0.35"};
     glr *g = need_glr();
     mesh *m = need_blobs();
     glr_mesh *gm = NULL;

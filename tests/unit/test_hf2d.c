@@ -77,7 +77,7 @@ TEST(frame_and_parabolic_map)
     double uv[2];
     for (int k = 0; k < 2000; k++) {
         double z = 2.0 * rand_r(&seed) / RAND_MAX - 1.0, ph = 6.283 * rand_r(&seed) / RAND_MAX;
-        v3 n = k < 2 ? v3_make(0, k ? -1 : 1, 0)
+        v3 n = k < 2 ? v3_make(0, 0, k ? -1 : 1)
                      : v3_make(sqrt(1 - z * z) * cos(ph), z, sqrt(1 - z * z) * sin(ph)), t, b;
         double nn[3], d[3];
         v3_frame(n, &t, &b);
@@ -95,10 +95,19 @@ TEST(frame_and_parabolic_map)
         ASSERT_NEAR(hypot(uv[0] - 0.5, uv[1] - 0.5), 0.5, 1e-12);
         ASSERT_NEAR(atan2(uv[1] - 0.5, uv[0] - 0.5), atan2(sin(ph), cos(ph)), 1e-9);
     }
-    { /* facing +Z: t = +X, b = +Y */
-        double n[3] = {0, 0, 1}, d[3] = {sin(0.5), 0, cos(0.5)};
+    { /* facing +X: t = +Y (around the up axis Z), b = +Z */
+        double n[3] = {1, 0, 0}, d[3] = {cos(0.5), sin(0.5), 0}, e[3] = {cos(0.5), 0, sin(0.5)};
         hf2d_parabolic(n, d, uv);
         ASSERT_NEAR(uv[0], 0.5 * (tan(0.25) + 1.0), 1e-12); /* r = tan(theta / 2) */
+        ASSERT_NEAR(uv[1], 0.5, 1e-12);
+        hf2d_parabolic(n, e, uv);
+        ASSERT_NEAR(uv[0], 0.5, 1e-12);
+        ASSERT_NEAR(uv[1], 0.5 * (tan(0.25) + 1.0), 1e-12);
+    }
+    { /* at the pole +Z: t = +X, b = +Y */
+        double n[3] = {0, 0, 1}, d[3] = {sin(0.5), 0, cos(0.5)};
+        hf2d_parabolic(n, d, uv);
+        ASSERT_NEAR(uv[0], 0.5 * (tan(0.25) + 1.0), 1e-12);
         ASSERT_NEAR(uv[1], 0.5, 1e-12);
     }
 }
@@ -179,10 +188,10 @@ static void dense_compare(const samples *ss, int R, int S, double rcond, double 
             h[a] = wi[a] + wo[a], hl += h[a] * h[a];
         for (int a = 0; a < 3; a++)
             h[a] /= sqrt(hl);
-        /* the frame: t = Y x n normalized, b = n x t */
-        t[0] = nn[2], t[1] = 0.0, t[2] = -nn[0];
-        l = sqrt(t[0] * t[0] + t[2] * t[2]);
-        t[0] /= l, t[2] /= l;
+        /* the frame: t = Z x n normalized, b = n x t */
+        t[0] = -nn[1], t[1] = nn[0], t[2] = 0.0;
+        l = sqrt(t[0] * t[0] + t[1] * t[1]);
+        t[0] /= l, t[1] /= l;
         bb[0] = nn[1] * t[2] - nn[2] * t[1];
         bb[1] = nn[2] * t[0] - nn[0] * t[2];
         bb[2] = nn[0] * t[1] - nn[1] * t[0];

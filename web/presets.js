@@ -1,0 +1,43 @@
+// presets.js: finishes to start from.  A preset is an analytic BRDF (core
+// spec, brdf.h); applying it paints every view of the session with the
+// server's own render of that BRDF (GET base.png?brdf=SPEC&format=exr, under
+// the scene's point lights, or its environment when it has one), each view
+// one undo step, for the artist to edit.  The colour replaces the diffuse
+// albedo (kd) of the finishes that have one.
+
+export const PRESETS = [
+  { name: 'matte', title: 'Matte: diffuse only (chalk, clay, unfinished wood)', spec: kd => `lambert:kd=${kd}` },
+  { name: 'plastic', title: 'Plastic: a diffuse colour under a white, fairly sharp highlight', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.25` },
+  { name: 'glossy', title: 'Glossy paint: a sharp white highlight', spec: kd => `ct:kd=${kd},f0=0.05,rough=0.1` },
+  { name: 'metal', title: 'Metal: no diffuse; the colour is in the highlight (gold when the colour is)', spec: kd => `ct:kd=0,f0=${kd},rough=0.2` },
+  { name: 'satin', title: 'Satin / brushed: a highlight stretched around the vertical axis (fit it with hf2d)', spec: kd => `ward:kd=${kd},ks=0.4,rough=0.08,rough_y=0.3` },
+  { name: 'rough', title: 'Rough: a wide, dim highlight (rubber, unglazed ceramic)', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.6` },
+  // the analytic truths glint paints with (brdf.h's defaults; the colour is not used)
+  { name: 'truth: phong32', title: 'Phong, exponent 32 (the reference truth)', spec: () => 'phong32', fixed: true },
+  { name: 'truth: blinn20', title: 'Blinn-Phong, exponent 20 (the reference truth)', spec: () => 'blinn20', fixed: true },
+  { name: 'truth: ct0.2', title: 'Cook-Torrance GGX, roughness 0.2 (the reference truth)', spec: () => 'ct0.2', fixed: true },
+  { name: 'truth: ct0.5', title: 'Cook-Torrance GGX, roughness 0.5 (the reference truth)', spec: () => 'ct0.5', fixed: true },
+  { name: 'truth: ward', title: 'Isotropic Ward, roughness 0.2', spec: () => 'ward', fixed: true },
+];
+
+// '#rrggbb' -> 'r/g/b' in [0, 1] (linear, as the studio reads 8-bit values).
+export function kdOf(hex) {
+  const v = [1, 3, 5].map(i => parseInt(hex.slice(i, i + 2), 16) / 255);
+  return v.map(x => +x.toFixed(4)).join('/');
+}
+
+// The query that renders spec for view k as the scene's base is lit.
+export function presetQuery(scene, spec) {
+  const q = { brdf: spec, format: 'exr' };
+  const b = scene.base || {};
+  if (b.scale) q.scale = b.scale;
+  if (b.env && b.env.spec) {
+    q.env = b.env.spec;
+    if (b.env.rotation != null) q.env_rotation = b.env.rotation;
+    if (b.env.intensity != null) q.env_intensity = b.env.intensity;
+    if (b.env.lights != null) q.lights = b.env.lights;
+    if (b.env.shadows != null) q.shadows = b.env.shadows ? 1 : 0;
+    if (b.env.background != null) q.background = b.env.background ? 1 : 0;
+  }
+  return q;
+}
