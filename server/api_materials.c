@@ -10,6 +10,7 @@
  *   GET  /api/v1/materials/{id}/package    tar of every file of the material and its shader
  *   GET  /api/v1/materials/{id}/preview.png|preview.exr
  *   POST /api/v1/materials/{id}/eval       BRDF values at direction pairs
+ *   GET  /api/v1/materials/{id}/summary    base colour, highlight, albedo, polar data
  *
  * A material's files are blobs "materials/<id>/": material.json and what
  * its method writes (material_save), written before its row is committed.
@@ -29,6 +30,7 @@
 #include "buf.h"
 #include "fitsvc.h"
 #include "material.h"
+#include "readable.h"
 #include "prep.h"
 #include "render.h"
 #include "store.h"
@@ -637,6 +639,29 @@ static http_resp eval_post(http_req *req)
     return http_json(200, json_pack("{s:o}", "values", values));
 }
 
+/* ---- summary -------------------------------------------------------------------------------- */
+
+/* GET /api/v1/materials/{id}/summary: the material in numbers (readable.h). */
+static http_resp summary_get(http_req *req)
+{
+    memo_doc doc;
+    material m = {0};
+    json_t *o = NULL;
+    glint_err e;
+    int rc;
+
+    if ((rc = api_material(req, req->param[0], &doc, &e)))
+        return api_error(&e);
+    free(doc.text);
+    if ((rc = material_of(req->app, req->param[0], &m, &e)))
+        return api_error(&e);
+    rc = material_readable(&m, &o, &e);
+    material_free(&m);
+    if (rc)
+        return api_error(&e);
+    return http_json(200, o);
+}
+
 const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}", material_get},
     {"GET", "/api/v1/materials/{id}/factors.png", factors_png},
@@ -652,5 +677,6 @@ const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}/preview.png", preview_png},
     {"GET", "/api/v1/materials/{id}/preview.exr", preview_exr},
     {"POST", "/api/v1/materials/{id}/eval", eval_post},
+    {"GET", "/api/v1/materials/{id}/summary", summary_get},
 };
 const int api_materials_nroutes = sizeof api_materials_routes / sizeof api_materials_routes[0];

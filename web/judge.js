@@ -9,6 +9,7 @@ import { decodeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
 import { SurfacePanel } from './surface.js';
+import { loadSummary, renderSummary } from './summary.js';
 
 const $ = id => document.getElementById(id);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -98,7 +99,7 @@ export class Judge extends EventTarget {
     for (const b of document.querySelectorAll('.tabs button')) {
       b.onclick = () => {
         for (const o of document.querySelectorAll('.tabs button')) o.classList.toggle('on', o === b);
-        for (const t of ['errors', 'factors', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
+        for (const t of ['errors', 'factors', 'summary', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
         if (b.dataset.tab === 'factors') { if (this.mat && this.mat.method === 'srbf') this.drawLobe(); else this.drawFactors(); }
       };
     }
@@ -128,6 +129,9 @@ export class Judge extends EventTarget {
     if (lobe) this.loadManifest().catch(e => this.emit('error', e));
     else this.loadFactors().catch(e => this.emit('error', e));
     this.surface.set(m, k != null ? k : (m.views_used || [])[0]).catch(e => this.emit('error', e));
+    this.summary = null;
+    loadSummary(this.api, m).then(sm => { if (m === this.mat) { this.summary = sm; renderSummary(sm); } })
+      .catch(e => this.emit('error', e));
     this.computeErrors(k).catch(e => this.emit('error', e));
   }
 

@@ -11,6 +11,7 @@
 #include "cli.h"
 #include "env.h"
 #include "glr.h"
+#include "readable.h"
 
 /* ---- the renderer ------------------------------------------------------------- */
 
@@ -241,4 +242,26 @@ int cmd_export_shader(int argc, char **argv)
         printf("%s/glint_material.frag, .vert, glint_factors.exr, shader.json\n", argv[3]);
     material_free(&m);
     return rc;
+}
+
+/* glint summary MATDIR: the material in words and numbers (readable.h), as
+ * JSON on stdout. */
+int cmd_summary(int argc, char **argv)
+{
+    material m;
+    glint_err e;
+    json_t *o;
+    if (argc != 2)
+        return fail(1, "usage: glint summary MATDIR");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    if (material_readable(&m, &o, &e)) {
+        material_free(&m);
+        return fail_err(&e);
+    }
+    json_dumpf(o, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(6));
+    fputc('\n', stdout);
+    json_decref(o);
+    material_free(&m);
+    return 0;
 }

@@ -41,6 +41,9 @@ static void usage(FILE *f)
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
           "  eval MATDIR --dirs FILE [-o OUT]    evaluate at direction pairs (and u v)\n"
+          "  summary MATDIR                      the material in numbers: base colour,\n"
+          "                                      highlight strength and width, albedo,\n"
+          "                                      polar plot data (JSON)\n"
           "  export-samples scene.json [--paintings DIR] [--channel C] -o samples.txt\n"
           "  fit-samples samples.txt -o MATDIR [--eval samples.txt [--eval-out F]] [fit options]\n"
           "  demo [-o DIR]                       paint the sphere, fit, render new views\n"
@@ -67,7 +70,7 @@ int main(int argc, char **argv)
 {
     static const struct { const char *name; int (*fn)(int, char **); } cmds[] = {
         {"scene", cmd_scene}, {"gbuffer", cmd_gbuffer}, {"paint", cmd_paint},
-        {"fit", cmd_fit}, {"render", cmd_render}, {"eval", cmd_eval},
+        {"fit", cmd_fit}, {"render", cmd_render}, {"eval", cmd_eval}, {"summary", cmd_summary},
         {"export-samples", cmd_export_samples}, {"fit-samples", cmd_fit_samples},
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"methods", cmd_methods}};

@@ -164,6 +164,20 @@ run({
     const res = await page.evaluate(() => window.glint.state.judge.factors.w);
     assertEq(res, mat.res, 'factor texels');
     await t.shot(page, '13-factors.png');
+    // the material in numbers: the server's summary, shown as words and a polar plot
+    await page.click('.tabs button[data-tab="summary"]');
+    await page.waitForFunction(() => window.glint.state.judge.summary, null, { timeout: 10000 });
+    const sm = await t.daemon.api('GET', `/materials/${f.id}/summary`, undefined, { 'X-Glint-Token': session.paint_token });
+    const words = await page.textContent('#tab-summary');
+    t.log('in numbers: ' + words.replace(/\s+/g, ' ').trim());
+    assert(words.includes(sm.base_colour[0].toFixed(3)), 'the base colour shown is the server\'s');
+    assert(/highlight|matte/.test(words), 'the highlight is put in words');
+    const polarInk = await page.evaluate(() => {
+      const c = document.getElementById('sum-polar'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let n = 0; for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 0 && Math.max(d[i], d[i + 1], d[i + 2]) > 90) n++; return n;
+    });
+    assertGE(polarInk, 200, 'the polar plot is drawn');
+    await t.shot(page, '13b-in-numbers.png');
     // the quality control now shows measured figures for the default preset
     await page.waitForFunction(() => {
       const cells = [...document.querySelectorAll('#quality .q[data-preset="default"] .v')].map(c => c.textContent);

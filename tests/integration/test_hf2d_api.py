@@ -2,7 +2,7 @@
 highlight (anisotropic Ward, painted by the CLI) uploaded to a session and
 fitted with a 2D q; against a fit with every factor 1D on the same
 paintings; the material's manifest (dimensions, log nodes, frame), factor
-textures, evaluation, preview, shader and package; the precomputation warm
+textures, evaluation, summary, preview, shader and package; the precomputation warm
 on a second fit and read from disk by a restarted daemon; the kernel form
 reported for fine 2D factors over few samples; the parameter checks."""
 import io
@@ -114,6 +114,15 @@ def test_03_manifest_files_eval_preview_shader_package(d):
                   data=json.dumps(body), status=200, schema="EvalResponse.json").json()["values"]
     print("  eval: tilted along t %s, along b %s" % (vals[0], vals[1]))
     assert vals[1][0] > 1.5 * vals[0][0], vals
+    # the summary: schema-valid, a highlight with a width, albedo below 1
+    sm = d.get("/api/v1/materials/%s/summary" % mid, headers=h, status=200,
+               schema="MaterialSummary.json").json()
+    print("  summary: base %s, highlight strength %.2f, half width %s deg" % (
+        [round(x, 3) for x in sm["base_colour"]], sm["highlight"]["strength"],
+        sm["highlight"]["half_width_deg"]))
+    assert sm["highlight"]["strength"] > 0.5 and sm["highlight"]["half_width_deg"] > 0
+    assert all(0 < x < 1.0 for a in sm["albedo"] for x in a["rgb"]), sm["albedo"]
+    d.get("/api/v1/materials/%s/summary" % ("0" * 32), headers=h, status=404)
     r = d.get("/api/v1/materials/%s/preview.png?view=2" % mid, headers=h, status=200)
     assert r.content[:8] == b"\x89PNG\r\n\x1a\n"
     pkg = d.get("/api/v1/materials/%s/package" % mid, headers=h, status=200)
