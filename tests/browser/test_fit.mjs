@@ -171,7 +171,7 @@ run({
     const words = await page.textContent('#tab-summary');
     t.log('in numbers: ' + words.replace(/\s+/g, ' ').trim());
     assert(words.includes(sm.base_colour[0].toFixed(3)), 'the base colour shown is the server\'s');
-    assert(/highlight|matte/.test(words), 'the highlight is put in words');
+    assert(/highlight|matte|sheen/.test(words), 'the highlight is put in words');
     const polarInk = await page.evaluate(() => {
       const c = document.getElementById('sum-polar'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       let n = 0; for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 0 && Math.max(d[i], d[i + 1], d[i + 2]) > 90) n++; return n;
