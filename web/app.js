@@ -379,8 +379,14 @@ function updateBrushUI() {
   $('opacity-v').textContent = b.opacity.toFixed(2);
   $('scale-v').textContent = b.scale.toFixed(2);
   $('cval').textContent = '(' + b.color.map(v => v.toFixed(2)).join(', ') + ')';
+  $('color').title = 'Brush colour C ' + $('cval').textContent;
+  for (const [id, v] of [['diameter', b.diameter], ['kappa', b.kappa.toFixed(3)], ['opacity', b.opacity.toFixed(2)], ['scale', b.scale.toFixed(2)]])
+    $(id).title = String(v);
   $('intensity').classList.toggle('hidden', !$('hdr').checked);
   $('scale-tb').classList.toggle('hidden', state.tool !== 'scale');
+  // the colour matters to painting and picking only (Scale multiplies what is there)
+  for (const el of document.querySelectorAll('#toolbar .colour-only'))
+    el.classList.toggle('hidden', !(state.tool === 'paint' || state.tool === 'pick'));
   for (const t of $('tools').children) t.classList.toggle('on', t.dataset.tool === state.tool);
   if (state.painter) {
     state.painter.tool = state.tool;

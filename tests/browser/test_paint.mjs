@@ -395,6 +395,38 @@ run({
     assert(await page.evaluate(() => window.glint.state.session.canUndo(0)), 'each view can undo the finish');
   },
 
+  async 'the toolbar keeps one row and the Fit button shows at 1280x720 and 1440x900'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const page = await t.page();
+    for (const [w, h] of [[1280, 720], [1440, 900]]) {
+      await page.setViewportSize({ width: w, height: h });
+      await openStudio(page, url);
+      for (const tool of ['paint', 'hdr', 'scale']) {
+        if (tool === 'hdr') {
+          await setChecked(page, 'hdr', true);  // its intensity field appears
+        } else {
+          if (tool === 'scale') await setChecked(page, 'hdr', false);
+          await page.click(`#tools button[data-tool="${tool}"]`);
+        }
+        const rows = await page.evaluate(() => {
+          const tops = new Set();
+          for (const el of document.getElementById('toolbar').children) {
+            const r = el.getBoundingClientRect();
+            if (r.width > 0 && r.height > 0) tops.add(Math.round(r.top + r.height / 2));
+          }
+          return [...tops];
+        });
+        const widths = await page.evaluate(() => [...document.getElementById('toolbar').children].map(el => `${el.id || el.className}:${Math.round(el.getBoundingClientRect().width)}`).join(' ') + ' of ' + Math.round(document.getElementById('toolbar').getBoundingClientRect().width));
+        t.log(`${w}x${h}, ${tool}: toolbar item centres at ${rows.join(', ')} px (${widths})`);
+        assertLE(Math.max(...rows) - Math.min(...rows), 4, `${w}x${h} ${tool}: one toolbar row`);
+      }
+      await page.click('#tools button[data-tool="paint"]');
+      const fitBox = await page.locator('#fit-btn').boundingBox();
+      assert(fitBox && fitBox.y + fitBox.height <= h, `${w}x${h}: the Fit button is above the fold`);
+      await t.shot(page, `00-layout-${w}x${h}.png`);
+    }
+  },
+
   async 'server refusals are shown with their problem detail'(t) {
     t.allowConsole(/status of 422/);
     const page = await t.page();
