@@ -6,10 +6,9 @@
 import { Api, ApiError, parseRoute, sessionHash } from './api.js';
 import { Session } from './session.js';
 import { Painter } from './painter.js';
-import { blit, bitmapToImage, decodeImage, resizeImage } from './image.js';
-import { isEXR } from './exr.js';
-import { paintThrough, viewUV } from './texmap.js';
-import { PRESETS, kdOf, presetQuery } from './presets.js';
+import { blit } from './image.js';
+import { bindPhoto, cancelPhoto, onSurface, renderPhoto, stagePhoto } from './photo.js';
+import { bindPresets } from './presets.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -586,144 +585,11 @@ async function onFitEvent(ev) {
   } catch (e) { showError(e); }
 }
 
-// ---- a photo dropped on the canvas -----------------------------------------------------------
-
-async function stagePhoto(file) {
-  const S = state.session;
-  if (!S.canPaint) { toast('View only', 'This link cannot change paintings.', 'error'); return; }
-  const buf = await file.arrayBuffer();
-  let source;
-  if (isEXR(buf)) source = { exr: await decodeImage(buf) };
-  else {
-    try { source = { bmp: await createImageBitmap(new Blob([buf]), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' }) }; }
-    catch (_) { toast('Not an image', `"${file.name}" cannot be read as PNG, JPEG, WebP or OpenEXR.`, 'error'); return; }
-  }
-  state.photo = { source, name: file.name };
-  $('photo-bar').classList.remove('hidden');
-  renderPhoto();
-}
-
-function photoImage() {
-  const S = state.session, w = S.scene.width, h = S.scene.height;
-  const src = state.photo.source;
-  if (src.exr) return resizeImage(src.exr, w, h);
-  return bitmapToImage(src.bmp, w, h, $('photo-fit').value);
-}
-
-// The photo as a texture over (u, v), at its own size (at most 2048 a side).
-function photoTexture() {
-  const src = state.photo.source;
-  if (src.exr) return src.exr;
-  const s = Math.min(1, 2048 / Math.max(src.bmp.width, src.bmp.height));
-  return bitmapToImage(src.bmp, Math.max(1, Math.round(src.bmp.width * s)), Math.max(1, Math.round(src.bmp.height * s)), 'stretch');
-}
-
-const onSurface = () => $('photo-place').value === 'surface';
-
-// View k painted with the photo as a texture over the surface.
-async function photoThrough(k) {
-  const S = state.session, v = S.views[k];
-  if (!state.photo.texture) state.photo.texture = photoTexture();
-  const [uv, base] = await Promise.all([viewUV(api, S.scene.id, k), v.base || S.fetchBase(k)]);
-  return paintThrough(base, uv, state.photo.texture, $('photo-flip').checked);
-}
-
-async function renderPhoto() {
-  if (!state.photo) return;
-  const surf = onSurface();
-  $('photo-fit-wrap').classList.toggle('hidden', surf);
-  $('photo-flip-wrap').classList.toggle('hidden', !surf);
-  const photo = state.photo;
-  let img;
-  try { img = surf ? await photoThrough(state.k) : photoImage(); } catch (e) { showError(e); return; }
-  if (state.photo !== photo) return;
-  state.photo.image = img;
-  state.photo.imageView = state.k;
-  const c = $('overlay-photo');
-  blit(c.getContext('2d'), img, null, state.painter.exposure);
-  c.classList.remove('hidden');
-  c.style.opacity = $('photo-opacity').value;
-  // under the photo: the base render, to line the two up
-  $('overlay-base').style.opacity = 1;
-}
-
-function cancelPhoto() {
-  state.photo = null;
-  $('photo-bar').classList.add('hidden');
-  $('overlay-photo').classList.add('hidden');
-  $('overlay-base').style.opacity = $('base-mix').value;
-  state.painter.redraw();
-}
-
-async function applyPhoto() {
-  const S = state.session, k = state.k, name = state.photo.name;
-  $('photo-apply').disabled = true;
-  try {
-    if (onSurface()) {
-      // every view, one after another (each its own undo step)
-      let n = 0;
-      for (const v of S.views) {
-        const img = v.k === state.photo.imageView && state.photo.image ? state.photo.image : await photoThrough(v.k);
-        await S.uploadImage(v.k, img);
-        n++;
-        $('photo-apply').textContent = `Painting ${n} of ${S.views.length}…`;
-      }
-      cancelPhoto();
-      toast('Paintings replaced', `${n} views now show ${name} over the surface`);
-    } else {
-      const img = state.photo.image || photoImage();
-      await S.uploadImage(k, img);
-      cancelPhoto();
-      toast('Painting replaced', `view ${k} now shows ${name || 'the image'}`);
-    }
-  } catch (e) { showError(e); } finally { $('photo-apply').disabled = false; $('photo-apply').textContent = 'Use as painting'; }
-}
-
-// ---- finishes to start from (presets.js) ---------------------------------------------------------
-
-function presetChosen() {
-  const p = PRESETS.find(x => x.name === $('preset-sel').value) || PRESETS[0];
-  $('preset-colour').disabled = !!p.fixed;
-  $('preset-note').textContent = p.title;
-  return p;
-}
-
-// Every view painted with the server's render of the chosen finish.
-async function applyPreset() {
-  const S = state.session;
-  if (!S.canPaint) { toast('View only', 'This link cannot change paintings.', 'error'); return; }
-  const p = presetChosen(), spec = p.spec(kdOf($('preset-colour').value));
-  const btn = $('preset-apply');
-  btn.disabled = true;
-  try {
-    let n = 0;
-    for (const v of S.views) {
-      const r = await api.request('GET', `/scenes/${S.scene.id}/views/${v.k}/base.png`, { query: presetQuery(S.scene, spec), raw: true, what: `Rendering ${p.name} for view ${v.k}` });
-      await S.uploadImage(v.k, await decodeImage(await r.arrayBuffer()));
-      btn.textContent = `${++n} of ${S.views.length}…`;
-    }
-    toast('Every view painted', `${n} views now show ${p.name} (${spec}); edit them, then fit`);
-  } catch (e) { showError(e); } finally { btn.disabled = false; btn.textContent = 'Paint all views'; }
-}
-
-function bindPresets() {
-  const sel = $('preset-sel');
-  if (sel.options.length) return;
-  for (const p of PRESETS) {
-    const o = document.createElement('option');
-    o.value = o.textContent = p.name;
-    o.title = p.title;
-    sel.appendChild(o);
-  }
-  sel.onchange = presetChosen;
-  $('preset-apply').onclick = applyPreset;
-  presetChosen();
-}
-
 // ---- controls and keyboard ----------------------------------------------------------------------
 
 function bindStudioControls() {
-  bindPresets();
+  bindPresets({ state, api, toast, showError });
+  bindPhoto({ state, api, toast, showError });
   // buttons do not keep the keyboard focus (Space would press them again)
   for (const b of document.querySelectorAll('#toolbar button, #statusbar button, #thumbs, .tabs button'))
     b.addEventListener('mousedown', e => { if (e.target.closest('button')) e.preventDefault(); });
@@ -741,12 +607,6 @@ function bindStudioControls() {
   $('zoom-fit').onclick = () => state.painter.fitToWindow();
   $('base-mix').oninput = () => state.painter.setBaseMix(+$('base-mix').value);
   $('exposure').onchange = () => { state.painter.setExposure(+$('exposure').value); for (const v of state.session.views) drawThumb(v.k); };
-  $('photo-opacity').oninput = () => { $('overlay-photo').style.opacity = $('photo-opacity').value; };
-  $('photo-fit').onchange = renderPhoto;
-  $('photo-place').onchange = renderPhoto;
-  $('photo-flip').onchange = renderPhoto;
-  $('photo-apply').onclick = applyPhoto;
-  $('photo-cancel').onclick = cancelPhoto;
 
   const vp = $('viewport');
   vp.addEventListener('dragover', e => { e.preventDefault(); $('drop-hint').classList.remove('hidden'); });

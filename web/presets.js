@@ -5,6 +5,11 @@
 // one undo step, for the artist to edit.  The colour replaces the diffuse
 // albedo (kd) of the finishes that have one.
 
+import { decodeImage } from './image.js';
+
+const $ = id => document.getElementById(id);
+let state, api, toast, showError;
+
 export const PRESETS = [
   { name: 'matte', title: 'Matte: diffuse only (chalk, clay, unfinished wood)', spec: kd => `lambert:kd=${kd}` },
   { name: 'plastic', title: 'Plastic: a diffuse colour under a white, fairly sharp highlight', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.25` },
@@ -40,4 +45,45 @@ export function presetQuery(scene, spec) {
     if (b.env.background != null) q.background = b.env.background ? 1 : 0;
   }
   return q;
+}
+
+function presetChosen() {
+  const p = PRESETS.find(x => x.name === $('preset-sel').value) || PRESETS[0];
+  $('preset-colour').disabled = !!p.fixed;
+  $('preset-note').textContent = p.title;
+  return p;
+}
+
+// Every view painted with the server's render of the chosen finish.
+async function applyPreset() {
+  const S = state.session;
+  if (!S.canPaint) { toast('View only', 'This link cannot change paintings.', 'error'); return; }
+  const p = presetChosen(), spec = p.spec(kdOf($('preset-colour').value));
+  const btn = $('preset-apply');
+  btn.disabled = true;
+  try {
+    let n = 0;
+    for (const v of S.views) {
+      const r = await api.request('GET', `/scenes/${S.scene.id}/views/${v.k}/base.png`, { query: presetQuery(S.scene, spec), raw: true, what: `Rendering ${p.name} for view ${v.k}` });
+      await S.uploadImage(v.k, await decodeImage(await r.arrayBuffer()));
+      btn.textContent = `${++n} of ${S.views.length}…`;
+    }
+    toast('Every view painted', `${n} views now show ${p.name} (${spec}); edit them, then fit`);
+  } catch (e) { showError(e); } finally { btn.disabled = false; btn.textContent = 'Paint all views'; }
+}
+
+// Wire the finish controls to the studio (once).
+export function bindPresets(ctx) {
+  ({ state, api, toast, showError } = ctx);
+  const sel = $('preset-sel');
+  if (sel.options.length) return;
+  for (const p of PRESETS) {
+    const o = document.createElement('option');
+    o.value = o.textContent = p.name;
+    o.title = p.title;
+    sel.appendChild(o);
+  }
+  sel.onchange = presetChosen;
+  $('preset-apply').onclick = applyPreset;
+  presetChosen();
 }
