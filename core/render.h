@@ -147,6 +147,18 @@ int render_material_env(render *r, render_engine eng, const char *mesh_key, cons
                         int width, int height, img *out, render_env_info *info,
                         render_used *used, glint_err *err);
 
+/* The material ball: a unit sphere (RENDER_BALL_LAT rings x RENDER_BALL_LON
+ * segments, with the built-in sphere's uv) that previews show a material
+ * on, whatever the scene's object.  Built once on first use and shared
+ * (never freed); its mesh key is RENDER_BALL_KEY.  Coarser than the
+ * built-in sphere (256 x 512) so that vertex shading under an environment
+ * stays within a frame's time (a ring spans about 4 pixels of a 512 x 512
+ * ball framed as the scenes' views frame their object). */
+#define RENDER_BALL_LAT 64
+#define RENDER_BALL_LON 128
+#define RENDER_BALL_KEY "builtin:ball"
+int render_ball(const mesh **out, glint_err *err);
+
 /* A base render under the environment: scale x B with the analytic BRDF. */
 int render_base_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                     const char *brdf_spec, double scale, const render_env *env,

@@ -2,6 +2,7 @@
  * the cache of lights and vertex visibility, vertex shading drawn through
  * EGL, and the per-pixel CPU reference. */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -284,4 +285,22 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
     if (!(scale > 0.0) || !isfinite(scale))
         return glint_err_set(err, GLINT_EINVAL, "base render scale %g must be > 0", scale);
     return env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
+}
+
+/* ---- the material ball ------------------------------------------------------------- */
+
+static pthread_once_t ball_once = PTHREAD_ONCE_INIT;
+static mesh ball_mesh;
+static int ball_rc;
+
+static void ball_init(void)
+{
+    ball_rc = mesh_sphere(&ball_mesh, RENDER_BALL_LAT, RENDER_BALL_LON, NULL);
+}
+
+int render_ball(const mesh **out, glint_err *err)
+{
+    pthread_once(&ball_once, ball_init);
+    *out = ball_rc ? NULL : &ball_mesh;
+    return ball_rc ? glint_err_set(err, ball_rc, "out of memory for the material ball") : 0;
 }

@@ -8,7 +8,7 @@
  *   GET  /api/v1/materials/{id}/shader     GLSL sources + binding manifest (JSON)
  *   GET  /api/v1/materials/{id}/shader/{file}
  *   GET  /api/v1/materials/{id}/package    tar of every file of the material and its shader
- *   GET  /api/v1/materials/{id}/preview.png|preview.exr
+ *   GET  /api/v1/materials/{id}/preview.png|preview.exr   (object=ball: the material ball)
  *   POST /api/v1/materials/{id}/eval       BRDF values at direction pairs
  *   GET  /api/v1/materials/{id}/summary    base colour, highlight, albedo, polar data
  *
@@ -443,6 +443,8 @@ static http_resp preview(http_req *req, const char *format)
     const char *mid = req->param[0];
     cache_entry *se = NULL;
     const scene *sc;
+    const mesh *msh;
+    const char *mkey, *q_obj;
     render_engine eng;
     render_used used;
     render_env env;
@@ -468,6 +470,19 @@ static http_resp preview(http_req *req, const char *format)
         goto done;
     }
     sc = prep_scene_of(se)->sc;
+    msh = &sc->mesh;
+    mkey = doc.scene;
+    if ((q_obj = http_query(req, "object")) && strcmp(q_obj, "scene")) {
+        /* the material ball: the scenes' views frame the unit ball, so
+         * every camera of the scene frames it too */
+        if (strcmp(q_obj, "ball")) {
+            rc = api_reject(&e, GLINT_EINVAL, "invalid-parameter", "object must be scene or ball");
+            goto done;
+        }
+        if ((rc = render_ball(&msh, &e)))
+            goto done;
+        mkey = RENDER_BALL_KEY;
+    }
     if ((rc = api_env_query(req, &env, &has_env, &e)) ||
         (rc = preview_args(req, sc, has_env, &eng, &v, &w, &h, &e)))
         goto done;
@@ -482,10 +497,10 @@ static http_resp preview(http_req *req, const char *format)
     admitted = 1;
     if ((rc = material_of(a, mid, &m, &e)))
         goto done;
-    if ((rc = has_env ? render_material_env(a->render, eng, doc.scene, &sc->mesh, &m, &env, &v,
-                                            w, h, &im, &info, &used, &e)
-                      : render_material(a->render, eng, doc.scene, &sc->mesh, &m, &v, w, h,
-                                        &im, &used, &e))) {
+    if ((rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im,
+                                            &info, &used, &e)
+                      : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used,
+                                        &e))) {
         if (rc == GLINT_EUNSUPPORTED && eng == RENDER_EGL)
             glint_err_kind(&e, "egl-unavailable");
         goto done;

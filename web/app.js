@@ -9,6 +9,7 @@ import { Painter } from './painter.js';
 import { blit } from './image.js';
 import { bindPhoto, cancelPhoto, onSurface, renderPhoto, stagePhoto } from './photo.js';
 import { bindPresets } from './presets.js';
+import { bindGuide } from './guide.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -183,7 +184,17 @@ function bindStart() {
 
 async function startSession(scene) {
   const s = await api.createSession(scene.id);
-  location.hash = sessionHash(s.id, s.paint_token);
+  location.hash = sessionHash(s.id, s.paint_token, firstView(scene));
+}
+
+// The view a new scene opens on: the one that shows the most of the object
+// lit (its samples), seen from above or level, so that a torus does not
+// open edge-on; view 0 unless another shows at least 10% more.
+function firstView(scene) {
+  const vs = (scene.views || []).map((v, k) => ({ k, n: v.samples || 0, up: (v.eye[2] - ((v.target || [0, 0, 0])[2])) >= -1e-9 }));
+  const pool = vs.some(v => v.up) ? vs.filter(v => v.up) : vs;
+  const best = pool.reduce((a, b) => (b.n > a.n ? b : a), pool[0] || { k: 0, n: 0 });
+  return vs.length && vs[0].up && vs[0].n >= 0.9 * best.n ? 0 : best.k;
 }
 
 // ---- studio ------------------------------------------------------------------------------
@@ -255,6 +266,7 @@ function setupStudioUI(S) {
   $('crumbs').append(b, document.createTextNode(` ${sc.width}×${sc.height} · ${sc.views.length} views · session ${S.id.slice(0, 8)}` + (S.canPaint ? '' : ' · view only')));
   $('share-btn').classList.remove('hidden');
   $('readonly-badge').classList.toggle('hidden', S.canPaint);
+  bindGuide(S.canPaint);
   $('viewport').classList.toggle('readonly', !S.canPaint);
   for (const id of ['undo', 'redo']) $(id).disabled = true;
   for (const el of $('toolbar').querySelectorAll('input, button')) if (!S.canPaint && !['pick', 'pan'].includes(el.dataset.tool)) el.disabled = true;
@@ -293,6 +305,7 @@ function setupStudioUI(S) {
   S.addEventListener('view', e => {
     const { k, box } = e.detail;
     if (k === state.k && !state.photo) painter.redraw(box);
+    if (k === state.k && state.compare && state.compare.mode === 'diff') state.compare.draw();
     scheduleThumb(k);
   });
   S.addEventListener('event', e => onSessionEvent(e.detail));
@@ -330,6 +343,7 @@ function selectView(k, first) {
     state.painter.show(k, !first);
     const sv = S.scene.views[k];
     $('st-view').textContent = `view ${k} · ${sv.samples} samples` + (sv.light_deg != null ? ` · light ${sv.light_deg.toFixed(0)}°` : '');
+    $('st-view').title = $('st-view').textContent + ' (samples: the pixels of the object this view gives the fit)';
     updateUndo();
     history.replaceState(null, '', sessionHash(S.id, S.token, k));
   };
@@ -337,6 +351,7 @@ function selectView(k, first) {
     S.loadViews([k]).then(go).catch(showError);
   } else go();
   if (state.judge && state.judge.mat && !state.judge.drag) state.judge.showDiff(k);
+  if (state.compare) state.compare.setView(k);
 }
 
 // thumbnails: at most one redraw per view per frame
@@ -512,10 +527,12 @@ function renderPresence(clients) {
 // ---- fits and materials -----------------------------------------------------------------------
 
 async function loadFitAndMaterials(S) {
-  const [{ FitPanel }, { Judge }] = await Promise.all([import('./fit.js'), import('./judge.js')]);
+  const [{ FitPanel }, { Judge }, { Compare }] = await Promise.all([import('./fit.js'), import('./judge.js'), import('./compare.js')]);
   const fit = new FitPanel(api, S);
   const judge = new Judge(api, S);
   state.fit = fit; state.judge = judge;
+  state.compare = new Compare(S, judge, state.painter);
+  state.compare.setView(state.k);
   fit.addEventListener('error', e => showError(e.detail));
   fit.addEventListener('envs', e => judge.addEnv(e.detail));
   judge.addEventListener('error', e => showError(e.detail));
@@ -567,6 +584,7 @@ function addMaterialOption(m, select) {
 function showMaterial(m) {
   state.material = m;
   state.judge.setMaterial(m, state.k);
+  if (state.compare) state.compare.update();
 }
 
 async function onFitEvent(ev) {
@@ -606,7 +624,7 @@ function bindStudioControls() {
   $('zoom-out').onclick = () => state.painter.zoomAt(0.8);
   $('zoom-fit').onclick = () => state.painter.fitToWindow();
   $('base-mix').oninput = () => state.painter.setBaseMix(+$('base-mix').value);
-  $('exposure').onchange = () => { state.painter.setExposure(+$('exposure').value); for (const v of state.session.views) drawThumb(v.k); };
+  $('exposure').onchange = () => { state.painter.setExposure(+$('exposure').value); for (const v of state.session.views) drawThumb(v.k); if (state.compare) state.compare.draw(); };
 
   const vp = $('viewport');
   vp.addEventListener('dragover', e => { e.preventDefault(); $('drop-hint').classList.remove('hidden'); });

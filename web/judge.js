@@ -10,6 +10,7 @@ import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
 import { SurfacePanel } from './surface.js';
 import { loadSummary, renderSummary } from './summary.js';
+import { Ball } from './ball.js';
 
 const $ = id => document.getElementById(id);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -39,6 +40,8 @@ export class Judge extends EventTarget {
     $('factors-log').onchange = () => this.drawFactors();
     this.surface = new SurfacePanel(api, session);
     this.surface.onProduct = () => this.drawFactors();
+    this.ball = new Ball(api);
+    this.ball.addEventListener('error', e => this.emit('error', e.detail));
     this.bindEnv();
   }
 
@@ -51,6 +54,7 @@ export class Judge extends EventTarget {
         const o = document.createElement('option');
         o.value = e.spec; o.textContent = e.name + (e.kind === 'builtin' ? ' (built-in)' : '');
         sel.appendChild(o);
+        this.ball.addEnv({ spec: e.spec, name: o.textContent });
       }
       if (this.mat) this.envDefault(this.mat);
     }).catch(e => this.emit('error', e));
@@ -63,6 +67,7 @@ export class Judge extends EventTarget {
     const o = document.createElement('option');
     o.value = e.spec; o.textContent = e.name;
     $('preview-light').appendChild(o);
+    this.ball.addEnv(e);
   }
 
   // The environment of the preview ('' for the point light).
@@ -118,6 +123,7 @@ export class Judge extends EventTarget {
     $('preview-empty').textContent = 'rendering…';
     $('preview-empty').classList.toggle('hidden', this.frames > 0);
     this.resetCamera(k);
+    this.ball.setMaterial(m);
     const q = t => this.api.url(`/materials/${m.id}/${t}`);
     $('dl-package').href = q('package');
     $('dl-package').download = `glint-material-${m.id.slice(0, 8)}.tar`;
@@ -423,11 +429,7 @@ export class Judge extends EventTarget {
     }
     if (!square) { $('err-summary').innerHTML += '<br>per-view errors need a square raster (previews are square)'; return; }
     await Promise.all(used.map(async k => {
-      const q = { view: String(k), renderer: 'cpu', size: String(sc.width) };
-      if (lobe) Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
-                                    lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
-      const r = await this.api.materialFile(mat.id, 'preview.exr', q);
-      const fitted = await decodeImage(await r.arrayBuffer());
+      const fitted = await this.fittedFor(k, mat);
       if (mat !== this.mat) return;
       const v = S.views[k];
       if (!v.conf) await S.loadViews([k]);
@@ -465,6 +467,17 @@ export class Judge extends EventTarget {
     if (k != null) this.showDiff(k);
   }
 
+  // The material rendered for view k as the fit saw it: the CPU renderer at
+  // the raster's size, under the fit's environment for srbf (linear RGB).
+  async fittedFor(k, mat = this.mat) {
+    const sc = this.session.scene;
+    const q = { view: String(k), renderer: 'cpu', size: String(sc.width) };
+    if (mat.method === 'srbf') Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
+                                                  lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
+    const r = await this.api.materialFile(mat.id, 'preview.exr', q);
+    return decodeImage(await r.arrayBuffer());
+  }
+
   showDiff(k) {
     const row = this.rows && this.rows.get(k);
     if (!row) return;
@@ -473,7 +486,13 @@ export class Judge extends EventTarget {
     for (const tr of $('err-table').querySelectorAll('tr')) tr.classList.toggle('on', +tr.dataset.view === k);
     $('diff-wrap').classList.remove('hidden');
     const { painted, fitted, diff } = row;
-    const gain = +$('diff-gain').value;
+    let gain = +$('diff-gain').value;
+    if ($('diff-gain').value === 'auto') {     // white = the 99th percentile of |difference|
+      const m = [...diff].filter(x => x >= 0).sort((a, b) => a - b);
+      const p99 = m.length ? m[Math.min(m.length - 1, Math.floor(0.99 * m.length))] : 0;
+      gain = 1 / Math.max(1e-4, p99);
+      $('diff-gain').options[0].textContent = `auto (white = ${(1 / gain).toPrecision(2)})`;
+    }
     const draw = (id, fn) => {
       const c = $(id); c.width = painted.w; c.height = painted.h;
       const g = c.getContext('2d'), img = g.createImageData(painted.w, painted.h);

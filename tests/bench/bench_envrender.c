@@ -103,8 +103,9 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     int nw = quick ? 5 : 15;
     char key[128];
 
+    const mesh *msh;
     scene_params_default(&p);
-    if (strcmp(mesh_file, "sphere")) {
+    if (strcmp(mesh_file, "sphere") && strcmp(mesh_file, "ball")) {
         snprintf(p.mesh_path, sizeof p.mesh_path, "%s/meshes/%s", DATA, mesh_file);
         struct stat st;
         if (stat(p.mesh_path, &st)) {
@@ -116,6 +117,12 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
         printf("| %s | %s | error: %s |\n", mesh_file, env, err.msg);
         return;
     }
+    msh = &sc.mesh;
+    if (!strcmp(mesh_file, "ball") && render_ball(&msh, &err)) {
+        printf("| ball | error: %s |\n", err.msg);
+        scene_free(&sc);
+        return;
+    }
     render_env_init(&e);
     snprintf(e.spec, sizeof e.spec, "%s", env);
     e.shadows = shadows;
@@ -123,7 +130,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     snprintf(key, sizeof key, "%s", mesh_file);
     v = sc.views[0];
     t0 = now();
-    if (render_material_env(r, RENDER_EGL, key, &sc.mesh, mat, &e, &v, size, size, &gl, &info,
+    if (render_material_env(r, RENDER_EGL, key, msh, mat, &e, &v, size, size, &gl, &info,
                             NULL, &err)) {
         printf("| %s | %s | EGL failed: %s |\n", mesh_file, env, err.msg);
         scene_free(&sc);
@@ -134,7 +141,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     for (int i = 0; i < nw; i++) {
         v = sc.views[(i + 1) % sc.nviews];
         t0 = now();
-        render_material_env(r, RENDER_EGL, key, &sc.mesh, mat, &e, &v, size, size, &gl, &info,
+        render_material_env(r, RENDER_EGL, key, msh, mat, &e, &v, size, size, &gl, &info,
                             NULL, &err);
         warm[i] = now() - t0;
         shade[i] = info.shade_s;
@@ -144,7 +151,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     }
     /* the last warm view against the CPU reference */
     t0 = now();
-    if (render_material_env(r, RENDER_CPU, key, &sc.mesh, mat, &e, &v, size, size, &cpu, NULL,
+    if (render_material_env(r, RENDER_CPU, key, msh, mat, &e, &v, size, size, &cpu, NULL,
                             NULL, &err) == 0) {
         tcpu = now() - t0;
         err_rel = rel_rms(&gl, &cpu, NULL);
@@ -155,7 +162,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     qsort(shade, nw, sizeof *shade, cmp_d);
     qsort(draw, nw, sizeof *draw, cmp_d);
     printf("| %s | %d | %s | %s | %d | %.0f | %.1f | %.1f | %.1f | %.0f | %.4f |\n", mesh_file,
-           sc.mesh.nverts, env, shadows ? (info.convex ? "on (convex: none)" : "on") : "off",
+           msh->nverts, env, shadows ? (info.convex ? "on (convex: none)" : "on") : "off",
            info.lights, 1e3 * cold, 1e3 * shade[nw / 2], 1e3 * draw[nw / 2], 1e3 * warm[nw / 2],
            1e3 * tcpu, err_rel);
     fflush(stdout);
@@ -164,7 +171,9 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
 
 int main(int argc, char **argv)
 {
-    const char *meshes[] = {"sphere", "bunny.ply", "cow.off"};
+    /* the material ball (render_ball) under the studio's default light and
+     * a captured one, then the built-in sphere and two meshes */
+    const char *meshes[] = {"ball", "sphere", "bunny.ply", "cow.off"};
     const char *envs[2] = {"data:courtyard.exr", "data:sunset.exr"};
     int quick = 0, size = 512;
     struct stat st;
@@ -206,11 +215,12 @@ int main(int argc, char **argv)
     printf("| mesh | vertices | environment | shadows | lights | cold ms | shade ms | draw ms | "
            "warm preview ms | CPU reference ms | rel RMS vs reference |\n");
     printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
-    for (int mi = 0; mi < 3; mi++)
+    row(r, &mat, "ball", "studio", 1, size, quick);
+    for (int mi = 0; mi < 4; mi++)
         for (int ei = 0; ei < 2; ei++)
             for (int s = 1; s >= 0; s--) {
-                if (mi == 0 && s == 0)
-                    continue; /* the sphere is convex: the same row */
+                if (mi <= 1 && s == 0)
+                    continue; /* spheres are convex: the same row */
                 row(r, &mat, meshes[mi], envs[ei], s, size, quick);
                 if (quick)
                     break;
