@@ -138,6 +138,7 @@ int cmd_render(int argc, char **argv);        /* cmd_render.c */
 int cmd_eval(int argc, char **argv);
 int cmd_summary(int argc, char **argv);
 int cmd_export_shader(int argc, char **argv);
+int cmd_export_merl(int argc, char **argv);
 int cmd_demo(int argc, char **argv);          /* cmd_demo.c */
 int cmd_methods(int argc, char **argv);       /* cmd_methods.c */
 

@@ -11,6 +11,7 @@
 #include "cli.h"
 #include "env.h"
 #include "glr.h"
+#include "merl.h"
 #include "readable.h"
 
 /* ---- the renderer ------------------------------------------------------------- */
@@ -264,4 +265,31 @@ int cmd_summary(int argc, char **argv)
     json_decref(o);
     material_free(&m);
     return 0;
+}
+
+/* glint export-merl MATDIR -o FILE.binary: the material tabulated in the
+ * MERL layout (merl.h), with what tabulating did on stdout as JSON. */
+int cmd_export_merl(int argc, char **argv)
+{
+    material m;
+    merl_table t;
+    merl_stats st;
+    glint_err e;
+    int rc = 0;
+    if (argc != 4 || strcmp(argv[2], "-o") != 0)
+        return fail(1, "usage: glint export-merl MATDIR -o FILE.binary");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    if (merl_from_material(&m, 0, &t, &st, &e) || merl_write(&t, argv[3], &e))
+        rc = fail_err(&e);
+    else
+        printf("{\"file\": \"%s\", \"layout\": \"MERL 90x90x180\", \"anisotropic\": %s, "
+               "\"azimuths_averaged\": %d, \"spatial_average\": %s, \"bins_below_horizon\": %ld, "
+               "\"bins_nonfinite\": %ld, \"max_f\": %.6g, \"seconds\": %.3f}\n",
+               argv[3], st.anisotropic ? "true" : "false", st.azimuths,
+               st.spatial ? "true" : "false", st.below_horizon, st.nonfinite, st.max_f,
+               st.seconds);
+    merl_free(&t);
+    material_free(&m);
+    return rc;
 }

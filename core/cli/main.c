@@ -40,6 +40,8 @@ static void usage(FILE *f)
           "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH]\n"
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
+          "  export-merl MATDIR -o FILE.binary   the material as a MERL table (90x90x180\n"
+          "                                      bins, isotropic; BRDF Explorer, ALTA)\n"
           "  eval MATDIR --dirs FILE [-o OUT]    evaluate at direction pairs (and u v)\n"
           "  summary MATDIR                      the material in numbers: base colour,\n"
           "                                      highlight strength and width, albedo,\n"
@@ -73,7 +75,8 @@ int main(int argc, char **argv)
         {"fit", cmd_fit}, {"render", cmd_render}, {"eval", cmd_eval}, {"summary", cmd_summary},
         {"export-samples", cmd_export_samples}, {"fit-samples", cmd_fit_samples},
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
-        {"export-shader", cmd_export_shader}, {"methods", cmd_methods}};
+        {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
+        {"methods", cmd_methods}};
     static char name[64];
 
     env_set_resolver(cli_env_resolver);

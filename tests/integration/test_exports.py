@@ -1,0 +1,165 @@
+"""Materials taken elsewhere, through the real daemon: the MERL table
+(GET /materials/{id}/merl.binary) read by an independent reader written
+here after BRDFRead.cpp (the MERL database's own reader, numpy), against the
+material's own evaluation (POST /materials/{id}/eval): exactly at bin
+centres, and within the layout's nearest-bin limit at random direction
+pairs; an anisotropic material reported and averaged; access and errors."""
+import json
+import math
+import os
+import random
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import run_tests  # noqa: E402
+
+try:
+    import numpy as np
+except ImportError:  # the table checks need Debian's python3-numpy
+    np = None
+
+SIZE = 48
+S = {}
+SCALE = (1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0)
+N = 90 * 90 * 180
+
+
+def tok(t):
+    return {"X-Glint-Token": t}
+
+
+def fitted(d, spec, body):
+    """A session on a sphere painted with `spec` (the base render at scale 1:
+    f cos per unit light) on every view, and the material `body` fits."""
+    sc = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE}, status=201).json()
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for k in range(len(sc["views"])):
+        img = d.get("/api/v1/scenes/%s/views/%d/base.png?format=exr&scale=1&brdf=%s"
+                    % (sc["id"], k, spec), status=200).content
+        d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+              headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}), data=img,
+              status=200)
+    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
+               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
+               data=json.dumps(body))
+    assert r.status_code in (201, 202), r.text
+    if r.status_code == 201:
+        return s, r.json()["id"]
+    jid, deadline = r.json()["job"]["id"], time.time() + 300
+    while True:
+        j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
+        if j["state"] in ("done", "failed"):
+            break
+        assert time.time() < deadline
+        time.sleep(0.2)
+    assert j["state"] == "done", j
+    return s, j["material_id"]
+
+
+# ---- an independent reader, after BRDFRead.cpp ---------------------------------------------
+
+def rotate(v, axis, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    d = sum(a * b for a, b in zip(axis, v))
+    x = (axis[1] * v[2] - axis[2] * v[1], axis[2] * v[0] - axis[0] * v[2],
+         axis[0] * v[1] - axis[1] * v[0])
+    return [v[e] * c + axis[e] * d * (1 - c) + x[e] * s for e in range(3)]
+
+
+def merl_lookup(table, wi, wo):
+    h = [a + b for a, b in zip(wi, wo)]
+    hl = math.sqrt(sum(x * x for x in h))
+    h = [x / hl for x in h]
+    th, ph = math.acos(max(-1.0, min(1.0, h[2]))), math.atan2(h[1], h[0])
+    dvec = rotate(rotate(wi, (0, 0, 1), -ph), (0, 1, 0), -th)
+    td, pd = math.acos(max(-1.0, min(1.0, dvec[2]))), math.atan2(dvec[1], dvec[0])
+    i = 0 if th <= 0 else min(89, max(0, int(math.sqrt(th / (math.pi / 2) * 90 * 90))))
+    j = min(89, max(0, int(td / (math.pi * 0.5) * 90)))
+    if pd < 0:
+        pd += math.pi
+    k = min(179, max(0, int(pd / math.pi * 180)))
+    ind = k + 180 * (j + 90 * i)
+    return [float(table[c * N + ind]) * SCALE[c] for c in range(3)]
+
+
+def bin_centre(i, j, k, ph):
+    th = ((i + 0.5) / 90) ** 2 * math.pi / 2
+    td, pd = (j + 0.5) * math.pi / 180, (k + 0.5) * math.pi / 180
+    dvec = [math.sin(td) * math.cos(pd), math.sin(td) * math.sin(pd), math.cos(td)]
+    wi = rotate(rotate(dvec, (0, 1, 0), th), (0, 0, 1), ph)
+    h = [math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)]
+    c = sum(a * b for a, b in zip(wi, h))
+    return wi, [2 * c * h[e] - wi[e] for e in range(3)]
+
+
+def evaluate(d, mid, token, pairs):
+    body = {"pairs": [{"n": [0, 0, 1], "wi": wi, "wo": wo} for wi, wo in pairs]}
+    vals = d.post("/api/v1/materials/%s/eval" % mid,
+                  headers=dict(tok(token), **{"Content-Type": "application/json"}),
+                  data=json.dumps(body), status=200, schema="EvalResponse.json").json()["values"]
+    return [[v / wi[2] for v in val] for val, (wi, wo) in zip(vals, pairs)]
+
+
+def test_01_the_merl_table_reads_as_the_material(d):
+    s, mid = fitted(d, "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3", {"method": "hf3", "params": {"res": 64}})
+    S.update(session=s, material=mid)
+    r = d.get("/api/v1/materials/%s/merl.binary" % mid, headers=tok(s["view_token"]), status=200)
+    info = r.headers["X-Glint-Merl"]
+    print("X-Glint-Merl:", info)
+    assert "anisotropic=0" in info and "azimuths=1" in info and "nonfinite=0" in info, info
+    assert len(r.content) == 12 + 3 * N * 8 == 34992012, len(r.content)
+    if np is None:
+        return
+    dims = np.frombuffer(r.content[:12], dtype="<i4")
+    assert list(dims) == [90, 90, 180], dims
+    table = np.frombuffer(r.content[12:], dtype="<f8")
+    assert np.isfinite(table).all() and (table >= 0).all()
+    rng = random.Random(5)
+    # bin centres (above the horizon), the half vector at any azimuth: exact
+    pairs = []
+    while len(pairs) < 300:
+        wi, wo = bin_centre(rng.randrange(90), rng.randrange(80), rng.randrange(180),
+                            rng.uniform(0, 2 * math.pi))
+        if wi[2] > 0.02 and wo[2] > 0.02:
+            pairs.append((wi, wo))
+    want = evaluate(d, mid, s["view_token"], pairs)
+    worst = max(abs(a - b) / (abs(b) + 1e-9)
+                for (wi, wo), w in zip(pairs, want) for a, b in zip(merl_lookup(table, wi, wo), w))
+    print("bin centres, the independent reader against /eval: worst relative %.2e" % worst)
+    assert worst < 1e-6, worst
+    # random pairs: the nearest bin, as every MERL reader looks it up
+    pairs = []
+    for _ in range(400):
+        ti, to = math.acos(rng.uniform(0.05, 1)), math.acos(rng.uniform(0.05, 1))
+        pi_, po = rng.uniform(0, 2 * math.pi), rng.uniform(0, 2 * math.pi)
+        pairs.append(([math.sin(ti) * math.cos(pi_), math.sin(ti) * math.sin(pi_), math.cos(ti)],
+                      [math.sin(to) * math.cos(po), math.sin(to) * math.sin(po), math.cos(to)]))
+    want = evaluate(d, mid, s["view_token"], pairs)
+    lum = lambda c: 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]  # noqa: E731
+    errs = sorted(abs(lum(merl_lookup(table, wi, wo)) - lum(w)) / (lum(w) + 1e-6)
+                  for (wi, wo), w in zip(pairs, want))
+    print("random pairs, nearest bin: median %.4f, 90th percentile %.4f relative"
+          % (errs[len(errs) // 2], errs[len(errs) * 9 // 10]))
+    assert errs[len(errs) // 2] < 0.03, errs[len(errs) // 2]
+
+
+def test_02_an_anisotropic_material_is_averaged(d):
+    s, mid = fitted(d, "ward:kd=0.3,ks=0.5,rough=0.1,rough_y=0.35",
+                    {"method": "hf2d", "params": {"res": 32, "res_2d": 16}})
+    r = d.get("/api/v1/materials/%s/merl.binary" % mid, headers=tok(s["view_token"]), status=200)
+    info = r.headers["X-Glint-Merl"]
+    print("X-Glint-Merl:", info)
+    assert "anisotropic=1" in info and "azimuths=8" in info, info
+    assert len(r.content) == 34992012
+
+
+def test_03_access_and_errors(d):
+    mid = S["material"]
+    d.get("/api/v1/materials/%s/merl.binary" % mid, status=401)
+    d.get("/api/v1/materials/%s/merl.binary" % ("0" * 32), headers=tok(S["session"]["view_token"]),
+          status=404)
+    d.get("/api/v1/materials/%s/merl.binary" % mid, headers=tok("x" * 40), status=403)
+
+
+run_tests(globals())
