@@ -96,9 +96,13 @@ static void bin_dirs(int i, int j, int k, double ph, double wi[3], double wo[3])
         wo[e] = 2.0 * c * h[e] - wi[e];
 }
 
-/* f = the material's value per unit light / n.wi at (wi, wo); 0 (and
- * *below set) under the horizon */
-static void eval_f(const material *m, const double wi[3], const double wo[3], double f[3],
+/* f at (wi, wo) in the local frame; 0 (and *below set) under the horizon */
+typedef struct source {
+    merl_fn fn;
+    const void *ctx;
+} source;
+
+static void eval_f(const source *src, const double wi[3], const double wo[3], double f[3],
                    int *below)
 {
     *below = !(wi[2] > 1e-12 && wo[2] > 1e-12);
@@ -106,15 +110,29 @@ static void eval_f(const material *m, const double wi[3], const double wo[3], do
         f[0] = f[1] = f[2] = 0.0;
         return;
     }
-    material_eval(m, Z_AXIS, wi, wo, f);
+    src->fn(src->ctx, Z_AXIS, wi, wo, f);
+}
+
+/* a material's f: its value per unit light divided by n.wi */
+static void material_f(const void *ctx, const double n[3], const double wi[3],
+                       const double wo[3], double f[3])
+{
+    double ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    material_eval(ctx, n, wi, wo, f);
     for (int c = 0; c < 3; c++)
-        f[c] /= wi[2];
+        f[c] = ci > 0.0 ? f[c] / ci : 0.0;
+}
+
+void merl_truth(const void *ctx, const double n[3], const double wi[3], const double wo[3],
+                double f[3])
+{
+    merl_eval(ctx, n, wi, wo, f);
 }
 
 /* ---- tabulating ---------------------------------------------------------------------- */
 
 typedef struct job {
-    const material *m;
+    const source *m;
     double *f;
     int i0, i1, azimuths;
     long below, nonfinite;
@@ -155,7 +173,7 @@ static void *tabulate_rows(void *arg)
 
 /* Does m's value change with the azimuth of the half vector?  Compared at
  * 97 bins spread over the table, each at two azimuths. */
-static int anisotropic(const material *m)
+static int anisotropic(const source *m)
 {
     unsigned s = 2463534242u;
     for (int t = 0; t < 97; t++) {
@@ -181,6 +199,23 @@ static int anisotropic(const material *m)
 int merl_from_material(const material *m, int nthreads, merl_table *out, merl_stats *st,
                        glint_err *err)
 {
+    int rc;
+    memset(out, 0, sizeof *out);
+    if (!m || !m->method) {
+        if (st)
+            memset(st, 0, sizeof *st);
+        return glint_err_set(err, GLINT_EINVAL, "no material to tabulate");
+    }
+    rc = merl_tabulate(material_f, m, nthreads, out, st, err);
+    if (!rc && st)
+        st->spatial = material_spatial(m);
+    return rc;
+}
+
+int merl_tabulate(merl_fn fn, const void *ctx, int nthreads, merl_table *out, merl_stats *st,
+                  glint_err *err)
+{
+    source src = {fn, ctx}, *m = &src;
     job jobs[MERL_MAX_THREADS];
     pthread_t th[MERL_MAX_THREADS];
     unsigned char started[MERL_MAX_THREADS] = {0};
@@ -192,12 +227,11 @@ int merl_from_material(const material *m, int nthreads, merl_table *out, merl_st
     if (!st)
         st = &dummy;
     memset(st, 0, sizeof *st);
-    if (!m || !m->method)
-        return glint_err_set(err, GLINT_EINVAL, "no material to tabulate");
+    if (!fn)
+        return glint_err_set(err, GLINT_EINVAL, "nothing to tabulate");
     if (!(out->f = malloc((size_t)3 * MERL_N * sizeof *out->f)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for a MERL table (%zu MB)",
                              (size_t)3 * MERL_N * sizeof *out->f >> 20);
-    st->spatial = material_spatial(m);
     st->anisotropic = anisotropic(m);
     st->azimuths = st->anisotropic ? MERL_AZIMUTHS : 1;
     nt = nthreads > 0 ? nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);

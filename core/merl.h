@@ -73,6 +73,14 @@ typedef struct merl_stats {
 int merl_from_material(const material *m, int nthreads, merl_table *out, merl_stats *st,
                        glint_err *err);
 
+/* Tabulate any BRDF given as a function: f at unit (n, wi, wo), per
+ * steradian, no cosine (brdf_eval's and merl_truth's shape; paint.h's
+ * paint_fn).  Called with n = +Z, wi and wo above the horizon. */
+typedef void (*merl_fn)(const void *ctx, const double n[3], const double wi[3],
+                        const double wo[3], double f[3]);
+int merl_tabulate(merl_fn fn, const void *ctx, int nthreads, merl_table *out, merl_stats *st,
+                  glint_err *err);
+
 /* The file's bytes (OUT: *data, MERL_FILE_BYTES long, free()). */
 int merl_write_mem(const merl_table *t, void **data, size_t *len, glint_err *err);
 /* Written atomically (fsio.h). */
@@ -88,6 +96,11 @@ int merl_read(const char *path, merl_table *out, glint_err *err);
  * around n is vec3.h's v3_frame (an isotropic table does not depend on it). */
 void merl_eval(const merl_table *t, const double n[3], const double wi[3], const double wo[3],
                double rgb[3]);
+
+/* merl_eval as a truth function (ctx: const merl_table *), for paint.h's
+ * paint_views_fn: painting from a measured material. */
+void merl_truth(const void *ctx, const double n[3], const double wi[3], const double wo[3],
+                double f[3]);
 
 /* The bin of a direction pair in the local frame (n = +Z): the index
  * k + 180 (j + 90 i), as BRDFRead.cpp computes it. */

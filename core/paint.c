@@ -148,8 +148,15 @@ static int paint_check_view(const gbuf *g, const scene_view *v, int k, glint_err
 /* Unscaled radiance I f cos_i of one pixel (OUT: rgb[3]); zero unless
  * mask, cos_i > 0 and cos_o > 0.  GLINT_ENONFINITE for a covered pixel with
  * non-finite geometry or a non-finite result. */
-static int paint_pixel(const brdf *b, const paint_sv *sv, const gbuf *g, double intensity,
-                       size_t p, int k, double rgb[3], glint_err *err)
+typedef struct truth {
+    const brdf *b;        /* one analytic BRDF, */
+    const paint_sv *sv;   /* or two blended over the surface, */
+    paint_fn fn;          /* or a function (a measured material) */
+    const void *ctx;
+} truth;
+
+static int paint_pixel(const truth *t, const gbuf *g, double intensity, size_t p, int k,
+                       double rgb[3], glint_err *err)
 {
     double n[3], wi[3], wo[3], ci = 0.0, co = 0.0;
 
@@ -170,14 +177,17 @@ static int paint_pixel(const brdf *b, const paint_sv *sv, const gbuf *g, double 
                              k, (int)(p % (size_t)g->width), (int)(p / (size_t)g->width));
     if (!(ci > 0.0 && co > 0.0))
         return 0;
-    if (sv) { /* (1 - w) a + w b, w the pattern's weight at the pixel's uv */
+    if (t->sv) { /* (1 - w) a + w b, w the pattern's weight at the pixel's uv */
+        const paint_sv *sv = t->sv;
         double w = paint_sv_weight(sv, g->uv[2 * p], g->uv[2 * p + 1]), fb[3];
         brdf_eval(&sv->a, n, wi, wo, rgb);
         brdf_eval(&sv->b, n, wi, wo, fb);
         for (int c = 0; c < 3; c++)
             rgb[c] = w == 0.0 ? rgb[c] : w == 1.0 ? fb[c] : (1.0 - w) * rgb[c] + w * fb[c];
+    } else if (t->fn) {
+        t->fn(t->ctx, n, wi, wo, rgb);
     } else {
-        brdf_eval(b, n, wi, wo, rgb);
+        brdf_eval(t->b, n, wi, wo, rgb);
     }
     for (int c = 0; c < 3; c++) {
         rgb[c] *= intensity * ci;
@@ -190,21 +200,21 @@ static int paint_pixel(const brdf *b, const paint_sv *sv, const gbuf *g, double 
     return 0;
 }
 
-static int paint_any(const brdf *b, const paint_sv *sv, const gbuf *g,
-                     const scene_view *views, int nviews, double scale, img *out,
-                     double *scale_out, glint_err *err)
+static int paint_any(const truth *t, const gbuf *g, const scene_view *views, int nviews,
+                     double scale, img *out, double *scale_out, glint_err *err)
 {
+    const paint_sv *sv = t->sv;
     double rgb[3];
     int k, done = 0, rc;
 
-    if ((!b && !sv) || !g || !views || !out)
+    if ((!t->b && !sv && !t->fn) || !g || !views || !out)
         return glint_err_set(err, GLINT_EINVAL, "paint: NULL brdf, gbufs, views or output");
     if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
         return glint_err_set(err, GLINT_ERANGE, "paint: %d views, supported 1..%d", nviews,
                              SCENE_MAX_VIEWS);
     if (!isfinite(scale))
         return glint_err_set(err, GLINT_ENONFINITE, "paint: scale %g is not finite", scale);
-    rc = sv ? paint_sv_check(sv, err) : paint_check_brdf(b, err);
+    rc = sv ? paint_sv_check(sv, err) : t->fn ? 0 : paint_check_brdf(t->b, err);
     if (rc)
         return rc;
     for (k = 0; k < nviews; k++) {
@@ -221,7 +231,7 @@ static int paint_any(const brdf *b, const paint_sv *sv, const gbuf *g,
         for (k = 0; k < nviews; k++) {
             size_t np = (size_t)g[k].width * (size_t)g[k].height;
             for (size_t p = 0; p < np; p++) {
-                rc = paint_pixel(b, sv, &g[k], views[k].light_intensity, p, k, rgb, err);
+                rc = paint_pixel(t, &g[k], views[k].light_intensity, p, k, rgb, err);
                 if (rc)
                     return rc;
                 for (int c = 0; c < 3; c++)
@@ -242,7 +252,7 @@ static int paint_any(const brdf *b, const paint_sv *sv, const gbuf *g,
             goto fail_views;
         done = k + 1;
         for (size_t p = 0; p < np; p++) {
-            rc = paint_pixel(b, sv, gk, views[k].light_intensity, p, k, rgb, err);
+            rc = paint_pixel(t, gk, views[k].light_intensity, p, k, rgb, err);
             if (rc)
                 goto fail_views;
             for (int c = 0; c < 3; c++) {
@@ -272,15 +282,26 @@ fail_views:
 int paint_views(const brdf *b, const gbuf *g, const scene_view *views, int nviews,
                 double scale, img *out, double *scale_out, glint_err *err)
 {
+    truth t = {b, NULL, NULL, NULL};
     if (!b)
         return glint_err_set(err, GLINT_EINVAL, "paint: NULL brdf");
-    return paint_any(b, NULL, g, views, nviews, scale, out, scale_out, err);
+    return paint_any(&t, g, views, nviews, scale, out, scale_out, err);
 }
 
 int paint_views_sv(const paint_sv *sv, const gbuf *g, const scene_view *views, int nviews,
                    double scale, img *out, double *scale_out, glint_err *err)
 {
+    truth t = {NULL, sv, NULL, NULL};
     if (!sv)
         return glint_err_set(err, GLINT_EINVAL, "paint: NULL spatially varying brdf");
-    return paint_any(NULL, sv, g, views, nviews, scale, out, scale_out, err);
+    return paint_any(&t, g, views, nviews, scale, out, scale_out, err);
+}
+
+int paint_views_fn(paint_fn fn, const void *ctx, const gbuf *g, const scene_view *views,
+                   int nviews, double scale, img *out, double *scale_out, glint_err *err)
+{
+    truth t = {NULL, NULL, fn, ctx};
+    if (!fn)
+        return glint_err_set(err, GLINT_EINVAL, "paint: NULL truth function");
+    return paint_any(&t, g, views, nviews, scale, out, scale_out, err);
 }

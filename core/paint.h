@@ -54,6 +54,14 @@ double paint_sv_weight(const paint_sv *sv, double u, double v);
 int paint_views_sv(const paint_sv *sv, const gbuf *g, const scene_view *views, int nviews,
                    double scale, img *out, double *scale_out, glint_err *err);
 
+/* A truth given as a function: f at unit (n, wi, wo), per steradian, no
+ * cosine, RGB (merl_eval's shape: a measured material); it must be 0 below
+ * either horizon and finite. */
+typedef void (*paint_fn)(const void *ctx, const double n[3], const double wi[3],
+                         const double wo[3], double f[3]);
+int paint_views_fn(paint_fn fn, const void *ctx, const gbuf *g, const scene_view *views,
+                   int nviews, double scale, img *out, double *scale_out, glint_err *err);
+
 /* Paint nviews views under an environment's lights instead of the views'
  * point lights: each covered pixel seen from its camera gets
  *   scale * sum_k V_k power_k f(d_k, wo) max(0, n.d_k),
@@ -65,5 +73,9 @@ struct mesh;
 int paint_views_env(const brdf *b, const gbuf *g, int nviews, const struct mesh *m,
                     const struct env_lights *l, int shadows, double scale, img *out,
                     glint_err *err);
+/* The same with a truth function (paint_fn). */
+int paint_views_env_fn(paint_fn fn, const void *ctx, const gbuf *g, int nviews,
+                       const struct mesh *m, const struct env_lights *l, int shadows,
+                       double scale, img *out, glint_err *err);
 
 #endif

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "brdf.h"
 #include "cli.h"
 #include "env.h"
 #include "glr.h"
@@ -267,8 +268,16 @@ int cmd_summary(int argc, char **argv)
     return 0;
 }
 
-/* glint export-merl MATDIR -o FILE.binary: the material tabulated in the
- * MERL layout (merl.h), with what tabulating did on stdout as JSON. */
+/* brdf_eval as a merl_fn */
+static void merl_brdf(const void *ctx, const double n[3], const double wi[3], const double wo[3],
+                      double f[3])
+{
+    brdf_eval(ctx, n, wi, wo, f);
+}
+
+/* glint export-merl (MATDIR | --brdf SPEC) -o FILE.binary: a material, or
+ * an analytic truth, tabulated in the MERL layout (merl.h), with what
+ * tabulating did on stdout as JSON. */
 int cmd_export_merl(int argc, char **argv)
 {
     material m;
@@ -276,17 +285,22 @@ int cmd_export_merl(int argc, char **argv)
     merl_stats st;
     glint_err e;
     int rc = 0;
-    if (argc != 4 || strcmp(argv[2], "-o") != 0)
-        return fail(1, "usage: glint export-merl MATDIR -o FILE.binary");
-    if (material_load(argv[1], &m, &e))
+    brdf b;
+    int truth = argc == 5 && strcmp(argv[1], "--brdf") == 0;
+    if (!(argc == 4 || truth) || strcmp(argv[argc - 2], "-o") != 0)
+        return fail(1, "usage: glint export-merl (MATDIR | --brdf SPEC) -o FILE.binary");
+    memset(&m, 0, sizeof m);
+    if (truth ? brdf_parse(argv[2], &b, &e) : material_load(argv[1], &m, &e))
         return fail_err(&e);
-    if (merl_from_material(&m, 0, &t, &st, &e) || merl_write(&t, argv[3], &e))
+    if ((truth ? merl_tabulate(merl_brdf, &b, 0, &t, &st, &e)
+               : merl_from_material(&m, 0, &t, &st, &e)) ||
+        merl_write(&t, argv[argc - 1], &e))
         rc = fail_err(&e);
     else
         printf("{\"file\": \"%s\", \"layout\": \"MERL 90x90x180\", \"anisotropic\": %s, "
                "\"azimuths_averaged\": %d, \"spatial_average\": %s, \"bins_below_horizon\": %ld, "
                "\"bins_nonfinite\": %ld, \"max_f\": %.6g, \"seconds\": %.3f}\n",
-               argv[3], st.anisotropic ? "true" : "false", st.azimuths,
+               argv[argc - 1], st.anisotropic ? "true" : "false", st.azimuths,
                st.spatial ? "true" : "false", st.below_horizon, st.nonfinite, st.max_f,
                st.seconds);
     merl_free(&t);

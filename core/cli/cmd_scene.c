@@ -12,6 +12,7 @@
 #include "env.h"
 #include "vis.h"
 #include "fsio.h"
+#include "merl.h"
 #include "paint.h"
 #include "raster.h"
 
@@ -209,8 +210,9 @@ int cmd_paint(int argc, char **argv)
         {0, 0, 0, 0}};
     const char *out = NULL, *fmt = "exr", *spec = NULL, *env = NULL, *shadows = "auto";
     double scale = 0.0, used = 0.0, rot = 0.0, kl = 256;
-    int c, rc, is_sv;
+    int c, rc, is_sv, is_merl;
     paint_sv sv;
+    merl_table mt = {0};
     scene sc;
     gbuf *g = NULL;
     img *imgs = NULL;
@@ -253,13 +255,18 @@ int cmd_paint(int argc, char **argv)
         return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr]");
     /* PATTERN|BRDF|BRDF: a spatially varying truth over the texture coordinates */
     is_sv = strchr(spec, '|') != NULL;
-    if (is_sv ? paint_sv_parse(spec, &sv, &e) : brdf_parse(spec, &b, &e))
+    /* merl:FILE: a measured material, a table in the MERL layout (merl.h) */
+    is_merl = !is_sv && strncmp(spec, "merl:", 5) == 0;
+    if (is_merl ? merl_read(spec + 5, &mt, &e)
+                : is_sv ? paint_sv_parse(spec, &sv, &e) : brdf_parse(spec, &b, &e))
         return fail_err(&e);
     if (is_sv && env)
         return fail(1, "--brdf: a spatially varying truth paints under the views' lights "
                        "(leave out --env)");
-    if ((rc = load_scene(argv[optind], &sc)))
+    if ((rc = load_scene(argv[optind], &sc))) {
+        merl_free(&mt);
         return rc;
+    }
     if ((rc = raster_all(&sc, &g)))
         goto done;
     imgs = calloc((size_t)sc.nviews, sizeof *imgs);
@@ -281,14 +288,18 @@ int cmd_paint(int argc, char **argv)
         }
         env_map_free(&em);
         used = scale > 0.0 ? scale : 1.0;
-        rc = paint_views_env(&b, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e);
+        rc = is_merl ? paint_views_env_fn(merl_truth, &mt, g, sc.nviews, &sc.mesh, &el, sh, used,
+                                          imgs, &e)
+                     : paint_views_env(&b, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e);
         env_lights_free(&el);
         if (rc) {
             rc = fail_err(&e);
             goto done;
         }
-    } else if (is_sv ? paint_views_sv(&sv, g, sc.views, sc.nviews, scale, imgs, &used, &e)
-                     : paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
+    } else if (is_merl ? paint_views_fn(merl_truth, &mt, g, sc.views, sc.nviews, scale, imgs,
+                                        &used, &e)
+               : is_sv ? paint_views_sv(&sv, g, sc.views, sc.nviews, scale, imgs, &used, &e)
+                       : paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
         rc = fail_err(&e);
         goto done;
     }
@@ -307,7 +318,10 @@ int cmd_paint(int argc, char **argv)
     {
         char path[4096], bs[256];
         json_t *j;
-        brdf_format(&b, bs, sizeof bs);
+        if (is_sv || is_merl)
+            snprintf(bs, sizeof bs, "%s", spec);
+        else
+            brdf_format(&b, bs, sizeof bs);
         snprintf(path, sizeof path, "%s/paint.json", out);
         j = json_pack("{s:s, s:f, s:s, s:i}", "brdf", bs, "scale", used, "format", fmt, "views",
                       sc.nviews);
@@ -320,6 +334,7 @@ done:
     free_imgs(imgs, sc.nviews);
     raster_free_all(g, sc.nviews);
     scene_free(&sc);
+    merl_free(&mt);
     return rc;
 }
 

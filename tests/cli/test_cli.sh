@@ -135,6 +135,18 @@ for f in glint_material.frag glint_material.vert glint_factors.exr shader.json; 
   [ -s "$T/shader/$f" ] && ok "export-shader writes $f" || bad "export-shader writes $f"
 done
 
+# MERL tables: a material and a truth out, a measured material painted back in
+expect_ok "export-merl of a material" "$G" export-merl "$T/mat" -o "$T/mat.binary"
+grep -q '"anisotropic": false' "$T/out" && ok "export-merl reports isotropy" || bad "export-merl reports isotropy"
+[ "$(stat -c %s "$T/mat.binary")" = 34992012 ] && ok "a MERL file is 34992012 bytes" || bad "a MERL file is 34992012 bytes"
+expect_ok "export-merl of a truth" "$G" export-merl --brdf ct:rough=0.3,kd=0.4,f0=0.2 -o "$T/ct.binary"
+expect_ok "paint from a MERL table" "$G" paint "$T/scene.json" --brdf "merl:$T/ct.binary" -o "$T/merlpaint"
+[ -f "$T/merlpaint/view_11.exr" ] && ok "paint from a MERL table writes 12 views" || bad "paint from a MERL table writes 12 views"
+head -c 1000 "$T/ct.binary" > "$T/short.binary"
+expect_err "paint from a truncated MERL table" 1 "not a MERL|truncated" "$G" paint "$T/scene.json" --brdf "merl:$T/short.binary" -o "$T/x"
+expect_err "paint from a missing MERL table" 1 "No such file|nosuch" "$G" paint "$T/scene.json" --brdf "merl:$T/nosuch.binary" -o "$T/x"
+expect_err "export-merl usage" 1 "usage" "$G" export-merl "$T/mat"
+
 # environment lighting: truths painted under a built-in sky, the srbf fit, a preview
 expect_ok "paint under an environment" "$G" paint "$T/torus.json" --brdf ct:rough=0.3,kd=0.4,f0=0.25 --env sky --lights 64 -o "$T/envlit"
 expect_err "paint under an unknown environment" 1 "built-in" "$G" paint "$T/torus.json" --brdf lambert --env nosuch -o "$T/x"
