@@ -370,3 +370,94 @@ void merl_eval(const merl_table *t, const double n[3], const double wi[3], const
         rgb[c] = v > 0.0 ? v : 0.0;
     }
 }
+
+void merl_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3])
+{
+    double c = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    (void)uv;
+    merl_eval(ctx, n, wi, wo, rgb);
+    for (int e = 0; e < 3; e++)
+        rgb[e] *= c > 0.0 ? c : 0.0;
+}
+
+/* ---- measured materials by name ------------------------------------------------------ */
+
+typedef struct held {
+    char path[4096];
+    merl_table t;
+    int refs;
+    unsigned long used;      /* a clock: larger is more recent */
+} held;
+
+static pthread_mutex_t held_lock = PTHREAD_MUTEX_INITIALIZER;
+static held cache_[MERL_CACHE];
+static unsigned long clock_;
+static merl_resolver resolver_;
+
+void merl_set_resolver(merl_resolver fn)
+{
+    resolver_ = fn;
+}
+
+int merl_resolve(const char *name, char *path, size_t len, glint_err *err)
+{
+    if (!name || !name[0])
+        return glint_err_set(err, GLINT_EINVAL, "merl: a measured material needs a name");
+    if (!resolver_)
+        return glint_err_set(err, GLINT_ENOTFOUND, "no measured material '%.200s' here", name);
+    return resolver_(name, path, len, err);
+}
+
+int merl_acquire(const char *name, const merl_table **out, glint_err *err)
+{
+    char path[4096];
+    merl_table t;
+    int rc, slot = -1;
+
+    *out = NULL;
+    if ((rc = merl_resolve(name, path, sizeof path, err)))
+        return rc;
+    pthread_mutex_lock(&held_lock);
+    for (int i = 0; i < MERL_CACHE; i++)
+        if (cache_[i].t.f && !strcmp(cache_[i].path, path)) {
+            cache_[i].refs++;
+            cache_[i].used = ++clock_;
+            *out = &cache_[i].t;
+            pthread_mutex_unlock(&held_lock);
+            return 0;
+        }
+    pthread_mutex_unlock(&held_lock);
+    if ((rc = merl_read(path, &t, err)))
+        return rc;
+    pthread_mutex_lock(&held_lock);
+    for (int i = 0; i < MERL_CACHE; i++) /* an empty slot, else the oldest unused one */
+        if (!cache_[i].refs && (slot < 0 || !cache_[i].t.f ||
+                                (cache_[slot].t.f && cache_[i].used < cache_[slot].used)))
+            slot = i;
+    if (slot < 0) { /* every table in use: this one is the caller's alone */
+        pthread_mutex_unlock(&held_lock);
+        merl_free(&t);
+        return glint_err_set(err, GLINT_EBUSY, "measured materials: %d in use, try again",
+                             MERL_CACHE);
+    }
+    merl_free(&cache_[slot].t);
+    snprintf(cache_[slot].path, sizeof cache_[slot].path, "%s", path);
+    cache_[slot].t = t;
+    cache_[slot].refs = 1;
+    cache_[slot].used = ++clock_;
+    *out = &cache_[slot].t;
+    pthread_mutex_unlock(&held_lock);
+    return 0;
+}
+
+void merl_release(const merl_table *t)
+{
+    if (!t)
+        return;
+    pthread_mutex_lock(&held_lock);
+    for (int i = 0; i < MERL_CACHE; i++)
+        if (&cache_[i].t == t && cache_[i].refs > 0)
+            cache_[i].refs--;
+    pthread_mutex_unlock(&held_lock);
+}

@@ -102,6 +102,25 @@ void merl_eval(const merl_table *t, const double n[3], const double wi[3], const
 void merl_truth(const void *ctx, const double n[3], const double wi[3], const double wo[3],
                 double f[3]);
 
+/* merl_eval times n.wi, as envlit.h's envlit_fn (ctx: const merl_table *):
+ * a measured material under an environment. */
+void merl_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3]);
+
+/* ---- measured materials by name ("merl:NAME" truths) ------------------------------
+ * The host says where a name's file is (merl_set_resolver; the command
+ * line: a path; glintd: a file of its --measured-dir, never outside it);
+ * merl_acquire reads it once and keeps the MERL_CACHE most recently used
+ * tables (35 MB each), shared read-only by any number of threads. */
+#define MERL_CACHE 2
+typedef int (*merl_resolver)(const char *name, char *path, size_t len, glint_err *err);
+void merl_set_resolver(merl_resolver fn);
+/* The file of NAME (GLINT_ENOTFOUND saying why not). */
+int merl_resolve(const char *name, char *path, size_t len, glint_err *err);
+/* The table of NAME (OUT: *out, held until merl_release). */
+int merl_acquire(const char *name, const merl_table **out, glint_err *err);
+void merl_release(const merl_table *t);
+
 /* The bin of a direction pair in the local frame (n = +Z): the index
  * k + 180 (j + 90 i), as BRDFRead.cpp computes it. */
 long merl_index(const double wi[3], const double wo[3]);

@@ -11,6 +11,7 @@
 #include "brdf.h"
 #include "glr.h"
 #include "lru.h"
+#include "merl.h"
 #include "paint.h"
 #include "raster.h"
 #include "render_int.h"
@@ -124,7 +125,8 @@ int render_gl_mesh_get(render *r, const char *key, const mesh *m, glr_mesh **out
 typedef struct draw {
     const brdf *b;          /* base render, or */
     double scale;
-    const material *mat;    /* a preview */
+    const material *mat;    /* a preview, or */
+    const merl_table *merl; /* a base render of a measured material (the CPU only) */
 } draw;
 
 static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
@@ -134,6 +136,9 @@ static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
     glr_mesh *gm = NULL, *tmp = NULL;
     int rc;
 
+    if (d->merl) /* a table of 1458000 bins per channel: the CPU shades it */
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "measured materials (merl:) render on the CPU");
     pthread_mutex_lock(&r->lock);
     if (!render_gl_get(r, err)) {
         pthread_mutex_unlock(&r->lock);
@@ -161,7 +166,8 @@ static int draw_cpu(const mesh *m, const draw *d, const scene_view *v, int w, in
         gbuf g;
         if ((rc = raster_view(m, v, w, h, &g, err)))
             return rc;
-        rc = paint_views(d->b, &g, v, 1, d->scale, out, NULL, err);
+        rc = d->merl ? paint_views_fn(merl_truth, d->merl, &g, v, 1, d->scale, out, NULL, err)
+                     : paint_views(d->b, &g, v, 1, d->scale, out, NULL, err);
         gbuf_free(&g);
     }
     if (!rc && used)
@@ -206,6 +212,9 @@ size_t render_gbuffer_peak_bytes(int width, int height)
 int render_brdf_check(const char *brdf_spec, glint_err *err)
 {
     brdf b;
+    char path[4096];
+    if (brdf_spec && !strncmp(brdf_spec, "merl:", 5))
+        return merl_resolve(brdf_spec + 5, path, sizeof path, err);
     return brdf_parse(brdf_spec, &b, err);
 }
 
@@ -214,13 +223,20 @@ int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *
                 double scale, img *out, render_used *used, glint_err *err)
 {
     brdf b;
-    draw d = {&b, scale, NULL};
+    draw d = {&b, scale, NULL, NULL};
     int rc;
     memset(out, 0, sizeof *out);
-    if ((rc = brdf_parse(brdf_spec, &b, err)))
-        return rc;
     if (!(scale > 0.0) || !isfinite(scale))
         return glint_err_set(err, GLINT_EINVAL, "base render scale %g must be > 0", scale);
+    if (brdf_spec && !strncmp(brdf_spec, "merl:", 5)) {
+        if ((rc = merl_acquire(brdf_spec + 5, &d.merl, err)))
+            return rc;
+        rc = draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
+        merl_release(d.merl);
+        return rc;
+    }
+    if ((rc = brdf_parse(brdf_spec, &b, err)))
+        return rc;
     return draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
 }
 
@@ -228,7 +244,7 @@ int render_material(render *r, render_engine eng, const char *mesh_key, const me
                     const material *mat, const scene_view *v, int width, int height, img *out,
                     render_used *used, glint_err *err)
 {
-    draw d = {NULL, 0.0, mat};
+    draw d = {NULL, 0.0, mat, NULL};
     return draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
 }
 

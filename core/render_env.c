@@ -11,6 +11,7 @@
 #include "brdf.h"
 #include "env.h"
 #include "envlit.h"
+#include "merl.h"
 #include "raster.h"
 #include "render_int.h"
 #include "vis.h"
@@ -280,10 +281,20 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
     shader s = {envlit_brdf, envlit_brdf, &b, scale};
     int rc;
     memset(out, 0, sizeof *out);
-    if ((rc = brdf_parse(brdf_spec, &b, err)))
-        return rc;
     if (!(scale > 0.0) || !isfinite(scale))
         return glint_err_set(err, GLINT_EINVAL, "base render scale %g must be > 0", scale);
+    if (brdf_spec && !strncmp(brdf_spec, "merl:", 5)) { /* a measured material */
+        const merl_table *t;
+        if ((rc = merl_acquire(brdf_spec + 5, &t, err)))
+            return rc;
+        s.fn = s.fn_vertex = merl_envlit;
+        s.ctx = t;
+        rc = env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
+        merl_release(t);
+        return rc;
+    }
+    if ((rc = brdf_parse(brdf_spec, &b, err)))
+        return rc;
     return env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
 }
 

@@ -32,6 +32,7 @@ typedef struct app_config {
     char data_dir[4096];
     char web_dir[4096];
     char env_dir[4096];       /* HDR maps offered as data:<file> ("" = none) */
+    char measured_dir[4096];  /* MERL tables offered as merl:<file> ("" = none) */
     size_t cache_bytes;       /* in-memory budget for precomputations */
     size_t work_bytes;        /* memory budget of expensive work in flight (admit.h) */
     int work_slots;           /* ... pieces of it at once */
@@ -86,6 +87,10 @@ extern const http_route api_envs_routes[];       /* the environments on offer */
 extern const int api_envs_nroutes;
 /* The environments' resolver (api_envs.c), set before threads start. */
 int api_envs_init(const char *dir, glint_err *err);
+extern const http_route api_measured_routes[];   /* measured materials on offer */
+extern const int api_measured_nroutes;
+/* The measured materials' resolver (api_measured.c), set before threads start. */
+int api_measured_init(const char *dir, glint_err *err);
 /* Uploaded environments live in the store's blobs (after store_open). */
 int api_envs_store(struct store *s, glint_err *err);
 

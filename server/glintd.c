@@ -32,6 +32,7 @@ static void usage(FILE *f)
           "  --data-dir DIR        scenes, sessions, paintings, materials, cache (./glint-data)\n"
           "  --web-dir DIR         static files served at / (./web)\n"
           "  --env-dir DIR         HDR environment maps offered to fits as data:<file>\n"
+          "  --measured-dir DIR    MERL tables (*.binary) offered to paint from as merl:<file>\n"
           "  --cache-mb N          in-memory precomputation cache budget (512)\n"
           "  --threads N           background job threads (2)\n"
           "  --work-mb N           memory for expensive work in flight: previews, base\n"
@@ -128,6 +129,8 @@ static int apply_opt(app_config *c, const char *name, const char *val)
         return copy_str(c->web_dir, sizeof c->web_dir, val, "--web-dir");
     if (!strcmp(name, "env-dir"))
         return copy_str(c->env_dir, sizeof c->env_dir, val, "--env-dir");
+    if (!strcmp(name, "measured-dir"))
+        return copy_str(c->measured_dir, sizeof c->measured_dir, val, "--measured-dir");
     if (!strcmp(name, "api-key"))
         return copy_str(c->api_key, sizeof c->api_key, val, "--api-key");
     if (!strcmp(name, "allow-origin"))
@@ -247,7 +250,7 @@ int main(int argc, char **argv)
     static const struct option lo[] = {
         {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
         {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
-        {"env-dir", required_argument, 0, 1},
+        {"env-dir", required_argument, 0, 1}, {"measured-dir", required_argument, 0, 1},
         {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
         {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
         {"max-connections-per-ip", required_argument, 0, 1},
@@ -304,7 +307,7 @@ int main(int argc, char **argv)
         return 1;
     }
 
-    if (api_envs_init(a.cfg.env_dir, &ge)) {
+    if (api_envs_init(a.cfg.env_dir, &ge) || api_measured_init(a.cfg.measured_dir, &ge)) {
         fprintf(stderr, "glintd: %s\n", ge.msg);
         return 1;
     }
@@ -345,10 +348,12 @@ int main(int argc, char **argv)
     {
         const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
                                       api_tokens_routes, api_fits_routes, api_materials_routes,
-                                      api_methods_routes, api_envs_routes};
+                                      api_methods_routes, api_envs_routes,
+                                      api_measured_routes};
         const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
                               api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
-                              api_methods_nroutes, api_envs_nroutes};
+                              api_methods_nroutes, api_envs_nroutes,
+                              api_measured_nroutes};
         const int ntables = (int)(sizeof counts / sizeof counts[0]);
         int total = 0;
         for (int i = 0; i < ntables; i++)

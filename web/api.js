@@ -105,6 +105,7 @@ export class Api {
   }
   strokes(sid, since, limit) { return this.get(`/sessions/${sid}/strokes`, { query: { since, limit: limit || 1000 }, what: 'Reading strokes' }); }
   environments() { return this.get('/environments', { what: 'Reading the environments' }); }
+  measured() { return this.get('/measured', { what: 'Reading the measured materials' }); }
   uploadEnvironment(bytes, name) {
     return this.request('POST', '/environments', { body: bytes, type: 'application/octet-stream', query: { name }, what: 'Uploading the environment' });
   }

@@ -3,7 +3,8 @@
 // server's own render of that BRDF (GET base.png?brdf=SPEC&format=exr, under
 // the scene's point lights, or its environment when it has one), each view
 // one undo step, for the artist to edit.  The colour replaces the diffuse
-// albedo (kd) of the finishes that have one.
+// albedo (kd) of the finishes that have one.  Measured materials the server
+// offers (GET /measured: MERL tables, brdf=merl:<file>) are finishes too.
 
 import { decodeImage } from './image.js';
 
@@ -86,4 +87,14 @@ export function bindPresets(ctx) {
   sel.onchange = presetChosen;
   $('preset-apply').onclick = applyPreset;
   presetChosen();
+  api.measured().then(r => {
+    for (const m of r.materials || []) {
+      const p = { name: 'measured: ' + m.name, title: `Measured (${m.layout}): ${m.name}, as the server's table holds it; the colour is not used`, spec: () => m.spec, fixed: true };
+      PRESETS.push(p);
+      const o = document.createElement('option');
+      o.value = o.textContent = p.name;
+      o.title = p.title;
+      sel.appendChild(o);
+    }
+  }).catch(() => { /* the analytic finishes stay */ });
 }

@@ -12,6 +12,7 @@
 
 #include "cli.h"
 #include "env.h"
+#include "merl.h"
 
 #define GLINT_VERSION "0.1.0"
 
@@ -71,6 +72,14 @@ static int cli_env_resolver(const char *spec, char *path, size_t len, glint_err 
     return 0;
 }
 
+/* merl:PATH on the command line: the user's own file */
+static int cli_merl_resolver(const char *name, char *path, size_t len, glint_err *err)
+{
+    if ((size_t)snprintf(path, len, "%s", name) >= len)
+        return glint_err_set(err, GLINT_EINVAL, "merl: path too long");
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static const struct { const char *name; int (*fn)(int, char **); } cmds[] = {
@@ -83,6 +92,7 @@ int main(int argc, char **argv)
     static char name[64];
 
     env_set_resolver(cli_env_resolver);
+    merl_set_resolver(cli_merl_resolver);
 
     if (argc < 2 || strcmp(argv[1], "help") == 0 || strcmp(argv[1], "--help") == 0 ||
         strcmp(argv[1], "-h") == 0) {

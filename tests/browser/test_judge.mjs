@@ -3,11 +3,23 @@
 // against the fit in the large view (split, and a signed difference whose
 // scale is printed and checked against an independent computation from the
 // server's painting and render), the first-visit guide (not in the way,
-// dismissed for good, brought back from the help), and the view a new torus
-// opens on.  Screenshots at 1440x900 and 1280x720.
+// dismissed for good, brought back from the help), a measured material the
+// server offers painted as a finish, and the view a new torus opens on.
+// Screenshots at 1440x900 and 1280x720.
+import { execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
 import {
   run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq,
 } from './harness.mjs';
+
+// a measured material for the server to offer: a MERL table of a
+// Cook-Torrance truth, written by the command line
+const CLI = path.join(process.env.GLINT_BUILD_DIR || path.join(path.dirname(new URL(import.meta.url).pathname), '..', '..', 'build'), 'core', 'glint');
+const MDIR = fs.mkdtempSync(path.join(os.tmpdir(), 'glint-measured-'));
+const haveCli = fs.existsSync(CLI);
+if (haveCli) execFileSync(CLI, ['export-merl', '--brdf', 'ct:kd=0.5/0.2/0.1,f0=0.3,rough=0.15', '-o', path.join(MDIR, 'red-ct.binary')], { stdio: 'ignore' });
 
 async function setRange(page, id, v) {
   await page.evaluate(([id, v]) => { const el = document.getElementById(id); el.value = v; el.dispatchEvent(new Event('input', { bubbles: true })); }, [id, String(v)]);
@@ -167,6 +179,37 @@ run({
     assert(await page.isVisible('#guide'), 'the help brings the guide back');
   },
 
+  async 'a measured material the server offers is a finish to start from'(t) {
+    if (!haveCli) { t.log('no glint command line at ' + CLI + ': skipped'); return; }
+    const { url, session } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.waitForFunction(() => [...document.getElementById('preset-sel').options].some(o => o.value === 'measured: red-ct'));
+    await page.selectOption('#preset-sel', 'measured: red-ct');
+    assert(/Measured/.test(await page.textContent('#preset-note')), 'the measured finish is described');
+    assert(await page.isDisabled('#preset-colour'), 'its colour is what was measured');
+    await page.click('#preset-apply');
+    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
+                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await settled(page, 0);
+    const d = await page.evaluate(async ([sid, tok]) => {
+      const { decodeImage } = await import('/image.js');
+      const S = window.glint.state.session;
+      const get = async u => decodeImage(await (await fetch(u, { headers: { 'X-Glint-Token': tok } })).arrayBuffer());
+      const p = await get(`/api/v1/sessions/${sid}/views/0/painting?format=exr`);
+      const b = await get(`/api/v1/scenes/${S.scene.id}/views/0/base.png?format=exr&brdf=merl:red-ct.binary`);
+      let mx = 0, lit = 0, red = 0, blue = 0;
+      for (let i = 0; i < p.data.length; i++) { mx = Math.max(mx, Math.abs(p.data[i] - b.data[i])); if (b.data[i] > 0) lit++; }
+      for (let i = 0; i < p.data.length; i += 3) { red += p.data[i]; blue += p.data[i + 2]; }
+      return { mx, lit, red, blue };
+    }, [session.id, session.paint_token]);
+    t.log(`view 0 painted from the measured table: ${d.lit} lit values, largest difference from the server's render ${d.mx.toExponential(2)}; summed red ${d.red.toFixed(1)}, blue ${d.blue.toFixed(1)}`);
+    assertGE(d.lit, 1000, 'the measured finish lights the sphere');
+    assertLE(d.mx, 1e-6, 'the painting is the server\'s render of the measured table');
+    assertGE(d.red, 2 * d.blue, 'its colour is the measured red');
+    await t.shot(page, '43-measured-finish.png');
+  },
+
   async 'a new torus opens on a view that shows it, not edge-on'(t) {
     const page = await t.page();
     await page.goto(t.daemon.base + '/');
@@ -186,4 +229,4 @@ run({
     assertGE(r.n[r.k], 1.1 * r.n[0], 'the edge-on view 0 is not the one opened');
     await t.shot(page, '42-torus-first-view.png');
   },
-});
+}, { daemonArgs: ['--measured-dir', MDIR] });

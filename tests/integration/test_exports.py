@@ -3,12 +3,19 @@
 here after BRDFRead.cpp (the MERL database's own reader, numpy), against the
 material's own evaluation (POST /materials/{id}/eval): exactly at bin
 centres, and within the layout's nearest-bin limit at random direction
-pairs; an anisotropic material reported and averaged; access and errors."""
+pairs; an anisotropic material reported and averaged; access and errors;
+measured materials offered by --measured-dir painting as the truth their
+table holds (point lights and a sky), the resolver refusing what is not
+theirs (hidden, short, a link out, traversal), and a fit of such paintings
+reading the truth's colour."""
 import json
 import math
 import os
 import random
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -21,6 +28,22 @@ except ImportError:  # the table checks need Debian's python3-numpy
 
 SIZE = 48
 S = {}
+CT = "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"
+
+# measured materials offered by the daemon: a table of CT made by the CLI,
+# and files the resolver must refuse
+CLI = os.environ.get("GLINT_CLI") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(os.environ.get("GLINTD", "build/server/glintd")))),
+    "core", "glint")
+MDIR = tempfile.mkdtemp(prefix="glint-measured-")
+subprocess.run([CLI, "export-merl", "--brdf", CT, "-o", os.path.join(MDIR, "ct.binary")],
+               check=True, stdout=subprocess.DEVNULL)
+shutil.copy(os.path.join(MDIR, "ct.binary"), os.path.join(MDIR, ".hidden.binary"))
+with open(os.path.join(MDIR, "short.binary"), "wb") as f:
+    f.write(b"\x5a\0\0\0" * 100)
+OUTSIDE = tempfile.mkdtemp(prefix="glint-outside-")
+shutil.copy(os.path.join(MDIR, "ct.binary"), os.path.join(OUTSIDE, "far.binary"))
+os.symlink(os.path.join(OUTSIDE, "far.binary"), os.path.join(MDIR, "evil.binary"))
 SCALE = (1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0)
 N = 90 * 90 * 180
 
@@ -102,7 +125,7 @@ def evaluate(d, mid, token, pairs):
 
 
 def test_01_the_merl_table_reads_as_the_material(d):
-    s, mid = fitted(d, "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3", {"method": "hf3", "params": {"res": 64}})
+    s, mid = fitted(d, CT, {"method": "hf3", "params": {"res": 64}})
     S.update(session=s, material=mid)
     r = d.get("/api/v1/materials/%s/merl.binary" % mid, headers=tok(s["view_token"]), status=200)
     info = r.headers["X-Glint-Merl"]
@@ -162,4 +185,57 @@ def test_03_access_and_errors(d):
     d.get("/api/v1/materials/%s/merl.binary" % mid, headers=tok("x" * 40), status=403)
 
 
-run_tests(globals())
+def exr(content):
+    import OpenImageIO as oiio
+    path = os.path.join(tempfile.mkdtemp(prefix="glint-exp-"), "x.exr")
+    with open(path, "wb") as f:
+        f.write(content)
+    return np.asarray(oiio.ImageBuf(path).get_pixels(oiio.FLOAT))[:, :, :3]
+
+
+def test_04_measured_materials_paint_as_their_truth(d):
+    lst = d.get("/api/v1/measured", status=200, schema="MeasuredList.json").json()["materials"]
+    assert [m["spec"] for m in lst] == ["merl:ct.binary"], lst
+    sc = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE}, status=201).json()
+    url = "/api/v1/scenes/%s/views/%%d/base.png?format=exr&scale=1&brdf=%%s" % sc["id"]
+    for q in ("", "&env=sky&lights=32"):
+        a = d.get(url % (2, "merl:ct.binary") + q, status=200)
+        b = d.get(url % (2, CT) + q, status=200)
+        if np is not None:
+            x, y = exr(a.content), exr(b.content)
+            rel = float(np.sqrt(((x - y) ** 2).sum() / (y ** 2).sum()))
+            print("base render from the measured table against its truth%s: %.4f relative RMS"
+                  % (" under the sky" if q else "", rel))
+            assert rel < 0.02, rel
+    for bad in ("merl:.hidden.binary", "merl:short.binary", "merl:evil.binary",
+                "merl:../ct.binary", "merl:nosuch.binary", "merl:"):
+        r = d.get(url % (0, bad), status=422)
+        assert "no measured material" in r.text or "needs a name" in r.text, (bad, r.text)
+    # a session painted from the measured material, fitted: the truth's colour
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for k in range(len(sc["views"])):
+        d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+              headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
+              data=d.get(url % (k, "merl:ct.binary"), status=200).content, status=200)
+    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
+               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
+               data=json.dumps({"method": "hf3", "params": {"res": 64}}))
+    assert r.status_code in (201, 202), r.text
+    mid = r.json()["id"] if r.status_code == 201 else None
+    if mid is None:
+        jid = r.json()["job"]["id"]
+        while True:
+            j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
+            if j["state"] in ("done", "failed"):
+                break
+            time.sleep(0.2)
+        assert j["state"] == "done", j
+        mid = j["material_id"]
+    summ = d.get("/api/v1/materials/%s/summary" % mid, headers=tok(s["view_token"]),
+                 status=200, schema="MaterialSummary.json").json()
+    print("fitted to the measured paintings: base colour", summ["base_colour"])
+    for c, kd in enumerate((0.4, 0.3, 0.2)):
+        assert abs(summ["base_colour"][c] - kd) < 0.15 * kd + 0.02, summ["base_colour"]
+
+
+run_tests(globals(), daemon_args=("--measured-dir", MDIR))
