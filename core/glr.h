@@ -129,6 +129,15 @@ int glr_shader_export(const material *mat, const char *dir, glint_err *err);
  * compiler's or linker's log in the message. */
 int glr_program_check(glr *g, const char *vert_src, const char *frag_src, glint_err *err);
 
+/* Draw mesh m from view v (w x h, RGB) with a fragment stage of the
+ * caller's (GLSL ES 3.00: GLSL_STAGE_IO's inputs and o_color, glsl_parts.h)
+ * after the shared vertex stage, u_eye, u_light and u_light_intensity set
+ * from v: how exported shader code (e.g. a BRDF Explorer BRDF()) is run
+ * to be checked.  GLINT_EFORMAT with the compiler's log if it does not
+ * build. */
+int glr_render_fragment(glr *g, const glr_mesh *m, const char *frag_src, const scene_view *v,
+                        int width, int height, img *out, glint_err *err);
+
 /* Counters for tests and benchmarks (context reuse, leaks); OUT: *out
  * (zeros for a NULL g). */
 typedef struct glr_stats {

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "glr_int.h"
+#include "glr_shaders.h"
 
 /* ---- G-buffer ----------------------------------------------------------- */
 
@@ -231,6 +232,50 @@ int glr_preview(glr *g, const glr_mesh *m, const material *mat, const scene_view
                 int width, int height, float background, img *out, glint_err *err)
 {
     int rc = glr_preview_in(g, m, mat, v, width, height, background, out, err);
+    glr_leave(g);
+    return rc;
+}
+
+/* ---- a caller's fragment stage (checking exported shaders) ------------------ */
+
+static int glr_render_fragment_in(glr *g, const glr_mesh *m, const char *frag_src,
+                                  const scene_view *v, int width, int height, img *out,
+                                  glint_err *err)
+{
+    glr_locs l;
+    GLuint p;
+    float clear0[4] = {0, 0, 0, 0};
+    int rc;
+
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!frag_src)
+        return glint_err_set(err, GLINT_EINVAL, "no fragment stage");
+    if ((rc = glr_common_checks(g, m, v, width, height, out, err)))
+        return rc;
+    glr_gl_drain();
+    if (!(p = glr_link(GLR_VERT_SRC, frag_src, "the caller's program", err)))
+        return err ? err->code : GLINT_EFORMAT;
+    glr_locs_get(p, &l);
+    glUseProgram(p);
+    {
+        static const float id4[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        static const float id3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        glUniformMatrix4fv(l.model, 1, GL_FALSE, id4);
+        glUniformMatrix3fv(l.normal_matrix, 1, GL_FALSE, id3);
+    }
+    glUniform1f(l.light_intensity, (float)v->light_intensity);
+    rc = glr_draw(g, p, &l, &g->ct, 1, m, v, width, height, clear0, err);
+    if (!rc)
+        rc = glr_color_readback(g, width, height, out, err);
+    glDeleteProgram(p);
+    return rc;
+}
+
+int glr_render_fragment(glr *g, const glr_mesh *m, const char *frag_src, const scene_view *v,
+                        int width, int height, img *out, glint_err *err)
+{
+    int rc = glr_render_fragment_in(g, m, frag_src, v, width, height, out, err);
     glr_leave(g);
     return rc;
 }

@@ -340,3 +340,16 @@ fail:
     json_decref(root);
     return rc;
 }
+
+int material_brdf_explorer(const material *m, char **text, glint_err *err)
+{
+    *text = NULL;
+    if (!m || !m->method)
+        return glint_err_set(err, GLINT_EINVAL, "no material");
+    if (!m->method->mat->brdf_explorer)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "method %s writes no BRDF Explorer .brdf file; its MERL table "
+                             "(merl.binary, glint export-merl) opens in BRDF Explorer too",
+                             m->method->name);
+    return m->method->mat->brdf_explorer(m->data, text, err);
+}

@@ -61,6 +61,11 @@ void material_eval_preview(const material *m, const double n[3], const double wi
 void material_eval_preview_at(const material *m, const double uv[2], const double n[3],
                               const double wi[3], const double wo[3], double rgb[3]);
 
+/* The material as BRDF Explorer's analytic .brdf file (OUT: *text,
+ * free()): GLINT_EUNSUPPORTED naming the alternative (the MERL table,
+ * merl.h, which BRDF Explorer reads too) for methods that do not write one. */
+int material_brdf_explorer(const material *m, char **text, glint_err *err);
+
 /* 1 when the material varies over the surface (its value depends on the
  * texture coordinates), 0 when one BRDF holds everywhere. */
 int material_spatial(const material *m);

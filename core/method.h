@@ -172,6 +172,9 @@ typedef struct material_ops {
     int (*gpu)(const void *data, material_gpu *out, glint_err *err);
     /* A few members for the API's material object (e.g. {"res": 64}). */
     json_t *(*summary)(const void *data);
+    /* Optional: the material as BRDF Explorer's analytic .brdf text, exact
+     * (OUT: *text, free()); NULL: not offered (the MERL table is). */
+    int (*brdf_explorer)(const void *data, char **text, glint_err *err);
 } material_ops;
 
 /* ---- the method ------------------------------------------------------------------------- */

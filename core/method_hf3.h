@@ -25,6 +25,9 @@ extern const method method_hf3;
 /* The fragment stage of an hf3 material (GLSL ES 3.00): what previews draw
  * and the shader export writes as glint_material.frag. */
 extern const char hf3_glsl_frag[];
+/* BRDF Explorer's analytic .brdf text of an hf3 material (hf_factors data),
+ * exact (method_hf3_glsl.c). */
+int hf3_brdf_explorer(const void *data, char **text, glint_err *err);
 
 /* The factors of an hf3 material (NULL for another method's). */
 hf_factors *hf3_factors(const material *m);

@@ -326,4 +326,5 @@ const material_ops hf3_material_ops = {
     .save_files = hf3_save_files,
     .gpu = hf3_gpu,
     .summary = hf3_summary,
+    .brdf_explorer = hf3_brdf_explorer,
 };

@@ -12,6 +12,7 @@
  *   POST /api/v1/materials/{id}/eval       BRDF values at direction pairs
  *   GET  /api/v1/materials/{id}/summary    base colour, highlight, albedo, polar data
  *   GET  /api/v1/materials/{id}/merl.binary  the material as a MERL table (merl.h)
+ *   GET  /api/v1/materials/{id}/material.brdf  BRDF Explorer's analytic .brdf (hf3)
  *
  * A material's files are blobs "materials/<id>/": material.json and what
  * its method writes (material_save), written before its row is committed.
@@ -725,6 +726,32 @@ done:
     return r;
 }
 
+/* The material as BRDF Explorer's analytic .brdf file (methods that write
+ * one: hf3; 422 naming the MERL table otherwise). */
+static http_resp brdf_get(http_req *req)
+{
+    memo_doc doc;
+    material m = {0};
+    char *text = NULL;
+    http_resp r;
+    glint_err e;
+    int rc;
+
+    if ((rc = api_material(req, req->param[0], &doc, &e)))
+        return api_error(&e);
+    free(doc.text);
+    if ((rc = material_of(req->app, req->param[0], &m, &e)))
+        return api_error(&e);
+    rc = material_brdf_explorer(&m, &text, &e);
+    material_free(&m);
+    if (rc)
+        return rc == GLINT_EUNSUPPORTED ? http_problem(422, "unsupported", "%s", e.msg)
+                                        : api_error(&e);
+    r = http_bytes_owned(200, "text/plain; charset=utf-8", text, strlen(text));
+    http_header(&r, "Content-Disposition", "attachment; filename=\"material.brdf\"");
+    return r;
+}
+
 const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}", material_get},
     {"GET", "/api/v1/materials/{id}/factors.png", factors_png},
@@ -742,5 +769,6 @@ const http_route api_materials_routes[] = {
     {"POST", "/api/v1/materials/{id}/eval", eval_post},
     {"GET", "/api/v1/materials/{id}/summary", summary_get},
     {"GET", "/api/v1/materials/{id}/merl.binary", merl_get},
+    {"GET", "/api/v1/materials/{id}/material.brdf", brdf_get},
 };
 const int api_materials_nroutes = sizeof api_materials_routes / sizeof api_materials_routes[0];

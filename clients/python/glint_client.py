@@ -709,6 +709,12 @@ class GlintClient:
         over the surface). BRDF Explorer, ALTA and dj_brdf read it."""
         return self._call("GET", self._mat(material_id, "/merl.binary"), raw=True, token=token)
 
+    def brdf_explorer(self, material_id, token=None):
+        """GET /api/v1/materials/{id}/material.brdf: the material as BRDF
+        Explorer's analytic .brdf text (Blob) for methods that write one
+        (hf3); GlintError 422 otherwise (use merl())."""
+        return self._call("GET", self._mat(material_id, "/material.brdf"), raw=True, token=token)
+
     def preview(self, material_id, format="png", view=None, eye=None, light=None, target=None,
                 fov=None, intensity=None, size=None, renderer=None, object=None, env=None,
                 env_rotation=None, env_intensity=None, lights=None, shadows=None,

@@ -11,6 +11,7 @@
 #include "brdf.h"
 #include "cli.h"
 #include "env.h"
+#include "fsio.h"
 #include "glr.h"
 #include "merl.h"
 #include "readable.h"
@@ -304,6 +305,28 @@ int cmd_export_merl(int argc, char **argv)
                st.spatial ? "true" : "false", st.below_horizon, st.nonfinite, st.max_f,
                st.seconds);
     merl_free(&t);
+    material_free(&m);
+    return rc;
+}
+
+/* glint export-brdf MATDIR -o FILE.brdf: the material as BRDF Explorer's
+ * analytic .brdf file (material_brdf_explorer). */
+int cmd_export_brdf(int argc, char **argv)
+{
+    material m;
+    glint_err e;
+    char *text = NULL;
+    int rc = 0;
+    if (argc != 4 || strcmp(argv[2], "-o") != 0)
+        return fail(1, "usage: glint export-brdf MATDIR -o FILE.brdf");
+    if (material_load(argv[1], &m, &e))
+        return fail_err(&e);
+    if (material_brdf_explorer(&m, &text, &e) ||
+        fsio_write_atomic(argv[3], text, strlen(text), &e))
+        rc = fail_err(&e);
+    else
+        printf("%s: BRDF Explorer analytic BRDF, %zu bytes\n", argv[3], strlen(text));
+    free(text);
     material_free(&m);
     return rc;
 }

@@ -41,6 +41,7 @@ static void usage(FILE *f)
           "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH]\n"
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
+          "  export-brdf MATDIR -o FILE.brdf     BRDF Explorer's analytic .brdf (hf3)\n"
           "  export-merl (MATDIR | --brdf SPEC) -o FILE.binary\n"
           "                                      a material (or an analytic truth) as a MERL\n"
           "                                      table (90x90x180 bins, isotropic; BRDF\n"
@@ -88,6 +89,7 @@ int main(int argc, char **argv)
         {"export-samples", cmd_export_samples}, {"fit-samples", cmd_fit_samples},
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
+        {"export-brdf", cmd_export_brdf},
         {"methods", cmd_methods}};
     static char name[64];
 

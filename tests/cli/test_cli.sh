@@ -146,6 +146,8 @@ head -c 1000 "$T/ct.binary" > "$T/short.binary"
 expect_err "paint from a truncated MERL table" 1 "not a MERL|truncated" "$G" paint "$T/scene.json" --brdf "merl:$T/short.binary" -o "$T/x"
 expect_err "paint from a missing MERL table" 1 "No such file|nosuch" "$G" paint "$T/scene.json" --brdf "merl:$T/nosuch.binary" -o "$T/x"
 expect_err "export-merl usage" 1 "usage" "$G" export-merl "$T/mat"
+expect_ok "export-brdf" "$G" export-brdf "$T/mat" -o "$T/mat.brdf"
+head -1 "$T/mat.brdf" | grep -q '^analytic$' && grep -q 'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)' "$T/mat.brdf" && ok "export-brdf writes BRDF Explorer's format" || bad "export-brdf writes BRDF Explorer's format"
 
 # environment lighting: truths painted under a built-in sky, the srbf fit, a preview
 expect_ok "paint under an environment" "$G" paint "$T/torus.json" --brdf ct:rough=0.3,kd=0.4,f0=0.25 --env sky --lights 64 -o "$T/envlit"

@@ -175,10 +175,21 @@ def test_02_an_anisotropic_material_is_averaged(d):
     print("X-Glint-Merl:", info)
     assert "anisotropic=1" in info and "azimuths=8" in info, info
     assert len(r.content) == 34992012
+    # no BRDF Explorer file for hf2d: the answer names the MERL table
+    r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(s["view_token"]), status=422)
+    assert "MERL" in r.json()["detail"], r.text
 
 
 def test_03_access_and_errors(d):
     mid = S["material"]
+    # the hf3 material as BRDF Explorer's analytic file
+    r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(S["session"]["view_token"]),
+              status=200)
+    text = r.text
+    assert text.startswith("analytic\n") and "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)" in text
+    assert text.index("::begin parameters") < text.index("::begin shader") < text.index("::end shader")
+    assert text.count("vec3(") > 3 * 64, "the factors are embedded"
+    d.get("/api/v1/materials/%s/material.brdf" % mid, status=401)
     d.get("/api/v1/materials/%s/merl.binary" % mid, status=401)
     d.get("/api/v1/materials/%s/merl.binary" % ("0" * 32), headers=tok(S["session"]["view_token"]),
           status=404)

@@ -322,6 +322,8 @@ def test_07_material_files(d):
 
     summ = v.summary(mid)
     validate(summ, "MaterialSummary.json")
+    brdf = v.brdf_explorer(mid)
+    assert brdf.startswith(b"analytic\n") and b"vec3 BRDF(" in brdf
     merl = v.merl(mid)
     assert len(merl) == 34992012 and merl[:12] == bytes([90, 0, 0, 0, 90, 0, 0, 0, 180, 0, 0, 0])
     assert "azimuths=" in merl.header("X-Glint-Merl", ""), merl.headers

@@ -17,6 +17,7 @@
 #include "fsio.h"
 #include "glr.h"
 #include "glr_fixture.h"
+#include "glsl_parts.h"
 #include "glr_shaders.h"
 #include "method_hf3.h"
 #include "material.h"
@@ -410,6 +411,79 @@ static float half_to_float(uint16_t h)
     return (float)(s ? -v : v);
 }
 
+/* The BRDF Explorer export (material_brdf_explorer): its shader section,
+ * compiled as GLSL ES 3.00 and run by the renderer as a preview's fragment
+ * stage (radiance = BRDF(L, V, N, X, Y) n.L I, X and Y any tangents),
+ * against the CPU's render of the material, for every mapping and both
+ * models. */
+TEST(brdf_explorer_export_renders_as_the_material)
+{
+    glr *g = need_glr();
+    material *mat = need_material();
+    mesh *m = need_sphere();
+    glr_mesh *gm = NULL;
+    scene_view v[3];
+    glint_err e;
+    material alt;
+    hf_factors fac;
+
+    ASSERT(mat && m);
+    test_views(v);
+    ASSERT_OK(glr_mesh_upload(g, m, &gm, &e));
+    fac = *hf3_factors(mat); /* shallow: shares logf, never freed */
+    alt = *mat;
+    alt.data = &fac;
+    for (int kind = 0; kind < 4; kind++) {
+        char *text = NULL, frag[200000];
+        const char *a, *b;
+        img ref, out;
+        double d, mx = 0.0;
+        fac.map.kind = kind == 3 ? HF_MAP_ADD : (hf_map_kind)kind;
+        fac.model = kind == 3 ? HF_MODEL_BRDF : HF_MODEL_RADIANCE;
+        for (int c = 0; c < 3; c++)
+            fac.a_used[c] = kind == 2 ? 1.5 : hf3_factors(mat)->a_used[c];
+        ASSERT_MSG(material_brdf_explorer(&alt, &text, &e) == 0, "%s", e.msg);
+        ASSERT(!strncmp(text, "analytic\n", 9));
+        a = strstr(text, "::begin shader\n");
+        b = strstr(text, "::end shader");
+        ASSERT(a && b && b > a && strstr(text, "::begin parameters") < a);
+        a += strlen("::begin shader\n");
+        snprintf(frag, sizeof frag,
+                 "#version 300 es\n" GLSL_PRECISION GLSL_STAGE_IO "%.*s\n"
+                 "void main()\n"
+                 "{\n"
+                 "    vec3 n = normalize(v_nrm), l = normalize(u_light - v_pos),"
+                 " e = normalize(u_eye - v_pos);\n"
+                 "    vec3 x = normalize(abs(n.z) < 0.9 ? cross(vec3(0.0, 0.0, 1.0), n)"
+                 " : cross(vec3(1.0, 0.0, 0.0), n));\n"
+                 "    o_color = vec4(BRDF(l, e, n, x, cross(n, x)) * max(dot(n, l), 0.0) *"
+                 " u_light_intensity, 1.0);\n"
+                 "}\n",
+                 (int)(b - a), a);
+        ASSERT_OK(material_render(&alt, m, &v[1], 128, 128, &ref, &e));
+        ASSERT_MSG(glr_render_fragment(g, gm, frag, &v[1], 128, 128, &out, &e) == 0, "%s", e.msg);
+        d = mad(&ref, &out);
+        for (size_t i = 0; i < (size_t)128 * 128 * 3; i++)
+            mx = ref.px[i] > mx ? ref.px[i] : mx;
+        printf("  .brdf, mapping %d%s: %zu bytes, mean |its BRDF() rendered - cpu| = %.2e "
+               "(largest value %.3f)\n",
+               kind, kind == 3 ? " (brdf model)" : "", strlen(text), d, mx);
+        img_free(&ref);
+        img_free(&out);
+        free(text);
+        ASSERT_LT(d, 1.0 / 255);
+        ASSERT_LT(0.05, mx);
+    }
+    /* a broken fragment stage is refused with the compiler's words */
+    {
+        img out;
+        ASSERT_EQ(glr_render_fragment(g, gm, "#version 300 es\nvoid main() { nonsense; }\n",
+                                      &v[1], 16, 16, &out, &e),
+                  GLINT_EFORMAT);
+    }
+    glr_mesh_free(g, gm);
+}
+
 TEST(shader_export)
 {
     glr *g = need_glr();
@@ -558,6 +632,7 @@ TEST_LIST{
     TEST_ENTRY(repeated_previews_reuse_everything),
     TEST_ENTRY(calls_from_other_threads),
     TEST_ENTRY(shader_export),
+    TEST_ENTRY(brdf_explorer_export_renders_as_the_material),
     TEST_ENTRY(contact_sheet_bunny),
     TEST_ENTRY(close_everything),
 };
