@@ -1,10 +1,13 @@
 /* api_common.c: errors to HTTP answers, access checks (api_common.h). */
 #include "api_common.h"
 
+#include <limits.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "app.h"
 #include "auth.h"
@@ -242,5 +245,28 @@ int api_parse_count(const char *text, long long *out)
         v = 10 * v + (*c - '0');
     }
     *out = v;
+    return 0;
+}
+
+int api_dir_file(const char *dir, const char *name, char *real, size_t len, long long *size)
+{
+    char path[PATH_MAX + 64], r[PATH_MAX];
+    struct stat st;
+    size_t dl = strlen(dir), n = strlen(name);
+    if (!dir[0] || n == 0 || n > 60 || name[0] == '.')
+        return -1;
+    for (size_t i = 0; i < n; i++) {
+        char c = name[i];
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              c == '.' || c == '_' || c == '-'))
+            return -1;
+    }
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (!realpath(path, r) || strncmp(r, dir, dl) || r[dl] != '/' || stat(r, &st) ||
+        !S_ISREG(st.st_mode))
+        return -1;
+    snprintf(real, len, "%s", r);
+    if (size)
+        *size = (long long)st.st_size;
     return 0;
 }

@@ -88,4 +88,10 @@ int api_view_index(const char *text, int n, int *k);
 /* A non-negative decimal integer of at most 18 digits (0), else -1. */
 int api_parse_count(const char *text, long long *out);
 
+/* A file a directory offers (--env-dir, --measured-dir): NAME of
+ * [A-Za-z0-9._-], 1..60 bytes, not starting with '.', a regular file whose
+ * real path lies inside `dir` (itself a real path; no traversal, no
+ * symbolic link out of it).  OUT: real (its real path), *size.  0, else -1. */
+int api_dir_file(const char *dir, const char *name, char *real, size_t len, long long *size);
+
 #endif

@@ -42,34 +42,10 @@ static char up_dir[PATH_MAX];  /* the uploads' blob directory, "" before the sto
 #define ENV_UPLOAD_MAX_DIM 4096
 #define ENV_UPLOAD_BYTES ((size_t)ENV_UPLOAD_MAX_DIM * ENV_UPLOAD_MAX_DIM * (4 + 3) * sizeof(float))
 
-static int name_ok(const char *name)
-{
-    size_t n = strlen(name);
-    if (n == 0 || n > 60 || name[0] == '.')
-        return 0;
-    for (size_t i = 0; i < n; i++) {
-        char c = name[i];
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              c == '.' || c == '_' || c == '-'))
-            return 0;
-    }
-    return 1;
-}
-
 /* The file of data:NAME inside the directory (OUT: real path), or -1. */
 static int data_file(const char *name, char *real, size_t len)
 {
-    char path[PATH_MAX + 64], r[PATH_MAX];
-    struct stat st;
-    size_t dl = strlen(env_dir);
-    if (!env_dir[0] || !name_ok(name))
-        return -1;
-    snprintf(path, sizeof path, "%s/%s", env_dir, name);
-    if (!realpath(path, r) || strncmp(r, env_dir, dl) || r[dl] != '/' || stat(r, &st) ||
-        !S_ISREG(st.st_mode))
-        return -1;
-    snprintf(real, len, "%s", r);
-    return 0;
+    return api_dir_file(env_dir, name, real, len, NULL);
 }
 
 /* The file of upload:ID (OUT: path; ext: "exr" or "hdr" when not NULL), or -1. */

@@ -16,7 +16,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "api_common.h"
 #include "app.h"
@@ -24,33 +23,15 @@
 
 static char dir_[PATH_MAX]; /* real path, "" when none */
 
-static int name_ok(const char *name)
-{
-    size_t n = strlen(name);
-    if (n < 8 || n > 60 || name[0] == '.' || strcmp(name + n - 7, ".binary"))
-        return 0;
-    for (size_t i = 0; i < n; i++) {
-        char c = name[i];
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-              c == '.' || c == '_' || c == '-'))
-            return 0;
-    }
-    return 1;
-}
-
-/* The file of NAME inside the directory (OUT: real path), or -1. */
+/* The file of NAME (*.binary of the MERL size) inside the directory (OUT:
+ * real path), or -1. */
 static int table_file(const char *name, char *real, size_t len)
 {
-    char path[PATH_MAX + 64], r[PATH_MAX];
-    struct stat st;
-    size_t dl = strlen(dir_);
-    if (!dir_[0] || !name_ok(name))
+    size_t n = strlen(name);
+    long long size = 0;
+    if (n < 8 || strcmp(name + n - 7, ".binary") ||
+        api_dir_file(dir_, name, real, len, &size) || size != (long long)MERL_FILE_BYTES)
         return -1;
-    snprintf(path, sizeof path, "%s/%s", dir_, name);
-    if (!realpath(path, r) || strncmp(r, dir_, dl) || r[dl] != '/' || stat(r, &st) ||
-        !S_ISREG(st.st_mode) || (size_t)st.st_size != MERL_FILE_BYTES)
-        return -1;
-    snprintf(real, len, "%s", r);
     return 0;
 }
 

@@ -75,4 +75,27 @@ static inline float *sv_painted(const prep *pp, const char *spec, const scene *s
     return rgb;
 }
 
+/* Fit every view of sc, painted with spec, by method meth with its
+ * parameters (through the cache entry se).  OUT: *out. */
+static inline int sv_fit(const method *meth, const void *params, const char *spec,
+                         const scene *sc, const gbuf *g, cache *c, cache_entry *se,
+                         material *out)
+{
+    unsigned char all[SCENE_MAX_VIEWS];
+    prep_request rq = {meth, params, se, all};
+    prep *pp = NULL;
+    img im[SCENE_MAX_VIEWS];
+    glint_err e;
+    int rc;
+    memset(all, 1, sizeof all);
+    rc = sv_paint(spec, sc, g, im, &e) || prep_acquire(c, &rq, NULL, NULL, &pp, &e) ||
+         prep_fit(pp, im, NULL, out, &e);
+    if (rc)
+        fprintf(stderr, "fitting %s: %s\n", spec, e.msg);
+    for (int v = 0; v < sc->nviews; v++)
+        img_free(&im[v]);
+    prep_release(c, pp);
+    return rc;
+}
+
 #endif

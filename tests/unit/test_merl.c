@@ -46,21 +46,7 @@ static int setup(void)
 
 static int fit(const method *meth, const void *params, const char *spec, material *out)
 {
-    unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {meth, params, SE, all};
-    prep *pp = NULL;
-    img im[SCENE_MAX_VIEWS];
-    glint_err e;
-    int rc;
-    memset(all, 1, sizeof all);
-    rc = sv_paint(spec, &SC, G, im, &e) || prep_acquire(C, &rq, NULL, NULL, &pp, &e) ||
-         prep_fit(pp, im, NULL, out, &e);
-    if (rc)
-        fprintf(stderr, "fit: %s\n", e.msg);
-    for (int v = 0; v < SC.nviews; v++)
-        img_free(&im[v]);
-    prep_release(C, pp);
-    return rc;
+    return sv_fit(meth, params, spec, &SC, G, C, SE, out);
 }
 
 /* The centre of bin (i, j, k) with the half vector at azimuth ph, built
