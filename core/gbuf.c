@@ -105,3 +105,150 @@ int gbuf_exr_mem(const gbuf *g, void **out, size_t *len, glint_err *err)
     free(data);
     return rc;
 }
+
+/* ---- reading G-buffers made elsewhere -------------------------------------------------- */
+
+#include <math.h>
+#include <stdio.h>
+#include <strings.h>
+#include <xxhash.h>
+
+/* The index of channel `name` (case-insensitive; "N.X" also matches "N.x"
+ * and "Nx"), or -1. */
+static int channel_of(const img_named *im, const char *name)
+{
+    char alt[16];
+    size_t n = strlen(name);
+    snprintf(alt, sizeof alt, "%s", name);
+    if (n >= 3 && name[n - 2] == '.') { /* "N.X" -> "NX" */
+        alt[n - 2] = name[n - 1];
+        alt[n - 1] = '\0';
+    }
+    for (int c = 0; c < im->channels; c++)
+        if (!strcasecmp(im->names[c], name) || !strcasecmp(im->names[c], alt))
+            return c;
+    return -1;
+}
+
+static int vec_channels(const img_named *im, const char *base, const char *const comp[],
+                        int ncomp, int ch[3], const char *what, glint_err *err)
+{
+    for (int k = 0; k < ncomp; k++) {
+        char name[16];
+        snprintf(name, sizeof name, "%s.%s", base, comp[k]);
+        if ((ch[k] = channel_of(im, name)) < 0)
+            return err ? glint_err_set(err, GLINT_EFORMAT,
+                                       "%s: no channel %s (a G-buffer needs N.X N.Y N.Z, "
+                                       "wi.X wi.Y wi.Z, wo.X wo.Y wo.Z; mask, P.X P.Y P.Z and "
+                                       "uv.U uv.V are optional)",
+                                       what, name)
+                       : -1;
+    }
+    return 0;
+}
+
+int gbuf_from_named(const img_named *im, const char *what, gbuf *g, int *has_uv,
+                    glint_err *err)
+{
+    static const char *const xyz[3] = {"X", "Y", "Z"}, *const uv2[2] = {"U", "V"};
+    int cn[3], ci[3], co[3], cp[3] = {0, 0, 0}, cu[3] = {0, 0, 0}, cm, has_p, rc;
+    size_t np;
+
+    memset(g, 0, sizeof *g);
+    *has_uv = 0;
+    if ((rc = vec_channels(im, "N", xyz, 3, cn, what, err)) ||
+        (rc = vec_channels(im, "wi", xyz, 3, ci, what, err)) ||
+        (rc = vec_channels(im, "wo", xyz, 3, co, what, err)))
+        return rc;
+    has_p = vec_channels(im, "P", xyz, 3, cp, what, NULL) == 0;
+    *has_uv = vec_channels(im, "uv", uv2, 2, cu, what, NULL) == 0;
+    cm = channel_of(im, "mask");
+    if ((rc = gbuf_alloc(g, im->width, im->height, err)))
+        return rc;
+    np = (size_t)im->width * im->height;
+    for (size_t p = 0; p < np; p++) {
+        const float *px = im->px + p * (size_t)im->channels;
+        float v[3][3];
+        int on = cm >= 0 ? px[cm] > 0.5f : 1;
+        for (int k = 0; k < 3; k++) {
+            v[0][k] = px[cn[k]];
+            v[1][k] = px[ci[k]];
+            v[2][k] = px[co[k]];
+        }
+        for (int a = 0; a < 3 && on; a++) {
+            double l = sqrt((double)v[a][0] * v[a][0] + (double)v[a][1] * v[a][1] +
+                            (double)v[a][2] * v[a][2]);
+            if (!isfinite(l)) {
+                gbuf_free(g);
+                return glint_err_set(err, GLINT_ENONFINITE,
+                                     "%s: pixel (x %d, y %d) has a non-finite %s", what,
+                                     (int)(p % (size_t)im->width), (int)(p / (size_t)im->width),
+                                     a == 0 ? "normal" : a == 1 ? "wi" : "wo");
+            }
+            if (l < 1e-6) { /* no geometry here (a background pixel without a mask) */
+                if (cm >= 0) {
+                    gbuf_free(g);
+                    return glint_err_set(err, GLINT_EFORMAT,
+                                         "%s: pixel (x %d, y %d) is in the mask but its %s is "
+                                         "zero",
+                                         what, (int)(p % (size_t)im->width),
+                                         (int)(p / (size_t)im->width),
+                                         a == 0 ? "normal" : a == 1 ? "wi" : "wo");
+                }
+                on = 0;
+                break;
+            }
+            for (int k = 0; k < 3; k++)
+                v[a][k] = (float)(v[a][k] / l);
+        }
+        if (!on)
+            continue;
+        g->mask[p] = 1;
+        memcpy(g->nrm + 3 * p, v[0], sizeof v[0]);
+        memcpy(g->wi + 3 * p, v[1], sizeof v[1]);
+        memcpy(g->wo + 3 * p, v[2], sizeof v[2]);
+        for (int k = 0; k < 3 && has_p; k++)
+            g->pos[3 * p + k] = isfinite(px[cp[k]]) ? px[cp[k]] : 0.0f;
+        for (int k = 0; k < 2 && *has_uv; k++) {
+            float u = px[cu[k]];
+            g->uv[2 * p + k] = !(u > 0.0f) ? 0.0f : u > 1.0f ? 1.0f : u;
+        }
+    }
+    return 0;
+}
+
+int gbuf_read_exr(const char *path, gbuf *g, int *has_uv, glint_err *err)
+{
+    img_named im;
+    int rc;
+    memset(g, 0, sizeof *g);
+    if ((rc = img_read_named(path, &im, err)))
+        return rc;
+    rc = gbuf_from_named(&im, path, g, has_uv, err);
+    img_named_free(&im);
+    return rc;
+}
+
+void gbuf_hash(const gbuf *g, int n, char hex[33])
+{
+    XXH3_state_t *st = XXH3_createState();
+    XXH128_hash_t h = {0, 0};
+    if (st && XXH3_128bits_reset(st) == XXH_OK) {
+        XXH3_128bits_update(st, "glint-gbuffers/1", 16);
+        for (int v = 0; v < n; v++) {
+            size_t np = (size_t)g[v].width * g[v].height;
+            int wh[2] = {g[v].width, g[v].height};
+            XXH3_128bits_update(st, wh, sizeof wh);
+            XXH3_128bits_update(st, g[v].mask, np);
+            XXH3_128bits_update(st, g[v].nrm, 3 * np * sizeof(float));
+            XXH3_128bits_update(st, g[v].wi, 3 * np * sizeof(float));
+            XXH3_128bits_update(st, g[v].wo, 3 * np * sizeof(float));
+            XXH3_128bits_update(st, g[v].uv, 2 * np * sizeof(float));
+            XXH3_128bits_update(st, g[v].pos, 3 * np * sizeof(float));
+        }
+        h = XXH3_128bits_digest(st);
+    }
+    XXH3_freeState(st);
+    snprintf(hex, 33, "%016llx%016llx", (unsigned long long)h.high64,
+             (unsigned long long)h.low64);
+}

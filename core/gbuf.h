@@ -40,4 +40,21 @@ int gbuf_write_exr(const gbuf *g, const char *path, glint_err *err);
 /* The same file's bytes (OUT: *out malloc'ed, *len). */
 int gbuf_exr_mem(const gbuf *g, void **out, size_t *len, glint_err *err);
 
+/* A G-buffer made elsewhere (a renderer's AOVs), or by gbuf_write_exr: an
+ * image with named float channels N.X N.Y N.Z, wi.X wi.Y wi.Z and wo.X
+ * wo.Y wo.Z (required; names case-insensitive, "N.x" and "Nx" too), mask
+ * (optional: where absent, a pixel is covered when its three vectors are
+ * non-zero), P.X P.Y P.Z and uv.U uv.V (optional; uv clamped to [0,1]).
+ * Vectors are normalized; a covered pixel with a zero or non-finite vector
+ * is an error naming it.  OUT: *g, *has_uv (1 when uv channels were read:
+ * what methods that vary over the surface need). */
+struct img_named;
+int gbuf_from_named(const struct img_named *im, const char *what, gbuf *g, int *has_uv,
+                    glint_err *err);
+int gbuf_read_exr(const char *path, gbuf *g, int *has_uv, glint_err *err);
+
+/* A content hash of n G-buffers (OUT: hex, 32 digits): what keys the
+ * precomputations of samples made from them. */
+void gbuf_hash(const gbuf *g, int n, char hex[33]);
+
 #endif

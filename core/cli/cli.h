@@ -68,6 +68,8 @@ int raster_all(const scene *sc, gbuf **g);
  * dir is NULL, from `files` (nfiles of them, one per view, in order).
  * imgs and use hold sc->nviews entries (OUT: imgs[v] and use[v] = 1 for
  * each painting read; the caller frees imgs with free_imgs). */
+/* DIR/view_KK.exr, .hdr, .png, .jpg or .jpeg if one exists (OUT: path): 1, else 0. */
+int find_painting(const char *dir, int view, char *path, size_t len);
 int read_paintings(const scene *sc, const char *dir, char **files, int nfiles,
                    img *imgs, unsigned char *use);
 /* Free n images and the array.  Accepts NULL. */
@@ -133,6 +135,7 @@ int cmd_paint(int argc, char **argv);
 int cmd_base_render(int argc, char **argv);
 int cmd_fit(int argc, char **argv);           /* cmd_fit.c */
 int cmd_fit_samples(int argc, char **argv);
+int cmd_fit_gbuffers(int argc, char **argv);
 int cmd_export_samples(int argc, char **argv);
 int cmd_render(int argc, char **argv);        /* cmd_render.c */
 int cmd_eval(int argc, char **argv);

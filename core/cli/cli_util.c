@@ -125,8 +125,8 @@ int raster_all(const scene *sc, gbuf **g)
     return 0;
 }
 
-/* Find view_KK.{exr,hdr,png,jpg,jpeg} in dir; returns 1 and the path if found. */
-static int find_painting(const char *dir, int view, char *path, size_t len)
+/* Find view_KK.{exr,hdr,png,jpg,jpeg} in dir; returns 1 and the path if found (cli.h). */
+int find_painting(const char *dir, int view, char *path, size_t len)
 {
     static const char *ext[] = {"exr", "hdr", "png", "jpg", "jpeg"};
     struct stat st;

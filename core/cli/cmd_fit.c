@@ -1,6 +1,7 @@
 /* cmd_fit.c: the glint commands that fit a material: fit (paintings of a
  * scene), export-samples and fit-samples (samples in a text file, e.g. to
- * compare with the reference).  Fits go through the method's levels and the
+ * compare with the reference), fit-gbuffers (G-buffers and paintings made
+ * elsewhere).  Fits go through the method's levels and the
  * cache on disk (prep.h, cache.h), as in the daemon. */
 #include <errno.h>
 #include <getopt.h>
@@ -9,7 +10,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
 #include "cli.h"
+#include "gbuf.h"
 #include "prep.h"
 #include "raster.h"
 #include "samples.h"
@@ -297,5 +301,139 @@ done:
     fit_opts_free(&o);
     samples_free(&s);
     free(vals);
+    return rc;
+}
+
+/* ---- fit-gbuffers: G-buffers and paintings made elsewhere ----------------------------- */
+
+static const char usage_fit_gbuffers[] =
+    "usage: glint fit-gbuffers GBDIR --paintings DIR -o MATDIR [fit options]\n"
+    "  GBDIR/view_00.exr, view_01.exr, ...: G-buffers with named channels N.X N.Y N.Z,\n"
+    "  wi.X wi.Y wi.Z, wo.X wo.Y wo.Z (mask, P.X P.Y P.Z, uv.U uv.V optional; what\n"
+    "  glint gbuffer writes); DIR/view_KK.exr|hdr|png: the RGB paintings of those views\n"
+    "  (views without one are not used).  Every method but srbf (which needs the\n"
+    "  mesh and an environment); those that vary over the surface need uv.";
+
+int cmd_fit_gbuffers(int argc, char **argv)
+{
+    static const struct option own[] = {{"out", required_argument, 0, 'o'},
+                                        {"paintings", required_argument, 0, 'p'}};
+    struct option *lo = fit_opts_table(own, 2);
+    gbuf g[SCENE_MAX_VIEWS];
+    img imgs[SCENE_MAX_VIEWS];
+    scene_view views[SCENE_MAX_VIEWS];
+    unsigned char use[SCENE_MAX_VIEWS];
+    const char *out = NULL, *pdir = NULL;
+    char hash[33], path[4096];
+    int c, rc = 0, n = 0, has_uv = 1, found = 0;
+    fit_opts o;
+    samples s;
+    float *vals = NULL;
+    cache *cc = NULL;
+    prep *p = NULL;
+    material m;
+    glint_err e;
+
+    memset(g, 0, sizeof g);
+    memset(imgs, 0, sizeof imgs);
+    memset(views, 0, sizeof views);
+    memset(&s, 0, sizeof s);
+    memset(&m, 0, sizeof m);
+    fit_opts_init(&o);
+    if (!lo)
+        return fail(1, "out of memory");
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "o:p:", lo, NULL)) != -1) {
+        if (c == 'o') out = optarg;
+        else if (c == 'p') pdir = optarg;
+        else if ((rc = fit_opt(&o, c, optarg)) != 0) {
+            free(lo);
+            return rc > 0 ? rc : fail(1, "%s", usage_fit_gbuffers);
+        }
+    }
+    free(lo);
+    if (!out || !pdir || optind != argc - 1)
+        return fail(1, "%s", usage_fit_gbuffers);
+    if ((rc = fit_opts_resolve(&o)))
+        goto done;
+    if (o.m->pattern_rule != SAMPLES_LIT) {
+        rc = fail(1, "method %s fits under an environment and needs the scene's mesh: fit "
+                     "G-buffers with a point-light method (hf3, hf2d, hf4, maps, hybrid, auto)",
+                     o.m->name);
+        goto done;
+    }
+    for (; n < SCENE_MAX_VIEWS; n++) { /* view_00.exr, view_01.exr, ... while they exist */
+        struct stat st;
+        int uv = 0;
+        snprintf(path, sizeof path, "%s/view_%02d.exr", argv[optind], n);
+        if (stat(path, &st))
+            break;
+        if (gbuf_read_exr(path, &g[n], &uv, &e)) {
+            rc = fail_err(&e);
+            goto done;
+        }
+        if (n > 0 && (g[n].width != g[0].width || g[n].height != g[0].height)) {
+            rc = fail(1, "%s is %dx%d but view 0's G-buffer is %dx%d", path, g[n].width,
+                      g[n].height, g[0].width, g[0].height);
+            goto done;
+        }
+        has_uv &= uv;
+        views[n].light_intensity = 1.0; /* the paintings are per unit light */
+    }
+    if (n == 0) {
+        rc = fail(1, "no G-buffer in %s (expected view_00.exr, view_01.exr, ...)", argv[optind]);
+        goto done;
+    }
+    for (int v = 0; v < n; v++) {
+        use[v] = find_painting(pdir, v, path, sizeof path);
+        if (!use[v])
+            continue;
+        if (img_read(path, &imgs[v], &e)) {
+            glint_err_prefix(&e, "painting of view %d (%s)", v, path);
+            rc = fail_err(&e);
+            goto done;
+        }
+        if (imgs[v].width != g[v].width || imgs[v].height != g[v].height) {
+            rc = fail(1, "painting %s is %dx%d but its G-buffer is %dx%d", path, imgs[v].width,
+                      imgs[v].height, g[v].width, g[v].height);
+            goto done;
+        }
+        found++;
+    }
+    if (!found) {
+        rc = fail(1, "no painting in %s for the %d G-buffers (expected view_00.exr, ...)", pdir,
+                  n);
+        goto done;
+    }
+    gbuf_hash(g, n, hash);
+    if (samples_build(g, views, n, use, hash, &s, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    s.has_pos = has_uv; /* the surface's coordinates came with every G-buffer */
+    if (!(vals = malloc(3 * (size_t)s.n * sizeof *vals)) || samples_gather(&s, imgs, vals, &e)) {
+        rc = vals ? fail_err(&e) : fail(1, "out of memory");
+        goto done;
+    }
+    if (cache_open(o.cache_dir, 0, &cc, &e) ||
+        prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, &p, &e) ||
+        prep_fit(p, NULL, vals, &m, &e)) {
+        rc = fail_err(&e);
+        goto done;
+    }
+    if ((rc = save_material(&m, out)))
+        goto done;
+    print_json(m.info);
+done:
+    prep_release(cc, p);
+    cache_close(cc);
+    material_free(&m);
+    fit_opts_free(&o);
+    samples_free(&s);
+    free(vals);
+    for (int v = 0; v < SCENE_MAX_VIEWS; v++) {
+        gbuf_free(&g[v]);
+        img_free(&imgs[v]);
+    }
     return rc;
 }

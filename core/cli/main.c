@@ -53,6 +53,9 @@ static void usage(FILE *f)
           "                                      polar plot data (JSON)\n"
           "  export-samples scene.json [--paintings DIR] [--channel C] -o samples.txt\n"
           "  fit-samples samples.txt -o MATDIR [--eval samples.txt [--eval-out F]] [fit options]\n"
+          "  fit-gbuffers GBDIR --paintings DIR -o MATDIR [fit options]\n"
+          "                                      fit G-buffers and RGB paintings made elsewhere\n"
+          "                                      (OpenEXR, named channels N, wi, wo, mask, P, uv)\n"
           "  demo [-o DIR]                       paint the sphere, fit, render new views\n"
           "  methods [--json | --schema NAME]    the fit methods and their parameters\n"
           "  version | help\n"
@@ -87,6 +90,7 @@ int main(int argc, char **argv)
         {"scene", cmd_scene}, {"gbuffer", cmd_gbuffer}, {"paint", cmd_paint},
         {"fit", cmd_fit}, {"render", cmd_render}, {"eval", cmd_eval}, {"summary", cmd_summary},
         {"export-samples", cmd_export_samples}, {"fit-samples", cmd_fit_samples},
+        {"fit-gbuffers", cmd_fit_gbuffers},
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
         {"export-brdf", cmd_export_brdf},

@@ -104,6 +104,23 @@ expect_err "maps rounds without refine" 1 "needs refine" "$G" fit "$T/scene.json
 printf '{"format":"glint-material","version":1,"method":"hf3","res":64' > "$T/mat3/material.json"
 expect_err "corrupt material" 1 "material.json" "$G" eval "$T/mat3" --dirs "$T/dirs.txt"
 
+# G-buffers and paintings as another tool would hand them over: the same fit
+expect_ok "gbuffer of every view" "$G" gbuffer "$T/scene.json" -o "$T/gball"
+expect_ok "fit-gbuffers" "$G" fit-gbuffers "$T/gball" --paintings "$T/paint" -o "$T/matgb" --no-cache
+rms_of() { grep -o '"rms_painted": *[0-9.e-]*' "$1" | head -1 | sed 's/.*: *//'; }
+a=$(rms_of "$T/matgb/material.json"); b=$(rms_of "$T/mat/material.json")
+awk -v a="$a" -v b="$b" 'BEGIN { exit !(a > 0 && (a - b < 1e-6) && (b - a < 1e-6)) }' && ok "fit-gbuffers fits as fit does ($a, $b)" || bad "fit-gbuffers fits as fit does ($a, $b)"
+expect_ok "fit-gbuffers, colour varying over uv" "$G" fit-gbuffers "$T/gball" --paintings "$T/paintsv" --method hf4 --res 16 -o "$T/matgb4" --no-cache
+expect_err "fit-gbuffers refuses srbf" 1 "needs the scene's mesh" "$G" fit-gbuffers "$T/gball" --paintings "$T/paint" --method srbf -o "$T/x"
+mkdir -p "$T/nopaint"
+expect_err "fit-gbuffers without paintings" 1 "no painting" "$G" fit-gbuffers "$T/gball" --paintings "$T/nopaint" -o "$T/x"
+expect_err "fit-gbuffers without G-buffers" 1 "no G-buffer" "$G" fit-gbuffers "$T/nopaint" --paintings "$T/paint" -o "$T/x"
+if command -v oiiotool >/dev/null; then
+  mkdir -p "$T/gbhalf"
+  oiiotool --create 48x48 3 --chnames N.X,N.Y,N.Z -d float -o "$T/gbhalf/view_00.exr" >/dev/null 2>&1
+  expect_err "fit-gbuffers names a missing channel" 1 "no channel wi.X" "$G" fit-gbuffers "$T/gbhalf" --paintings "$T/paint" -o "$T/x"
+fi
+
 # samples round trip: fitting exported samples gives the same factors
 expect_ok "export-samples" "$G" export-samples "$T/scene.json" --paintings "$T/paint" --channel 1 -o "$T/s.txt"
 expect_ok "fit-samples" "$G" fit-samples "$T/s.txt" -o "$T/mats" --no-cache --eval "$T/s.txt"
