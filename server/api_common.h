@@ -81,6 +81,10 @@ int api_expiry_parse(const json_t *v, json_t *doc, glint_err *e);
 /* The material `mid` if the request may read its session.  OUT: *doc (free
  * doc->text). */
 int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err);
+/* Load a stored material (OUT: *m, material_free; api_materials.c). */
+struct app;
+struct material;
+int api_material_load(struct app *a, const char *mid, struct material *m, glint_err *err);
 
 /* A view index from a path segment: decimal digits, 0..n-1 (0), else -1. */
 int api_view_index(const char *text, int n, int *k);

@@ -11,8 +11,7 @@
  *   GET  /api/v1/materials/{id}/preview.png|preview.exr   (object=ball: the material ball)
  *   POST /api/v1/materials/{id}/eval       BRDF values at direction pairs
  *   GET  /api/v1/materials/{id}/summary    base colour, highlight, albedo, polar data
- *   GET  /api/v1/materials/{id}/merl.binary  the material as a MERL table (merl.h)
- *   GET  /api/v1/materials/{id}/material.brdf  BRDF Explorer's analytic .brdf (hf3)
+ *   (exports for other tools: api_exports.c)
  *
  * A material's files are blobs "materials/<id>/": material.json and what
  * its method writes (material_save), written before its row is committed.
@@ -32,7 +31,6 @@
 #include "buf.h"
 #include "fitsvc.h"
 #include "material.h"
-#include "merl.h"
 #include "readable.h"
 #include "prep.h"
 #include "render.h"
@@ -133,7 +131,7 @@ static const char *ctype_of(const char *name)
 static pthread_mutex_t export_lock = PTHREAD_MUTEX_INITIALIZER;
 
 /* Load a stored material (OUT: *m, material_free). */
-static int material_of(app *a, const char *mid, material *m, glint_err *e)
+int api_material_load(app *a, const char *mid, material *m, glint_err *e)
 {
     char name[128], dir[4096];
     int rc;
@@ -165,7 +163,7 @@ static int shader_ensure(app *a, const char *mid, glint_err *e)
         pthread_mutex_unlock(&export_lock);
         return 0;
     }
-    if ((rc = material_of(a, mid, &m, e)) == 0) {
+    if ((rc = api_material_load(a, mid, &m, e)) == 0) {
         snprintf(path, sizeof path, "%s/shader", dir);
         rc = render_export_shader(&m, path, e);
         material_free(&m);
@@ -498,7 +496,7 @@ static http_resp preview(http_req *req, const char *format)
     if ((rc = admit_enter(a->work, bytes, what, &e)))
         goto done;
     admitted = 1;
-    if ((rc = material_of(a, mid, &m, &e)))
+    if ((rc = api_material_load(a, mid, &m, &e)))
         goto done;
     if ((rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im,
                                             &info, &used, &e)
@@ -591,7 +589,7 @@ static int eval_pairs(app *a, const char *mid, const json_t *body, json_t **valu
         return api_reject(e, GLINT_ETOOBIG, "too-many-pairs",
                           "%zu pairs exceed the limit of %d per request", json_array_size(pairs),
                           EVAL_MAX_PAIRS);
-    if ((rc = material_of(a, mid, &m, e)))
+    if ((rc = api_material_load(a, mid, &m, e)))
         return rc;
     *values = json_array();
     json_array_foreach(pairs, i, p) {
@@ -671,85 +669,13 @@ static http_resp summary_get(http_req *req)
     if ((rc = api_material(req, req->param[0], &doc, &e)))
         return api_error(&e);
     free(doc.text);
-    if ((rc = material_of(req->app, req->param[0], &m, &e)))
+    if ((rc = api_material_load(req->app, req->param[0], &m, &e)))
         return api_error(&e);
     rc = material_readable(&m, &o, &e);
     material_free(&m);
     if (rc)
         return api_error(&e);
     return http_json(200, o);
-}
-
-/* The material as a MERL table (merl.h): 35 MB, computed on request
- * (about 0.5 s for hf3 on two cores, eight times that for an anisotropic
- * material, averaged over half-vector azimuths), held against the work
- * budget while it is made. */
-static http_resp merl_get(http_req *req)
-{
-    app *a = req->app;
-    memo_doc doc;
-    material m = {0};
-    merl_table t = {0};
-    merl_stats st;
-    void *data = NULL;
-    size_t len = 0, bytes = 2 * MERL_FILE_BYTES;
-    http_resp r;
-    glint_err e;
-    char info[200];
-    int rc, admitted = 0;
-
-    if ((rc = api_material(req, req->param[0], &doc, &e)))
-        return api_error(&e);
-    free(doc.text);
-    if ((rc = admit_enter(a->work, bytes, "a MERL table", &e)))
-        return api_error(&e);
-    admitted = 1;
-    if ((rc = material_of(a, req->param[0], &m, &e)) ||
-        (rc = merl_from_material(&m, 0, &t, &st, &e)) ||
-        (rc = merl_write_mem(&t, &data, &len, &e)))
-        goto done;
-    r = http_bytes_owned(200, "application/octet-stream", data, len);
-    snprintf(info, sizeof info,
-             "anisotropic=%d; azimuths=%d; spatial_average=%d; below_horizon=%ld; nonfinite=%ld; "
-             "max_f=%.6g; ms=%.1f",
-             st.anisotropic, st.azimuths, st.spatial, st.below_horizon, st.nonfinite, st.max_f,
-             1e3 * st.seconds);
-    http_header(&r, "X-Glint-Merl", info);
-    http_header(&r, "Content-Disposition", "attachment; filename=\"material.binary\"");
-done:
-    if (rc)
-        r = api_error(&e);
-    merl_free(&t);
-    material_free(&m);
-    if (admitted)
-        admit_leave(a->work, bytes);
-    return r;
-}
-
-/* The material as BRDF Explorer's analytic .brdf file (methods that write
- * one: hf3; 422 naming the MERL table otherwise). */
-static http_resp brdf_get(http_req *req)
-{
-    memo_doc doc;
-    material m = {0};
-    char *text = NULL;
-    http_resp r;
-    glint_err e;
-    int rc;
-
-    if ((rc = api_material(req, req->param[0], &doc, &e)))
-        return api_error(&e);
-    free(doc.text);
-    if ((rc = material_of(req->app, req->param[0], &m, &e)))
-        return api_error(&e);
-    rc = material_brdf_explorer(&m, &text, &e);
-    material_free(&m);
-    if (rc)
-        return rc == GLINT_EUNSUPPORTED ? http_problem(422, "unsupported", "%s", e.msg)
-                                        : api_error(&e);
-    r = http_bytes_owned(200, "text/plain; charset=utf-8", text, strlen(text));
-    http_header(&r, "Content-Disposition", "attachment; filename=\"material.brdf\"");
-    return r;
 }
 
 const http_route api_materials_routes[] = {
@@ -768,7 +694,5 @@ const http_route api_materials_routes[] = {
     {"GET", "/api/v1/materials/{id}/preview.exr", preview_exr},
     {"POST", "/api/v1/materials/{id}/eval", eval_post},
     {"GET", "/api/v1/materials/{id}/summary", summary_get},
-    {"GET", "/api/v1/materials/{id}/merl.binary", merl_get},
-    {"GET", "/api/v1/materials/{id}/material.brdf", brdf_get},
 };
 const int api_materials_nroutes = sizeof api_materials_routes / sizeof api_materials_routes[0];

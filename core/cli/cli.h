@@ -143,6 +143,7 @@ int cmd_summary(int argc, char **argv);
 int cmd_export_shader(int argc, char **argv);
 int cmd_export_merl(int argc, char **argv);
 int cmd_export_brdf(int argc, char **argv);
+int cmd_export_gltf(int argc, char **argv);
 int cmd_demo(int argc, char **argv);          /* cmd_demo.c */
 int cmd_methods(int argc, char **argv);       /* cmd_methods.c */
 

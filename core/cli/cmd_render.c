@@ -13,8 +13,11 @@
 #include "env.h"
 #include "fsio.h"
 #include "glr.h"
+#include "gltf.h"
 #include "merl.h"
 #include "readable.h"
+#include "samples.h"
+#include "raster.h"
 
 /* ---- the renderer ------------------------------------------------------------- */
 
@@ -327,6 +330,59 @@ int cmd_export_brdf(int argc, char **argv)
     else
         printf("%s: BRDF Explorer analytic BRDF, %zu bytes\n", argv[3], strlen(text));
     free(text);
+    material_free(&m);
+    return rc;
+}
+
+/* glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb:
+ * the scene's mesh with the glTF metallic-roughness material fitted to
+ * MATDIR at the samples of the painted views (those with a file in DIR;
+ * every view without it) (gltf.h). */
+int cmd_export_gltf(int argc, char **argv)
+{
+    static const struct option lo[] = {{"scene", required_argument, 0, 's'},
+                                       {"paintings", required_argument, 0, 'p'},
+                                       {"out", required_argument, 0, 'o'},
+                                       {0, 0, 0, 0}};
+    const char *scn = NULL, *pdir = NULL, *out = NULL;
+    unsigned char use[SCENE_MAX_VIEWS];
+    material m;
+    scene sc;
+    gltf_pbr p;
+    glint_err e;
+    void *glb = NULL;
+    size_t len = 0;
+    char path[4096];
+    int c, rc = 0;
+
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "o:", lo, NULL)) != -1) {
+        if (c == 's') scn = optarg;
+        else if (c == 'p') pdir = optarg;
+        else if (c == 'o') out = optarg;
+        else return fail(1, "usage: glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb");
+    }
+    if (!scn || !out || optind != argc - 1)
+        return fail(1, "usage: glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb");
+    if (material_load(argv[optind], &m, &e))
+        return fail_err(&e);
+    if ((rc = load_scene(scn, &sc))) {
+        material_free(&m);
+        return rc;
+    }
+    for (int v = 0; v < sc.nviews; v++)
+        use[v] = !pdir || find_painting(pdir, v, path, sizeof path);
+    if (gltf_export_scene(&m, &sc, use, &glb, &len, &p, &e) ||
+        fsio_write_atomic(out, glb, len, &e))
+        rc = fail_err(&e);
+    else
+        printf("{\"file\": \"%s\", \"bytes\": %zu, \"base_color\": [%.4f, %.4f, %.4f], "
+               "\"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f, "
+               "\"pairs\": %d}\n",
+               out, len, p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms,
+               p.pairs);
+    free(glb);
+    scene_free(&sc);
     material_free(&m);
     return rc;
 }

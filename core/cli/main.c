@@ -42,6 +42,9 @@ static void usage(FILE *f)
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
           "  export-brdf MATDIR -o FILE.brdf     BRDF Explorer's analytic .brdf (hf3)\n"
+          "  export-gltf MATDIR --scene scene.json -o FILE.glb\n"
+          "                                      the scene's mesh with a glTF metallic-\n"
+          "                                      roughness material fitted to MATDIR\n"
           "  export-merl (MATDIR | --brdf SPEC) -o FILE.binary\n"
           "                                      a material (or an analytic truth) as a MERL\n"
           "                                      table (90x90x180 bins, isotropic; BRDF\n"
@@ -93,7 +96,7 @@ int main(int argc, char **argv)
         {"fit-gbuffers", cmd_fit_gbuffers},
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
-        {"export-brdf", cmd_export_brdf},
+        {"export-brdf", cmd_export_brdf}, {"export-gltf", cmd_export_gltf},
         {"methods", cmd_methods}};
     static char name[64];
 

@@ -164,6 +164,9 @@ expect_err "paint from a truncated MERL table" 1 "not a MERL|truncated" "$G" pai
 expect_err "paint from a missing MERL table" 1 "No such file|nosuch" "$G" paint "$T/scene.json" --brdf "merl:$T/nosuch.binary" -o "$T/x"
 expect_err "export-merl usage" 1 "usage" "$G" export-merl "$T/mat"
 expect_ok "export-brdf" "$G" export-brdf "$T/mat" -o "$T/mat.brdf"
+expect_ok "export-gltf" "$G" export-gltf "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" -o "$T/mat.glb"
+[ "$(head -c 4 "$T/mat.glb")" = glTF ] && grep -q '"roughness"' "$T/out" && ok "export-gltf writes binary glTF and its fit" || bad "export-gltf writes binary glTF and its fit"
+expect_err "export-gltf usage" 1 "usage" "$G" export-gltf "$T/mat" -o "$T/x.glb"
 head -1 "$T/mat.brdf" | grep -q '^analytic$' && grep -q 'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)' "$T/mat.brdf" && ok "export-brdf writes BRDF Explorer's format" || bad "export-brdf writes BRDF Explorer's format"
 
 # environment lighting: truths painted under a built-in sky, the srbf fit, a preview

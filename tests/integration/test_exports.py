@@ -13,6 +13,7 @@ import math
 import os
 import random
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -182,6 +183,30 @@ def test_02_an_anisotropic_material_is_averaged(d):
 
 def test_03_access_and_errors(d):
     mid = S["material"]
+    # the material on its mesh as binary glTF, with the fitted metallic-roughness material
+    r = d.get("/api/v1/materials/%s/material.glb" % mid, headers=tok(S["session"]["view_token"]),
+              status=200)
+    glb = r.content
+    magic, version, total = struct.unpack("<III", glb[:12])
+    jl, jt = struct.unpack("<II", glb[12:20])
+    assert (magic, version, total, jt) == (0x46546C67, 2, len(glb), 0x4E4F534A)
+    doc = json.loads(glb[20:20 + jl])
+    bl, bt = struct.unpack("<II", glb[20 + jl:28 + jl])
+    assert bt == 0x004E4942 and 28 + jl + bl == len(glb)
+    acc = doc["accessors"]
+    nv, ni = acc[0]["count"], acc[3]["count"]
+    assert acc[1]["count"] == acc[2]["count"] == nv and ni % 3 == 0 and ni > 0
+    assert all(abs(v) <= 1.0 + 1e-6 for v in acc[0]["min"] + acc[0]["max"])  # the unit ball
+    views = doc["bufferViews"]
+    assert views[0]["byteLength"] == 12 * nv and views[3]["byteLength"] == 4 * ni
+    pbr = doc["materials"][0]["pbrMetallicRoughness"]
+    extras = doc["materials"][0]["extras"]["glint"]
+    print("glTF:", r.headers["X-Glint-Gltf"], "| extras:", extras)
+    # ct kd 0.4/0.3/0.2, f0 0.2, alpha 0.3: glTF roughness sqrt(0.3) = 0.548
+    assert abs(pbr["roughnessFactor"] - math.sqrt(0.3)) < 0.1, pbr
+    assert extras["fit_rel_rms"] < 0.1 and extras["method"] == "hf3", extras
+    assert "alpha = roughness^2" in extras["model"]
+    d.get("/api/v1/materials/%s/material.glb" % mid, status=401)
     # the hf3 material as BRDF Explorer's analytic file
     r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(S["session"]["view_token"]),
               status=200)

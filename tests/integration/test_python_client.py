@@ -322,6 +322,8 @@ def test_07_material_files(d):
 
     summ = v.summary(mid)
     validate(summ, "MaterialSummary.json")
+    glb = v.gltf(mid)
+    assert glb[:4] == b"glTF" and "roughness=" in glb.header("X-Glint-Gltf", ""), glb.headers
     brdf = v.brdf_explorer(mid)
     assert brdf.startswith(b"analytic\n") and b"vec3 BRDF(" in brdf
     merl = v.merl(mid)

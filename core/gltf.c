@@ -1,0 +1,372 @@
+/* gltf.c: glTF 2.0 metallic-roughness materials fitted to glint materials,
+ * and binary glTF files (gltf.h). */
+#include "gltf.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "raster.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* ---- the model ------------------------------------------------------------------------ */
+
+/* D G / (4 ci co) and s = (1 - |V.H|)^5 of a pair (ci, co > 0) */
+static void spec_terms(double alpha, const double n[3], const double wi[3], const double wo[3],
+                       double ci, double co, double *S, double *s)
+{
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]}, hl, nh, vh, a2 = alpha * alpha;
+    double d, g1i, g1o;
+    hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    for (int e = 0; e < 3; e++)
+        h[e] /= hl;
+    nh = n[0] * h[0] + n[1] * h[1] + n[2] * h[2];
+    vh = fabs(wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2]);
+    d = nh * nh * (a2 - 1.0) + 1.0;
+    d = a2 / (M_PI * d * d);
+    g1i = 2.0 * ci / (ci + sqrt(a2 + (1.0 - a2) * ci * ci));
+    g1o = 2.0 * co / (co + sqrt(a2 + (1.0 - a2) * co * co));
+    *S = d * g1i * g1o / (4.0 * ci * co);
+    *s = pow(1.0 - vh, 5.0);
+}
+
+/* f = A + B x + C x^2 in the base colour x of one channel (gltf.h's model) */
+static void coefs(double S, double s, double m, double *A, double *B, double *C)
+{
+    *A = S * s + 0.04 * S * (1.0 - s) * (1.0 - m);
+    *B = S * (1.0 - s) * m + (1.0 - s) * (1.0 - m) * (1.0 - 0.04 * (1.0 - m)) / M_PI;
+    *C = -(1.0 - s) * (1.0 - m) * m / M_PI;
+}
+
+void gltf_brdf(const gltf_pbr *p, const double n[3], const double wi[3], const double wo[3],
+               double rgb[3])
+{
+    double ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    double co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2], S, s, A, B, C;
+    rgb[0] = rgb[1] = rgb[2] = 0.0;
+    if (!(ci > 0.0) || !(co > 0.0))
+        return;
+    spec_terms(p->roughness * p->roughness, n, wi, wo, ci, co, &S, &s);
+    coefs(S, s, p->metallic, &A, &B, &C);
+    for (int c = 0; c < 3; c++)
+        rgb[c] = A + B * p->base[c] + C * p->base[c] * p->base[c];
+}
+
+/* ---- the fit ---------------------------------------------------------------------------- */
+
+static void fib(int i, int n, double out[3])
+{
+    double z = 1.0 - (i + 0.5) / n, r = sqrt(1.0 - z * z), ph = i * M_PI * (3.0 - sqrt(5.0));
+    out[0] = r * cos(ph), out[1] = r * sin(ph), out[2] = z;
+}
+
+/* min over x in [0, 1] of q0 + q1 x + q2 x^2 + q3 x^3 + q4 x^4 (OUT: *x) */
+static double quartic_min(const double q[5], double *x)
+{
+    double best = INFINITY, bx = 0.0;
+    for (int k = 0; k <= 200; k++) {
+        double t = k / 200.0, v = q[0] + t * (q[1] + t * (q[2] + t * (q[3] + t * q[4])));
+        if (v < best)
+            best = v, bx = t;
+    }
+    for (int it = 0; it < 20; it++) { /* Newton on the derivative, kept inside [0, 1] */
+        double d1 = q[1] + bx * (2 * q[2] + bx * (3 * q[3] + bx * 4 * q[4]));
+        double d2 = 2 * q[2] + bx * (6 * q[3] + bx * 12 * q[4]), t, v;
+        if (!(d2 > 0.0))
+            break;
+        t = bx - d1 / d2;
+        t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+        v = q[0] + t * (q[1] + t * (q[2] + t * (q[3] + t * q[4])));
+        if (!(v < best))
+            break;
+        best = v, bx = t;
+    }
+    *x = bx;
+    return best;
+}
+
+typedef struct pairs {
+    int n;
+    double (*nn)[3], (*wi)[3], (*wo)[3], *ci, *co, (*y)[3];
+    double *S, *s; /* for the roughness being tried */
+} pairs;
+
+/* the squared error of (m, r) with the best base colour (OUT: base) */
+static double try_mr(pairs *P, double m, double r, double base[3])
+{
+    double q[3][5] = {{0}}, total = 0.0;
+    for (int i = 0; i < P->n; i++)
+        spec_terms(r * r, P->nn[i], P->wi[i], P->wo[i], P->ci[i], P->co[i], &P->S[i], &P->s[i]);
+    for (int i = 0; i < P->n; i++) {
+        double A, B, C, ci = P->ci[i];
+        coefs(P->S[i], P->s[i], m, &A, &B, &C);
+        for (int c = 0; c < 3; c++) {
+            double a = ci * A - P->y[i][c], b = ci * B, cc = ci * C;
+            q[c][0] += a * a;
+            q[c][1] += 2 * a * b;
+            q[c][2] += b * b + 2 * a * cc;
+            q[c][3] += 2 * b * cc;
+            q[c][4] += cc * cc;
+        }
+    }
+    for (int c = 0; c < 3; c++)
+        total += quartic_min(q[c], &base[c]);
+    return total;
+}
+
+static void pairs_free(pairs *P)
+{
+    free(P->nn), free(P->wi), free(P->wo), free(P->y), free(P->ci), free(P->co), free(P->S),
+        free(P->s);
+}
+
+static void material_fn(const void *ctx, const double n[3], const double wi[3],
+                        const double wo[3], double rad[3])
+{
+    material_eval(ctx, n, wi, wo, rad);
+}
+
+int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_err *err)
+{
+    int rc;
+    memset(out, 0, sizeof *out);
+    if (!m || !m->method)
+        return glint_err_set(err, GLINT_EINVAL, "no material to fit");
+    rc = gltf_fit(material_fn, m, s, out, err);
+    out->spatial = material_spatial(m);
+    return rc;
+}
+
+int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, glint_err *err)
+{
+    pairs P;
+    double den = 0.0, best = INFINITY, bm = 0.0, br = 0.5, base[3];
+    int k = 0, cap = smp ? (smp->n < GLTF_FIT_MAX_SAMPLES ? smp->n : GLTF_FIT_MAX_SAMPLES)
+                         : GLTF_FIT_PAIRS;
+
+    memset(out, 0, sizeof *out);
+    if (!fn || cap < 1)
+        return glint_err_set(err, GLINT_EINVAL, "nothing to fit a glTF material to");
+    memset(&P, 0, sizeof P);
+    P.nn = malloc((size_t)cap * sizeof *P.nn);
+    P.wi = malloc((size_t)cap * sizeof *P.wi);
+    P.wo = malloc((size_t)cap * sizeof *P.wo);
+    P.y = malloc((size_t)cap * sizeof *P.y);
+    P.ci = malloc((size_t)cap * sizeof *P.ci);
+    P.co = malloc((size_t)cap * sizeof *P.co);
+    P.S = malloc((size_t)cap * sizeof *P.S);
+    P.s = malloc((size_t)cap * sizeof *P.s);
+    if (!P.nn || !P.wi || !P.wo || !P.y || !P.ci || !P.co || !P.S || !P.s) {
+        pairs_free(&P);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF fit");
+    }
+    for (int j = 0; j < cap; j++) {
+        double y[3];
+        if (smp) { /* every (n / cap)-th sample: the painted directions */
+            long i = (long)((double)j * smp->n / cap);
+            for (int e = 0; e < 3; e++) {
+                P.nn[k][e] = smp->nrm[3 * i + e];
+                P.wi[k][e] = smp->wi[3 * i + e];
+                P.wo[k][e] = smp->wo[3 * i + e];
+            }
+        } else {
+            P.nn[k][0] = P.nn[k][1] = 0.0, P.nn[k][2] = 1.0;
+            fib(j / GLTF_FIT_VIEWS, GLTF_FIT_LIGHTS, P.wi[k]);
+            fib(j % GLTF_FIT_VIEWS, GLTF_FIT_VIEWS, P.wo[k]);
+        }
+        P.ci[k] = P.nn[k][0] * P.wi[k][0] + P.nn[k][1] * P.wi[k][1] + P.nn[k][2] * P.wi[k][2];
+        P.co[k] = P.nn[k][0] * P.wo[k][0] + P.nn[k][1] * P.wo[k][1] + P.nn[k][2] * P.wo[k][2];
+        if (!(P.ci[k] > 0.0 && P.co[k] > 0.0))
+            continue;
+        fn(ctx, P.nn[k], P.wi[k], P.wo[k], y);
+        if (!isfinite(y[0] + y[1] + y[2]))
+            continue;
+        memcpy(P.y[k], y, sizeof y);
+        den += y[0] * y[0] + y[1] * y[1] + y[2] * y[2];
+        k++;
+    }
+    P.n = k;
+    if (!k) {
+        pairs_free(&P);
+        return glint_err_set(err, GLINT_EINVAL, "no direction pair above the surface to fit");
+    }
+    for (int mi = 0; mi <= 20; mi++) /* a grid, then a finer one around its best */
+        for (int ri = 1; ri <= 50; ri++) {
+            double e = try_mr(&P, mi / 20.0, ri / 50.0, base);
+            if (e < best)
+                best = e, bm = mi / 20.0, br = ri / 50.0;
+        }
+    {
+        double m0 = bm, r0 = br;
+        for (int mi = -10; mi <= 10; mi++)
+            for (int ri = -10; ri <= 10; ri++) {
+                double mm = m0 + 0.005 * mi, rr = r0 + 0.002 * ri, e;
+                if (mm < 0.0 || mm > 1.0 || rr < 0.01 || rr > 1.0)
+                    continue;
+                if ((e = try_mr(&P, mm, rr, base)) < best)
+                    best = e, bm = mm, br = rr;
+            }
+    }
+    try_mr(&P, bm, br, out->base);
+    out->metallic = bm;
+    out->roughness = br;
+    out->rel_rms = den > 0.0 ? sqrt(best / den) : 0.0;
+    out->pairs = P.n;
+    pairs_free(&P);
+    return 0;
+}
+
+/* ---- the file ------------------------------------------------------------------------------ */
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v, p[1] = (unsigned char)(v >> 8), p[2] = (unsigned char)(v >> 16),
+    p[3] = (unsigned char)(v >> 24);
+}
+
+static json_t *view_of(size_t off, size_t len, int target)
+{
+    return json_pack("{s:i, s:I, s:I, s:i}", "buffer", 0, "byteOffset", (json_int_t)off,
+                     "byteLength", (json_int_t)len, "target", target);
+}
+
+int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
+                   const char *extras_json, void **glb, size_t *len, glint_err *err)
+{
+    size_t nv, nt, off_pos, off_nrm, off_uv, off_idx, bin_len, json_len, json_pad, bin_pad, total;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    json_t *root, *extras = NULL, *mat;
+    unsigned char *out, *bin;
+    char *text;
+
+    *glb = NULL;
+    *len = 0;
+    if (!msh || msh->nverts < 3 || msh->ntris < 1 || !msh->pos || !msh->nrm || !msh->tri)
+        return glint_err_set(err, GLINT_EINVAL, "no mesh to write");
+    if (extras_json && !(extras = json_loads(extras_json, 0, NULL)))
+        return glint_err_set(err, GLINT_EINVAL, "the material's extras are not JSON");
+    nv = (size_t)msh->nverts;
+    nt = (size_t)msh->ntris;
+    off_pos = 0;
+    off_nrm = off_pos + 12 * nv;
+    off_uv = off_nrm + 12 * nv;
+    off_idx = off_uv + 8 * nv;
+    bin_len = off_idx + 12 * nt;
+    for (size_t i = 0; i < nv; i++)
+        for (int e = 0; e < 3; e++) {
+            float v = msh->pos[3 * i + e];
+            lo[e] = v < lo[e] ? v : lo[e];
+            hi[e] = v > hi[e] ? v : hi[e];
+        }
+    mat = json_pack("{s:s, s:{s:[f,f,f,f], s:f, s:f}}", "name", name ? name : "glint",
+                    "pbrMetallicRoughness", "baseColorFactor", p->base[0], p->base[1],
+                    p->base[2], 1.0, "metallicFactor", p->metallic, "roughnessFactor",
+                    p->roughness);
+    if (extras)
+        json_object_set_new(mat, "extras", extras);
+    root = json_pack(
+        "{s:{s:s, s:s}, s:i, s:[{s:[i]}], s:[{s:i, s:s}], "
+        "s:[{s:s, s:[{s:{s:i, s:i, s:i}, s:i, s:i, s:i}]}], s:[o], s:[{s:I}], "
+        "s:[o, o, o, o], "
+        "s:[{s:i, s:i, s:I, s:s, s:[f,f,f], s:[f,f,f]}, {s:i, s:i, s:I, s:s}, "
+        "{s:i, s:i, s:I, s:s}, {s:i, s:i, s:I, s:s}]}",
+        "asset", "version", "2.0", "generator", "glint", "scene", 0, "scenes", "nodes", 0,
+        "nodes", "mesh", 0, "name", name ? name : "glint", "meshes", "name",
+        name ? name : "glint", "primitives", "attributes", "POSITION", 0, "NORMAL", 1,
+        "TEXCOORD_0", 2, "indices", 3, "material", 0, "mode", 4, "materials", mat, "buffers",
+        "byteLength", (json_int_t)bin_len, "bufferViews", view_of(off_pos, 12 * nv, 34962),
+        view_of(off_nrm, 12 * nv, 34962), view_of(off_uv, 8 * nv, 34962),
+        view_of(off_idx, 12 * nt, 34963), "accessors", "bufferView", 0, "componentType", 5126,
+        "count", (json_int_t)nv, "type", "VEC3", "min", (double)lo[0], (double)lo[1],
+        (double)lo[2], "max", (double)hi[0], (double)hi[1], (double)hi[2], "bufferView", 1,
+        "componentType", 5126, "count", (json_int_t)nv, "type", "VEC3", "bufferView", 2,
+        "componentType", 5126, "count", (json_int_t)nv, "type", "VEC2", "bufferView", 3,
+        "componentType", 5125, "count", (json_int_t)(3 * nt), "type", "SCALAR");
+    if (!root)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF document");
+    text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(9));
+    json_decref(root);
+    if (!text)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF document");
+    json_len = strlen(text);
+    json_pad = (4 - json_len % 4) % 4;
+    bin_pad = (4 - bin_len % 4) % 4;
+    total = 12 + 8 + json_len + json_pad + 8 + bin_len + bin_pad;
+    if (total > UINT32_MAX || !(out = malloc(total))) {
+        free(text);
+        return glint_err_set(err, GLINT_ENOMEM, "a glTF file of %zu bytes", total);
+    }
+    put_u32(out, 0x46546C67u); /* "glTF" */
+    put_u32(out + 4, 2);
+    put_u32(out + 8, (uint32_t)total);
+    put_u32(out + 12, (uint32_t)(json_len + json_pad));
+    put_u32(out + 16, 0x4E4F534Au); /* "JSON" */
+    memcpy(out + 20, text, json_len);
+    memset(out + 20 + json_len, ' ', json_pad);
+    free(text);
+    bin = out + 20 + json_len + json_pad;
+    put_u32(bin, (uint32_t)(bin_len + bin_pad));
+    put_u32(bin + 4, 0x004E4942u); /* "BIN" */
+    bin += 8;
+    memcpy(bin + off_pos, msh->pos, 12 * nv);
+    memcpy(bin + off_nrm, msh->nrm, 12 * nv);
+    for (size_t i = 0; i < nv; i++) { /* glTF's texture origin is the top left: v down */
+        float uv[2] = {msh->uv ? msh->uv[2 * i] : 0.0f, msh->uv ? 1.0f - msh->uv[2 * i + 1] : 0.0f};
+        memcpy(bin + off_uv + 8 * i, uv, 8);
+    }
+    memcpy(bin + off_idx, msh->tri, 12 * nt);
+    memset(bin + bin_len, 0, bin_pad);
+    *glb = out;
+    *len = total;
+    return 0;
+}
+
+/* ---- a material on its scene ------------------------------------------------------------ */
+
+static char *extras_text(const material *m, const gltf_pbr *p)
+{
+    json_t *o = json_pack("{s:{s:s, s:s, s:f, s:i, s:s, s:b, s:s}}", "glint", "method",
+                          material_method_name(m), "model",
+                          "glTF 2.0 metallic-roughness (Appendix B); alpha = roughness^2",
+                          "fit_rel_rms", p->rel_rms, "fit_pairs", p->pairs, "fit",
+                          "least squares of f cos at the painted views' samples", "spatial_average",
+                          p->spatial, "units",
+                          "per unit light as painted (base renders at the default scale pi "
+                          "hold pi times the BRDF they show)");
+    char *t = o ? json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(6)) : NULL;
+    json_decref(o);
+    return t;
+}
+
+int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use, void **glb,
+                      size_t *len, gltf_pbr *out, glint_err *err)
+{
+    gbuf *g = NULL;
+    samples s;
+    char hash[33], *extras = NULL;
+    int rc;
+
+    *glb = NULL;
+    *len = 0;
+    memset(&s, 0, sizeof s);
+    scene_hash(sc, hash);
+    if ((rc = raster_scene(sc, &g, err)) ||
+        (rc = samples_build(g, sc->views, sc->nviews, use, hash, &s, err)) ||
+        (rc = gltf_fit_material(m, &s, out, err)))
+        goto done;
+    if (!(extras = extras_text(m, out))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        goto done;
+    }
+    rc = gltf_write_glb(&sc->mesh, out, "glint material", extras, glb, len, err);
+done:
+    free(extras);
+    samples_free(&s);
+    raster_free_all(g, sc->nviews);
+    return rc;
+}
