@@ -85,6 +85,8 @@ int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err);
 struct app;
 struct material;
 int api_material_load(struct app *a, const char *mid, struct material *m, glint_err *err);
+/* Both: the material `mid` loaded if the request may read it (OUT: *m). */
+int api_material_read(http_req *req, const char *mid, struct material *m, glint_err *err);
 
 /* A view index from a path segment: decimal digits, 0..n-1 (0), else -1. */
 int api_view_index(const char *text, int n, int *k);

@@ -73,17 +73,13 @@ done:
  * one: hf3; 422 naming the MERL table otherwise). */
 static http_resp brdf_get(http_req *req)
 {
-    memo_doc doc;
     material m = {0};
     char *text = NULL;
     http_resp r;
     glint_err e;
     int rc;
 
-    if ((rc = api_material(req, req->param[0], &doc, &e)))
-        return api_error(&e);
-    free(doc.text);
-    if ((rc = api_material_load(req->app, req->param[0], &m, &e)))
+    if ((rc = api_material_read(req, req->param[0], &m, &e)))
         return api_error(&e);
     rc = material_brdf_explorer(&m, &text, &e);
     material_free(&m);

@@ -130,6 +130,17 @@ static const char *ctype_of(const char *name)
 
 static pthread_mutex_t export_lock = PTHREAD_MUTEX_INITIALIZER;
 
+int api_material_read(http_req *req, const char *mid, material *m, glint_err *e)
+{
+    memo_doc doc;
+    int rc;
+    memset(m, 0, sizeof *m);
+    if ((rc = api_material(req, mid, &doc, e)))
+        return rc;
+    free(doc.text);
+    return api_material_load(req->app, mid, m, e);
+}
+
 /* Load a stored material (OUT: *m, material_free). */
 int api_material_load(app *a, const char *mid, material *m, glint_err *e)
 {
@@ -660,16 +671,12 @@ static http_resp eval_post(http_req *req)
 /* GET /api/v1/materials/{id}/summary: the material in numbers (readable.h). */
 static http_resp summary_get(http_req *req)
 {
-    memo_doc doc;
     material m = {0};
     json_t *o = NULL;
     glint_err e;
     int rc;
 
-    if ((rc = api_material(req, req->param[0], &doc, &e)))
-        return api_error(&e);
-    free(doc.text);
-    if ((rc = api_material_load(req->app, req->param[0], &m, &e)))
+    if ((rc = api_material_read(req, req->param[0], &m, &e)))
         return api_error(&e);
     rc = material_readable(&m, &o, &e);
     material_free(&m);
