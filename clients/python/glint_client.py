@@ -785,6 +785,12 @@ class GlintClient:
         built-in skies, the daemon's --env-dir maps and the uploads."""
         return self._call("GET", "/api/v1/environments")
 
+    def measured(self):
+        """GET /api/v1/measured: {materials: [{spec, name, layout}]}: the
+        MERL tables of the daemon's --measured-dir, each usable as a base
+        render's brdf (base_render(..., brdf=spec))."""
+        return self._call("GET", "/api/v1/measured")
+
     def upload_environment(self, data, name=None):
         """POST /api/v1/environments: upload an HDR map (OpenEXR or Radiance
         HDR bytes, or a file path; lat-long or cube cross). Returns

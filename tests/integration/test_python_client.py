@@ -126,6 +126,9 @@ def test_02_health_metrics_methods_environments(d):
         raise AssertionError("KeyError expected")
     except KeyError:
         pass
+    meas = c.measured()
+    validate(meas, "MeasuredList.json")
+    assert meas["materials"] == [], meas  # no --measured-dir: none on offer
     envs = c.list_environments()["environments"]
     for e in envs:
         validate(e, "Environment.json")
