@@ -167,7 +167,9 @@ def test_06_previews_under_an_environment(d):
     if np is not None and "vertex shading" in a.headers["X-Glint-Renderer"]:
         imgs = []
         for r in (a, cpu, b):
-            path = os.path.join(ENV_DIR, "p.exr")
+            # a file of its own for each: OpenImageIO caches images by name, and
+            # a rewritten file of the same size within a second reads as the old one
+            path = os.path.join(ENV_DIR, "p%d.exr" % len(imgs))
             with open(path, "wb") as f:
                 f.write(r.content)
             imgs.append(np.asarray(oiio.ImageBuf(path).get_pixels(oiio.FLOAT)))
