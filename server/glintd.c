@@ -17,6 +17,7 @@
 
 #include "admit.h"
 #include "app.h"
+#include "config.h"
 #include "events.h"
 #include "fitsvc.h"
 #include "fsio.h"
@@ -65,186 +66,6 @@ static void usage(FILE *f)
           f);
 }
 
-static void config_default(app_config *c)
-{
-    memset(c, 0, sizeof *c);
-    strcpy(c->address, "127.0.0.1");
-    c->port = 8080;
-    strcpy(c->data_dir, "glint-data");
-    strcpy(c->web_dir, "web");
-    c->cache_bytes = (size_t)512 << 20;
-    c->worker_threads = 2;
-    c->work_bytes = (size_t)2048 << 20;
-    c->work_slots = 4;
-    c->work_wait_s = 10;
-    c->timeout_s = 30;
-    c->max_connections = 256;
-    c->max_connections_per_ip = 64;
-    c->max_waiting_per_ip = 256;
-    c->health_reserve = 4;
-    c->header_timeout_s = 10;
-    c->min_body_rate = 1024;
-    c->lim.max_body = (size_t)32 << 20;
-    c->lim.max_image_dim = 4096;
-    c->lim.max_mesh_tris = 2000000;
-    c->lim.max_strokes = 1000;
-    c->lim.max_stroke_points = 10000;
-    c->lim.max_stroke_work = 5e7;
-    c->lim.max_views = 64;
-}
-
-static int parse_long(const char *s, const char *what, long lo, long hi, long *out)
-{
-    char *end;
-    long v;
-    errno = 0;
-    v = strtol(s, &end, 10);
-    if (end == s || *end || errno || v < lo || v > hi) {
-        fprintf(stderr, "glintd: %s '%s' must be a whole number in %ld..%ld\n", what, s, lo, hi);
-        return -1;
-    }
-    *out = v;
-    return 0;
-}
-
-static int copy_str(char *dst, size_t cap, const char *src, const char *what)
-{
-    if (strlen(src) >= cap) {
-        fprintf(stderr, "glintd: %s too long\n", what);
-        return -1;
-    }
-    strcpy(dst, src);
-    return 0;
-}
-
-/* Apply one option (from the command line or the config file). */
-static int apply_opt(app_config *c, const char *name, const char *val)
-{
-    long v;
-    if (!strcmp(name, "address"))
-        return copy_str(c->address, sizeof c->address, val, "--address");
-    if (!strcmp(name, "data-dir"))
-        return copy_str(c->data_dir, sizeof c->data_dir, val, "--data-dir");
-    if (!strcmp(name, "web-dir"))
-        return copy_str(c->web_dir, sizeof c->web_dir, val, "--web-dir");
-    if (!strcmp(name, "env-dir"))
-        return copy_str(c->env_dir, sizeof c->env_dir, val, "--env-dir");
-    if (!strcmp(name, "measured-dir"))
-        return copy_str(c->measured_dir, sizeof c->measured_dir, val, "--measured-dir");
-    if (!strcmp(name, "api-key"))
-        return copy_str(c->api_key, sizeof c->api_key, val, "--api-key");
-    if (!strcmp(name, "allow-origin"))
-        return copy_str(c->allow_origin, sizeof c->allow_origin, val, "--allow-origin");
-    if (!strcmp(name, "port")) {
-        if (parse_long(val, "--port", 0, 65535, &v)) return -1;
-        c->port = (int)v;
-    } else if (!strcmp(name, "cache-mb")) {
-        if (parse_long(val, "--cache-mb", 1, 1 << 20, &v)) return -1;
-        c->cache_bytes = (size_t)v << 20;
-    } else if (!strcmp(name, "threads")) {
-        if (parse_long(val, "--threads", 1, 64, &v)) return -1;
-        c->worker_threads = (int)v;
-    } else if (!strcmp(name, "work-mb")) {
-        if (parse_long(val, "--work-mb", 64, 1 << 22, &v)) return -1;
-        c->work_bytes = (size_t)v << 20;
-    } else if (!strcmp(name, "work-slots")) {
-        if (parse_long(val, "--work-slots", 1, 1024, &v)) return -1;
-        c->work_slots = (int)v;
-    } else if (!strcmp(name, "work-wait")) {
-        if (parse_long(val, "--work-wait", 0, 3600, &v)) return -1;
-        c->work_wait_s = (int)v;
-    } else if (!strcmp(name, "timeout")) {
-        if (parse_long(val, "--timeout", 1, 3600, &v)) return -1;
-        c->timeout_s = (unsigned)v;
-    } else if (!strcmp(name, "max-connections")) {
-        if (parse_long(val, "--max-connections", 1, 100000, &v)) return -1;
-        c->max_connections = (unsigned)v;
-    } else if (!strcmp(name, "max-connections-per-ip")) {
-        if (parse_long(val, "--max-connections-per-ip", 1, 100000, &v)) return -1;
-        c->max_connections_per_ip = (unsigned)v;
-    } else if (!strcmp(name, "max-waiting-per-ip")) {
-        if (parse_long(val, "--max-waiting-per-ip", 1, 1000000, &v)) return -1;
-        c->max_waiting_per_ip = (unsigned)v;
-    } else if (!strcmp(name, "health-reserve")) {
-        if (parse_long(val, "--health-reserve", 0, 1000, &v)) return -1;
-        c->health_reserve = (unsigned)v;
-    } else if (!strcmp(name, "header-timeout")) {
-        if (parse_long(val, "--header-timeout", 1, 3600, &v)) return -1;
-        c->header_timeout_s = (unsigned)v;
-    } else if (!strcmp(name, "min-body-rate")) {
-        if (parse_long(val, "--min-body-rate", 0, 1L << 30, &v)) return -1;
-        c->min_body_rate = (unsigned)v;
-    } else if (!strcmp(name, "max-body-mb")) {
-        if (parse_long(val, "--max-body-mb", 1, 4096, &v)) return -1;
-        c->lim.max_body = (size_t)v << 20;
-    } else if (!strcmp(name, "max-image-dim")) {
-        if (parse_long(val, "--max-image-dim", 8, 16384, &v)) return -1;
-        c->lim.max_image_dim = (int)v;
-    } else if (!strcmp(name, "max-mesh-tris")) {
-        if (parse_long(val, "--max-mesh-tris", 1, 1 << 24, &v)) return -1;
-        c->lim.max_mesh_tris = (int)v;
-    } else if (!strcmp(name, "max-strokes")) {
-        if (parse_long(val, "--max-strokes", 1, 1000000, &v)) return -1;
-        c->lim.max_strokes = (int)v;
-    } else if (!strcmp(name, "max-stroke-work")) {
-        if (parse_long(val, "--max-stroke-work", 1, 100000, &v)) return -1;
-        c->lim.max_stroke_work = (double)v * 1e6;
-    } else {
-        fprintf(stderr, "glintd: unknown option '%s'\n", name);
-        return -1;
-    }
-    return 0;
-}
-
-static int load_config(app_config *c, const char *path)
-{
-    json_error_t e;
-    json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &e), *v;
-    const char *k;
-    int rc = 0;
-
-    if (!root) {
-        fprintf(stderr, "glintd: config %s: line %d: %s\n", path, e.line, e.text);
-        return -1;
-    }
-    if (!json_is_object(root)) {
-        fprintf(stderr, "glintd: config %s: expected a JSON object\n", path);
-        json_decref(root);
-        return -1;
-    }
-    json_object_foreach(root, k, v) {
-        char name[64], val[4096];
-        size_t i;
-        if (strlen(k) >= sizeof name) {
-            fprintf(stderr, "glintd: config %s: key too long\n", path);
-            rc = -1;
-            break;
-        }
-        for (i = 0; k[i]; i++)
-            name[i] = k[i] == '_' ? '-' : k[i];
-        name[i] = '\0';
-        if (json_is_string(v))
-            snprintf(val, sizeof val, "%s", json_string_value(v));
-        else if (json_is_integer(v))
-            snprintf(val, sizeof val, "%lld", (long long)json_integer_value(v));
-        else if (json_is_boolean(v) && !strcmp(name, "quiet")) {
-            c->quiet = json_is_true(v);
-            continue;
-        } else {
-            fprintf(stderr, "glintd: config %s: '%s' must be a string or an integer\n", path, k);
-            rc = -1;
-            break;
-        }
-        if (apply_opt(c, name, val)) {
-            fprintf(stderr, "glintd: (in config %s)\n", path);
-            rc = -1;
-            break;
-        }
-    }
-    json_decref(root);
-    return rc;
-}
-
 int main(int argc, char **argv)
 {
     static const struct option lo[] = {
@@ -276,16 +97,24 @@ int main(int argc, char **argv)
 
     memset(&a, 0, sizeof a);
     config_default(&a.cfg);
-    /* the config file first, so that options override it */
-    for (int i = 1; i < argc - 1; i++)
-        if (!strcmp(argv[i], "--config") && load_config(&a.cfg, argv[i + 1]))
+    /* the config file first, so that options override it: a first pass of
+     * getopt finds --config (either form), the second applies the rest */
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, "h", lo, &idx)) != -1)
+        if (c == 2 && config_load_file(&a.cfg, optarg, &ge)) {
+            fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
+        }
+    opterr = 1;
+    optind = 1;
     while ((c = getopt_long(argc, argv, "h", lo, &idx)) != -1) {
         if (c == 1) {
-            if (apply_opt(&a.cfg, lo[idx].name, optarg))
+            if (config_apply(&a.cfg, lo[idx].name, optarg, &ge)) {
+                fprintf(stderr, "glintd: %s\n", ge.msg);
                 return 1;
+            }
         } else if (c == 2) {
-            /* handled above */
+            /* read in the first pass */
         } else if (c == 3) {
             port_file = optarg;
         } else if (c == 4) {
