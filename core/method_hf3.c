@@ -286,8 +286,7 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
     info = json_pack("{s:o, s:o, s:o, s:o}", "params",
                      method_params_to_json(&method_hf3, pp->params), "precomputation", pre,
                      "seconds", tim, "errors", errs);
-    hf3_material_init(out, &fac, info);
-    return 0;
+    return hf3_material_init(out, &fac, info, err);
 }
 
 static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)

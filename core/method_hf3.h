@@ -33,8 +33,9 @@ int hf3_brdf_explorer(const void *data, char **text, glint_err *err);
 hf_factors *hf3_factors(const material *m);
 
 /* An hf3 material from fitted factors (moved: *fac is zeroed) and info
- * (one reference stolen; may be NULL). */
-void hf3_material_init(material *m, hf_factors *fac, json_t *info);
+ * (one reference stolen; may be NULL).  GLINT_ENOMEM: the factors and info
+ * are released and *m is a material with no data (material_free). */
+int hf3_material_init(material *m, hf_factors *fac, json_t *info, glint_err *err);
 
 /* The level values (what cache_data() of each level holds). */
 typedef struct hf3_decomp {

@@ -15,17 +15,20 @@ hf_factors *hf3_factors(const material *m)
     return m && m->method == &method_hf3 ? m->data : NULL;
 }
 
-void hf3_material_init(material *m, hf_factors *fac, json_t *info)
+int hf3_material_init(material *m, hf_factors *fac, json_t *info, glint_err *err)
 {
     hf_factors *f = malloc(sizeof *f);
-    if (!f) { /* keep the contract: a material with no data, factors freed */
+    if (!f) {
         hf_factors_free(fac);
-        material_init(m, NULL, NULL, info);
-        return;
+        memset(fac, 0, sizeof *fac);
+        json_decref(info);
+        material_init(m, NULL, NULL, NULL);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory making the material");
     }
     *f = *fac;
     memset(fac, 0, sizeof *fac);
     material_init(m, &method_hf3, f, info);
+    return 0;
 }
 
 static void hf3_eval(const void *data, const double uv[2], const double n[3],

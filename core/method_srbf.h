@@ -178,7 +178,9 @@ void srbf_material_eval_preview(const srbf_material *sm, const double n[3], cons
                                 const double wo[3], double rgb[3]);
 
 /* Make a material of method srbf (takes *sm's arrays). */
-void srbf_material_init(material *m, srbf_material *sm, json_t *info);
+/* As hf3_material_init (method_hf3.h): *sm moved, info stolen; GLINT_ENOMEM
+ * releases both and leaves a material with no data. */
+int srbf_material_init(material *m, srbf_material *sm, json_t *info, glint_err *err);
 /* The srbf material of m, or NULL. */
 const srbf_material *srbf_material_of(const material *m);
 /* Evaluate at world unit vectors (OUT rgb). */

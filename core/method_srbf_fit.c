@@ -334,7 +334,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
                          method_params_to_json(&method_srbf, p), "precomputation", pre,
                          "seconds", tim, "errors", errs, "diffuse", diff);
     }
-    srbf_material_init(out, &sm, info);
+    rc = srbf_material_init(out, &sm, info, err);
 done:
     if (rc) {
         free(sm.c);

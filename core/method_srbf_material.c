@@ -18,20 +18,23 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-void srbf_material_init(material *m, srbf_material *sm, json_t *info)
+int srbf_material_init(material *m, srbf_material *sm, json_t *info, glint_err *err)
 {
     srbf_material *d = malloc(sizeof *d);
     if (!d) {
         free(sm->c);
         srbf_basis_free(&sm->b);
-        material_init(m, NULL, NULL, info);
-        return;
+        memset(sm, 0, sizeof *sm);
+        json_decref(info);
+        material_init(m, NULL, NULL, NULL);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory making the material");
     }
     *d = *sm;
     d->ptab = NULL;
     d->ptab_n = 0;
     memset(sm, 0, sizeof *sm);
     material_init(m, &method_srbf, d, info);
+    return 0;
 }
 
 const srbf_material *srbf_material_of(const material *m)

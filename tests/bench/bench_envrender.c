@@ -73,7 +73,10 @@ static void make_material(material *m)
     }
     for (int c = 0; c < 3; c++)
         sm.rho[c] = 0.2 + 0.1 * c;
-    srbf_material_init(m, &sm, NULL);
+    if (srbf_material_init(m, &sm, NULL, NULL)) {
+        fprintf(stderr, "bench_envrender: out of memory\n");
+        exit(1);
+    }
 }
 
 static double rel_rms(const img *a, const img *b, const img *mask_src)

@@ -75,7 +75,8 @@ static int make_material(material *m, glint_err *err)
             f.logf[(2 * R + k) * 3 + c] = log(1.0 - 0.2 * u);
         }
     }
-    hf3_material_init(m, &f, NULL);
+    if (hf3_material_init(m, &f, NULL, NULL))
+        return -1;
     return 0;
 }
 

@@ -291,7 +291,7 @@ TEST(a_fitted_srbf_material_under_the_environment)
         sm.c[(size_t)c * sm.b.J] = 0.5 + 0.1 * c;
         sm.rho[c] = 0.3;
     }
-    srbf_material_init(&mat, &sm, NULL);
+    ASSERT_OK(srbf_material_init(&mat, &sm, NULL, NULL));
     ASSERT(mat.method != NULL);
     ASSERT_OK(mesh_sphere(&m, 96, 192, &err));
     render_env_init(&e);
@@ -334,7 +334,7 @@ TEST(srbf_preview_table_error)
             s = s * 1103515245u + 12345u;
             sm.c[i] = ((s >> 9) & 3) == 0 ? ((s >> 12) & 1023) / 1023.0 : 0.0; /* sparse */
         }
-        srbf_material_init(&mat, &sm, NULL);
+        ASSERT_OK(srbf_material_init(&mat, &sm, NULL, NULL));
         for (int k = 0; k < 40000; k++) {
             double n[3] = {0, 0, 1}, wi[3], wo[3], a[3], b[3];
             double *d[2] = {wi, wo};

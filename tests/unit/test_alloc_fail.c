@@ -1,0 +1,482 @@
+/* Allocation failure along glint's core paths, as SQLite tests it: each
+ * operation is run again and again with its Nth allocation failing (N = 1,
+ * 2, ... until a run makes no failing allocation), each run in a child
+ * process.  Every run must end in the operation's error or its success,
+ * never a crash, a hang or an error without an injected failure.
+ *
+ * malloc, calloc and realloc are replaced in this program (forwarding to
+ * glibc's own).  The allocations that fail are those glint's own code makes;
+ * the libraries' never fail here, because they do not survive it: this
+ * test found OpenImageIO 2.4 throwing std::bad_alloc through libpng's C
+ * frames (std::terminate), assimp 5.2 freeing twice after a failure in its
+ * post-processing, and jansson 2.14's parser crashing inside json_loadb.
+ * glintd imports meshes in a child process (mesh_child.c), which such a
+ * crash cannot take down, and its admission budget (admit.h) keeps the
+ * work it takes on within memory.  A process the operation forks (the mesh
+ * importer's child) runs without failures: its own failures reach the
+ * parent as an error this test could not tell from a bug.
+ *
+ * Not built under the sanitizers, whose runtime owns malloc (meson.build).
+ * An operation with more allocations than SWEEP_DENSE is swept densely up
+ * to that count and then at SWEEP_RUNS evenly spread points beyond it.
+ * GLINT_ALLOC_FAIL_AT=N runs each operation once, in this process, with
+ * allocation N failing (for a debugger). */
+#define _GNU_SOURCE
+#include <pthread.h>
+#include <jansson.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "cache.h"
+#include "check.h"
+#include "method.h"
+#include "prep.h"
+#include "env.h"
+#include "fit.h"
+#include "img.h"
+#include "material.h"
+#include "mesh.h"
+#include "paint.h"
+#include "raster.h"
+#include "scene.h"
+#include "stroke.h"
+
+#define SWEEP_DENSE 400
+#define SWEEP_RUNS 400
+
+/* ---- the replacement allocator -------------------------------------------------------- */
+
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+
+static long fi_countdown = -1; /* >= 0: allocations left before the one that fails */
+static long fi_count;          /* allocations made while armed */
+static int fi_fired;
+
+extern char __executable_start, etext;
+
+/* Is an allocation made at `caller` one that may fail? */
+static int fi_in_scope(const void *caller)
+{
+    return (const char *)caller >= &__executable_start && (const char *)caller < &etext;
+}
+
+static int fi_fail(const void *caller)
+{
+    if (fi_countdown < 0 || !fi_in_scope(caller))
+        return 0;
+    fi_count++;
+    if (fi_countdown-- == 0) {
+        fi_fired = 1;
+        return 1;
+    }
+    return 0;
+}
+
+void *malloc(size_t n)
+{
+    return fi_fail(__builtin_return_address(0)) ? NULL : __libc_malloc(n);
+}
+
+void *calloc(size_t a, size_t b)
+{
+    return fi_fail(__builtin_return_address(0)) ? NULL : __libc_calloc(a, b);
+}
+
+void *realloc(void *p, size_t n)
+{
+    return fi_fail(__builtin_return_address(0)) ? NULL : __libc_realloc(p, n);
+}
+
+void free(void *p)
+{
+    __libc_free(p);
+}
+
+/* A process the operation forks runs without failures (see the top). */
+static void fi_disarm(void)
+{
+    fi_countdown = -1;
+}
+
+__attribute__((constructor)) static void fi_init(void)
+{
+    pthread_atfork(NULL, NULL, fi_disarm);
+}
+
+/* ---- the sweep ------------------------------------------------------------------------ */
+
+enum { RUN_CLEAN = 0, RUN_FAILED_OK = 1, RUN_ERROR_WITHOUT_FAULT = 2, RUN_COUNT = 3 };
+
+typedef int (*op_fn)(glint_err *e);
+
+/* One run in a child: fail allocation n (n < 0: none, and report how many
+ * allocations the operation made through a pipe). */
+static int run_once(op_fn op, long n, long *count, char *msg, size_t msg_len)
+{
+    int fds[2], status;
+    pid_t pid;
+    if (pipe(fds))
+        return -1;
+    fflush(NULL);
+    pid = fork();
+    if (pid < 0)
+        return -1;
+    if (pid == 0) {
+        glint_err e;
+        int rc, code;
+        close(fds[0]);
+        alarm(60);
+        memset(&e, 0, sizeof e);
+        fi_count = 0;
+        fi_fired = 0;
+        fi_countdown = n < 0 ? (long)1 << 60 : n;
+        rc = op(&e);
+        fi_countdown = -1;
+        code = !fi_fired ? (rc ? RUN_ERROR_WITHOUT_FAULT : RUN_CLEAN) : RUN_FAILED_OK;
+        if (write(fds[1], &fi_count, sizeof fi_count) < 0 ||
+            write(fds[1], e.msg, strlen(e.msg) + 1) < 0)
+            _exit(99);
+        _exit(code);
+    }
+    close(fds[1]);
+    memset(msg, 0, msg_len);
+    if (read(fds[0], count, sizeof *count) != (ssize_t)sizeof *count)
+        *count = -1;
+    else if (read(fds[0], msg, msg_len - 1) < 0)
+        msg[0] = '\0';
+    close(fds[0]);
+    if (waitpid(pid, &status, 0) < 0)
+        return -1;
+    if (WIFSIGNALED(status))
+        return 100 + WTERMSIG(status);
+    return WEXITSTATUS(status);
+}
+
+static int sweep_dense = SWEEP_DENSE, sweep_runs = SWEEP_RUNS;
+
+/* Sweep op; returns the number of bad runs (printed). */
+static int sweep(const char *name, op_fn op)
+{
+    long total, n, step, runs = 0, count;
+    char msg[GLINT_ERR_MSG_MAX];
+    int bad = 0, r;
+    const char *at = getenv("GLINT_ALLOC_FAIL_AT"); /* N: one run, in this process (a debugger) */
+    if (at) {
+        glint_err e;
+        fi_countdown = atol(at) - 1;
+        r = op(&e);
+        fi_countdown = -1;
+        printf("  %s: allocation %s failing: rc %d, %s\n", name, at, r, r ? e.msg : "");
+        return 0;
+    }
+    r = run_once(op, -1, &total, msg, sizeof msg);
+    if (r != RUN_CLEAN) {
+        fprintf(stderr, "  %s: the operation fails without any fault (%d): %s\n", name, r, msg);
+        return 1;
+    }
+    step = total <= sweep_dense ? 1 : (total - sweep_dense) / sweep_runs + 1;
+    for (n = 0; n < total; n += n < sweep_dense ? 1 : step) {
+        r = run_once(op, n, &count, msg, sizeof msg);
+        runs++;
+        if (r == RUN_FAILED_OK || r == RUN_CLEAN)
+            continue;
+        bad++;
+        if (bad <= 8)
+            fprintf(stderr, "  %s: allocation %ld of %ld failing: %s %s\n", name, n + 1, total,
+                    r >= 100 ? "killed by signal" : "error without a fault", r >= 100 ? strsignal(r - 100) : msg);
+    }
+    printf("  %s: %ld allocations, %ld runs with one failing, %d bad\n", name, total, runs, bad);
+    return bad;
+}
+
+/* ---- the operations --------------------------------------------------------------------- */
+
+static int op_strokes(glint_err *e)
+{
+    const char *text = "[{\"mode\": \"paint\", \"color\": [1, 0.5, 0], \"diameter\": 8,"
+                       " \"kappa\": 0.5, \"points\": [[1, 2], [3, 4], [5, 6]], \"tag\": \"a\"},"
+                       " {\"mode\": \"scale\", \"scale\": 2, \"diameter\": 3, \"points\": [[0, 0]]}]";
+    stroke_limits lim = {10, 100};
+    stroke *list;
+    int n, rc;
+    json_t *j = json_loads(text, 0, NULL), *back;
+    if (!j)
+        return glint_err_set(e, GLINT_ENOMEM, "json_loads failed");
+    rc = stroke_list_from_json(j, &lim, &list, &n, e);
+    json_decref(j);
+    if (rc)
+        return rc;
+    back = stroke_to_json(&list[0]);
+    stroke_list_free(list, n);
+    if (!back)
+        return glint_err_set(e, GLINT_ENOMEM, "stroke_to_json failed");
+    json_decref(back);
+    return 0;
+}
+
+static int op_scene(glint_err *e)
+{
+    scene_params p;
+    scene a, b;
+    char *text;
+    int rc;
+    scene_params_default(&p);
+    p.width = p.height = 8;
+    if ((rc = scene_create(&p, &a, e)))
+        return rc;
+    text = scene_to_json(&a, e);
+    scene_free(&a);
+    if (!text)
+        return e->code ? e->code : GLINT_ENOMEM;
+    rc = scene_from_json(text, &b, e);
+    free(text);
+    if (rc == 0)
+        scene_free(&b);
+    return rc;
+}
+
+static void *png_data, *hdr_data;
+static size_t png_len, hdr_len;
+
+static int op_image(glint_err *e)
+{
+    img im;
+    int rc = img_read_mem(png_data, png_len, &im, e);
+    if (rc == 0)
+        img_free(&im);
+    return rc;
+}
+
+static int op_env(glint_err *e)
+{
+    env_map m;
+    int rc = env_load_mem(hdr_data, hdr_len, "sky.hdr", 64, &m, e);
+    if (rc == 0)
+        env_map_free(&m);
+    return rc;
+}
+
+static int op_mesh(glint_err *e)
+{
+    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                              "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    mesh m;
+    mesh_report rep;
+    int rc = mesh_load_mem(obj, sizeof obj - 1, "obj", &m, &rep, e);
+    if (rc == 0)
+        mesh_free(&m);
+    return rc;
+}
+
+/* A whole hf3 fit of a small scene: G-buffers, paintings, samples, design,
+ * decomposition, operator, fit, and the material written and read back. */
+static scene fit_scene;
+static char fit_dir[64];
+
+static int op_fit(glint_err *e)
+{
+    gbuf *g = NULL;
+    img paint[12];
+    brdf b;
+    fit_params p;
+    fit_prep fp;
+    material m, back;
+    int rc, k;
+    memset(paint, 0, sizeof paint);
+    memset(&fp, 0, sizeof fp);
+    if ((rc = raster_scene(&fit_scene, &g, e)))
+        return rc;
+    if ((rc = brdf_parse("ct:rough=0.3,kd=0.5", &b, e)) ||
+        (rc = paint_views(&b, g, fit_scene.views, fit_scene.nviews, 0, paint, NULL, e)))
+        goto done;
+    fit_params_default(&p);
+    p.res = 8;
+    if ((rc = fit_prepare(&fp, &fit_scene, g, NULL, &p, NULL, e)) ||
+        (rc = fit_run(&fp, paint, NULL, &m, e)))
+        goto done;
+    rc = material_save(&m, fit_dir, e);
+    if (rc == 0 && (rc = material_load(fit_dir, &back, e)) == 0)
+        material_free(&back);
+    material_free(&m);
+done:
+    fit_prep_free(&fp);
+    for (k = 0; k < fit_scene.nviews; k++) {
+        img_free(&paint[k]);
+        if (g)
+            gbuf_free(&g[k]);
+    }
+    free(g);
+    return rc;
+}
+
+/* Every method as glintd fits: the scene lent to a cache, the method's
+ * levels built through it (pattern, design, decompositions, transfer
+ * matrices), the fit, the material written and read back.  Small
+ * parameters: the paths are the same at any size. */
+static const char *const method_small[][2] = {
+    {"hf3", "res=8"},
+    {"srbf", "lights=8,basis_res=2,raster=full,grazing=0"},
+    {"hf4", "res=8,s_res=4"},
+    {"hf2d", "res=8,res_2d=8"},
+    {"maps", "res=8,components=2,map_res=16,rounds=2"},
+    {"hybrid", "res=8,s_res=4,components=2,map_res=16,rounds=2"},
+    {"auto", "res=8,s_res=4,res_2d=8,components=2"},
+};
+static const method *cur_method;
+static void *cur_params;
+static img method_paint[SCENE_MAX_VIEWS];
+
+static int lend_scene(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    *out = cls;
+    return 0;
+}
+
+static int op_method(glint_err *e)
+{
+    unsigned char all[SCENE_MAX_VIEWS];
+    prep_scene_source src = {lend_scene, NULL, &fit_scene};
+    prep_request rq = {cur_method, cur_params, NULL, all};
+    cache *c = NULL;
+    cache_entry *se = NULL;
+    prep *pp = NULL;
+    material m, back;
+    int rc;
+    memset(all, 1, sizeof all);
+    if ((rc = cache_open(NULL, (size_t)1 << 30, &c, e)) ||
+        (rc = prep_scene_acquire(c, "s", &src, &se, e)))
+        goto done;
+    rq.scene = se;
+    if ((rc = prep_acquire(c, &rq, NULL, NULL, &pp, e)) ||
+        (rc = prep_fit(pp, method_paint, NULL, &m, e)))
+        goto done;
+    rc = material_save(&m, fit_dir, e);
+    if (rc == 0 && (rc = material_load(fit_dir, &back, e)) == 0)
+        material_free(&back);
+    material_free(&m);
+done:
+    if (pp)
+        prep_release(c, pp);
+    if (se)
+        cache_release(c, se);
+    cache_close(c);
+    return rc;
+}
+
+/* ---- tests ------------------------------------------------------------------------------ */
+
+TEST(stroke_json)
+{
+    ASSERT_EQ(sweep("strokes", op_strokes), 0);
+}
+
+TEST(scene_documents)
+{
+    ASSERT_EQ(sweep("scene", op_scene), 0);
+}
+
+TEST(image_decoding)
+{
+    img im;
+    glint_err e;
+    ASSERT_OK(img_alloc(&im, 16, 8, 3, &e));
+    for (int i = 0; i < 16 * 8 * 3; i++)
+        im.px[i] = (float)(i % 7) / 7.0f;
+    ASSERT_OK(img_write_mem("png", &im, &png_data, &png_len, &e));
+    ASSERT_OK(img_write_mem("hdr", &im, &hdr_data, &hdr_len, &e));
+    img_free(&im);
+    ASSERT_EQ(sweep("png", op_image), 0);
+    ASSERT_EQ(sweep("environment", op_env), 0);
+}
+
+/* As glintd loads an upload: pre-scan, the import in a child, cleaning,
+ * normals, uvs. */
+TEST(mesh_upload)
+{
+    ASSERT_EQ(sweep("mesh", op_mesh), 0);
+}
+
+TEST(hf3_fit_end_to_end)
+{
+    scene_params p;
+    glint_err e;
+    scene_params_default(&p);
+    p.width = p.height = 16;
+    ASSERT_OK(scene_create(&p, &fit_scene, &e));
+    snprintf(fit_dir, sizeof fit_dir, "/tmp/glint-allocfail-XXXXXX");
+    ASSERT(mkdtemp(fit_dir) != NULL);
+    ASSERT_EQ(sweep("hf3 fit", op_fit), 0);
+    {
+        char cmd[128];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", fit_dir);
+        ASSERT_EQ(system(cmd), 0);
+    }
+    scene_free(&fit_scene);
+}
+
+TEST(every_method_through_the_cache)
+{
+    scene_params p;
+    glint_err e;
+    gbuf *g = NULL;
+    brdf b;
+    char name[64];
+    int bad = 0;
+    scene_params_default(&p);
+    p.width = p.height = 16;
+    ASSERT_OK(scene_create(&p, &fit_scene, &e));
+    ASSERT_OK(raster_scene(&fit_scene, &g, &e));
+    ASSERT_OK(brdf_parse("ct:rough=0.3,kd=0.5", &b, &e));
+    ASSERT_OK(paint_views(&b, g, fit_scene.views, fit_scene.nviews, 0, method_paint, NULL, &e));
+    snprintf(fit_dir, sizeof fit_dir, "/tmp/glint-allocfail-XXXXXX");
+    ASSERT(mkdtemp(fit_dir) != NULL);
+    sweep_dense = 120; /* seven methods: fewer runs each */
+    sweep_runs = 120;
+    for (size_t i = 0; i < sizeof method_small / sizeof *method_small; i++) {
+        char spec[128], *tok, *save;
+        cur_method = method_find(method_small[i][0]);
+        ASSERT(cur_method && (cur_params = method_params_new(cur_method)));
+        snprintf(spec, sizeof spec, "%s", method_small[i][1]);
+        for (tok = strtok_r(spec, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+            char *eq = strchr(tok, '=');
+            *eq = '\0';
+            ASSERT_MSG(method_param_set_text(cur_method, cur_params, tok, eq + 1, &e) == 0,
+                       "%s: %s", method_small[i][0], e.msg);
+        }
+        snprintf(name, sizeof name, "%s fit", method_small[i][0]);
+        bad += sweep(name, op_method);
+        free(cur_params);
+    }
+    sweep_dense = SWEEP_DENSE;
+    sweep_runs = SWEEP_RUNS;
+    ASSERT_EQ(bad, 0);
+    {
+        char cmd[128];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", fit_dir);
+        ASSERT_EQ(system(cmd), 0);
+    }
+    for (int k = 0; k < fit_scene.nviews; k++) {
+        img_free(&method_paint[k]);
+        gbuf_free(&g[k]);
+    }
+    free(g);
+    scene_free(&fit_scene);
+}
+
+TEST_LIST {
+    TEST_ENTRY(stroke_json),
+    TEST_ENTRY(scene_documents),
+    TEST_ENTRY(image_decoding),
+    TEST_ENTRY(mesh_upload),
+    TEST_ENTRY(hf3_fit_end_to_end),
+    TEST_ENTRY(every_method_through_the_cache),
+};
+
+TEST_MAIN()
