@@ -187,6 +187,7 @@ int store_open(const char *data_dir, store **out, glint_err *err)
         (rc = store_schema_init(s, err)))
         goto fail_db;
     store_sweep(s);
+    store_sweep_blobs(s);
     *out = s;
     return 0;
 

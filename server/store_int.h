@@ -1,5 +1,5 @@
-/* store_int.h: internals of the store, shared by store.c, store_blob.c and
- * store_log.c only. */
+/* store_int.h: internals of the store, shared by store.c, store_blob.c,
+ * store_log.c and store_sweep.c only. */
 #ifndef GLINTD_STORE_INT_H
 #define GLINTD_STORE_INT_H
 
@@ -40,5 +40,7 @@ int store_random_name(char *buf, size_t len, const char *prefix, const char *suf
 /* Remove painting files no row names and temporary files of interrupted
  * writes (at open, before anyone writes). */
 void store_sweep(store *s);
+/* The other kinds of blobs nothing names after a crash (store_sweep.c). */
+void store_sweep_blobs(store *s);
 
 #endif

@@ -95,7 +95,7 @@ static inline long long db_int(const char *dir, const char *sql)
 
 static inline int path_exists(const char *dir, const char *rel)
 {
-    char path[512];
+    char path[8192];
     struct stat st;
     snprintf(path, sizeof path, "%s/%s", dir, rel);
     return stat(path, &st) == 0;

@@ -28,7 +28,7 @@ static int db_exec(const char *dir, const char *sql)
 
 static int write_file(const char *dir, const char *rel, const char *text)
 {
-    char path[512];
+    char path[8192];
     FILE *f;
     snprintf(path, sizeof path, "%s/%s", dir, rel);
     if (!(f = fopen(path, "w")))
@@ -438,6 +438,75 @@ TEST(open_sweeps_files_no_row_names)
     fx_close(&f);
 }
 
+/* The other kinds a crash can leave (store_sweep.c): material and scene
+ * directories and mesh files without their row, environment maps without
+ * their record and records without their map, temporary files anywhere;
+ * what rows and records name stays, and so do names that are not ids. */
+TEST(open_sweeps_every_kind_of_blob)
+{
+    fixture f;
+    char keep_m[33], lost_m[33], lost_s[33], keep_e[33], lost_e[33], lost_r[33], mesh[33];
+    char p[40][160];
+    int n = 0;
+    json_t *doc;
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(glint_id_new(keep_m, NULL) || glint_id_new(lost_m, NULL) ||
+              glint_id_new(lost_s, NULL) || glint_id_new(keep_e, NULL) ||
+              glint_id_new(lost_e, NULL) || glint_id_new(lost_r, NULL) ||
+              glint_id_new(mesh, NULL));
+    doc = json_pack("{s:s}", "id", keep_m);
+    ASSERT_OK(store_material_put(f.s, keep_m, f.session, doc, NULL));
+    json_decref(doc);
+    doc = json_pack("{s:s, s:s, s:i}", "id", mesh, "format", "ply", "triangles", 1);
+    ASSERT_OK(store_mesh_put(f.s, mesh, doc, "ply\n", 4, NULL));
+    json_decref(doc);
+    store_close(f.s);
+    f.s = NULL;
+    {
+        static const char *const dirs[] = {"blobs/materials", "blobs/scenes", "blobs/environments"};
+        char d[160];
+        for (int i = 0; i < 3; i++) {
+            snprintf(d, sizeof d, "%s/%s", f.dir, dirs[i]);
+            mkdir(d, 0755);
+        }
+    }
+#define MKDIR(...) (snprintf(p[n], sizeof p[n], __VA_ARGS__), \
+                    mkdir(strcat(strcat(strcpy(p[39], f.dir), "/"), p[n]), 0755), n++)
+#define FILE_(...) (snprintf(p[n], sizeof p[n], __VA_ARGS__), write_file(f.dir, p[n], "x"), n++)
+    /* kept: 0..5 */
+    MKDIR("blobs/materials/%s", keep_m);
+    FILE_("blobs/materials/%s/material.json", keep_m);
+    MKDIR("blobs/scenes/%s", f.scene);
+    FILE_("blobs/environments/%s.hdr", keep_e);
+    FILE_("blobs/environments/%s.json", keep_e);
+    FILE_("blobs/materials/README");
+    const int kept = n;
+    /* removed: the rest */
+    MKDIR("blobs/materials/%s", lost_m);
+    FILE_("blobs/materials/%s/factors.exr", lost_m);
+    MKDIR("blobs/scenes/%s", lost_s);
+    FILE_("blobs/scenes/%s/base0.exr", lost_s);
+    FILE_("blobs/meshes/%s.obj", lost_m);
+    FILE_("blobs/environments/%s.exr", lost_e);
+    FILE_("blobs/environments/%s.json", lost_r);
+    FILE_("blobs/materials/%s/material.json.tmp-Xy12Zw", keep_m);
+    FILE_("blobs/environments/%s.hdr.tmp-Ab34Cd", keep_e);
+#undef MKDIR
+#undef FILE_
+    for (int i = 0; i < n; i++)
+        ASSERT_MSG(path_exists(f.dir, p[i]), "not made: %s", p[i]);
+    ASSERT_OK(store_open(f.dir, &f.s, NULL));
+    for (int i = 0; i < n; i++)
+        ASSERT_MSG(path_exists(f.dir, p[i]) == (i < kept), "%s: %s", p[i],
+                   i < kept ? "removed" : "left");
+    {
+        char m[160];
+        snprintf(m, sizeof m, "blobs/meshes/%s.ply", mesh);
+        ASSERT(path_exists(f.dir, m));
+    }
+    fx_close(&f);
+}
+
 TEST_LIST{
     TEST_ENTRY(open_fresh_records_schema_and_reopens),
     TEST_ENTRY(newer_schema_is_refused_and_left_unchanged),
@@ -448,6 +517,7 @@ TEST_LIST{
     TEST_ENTRY(blob_names_refused),
     TEST_ENTRY(blob_put_get_delete_list),
     TEST_ENTRY(open_sweeps_files_no_row_names),
+    TEST_ENTRY(open_sweeps_every_kind_of_blob),
 };
 
 TEST_MAIN()
