@@ -18,6 +18,16 @@ int fsio_join(char *buf, size_t len, const char *dir, const char *name, glint_er
 
 /* fsync the directory holding `path`, so the rename itself is durable.
  * Best effort: a file system that refuses loses durability, not data. */
+
+int fsio_err_kind(glint_err *err, int errnum)
+{
+    if (errnum == ENOSPC || errnum == EDQUOT || errnum == EFBIG)
+        return glint_err_kind(err, "storage-full");
+    if (errnum == EROFS || errnum == EACCES || errnum == EPERM)
+        return glint_err_kind(err, "storage-read-only");
+    return err ? err->code : GLINT_EIO;
+}
+
 static void sync_dir(const char *path)
 {
     const char *slash = strrchr(path, '/');
@@ -85,9 +95,12 @@ int fsio_group_end(fsio_group *g, glint_err *err)
     if (g->failed)
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory making files durable");
     for (int i = 0; i < g->n && !rc; i++)
-        if (sync_path(g->paths[i], 0) != 0)
+        if (sync_path(g->paths[i], 0) != 0) {
+            int e = errno;
             rc = glint_err_set(err, GLINT_EIO, "%s: fsync failed: %s", g->paths[i],
-                               strerror(errno));
+                               strerror(e));
+            fsio_err_kind(err, e);
+        }
     /* then each directory once (best effort, as sync_dir) */
     nfiles = g->n;
     for (int i = 0; i < nfiles && !rc; i++) {
@@ -153,8 +166,9 @@ int fsio_atomic_open(fsio_atomic *a, const char *path, glint_err *err)
         free(a->tmp);
         a->tmp = NULL;
         fsio_atomic_abort(a);
-        return glint_err_set(err, GLINT_EIO, "%s: cannot create a temporary file: %s", path,
-                             strerror(e));
+        glint_err_set(err, GLINT_EIO, "%s: cannot create a temporary file: %s", path,
+                      strerror(e));
+        return fsio_err_kind(err, e);
     }
     (void)fchmod(fd, 0644); /* mkstemp makes 0600; glint's files are not secrets */
     a->fp = fdopen(fd, "wb");
@@ -194,7 +208,11 @@ int fsio_atomic_commit(fsio_atomic *a, glint_err *err)
     fsio_atomic_abort(a);
     return 0;
 fail:
-    rc = glint_err_set(err, GLINT_EIO, "%s: %s failed: %s", a->path, what, strerror(errno));
+    {
+        int e = errno;
+        glint_err_set(err, GLINT_EIO, "%s: %s failed: %s", a->path, what, strerror(e));
+        rc = fsio_err_kind(err, e);
+    }
     fsio_atomic_abort(a);
     return rc;
 }
@@ -206,7 +224,9 @@ int fsio_write_atomic(const char *path, const void *data, size_t len, glint_err 
     if (rc)
         return rc;
     if (len && fwrite(data, 1, len, a.fp) != len) {
-        rc = glint_err_set(err, GLINT_EIO, "%s: write failed: %s", path, strerror(errno));
+        int e = errno;
+        glint_err_set(err, GLINT_EIO, "%s: write failed: %s", path, strerror(e));
+        rc = fsio_err_kind(err, e);
         fsio_atomic_abort(&a);
         return rc;
     }
@@ -289,9 +309,11 @@ int fsio_mkdirs(const char *path, glint_err *err)
         if (buf[i] == '/' || buf[i] == '\0') {
             char c = buf[i];
             buf[i] = '\0';
-            if (mkdir(buf, 0755) != 0 && errno != EEXIST)
-                return glint_err_set(err, GLINT_EIO, "cannot create directory %s: %s", buf,
-                                     strerror(errno));
+            if (mkdir(buf, 0755) != 0 && errno != EEXIST) {
+                int e = errno;
+                glint_err_set(err, GLINT_EIO, "cannot create directory %s: %s", buf, strerror(e));
+                return fsio_err_kind(err, e);
+            }
             buf[i] = c;
         }
     }

@@ -59,6 +59,11 @@ int fsio_write_rebuildable(const char *path, const void *data, size_t len, glint
 int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len,
                   glint_err *err);
 
+/* Name the kind of an I/O error from its errno (after glint_err_set):
+ * "storage-full" (ENOSPC, EDQUOT, EFBIG) or "storage-read-only" (EROFS,
+ * EACCES, EPERM); other errors keep none.  Returns err->code. */
+int fsio_err_kind(glint_err *err, int errnum);
+
 /* mkdir -p (mode 0755).  Existing directories are fine. */
 int fsio_mkdirs(const char *path, glint_err *err);
 

@@ -48,6 +48,8 @@ static const struct {
     {"invalid-json", 400},
     {"bad-if-match", 400},
     {"unsupported-media-type", 415},
+    {"storage-full", 507},      /* the data directory's disk (fsio_err_kind) */
+    {"storage-read-only", 503},
 };
 
 int api_status(const glint_err *e)

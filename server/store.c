@@ -39,7 +39,13 @@ static const char *const store_schema[] = {
 
 int store_sqlerr(store *s, glint_err *err, const char *what)
 {
-    return glint_err_set(err, GLINT_EIO, "database: %s: %s", what, sqlite3_errmsg(s->db));
+    int code = sqlite3_errcode(s->db), sys = sqlite3_system_errno(s->db);
+    glint_err_set(err, GLINT_EIO, "database: %s: %s", what, sqlite3_errmsg(s->db));
+    if (code == SQLITE_FULL)
+        return glint_err_kind(err, "storage-full");
+    if (code == SQLITE_READONLY || code == SQLITE_PERM)
+        return glint_err_kind(err, "storage-read-only");
+    return fsio_err_kind(err, sys);
 }
 
 /* Compact JSON text with every double exact (caller frees). */

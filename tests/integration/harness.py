@@ -73,17 +73,19 @@ class Daemon:
         self.data_dir = data_dir or os.path.join(self.tmp, "data")
         self.args = list(args)
         self.proc = None
+        self.preexec = None  # run in the child before glintd (limits, another user)
+        self.port_dir = self.tmp
         self.start()
 
     def start(self):
-        port_file = os.path.join(self.tmp, "port")
+        port_file = os.path.join(self.port_dir, "port")
         if os.path.exists(port_file):
             os.unlink(port_file)
         self.log = open(os.path.join(self.tmp, "glintd.log"), "ab")
         self.proc = subprocess.Popen(
             [GLINTD, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
              "--web-dir", os.path.join(SRC, "web")] + self.args,
-            stdout=self.log, stderr=self.log)
+            stdout=self.log, stderr=self.log, preexec_fn=self.preexec)
         deadline = time.time() + 20
         while time.time() < deadline:
             if self.proc.poll() is not None:
