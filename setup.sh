@@ -108,12 +108,12 @@ case "$mode" in
     build build
     echo "== unit, CLI and integration tests"
     meson test -C build --print-errorlogs
-    echo "== unit tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+    echo "== unit tests and the fuzz corpora under AddressSanitizer + UndefinedBehaviorSanitizer"
     build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
     ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
     LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      meson test -C build-asan --suite unit --print-errorlogs
+      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs
     # the daemon under the sanitizers, driven by the integration tests (a
     # sanitizer report in its log fails the test: tests/integration/harness.py);
     # its previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung under ASan)

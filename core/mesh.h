@@ -132,6 +132,11 @@ int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err);
 int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
                   mesh_report *report, glint_err *err);
 
+/* Import in the calling process instead of a child (on != 0).  Only for a
+ * fuzzer, which must see the importer's coverage and wants its crashes: a
+ * malformed file may then crash or hang the caller.  Not thread-safe. */
+void mesh_import_in_process(int on);
+
 /* Smooth per-vertex normals, area-weighted (replaces m->nrm). */
 int mesh_compute_normals(mesh *m, glint_err *err);
 

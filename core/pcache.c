@@ -221,8 +221,8 @@ int pcache_decomp_load(const char *dir, const char key[33], hf_decomp *out, glin
     out->s_weak = rb_f64(&b);
     if (b.bad || out->res < HF_RES_MIN || out->res > HF_RES_MAX || out->n != 3 * out->res ||
         out->rank < 1 || out->rank > out->n || out->nsamples < 1 ||
-        out->null_dims < 0 || out->weak_dims < 0 ||
-        out->gauge_dims + out->null_dims + out->weak_dims + out->rank > out->n ||
+        out->gauge_dims < 0 || out->null_dims < 0 || out->weak_dims < 0 ||
+        (long long)out->gauge_dims + out->null_dims + out->weak_dims + out->rank > out->n ||
         !isfinite(out->s_null) || !isfinite(out->gain_max) || !isfinite(out->gain_kept) ||
         !isfinite(out->s_weak) ||
         b.len - b.pos != (size_t)8 * out->rank * (1 + (size_t)out->n)) {

@@ -9,8 +9,9 @@
 /* glibc libmvec vector variants (x86-64 vector ABI names). */
 __m128d _ZGVbN2v_log(__m128d x);
 __m128d _ZGVbN2v_exp(__m128d x);
-__m256d _ZGVdN4v_log(__m256d x);
-__m256d _ZGVdN4v_exp(__m256d x);
+/* the AVX2 variants take and return ymm registers: declared for avx2 code */
+__attribute__((target("avx2"))) __m256d _ZGVdN4v_log(__m256d x);
+__attribute__((target("avx2"))) __m256d _ZGVdN4v_exp(__m256d x);
 
 __attribute__((target("avx2"))) static void log_avx2(const double *in, double *out, size_t n)
 {
