@@ -42,8 +42,9 @@ SRC = os.path.dirname(os.path.dirname(HERE))
 
 
 class Daemon:
-    def __init__(self, glintd, data_dir, threads):
+    def __init__(self, glintd, data_dir, threads, extra=()):
         self.glintd, self.data_dir, self.threads = glintd, data_dir, threads
+        self.extra = list(extra)
         self.proc = None
 
     def start(self):
@@ -53,7 +54,8 @@ class Daemon:
         self.log = open(self.data_dir + ".log", "ab")
         self.proc = subprocess.Popen(
             [self.glintd, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
-             "--threads", str(self.threads), "--quiet", "--web-dir", os.path.join(SRC, "web")],
+             "--threads", str(self.threads), "--quiet", "--web-dir", os.path.join(SRC, "web")]
+            + self.extra,
             stdout=self.log, stderr=self.log)
         t0 = time.time()
         while time.time() - t0 < 20:
