@@ -34,6 +34,7 @@
 #include "cache.h"
 #include "check.h"
 #include "method.h"
+#include "method_small.h"
 #include "prep.h"
 #include "env.h"
 #include "fit.h"
@@ -320,15 +321,6 @@ done:
  * levels built through it (pattern, design, decompositions, transfer
  * matrices), the fit, the material written and read back.  Small
  * parameters: the paths are the same at any size. */
-static const char *const method_small[][2] = {
-    {"hf3", "res=8"},
-    {"srbf", "lights=8,basis_res=2,raster=full,grazing=0"},
-    {"hf4", "res=8,s_res=4"},
-    {"hf2d", "res=8,res_2d=8"},
-    {"maps", "res=8,components=2,map_res=16,rounds=2"},
-    {"hybrid", "res=8,s_res=4,components=2,map_res=16,rounds=2"},
-    {"auto", "res=8,s_res=4,res_2d=8,components=2"},
-};
 static const method *cur_method;
 static void *cur_params;
 static img method_paint[SCENE_MAX_VIEWS];
@@ -439,17 +431,11 @@ TEST(every_method_through_the_cache)
     ASSERT(mkdtemp(fit_dir) != NULL);
     sweep_dense = 120; /* seven methods: fewer runs each */
     sweep_runs = 120;
-    for (size_t i = 0; i < sizeof method_small / sizeof *method_small; i++) {
-        char spec[128], *tok, *save;
+    for (int i = 0; i < METHOD_SMALL_N; i++) {
         cur_method = method_find(method_small[i][0]);
         ASSERT(cur_method && (cur_params = method_params_new(cur_method)));
-        snprintf(spec, sizeof spec, "%s", method_small[i][1]);
-        for (tok = strtok_r(spec, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-            char *eq = strchr(tok, '=');
-            *eq = '\0';
-            ASSERT_MSG(method_param_set_text(cur_method, cur_params, tok, eq + 1, &e) == 0,
-                       "%s: %s", method_small[i][0], e.msg);
-        }
+        ASSERT_MSG(method_small_set(cur_method, cur_params, method_small[i][1], &e) == 0,
+                   "%s: %s", method_small[i][0], e.msg);
         snprintf(name, sizeof name, "%s fit", method_small[i][0]);
         bad += sweep(name, op_method);
         free(cur_params);
