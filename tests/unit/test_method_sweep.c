@@ -215,6 +215,34 @@ TEST(every_parameter_at_its_ends)
     ASSERT_EQ(bad, 0);
 }
 
+static int by_time(const void *a, const void *b)
+{
+    double x = ((const outcome *)a)->seconds, y = ((const outcome *)b)->seconds;
+    return (x < y) - (x > y);
+}
+
+static int by_rel(const void *a, const void *b)
+{
+    double x = ((const outcome *)a)->rel, y = ((const outcome *)b)->rel;
+    return (x < y) - (x > y);
+}
+
+/* The slowest and least accurate cases run so far. */
+static void report_corners(void)
+{
+    static outcome sorted[1024];
+    int n = nouts;
+    memcpy(sorted, outs, (size_t)n * sizeof *outs);
+    qsort(sorted, (size_t)n, sizeof *sorted, by_time);
+    printf("  %d cases; the slowest:\n", n);
+    for (int i = 0; i < 6 && i < n; i++)
+        printf("    %8.3f s  %s\n", sorted[i].seconds, sorted[i].what);
+    qsort(sorted, (size_t)n, sizeof *sorted, by_rel);
+    printf("  the least accurate on the painted samples (rms_painted / painting RMS):\n");
+    for (int i = 0; i < 6 && i < n && sorted[i].rel >= 0; i++)
+        printf("    %8.4f    %s\n", sorted[i].rel, sorted[i].what);
+}
+
 TEST(extreme_paintings)
 {
     int bad = 0;
@@ -257,41 +285,13 @@ TEST(extreme_paintings)
         bad += run_case(meth, params, paint_x, "one NaN pixel", 1);
         free(params);
     }
+    report_corners();
     ASSERT_EQ(bad, 0);
-}
-
-static int by_time(const void *a, const void *b)
-{
-    double x = ((const outcome *)a)->seconds, y = ((const outcome *)b)->seconds;
-    return (x < y) - (x > y);
-}
-
-static int by_rel(const void *a, const void *b)
-{
-    double x = ((const outcome *)a)->rel, y = ((const outcome *)b)->rel;
-    return (x < y) - (x > y);
-}
-
-TEST(report_the_corners)
-{
-    outcome sorted[1024];
-    int n = nouts;
-    ASSERT(n > 0);
-    memcpy(sorted, outs, (size_t)n * sizeof *outs);
-    qsort(sorted, (size_t)n, sizeof *sorted, by_time);
-    printf("  %d cases; the slowest:\n", n);
-    for (int i = 0; i < 6 && i < n; i++)
-        printf("    %8.3f s  %s\n", sorted[i].seconds, sorted[i].what);
-    qsort(sorted, (size_t)n, sizeof *sorted, by_rel);
-    printf("  the least accurate on the painted samples (rms_painted / painting RMS):\n");
-    for (int i = 0; i < 6 && i < n && sorted[i].rel >= 0; i++)
-        printf("    %8.4f    %s\n", sorted[i].rel, sorted[i].what);
 }
 
 TEST_LIST {
     TEST_ENTRY(every_parameter_at_its_ends),
     TEST_ENTRY(extreme_paintings),
-    TEST_ENTRY(report_the_corners),
 };
 
 TEST_MAIN()
