@@ -22,7 +22,7 @@ BUILD_PKGS=(
 # inspecting outputs, gnuplot for the benchmark plot, valgrind.
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt python3-openimageio python3-matplotlib
-  openimageio-tools gnuplot-nox wrk chromium jq
+  openimageio-tools gnuplot-nox wrk chromium jq valgrind
 )
 
 missing_packages() {
@@ -108,6 +108,8 @@ case "$mode" in
     build build
     echo "== unit, CLI and integration tests"
     meson test -C build --print-errorlogs
+    echo "== unit tests under valgrind (memcheck; those that finish within minutes there)"
+    meson test -C build --setup valgrind --suite valgrind --print-errorlogs
     echo "== unit tests and the fuzz corpora under AddressSanitizer + UndefinedBehaviorSanitizer"
     build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
     ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
@@ -123,7 +125,8 @@ case "$mode" in
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       meson test -C build-asan --suite integration --no-suite unsanitized --print-errorlogs \
         --logbase testlog-integration
-    python3 tests/summary.py build/meson-logs/testlog.json build-asan/meson-logs/testlog.json \
+    python3 tests/summary.py build/meson-logs/testlog.json build/meson-logs/testlog-valgrind.json \
+      build-asan/meson-logs/testlog.json \
       build-asan/meson-logs/testlog-integration.json
     ;;
   *)
