@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "mesh_int.h"
 
@@ -421,8 +422,11 @@ static int mio_prescan_off(const char *buf, size_t len, int named_off, const cha
 int mio_prescan(const char *buf, size_t len, const char *fmt, const char *what,
                 glint_err *err)
 {
-    if (len >= 4 && (memcmp(buf, "ply", 3) == 0 || memcmp(buf, "PLY", 3) == 0) &&
-        mio_space(buf[3]))
+    /* named .ply, whatever it holds: assimp's PLY reader takes "ply" in any
+     * case followed by anything, and loops without end_header (found by
+     * tests/fuzz: "plY", "ply)", "ply3ds" ...) */
+    if (strcmp(fmt, "ply") == 0 ||
+        (len >= 4 && strncasecmp(buf, "ply", 3) == 0 && mio_space(buf[3])))
         return mio_prescan_ply(buf, len, what, err);
     return mio_prescan_off(buf, len, strcmp(fmt, "off") == 0, what, err);
 }
