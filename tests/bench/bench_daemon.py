@@ -74,6 +74,21 @@ class Daemon:
         self.log.close()
 
 
+def view0_pngs(cli, tmp):
+    """Two paintings of view 0 of the daemon's default scene at 256x256, made
+    by the CLI (PNG bytes); the scene is left in tmp/scene.json and every
+    view's PNGs in tmp/png0, tmp/png1."""
+    subprocess.run([cli, "scene", "create", "--size", "256", "-o", tmp + "/scene.json"],
+                   check=True, stdout=subprocess.DEVNULL)
+    pngs = []
+    for i, brdf in enumerate(["ct:rough=0.3,kd=0.5,f0=0.3", "ct:rough=0.2,kd=0.4,f0=0.2"]):
+        subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", brdf, "--format", "png",
+                        "-o", "%s/png%d" % (tmp, i)], check=True, stdout=subprocess.DEVNULL)
+        with open("%s/png%d/view_00.png" % (tmp, i), "rb") as f:
+            pngs.append(f.read())
+    return pngs
+
+
 def check(r, status):
     if r.status_code != status:
         raise RuntimeError("%s %s: %d %s" % (r.request.method, r.request.url, r.status_code,
@@ -233,15 +248,7 @@ def main():
     rows = []
     load0 = " ".join("%.2f" % x for x in os.getloadavg())
     try:
-        # paintings made by the CLI for the daemon's default scene at 256x256
-        subprocess.run([cli, "scene", "create", "--size", "256", "-o", tmp + "/scene.json"],
-                       check=True, stdout=subprocess.DEVNULL)
-        pngs = []
-        for i, brdf in enumerate(["ct:rough=0.3,kd=0.5,f0=0.3", "ct:rough=0.2,kd=0.4,f0=0.2"]):
-            subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", brdf, "--format", "png",
-                            "-o", "%s/png%d" % (tmp, i)], check=True, stdout=subprocess.DEVNULL)
-            with open("%s/png%d/view_00.png" % (tmp, i), "rb") as f:
-                pngs.append(f.read())
+        pngs = view0_pngs(cli, tmp)
         subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", "ct:rough=0.3,kd=0.5,f0=0.3",
                         "-o", tmp + "/exr"], check=True, stdout=subprocess.DEVNULL)
 

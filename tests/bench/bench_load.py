@@ -28,7 +28,6 @@ import os
 import random
 import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -38,7 +37,7 @@ import requests
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from bench_daemon import SRC, Daemon, check, new_session  # noqa: E402
+from bench_daemon import SRC, Daemon, check, new_session, view0_pngs  # noqa: E402
 
 API = "/api/v1"
 
@@ -270,13 +269,7 @@ def main():
     glintd = os.path.join(a.build, "server", "glintd")
     cli = os.path.join(a.build, "core", "glint")
     tmp = tempfile.mkdtemp(prefix="glint-load-")
-    subprocess.run([cli, "scene", "create", "--size", "256", "-o", tmp + "/scene.json"],
-                   check=True, stdout=subprocess.DEVNULL)
-    pngs = []
-    for i, brdf in enumerate(["ct:rough=0.3,kd=0.5,f0=0.3", "ct:rough=0.2,kd=0.4,f0=0.2"]):
-        subprocess.run([cli, "paint", tmp + "/scene.json", "--brdf", brdf, "--format", "png",
-                        "-o", "%s/png%d" % (tmp, i)], check=True, stdout=subprocess.DEVNULL)
-        pngs.append(open("%s/png%d/view_00.png" % (tmp, i), "rb").read())
+    pngs = view0_pngs(cli, tmp)
     # twice what is held: at 3/4 of its limits glintd stops keeping
     # connections alive (http_front.h), which would close the idle ones
     conns = 2 * (a.idle + a.painters + 4 * a.scripts + 64)
