@@ -117,12 +117,20 @@ int glr_vertex_colors(glr *g, const glr_mesh *m, const scene_view *v, int width,
 /* Write the material's shader for use in any OpenGL ES 3 / WebGL 2
  * renderer: dir/glint_material.frag and .vert (GLSL ES 3.00), the factor
  * texture dir/glint_factors.exr (log-factors, RGB float, 3 rows of res
- * texels) plus dir/glint_factors_rgba16f.bin (raw half floats for WebGL), and
+ * texels) plus dir/glint_factors_rgba16f.bin (raw half floats for WebGL) and
+ * dir/glint_factors16.png (16 bits, each channel scaled to its range), the
+ * same stages as GLSL 3.30 core (glint_material_330.*), and
  * dir/shader.json, the manifest of how to bind them (attribute, uniform and
  * texture names, texel convention, mapping constants and their values).
  * The fragment shader is the very text glr_preview() draws with.  Needs no
  * GL context; dir is created if missing; files are written atomically. */
 int glr_shader_export(const material *mat, const char *dir, glint_err *err);
+
+/* The desktop variant of a GLSL ES 3.00 stage: "#version 330 core" for its
+ * first line (precision qualifiers are accepted and ignored there), the
+ * rest the same text; the shader export writes it as glint_material_330.*.
+ * malloc'ed, or NULL when `es` does not start "#version 300 es". */
+char *glr_glsl_desktop(const char *es);
 
 /* Compile and link a vertex + fragment pair in g's context (e.g. the files
  * glr_shader_export wrote), then delete it: 0, or GLINT_EFORMAT with the

@@ -80,6 +80,42 @@ static json_t *glr_attribute(const char *name, int loc, const char *type, const 
     return a;
 }
 
+/* Per channel range of the method's texture (hi > lo: a constant channel
+ * gets a range of 1 so that it decodes exactly). */
+static void tex_range(const material_gpu *gpu, double lo[3], double hi[3])
+{
+    size_t n = (size_t)gpu->tex_w * gpu->tex_h;
+    for (int c = 0; c < 3; c++) {
+        lo[c] = n ? gpu->tex[c] : 0.0;
+        hi[c] = lo[c];
+    }
+    for (size_t t = 0; t < n; t++)
+        for (int c = 0; c < 3; c++) {
+            double v = gpu->tex[3 * t + (size_t)c];
+            lo[c] = v < lo[c] ? v : lo[c];
+            hi[c] = v > hi[c] ? v : hi[c];
+        }
+    for (int c = 0; c < 3; c++)
+        if (!(hi[c] > lo[c]))
+            hi[c] = lo[c] + 1.0;
+}
+
+char *glr_glsl_desktop(const char *es)
+{
+    static const char v[] = "#version 330 core";
+    const char *rest = strchr(es, '\n');
+    size_t n;
+    char *out;
+    if (strncmp(es, "#version 300 es", 15) != 0 || !rest)
+        return NULL;
+    n = strlen(rest);
+    if (!(out = malloc(sizeof v - 1 + n + 1)))
+        return NULL;
+    memcpy(out, v, sizeof v - 1);
+    memcpy(out + sizeof v - 1, rest, n + 1);
+    return out;
+}
+
 static json_t *uniform_value(const material_gpu_uniform *u)
 {
     if (strcmp(u->type, "int") == 0)
@@ -139,6 +175,24 @@ static json_t *glr_manifest(const material *mat, const material_gpu *gpu)
     json_object_set_new(root, "output",
                         json_string("vec4(linear RGB radiance, 1) at location 0; 0 where "
                                     "n.wi <= 0 or n.wo <= 0"));
+    json_object_set_new(root, "desktop",
+                        json_pack("{s:s, s:s, s:s, s:s}", "language",
+                                  "GLSL 3.30 core (OpenGL 3.3 and later)", "vertex",
+                                  "glint_material_330.vert", "fragment",
+                                  "glint_material_330.frag", "differs",
+                                  "only in the #version line: the same code, bindings and "
+                                  "results"));
+    if (gpu->tex) {
+        double lo[3], hi[3];
+        tex_range(gpu, lo, hi);
+        json_object_set_new(root, "texture_png16",
+                            json_pack("{s:s, s:[f,f,f], s:[f,f,f], s:s}", "file",
+                                      "glint_factors16.png", "min", lo[0], lo[1], lo[2], "max",
+                                      hi[0], hi[1], hi[2], "decode",
+                                      "value = min + (max - min) * v / 65535 per channel, v "
+                                      "the 16-bit sample (RGB, the texture's layout): within "
+                                      "(max - min) / 131070 of the float texture"));
+    }
     return root;
 }
 
@@ -172,7 +226,32 @@ static int write_texture(const material_gpu *gpu, const char *dir, glint_err *er
     if (!rc)
         rc = fsio_write_atomic(path, half, n * 4 * 2, err);
     free(half);
+    if (rc)
+        return rc;
+    /* 16-bit PNG, each channel scaled to its range (shader.json: texture_png16) */
+    {
+        double lo[3], hi[3];
+        tex_range(gpu, lo, hi);
+        if ((rc = img_alloc(&tex, gpu->tex_w, gpu->tex_h, 3, err)))
+            return rc;
+        for (size_t t = 0; t < n; t++)
+            for (int c = 0; c < 3; c++)
+                tex.px[3 * t + (size_t)c] =
+                    (float)((gpu->tex[3 * t + (size_t)c] - lo[c]) / (hi[c] - lo[c]));
+        rc = fsio_join(path, sizeof path, dir, "glint_factors16.png", err);
+        if (!rc)
+            rc = img_write_png16(path, &tex, err);
+        img_free(&tex);
+    }
     return rc;
+}
+
+/* Write a text file dir/name. */
+static int write_text(const char *dir, const char *name, const char *text, glint_err *err)
+{
+    char path[4096];
+    int rc = fsio_join(path, sizeof path, dir, name, err);
+    return rc ? rc : fsio_write_atomic(path, text, strlen(text), err);
 }
 
 int glr_shader_export(const material *mat, const char *dir, glint_err *err)
@@ -191,13 +270,20 @@ int glr_shader_export(const material *mat, const char *dir, glint_err *err)
     }
     if ((rc = fsio_mkdirs(dir, err)))
         goto done;
-    rc = fsio_join(path, sizeof path, dir, "glint_material.vert", err);
+    rc = write_text(dir, "glint_material.vert", GLR_VERT_SRC, err);
     if (!rc)
-        rc = fsio_write_atomic(path, GLR_VERT_SRC, strlen(GLR_VERT_SRC), err);
-    if (!rc)
-        rc = fsio_join(path, sizeof path, dir, "glint_material.frag", err);
-    if (!rc)
-        rc = fsio_write_atomic(path, gpu.frag_src, strlen(gpu.frag_src), err);
+        rc = write_text(dir, "glint_material.frag", gpu.frag_src, err);
+    if (!rc) {
+        char *v = glr_glsl_desktop(GLR_VERT_SRC), *f = glr_glsl_desktop(gpu.frag_src);
+        if (!v || !f)
+            rc = glint_err_set(err, GLINT_EINTERNAL, "a shader stage is not GLSL ES 3.00");
+        if (!rc)
+            rc = write_text(dir, "glint_material_330.vert", v, err);
+        if (!rc)
+            rc = write_text(dir, "glint_material_330.frag", f, err);
+        free(v);
+        free(f);
+    }
     if (!rc && gpu.tex)
         rc = write_texture(&gpu, dir, err);
     if (rc)

@@ -434,6 +434,29 @@ static int img_encode(const img_fmt *f, const img *im, const char *path, void **
     return rc;
 }
 
+int img_write_png16(const char *path, const img *im, glint_err *err)
+{
+    size_t n;
+    uint16_t *q;
+    int rc = img_validate(im, err);
+    if (rc)
+        return rc;
+    if ((rc = img_check_finite_array(im->px, im->width, im->height, im->channels, NULL, path,
+                                     err)))
+        return glint_err_prefix(err, "refusing to write");
+    n = (size_t)im->width * im->height * im->channels;
+    if (!(q = malloc(n * sizeof *q)))
+        return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", path);
+    for (size_t i = 0; i < n; i++) {
+        double x = im->px[i];
+        x = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+        q[i] = (uint16_t)(x * 65535.0 + 0.5);
+    }
+    rc = img_write_atomic(path, "png", im->width, im->height, im->channels, NULL, 2, q, err);
+    free(q);
+    return rc;
+}
+
 int img_write_pair(const char *dir, const char *stem, const img *lin, const img *png,
                    glint_err *err)
 {

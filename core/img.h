@@ -54,6 +54,10 @@ int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_
  * renamed, so a crash never leaves a half-written file at `path`. */
 int img_write(const char *path, const img *im, glint_err *err);
 
+/* A 16-bit PNG (any extension): each value clamped to [0, 1] and rounded
+ * to x * 65535, no transfer curve; written atomically like img_write. */
+int img_write_png16(const char *path, const img *im, glint_err *err);
+
 /* A texture as a material directory holds it: dir/stem.exr (float, `lin`)
  * and dir/stem.png (8-bit, `png`), each written as img_write does. */
 int img_write_pair(const char *dir, const char *stem, const img *lin, const img *png,

@@ -284,7 +284,9 @@ extern "C" int img_oiio_write(const char *format, FILE *fp, void **mem,
         return glint_err_set(err, GLINT_EINVAL, "%s: bad arguments to the encoder", dst);
     try {
         oiio_init();
-        const TypeDesc type = u8 ? TypeDesc(TypeDesc::UINT8) : TypeDesc(TypeDesc::FLOAT);
+        const TypeDesc type = u8 == 2 ? TypeDesc(TypeDesc::UINT16)
+                              : u8   ? TypeDesc(TypeDesc::UINT8)
+                                     : TypeDesc(TypeDesc::FLOAT);
         ImageSpec spec(width, height, nch, type);
         if (names) {
             spec.channelnames.clear();

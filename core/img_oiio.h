@@ -45,8 +45,9 @@ int img_oiio_read(const char *format, FILE *fp, const void *mem, size_t len,
 
 void img_oiio_pixels_free(img_oiio_pixels *p);
 
-/* Encode width x height x nch interleaved pixels, float (u8 == 0) or
- * unsigned 8-bit (u8 != 0), in OpenImageIO format `format`, to the open
+/* Encode width x height x nch interleaved pixels, float (u8 == 0),
+ * unsigned 8-bit (u8 == 1) or unsigned 16-bit (u8 == 2, native byte order),
+ * in OpenImageIO format `format`, to the open
  * stream `fp` (the caller flushes, syncs and closes it) or, when fp is
  * NULL, to memory: *mem is then malloc'ed (caller frees) and *mem_len set.
  * names: NULL for the default R, G, B, A, or nch channel names.  OpenEXR is

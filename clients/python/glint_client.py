@@ -38,7 +38,8 @@ __all__ = ["GlintClient", "GlintError", "GlintConnectionError", "GlintTimeout",
            "JobFailed", "Blob", "Event", "EventStream", "UNCHANGED"]
 
 SHADER_FILES = ("shader.json", "glint_material.vert", "glint_material.frag",
-                "glint_factors.exr", "glint_factors_rgba16f.bin")
+                "glint_material_330.vert", "glint_material_330.frag",
+                "glint_factors.exr", "glint_factors_rgba16f.bin", "glint_factors16.png")
 MESH_FORMATS = ("ply", "obj", "off", "gltf", "glb", "dae")
 IMAGE_FORMATS = ("png", "exr")
 UNCHANGED = object()  # replace_tokens(expires_in=UNCHANGED): leave the expiry as it is

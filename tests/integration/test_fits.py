@@ -306,7 +306,9 @@ def test_04_material_files(d):
         assert names == sorted(["material.json", "factors.png", "factors.exr",
                                 "shader/shader.json", "shader/glint_material.vert",
                                 "shader/glint_material.frag", "shader/glint_factors.exr",
-                                "shader/glint_factors_rgba16f.bin"]), names
+                                "shader/glint_factors_rgba16f.bin", "shader/glint_factors16.png",
+                                "shader/glint_material_330.vert",
+                                "shader/glint_material_330.frag"]), names
         top = t.getnames()[0].split("/")[0]
         manifest = json.load(t.extractfile(top + "/material.json"))
         assert manifest["format"] == "glint-material" and manifest["res"] == 32

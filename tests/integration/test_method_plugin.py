@@ -123,7 +123,8 @@ def test_04_the_material_evaluates_renders_and_exports(d):
         top = t.getnames()[0].split("/")[0]
         manifest = json.load(t.extractfile(top + "/material.json"))
     assert names == ["material.json", "shader/glint_material.frag",
-                     "shader/glint_material.vert", "shader/shader.json"], names
+                     "shader/glint_material.vert", "shader/glint_material_330.frag",
+                     "shader/glint_material_330.vert", "shader/shader.json"], names
     assert manifest["method"] == "lambert-test"
     for c in range(3):
         assert abs(manifest["albedo"][c] - KD[c]) < 1e-4, manifest["albedo"]
@@ -135,7 +136,8 @@ def test_04_the_material_evaluates_renders_and_exports(d):
     sh = d.get("/api/v1/materials/%s/shader" % mid, headers=h, status=200,
                schema="Shader.json").json()
     assert "u_albedo" in sh["fragment"] and sorted(sh["files"]) == [
-        "glint_material.frag", "glint_material.vert", "shader.json"]
+        "glint_material.frag", "glint_material.vert", "glint_material_330.frag",
+        "glint_material_330.vert", "shader.json"]
     assert sh["manifest"]["method"] == "lambert-test"
     d.get("/api/v1/materials/%s/factors.png" % mid, headers=h, status=404)
     # previews: the method's shader on EGL and its evaluation on the CPU agree

@@ -553,6 +553,40 @@ TEST(shader_export)
             ASSERT_NEAR(h, hf3_factors(mat)->logf[3 * t + c], 1e-3 * (1 + fabs(hf3_factors(mat)->logf[3 * t + c])));
         }
     free(bin);
+    /* the 16-bit PNG decodes, with shader.json's range, to the factors within
+     * half a step of 65535 */
+    {
+        json_t *p16;
+        img png;
+        snprintf(path, sizeof path, "%s/shader.json", dir);
+        root = json_load_file(path, 0, &je);
+        ASSERT(root && (p16 = json_object_get(root, "texture_png16")));
+        snprintf(path, sizeof path, "%s/%s", dir,
+                 json_string_value(json_object_get(p16, "file")));
+        ASSERT_MSG(img_read(path, &png, &e) == 0, "%s", e.msg);
+        ASSERT(png.width == R && png.height == 3 && png.channels == 3);
+        for (int i = 0; i < 9 * R; i++) {
+            double lo = json_real_value(json_array_get(json_object_get(p16, "min"), i % 3));
+            double hi = json_real_value(json_array_get(json_object_get(p16, "max"), i % 3));
+            double v = lo + (hi - lo) * png.px[i];
+            ASSERT_NEAR(v, hf3_factors(mat)->logf[i], (hi - lo) / 131070.0 * 1.01 + 1e-12);
+        }
+        img_free(&png);
+        /* the desktop stages: the same text after the #version line */
+        for (int k = 0; k < 2; k++) {
+            const char *es = k ? hf3_glsl_frag : GLR_VERT_SRC;
+            char *gl = NULL;
+            size_t gll;
+            snprintf(path, sizeof path, "%s/%s", dir,
+                     json_string_value(json_object_get(json_object_get(root, "desktop"),
+                                                       k ? "fragment" : "vertex")));
+            ASSERT_OK(fsio_read_all(path, 1 << 20, &gl, &gll, &e));
+            ASSERT(strncmp(gl, "#version 330 core\n", 18) == 0);
+            ASSERT(strcmp(strchr(gl, '\n'), strchr(es, '\n')) == 0);
+            free(gl);
+        }
+        json_decref(root);
+    }
     /* no material: an error, not a crash */
     ASSERT_EQ(glr_shader_export(NULL, dir, &e), GLINT_EINVAL);
 }
