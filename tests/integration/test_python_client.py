@@ -303,6 +303,8 @@ def test_07_material_files(d):
     assert frag.decode() == sh["fragment"]
     assert v.shader_file(mid, "glint_factors.exr")[:4] == EXR_SIG
     assert len(v.shader_file(mid, "glint_factors_rgba16f.bin")) > 0
+    assert v.shader_file(mid, "glint_factors16.png")[:8] == b"\x89PNG\r\n\x1a\n"
+    assert v.shader_file(mid, "glint_material_330.frag").decode().startswith("#version 330 core")
     pkg = v.package(mid)
     with tarfile.open(fileobj=io.BytesIO(pkg)) as tf:
         names = tf.getnames()
