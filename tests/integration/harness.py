@@ -74,6 +74,7 @@ class Daemon:
         self.args = list(args)
         self.proc = None
         self.preexec = None  # run in the child before glintd (limits, another user)
+        self.glintd = GLINTD
         self.port_dir = self.tmp
         self.start()
 
@@ -83,7 +84,7 @@ class Daemon:
             os.unlink(port_file)
         self.log = open(os.path.join(self.tmp, "glintd.log"), "ab")
         self.proc = subprocess.Popen(
-            [GLINTD, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
+            [self.glintd, "--port", "0", "--port-file", port_file, "--data-dir", self.data_dir,
              "--web-dir", os.path.join(SRC, "web")] + self.args,
             stdout=self.log, stderr=self.log, preexec_fn=self.preexec)
         deadline = time.time() + 20
