@@ -6,7 +6,8 @@ restart:
   - every write answered 2xx is there, as answered: scenes, sessions, meshes,
     environments and materials readable (a material's files too), paintings
     at least at the acknowledged version, strokes at least to the
-    acknowledged number; every acknowledged deletion stays deleted;
+    acknowledged number; every acknowledged deletion stays deleted (one sent
+    but unanswered may have happened or not, and then stays as it is found);
   - no orphan: each directory or file under blobs/ belongs to a row of the
     database (materials, scenes, meshes, paintings) or, for an uploaded
     environment, to its record; no temporary file of an interrupted atomic
@@ -52,6 +53,8 @@ class State:
         self.materials = []         # (id, token)
         self.meshes = []
         self.envs, self.deleted_envs = [], []
+        # deletions sent but not answered: done or not, as the kill fell
+        self.maybe_deleted = set()
 
 
 def live_sessions(st):
@@ -75,6 +78,7 @@ def write(kind, base, st, rng, acks):
                  and all(x["scene_id"] != s for x in st.sessions)]
         if spare:
             sid = rng.choice(spare)
+            acks.append(("maybe_delete", sid))
             r = http.delete(url + "/scenes/" + sid, headers=OWNER, timeout=30)
             if r.status_code == 204:
                 acks.append(("delete_scene", sid))
@@ -138,6 +142,7 @@ def write(kind, base, st, rng, acks):
         live = [e for e in st.envs if e not in st.deleted_envs]
         if live:
             eid = rng.choice(live)
+            acks.append(("maybe_delete", eid))
             r = http.delete(url + "/environments/" + eid, timeout=30)
             if r.status_code == 204:
                 acks.append(("delete_env", eid))
@@ -164,10 +169,16 @@ def apply(st, acks):
             st.envs.append(v)
         elif kind == "delete_env":
             st.deleted_envs.append(v)
+        elif kind == "maybe_delete":
+            st.maybe_deleted.add(v)
 
 
 def verify(d, st):
     for s in st.scenes:
+        if s in st.maybe_deleted and s not in st.deleted_scenes:
+            if d.get(API + "/scenes/" + s).status_code == 404:
+                st.deleted_scenes.append(s)  # deleted before the kill, unanswered
+            st.maybe_deleted.discard(s)
         d.get(API + "/scenes/" + s, status=404 if s in st.deleted_scenes else 200)
     for s in st.sessions:
         r = d.get(API + "/sessions/" + s["id"], status=200, headers=tok(s["paint_token"]))
@@ -191,6 +202,10 @@ def verify(d, st):
         d.get(API + "/meshes/" + m, status=200)
     envs = {e.get("id") for e in d.get(API + "/environments", status=200).json()["environments"]}
     for e in st.envs:
+        if e in st.maybe_deleted and e not in st.deleted_envs:
+            if e not in envs:
+                st.deleted_envs.append(e)  # deleted before the kill, unanswered
+            st.maybe_deleted.discard(e)
         assert (e in envs) == (e not in st.deleted_envs), (e, envs)
 
 
