@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gltf_int.h"
 #include "raster.h"
 
 #ifndef M_PI
@@ -17,8 +18,8 @@
 /* ---- the model ------------------------------------------------------------------------ */
 
 /* D G / (4 ci co) and s = (1 - |V.H|)^5 of a pair (ci, co > 0) */
-static void spec_terms(double alpha, const double n[3], const double wi[3], const double wo[3],
-                       double ci, double co, double *S, double *s)
+void gltf_spec_terms(double alpha, const double n[3], const double wi[3], const double wo[3],
+                     double ci, double co, double *S, double *s)
 {
     double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]}, hl, nh, vh, a2 = alpha * alpha;
     double d, g1i, g1o;
@@ -51,7 +52,7 @@ void gltf_brdf(const gltf_pbr *p, const double n[3], const double wi[3], const d
     rgb[0] = rgb[1] = rgb[2] = 0.0;
     if (!(ci > 0.0) || !(co > 0.0))
         return;
-    spec_terms(p->roughness * p->roughness, n, wi, wo, ci, co, &S, &s);
+    gltf_spec_terms(p->roughness * p->roughness, n, wi, wo, ci, co, &S, &s);
     coefs(S, s, p->metallic, &A, &B, &C);
     for (int c = 0; c < 3; c++)
         rgb[c] = A + B * p->base[c] + C * p->base[c] * p->base[c];
@@ -90,21 +91,13 @@ static double quartic_min(const double q[5], double *x)
     return best;
 }
 
-typedef struct pairs {
-    int n;
-    double (*nn)[3], (*wi)[3], (*wo)[3], *ci, *co, (*y)[3];
-    double *S, *s; /* for the roughness being tried */
-} pairs;
-
-/* the squared error of (m, r) with the best base colour (OUT: base) */
-static double try_mr(pairs *P, double m, double r, double base[3])
+double gltf_pairs_error(const gltf_pairs *P, const double *S, const double *s, double m,
+                        double base[3])
 {
     double q[3][5] = {{0}}, total = 0.0;
-    for (int i = 0; i < P->n; i++)
-        spec_terms(r * r, P->nn[i], P->wi[i], P->wo[i], P->ci[i], P->co[i], &P->S[i], &P->s[i]);
     for (int i = 0; i < P->n; i++) {
         double A, B, C, ci = P->ci[i];
-        coefs(P->S[i], P->s[i], m, &A, &B, &C);
+        coefs(S[i], s[i], m, &A, &B, &C);
         for (int c = 0; c < 3; c++) {
             double a = ci * A - P->y[i][c], b = ci * B, cc = ci * C;
             q[c][0] += a * a;
@@ -119,10 +112,79 @@ static double try_mr(pairs *P, double m, double r, double base[3])
     return total;
 }
 
-static void pairs_free(pairs *P)
+/* the squared error of (m, r) with the best base colour (OUT: base) */
+static double try_mr(gltf_pairs *P, double m, double r, double base[3])
+{
+    for (int i = 0; i < P->n; i++)
+        gltf_spec_terms(r * r, P->nn[i], P->wi[i], P->wo[i], P->ci[i], P->co[i], &P->S[i],
+                        &P->s[i]);
+    return gltf_pairs_error(P, P->S, P->s, m, base);
+}
+
+void gltf_pairs_free(gltf_pairs *P)
 {
     free(P->nn), free(P->wi), free(P->wo), free(P->y), free(P->ci), free(P->co), free(P->S),
         free(P->s);
+    memset(P, 0, sizeof *P);
+}
+
+int gltf_pairs_alloc(gltf_pairs *P, int cap, glint_err *err)
+{
+    memset(P, 0, sizeof *P);
+    if (cap < 1)
+        return glint_err_set(err, GLINT_EINVAL, "no direction pair to fit a glTF material at");
+    P->nn = malloc((size_t)cap * sizeof *P->nn);
+    P->wi = malloc((size_t)cap * sizeof *P->wi);
+    P->wo = malloc((size_t)cap * sizeof *P->wo);
+    P->y = calloc((size_t)cap, sizeof *P->y);
+    P->ci = malloc((size_t)cap * sizeof *P->ci);
+    P->co = malloc((size_t)cap * sizeof *P->co);
+    P->S = malloc((size_t)cap * sizeof *P->S);
+    P->s = malloc((size_t)cap * sizeof *P->s);
+    if (!P->nn || !P->wi || !P->wo || !P->y || !P->ci || !P->co || !P->S || !P->s) {
+        gltf_pairs_free(P);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for %d glTF fit pairs", cap);
+    }
+    P->cap = cap;
+    return 0;
+}
+
+void gltf_pairs_fill(gltf_pairs *P, const samples *smp, int cap, gltf_fn fn, const void *ctx)
+{
+    int k = 0, total = smp ? smp->n : GLTF_FIT_PAIRS;
+    if (cap > P->cap)
+        cap = P->cap;
+    if (cap > total)
+        cap = total;
+    for (int j = 0; j < cap; j++) {
+        long i = (long)((double)j * total / cap); /* every (total / cap)-th */
+        if (smp) { /* the painted directions */
+            for (int e = 0; e < 3; e++) {
+                P->nn[k][e] = smp->nrm[3 * i + e];
+                P->wi[k][e] = smp->wi[3 * i + e];
+                P->wo[k][e] = smp->wo[3 * i + e];
+            }
+        } else {
+            P->nn[k][0] = P->nn[k][1] = 0.0, P->nn[k][2] = 1.0;
+            fib((int)(i / GLTF_FIT_VIEWS), GLTF_FIT_LIGHTS, P->wi[k]);
+            fib((int)(i % GLTF_FIT_VIEWS), GLTF_FIT_VIEWS, P->wo[k]);
+        }
+        P->ci[k] = P->nn[k][0] * P->wi[k][0] + P->nn[k][1] * P->wi[k][1] +
+                   P->nn[k][2] * P->wi[k][2];
+        P->co[k] = P->nn[k][0] * P->wo[k][0] + P->nn[k][1] * P->wo[k][1] +
+                   P->nn[k][2] * P->wo[k][2];
+        if (!(P->ci[k] > 0.0 && P->co[k] > 0.0))
+            continue;
+        if (fn) {
+            double y[3];
+            fn(ctx, P->nn[k], P->wi[k], P->wo[k], y);
+            if (!isfinite(y[0] + y[1] + y[2]))
+                continue;
+            memcpy(P->y[k], y, sizeof y);
+        }
+        k++;
+    }
+    P->n = k;
 }
 
 static void material_fn(const void *ctx, const double n[3], const double wi[3],
@@ -144,57 +206,23 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
 
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, glint_err *err)
 {
-    pairs P;
+    gltf_pairs P;
     double den = 0.0, best = INFINITY, bm = 0.0, br = 0.5, base[3];
-    int k = 0, cap = smp ? (smp->n < GLTF_FIT_MAX_SAMPLES ? smp->n : GLTF_FIT_MAX_SAMPLES)
-                         : GLTF_FIT_PAIRS;
+    int rc, cap = smp ? (smp->n < GLTF_FIT_MAX_SAMPLES ? smp->n : GLTF_FIT_MAX_SAMPLES)
+                      : GLTF_FIT_PAIRS;
 
     memset(out, 0, sizeof *out);
     if (!fn || cap < 1)
         return glint_err_set(err, GLINT_EINVAL, "nothing to fit a glTF material to");
-    memset(&P, 0, sizeof P);
-    P.nn = malloc((size_t)cap * sizeof *P.nn);
-    P.wi = malloc((size_t)cap * sizeof *P.wi);
-    P.wo = malloc((size_t)cap * sizeof *P.wo);
-    P.y = malloc((size_t)cap * sizeof *P.y);
-    P.ci = malloc((size_t)cap * sizeof *P.ci);
-    P.co = malloc((size_t)cap * sizeof *P.co);
-    P.S = malloc((size_t)cap * sizeof *P.S);
-    P.s = malloc((size_t)cap * sizeof *P.s);
-    if (!P.nn || !P.wi || !P.wo || !P.y || !P.ci || !P.co || !P.S || !P.s) {
-        pairs_free(&P);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF fit");
-    }
-    for (int j = 0; j < cap; j++) {
-        double y[3];
-        if (smp) { /* every (n / cap)-th sample: the painted directions */
-            long i = (long)((double)j * smp->n / cap);
-            for (int e = 0; e < 3; e++) {
-                P.nn[k][e] = smp->nrm[3 * i + e];
-                P.wi[k][e] = smp->wi[3 * i + e];
-                P.wo[k][e] = smp->wo[3 * i + e];
-            }
-        } else {
-            P.nn[k][0] = P.nn[k][1] = 0.0, P.nn[k][2] = 1.0;
-            fib(j / GLTF_FIT_VIEWS, GLTF_FIT_LIGHTS, P.wi[k]);
-            fib(j % GLTF_FIT_VIEWS, GLTF_FIT_VIEWS, P.wo[k]);
-        }
-        P.ci[k] = P.nn[k][0] * P.wi[k][0] + P.nn[k][1] * P.wi[k][1] + P.nn[k][2] * P.wi[k][2];
-        P.co[k] = P.nn[k][0] * P.wo[k][0] + P.nn[k][1] * P.wo[k][1] + P.nn[k][2] * P.wo[k][2];
-        if (!(P.ci[k] > 0.0 && P.co[k] > 0.0))
-            continue;
-        fn(ctx, P.nn[k], P.wi[k], P.wo[k], y);
-        if (!isfinite(y[0] + y[1] + y[2]))
-            continue;
-        memcpy(P.y[k], y, sizeof y);
-        den += y[0] * y[0] + y[1] * y[1] + y[2] * y[2];
-        k++;
-    }
-    P.n = k;
-    if (!k) {
-        pairs_free(&P);
+    if ((rc = gltf_pairs_alloc(&P, cap, err)))
+        return rc;
+    gltf_pairs_fill(&P, smp, cap, fn, ctx);
+    if (!P.n) {
+        gltf_pairs_free(&P);
         return glint_err_set(err, GLINT_EINVAL, "no direction pair above the surface to fit");
     }
+    for (int i = 0; i < P.n; i++)
+        den += P.y[i][0] * P.y[i][0] + P.y[i][1] * P.y[i][1] + P.y[i][2] * P.y[i][2];
     for (int mi = 0; mi <= 20; mi++) /* a grid, then a finer one around its best */
         for (int ri = 1; ri <= 50; ri++) {
             double e = try_mr(&P, mi / 20.0, ri / 50.0, base);
@@ -217,7 +245,7 @@ int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, gli
     out->roughness = br;
     out->rel_rms = den > 0.0 ? sqrt(best / den) : 0.0;
     out->pairs = P.n;
-    pairs_free(&P);
+    gltf_pairs_free(&P);
     return 0;
 }
 
