@@ -5,6 +5,7 @@
 #include <jansson.h>
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -263,21 +264,69 @@ static json_t *view_of(size_t off, size_t len, int target)
                      "byteLength", (json_int_t)len, "target", target);
 }
 
-int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
+/* The textures' part of the document: images in buffer views 4 and 5,
+ * one sampler (linear, clamped at the edges: glint clamps uv to [0,1]),
+ * and the material's pbrMetallicRoughness reading them with factors 1. */
+static int add_textures(json_t *root, json_t *mat, size_t off_bc, size_t len_bc,
+                        size_t off_mr, size_t len_mr)
+{
+    json_t *pbr = json_object_get(mat, "pbrMetallicRoughness");
+    int rc = 0;
+    rc |= json_array_append_new(json_object_get(root, "bufferViews"),
+                                json_pack("{s:i, s:I, s:I}", "buffer", 0, "byteOffset",
+                                          (json_int_t)off_bc, "byteLength", (json_int_t)len_bc));
+    rc |= json_array_append_new(json_object_get(root, "bufferViews"),
+                                json_pack("{s:i, s:I, s:I}", "buffer", 0, "byteOffset",
+                                          (json_int_t)off_mr, "byteLength", (json_int_t)len_mr));
+    rc |= json_object_set_new(root, "images",
+                              json_pack("[{s:i, s:s, s:s}, {s:i, s:s, s:s}]", "bufferView", 4,
+                                        "mimeType", "image/png", "name", "baseColor (sRGB)",
+                                        "bufferView", 5, "mimeType", "image/png", "name",
+                                        "metallicRoughness (linear: G roughness, B metallic)"));
+    rc |= json_object_set_new(root, "samplers",
+                              json_pack("[{s:i, s:i, s:i, s:i}]", "magFilter", 9729, "minFilter",
+                                        9729, "wrapS", 33071, "wrapT", 33071));
+    rc |= json_object_set_new(root, "textures",
+                              json_pack("[{s:i, s:i}, {s:i, s:i}]", "sampler", 0, "source", 0,
+                                        "sampler", 0, "source", 1));
+    rc |= json_object_set_new(pbr, "baseColorTexture",
+                              json_pack("{s:i, s:i}", "index", 0, "texCoord", 0));
+    rc |= json_object_set_new(pbr, "metallicRoughnessTexture",
+                              json_pack("{s:i, s:i}", "index", 1, "texCoord", 0));
+    rc |= json_object_set_new(pbr, "baseColorFactor", json_pack("[f,f,f,f]", 1.0, 1.0, 1.0, 1.0));
+    rc |= json_object_set_new(pbr, "metallicFactor", json_real(1.0));
+    rc |= json_object_set_new(pbr, "roughnessFactor", json_real(1.0));
+    return rc ? -1 : 0;
+}
+
+int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, const char *name,
                    const char *extras_json, void **glb, size_t *len, glint_err *err)
 {
-    size_t nv, nt, off_pos, off_nrm, off_uv, off_idx, bin_len, json_len, json_pad, bin_pad, total;
+    size_t nv, nt, off_pos, off_nrm, off_uv, off_idx, off_bc = 0, off_mr = 0, bin_len, json_len,
+                                                      json_pad, bin_pad, total;
+    size_t len_bc = 0, len_mr = 0;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     json_t *root, *extras = NULL, *mat;
     unsigned char *out, *bin;
+    void *png_bc = NULL, *png_mr = NULL;
     char *text;
+    int rc;
 
     *glb = NULL;
     *len = 0;
     if (!msh || msh->nverts < 3 || msh->ntris < 1 || !msh->pos || !msh->nrm || !msh->tri)
         return glint_err_set(err, GLINT_EINVAL, "no mesh to write");
-    if (extras_json && !(extras = json_loads(extras_json, 0, NULL)))
+    if (!p)
+        return glint_err_set(err, GLINT_EINVAL, "no glTF material to write");
+    if (bake && !msh->uv)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the mesh has no texture coordinates to map baked textures with");
+    if (bake && (rc = gltf_bake_png(bake, &png_bc, &len_bc, &png_mr, &len_mr, err)))
+        return rc;
+    if (extras_json && !(extras = json_loads(extras_json, 0, NULL))) {
+        free(png_bc), free(png_mr);
         return glint_err_set(err, GLINT_EINVAL, "the material's extras are not JSON");
+    }
     nv = (size_t)msh->nverts;
     nt = (size_t)msh->ntris;
     off_pos = 0;
@@ -285,6 +334,11 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
     off_uv = off_nrm + 12 * nv;
     off_idx = off_uv + 8 * nv;
     bin_len = off_idx + 12 * nt;
+    if (bake) { /* the images after the indices, each at a multiple of 4 */
+        off_bc = bin_len;
+        off_mr = off_bc + len_bc + (4 - len_bc % 4) % 4;
+        bin_len = off_mr + len_mr;
+    }
     for (size_t i = 0; i < nv; i++)
         for (int e = 0; e < 3; e++) {
             float v = msh->pos[3 * i + e];
@@ -295,7 +349,9 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
                     "pbrMetallicRoughness", "baseColorFactor", p->base[0], p->base[1],
                     p->base[2], 1.0, "metallicFactor", p->metallic, "roughnessFactor",
                     p->roughness);
-    if (extras)
+    if (!mat)
+        json_decref(extras);
+    else if (extras)
         json_object_set_new(mat, "extras", extras);
     root = json_pack(
         "{s:{s:s, s:s}, s:i, s:[{s:[i]}], s:[{s:i, s:s}], "
@@ -315,18 +371,23 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC3", "bufferView", 2,
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC2", "bufferView", 3,
         "componentType", 5125, "count", (json_int_t)(3 * nt), "type", "SCALAR");
-    if (!root)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF document");
-    text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(9));
+    if (root && bake && add_textures(root, mat, off_bc, len_bc, off_mr, len_mr)) {
+        json_decref(root);
+        root = NULL;
+    }
+    text = root ? json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(9)) : NULL;
     json_decref(root);
-    if (!text)
+    if (!text) {
+        free(png_bc), free(png_mr);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the glTF document");
+    }
     json_len = strlen(text);
     json_pad = (4 - json_len % 4) % 4;
     bin_pad = (4 - bin_len % 4) % 4;
     total = 12 + 8 + json_len + json_pad + 8 + bin_len + bin_pad;
     if (total > UINT32_MAX || !(out = malloc(total))) {
         free(text);
+        free(png_bc), free(png_mr);
         return glint_err_set(err, GLINT_ENOMEM, "a glTF file of %zu bytes", total);
     }
     put_u32(out, 0x46546C67u); /* "glTF" */
@@ -348,7 +409,13 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
         memcpy(bin + off_uv + 8 * i, uv, 8);
     }
     memcpy(bin + off_idx, msh->tri, 12 * nt);
+    if (bake) {
+        memcpy(bin + off_bc, png_bc, len_bc);
+        memset(bin + off_bc + len_bc, 0, off_mr - off_bc - len_bc);
+        memcpy(bin + off_mr, png_mr, len_mr);
+    }
     memset(bin + bin_len, 0, bin_pad);
+    free(png_bc), free(png_mr);
     *glb = out;
     *len = total;
     return 0;
@@ -356,44 +423,96 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
 
 /* ---- a material on its scene ------------------------------------------------------------ */
 
-static char *extras_text(const material *m, const gltf_pbr *p)
+static char *extras_text(const material *m, const gltf_pbr *p, const gltf_bake *bake,
+                         const char *note)
 {
     json_t *o = json_pack("{s:{s:s, s:s, s:f, s:i, s:s, s:b, s:s}}", "glint", "method",
                           material_method_name(m), "model",
                           "glTF 2.0 metallic-roughness (Appendix B); alpha = roughness^2",
                           "fit_rel_rms", p->rel_rms, "fit_pairs", p->pairs, "fit",
                           "least squares of f cos at the painted views' samples", "spatial_average",
-                          p->spatial, "units",
+                          p->spatial && !bake, "units",
                           "per unit light as painted (base renders at the default scale pi "
                           "hold pi times the BRDF they show)");
-    char *t = o ? json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(6)) : NULL;
+    json_t *g = json_object_get(o, "glint");
+    char *t;
+    if (g && bake) {
+        json_object_set_new(
+            g, "textures",
+            json_pack("{s:i, s:i, s:i, s:f, s:f, s:I, s:f, s:s, s:s, s:s}", "res", bake->res,
+                      "pairs_per_texel", bake->pairs, "far_texels", bake->far_texels,
+                      "texel_rel_rms_median",
+                      bake->rel_rms_median, "texel_rel_rms_max", bake->rel_rms_max,
+                      "nonfinite_values", (json_int_t)bake->nonfinite, "seconds", bake->seconds,
+                      "base_color", "8-bit PNG, sRGB-encoded, baseColorFactor 1",
+                      "metallic_roughness",
+                      "8-bit PNG, linear: G roughness, B metallic, R 1; factors 1",
+                      "fit", "per texel at its centre over the directions painted in and "
+                             "around it (far texels: over all painted directions), from the "
+                             "average's fit (fit_rel_rms and average) and a coarse grid"));
+        json_object_set_new(g, "average",
+                            json_pack("{s:[f,f,f], s:f, s:f}", "base_color", p->base[0],
+                                      p->base[1], p->base[2], "metallic", p->metallic,
+                                      "roughness", p->roughness));
+    }
+    if (g && note && *note)
+        json_object_set_new(g, "textures_not_baked", json_string(note));
+    t = o ? json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(6)) : NULL;
     json_decref(o);
     return t;
 }
 
-int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use, void **glb,
-                      size_t *len, gltf_pbr *out, glint_err *err)
+int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
+                      int bake_res, void **glb, size_t *len, gltf_pbr *out,
+                      gltf_export_info *info, glint_err *err)
 {
     gbuf *g = NULL;
     samples s;
+    gltf_bake bake;
+    gltf_export_info dummy;
     char hash[33], *extras = NULL;
-    int rc;
+    int rc, baked = 0;
 
     *glb = NULL;
     *len = 0;
+    if (!info)
+        info = &dummy;
+    memset(info, 0, sizeof *info);
     memset(&s, 0, sizeof s);
+    memset(&bake, 0, sizeof bake);
+    if (bake_res < 0 || bake_res > GLTF_BAKE_RES_MAX)
+        return glint_err_set(err, GLINT_ERANGE, "texture size %d outside 0..%d (0: no textures)",
+                             bake_res, GLTF_BAKE_RES_MAX);
     scene_hash(sc, hash);
     if ((rc = raster_scene(sc, &g, err)) ||
         (rc = samples_build(g, sc->views, sc->nviews, use, hash, &s, err)) ||
         (rc = gltf_fit_material(m, &s, out, err)))
         goto done;
-    if (!(extras = extras_text(m, out))) {
+    if (out->spatial && !bake_res)
+        snprintf(info->note, sizeof info->note, "textures were not asked for: the average only");
+    else if (out->spatial && !sc->mesh.uv)
+        snprintf(info->note, sizeof info->note,
+                 "the mesh has no texture coordinates: the average only");
+    else if (out->spatial) {
+        if ((rc = gltf_bake_material(m, &s, out, bake_res, &bake, err)))
+            goto done;
+        baked = 1;
+        info->baked = 1;
+        info->res = bake.res;
+        info->pairs = bake.pairs;
+        info->rel_rms_median = bake.rel_rms_median;
+        info->rel_rms_max = bake.rel_rms_max;
+        info->seconds = bake.seconds;
+    }
+    if (!(extras = extras_text(m, out, baked ? &bake : NULL, info->note))) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
-    rc = gltf_write_glb(&sc->mesh, out, "glint material", extras, glb, len, err);
+    rc = gltf_write_glb(&sc->mesh, out, baked ? &bake : NULL, "glint material", extras, glb, len,
+                        err);
 done:
     free(extras);
+    gltf_bake_free(&bake);
     samples_free(&s);
     raster_free_all(g, sc->nviews);
     return rc;

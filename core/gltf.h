@@ -20,8 +20,22 @@
  * minimized exactly on [0, 1]; metallic and roughness are searched on a
  * grid and refined.  The relative RMS of the best fit is reported: what the
  * material loses in the glTF model (a painted highlight no GGX lobe has, a
- * fit's extrapolation, anisotropy).  A material that varies over the
- * surface is fitted at its average (no textures are baked).
+ * fit's extrapolation, anisotropy).
+ *
+ * Textures.  A material that varies over the surface (material_spatial) is
+ * also fitted per texel of a res x res grid over its texture coordinates
+ * (gltf_bake_material): the average's fit first, then each texel's from
+ * the best of it and a coarse grid, over GLTF_BAKE_PAIRS of the painted
+ * directions with the material evaluated at the texel's centre.  The .glb
+ * then holds baseColorTexture (8-bit PNG, sRGB-encoded as glTF requires)
+ * and metallicRoughnessTexture (8-bit PNG, linear: G roughness, B
+ * metallic, R 1), with the factors 1 and TEXCOORD_0 the mesh's uv (glTF's
+ * v is 1 - glint's: texture row 0, the image's top, is glint's v = 1).
+ * Each texel's relative RMS is reported (median and max).  Without the
+ * mesh's texture coordinates, or with res 0, the average alone is written
+ * and the extras say why.  Cost (measured, BENCHMARKS.md): about 1 ms of
+ * one core per texel for a maps material, so the default 32 x 32 takes
+ * about half a second on two cores.
  * Thread-safety: reads the material only. */
 #ifndef GLINT_GLTF_H
 #define GLINT_GLTF_H
@@ -65,16 +79,69 @@ typedef void (*gltf_fn)(const void *ctx, const double n[3], const double wi[3],
                         const double wo[3], double rad[3]);
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *s, gltf_pbr *out, glint_err *err);
 
+/* ---- textures ---------------------------------------------------------------------------- */
+
+#define GLTF_BAKE_RES_DEFAULT 32  /* texels per side */
+#define GLTF_BAKE_RES_MAX 256
+#define GLTF_BAKE_PAIRS 256       /* direction pairs per texel, at most */
+#define GLTF_BAKE_MIN_PAIRS 48    /* the painted neighbourhood grows until it has them */
+#define GLTF_BAKE_R_LEVELS 200    /* roughnesses tabulated: (j + 1) / 200 */
+
+/* Per-texel parameters, in the image's layout: texel t = row * res + col,
+ * row 0 the top (glTF v = (row + 0.5) / res, glint v = 1 - that), u =
+ * (col + 0.5) / res.  Owns its arrays (gltf_bake_free, which accepts a
+ * zeroed struct). */
+typedef struct gltf_bake {
+    int res;
+    float *base;                 /* 3 per texel, linear, [0, 1] */
+    float *metallic, *roughness; /* 1 per texel, [0, 1]; alpha = roughness^2 */
+    float *rel_rms;              /* 1 per texel: of f cos over the pairs */
+    double rel_rms_median, rel_rms_max;
+    int pairs;                   /* direction pairs per texel, at most */
+    int far_texels;              /* fitted over all the painted directions: none near */
+    long nonfinite;              /* values of the material taken as 0 (not finite) */
+    double seconds;              /* the whole bake, wall clock */
+} gltf_bake;
+
+/* Fit m per texel of a res x res grid (1..GLTF_BAKE_RES_MAX) at
+ * GLTF_BAKE_PAIRS of s's samples (NULL: of the hemisphere's pairs), each
+ * search started from avg (gltf_fit_material's result) and a coarse grid.
+ * Parallel over rows (par.h).  OUT: *out. */
+int gltf_bake_material(const material *m, const samples *s, const gltf_pbr *avg, int res,
+                       gltf_bake *out, glint_err *err);
+void gltf_bake_free(gltf_bake *b);
+
+/* The two textures as PNG bytes (OUT: malloc'ed, caller frees): base
+ * colour sRGB-encoded, metallic-roughness linear (G roughness, B metallic,
+ * R 1). */
+int gltf_bake_png(const gltf_bake *b, void **base_png, size_t *base_len, void **mr_png,
+                  size_t *mr_len, glint_err *err);
+
+/* ---- the file --------------------------------------------------------------------------- */
+
 /* A binary glTF 2.0 file: the mesh (positions, normals, texture
- * coordinates, indices) with the material p, `extras_json` (a JSON object's
- * text, or NULL) as the material's extras.  OUT: *glb (free()), *len. */
-int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const char *name,
+ * coordinates, indices) with the material p, or with bake's textures when
+ * bake is not NULL (the factors then 1; the mesh must have uv),
+ * `extras_json` (a JSON object's text, or NULL) as the material's extras.
+ * OUT: *glb (free()), *len. */
+int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, const char *name,
                    const char *extras_json, void **glb, size_t *len, glint_err *err);
 
+/* What an export did beyond the average's fit. */
+typedef struct gltf_export_info {
+    int baked;                   /* textures written */
+    int res, pairs;              /* of the textures */
+    double rel_rms_median, rel_rms_max, seconds;
+    char note[160];              /* why not baked ("" when baked or not spatial) */
+} gltf_export_info;
+
 /* The whole export: the material fitted at the samples of the views
- * flagged in `use` (NULL: all) of scene sc, written with sc's mesh (OUT:
- * *glb, *len, *out). */
-int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use, void **glb,
-                      size_t *len, gltf_pbr *out, glint_err *err);
+ * flagged in `use` (NULL: all) of scene sc, and baked at bake_res x
+ * bake_res texels when it varies over the surface (bake_res 0: the average
+ * only; else 1..GLTF_BAKE_RES_MAX), written with sc's mesh (OUT: *glb,
+ * *len, *out, *info; info may be NULL). */
+int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
+                      int bake_res, void **glb, size_t *len, gltf_pbr *out,
+                      gltf_export_info *info, glint_err *err);
 
 #endif

@@ -4,7 +4,9 @@
  *   GET /api/v1/materials/{id}/merl.binary    a MERL table (merl.h)
  *   GET /api/v1/materials/{id}/material.brdf  BRDF Explorer's analytic .brdf (hf3)
  *   GET /api/v1/materials/{id}/material.glb   the scene's mesh with a glTF 2.0
- *                                             metallic-roughness material (gltf.h)
+ *                                             metallic-roughness material (gltf.h),
+ *                                             textures baked where it varies over
+ *                                             the surface (?bake_res=N)
  *
  * Each reads the material as GET /materials/{id} does (the session's
  * token), computes on request and holds its memory against the work budget
@@ -93,7 +95,9 @@ static http_resp brdf_get(http_req *req)
 
 /* The glTF 2.0 file: the scene's mesh with the metallic-roughness material
  * fitted at the samples of the views the material was fitted to
- * (views_used). */
+ * (views_used), and baked into textures of bake_res x bake_res texels
+ * (query, 0..GLTF_BAKE_RES_MAX, default GLTF_BAKE_RES_DEFAULT; 0: the
+ * average only) where the material varies over the surface. */
 static http_resp glb_get(http_req *req)
 {
     app *a = req->app;
@@ -105,13 +109,20 @@ static http_resp glb_get(http_req *req)
     unsigned char use[SCENE_MAX_VIEWS];
     json_t *d = NULL, *vu, *x;
     gltf_pbr p;
+    gltf_export_info gi;
+    const char *bq = http_query(req, "bake_res");
+    long long bake_res = GLTF_BAKE_RES_DEFAULT;
     void *glb = NULL;
     size_t len = 0, bytes = 0, i;
     http_resp r;
     glint_err e;
-    char info[200];
+    char info[400];
     int rc, admitted = 0;
 
+    if (bq && (api_parse_count(bq, &bake_res) || bake_res > GLTF_BAKE_RES_MAX))
+        return http_problem(400, "invalid-parameter",
+                            "bake_res must be an integer in 0..%d (0: no textures)",
+                            GLTF_BAKE_RES_MAX);
     if ((rc = api_material(req, mid, &doc, &e)))
         return api_error(&e);
     if ((rc = fitsvc_scene(a->fits, doc.scene, &se, &e))) {
@@ -132,18 +143,24 @@ static http_resp glb_get(http_req *req)
                 use[json_integer_value(x)] = 1;
     }
     bytes = (size_t)sc->nviews * sc->width * sc->height * 64 +
-            (size_t)sc->mesh.nverts * 32 + (size_t)sc->mesh.ntris * 12;
+            (size_t)sc->mesh.nverts * 32 + (size_t)sc->mesh.ntris * 12 +
+            (size_t)bake_res * (size_t)bake_res * 64 + ((size_t)2 << 20); /* textures, tables */
     if ((rc = admit_enter(a->work, bytes, "a glTF export", &e)))
         goto done;
     admitted = 1;
     if ((rc = api_material_load(a, mid, &m, &e)) ||
-        (rc = gltf_export_scene(&m, sc, use, &glb, &len, &p, &e)))
+        (rc = gltf_export_scene(&m, sc, use, (int)bake_res, &glb, &len, &p, &gi, &e)))
         goto done;
     r = http_bytes_owned(200, "model/gltf-binary", glb, len);
     snprintf(info, sizeof info,
              "base_color=%.4f,%.4f,%.4f; metallic=%.4f; roughness=%.4f; fit_rel_rms=%.4f; "
-             "pairs=%d",
-             p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms, p.pairs);
+             "pairs=%d; spatial=%d; textures=%d",
+             p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms, p.pairs,
+             p.spatial, gi.baked ? gi.res : 0);
+    if (gi.baked)
+        snprintf(info + strlen(info), sizeof info - strlen(info),
+                 "; texel_rel_rms_median=%.4f; texel_rel_rms_max=%.4f; bake_seconds=%.3f",
+                 gi.rel_rms_median, gi.rel_rms_max, gi.seconds);
     http_header(&r, "X-Glint-Gltf", info);
     http_header(&r, "Content-Disposition", "attachment; filename=\"material.glb\"");
 done:

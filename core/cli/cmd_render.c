@@ -334,21 +334,29 @@ int cmd_export_brdf(int argc, char **argv)
     return rc;
 }
 
-/* glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb:
- * the scene's mesh with the glTF metallic-roughness material fitted to
- * MATDIR at the samples of the painted views (those with a file in DIR;
- * every view without it) (gltf.h). */
+/* glint export-gltf MATDIR --scene scene.json [--paintings DIR]
+ * [--bake-res N] -o FILE.glb: the scene's mesh with the glTF
+ * metallic-roughness material fitted to MATDIR at the samples of the
+ * painted views (those with a file in DIR; every view without it), baked
+ * into N x N textures (default GLTF_BAKE_RES_DEFAULT, 0: the average only)
+ * where the material varies over the surface (gltf.h). */
 int cmd_export_gltf(int argc, char **argv)
 {
     static const struct option lo[] = {{"scene", required_argument, 0, 's'},
                                        {"paintings", required_argument, 0, 'p'},
                                        {"out", required_argument, 0, 'o'},
+                                       {"bake-res", required_argument, 0, 'b'},
                                        {0, 0, 0, 0}};
+    static const char *usage = "usage: glint export-gltf MATDIR --scene scene.json "
+                               "[--paintings DIR] [--bake-res N] -o FILE.glb";
     const char *scn = NULL, *pdir = NULL, *out = NULL;
     unsigned char use[SCENE_MAX_VIEWS];
     material m;
     scene sc;
     gltf_pbr p;
+    gltf_export_info gi;
+    long bake_res = GLTF_BAKE_RES_DEFAULT;
+    char *end;
     glint_err e;
     void *glb = NULL;
     size_t len = 0;
@@ -360,10 +368,15 @@ int cmd_export_gltf(int argc, char **argv)
         if (c == 's') scn = optarg;
         else if (c == 'p') pdir = optarg;
         else if (c == 'o') out = optarg;
-        else return fail(1, "usage: glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb");
+        else if (c == 'b') {
+            bake_res = strtol(optarg, &end, 10);
+            if (end == optarg || *end || bake_res < 0 || bake_res > GLTF_BAKE_RES_MAX)
+                return fail(1, "--bake-res must be an integer in 0..%d (0: no textures), not '%s'",
+                            GLTF_BAKE_RES_MAX, optarg);
+        } else return fail(1, "%s", usage);
     }
     if (!scn || !out || optind != argc - 1)
-        return fail(1, "usage: glint export-gltf MATDIR --scene scene.json [--paintings DIR] -o FILE.glb");
+        return fail(1, "%s", usage);
     if (material_load(argv[optind], &m, &e))
         return fail_err(&e);
     if ((rc = load_scene(scn, &sc))) {
@@ -372,15 +385,24 @@ int cmd_export_gltf(int argc, char **argv)
     }
     for (int v = 0; v < sc.nviews; v++)
         use[v] = !pdir || find_painting(pdir, v, path, sizeof path);
-    if (gltf_export_scene(&m, &sc, use, &glb, &len, &p, &e) ||
+    if (gltf_export_scene(&m, &sc, use, (int)bake_res, &glb, &len, &p, &gi, &e) ||
         fsio_write_atomic(out, glb, len, &e))
         rc = fail_err(&e);
+    else if (gi.baked)
+        printf("{\"file\": \"%s\", \"bytes\": %zu, \"average\": {\"base_color\": [%.4f, "
+               "%.4f, %.4f], \"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f}, "
+               "\"pairs\": %d, \"textures\": {\"res\": %d, \"pairs_per_texel\": %d, "
+               "\"texel_rel_rms_median\": %.4f, \"texel_rel_rms_max\": %.4f, "
+               "\"seconds\": %.3f}}\n",
+               out, len, p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms,
+               p.pairs, gi.res, gi.pairs, gi.rel_rms_median, gi.rel_rms_max, gi.seconds);
     else
         printf("{\"file\": \"%s\", \"bytes\": %zu, \"base_color\": [%.4f, %.4f, %.4f], "
                "\"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f, "
-               "\"pairs\": %d}\n",
+               "\"pairs\": %d%s%s%s}\n",
                out, len, p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms,
-               p.pairs);
+               p.pairs, gi.note[0] ? ", \"textures_not_baked\": \"" : "", gi.note,
+               gi.note[0] ? "\"" : "");
     free(glb);
     scene_free(&sc);
     material_free(&m);
