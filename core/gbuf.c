@@ -131,18 +131,25 @@ static int channel_of(const img_named *im, const char *name)
 }
 
 static int vec_channels(const img_named *im, const char *base, const char *const comp[],
-                        int ncomp, int ch[3], const char *what, glint_err *err)
+                        int ncomp, int ch[3], const char *what, int need_wi, glint_err *err)
 {
     for (int k = 0; k < ncomp; k++) {
         char name[16];
         snprintf(name, sizeof name, "%s.%s", base, comp[k]);
-        if ((ch[k] = channel_of(im, name)) < 0)
-            return err ? glint_err_set(err, GLINT_EFORMAT,
-                                       "%s: no channel %s (a G-buffer needs N.X N.Y N.Z, "
-                                       "wi.X wi.Y wi.Z, wo.X wo.Y wo.Z; mask, P.X P.Y P.Z and "
-                                       "uv.U uv.V are optional)",
-                                       what, name)
-                       : -1;
+        if ((ch[k] = channel_of(im, name)) < 0) {
+            if (!err)
+                return -1;
+            if (!strcmp(base, "wi"))
+                return glint_err_set(err, GLINT_EFORMAT,
+                                     "%s: no channel %s (point-light methods need the direction "
+                                     "to the light, wi.X wi.Y wi.Z; methods lit by an "
+                                     "environment, such as srbf, do not)",
+                                     what, name);
+            return glint_err_set(err, GLINT_EFORMAT,
+                                 "%s: no channel %s (a G-buffer needs N.X N.Y N.Z, %swo.X wo.Y "
+                                 "wo.Z; mask, P.X P.Y P.Z and uv.U uv.V are optional)",
+                                 what, name, need_wi ? "wi.X wi.Y wi.Z, " : "");
+        }
     }
     return 0;
 }
@@ -150,18 +157,27 @@ static int vec_channels(const img_named *im, const char *base, const char *const
 int gbuf_from_named(const img_named *im, const char *what, gbuf *g, int *has_uv,
                     glint_err *err)
 {
+    int has_wi;
+    return gbuf_from_named_ex(im, what, 1, g, has_uv, &has_wi, err);
+}
+
+int gbuf_from_named_ex(const img_named *im, const char *what, int need_wi, gbuf *g,
+                       int *has_uv, int *has_wi, glint_err *err)
+{
     static const char *const xyz[3] = {"X", "Y", "Z"}, *const uv2[2] = {"U", "V"};
-    int cn[3], ci[3], co[3], cp[3] = {0, 0, 0}, cu[3] = {0, 0, 0}, cm, has_p, rc;
+    int cn[3], ci[3] = {0, 0, 0}, co[3], cp[3] = {0, 0, 0}, cu[3] = {0, 0, 0}, cm, has_p, rc;
     size_t np;
 
     memset(g, 0, sizeof *g);
     *has_uv = 0;
-    if ((rc = vec_channels(im, "N", xyz, 3, cn, what, err)) ||
-        (rc = vec_channels(im, "wi", xyz, 3, ci, what, err)) ||
-        (rc = vec_channels(im, "wo", xyz, 3, co, what, err)))
+    *has_wi = 0;
+    if ((rc = vec_channels(im, "N", xyz, 3, cn, what, need_wi, err)) ||
+        (need_wi && (rc = vec_channels(im, "wi", xyz, 3, ci, what, need_wi, err))) ||
+        (rc = vec_channels(im, "wo", xyz, 3, co, what, need_wi, err)))
         return rc;
-    has_p = vec_channels(im, "P", xyz, 3, cp, what, NULL) == 0;
-    *has_uv = vec_channels(im, "uv", uv2, 2, cu, what, NULL) == 0;
+    *has_wi = vec_channels(im, "wi", xyz, 3, ci, what, need_wi, NULL) == 0;
+    has_p = vec_channels(im, "P", xyz, 3, cp, what, need_wi, NULL) == 0;
+    *has_uv = vec_channels(im, "uv", uv2, 2, cu, what, need_wi, NULL) == 0;
     cm = channel_of(im, "mask");
     if ((rc = gbuf_alloc(g, im->width, im->height, err)))
         return rc;
@@ -172,12 +188,15 @@ int gbuf_from_named(const img_named *im, const char *what, gbuf *g, int *has_uv,
         int on = cm >= 0 ? px[cm] > 0.5f : 1;
         for (int k = 0; k < 3; k++) {
             v[0][k] = px[cn[k]];
-            v[1][k] = px[ci[k]];
+            v[1][k] = *has_wi ? px[ci[k]] : 0.0f;
             v[2][k] = px[co[k]];
         }
         for (int a = 0; a < 3 && on; a++) {
-            double l = sqrt((double)v[a][0] * v[a][0] + (double)v[a][1] * v[a][1] +
-                            (double)v[a][2] * v[a][2]);
+            double l;
+            if (a == 1 && !*has_wi)
+                continue; /* no light direction: left zero */
+            l = sqrt((double)v[a][0] * v[a][0] + (double)v[a][1] * v[a][1] +
+                     (double)v[a][2] * v[a][2]);
             if (!isfinite(l)) {
                 gbuf_free(g);
                 return glint_err_set(err, GLINT_ENONFINITE,

@@ -52,6 +52,12 @@ struct img_named;
 int gbuf_from_named(const struct img_named *im, const char *what, gbuf *g, int *has_uv,
                     glint_err *err);
 int gbuf_read_exr(const char *path, gbuf *g, int *has_uv, glint_err *err);
+/* The same with the light's direction optional (need_wi 0: methods lit by
+ * an environment, which read N and wo only): where wi.X wi.Y wi.Z are
+ * absent, wi is left zero (so n.wi = 0) and *has_wi is 0; with need_wi 1
+ * their absence is an error naming them and what needs them. */
+int gbuf_from_named_ex(const struct img_named *im, const char *what, int need_wi, gbuf *g,
+                       int *has_uv, int *has_wi, glint_err *err);
 
 /* A content hash of n G-buffers (OUT: hex, 32 digits): what keys the
  * precomputations of samples made from them. */

@@ -309,6 +309,34 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
     return 0;
 }
 
+int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channels,
+                       img_named *out, glint_err *err)
+{
+    img_oiio_pixels pix;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_named_mem: NULL output");
+    memset(out, 0, sizeof *out);
+    if (!data && len)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_named_mem: NULL data");
+    if (len == 0)
+        return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
+    if (max_dim < 1 || max_dim > IMG_MAX_DIM)
+        max_dim = IMG_MAX_DIM;
+    if (max_channels < 1 || max_channels > IMG_MAX_NAMED_CHANNELS)
+        max_channels = IMG_MAX_NAMED_CHANNELS;
+    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, &pix, err);
+    if (rc)
+        return rc;
+    out->width = pix.width;
+    out->height = pix.height;
+    out->channels = pix.channels;
+    out->names = pix.names;
+    out->px = pix.px;
+    return 0;
+}
+
 /* ---- writing ----------------------------------------------------------- */
 
 typedef struct img_fmt {

@@ -108,6 +108,11 @@ typedef struct img_named {
 /* Read with the checks of img_read, channels 1..IMG_MAX_NAMED_CHANNELS.
  * (OUT: *out, zeroed first.) */
 int img_read_named(const char *path, img_named *out, glint_err *err);
+/* The same from memory (an upload), sides at most max_dim (1..IMG_MAX_DIM)
+ * and channels at most max_channels (1..IMG_MAX_NAMED_CHANNELS), checked
+ * from the header before any pixel is decoded: what bounds its memory. */
+int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channels,
+                       img_named *out, glint_err *err);
 void img_named_free(img_named *im);
 
 #endif

@@ -382,18 +382,19 @@ int prep_acquire_samples(cache *c, const method *m, const void *params, samples 
     return 0;
 }
 
-int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err)
+/* The prepared fit whose pattern has `key`, if it and every level are in
+ * memory now. */
+static int try_key(cache *c, const method *m, const void *params, const char *pattern_key,
+                   prep **out, glint_err *err)
 {
-    const prep_scene *ps = cache_data(rq->scene);
     char key[CACHE_KEY_MAX], prev_key[CACHE_KEY_MAX];
     const samples *s;
     prep *p;
 
     *out = NULL;
-    if (!(p = prep_new(rq->m, rq->params, err)))
+    if (!(p = prep_new(m, params, err)))
         return GLINT_ENOMEM;
-    prep_pattern_key(ps, rq->use, rq->m->pattern_rule, key);
-    if (cache_find(c, key, &p->pattern))
+    if (cache_find(c, pattern_key, &p->pattern))
         goto miss;
     s = cache_data(p->pattern);
     snprintf(prev_key, sizeof prev_key, "%s", s->hash);
@@ -411,6 +412,21 @@ int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err)
 miss:
     prep_release(c, p);
     return glint_err_set(err, GLINT_ENOTFOUND, "the precomputation is not in memory");
+}
+
+int prep_try(cache *c, const prep_request *rq, prep **out, glint_err *err)
+{
+    char key[CACHE_KEY_MAX];
+    prep_pattern_key(cache_data(rq->scene), rq->use, rq->m->pattern_rule, key);
+    return try_key(c, rq->m, rq->params, key, out, err);
+}
+
+int prep_try_samples(cache *c, const method *m, const void *params, const samples *s,
+                     prep **out, glint_err *err)
+{
+    char key[CACHE_KEY_MAX];
+    snprintf(key, sizeof key, "samples:%s", s->hash);
+    return try_key(c, m, params, key, out, err);
 }
 
 const samples *prep_samples(const prep *p)

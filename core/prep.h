@@ -97,6 +97,9 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
  * is moved in, zeroed). */
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
                          prep_progress_fn cb, void *cls, prep **out, glint_err *err);
+/* prep_try for such samples (they are only read: keyed by s->hash). */
+int prep_try_samples(cache *c, const method *m, const void *params, const samples *s,
+                     prep **out, glint_err *err);
 
 /* Fit one set of paintings (one img per scene view; unused views are not
  * read) or, when paintings is NULL, the values rgb[3 n] directly.  The

@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "cli.h"
+#include "gbfit.h"
 #include "gbuf.h"
 #include "prep.h"
 #include "raster.h"
@@ -309,10 +310,37 @@ done:
 static const char usage_fit_gbuffers[] =
     "usage: glint fit-gbuffers GBDIR --paintings DIR -o MATDIR [fit options]\n"
     "  GBDIR/view_00.exr, view_01.exr, ...: G-buffers with named channels N.X N.Y N.Z,\n"
-    "  wi.X wi.Y wi.Z, wo.X wo.Y wo.Z (mask, P.X P.Y P.Z, uv.U uv.V optional; what\n"
-    "  glint gbuffer writes); DIR/view_KK.exr|hdr|png: the RGB paintings of those views\n"
-    "  (views without one are not used).  Every method but srbf (which needs the\n"
-    "  mesh and an environment); those that vary over the surface need uv.";
+    "  wo.X wo.Y wo.Z (towards the camera) and, for point-light methods, wi.X wi.Y wi.Z\n"
+    "  (towards the light); mask, P.X P.Y P.Z, uv.U uv.V optional (what glint gbuffer\n"
+    "  writes); DIR/view_KK.exr|hdr|png: the RGB paintings of those views (views\n"
+    "  without one are not used), per unit light.  Every method: those that vary over\n"
+    "  the surface need uv; srbf fits paintings lit by its --env (a built-in or\n"
+    "  file:PATH) and, without the scene's mesh, models no occlusion (visibility off).";
+
+/* The G-buffers GBDIR/view_KK.exr while they exist (OUT: g[*n], *has_uv). */
+static int read_gbuffers(const method *m, const char *dir, gbuf *g, int *n, int *has_uv)
+{
+    char path[4096];
+    glint_err e;
+
+    *has_uv = 1;
+    for (*n = 0; *n < SCENE_MAX_VIEWS; (*n)++) {
+        struct stat st;
+        int uv = 0, wi = 0, k = *n;
+        snprintf(path, sizeof path, "%s/view_%02d.exr", dir, k);
+        if (stat(path, &st))
+            break;
+        if (gbfit_gbuf_file(m, path, &g[k], &uv, &wi, &e))
+            return fail_err(&e);
+        if (k > 0 && (g[k].width != g[0].width || g[k].height != g[0].height))
+            return fail(1, "%s is %dx%d but view 0's G-buffer is %dx%d", path, g[k].width,
+                        g[k].height, g[0].width, g[0].height);
+        *has_uv &= uv;
+    }
+    if (*n == 0)
+        return fail(1, "no G-buffer in %s (expected view_00.exr, view_01.exr, ...)", dir);
+    return 0;
+}
 
 int cmd_fit_gbuffers(int argc, char **argv)
 {
@@ -321,10 +349,9 @@ int cmd_fit_gbuffers(int argc, char **argv)
     struct option *lo = fit_opts_table(own, 2);
     gbuf g[SCENE_MAX_VIEWS];
     img imgs[SCENE_MAX_VIEWS];
-    scene_view views[SCENE_MAX_VIEWS];
     unsigned char use[SCENE_MAX_VIEWS];
     const char *out = NULL, *pdir = NULL;
-    char hash[33], path[4096];
+    char path[4096];
     int c, rc = 0, n = 0, has_uv = 1, found = 0;
     fit_opts o;
     samples s;
@@ -336,7 +363,7 @@ int cmd_fit_gbuffers(int argc, char **argv)
 
     memset(g, 0, sizeof g);
     memset(imgs, 0, sizeof imgs);
-    memset(views, 0, sizeof views);
+    memset(use, 0, sizeof use);
     memset(&s, 0, sizeof s);
     memset(&m, 0, sizeof m);
     fit_opts_init(&o);
@@ -354,36 +381,8 @@ int cmd_fit_gbuffers(int argc, char **argv)
     free(lo);
     if (!out || !pdir || optind != argc - 1)
         return fail(1, "%s", usage_fit_gbuffers);
-    if ((rc = fit_opts_resolve(&o)))
+    if ((rc = fit_opts_resolve(&o)) || (rc = read_gbuffers(o.m, argv[optind], g, &n, &has_uv)))
         goto done;
-    if (o.m->pattern_rule != SAMPLES_LIT) {
-        rc = fail(1, "method %s fits under an environment and needs the scene's mesh: fit "
-                     "G-buffers with a point-light method (hf3, hf2d, hf4, maps, hybrid, auto)",
-                     o.m->name);
-        goto done;
-    }
-    for (; n < SCENE_MAX_VIEWS; n++) { /* view_00.exr, view_01.exr, ... while they exist */
-        struct stat st;
-        int uv = 0;
-        snprintf(path, sizeof path, "%s/view_%02d.exr", argv[optind], n);
-        if (stat(path, &st))
-            break;
-        if (gbuf_read_exr(path, &g[n], &uv, &e)) {
-            rc = fail_err(&e);
-            goto done;
-        }
-        if (n > 0 && (g[n].width != g[0].width || g[n].height != g[0].height)) {
-            rc = fail(1, "%s is %dx%d but view 0's G-buffer is %dx%d", path, g[n].width,
-                      g[n].height, g[0].width, g[0].height);
-            goto done;
-        }
-        has_uv &= uv;
-        views[n].light_intensity = 1.0; /* the paintings are per unit light */
-    }
-    if (n == 0) {
-        rc = fail(1, "no G-buffer in %s (expected view_00.exr, view_01.exr, ...)", argv[optind]);
-        goto done;
-    }
     for (int v = 0; v < n; v++) {
         use[v] = find_painting(pdir, v, path, sizeof path);
         if (!use[v])
@@ -393,11 +392,6 @@ int cmd_fit_gbuffers(int argc, char **argv)
             rc = fail_err(&e);
             goto done;
         }
-        if (imgs[v].width != g[v].width || imgs[v].height != g[v].height) {
-            rc = fail(1, "painting %s is %dx%d but its G-buffer is %dx%d", path, imgs[v].width,
-                      imgs[v].height, g[v].width, g[v].height);
-            goto done;
-        }
         found++;
     }
     if (!found) {
@@ -405,17 +399,8 @@ int cmd_fit_gbuffers(int argc, char **argv)
                   n);
         goto done;
     }
-    gbuf_hash(g, n, hash);
-    if (samples_build(g, views, n, use, hash, &s, &e)) {
-        rc = fail_err(&e);
-        goto done;
-    }
-    s.has_pos = has_uv; /* the surface's coordinates came with every G-buffer */
-    if (!(vals = malloc(3 * (size_t)s.n * sizeof *vals)) || samples_gather(&s, imgs, vals, &e)) {
-        rc = vals ? fail_err(&e) : fail(1, "out of memory");
-        goto done;
-    }
-    if (cache_open(o.cache_dir, 0, &cc, &e) ||
+    if (gbfit_samples(o.m, g, imgs, use, n, has_uv, &s, &vals, &e) ||
+        cache_open(o.cache_dir, 0, &cc, &e) ||
         prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, &p, &e) ||
         prep_fit(p, NULL, vals, &m, &e)) {
         rc = fail_err(&e);

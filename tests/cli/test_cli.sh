@@ -111,7 +111,7 @@ rms_of() { grep -o '"rms_painted": *[0-9.e-]*' "$1" | head -1 | sed 's/.*: *//';
 a=$(rms_of "$T/matgb/material.json"); b=$(rms_of "$T/mat/material.json")
 awk -v a="$a" -v b="$b" 'BEGIN { exit !(a > 0 && (a - b < 1e-6) && (b - a < 1e-6)) }' && ok "fit-gbuffers fits as fit does ($a, $b)" || bad "fit-gbuffers fits as fit does ($a, $b)"
 expect_ok "fit-gbuffers, colour varying over uv" "$G" fit-gbuffers "$T/gball" --paintings "$T/paintsv" --method hf4 --res 16 -o "$T/matgb4" --no-cache
-expect_err "fit-gbuffers refuses srbf" 1 "needs the scene's mesh" "$G" fit-gbuffers "$T/gball" --paintings "$T/paint" --method srbf -o "$T/x"
+expect_err "fit-gbuffers: srbf's shadows need a mesh" 1 "visibility needs the scene's mesh" "$G" fit-gbuffers "$T/gball" --paintings "$T/paint" --method srbf --visibility on --lights 16 --basis_res 3 -o "$T/x"
 mkdir -p "$T/nopaint"
 expect_err "fit-gbuffers without paintings" 1 "no painting" "$G" fit-gbuffers "$T/gball" --paintings "$T/nopaint" -o "$T/x"
 expect_err "fit-gbuffers without G-buffers" 1 "no G-buffer" "$G" fit-gbuffers "$T/nopaint" --paintings "$T/paint" -o "$T/x"
