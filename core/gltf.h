@@ -25,17 +25,18 @@
  * Textures.  A material that varies over the surface (material_spatial) is
  * also fitted per texel of a res x res grid over its texture coordinates
  * (gltf_bake_material): the average's fit first, then each texel's from
- * the best of it and a coarse grid, over GLTF_BAKE_PAIRS of the painted
- * directions with the material evaluated at the texel's centre.  The .glb
+ * the best of it and a coarse grid, with the material evaluated at the
+ * texel's centre over the directions painted in and around the texel (at
+ * least GLTF_BAKE_MIN_PAIRS, at most GLTF_BAKE_PAIRS; gltf_bake.c).  The .glb
  * then holds baseColorTexture (8-bit PNG, sRGB-encoded as glTF requires)
  * and metallicRoughnessTexture (8-bit PNG, linear: G roughness, B
  * metallic, R 1), with the factors 1 and TEXCOORD_0 the mesh's uv (glTF's
  * v is 1 - glint's: texture row 0, the image's top, is glint's v = 1).
  * Each texel's relative RMS is reported (median and max).  Without the
  * mesh's texture coordinates, or with res 0, the average alone is written
- * and the extras say why.  Cost (measured, BENCHMARKS.md): about 1 ms of
- * one core per texel for a maps material, so the default 32 x 32 takes
- * about half a second on two cores.
+ * and the extras say why.  Cost (measured, BENCHMARKS.md, a maps material
+ * on two shared cores): about 0.45 ms of wall clock per texel, 0.8 s for
+ * the default 32 x 32, 2 s for 64 x 64, 7 s for 128 x 128.
  * Thread-safety: reads the material only. */
 #ifndef GLINT_GLTF_H
 #define GLINT_GLTF_H

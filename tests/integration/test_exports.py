@@ -7,7 +7,9 @@ pairs; an anisotropic material reported and averaged; access and errors;
 measured materials offered by --measured-dir painting as the truth their
 table holds (point lights and a sky), the resolver refusing what is not
 theirs (hidden, short, a link out, traversal), and a fit of such paintings
-reading the truth's colour."""
+reading the truth's colour; the glTF file of a material that varies over
+the surface (maps of gold stripes on red plastic) with its two PNG textures,
+parsed here (the GLB's chunks, the PNGs decoded with zlib)."""
 import json
 import math
 import os
@@ -18,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import run_tests  # noqa: E402
@@ -272,6 +275,139 @@ def test_04_measured_materials_paint_as_their_truth(d):
     print("fitted to the measured paintings: base colour", summ["base_colour"])
     for c, kd in enumerate((0.4, 0.3, 0.2)):
         assert abs(summ["base_colour"][c] - kd) < 0.15 * kd + 0.02, summ["base_colour"]
+
+
+# ---- glTF textures of a material that varies over the surface ------------------------------
+
+STRIPES = ("stripes:freq=3,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|"
+           "ct:kd=0,f0=0.9/0.7/0.3,rough=0.25")
+SV_SIZE = 64  # at 48 a material of maps is 30 to 70% from the stripes in renders
+
+
+def glb_chunks(glb):
+    """The JSON document and the BIN chunk of a binary glTF file."""
+    magic, version, total = struct.unpack("<III", glb[:12])
+    jl, jt = struct.unpack("<II", glb[12:20])
+    assert (magic, version, total, jt) == (0x46546C67, 2, len(glb), 0x4E4F534A)
+    bl, bt = struct.unpack("<II", glb[20 + jl:28 + jl])
+    assert bt == 0x004E4942 and 28 + jl + bl == len(glb)
+    return json.loads(glb[20:20 + jl]), glb[28 + jl:28 + jl + bl]
+
+
+def png_decode(png):
+    """An 8-bit RGB PNG's size and rows of bytes (PNG specification: IHDR,
+    zlib-compressed IDAT, one filter byte per row)."""
+    assert png[:8] == b"\x89PNG\r\n\x1a\n", png[:8]
+    pos, idat, hdr = 8, b"", None
+    while pos < len(png):
+        n, typ = struct.unpack(">I4s", png[pos:pos + 8])
+        body = png[pos + 8:pos + 8 + n]
+        assert zlib.crc32(typ + body) == struct.unpack(">I", png[pos + 8 + n:pos + 12 + n])[0]
+        if typ == b"IHDR":
+            hdr = struct.unpack(">IIBBBBB", body)
+        elif typ == b"IDAT":
+            idat += body
+        pos += 12 + n
+    w, h, depth, ctype, _, _, interlace = hdr
+    assert (depth, ctype, interlace) == (8, 2, 0), hdr  # 8-bit RGB, not interlaced
+    raw, rows, prev, bpp = zlib.decompress(idat), [], bytearray(3 * w), 3
+    for y in range(h):
+        f, line = raw[y * (3 * w + 1)], bytearray(raw[y * (3 * w + 1) + 1:(y + 1) * (3 * w + 1)])
+        for i in range(3 * w):
+            a = line[i - bpp] if i >= bpp else 0
+            b, c = prev[i], prev[i - bpp] if i >= bpp else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+            else:
+                assert f == 0, f
+        rows.append(line)
+        prev = line
+    return w, h, rows
+
+
+def test_05_a_spatial_material_bakes_textures(d):
+    tmp = tempfile.mkdtemp(prefix="glint-gltf-")
+    scene = os.path.join(tmp, "scene.json")
+    subprocess.run([CLI, "scene", "create", "--size", str(SV_SIZE), "-o", scene], check=True,
+                   stdout=subprocess.DEVNULL)
+    subprocess.run([CLI, "paint", scene, "--brdf", STRIPES, "-o", os.path.join(tmp, "paint")],
+                   check=True, stdout=subprocess.DEVNULL)
+    sc = d.post("/api/v1/scenes", json={"width": SV_SIZE, "height": SV_SIZE}, status=201).json()
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for k in range(len(sc["views"])):
+        with open(os.path.join(tmp, "paint", "view_%02d.exr" % k), "rb") as f:
+            d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+                  headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
+                  data=f.read(), status=200)
+    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
+               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
+               data=json.dumps({"method": "maps",
+                                "params": {"res": 32, "map_res": 32, "components": 3}}))
+    assert r.status_code in (201, 202), r.text
+    mid = r.json()["id"] if r.status_code == 201 else None
+    if mid is None:
+        jid, deadline = r.json()["job"]["id"], time.time() + 300
+        while True:
+            j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
+            if j["state"] in ("done", "failed"):
+                break
+            assert time.time() < deadline
+            time.sleep(0.2)
+        assert j["state"] == "done", j
+        mid = j["material_id"]
+    h = tok(s["view_token"])
+    url = "/api/v1/materials/%s/material.glb" % mid
+    r = d.get(url + "?bake_res=16", headers=h, status=200)
+    info = r.headers["X-Glint-Gltf"]
+    doc, binary = glb_chunks(r.content)
+    mat = doc["materials"][0]
+    pbr, extras = mat["pbrMetallicRoughness"], mat["extras"]["glint"]
+    print("glTF of maps:", info, "| textures:", extras["textures"])
+    assert "spatial=1" in info and "textures=16" in info, info
+    assert pbr["baseColorFactor"] == [1, 1, 1, 1] and pbr["metallicFactor"] == 1
+    assert pbr["roughnessFactor"] == 1
+    prim = doc["meshes"][0]["primitives"][0]
+    assert doc["accessors"][prim["attributes"]["TEXCOORD_0"]]["count"] == \
+        doc["accessors"][prim["attributes"]["POSITION"]]["count"]
+    assert len(doc["images"]) == 2 and len(doc["textures"]) == 2
+    imgs = []
+    for key in ("baseColorTexture", "metallicRoughnessTexture"):
+        assert pbr[key]["texCoord"] == 0
+        im = doc["images"][doc["textures"][pbr[key]["index"]]["source"]]
+        assert im["mimeType"] == "image/png"
+        bv = doc["bufferViews"][im["bufferView"]]
+        assert bv["byteOffset"] % 4 == 0 and bv["byteOffset"] + bv["byteLength"] <= len(binary)
+        imgs.append(png_decode(binary[bv["byteOffset"]:bv["byteOffset"] + bv["byteLength"]]))
+    assert all(w == hh == 16 for w, hh, _ in imgs), [(w, hh) for w, hh, _ in imgs]
+    assert extras["textures"]["res"] == 16 and not extras["spatial_average"]
+    assert extras["textures"]["texel_rel_rms_median"] < 0.3, extras["textures"]
+    # metallic-roughness: R 1, and the stripes across u (bands of 1/6) in B (metallic):
+    # gold on [0, 1/6), red plastic on [1/6, 1/3) (texel columns 0-1 and 3-4)
+    mr = imgs[1][2]
+    assert all(row[3 * x] == 255 for row in mr for x in range(16))
+    metal = [sum(row[3 * x + 2] for row in mr) / (16 * 255.0) for x in range(16)]
+    green = [sum(row[3 * x + 1] for row in imgs[0][2]) / (16 * 255.0) for x in range(16)]
+    print("by texel column, metallic:", " ".join("%.2f" % m for m in metal))
+    print("by texel column, base colour's green (sRGB):", " ".join("%.2f" % g for g in green))
+    # the material of maps holds the stripes only loosely (5 to 40% from its truth at the
+    # painted samples): the textures vary, and the gold columns are the more metallic
+    assert max(green) - min(green) > 0.1 and max(metal) - min(metal) > 0.2, (green, metal)
+    assert (metal[0] + metal[1]) / 2 > (metal[3] + metal[4]) / 2 + 0.1, metal
+    # the average alone when no textures are asked for; sizes refused
+    r = d.get(url + "?bake_res=0", headers=h, status=200)
+    doc, _ = glb_chunks(r.content)
+    assert "images" not in doc and "textures=0" in r.headers["X-Glint-Gltf"]
+    assert "textures_not_baked" in doc["materials"][0]["extras"]["glint"]
+    for bad in ("257", "-1", "x", "1e3"):
+        d.get(url + "?bake_res=" + bad, headers=h, status=400)
 
 
 run_tests(globals(), daemon_args=("--measured-dir", MDIR))
