@@ -35,8 +35,10 @@
  * Each texel's relative RMS is reported (median and max).  Without the
  * mesh's texture coordinates, or with res 0, the average alone is written
  * and the extras say why.  Cost (measured, BENCHMARKS.md, a maps material
- * on two shared cores): about 0.45 ms of wall clock per texel, 0.8 s for
- * the default 32 x 32, 2 s for 64 x 64, 7 s for 128 x 128.
+ * of 5 products on two cores other jobs shared): 0.3 to 0.45 ms per texel,
+ * 0.4 to 0.8 s for the default 32 x 32, 1.1 to 2 s for 64 x 64, 7 s for
+ * 128 x 128; the rows run on par.h's pool (no faster than one thread while
+ * the machine was loaded; the result does not depend on the threads).
  * Thread-safety: reads the material only. */
 #ifndef GLINT_GLTF_H
 #define GLINT_GLTF_H
