@@ -716,11 +716,15 @@ class GlintClient:
         (hf3); GlintError 422 otherwise (use merl())."""
         return self._call("GET", self._mat(material_id, "/material.brdf"), raw=True, token=token)
 
-    def gltf(self, material_id, token=None):
+    def gltf(self, material_id, bake_res=None, token=None):
         """GET /api/v1/materials/{id}/material.glb: the material on its
         scene's mesh as binary glTF 2.0 with a fitted metallic-roughness
-        material (Blob; X-Glint-Gltf gives the fit and its error)."""
-        return self._call("GET", self._mat(material_id, "/material.glb"), raw=True, token=token)
+        material (Blob; X-Glint-Gltf gives the fit and its error). A
+        material that varies over the surface is baked into bake_res x
+        bake_res textures (the daemon's default 32; 0: the average only)."""
+        q = {"bake_res": None if bake_res is None else _index(bake_res, "bake_res")}
+        return self._call("GET", self._mat(material_id, "/material.glb"), q, raw=True,
+                          token=token)
 
     def preview(self, material_id, format="png", view=None, eye=None, light=None, target=None,
                 fov=None, intensity=None, size=None, renderer=None, object=None, env=None,
