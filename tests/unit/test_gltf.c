@@ -398,9 +398,11 @@ static void side_free(gltf_side *g)
 }
 
 /* Render view v of the .glb's mesh with its material, alpha = roughness^expo:
- * radiance I f cos on lit and seen pixels, 0 elsewhere (OUT: *out, RGB). */
+ * radiance I f cos on lit and seen pixels, 0 elsewhere (OUT: *out, RGB).
+ * flip 1 or 2 reads the textures at 1 - s or 1 - t (what a texture
+ * written upside down or mirrored would show); 0 as the file says. */
 static int side_render(const gltf_side *g, const mesh *gm, const scene_view *v, int w, int h,
-                       int expo, img *out)
+                       int expo, int flip, img *out)
 {
     gbuf gb;
     glint_err e;
@@ -408,6 +410,7 @@ static int side_render(const gltf_side *g, const mesh *gm, const scene_view *v, 
         return -1;
     for (size_t p = 0; p < (size_t)w * h; p++) {
         double n[3], wi[3], wo[3], base[3], m = g->metallic, r = g->roughness, f[3], t[3], ci, co;
+        double st[2];
         if (!gb.mask[p])
             continue;
         for (int e2 = 0; e2 < 3; e2++)
@@ -416,15 +419,17 @@ static int side_render(const gltf_side *g, const mesh *gm, const scene_view *v, 
         co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];
         if (!(ci > 0.0 && co > 0.0))
             continue;
+        st[0] = flip == 1 ? 1.0 - gb.uv[2 * p] : gb.uv[2 * p];
+        st[1] = flip == 2 ? 1.0 - gb.uv[2 * p + 1] : gb.uv[2 * p + 1];
         for (int c = 0; c < 3; c++)
             base[c] = g->base[c];
         if (g->bc.px) {
-            tex_sample(&g->bc, gb.uv[2 * p], gb.uv[2 * p + 1], t);
+            tex_sample(&g->bc, st[0], st[1], t);
             for (int c = 0; c < 3; c++)
                 base[c] *= srgb_decode(t[c]);
         }
         if (g->mr.px) { /* G roughness, B metallic, linear */
-            tex_sample(&g->mr, gb.uv[2 * p], gb.uv[2 * p + 1], t);
+            tex_sample(&g->mr, st[0], st[1], t);
             r *= t[1];
             m *= t[2];
         }
@@ -456,12 +461,13 @@ static int paint_truth(const char *spec, const scene_view *v, img *out)
 /* Export m on the fixture's scene (textures bake_res), read the file back
  * and render it and m in 4 of the views at 96 x 96: the relative RMS
  * difference of the images, sqrt(sum d^2 / sum glint^2), with alpha =
- * roughness^2 and with alpha = roughness (OUT: *right, *wrong, *doc); with
+ * roughness^2, with alpha = roughness, and with the textures read mirrored
+ * in s and in t (OUT: diff[4], *doc); with
  * `truth` (a spec, or NULL) also the material's and the glTF's (alpha =
  * roughness^2) relative to the truth painted in those views (OUT:
  * vs_truth[2]). */
-static int compare(const material *m, int bake_res, const char *truth, double *right,
-                   double *wrong, double vs_truth[2], json_t **doc)
+static int compare(const material *m, int bake_res, const char *truth, double diff[4],
+                   double vs_truth[2], json_t **doc)
 {
     void *glb;
     size_t len;
@@ -470,7 +476,8 @@ static int compare(const material *m, int bake_res, const char *truth, double *r
     gltf_side g;
     mesh gm;
     glint_err e;
-    double ss[2] = {0, 0}, ref = 0.0, tt[3] = {0, 0, 0};
+    static const int expo[4] = {2, 1, 2, 2}, flip[4] = {0, 0, 1, 2};
+    double ss[4] = {0, 0, 0, 0}, ref = 0.0, tt[3] = {0, 0, 0};
     if (gltf_export_scene(m, &SC, NULL, bake_res, &glb, &len, &p, NULL, &e)) {
         fprintf(stderr, "export: %s\n", e.msg);
         return -1;
@@ -479,15 +486,17 @@ static int compare(const material *m, int bake_res, const char *truth, double *r
         return -1;
     for (int k = 0; k < 4; k++) {
         const scene_view *v = &SC.views[(k * SC.nviews) / 4];
-        img a, b[2], tr = {0};
-        if (material_render(m, &SC.mesh, v, 96, 96, &a, &e) ||
-            side_render(&g, &gm, v, 96, 96, 2, &b[0]) || side_render(&g, &gm, v, 96, 96, 1, &b[1]))
+        img a, b[4], tr = {0};
+        if (material_render(m, &SC.mesh, v, 96, 96, &a, &e))
             return -1;
+        for (int w = 0; w < 4; w++)
+            if (side_render(&g, &gm, v, 96, 96, expo[w], flip[w], &b[w]))
+                return -1;
         if (truth && paint_truth(truth, v, &tr))
             return -1;
         for (size_t i = 0; i < (size_t)96 * 96 * 3; i++) {
             ref += (double)a.px[i] * a.px[i];
-            for (int w = 0; w < 2; w++)
+            for (int w = 0; w < 4; w++)
                 ss[w] += ((double)a.px[i] - b[w].px[i]) * ((double)a.px[i] - b[w].px[i]);
             if (truth) {
                 tt[0] += ((double)tr.px[i] - a.px[i]) * ((double)tr.px[i] - a.px[i]);
@@ -495,10 +504,12 @@ static int compare(const material *m, int bake_res, const char *truth, double *r
                 tt[2] += (double)tr.px[i] * tr.px[i];
             }
         }
-        img_free(&a), img_free(&b[0]), img_free(&b[1]), img_free(&tr);
+        for (int w = 0; w < 4; w++)
+            img_free(&b[w]);
+        img_free(&a), img_free(&tr);
     }
-    *right = sqrt(ss[0] / ref);
-    *wrong = sqrt(ss[1] / ref);
+    for (int w = 0; w < 4; w++)
+        diff[w] = sqrt(ss[w] / ref);
     if (truth) {
         vs_truth[0] = sqrt(tt[0] / tt[2]);
         vs_truth[1] = sqrt(tt[1] / tt[2]);
@@ -521,10 +532,11 @@ TEST(the_roughness_convention_by_rendering_both)
     fp.res = 64;
     for (int t = 0; t < 2; t++) {
         material m;
-        double right, wrong, vt[2];
+        double d[4], right, wrong, vt[2];
         json_t *doc, *mat, *pbr;
         ASSERT_OK(sv_fit(&method_hf3, &fp, truths[t], &SC, G, C, SE, &m));
-        ASSERT_OK(compare(&m, GLTF_BAKE_RES_DEFAULT, truths[t], &right, &wrong, vt, &doc));
+        ASSERT_OK(compare(&m, GLTF_BAKE_RES_DEFAULT, truths[t], d, vt, &doc));
+        right = d[0], wrong = d[1];
         mat = jpath(doc, "materials", 0);
         pbr = json_object_get(mat, "pbrMetallicRoughness");
         printf("  hf3 of %s: glTF roughness %.4f, metallic %.4f, fit relative RMS %.4f; renders "
@@ -544,61 +556,74 @@ TEST(the_roughness_convention_by_rendering_both)
     }
 }
 
-/* red plastic with gold stripes across u, both GGX: what per-texel glTF
- * parameters can hold (but at the stripes' edges, where the material blends) */
+/* Red plastic with gold stripes across u, and in squares (the squares tell
+ * a texture upside down from the right one; stripes across u cannot), both
+ * GGX: what per-texel glTF parameters can hold, but at the edges, where the
+ * material blends, and where the material of maps is far from its truth
+ * (10 to 45% at the painted samples of a stripe's edge). */
 #define GLTF_STRIPES                                                                            \
     "stripes:freq=3,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|"                             \
+    "ct:kd=0,f0=0.9/0.7/0.3,rough=0.25"
+#define GLTF_SQUARES                                                                            \
+    "checker:freq=1,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|"                             \
     "ct:kd=0,f0=0.9/0.7/0.3,rough=0.25"
 
 TEST(baked_textures_by_rendering_both)
 {
+    static const char *truths[2] = {GLTF_STRIPES, GLTF_SQUARES};
+    static const double within[2] = {0.15, 0.25};
     maps_params mp;
-    material m;
-    double right, wrong, avg_right, avg_wrong, vt[2], avg_vt[2];
-    json_t *doc, *pbr, *tex, *glint;
     ASSERT_OK(sv_setup(SIZE, &SC, &G, &C, &SE));
     method_maps.params_default(&mp);
     mp.hf.res = 32;
     mp.map_res = 32;
-    ASSERT_OK(sv_fit(&method_maps, &mp, GLTF_STRIPES, &SC, G, C, SE, &m));
-    ASSERT(material_spatial(&m));
-    /* the average alone (textures not asked for) */
-    ASSERT_OK(compare(&m, 0, GLTF_STRIPES, &avg_right, &avg_wrong, avg_vt, &doc));
-    ASSERT(!json_object_get(doc, "images"));
-    glint = json_object_get(json_object_get(jpath(doc, "materials", 0), "extras"), "glint");
-    ASSERT(json_is_string(json_object_get(glint, "textures_not_baked")));
-    ASSERT(json_is_true(json_object_get(glint, "spatial_average")));
-    json_decref(doc);
-    ASSERT_OK(compare(&m, GLTF_BAKE_RES_DEFAULT, GLTF_STRIPES, &right, &wrong, vt, &doc));
-    pbr = json_object_get(jpath(doc, "materials", 0), "pbrMetallicRoughness");
-    glint = json_object_get(json_object_get(jpath(doc, "materials", 0), "extras"), "glint");
-    tex = json_object_get(glint, "textures");
-    printf("  maps of red plastic with gold stripes (%s), %dx%d texels (at most %d pairs each, "
-           "%d far texels, %.2f s): texel relative RMS median %.4f, max %.4f; renders differ "
-           "by %.4f (alpha = roughness^2), %.4f (alpha = roughness); the average alone %.4f "
-           "(%.4f); from the truth: the material %.4f, the baked glTF %.4f, the average "
-           "alone %.4f\n",
-           json_string_value(json_object_get(json_object_get(m.info, "stop"), "reason")),
-           (int)json_integer_value(json_object_get(tex, "res")),
-           (int)json_integer_value(json_object_get(tex, "res")),
-           (int)json_integer_value(json_object_get(tex, "pairs_per_texel")),
-           (int)json_integer_value(json_object_get(tex, "far_texels")),
-           json_number_value(json_object_get(tex, "seconds")),
-           json_number_value(json_object_get(tex, "texel_rel_rms_median")),
-           json_number_value(json_object_get(tex, "texel_rel_rms_max")), right, wrong,
-           avg_right, avg_wrong, vt[0], vt[1], avg_vt[1]);
-    ASSERT_EQ(json_array_size(json_object_get(doc, "images")), 2);
-    ASSERT(json_is_false(json_object_get(glint, "spatial_average")));
-    ASSERT_NEAR(json_number_value(json_object_get(pbr, "roughnessFactor")), 1.0, 0.0);
-    ASSERT_NEAR(json_number_value(json_object_get(pbr, "metallicFactor")), 1.0, 0.0);
-    ASSERT_EQ(jint(json_object_get(pbr, "baseColorTexture"), "texCoord"), 0);
-    ASSERT_LT(json_number_value(json_object_get(tex, "texel_rel_rms_median")), 0.15);
-    ASSERT_LT(right, 0.15);
-    ASSERT_LT(right, 0.3 * avg_right); /* the textures hold what the average cannot */
-    ASSERT_LT(3.0 * right, wrong);
-    ASSERT_LT(vt[1], 0.5 * avg_vt[1]);
-    json_decref(doc);
-    material_free(&m);
+    for (int k = 0; k < 2; k++) {
+        material m;
+        double d[4], avg[4], vt[2], avg_vt[2];
+        json_t *doc, *pbr, *tex, *glint;
+        ASSERT_OK(sv_fit(&method_maps, &mp, truths[k], &SC, G, C, SE, &m));
+        ASSERT(material_spatial(&m));
+        /* the average alone (textures not asked for) */
+        ASSERT_OK(compare(&m, 0, truths[k], avg, avg_vt, &doc));
+        ASSERT(!json_object_get(doc, "images"));
+        glint = json_object_get(json_object_get(jpath(doc, "materials", 0), "extras"), "glint");
+        ASSERT(json_is_string(json_object_get(glint, "textures_not_baked")));
+        ASSERT(json_is_true(json_object_get(glint, "spatial_average")));
+        json_decref(doc);
+        ASSERT_OK(compare(&m, GLTF_BAKE_RES_DEFAULT, truths[k], d, vt, &doc));
+        pbr = json_object_get(jpath(doc, "materials", 0), "pbrMetallicRoughness");
+        glint = json_object_get(json_object_get(jpath(doc, "materials", 0), "extras"), "glint");
+        tex = json_object_get(glint, "textures");
+        printf("  maps of %s, %dx%d texels (at most %d pairs each, %d far texels, %.2f s): "
+               "texel relative RMS median %.4f, max %.4f; renders differ by %.4f (alpha = "
+               "roughness^2), %.4f (alpha = roughness), %.4f and %.4f (textures mirrored in s, "
+               "in t); the average alone %.4f; from the truth: the material %.4f, the baked "
+               "glTF %.4f, the average alone %.4f\n",
+               k ? "gold squares on red plastic" : "gold stripes on red plastic",
+               (int)json_integer_value(json_object_get(tex, "res")),
+               (int)json_integer_value(json_object_get(tex, "res")),
+               (int)json_integer_value(json_object_get(tex, "pairs_per_texel")),
+               (int)json_integer_value(json_object_get(tex, "far_texels")),
+               json_number_value(json_object_get(tex, "seconds")),
+               json_number_value(json_object_get(tex, "texel_rel_rms_median")),
+               json_number_value(json_object_get(tex, "texel_rel_rms_max")), d[0], d[1], d[2],
+               d[3], avg[0], vt[0], vt[1], avg_vt[1]);
+        ASSERT_EQ(json_array_size(json_object_get(doc, "images")), 2);
+        ASSERT(json_is_false(json_object_get(glint, "spatial_average")));
+        ASSERT_NEAR(json_number_value(json_object_get(pbr, "roughnessFactor")), 1.0, 0.0);
+        ASSERT_NEAR(json_number_value(json_object_get(pbr, "metallicFactor")), 1.0, 0.0);
+        ASSERT_EQ(jint(json_object_get(pbr, "baseColorTexture"), "texCoord"), 0);
+        ASSERT_LT(json_number_value(json_object_get(tex, "texel_rel_rms_median")), 0.15);
+        ASSERT_LT(d[0], within[k]);
+        ASSERT_LT(d[0], 0.4 * avg[0]); /* the textures hold what the average cannot */
+        ASSERT_LT(2.5 * d[0], d[1]);  /* alpha = roughness^2, not roughness */
+        ASSERT_LT(2.0 * d[0], d[2]);  /* the texture's columns the right way round */
+        if (k == 1)
+            ASSERT_LT(2.0 * d[0], d[3]); /* and its rows */
+        ASSERT_LT(vt[1], 0.5 * avg_vt[1]);
+        json_decref(doc);
+        material_free(&m);
+    }
 }
 
 TEST(baking_refuses_what_it_cannot_do)
