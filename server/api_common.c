@@ -218,6 +218,13 @@ int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err)
 
     if ((rc = fitsvc_material_doc(a->fits, mid, doc, err)))
         return rc;
+    if (!doc->session[0]) { /* fitted from a G-buffer set: the API key's */
+        if ((rc = auth_require_key(req, err))) {
+            free(doc->text);
+            doc->text = NULL;
+        }
+        return rc;
+    }
     if ((rc = api_session(req, doc->session, 0, &sdoc, err))) {
         free(doc->text);
         doc->text = NULL;

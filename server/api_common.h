@@ -88,6 +88,17 @@ int api_material_load(struct app *a, const char *mid, struct material *m, glint_
 /* Both: the material `mid` loaded if the request may read it (OUT: *m). */
 int api_material_read(http_req *req, const char *mid, struct material *m, glint_err *err);
 
+/* The method and parameters of a fit request's body {"method", "params"}
+ * (the method's table checks every parameter; kind "invalid-parameter").
+ * OUT: *m, *params (malloc'ed: free).  api_fits.c. */
+struct method;
+int api_fit_body(const json_t *body, const struct method **m, void **params, glint_err *e);
+
+/* G-buffer sets (api_gbuffers.c): 1 when the set `id` exists; 0 when the
+ * request may use it (the API key, when one is set), else GLINT_EAUTH. */
+int api_gbuffer_set_exists(struct app *a, const char *id);
+int api_gbuffer_set_access(http_req *req, const char *id, glint_err *err);
+
 /* A view index from a path segment: decimal digits, 0..n-1 (0), else -1. */
 int api_view_index(const char *text, int n, int *k);
 

@@ -26,9 +26,8 @@
 
 #define SSE_KEEPALIVE_S 15.0
 
-/* The method and parameters of a fit request.  OUT: *m, *params
- * (malloc'ed: free). */
-static int fit_body(const json_t *body, const method **m, void **params, glint_err *e)
+/* The method and parameters of a fit request (api_common.h). */
+int api_fit_body(const json_t *body, const method **m, void **params, glint_err *e)
 {
     const char *k;
     json_t *v;
@@ -93,7 +92,7 @@ static http_resp fits_create(http_req *req)
     int rc;
 
     if ((rc = api_session(req, sid, 1, &sdoc, &e)) || (rc = api_body_json(req, &body, &e)) ||
-        (rc = fit_body(body, &m, &params, &e)))
+        (rc = api_fit_body(body, &m, &params, &e)))
         goto done;
     if (!(scid = json_string_value(json_object_get(sdoc, "scene_id")))) {
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);
@@ -138,7 +137,8 @@ static http_resp session_materials(http_req *req)
 
 /* ---- jobs ------------------------------------------------------------------------------- */
 
-/* The job `id` if the request may read its session.  OUT: *jdoc. */
+/* The job `id` if the request may read its session (or its G-buffer set,
+ * whose fits it runs: api_gbuffers.c).  OUT: *jdoc. */
 static int job_access(http_req *req, const char *id, json_t **jdoc, glint_err *e)
 {
     app *a = req->app;
@@ -154,12 +154,16 @@ static int job_access(http_req *req, const char *id, json_t **jdoc, glint_err *e
         return api_reject(e, GLINT_ENOTFOUND, "not-found",
                           "no job %.40s (unknown, or finished over an hour ago)", id);
     }
-    if ((rc = api_session(req, owner, 0, &sdoc, e))) {
+    rc = api_session(req, owner, 0, &sdoc, e);
+    if (rc == GLINT_ENOTFOUND && api_gbuffer_set_exists(req->app, owner))
+        rc = api_gbuffer_set_access(req, owner, e);
+    else
+        json_decref(sdoc);
+    if (rc) {
         json_decref(*jdoc);
         *jdoc = NULL;
         return rc;
     }
-    json_decref(sdoc);
     return 0;
 }
 

@@ -89,6 +89,8 @@ extern const int api_envs_nroutes;
 int api_envs_init(const char *dir, glint_err *err);
 extern const http_route api_exports_routes[];    /* materials for other tools */
 extern const int api_exports_nroutes;
+extern const http_route api_gbuffers_routes[];   /* G-buffer sets and their fits */
+extern const int api_gbuffers_nroutes;
 extern const http_route api_measured_routes[];   /* measured materials on offer */
 extern const int api_measured_nroutes;
 /* The measured materials' resolver (api_measured.c), set before threads start. */

@@ -37,6 +37,13 @@ int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *
 {
     prep_scene_source src = {src_load, src_unload, f->st};
     *out = NULL;
+    if (scene_id && !scene_id[0]) { /* a material fitted from a G-buffer set */
+        glint_err_set(err, GLINT_EUNSUPPORTED,
+                      "this material was fitted from uploaded G-buffers (a G-buffer set): it "
+                      "has no scene or mesh, which this needs; use a material fitted through a "
+                      "session on a scene");
+        return glint_err_kind(err, "no-scene");
+    }
     if (!glint_id_valid(scene_id))
         return glint_err_set(err, GLINT_ENOTFOUND, "no scene %.40s", scene_id ? scene_id : "");
     return prep_scene_acquire(f->cache, scene_id, &src, out, err);
@@ -78,11 +85,13 @@ int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err
         return rc == GLINT_ENOTFOUND ? glint_err_set(err, rc, "no material %s", id) : rc;
     sid = json_string_value(json_object_get(j, "session_id"));
     scid = json_string_value(json_object_get(j, "scene_id"));
+    if (!sid && !scid && json_is_string(json_object_get(j, "gbuffer_set_id")))
+        sid = scid = ""; /* fitted from a G-buffer set (fitsvc_gbuf.c): no session, no scene */
     if (!sid || !scid) {
         json_decref(j);
         return glint_err_set(err, GLINT_EINTERNAL, "material %s names no session or scene", id);
     }
-    if (!json_object_get(j, "links"))
+    if (!json_object_get(j, "links") && sid[0])
         json_object_set_new(j, "links", fitsvc_material_links(id, sid, scid));
     snprintf(out->session, sizeof out->session, "%s", sid);
     snprintf(out->scene, sizeof out->scene, "%s", scid);

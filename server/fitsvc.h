@@ -61,7 +61,9 @@ memo *fitsvc_memo(fitsvc *f);
 points *fitsvc_points(fitsvc *f);
 
 /* The core scene of a stored scene, through the cache (scenes never change:
- * loaded once, shared).  GLINT_ENOTFOUND for unknown ids.  OUT: *out, one
+ * loaded once, shared).  GLINT_ENOTFOUND for unknown ids; "" (the scene of
+ * a material fitted from a G-buffer set: none) GLINT_EUNSUPPORTED with
+ * kind "no-scene".  OUT: *out, one
  * reference (cache_release(fitsvc_cache(f), *out)). */
 int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *err);
 
@@ -75,6 +77,19 @@ int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *
 int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const method *m,
                const void *params, json_t **doc, char job_id[33], srv_timing *tm,
                glint_err *err);
+
+/* Fit the samples and painted values of a G-buffer set (core gbfit.h)
+ * with method m and params (copied): as fitsvc_fit, 0 with *doc (fitted
+ * now: the precomputation was in memory) or job_id (a job of owner set_id
+ * builds it and fits).  *s and *rgb are moved in (zeroed and NULL on return,
+ * whatever it is).  The material object names gbuffer_set_id, no session
+ * or scene; it is listed under set_id (store_material_list).  No fit point
+ * or held-out measurement is recorded (they are a scene's).
+ * fitsvc_gbuf.c. */
+struct samples;
+int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const void *params,
+                        struct samples *s, float **rgb, json_t **doc, char job_id[33],
+                        srv_timing *tm, glint_err *err);
 
 /* Links of a material object ({"self", "factors_png", ...}; a new object). */
 json_t *fitsvc_material_links(const char *id, const char *session_id, const char *scene_id);

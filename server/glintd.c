@@ -178,11 +178,13 @@ int main(int argc, char **argv)
         const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
                                       api_tokens_routes, api_fits_routes, api_materials_routes,
                                       api_methods_routes, api_envs_routes,
-                                      api_measured_routes, api_exports_routes};
+                                      api_measured_routes, api_exports_routes,
+                                      api_gbuffers_routes};
         const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
                               api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
                               api_methods_nroutes, api_envs_nroutes,
-                              api_measured_nroutes, api_exports_nroutes};
+                              api_measured_nroutes, api_exports_nroutes,
+                              api_gbuffers_nroutes};
         const int ntables = (int)(sizeof counts / sizeof counts[0]);
         int total = 0;
         for (int i = 0; i < ntables; i++)

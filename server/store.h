@@ -60,6 +60,9 @@ int store_blob_get(store *s, const char *name, void **data, size_t *len, glint_e
 /* Absolute path of a blob (OUT: buf). */
 int store_blob_path(store *s, const char *name, char *buf, size_t len, glint_err *err);
 int store_blob_delete(store *s, const char *name, glint_err *err);
+/* Remove the blob directory tree `name` (best effort: what cannot be
+ * removed stays, for the sweep when the store opens). */
+void store_blob_rmtree(store *s, const char *name);
 /* The regular files directly in the blob directory `name`, sorted (OUT:
  * *names, an array of strings; empty when the directory does not exist). */
 int store_blob_list(store *s, const char *name, json_t **names, glint_err *err);

@@ -31,8 +31,6 @@ sqlite3_stmt *store_prep(store *s, const char *sql, glint_err *err);
 /* Roll back the open transaction, if any. */
 void store_rollback(store *s);
 
-/* Remove the blob directory tree `name` (best effort). */
-void store_blob_rmtree(store *s, const char *name);
 /* A name with a random part: "<prefix><16 hex><suffix>" (OUT: buf). */
 int store_random_name(char *buf, size_t len, const char *prefix, const char *suffix,
                       glint_err *err);

@@ -10,7 +10,9 @@
  *   - environments/<id>.exr|hdr without its record <id>.json (an upload
  *     killed before the record, a deletion after it), or a record whose
  *     map is gone;
- *   - sessions/<id>/<file> that no painting row names (store_log.c).
+ *   - sessions/<id>/<file> that no painting row names (store_log.c);
+ *   - gbuffer-sets/<id>/ without its record set.json (a deletion killed
+ *     after removing the record; api_gbuffers.c).
  * Names that are not glint's (no id) are left alone. */
 #include <dirent.h>
 #include <stdio.h>
@@ -131,6 +133,28 @@ static void sweep_envs(store *s)
     closedir(d);
 }
 
+/* G-buffer sets whose record is gone. */
+static void sweep_gbuffer_sets(store *s)
+{
+    char dir[STORE_PATH_MAX], id[GLINT_ID_LEN];
+    DIR *d;
+    struct dirent *e;
+    if (snprintf(dir, sizeof dir, "%s/gbuffer-sets", s->blobs) >= (int)sizeof dir ||
+        !(d = opendir(dir)))
+        return;
+    while ((e = readdir(d))) {
+        char rec[STORE_PATH_MAX], name[STORE_PATH_MAX];
+        struct stat st;
+        if (!id_stem(e->d_name, id) || strcmp(e->d_name, id) ||
+            snprintf(rec, sizeof rec, "%s/%s/set.json", dir, id) >= (int)sizeof rec ||
+            stat(rec, &st) == 0)
+            continue;
+        snprintf(name, sizeof name, "gbuffer-sets/%s", id);
+        store_blob_rmtree(s, name);
+    }
+    closedir(d);
+}
+
 void store_sweep_blobs(store *s)
 {
     sweep_tmp(s->blobs, 0);
@@ -138,4 +162,5 @@ void store_sweep_blobs(store *s)
     sweep_rows(s, "scenes", "scenes");
     sweep_rows(s, "meshes", "meshes");
     sweep_envs(s);
+    sweep_gbuffer_sets(s);
 }
