@@ -806,3 +806,65 @@ class GlintClient:
     def delete_environment(self, env_id):
         """DELETE /api/v1/environments/{id}: delete an uploaded map. Returns None."""
         self._call("DELETE", "/api/v1/environments/" + _segment(env_id, "env_id"))
+
+    # ---- G-buffer sets: G-buffers and paintings made elsewhere ----------
+
+    def create_gbuffer_set(self, views, width, height):
+        """POST /api/v1/gbuffer-sets (API key): a set of `views` views of
+        width x height, for G-buffers and paintings another renderer made.
+        Returns GbufferSet."""
+        return self._call("POST", "/api/v1/gbuffer-sets", json_body={
+            "views": _index(views, "views"), "width": _index(width, "width"),
+            "height": _index(height, "height")})
+
+    def get_gbuffer_set(self, set_id):
+        """GET /api/v1/gbuffer-sets/{id}: GbufferSet, with each view's state."""
+        return self._call("GET", "/api/v1/gbuffer-sets/" + _segment(set_id, "set_id"))
+
+    def delete_gbuffer_set(self, set_id):
+        """DELETE /api/v1/gbuffer-sets/{id}: the set and its uploads (its
+        materials stay). Returns None."""
+        self._call("DELETE", "/api/v1/gbuffer-sets/" + _segment(set_id, "set_id"))
+
+    def put_gbuffer(self, set_id, view, exr):
+        """PUT /api/v1/gbuffer-sets/{id}/views/{k}/gbuffer.exr: view k's
+        G-buffer, OpenEXR bytes or a file path with named channels N.X N.Y
+        N.Z, wo.X wo.Y wo.Z, wi.X wi.Y wi.Z (point-light methods), mask,
+        P.X P.Y P.Z, uv.U uv.V (optional). Returns GbufferView."""
+        return self._call("PUT", "/api/v1/gbuffer-sets/%s/views/%d/gbuffer.exr" % (
+            _segment(set_id, "set_id"), _index(view)), data=_read(exr, "exr"),
+            content_type="image/x-exr")
+
+    def put_gbuffer_painting(self, set_id, view, image, content_type=None):
+        """PUT /api/v1/gbuffer-sets/{id}/views/{k}/painting: view k's RGB
+        painting per unit light (PNG, JPEG, OpenEXR or HDR bytes, or a file
+        path)."""
+        data = _read(image, "image")
+        return self._call("PUT", "/api/v1/gbuffer-sets/%s/views/%d/painting" % (
+            _segment(set_id, "set_id"), _index(view)), data=data,
+            content_type=content_type or _image_type(data))
+
+    def fit_gbuffers(self, set_id, method="hf3", params=None):
+        """POST /api/v1/gbuffer-sets/{id}/fits: fit the painted views with
+        any method (as fit does). Material (201) or JobResponse (202)."""
+        if not isinstance(method, str) or not method:
+            raise ValueError("method must be a method name such as hf3")
+        if params is not None and not isinstance(params, dict):
+            raise ValueError("params must be a dict")
+        body = {"method": method}
+        if params:
+            body["params"] = params
+        return self._call("POST", "/api/v1/gbuffer-sets/%s/fits" % _segment(set_id, "set_id"),
+                          json_body=body)
+
+    def fit_gbuffers_and_wait(self, set_id, method="hf3", params=None, timeout=600.0):
+        """fit_gbuffers, then wait_job when it became a job: the Material."""
+        r = self.fit_gbuffers(set_id, method, params)
+        if "job" not in r:
+            return r
+        job = self.wait_job(r["job"]["id"], timeout=timeout)
+        return self.get_material(job["material_id"])
+
+    def list_gbuffer_materials(self, set_id):
+        """GET /api/v1/gbuffer-sets/{id}/materials: MaterialList."""
+        return self._call("GET", "/api/v1/gbuffer-sets/%s/materials" % _segment(set_id, "set_id"))

@@ -424,4 +424,34 @@ def test_10_errors(d):
         assert e.status is None and "127.0.0.1:1" in str(e)
 
 
+
+def test_11_gbuffer_sets(d):
+    """G-buffers and paintings made elsewhere: here the scene's own
+    G-buffers and base renders, uploaded to a set and fitted."""
+    c = GlintClient(d.base, api_key=KEY)
+    sc = S["scene"]["id"]
+    st = c.create_gbuffer_set(2, SIZE, SIZE)
+    validate(st, "GbufferSet.json")
+    for k in (0, 1):
+        v = c.put_gbuffer(st["id"], k, c.gbuffer(sc, VIEWS[k]))
+        validate(v, "GbufferView.json")
+        assert v["view"] == k and v["has_wi"] and v["samples_lit"] > 0, v
+        c.put_gbuffer_painting(st["id"], k, c.base_render(sc, VIEWS[k], format="exr",
+                                                          brdf=SPEC, scale=1.0))
+    got = c.get_gbuffer_set(st["id"])
+    validate(got, "GbufferSet.json")
+    assert all(v["gbuffer"] and v["painting"] for v in got["view_state"]), got
+    m = c.fit_gbuffers_and_wait(st["id"], "hf3", {"res": 16})
+    validate(m, "Material.json")
+    assert m["gbuffer_set_id"] == st["id"] and m["views_used"] == [0, 1], m
+    assert m["id"] in [x["id"] for x in c.list_gbuffer_materials(st["id"])["materials"]]
+    assert c.factors(m["id"]).startswith(PNG_SIG)
+    raises(lambda: c.gltf(m["id"]), 422, "no-scene")
+    raises(lambda: GlintClient(d.base).get_gbuffer_set(st["id"]), 401, "api-key-required")
+    raises(lambda: c.put_gbuffer(st["id"], 2, c.gbuffer(sc, 0)), 404)
+    raises(lambda: c.put_gbuffer(st["id"], 0, b"not an exr"), 422, "invalid-gbuffer")
+    assert c.delete_gbuffer_set(st["id"]) is None
+    raises(lambda: c.get_gbuffer_set(st["id"]), 404)
+
+
 run_tests(globals(), daemon_args=("--api-key", KEY, "--quiet"))
