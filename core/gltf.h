@@ -35,8 +35,8 @@
  * Each texel's relative RMS is reported (median and max).  Without the
  * mesh's texture coordinates, or with res 0, the average alone is written
  * and the extras say why.  Cost (measured, BENCHMARKS.md, a maps material
- * of 5 products on two cores other jobs shared): 0.3 to 0.45 ms per texel,
- * 0.4 to 0.8 s for the default 32 x 32, 1.1 to 2 s for 64 x 64, 7 s for
+ * of 5 products on two cores other jobs shared): 0.6 to 1 ms per texel,
+ * 0.65 to 1.15 s for the default 32 x 32, 2.7 s for 64 x 64, 9.3 s for
  * 128 x 128; the rows run on par.h's pool (no faster than one thread while
  * the machine was loaded; the result does not depend on the threads).
  * Thread-safety: reads the material only. */
