@@ -3,7 +3,9 @@
  * made elsewhere (lower-case and short channel names, no mask, unnormalized
  * vectors, no uv) reads as covered where its vectors are, normalized; what
  * cannot be read is refused naming the channel or the pixel; the content
- * hash changes with the content. */
+ * hash changes with the content.  Without wi (gbuf_from_named_ex, need_wi
+ * 0) the light's direction is left zero; gbfit_samples makes the samples
+ * of the painted views by the method's rule (gbfit.h). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,6 +13,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "gbfit.h"
 #include "gbuf.h"
 #include "img.h"
 #include "raster.h"
@@ -122,10 +125,90 @@ TEST(what_cannot_be_read_is_refused_naming_it)
     ASSERT(gbuf_read_exr("/nonexistent/view_00.exr", &g, &has_uv, &e) != 0);
 }
 
+TEST(wi_is_optional_where_the_method_needs_none)
+{
+    static const char *const names[6] = {"N.X", "N.Y", "N.Z", "wo.X", "wo.Y", "wo.Z"};
+    const float vals[4][6] = {{0, 0, 1, 0, 0.6f, 0.8f},  /* covered, seen */
+                              {0, 0, 0, 0, 0, 0},        /* background */
+                              {0, 0, 1, 0, 0, -1},       /* covered, facing away */
+                              {0, 0, 2, 0, 0, 3}};       /* covered, unnormalized */
+    img_named im = make(6, names, &vals[0][0]);
+    gbuf g;
+    glint_err e;
+    int has_uv = 1, has_wi = 1;
+    ASSERT_EQ(gbuf_from_named_ex(&im, "nowi.exr", 1, &g, &has_uv, &has_wi, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "no channel wi.X") != NULL && strstr(e.msg, "srbf") != NULL);
+    ASSERT_OK(gbuf_from_named_ex(&im, "nowi.exr", 0, &g, &has_uv, &has_wi, &e));
+    ASSERT_EQ(has_wi, 0);
+    ASSERT_EQ(has_uv, 0);
+    ASSERT(g.mask[0] && !g.mask[1] && g.mask[2] && g.mask[3]);
+    ASSERT_NEAR(g.wo[3 * 3 + 2], 1.0, 1e-7);
+    for (int i = 0; i < 12; i++)
+        ASSERT_EQ(g.wi[i], 0.0f); /* left zero: n.wi = 0 */
+    ASSERT_EQ(samples_count_rule(&g, SAMPLES_SEEN), 2);
+    ASSERT_EQ(samples_count_rule(&g, SAMPLES_LIT), 0);
+    gbuf_free(&g);
+    img_named_free(&im);
+}
+
+/* gbfit_samples: the method's rule, the painted views only, sizes checked. */
+TEST(a_set_of_gbuffers_makes_samples_by_the_methods_rule)
+{
+    static const char *const names[9] = {"N.X", "N.Y", "N.Z", "wi.X", "wi.Y", "wi.Z",
+                                         "wo.X", "wo.Y", "wo.Z"};
+    const float vals[4][9] = {{0, 0, 1, 0, 0, 1, 0, 0, 1},   /* lit and seen */
+                              {0, 0, 1, 0, 0, -1, 0, 0, 1},  /* seen, not lit */
+                              {0, 0, 1, 0, 0, 1, 0, 0, -1},  /* lit, not seen */
+                              {0, 0, 0, 0, 0, 0, 0, 0, 0}};  /* background */
+    img_named im = make(9, names, &vals[0][0]);
+    const method *lit = method_find("hf3"), *seen = method_find("srbf");
+    gbuf g[2];
+    img p[2];
+    unsigned char use[2] = {0, 1};
+    samples s;
+    float *rgb = NULL;
+    glint_err e;
+    int uv, wi;
+    ASSERT(lit && seen && lit->pattern_rule == SAMPLES_LIT && seen->pattern_rule == SAMPLES_SEEN);
+    memset(g, 0, sizeof g);
+    memset(p, 0, sizeof p);
+    ASSERT_OK(gbuf_from_named_ex(&im, "v1.exr", 1, &g[1], &uv, &wi, &e));
+    ASSERT_OK(img_alloc(&p[1], 4, 1, 3, &e));
+    for (int i = 0; i < 12; i++)
+        p[1].px[i] = 0.25f * (float)(i / 3) + 0.01f * (float)(i % 3);
+    ASSERT_OK(gbfit_samples(lit, g, p, use, 2, 0, &s, &rgb, &e));
+    ASSERT_EQ(s.n, 1);
+    ASSERT_EQ(s.view[0], 1);
+    ASSERT_EQ(s.pixel[0], 0);
+    ASSERT(!s.used[0] && s.used[1]);
+    ASSERT_NEAR(rgb[2], 0.02, 1e-7);
+    samples_free(&s);
+    free(rgb);
+    ASSERT_OK(gbfit_samples(seen, g, p, use, 2, 0, &s, &rgb, &e));
+    ASSERT_EQ(s.n, 2); /* pixels 0 and 1: seen, lit or not */
+    ASSERT_EQ(s.pixel[1], 1);
+    ASSERT_NEAR(rgb[3], 0.25, 1e-7);
+    samples_free(&s);
+    free(rgb);
+    use[1] = 0;
+    ASSERT_EQ(gbfit_samples(lit, g, p, use, 2, 0, &s, &rgb, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "painting") != NULL);
+    use[1] = 1;
+    img_free(&p[1]);
+    ASSERT_OK(img_alloc(&p[1], 2, 2, 3, &e));
+    ASSERT_EQ(gbfit_samples(lit, g, p, use, 2, 0, &s, &rgb, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "2x2") != NULL && rgb == NULL);
+    img_free(&p[1]);
+    gbuf_free(&g[1]);
+    img_named_free(&im);
+}
+
 TEST_LIST{
     TEST_ENTRY(a_written_gbuffer_reads_back_as_written),
     TEST_ENTRY(a_gbuffer_made_elsewhere_reads),
     TEST_ENTRY(what_cannot_be_read_is_refused_naming_it),
+    TEST_ENTRY(wi_is_optional_where_the_method_needs_none),
+    TEST_ENTRY(a_set_of_gbuffers_makes_samples_by_the_methods_rule),
 };
 
 TEST_MAIN()
