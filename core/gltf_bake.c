@@ -86,6 +86,18 @@ static long window_count(const bake_ctx *x, int r0, int r1, int c0, int c1)
            x->sat[(size_t)r1 * n + c0] + x->sat[(size_t)r0 * n + c0];
 }
 
+/* the pairs of a texel no sample comes near: G's (1) */
+static int far_pairs(const bake_ctx *x, gltf_pairs *P)
+{
+    memcpy(P->nn, x->G->nn, (size_t)x->G->n * sizeof *P->nn);
+    memcpy(P->wi, x->G->wi, (size_t)x->G->n * sizeof *P->wi);
+    memcpy(P->wo, x->G->wo, (size_t)x->G->n * sizeof *P->wo);
+    memcpy(P->ci, x->G->ci, (size_t)x->G->n * sizeof *P->ci);
+    memcpy(P->co, x->G->co, (size_t)x->G->n * sizeof *P->co);
+    P->n = x->G->n;
+    return 1;
+}
+
 /* w's pairs for texel (row, col): the painted directions around it, else
  * G's.  0, or 1 for a far texel. */
 static int texel_pairs(const bake_ctx *x, bake_ws *w, int row, int col)
@@ -102,15 +114,8 @@ static int texel_pairs(const bake_ctx *x, bake_ws *w, int row, int col)
                 break;
         }
     }
-    if (cnt < GLTF_BAKE_MIN_PAIRS) {
-        memcpy(P->nn, x->G->nn, (size_t)x->G->n * sizeof *P->nn);
-        memcpy(P->wi, x->G->wi, (size_t)x->G->n * sizeof *P->wi);
-        memcpy(P->wo, x->G->wo, (size_t)x->G->n * sizeof *P->wo);
-        memcpy(P->ci, x->G->ci, (size_t)x->G->n * sizeof *P->ci);
-        memcpy(P->co, x->G->co, (size_t)x->G->n * sizeof *P->co);
-        P->n = x->G->n;
-        return 1;
-    }
+    if (cnt < GLTF_BAKE_MIN_PAIRS)
+        return far_pairs(x, P);
     /* every (cnt / GLTF_BAKE_PAIRS)-th of the window's samples, row of texels by row */
     for (int r = r0; r < r1; r++)
         for (int i = x->start[(size_t)r * res + c0]; i < x->start[(size_t)r * res + c1]; i++, j++) {
@@ -135,7 +140,7 @@ static int texel_pairs(const bake_ctx *x, bake_ws *w, int row, int col)
         }
 full:
     P->n = k;
-    return 0;
+    return k ? 0 : far_pairs(x, P); /* none above the horizon (SAMPLES_SEEN): the far ones */
 }
 
 static void bake_texel(const bake_ctx *x, bake_ws *w, int row, int col)
