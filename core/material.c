@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "brdfx.h"
 #include "fsio.h"
 #include "raster.h"
 
@@ -347,9 +348,6 @@ int material_brdf_explorer(const material *m, char **text, glint_err *err)
     if (!m || !m->method)
         return glint_err_set(err, GLINT_EINVAL, "no material");
     if (!m->method->mat->brdf_explorer)
-        return glint_err_set(err, GLINT_EUNSUPPORTED,
-                             "method %s writes no BRDF Explorer .brdf file; its MERL table "
-                             "(merl.binary, glint export-merl) opens in BRDF Explorer too",
-                             m->method->name);
+        return brdfx_from_gpu(m, text, err);
     return m->method->mat->brdf_explorer(m->data, text, err);
 }

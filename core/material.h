@@ -62,8 +62,10 @@ void material_eval_preview_at(const material *m, const double uv[2], const doubl
                               const double wi[3], const double wo[3], double rgb[3]);
 
 /* The material as BRDF Explorer's analytic .brdf file (OUT: *text,
- * free()): GLINT_EUNSUPPORTED naming the alternative (the MERL table,
- * merl.h, which BRDF Explorer reads too) for methods that do not write one. */
+ * free()): the method's own (material_ops.brdf_explorer), else the one
+ * written from its GPU evaluation (brdfx.h); GLINT_EUNSUPPORTED naming the
+ * alternative (the MERL table, merl.h, which BRDF Explorer reads too) when
+ * neither can be made. */
 int material_brdf_explorer(const material *m, char **text, glint_err *err);
 
 /* 1 when the material varies over the surface (its value depends on the

@@ -712,8 +712,8 @@ class GlintClient:
 
     def brdf_explorer(self, material_id, token=None):
         """GET /api/v1/materials/{id}/material.brdf: the material as BRDF
-        Explorer's analytic .brdf text (Blob) for methods that write one
-        (hf3); GlintError 422 otherwise (use merl())."""
+        Explorer's analytic .brdf text (Blob), for every method; GlintError
+        422 when its texture is too large to embed (use merl())."""
         return self._call("GET", self._mat(material_id, "/material.brdf"), raw=True, token=token)
 
     def gltf(self, material_id, bake_res=None, token=None):

@@ -41,7 +41,7 @@ static void usage(FILE *f)
           "         [--target X,Y,Z] [--fov DEG]) [--intensity I] [--size WxH]\n"
           "         [--engine auto|egl|cpu] -o IMAGE   (auto: EGL if it works, else CPU)\n"
           "  export-shader MATDIR -o DIR         GLSL + factor texture + binding manifest\n"
-          "  export-brdf MATDIR -o FILE.brdf     BRDF Explorer's analytic .brdf (hf3)\n"
+          "  export-brdf MATDIR -o FILE.brdf     BRDF Explorer's analytic .brdf\n"
           "  export-gltf MATDIR --scene scene.json [--bake-res N] -o FILE.glb\n"
           "                                      the scene's mesh with a glTF metallic-\n"
           "                                      roughness material fitted to MATDIR,\n"

@@ -179,9 +179,13 @@ def test_02_an_anisotropic_material_is_averaged(d):
     print("X-Glint-Merl:", info)
     assert "anisotropic=1" in info and "azimuths=8" in info, info
     assert len(r.content) == 34992012
-    # no BRDF Explorer file for hf2d: the answer names the MERL table
-    r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(s["view_token"]), status=422)
-    assert "MERL" in r.json()["detail"], r.text
+    # BRDF Explorer's file for hf2d: its 2D factors embedded, no texture bound
+    r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(s["view_token"]), status=200)
+    text = r.text
+    assert text.startswith("analytic\n") and "method hf2d" in text, text[:300]
+    assert "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)" in text
+    assert "sampler2D" not in text and "texelFetch" not in text
+    assert text.count("    vec3(") >= 16 * 16, "a 2D factor is embedded"
 
 
 def test_03_access_and_errors(d):
