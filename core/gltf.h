@@ -89,6 +89,7 @@ int gltf_fit(gltf_fn fn, const void *ctx, const samples *s, gltf_pbr *out, glint
 #define GLTF_BAKE_PAIRS 256       /* direction pairs per texel, at most */
 #define GLTF_BAKE_MIN_PAIRS 48    /* the painted neighbourhood grows until it has them */
 #define GLTF_BAKE_R_LEVELS 200    /* roughnesses tabulated: (j + 1) / 200 */
+#define GLTF_BAKE_PULL 1e-3       /* towards the average, in squared relative error */
 
 /* Per-texel parameters, in the image's layout: texel t = row * res + col,
  * row 0 the top (glTF v = (row + 0.5) / res, glint v = 1 - that), u =

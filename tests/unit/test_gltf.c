@@ -15,7 +15,10 @@
  *   the glTF specification's BRDF written here (not gltf_brdf), in the
  *   same views: alpha = roughness^2 matches, alpha = roughness measurably
  *   does not.  For one material (a Cook-Torrance plastic, a metal) and for
- *   a material of maps (red plastic with gold stripes) baked per texel. */
+ *   a material of maps (red plastic with gold stripes, and squares) baked per
+ *   texel, whose textures read mirrored in s or t render worse (the
+ *   orientation of glTF's texture coordinates).  A material the same
+ *   everywhere bakes its average. */
 #include <jansson.h>
 #include <math.h>
 #include <stdint.h>
@@ -626,6 +629,59 @@ TEST(baked_textures_by_rendering_both)
     }
 }
 
+/* A material that is the same everywhere bakes textures of its average's
+ * fit, over the directions painted around each texel and, without the
+ * samples, over the hemisphere's pairs (every texel then far). */
+TEST(a_uniform_material_bakes_its_average)
+{
+    fit_params fp;
+    material m;
+    samples s;
+    gltf_pbr avg;
+    gltf_bake b;
+    glint_err e;
+    char hash[33];
+    ASSERT_OK(sv_setup(SIZE, &SC, &G, &C, &SE));
+    fit_params_default(&fp);
+    fp.res = 64;
+    ASSERT_OK(sv_fit(&method_hf3, &fp, "ct:kd=0.5/0.3/0.2,f0=0.04,rough=0.25", &SC, G, C, SE, &m));
+    scene_hash(&SC, hash);
+    ASSERT_OK(samples_build(G, SC.views, SC.nviews, NULL, hash, &s, &e));
+    ASSERT_OK(gltf_fit_material(&m, &s, &avg, &e));
+    for (int pass = 0; pass < 2; pass++) {
+        double worst[3] = {0, 0, 0};
+        ASSERT_OK(gltf_bake_material(&m, pass ? NULL : &s, &avg, 6, &b, &e));
+        for (int t = 0; t < 36; t++) {
+            for (int c = 0; c < 3; c++)
+                worst[0] = fmax(worst[0], fabs(b.base[3 * t + c] - avg.base[c]));
+            worst[1] = fmax(worst[1], fabs(b.metallic[t] - avg.metallic));
+            worst[2] = fmax(worst[2], fabs(b.roughness[t] - avg.roughness));
+        }
+        printf("  hf3 plastic baked at 6x6 over %s: %d far texels, from the average (base "
+               "%.3f/%.3f/%.3f, metallic %.3f, roughness %.3f) at most %.4f (base), %.4f "
+               "(metallic), %.4f (roughness); texel relative RMS median %.4f, max %.4f\n",
+               pass ? "the hemisphere" : "the painted directions", b.far_texels, avg.base[0],
+               avg.base[1], avg.base[2], avg.metallic, avg.roughness, worst[0], worst[1],
+               worst[2], b.rel_rms_median, b.rel_rms_max);
+        ASSERT_EQ(b.far_texels, pass ? 36 : 0);
+        ASSERT_EQ(b.nonfinite, 0);
+        if (!pass) { /* the same directions (locally) as the average's fit */
+            ASSERT_LT(worst[0], 0.02);
+            ASSERT_LT(worst[1], 0.03);
+            ASSERT_LT(worst[2], 0.08);
+            ASSERT_LT(b.rel_rms_max, 0.05);
+        } else { /* the same pairs everywhere: the same texels */
+            for (int t = 1; t < 36; t++)
+                ASSERT(b.base[3 * t] == b.base[0] && b.base[3 * t + 2] == b.base[2] &&
+                       b.metallic[t] == b.metallic[0] && b.roughness[t] == b.roughness[0] &&
+                       b.rel_rms[t] == b.rel_rms[0]);
+        }
+        gltf_bake_free(&b);
+    }
+    samples_free(&s);
+    material_free(&m);
+}
+
 TEST(baking_refuses_what_it_cannot_do)
 {
     gltf_pbr p = {{0.5, 0.5, 0.5}, 0.0, 0.5, 0, 0, 1};
@@ -664,6 +720,7 @@ TEST_LIST{
     TEST_ENTRY(the_glb_file_holds_the_mesh_and_the_material),
     TEST_ENTRY(the_roughness_convention_by_rendering_both),
     TEST_ENTRY(baked_textures_by_rendering_both),
+    TEST_ENTRY(a_uniform_material_bakes_its_average),
     TEST_ENTRY(baking_refuses_what_it_cannot_do),
 };
 
