@@ -27,7 +27,9 @@
  * (gltf_bake_material): the average's fit first, then each texel's from
  * the best of it and a coarse grid, with the material evaluated at the
  * texel's centre over the directions painted in and around the texel (at
- * least GLTF_BAKE_MIN_PAIRS, at most GLTF_BAKE_PAIRS; gltf_bake.c).  The .glb
+ * least GLTF_BAKE_MIN_PAIRS, at most GLTF_BAKE_PAIRS), pulled towards the
+ * average where those directions cannot tell metallic from roughness
+ * (GLTF_BAKE_PULL; gltf_bake.c says why and how much).  The .glb
  * then holds baseColorTexture (8-bit PNG, sRGB-encoded as glTF requires)
  * and metallicRoughnessTexture (8-bit PNG, linear: G roughness, B
  * metallic, R 1), with the factors 1 and TEXCOORD_0 the mesh's uv (glTF's
