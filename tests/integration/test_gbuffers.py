@@ -290,6 +290,10 @@ def test_14_api_bad_inputs(d):
     for what, body, code, words in cases:
         r = d.put(url % 1, headers=key(exr), data=body)
         assert r.status_code == code and words in r.text, (what, r.status_code, r.text)
+    full = S["gb"][0]
+    for cut in (4, 40, 400, len(full) // 2, len(full) - 7):  # truncated files: refused
+        r = d.put(url % 1, headers=key(exr), data=full[:cut])
+        assert r.status_code == 422 and "invalid-gbuffer" in r.text, (cut, r.status_code, r.text)
     d.put(url % 12, headers=key(exr), data=S["gb"][0], status=404)
     d.put(url % 1, headers=exr, data=S["gb"][0], status=401)
     r = d.put("/api/v1/gbuffer-sets/%s/views/1/painting" % sid, headers=key(),
