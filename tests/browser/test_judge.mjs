@@ -162,9 +162,10 @@ run({
         }).map(el => el.id || el.className);
       });
       assertEq(cut.join(','), '', `${w}x${h}: status bar items cut off`);
-      if (h >= 900) {
-        const ballBox = await page.locator('#ball').boundingBox();
-        assert(ballBox.y + ballBox.height <= h, `${w}x${h}: the material ball is above the fold`);
+      // the material ball, its controls (light, turn) and the tabs below it above the fold too
+      for (const sel of ['#ball', '#ball-row select', '#ball-row input[type=range]', '.tabs button >> nth=-1']) {
+        const box = await page.locator(sel).first().boundingBox();
+        assert(box && box.y + box.height <= h, `${w}x${h}: ${sel} is above the fold`);
       }
       await t.shot(page, `41-judge-${w}x${h}.png`);
     }
