@@ -5,6 +5,7 @@
  * else prep_acquire_samples in a job), stores the material's files under
  * blobs "materials/<id>/" before its row, and answers the material object.
  * Numerics are core's. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -173,6 +174,9 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
     memcpy(t->used, t->s.used, (size_t)t->nviews);
     t->bytes = method_fit_bytes(m, t->params, t->s.n) + 3 * (size_t)t->s.n * sizeof(float);
     if (prep_try_samples(f->cache, m, t->params, &t->s, &p, NULL) == 0) { /* in memory */
+        pthread_mutex_lock(&f->lock);
+        f->hits++;
+        pthread_mutex_unlock(&f->lock);
         t->tm = tm;
         if (!f->work || !(rc = admit_enter(f->work, t->bytes, "the fit", err))) {
             rc = gb_execute(t, p, NULL, doc, err);
@@ -191,5 +195,8 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
             return rc;
         }
     }
+    pthread_mutex_lock(&f->lock);
+    f->misses++;
+    pthread_mutex_unlock(&f->lock);
     return jobs_submit(f->jobs, "fit", set_id, gb_job, t, gb_task_free, job_id, err);
 }
