@@ -74,6 +74,13 @@ int gbfit_samples(const method *m, const gbuf *g, const img *paintings,
     if (!painted)
         return glint_err_set(err, GLINT_EINVAL,
                              "none of the %d views has a painting: give at least one", n);
+    /* auto compares candidates that vary over the surface (hf4, maps) */
+    if (!has_uv && ((m->mat && m->mat->spatial) || !strcmp(m->name, "auto")))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "method %s fits materials that vary over the surface: it needs "
+                             "texture coordinates, channels uv.U uv.V, in every painted view's "
+                             "G-buffer (a view has none; hf3, hf2d and srbf do without)",
+                             m->name);
     if ((rc = samples_begin(s, n, g[first].width, g[first].height, err)))
         return rc;
     samples_set_rule(s, m->pattern_rule);

@@ -44,7 +44,9 @@ int gbfit_gbuf_mem(const method *m, const void *data, size_t len, int max_dim,
  * size, each painting its G-buffer's size, 1, 3 or 4 channels; unused
  * entries may be zeroed: they only enter the hash); has_uv: every
  * G-buffer had uv channels.  Checks sizes (naming the view), that a view is
- * painted, and that the painted views hold a sample.  OUT: *s (has_pos =
+ * painted, that methods whose material varies over the surface
+ * (material_ops.spatial, and auto, whose candidates do) have uv, and that the painted views hold a
+ * sample.  OUT: *s (has_pos =
  * has_uv), *rgb (3 s->n values, malloc'ed). */
 int gbfit_samples(const method *m, const gbuf *g, const img *paintings,
                   const unsigned char *use, int n, int has_uv, samples *s, float **rgb,

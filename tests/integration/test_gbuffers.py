@@ -15,7 +15,9 @@ point-light method (hf3) and the environment-lit one (srbf):
   values to 1e-5 relative); the material is served like any other and its
   scene-bound exports answer 422 no-scene; bad uploads and fits are refused
   with named errors; an answered upload survives kill -9; the API key is
-  required."""
+  required; every other method (hf2d, hf4, maps, hybrid, auto) fits a set
+  as it fits the session (RMS to 1e-5 relative), and those that vary over
+  the surface refuse G-buffers without uv."""
 import json
 import os
 import struct
@@ -65,6 +67,41 @@ def close(a, b, rel, what):
     d = abs(a - b) / max(abs(a), abs(b), 1e-3)
     assert d <= rel, "%s: %r vs %r (rel %g)" % (what, a, b, rel)
     WORST[what] = max(WORST.get(what, 0.0), d)
+
+
+def test_16_api_every_method(d):
+    """The other point-light methods fit the set as they fit the session on
+    the scene; those that vary over the surface need uv, and without it
+    they are refused naming it."""
+    sid, h = S["session_of_" + os.path.join(TMP, "lit")]
+    for method, params in (("hf2d", {"res": 16, "res_2d": 8}),
+                           ("hf4", {"res": 16, "s_res": 8}),
+                           ("maps", {"res": 16, "map_res": 16, "components": 2}),
+                           ("hybrid", {}), ("auto", {})):
+        r = d.post("/api/v1/gbuffer-sets/%s/fits" % S["set"], headers=key(),
+                   json={"method": method, "params": params})
+        m = fitted(d, r, key())
+        assert m["method"] == method and m["views_used"] == list(VIEWS), m
+        ms = fitted(d, d.post("/api/v1/sessions/%s/fits" % sid, headers=h,
+                              json={"method": method, "params": params}), h)
+        print("%-6s rms_painted %.6f, through a session %.6f" % (
+            method, m["errors"]["rms_painted"], ms["errors"]["rms_painted"]))
+        close(m["errors"]["rms_painted"], ms["errors"]["rms_painted"], 1e-5, method + " rms")
+    st = new_set(d, views=1)
+    chans, w, h = exr_named.read(S["gb"][0])
+    d.put("/api/v1/gbuffer-sets/%s/views/0/gbuffer.exr" % st["id"],
+          headers=key({"Content-Type": "image/x-exr"}), status=200,
+          data=exr_named.write(w, h, {n: v for n, v in chans.items() if not n.startswith("uv.")}))
+    with open(os.path.join(TMP, "lit", "view_00.exr"), "rb") as f:
+        d.put("/api/v1/gbuffer-sets/%s/views/0/painting" % st["id"],
+              headers=key({"Content-Type": "image/x-exr"}), data=f.read(), status=200)
+    for method in ("hf4", "maps", "hybrid", "auto"):
+        r = d.post("/api/v1/gbuffer-sets/%s/fits" % st["id"], headers=key(),
+                   json={"method": method}, status=422)
+        assert "uv.U uv.V" in r.text and method in r.text, r.text
+    m = fitted(d, d.post("/api/v1/gbuffer-sets/%s/fits" % st["id"], headers=key(),
+                         json={"method": "hf2d", "params": {"res": 16, "res_2d": 8}}), key())
+    assert m["views_used"] == [0], m
 
 
 def test_99_report(d):
@@ -177,6 +214,7 @@ def session_fit(d, paint_dir, method, params):
     r = d.post("/api/v1/sessions/%s/fits" % s["id"], headers=h,
                json={"method": method, "params": params})
     m = fitted(d, r, h)
+    S["session_of_" + paint_dir] = (s["id"], h)
     return m, api_eval(d, m["id"], h)
 
 

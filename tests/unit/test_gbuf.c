@@ -190,6 +190,9 @@ TEST(a_set_of_gbuffers_makes_samples_by_the_methods_rule)
     ASSERT_NEAR(rgb[3], 0.25, 1e-7);
     samples_free(&s);
     free(rgb);
+    ASSERT(method_find("hf4") != NULL);
+    ASSERT_EQ(gbfit_samples(method_find("hf4"), g, p, use, 2, 0, &s, &rgb, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "uv.U uv.V") != NULL && rgb == NULL);
     use[1] = 0;
     ASSERT_EQ(gbfit_samples(lit, g, p, use, 2, 0, &s, &rgb, &e), GLINT_EINVAL);
     ASSERT(strstr(e.msg, "painting") != NULL);
