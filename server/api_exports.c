@@ -2,7 +2,7 @@
  * "fits, jobs, materials, methods").
  *
  *   GET /api/v1/materials/{id}/merl.binary    a MERL table (merl.h)
- *   GET /api/v1/materials/{id}/material.brdf  BRDF Explorer's analytic .brdf (hf3)
+ *   GET /api/v1/materials/{id}/material.brdf  BRDF Explorer's analytic .brdf
  *   GET /api/v1/materials/{id}/material.glb   the scene's mesh with a glTF 2.0
  *                                             metallic-roughness material (gltf.h),
  *                                             textures baked where it varies over
@@ -71,8 +71,8 @@ done:
     return r;
 }
 
-/* The material as BRDF Explorer's analytic .brdf file (methods that write
- * one: hf3; 422 naming the MERL table otherwise). */
+/* The material as BRDF Explorer's analytic .brdf file (every method; 422
+ * naming the MERL table for a texture too large to embed, brdfx.h). */
 static http_resp brdf_get(http_req *req)
 {
     material m = {0};
