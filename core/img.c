@@ -606,3 +606,47 @@ int img_to_rgb(img *im, glint_err *err)
     *im = out;
     return 0;
 }
+
+int img_raster_scale(int pw, int ph, int w, int h)
+{
+    if (w < 1 || h < 1 || pw < w || pw % w || ph % h || pw / w != ph / h)
+        return 0;
+    return pw / w;
+}
+
+int img_to_raster(const img *in, int w, int h, img *out, glint_err *err)
+{
+    int rc, s, C;
+
+    memset(out, 0, sizeof *out);
+    if ((rc = img_validate(in, err)))
+        return rc;
+    if (!(s = img_raster_scale(in->width, in->height, w, h)))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "the painting is %dx%d: expected the raster's %dx%d or a whole "
+                             "multiple of it (2x: %dx%d)",
+                             in->width, in->height, w, h, 2 * w, 2 * h);
+    C = in->channels;
+    if ((rc = img_alloc(out, w, h, C, err)))
+        return rc;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float *o = out->px + ((size_t)y * w + x) * C;
+            if (s % 2) { /* the centre pixel */
+                const float *p =
+                    in->px + ((size_t)(y * s + s / 2) * in->width + (size_t)(x * s + s / 2)) * C;
+                memcpy(o, p, (size_t)C * sizeof *o);
+                continue;
+            }
+            /* the four pixels around the centre: (x s + s/2 - 1 .. x s + s/2, same in y) */
+            for (int c = 0; c < C; c++) {
+                double acc = 0.0;
+                for (int dy = 0; dy < 2; dy++)
+                    for (int dx = 0; dx < 2; dx++)
+                        acc += in->px[((size_t)(y * s + s / 2 - 1 + dy) * in->width +
+                                       (size_t)(x * s + s / 2 - 1 + dx)) * C + (size_t)c];
+                o[c] = (float)(0.25 * acc);
+            }
+        }
+    return 0;
+}

@@ -86,6 +86,21 @@ int img_to_rgb(img *im, glint_err *err);
 
 /* Check every value is finite (GLINT_ENONFINITE naming the first bad one). */
 int img_check_finite(const img *im, glint_err *err);
+
+/* A painting made at a multiple of the raster, read at the raster: `in` is
+ * w x h (copied) or (s w) x (s h) for an integer s >= 2, and out(x, y) is
+ * in's value at the raster pixel's centre, interpolated bilinearly (s
+ * even: the mean of the 2 x 2 pixels around the centre; s odd: the centre
+ * pixel itself).  The fit samples the geometry at pixel centres, so that
+ * is the value it must match; a box over the whole pixel would blend in
+ * what the sample's geometry does not have (a silhouette, a highlight
+ * narrower than a pixel).  GLINT_EINVAL naming both sizes for any other
+ * size.  OUT: *out (allocated here). */
+int img_to_raster(const img *in, int w, int h, img *out, glint_err *err);
+
+/* The scale s of a painting of size pw x ph over a w x h raster: 1, the
+ * integer s >= 2 with pw = s w and ph = s h, or 0 for any other size. */
+int img_raster_scale(int pw, int ph, int w, int h);
 /* Fill an image's holes in place (OpenImageIO's push-pull): the last
  * channel is the coverage in [0,1] and the others are premultiplied by it;
  * afterwards the coverage is 1 everywhere and each uncovered pixel holds a

@@ -7,7 +7,7 @@
  *   GET    /api/v1/scenes                                                   (API key)
  *   GET    /api/v1/scenes/{id}
  *   DELETE /api/v1/scenes/{id}                                              (API key)
- *   GET    /api/v1/scenes/{id}/views/{k}/base.png[?format=exr&brdf=&scale=&intensity=]
+ *   GET    /api/v1/scenes/{id}/views/{k}/base.png[?format=exr&brdf=&scale=&intensity=&size=]
  *   GET    /api/v1/scenes/{id}/views/{k}/gbuffer.exr
  *
  * Reading a scene or mesh by id needs no key: ids are 128 random bits.
@@ -37,6 +37,7 @@
 #include "store.h"
 
 #define API_DEFAULT_SIZE 128
+#define API_MAX_PAINT_SCALE 4
 #define API_BASE_BRDF "lambert:kd=0.6"
 /* Base renders show kd cos(theta_i) I: the Lambert 1/pi undone by the scale. */
 #define API_BASE_SCALE 3.14159265358979323846
@@ -223,6 +224,29 @@ static int scene_size(app *a, const json_t *body, long long *w, long long *h, gl
     return 0;
 }
 
+/* The painting's scale of a creation request: "paint_scale", 1 (the
+ * default: paint at the raster) to API_MAX_PAINT_SCALE, with the painted
+ * image within max_image_dim.  OUT: *s. */
+static int scene_paint_scale(app *a, const json_t *body, int w, int h, int *s, glint_err *e)
+{
+    json_t *j = json_object_get(body, "paint_scale");
+    long long v;
+    *s = 1;
+    if (!j)
+        return 0;
+    if (!json_is_integer(j) || (v = json_integer_value(j)) < 1 || v > API_MAX_PAINT_SCALE)
+        return api_reject(e, GLINT_EINVAL, "invalid-input",
+                          "paint_scale: expected an integer 1..%d (the painted image is that "
+                          "many times the raster a side)", API_MAX_PAINT_SCALE);
+    if (v * (w > h ? w : h) > a->cfg.lim.max_image_dim)
+        return api_reject(e, GLINT_EINVAL, "image-too-large",
+                          "paint_scale %lld makes %lldx%lld paintings, beyond the limit of %d "
+                          "pixels a side (max_image_dim, glintd --max-image-dim)",
+                          v, v * w, v * h, a->cfg.lim.max_image_dim);
+    *s = (int)v;
+    return 0;
+}
+
 /* The mesh of a creation request: a built-in name or an uploaded mesh id
  * (checked to exist).  OUT: *builtin, *mesh_id (borrowed from body). */
 static int scene_mesh(app *a, const json_t *body, const char **builtin, const char **mesh_id,
@@ -350,7 +374,7 @@ static int scene_build(app *a, const json_t *body, scene *sc, char *mesh_label,
                        size_t label_len, const char **view_set, glint_err *e)
 {
     static const char *const keys[] = {"mesh", "mesh_id", "width", "height", "views",
-                                       "light_angles", "base", NULL};
+                                       "light_angles", "base", "paint_scale", NULL};
     const char *k, *builtin, *mesh_id;
     long long width, height;
     json_t *v;
@@ -364,7 +388,7 @@ static int scene_build(app *a, const json_t *body, scene *sc, char *mesh_label,
         if (!known)
             return api_reject(e, GLINT_EINVAL, "invalid-input",
                               "unknown key \"%.64s\" (known: mesh, mesh_id, width, height, "
-                              "views, light_angles, base)", k);
+                              "views, light_angles, base, paint_scale)", k);
     }
     if ((rc = scene_mesh(a, body, &builtin, &mesh_id, e)) ||
         (rc = scene_size(a, body, &width, &height, e)) ||
@@ -499,7 +523,7 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
     json_t *base_env = NULL;
     long *counts = NULL, total = 0;
     scene sc;
-    int rc;
+    int rc, ps = 1;
 
     memset(&sc, 0, sizeof sc);
     if ((rc = auth_require_key(req, e)) || (rc = auth_owner_key(req, &owner, e)))
@@ -512,7 +536,8 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
     if ((rc = api_body_json(req, &body, e)))
         return rc;
     if ((rc = scene_base_settings(body, &base_spec, &base_scale, &base_env, e)) ||
-        (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)))
+        (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)) ||
+        (rc = scene_paint_scale(a, body, sc.width, sc.height, &ps, e)))
         goto done;
     /* samples per view: what a fit of this scene will see */
     if (!(counts = calloc((size_t)sc.nviews, sizeof *counts))) {
@@ -532,7 +557,10 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
         owner = made;
     if (!(doc = scene_doc(&sc, id, label, view_set, counts, total, base_spec, base_scale,
                           base_env, e)) ||
-        json_object_set_new(doc, "owner", json_string(owner))) {
+        json_object_set_new(doc, "owner", json_string(owner)) ||
+        json_object_set_new(doc, "paint_scale", json_integer(ps)) ||
+        json_object_set_new(doc, "paint_width", json_integer((json_int_t)ps * sc.width)) ||
+        json_object_set_new(doc, "paint_height", json_integer((json_int_t)ps * sc.height))) {
         rc = doc ? glint_err_set(e, GLINT_ENOMEM, "out of memory") : e->code;
         goto done;
     }
@@ -665,8 +693,10 @@ static int positive_query(const char *text, double *out)
     return 0;
 }
 
-/* A base render with other settings than the scene's (not cached). */
-static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, glint_err *e)
+/* A base render with other settings than the scene's (not cached), at
+ * `ps` times the raster a side. */
+static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, img *im,
+                             glint_err *e)
 {
     app *a = req->app;
     const char *spec = http_query(req, "brdf"), *scale_q = http_query(req, "scale"),
@@ -677,7 +707,7 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, g
     scene_view view;
     render_env env;
     size_t bytes;
-    int rc, has_env;
+    int rc, has_env, W, H;
 
     if ((rc = api_env_query(req, &env, &has_env, e)))
         return rc;
@@ -697,14 +727,16 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, g
     if (int_q && positive_query(int_q, &view.light_intensity))
         rc = api_reject(e, GLINT_EINVAL, "invalid-input",
                         "intensity \"%.32s\" is not a number in (0, 1e6]", int_q);
-    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height) +
-            (has_env ? (size_t)sc->width * sc->height * 8 * (size_t)((env.lights + 63) / 64) : 0);
+    W = sc->width * ps;
+    H = sc->height * ps;
+    bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
+            (has_env ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
     if (!rc && !(rc = admit_enter(a->work, bytes, "the base render", e))) {
-        /* on the CPU: the pixels are exactly those a painting is sampled at */
+        /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
         if ((rc = has_env ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
-                                            &view, sc->width, sc->height, im, NULL, NULL, e)
-                          : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, sc->width,
-                                        sc->height, spec, scale, im, NULL, e)))
+                                            &view, W, H, im, NULL, NULL, e)
+                          : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, W, H, spec,
+                                        scale, im, NULL, e)))
             glint_err_prefix(e, "rendering");
         admit_leave(a->work, bytes);
     }
@@ -715,25 +747,29 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, img *im, g
 static http_resp scene_base(http_req *req)
 {
     app *a = req->app;
-    const char *fmt = http_query(req, "format");
+    const char *fmt = http_query(req, "format"), *size = http_query(req, "size");
     json_t *doc = NULL;
     http_resp r;
     glint_err e;
     img im;
-    int k, rc;
+    int k, rc, ps;
 
     memset(&im, 0, sizeof im);
     if (!fmt)
         fmt = "png";
     if (strcmp(fmt, "png") && strcmp(fmt, "exr"))
         return http_problem(422, "invalid-input", "format \"%.16s\" is not png or exr", fmt);
+    if (size && strcmp(size, "paint") && strcmp(size, "raster"))
+        return http_problem(422, "invalid-input", "size \"%.16s\" is not paint or raster", size);
     if (scene_view_arg(req, &doc, &k, &e))
         return api_error(&e);
+    /* the painting's size (the scene's paint_scale times the raster), or the raster's */
+    ps = size && !strcmp(size, "raster") ? 1 : scenes_paint_scale(doc);
     if (!http_query(req, "brdf") && !http_query(req, "scale") && !http_query(req, "intensity") &&
         !http_query(req, "env"))
-        rc = scenes_base(a, req->param[0], k, &im, &e); /* what every session paints over */
+        rc = scenes_base(a, req->param[0], k, ps, &im, &e); /* what every session paints over */
     else
-        rc = scene_base_custom(req, doc, k, &im, &e);
+        rc = scene_base_custom(req, doc, k, ps, &im, &e);
     r = rc ? api_fail(&e, "base render") : image_response(&im, fmt);
     img_free(&im);
     json_decref(doc);

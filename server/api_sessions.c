@@ -63,9 +63,10 @@ static pthread_mutex_t *session_lock(const char *id)
 /* ---- helpers -------------------------------------------------------------------- */
 
 /* The session's scene doc and the view index of the path.  OUT: *scene_doc,
- * *k, *w, *h. */
+ * *k, *w, *h: the size of the view's image (the painting: the scene's
+ * paint_scale times its raster), *ps: that scale. */
 static int session_view(http_req *req, const json_t *sdoc, json_t **scene_doc, int *k, int *w,
-                        int *h, glint_err *e)
+                        int *h, int *ps, glint_err *e)
 {
     app *a = req->app;
     const char *scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
@@ -85,15 +86,16 @@ static int session_view(http_req *req, const json_t *sdoc, json_t **scene_doc, i
                           "session %s has no view \"%.16s\" (views 0..%d)", req->param[0],
                           req->param[1], n - 1);
     }
-    *w = (int)json_integer_value(json_object_get(*scene_doc, "width"));
-    *h = (int)json_integer_value(json_object_get(*scene_doc, "height"));
+    *ps = scenes_paint_scale(*scene_doc);
+    *w = *ps * (int)json_integer_value(json_object_get(*scene_doc, "width"));
+    *h = *ps * (int)json_integer_value(json_object_get(*scene_doc, "height"));
     return 0;
 }
 
 /* The current image of a view: its painting, or the base render.  OUT:
  * *im (RGB), *version (0 for the base). */
-static int view_current(app *a, const char *session, const char *scene_id, int k, img *im,
-                        int64_t *version, glint_err *e)
+static int view_current(app *a, const char *session, const char *scene_id, int k, int ps,
+                        img *im, int64_t *version, glint_err *e)
 {
     void *exr = NULL;
     size_t len = 0;
@@ -127,7 +129,7 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
     rc = store_painting_get(a->store, session, k, &exr, &len, version, e);
     if (rc == GLINT_ENOTFOUND) {
         *version = 0;
-        return scenes_base(a, scene_id, k, im, e);
+        return scenes_base(a, scene_id, k, ps, im, e);
     }
     if (rc)
         return rc;
@@ -331,7 +333,10 @@ static int painting_check_type(http_req *req, int w, int h, glint_err *e)
     return 0;
 }
 
-static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_err *e)
+/* Decode and check an uploaded painting: the view's image size w x h (the
+ * scene's paint_scale ps times its raster), or the raster's (accepted at
+ * any ps: the fit reads both, img_to_raster). */
+static int painting_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err *e)
 {
     app *a = req->app;
     double t0;
@@ -366,11 +371,17 @@ static int painting_decode(http_req *req, int k, int w, int h, img *im, glint_er
                         "the painting is %dx%d, beyond the limit of %d pixels a side "
                         "(max_image_dim, glintd --max-image-dim); this view expects %dx%d",
                         im->width, im->height, a->cfg.lim.max_image_dim, w, h);
-    else if (im->width != w || im->height != h)
-        rc = api_reject(e, GLINT_EINVAL, "wrong-size",
-                        "the painting is %dx%d; view %d of this scene expects exactly %dx%d "
-                        "(the scene's raster size)",
-                        im->width, im->height, k, w, h);
+    else if ((im->width != w || im->height != h) &&
+             (im->width != w / ps || im->height != h / ps))
+        rc = ps > 1 ? api_reject(e, GLINT_EINVAL, "wrong-size",
+                                 "the painting is %dx%d; view %d of this scene expects %dx%d "
+                                 "(the painting's size: %d times the raster) or %dx%d (the "
+                                 "raster's)",
+                                 im->width, im->height, k, w, h, ps, w / ps, h / ps)
+                    : api_reject(e, GLINT_EINVAL, "wrong-size",
+                                 "the painting is %dx%d; view %d of this scene expects exactly "
+                                 "%dx%d (the scene's raster size)",
+                                 im->width, im->height, k, w, h);
     else if ((rc = img_to_rgb(im, e)) || (rc = img_check_finite(im, e)))
         rc = rc == GLINT_ENONFINITE ? api_reject(e, rc, "non-finite",
                                                  "the painting has non-finite pixels: %.400s",
@@ -426,13 +437,13 @@ static http_resp painting_put(http_req *req)
     int64_t version = 0, seq = 0;
     glint_err e;
     double t0 = glint_now();
-    int k, w, h, rc;
+    int k, w, h, ps, rc;
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
-        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &ps, &e)))
         goto done;
     srv_timing_step(&req->timing, "session", t0);
-    if ((rc = painting_decode(req, k, w, h, &im, &e)))
+    if ((rc = painting_decode(req, k, w, h, ps, &im, &e)))
         goto done;
     /* the upload is stored as it came: it was decoded and checked above,
      * and decodes to the same pixels whenever it is read */
@@ -472,14 +483,14 @@ static http_resp painting_get(http_req *req)
     char vbuf[32];
     glint_err e;
     img im = {0};
-    int k, w, h, rc;
+    int k, w, h, ps, rc;
 
     if (!fmt)
         fmt = "png";
     if (strcmp(fmt, "png") && strcmp(fmt, "exr"))
         return http_problem(422, "invalid-input", "format \"%.16s\" is not png or exr", fmt);
     if ((rc = api_session(req, req->param[0], 0, &sdoc, &e)) ||
-        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &ps, &e)))
         goto done;
     rc = store_painting_get(a->store, req->param[0], k, &exr, &len, &version, &e);
     if (rc == 0 && strcmp(fmt, "exr") == 0 && len >= 4 && memcmp(exr, "\x76\x2f\x31\x01", 4) == 0) {
@@ -487,7 +498,8 @@ static http_resp painting_get(http_req *req)
         exr = NULL;
     } else if (rc == 0 || rc == GLINT_ENOTFOUND) {
         const char *scene_id = json_string_value(json_object_get(sdoc, "scene_id"));
-        rc = rc == 0 ? img_read_mem(exr, len, &im, &e) : scenes_base(a, scene_id, k, &im, &e);
+        rc = rc == 0 ? img_read_mem(exr, len, &im, &e)
+                     : scenes_base(a, scene_id, k, ps, &im, &e);
         if (rc || (rc = img_to_rgb(&im, &e)) || (rc = img_write_mem(fmt, &im, &data, &len, &e))) {
             glint_err_prefix(&e, "painting");
             goto done;
@@ -573,7 +585,7 @@ static http_resp strokes_post(http_req *req)
     app *a = req->app;
     json_t *sdoc = NULL, *scene_doc = NULL, *canon = NULL;
     stroke *list = NULL;
-    int n = 0, k, w, h, rc, need_base = 0, locked = 0;
+    int n = 0, k, w, h, ps, rc, need_base = 0, locked = 0;
     img cur = {0}, base = {0};
     void *exr = NULL;
     size_t len = 0;
@@ -585,7 +597,7 @@ static http_resp strokes_post(http_req *req)
     double t0 = glint_now();
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
-        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &e)))
+        (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &ps, &e)))
         goto done;
     t0 = srv_timing_step(&req->timing, "session", t0);
     if ((rc = strokes_parse(req, &list, &n, &canon, &e)))
@@ -611,18 +623,21 @@ static http_resp strokes_post(http_req *req)
     pthread_mutex_lock(session_lock(req->param[0]));
     locked = 1;
     t0 = srv_timing_step(&req->timing, "lock", t0);
-    if ((rc = view_current(a, req->param[0], scene_id, k, &cur, &version, &e))) {
+    if ((rc = view_current(a, req->param[0], scene_id, k, ps, &cur, &version, &e))) {
         glint_err_prefix(&e, "reading the view's image");
         goto done;
     }
     t0 = srv_timing_step(&req->timing, "read", t0);
-    if (need_base && (rc = scenes_base(a, scene_id, k, &base, &e))) {
-        glint_err_prefix(&e, "base render");
-        goto done;
-    }
-    if (cur.width != w || cur.height != h) {
+    /* the image is the painting's size, or the raster's where a painting of
+     * that size was uploaded: strokes are in its pixels either way */
+    if ((cur.width != w || cur.height != h) && (cur.width != w / ps || cur.height != h / ps)) {
         rc = glint_err_set(&e, GLINT_EINTERNAL, "the stored image of view %d is %dx%d, not %dx%d",
                            k, cur.width, cur.height, w, h);
+        goto done;
+    }
+    if (need_base &&
+        (rc = scenes_base(a, scene_id, k, cur.width == w ? ps : 1, &base, &e))) {
+        glint_err_prefix(&e, "base render");
         goto done;
     }
     if ((rc = stroke_apply_list(list, n, &cur, need_base ? &base : NULL, &pixels, &e))) {

@@ -215,11 +215,21 @@ static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *
         if (t->pins[v]) /* shared read-only with the memo */
             t->paintings[v] = *memo_painting_img(t->pins[v]);
         if (t->paintings[v].width != sc->width || t->paintings[v].height != sc->height) {
-            glint_err_set(err, GLINT_EINVAL,
-                          "painting of view %d is %dx%d, the scene's raster is %dx%d", v,
-                          t->paintings[v].width, t->paintings[v].height, sc->width, sc->height);
-            rc = glint_err_kind(err, "invalid-painting");
-            goto done;
+            /* painted at a multiple of the raster (the scene's paint_scale):
+             * the fit reads it at the raster's pixel centres (img.h) */
+            img r;
+            if (img_to_raster(&t->paintings[v], sc->width, sc->height, &r, err)) {
+                glint_err_prefix(err, "painting of view %d", v);
+                rc = glint_err_kind(err, "invalid-painting");
+                goto done;
+            }
+            if (t->pins[v]) {
+                memo_painting_release(t->f->memo, t->pins[v]);
+                t->pins[v] = NULL;
+            } else {
+                img_free(&t->paintings[v]);
+            }
+            t->paintings[v] = r;
         }
         t->use[v] = 1;
         t->versions[v] = listed[v];

@@ -76,7 +76,13 @@ done:
     return rc;
 }
 
-int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
+int scenes_paint_scale(const json_t *doc)
+{
+    json_int_t s = json_integer_value(json_object_get(doc, "paint_scale"));
+    return s >= 1 && s <= 16 ? (int)s : 1;
+}
+
+int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err *err)
 {
     char name[128];
     void *data = NULL;
@@ -85,14 +91,19 @@ int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
     cache_entry *se = NULL;
     const scene *sc;
     const char *spec;
-    double scale;
+    double bscale;
     render_env env;
-    int rc;
+    int rc, W, H;
 
     memset(out, 0, sizeof *out);
     if (!glint_id_valid(id))
         return glint_err_set(err, GLINT_ENOTFOUND, "no scene with id \"%.40s\"", id ? id : "");
-    snprintf(name, sizeof name, "scenes/%s/base%d.exr", id, view);
+    if (scale < 1 || scale > 16)
+        return glint_err_set(err, GLINT_EINVAL, "base render at scale %d: expected 1..16", scale);
+    if (scale == 1)
+        snprintf(name, sizeof name, "scenes/%s/base%d.exr", id, view);
+    else
+        snprintf(name, sizeof name, "scenes/%s/base%dx%d.exr", id, view, scale);
     if (view >= 0 && store_blob_get(a->store, name, &data, &len, NULL) == 0) {
         rc = img_read_mem(data, len, out, NULL);
         free(data);
@@ -112,8 +123,8 @@ int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
     }
     base = json_object_get(doc, "base");
     spec = json_string_value(json_object_get(base, "brdf"));
-    scale = json_number_value(json_object_get(base, "scale"));
-    if (!spec || !(scale > 0.0)) {
+    bscale = json_number_value(json_object_get(base, "scale"));
+    if (!spec || !(bscale > 0.0)) {
         rc = glint_err_set(err, GLINT_EFORMAT, "scene %s: stored document has no base brdf/scale",
                            id);
         goto done;
@@ -121,15 +132,17 @@ int scenes_base(app *a, const char *id, int view, img *out, glint_err *err)
     jenv = json_object_get(base, "env");
     if (jenv && (rc = api_env_parse(jenv, "base.env", &env, err)))
         goto done;
-    bytes = render_peak_bytes(RENDER_CPU, 1, sc->width, sc->height) +
-            (jenv ? (size_t)sc->width * sc->height * 8 * (size_t)((env.lights + 63) / 64) : 0);
+    W = sc->width * scale;
+    H = sc->height * scale;
+    bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
+            (jenv ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
     if ((rc = admit_enter(a->work, bytes, "the base render", err)))
         goto done;
-    /* on the CPU: the pixels are exactly those a painting is sampled at */
-    rc = jenv ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
-                                &sc->views[view], sc->width, sc->height, out, NULL, NULL, err)
-              : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], sc->width,
-                            sc->height, spec, scale, out, NULL, err);
+    /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
+    rc = jenv ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, bscale, &env,
+                                &sc->views[view], W, H, out, NULL, NULL, err)
+              : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], W, H, spec,
+                            bscale, out, NULL, err);
     admit_leave(a->work, bytes);
     if (rc)
         goto done;

@@ -18,11 +18,17 @@
 int scenes_load(struct store *st, const char *id, const scene **out, glint_err *err);
 void scenes_unload(const scene *sc);
 
-/* The base render of view `view`: rendered on the CPU (the reference, so it
- * never changes for a scene) with the BRDF and scale of the scene's
- * doc["base"], cached as the blob "scenes/<id>/base<view>.exr".
- * GLINT_ENOTFOUND for an unknown scene or view.  OUT: *out, float RGB of
- * the raster's size (img_free). */
-int scenes_base(app *a, const char *id, int view, img *out, glint_err *err);
+/* The base render of view `view` at `scale` times the raster a side (1, or
+ * the scene's paint_scale: the image its sessions paint over): rendered
+ * on the CPU (the reference, so it never changes for a scene) with the
+ * BRDF and scale of the scene's doc["base"], cached as the blob
+ * "scenes/<id>/base<view>.exr" ("base<view>x<scale>.exr" above 1).
+ * GLINT_ENOTFOUND for an unknown scene or view.  OUT: *out, float RGB
+ * (img_free). */
+int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err *err);
+
+/* The painting's scale of a scene document: its "paint_scale" (scenes made
+ * before it existed: 1). */
+int scenes_paint_scale(const json_t *doc);
 
 #endif

@@ -158,7 +158,10 @@ function bindStart() {
   }).catch(() => { /* the point lights stay available */ });
   $('create-btn').onclick = async () => {
     const size = +$('size-sel').value;
-    const spec = { width: size, height: size, views: $('viewset-sel').value };
+    // paint at a multiple of the raster (the fit still samples the raster):
+    // the painted image up to 512 a side, at most 4x
+    const spec = { width: size, height: size, views: $('viewset-sel').value,
+                   paint_scale: Math.max(1, Math.min(4, Math.floor(512 / size))) };
     if ($('base-light-sel').value) spec.base = { env: { spec: $('base-light-sel').value } };
     if (mesh === 'upload') {
       if (!meshId) { toast('No mesh yet', 'Upload a mesh file first, or pick a built-in shape.', 'error'); return; }
@@ -263,7 +266,7 @@ function setupStudioUI(S) {
   const sc = S.scene;
   $('crumbs').innerHTML = '';
   const b = document.createElement('b'); b.textContent = sc.mesh;
-  $('crumbs').append(b, document.createTextNode(` ${sc.width}×${sc.height} · ${sc.views.length} views · session ${S.id.slice(0, 8)}` + (S.canPaint ? '' : ' · view only')));
+  $('crumbs').append(b, document.createTextNode(` ${sc.width}×${sc.height}${sc.paint_scale > 1 ? ` (painted at ${sc.paint_width})` : ''} · ${sc.views.length} views · session ${S.id.slice(0, 8)}` + (S.canPaint ? '' : ' · view only')));
   $('share-btn').classList.remove('hidden');
   $('readonly-badge').classList.toggle('hidden', S.canPaint);
   bindGuide(S.canPaint);
@@ -281,7 +284,7 @@ function setupStudioUI(S) {
     const bt = document.createElement('button');
     bt.className = 'thumb'; bt.dataset.k = v.k;
     bt.title = `view ${v.k} (${v.k < 9 ? 'key ' + (v.k + 1) : 'arrows'}) · ${sc.views[v.k].samples} samples`;
-    const c = document.createElement('canvas'); c.width = sc.width; c.height = sc.height;
+    const c = document.createElement('canvas'); c.width = sc.paint_width || sc.width; c.height = sc.paint_height || sc.height;
     const lab = document.createElement('span'); lab.className = 'k'; lab.textContent = v.k;
     const dot = document.createElement('span'); dot.className = 'dot'; dot.title = 'painted';
     bt.append(c, lab, dot);

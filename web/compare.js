@@ -8,7 +8,7 @@
 // judge's render of the material for that view (the CPU renderer, the
 // rasterizer that defines the fit's samples).
 
-import { blit, to8 } from './image.js';
+import { blit, resizeImage, to8 } from './image.js';
 
 const $ = id => document.getElementById(id);
 const lum = (d, i) => 0.2126 * d[3 * i] + 0.7152 * d[3 * i + 1] + 0.0722 * d[3 * i + 2];
@@ -76,9 +76,10 @@ export class Compare {
   }
 
   draw() {
-    const c = $('overlay-fit'), S = this.session, v = S.views[this.k], f = this.fitted;
-    if (!f || !v || !v.conf || !this.mode) return;
+    const c = $('overlay-fit'), S = this.session, v = S.views[this.k];
+    if (!this.fitted || !v || !v.conf || !this.mode) return;
     const { w, h } = v.conf;
+    const f = resizeImage(this.fitted, w, h);   // a painting uploaded at the raster's size
     if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
     const g = c.getContext('2d');
     c.classList.remove('hidden');

@@ -5,7 +5,7 @@
 // the material for that view, with a difference image), the three factor
 // curves (factors.exr) and the export links.
 
-import { decodeImage } from './image.js';
+import { decodeImage, resizeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
 import { SurfacePanel } from './surface.js';
@@ -429,11 +429,12 @@ export class Judge extends EventTarget {
     }
     if (!square) { $('err-summary').innerHTML += '<br>per-view errors need a square raster (previews are square)'; return; }
     await Promise.all(used.map(async k => {
-      const fitted = await this.fittedFor(k, mat);
+      let fitted = await this.fittedFor(k, mat);
       if (mat !== this.mat) return;
       const v = S.views[k];
       if (!v.conf) await S.loadViews([k]);
-      const painted = v.conf, base = v.base;
+      const painted = v.conf, base = resizeImage(v.base, painted.w, painted.h);
+      if (fitted.w !== painted.w || fitted.h !== painted.h) fitted = resizeImage(fitted, painted.w, painted.h);
       let s2 = 0, n = 0, mx = 0;
       const diff = new Float32Array(painted.w * painted.h);
       for (let i = 0; i < painted.w * painted.h; i++) {
@@ -468,10 +469,10 @@ export class Judge extends EventTarget {
   }
 
   // The material rendered for view k as the fit saw it: the CPU renderer at
-  // the raster's size, under the fit's environment for srbf (linear RGB).
+  // the painting's size, under the fit's environment for srbf (linear RGB).
   async fittedFor(k, mat = this.mat) {
     const sc = this.session.scene;
-    const q = { view: String(k), renderer: 'cpu', size: String(sc.width) };
+    const q = { view: String(k), renderer: 'cpu', size: String(sc.paint_width || sc.width) };
     if (mat.method === 'srbf') Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
                                                   lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
     const r = await this.api.materialFile(mat.id, 'preview.exr', q);

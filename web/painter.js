@@ -38,7 +38,10 @@ export class Painter extends EventTarget {
     const first = this.k < 0;
     this.cancelLive();
     this.k = k;
-    const { w, h } = this.session.scene.width ? { w: this.session.scene.width, h: this.session.scene.height } : v.disp;
+    // the canvas is the view's image: the painting's size (the scene's
+    // paint_scale times its raster), or the raster's for a painting uploaded so
+    const sc = this.session.scene;
+    const { w, h } = v.disp ? { w: v.disp.w, h: v.disp.h } : { w: sc.paint_width || sc.width, h: sc.paint_height || sc.height };
     for (const c of [this.el.paint, this.el.base, this.el.photo]) { c.width = w; c.height = h; }
     this.el.stage.style.width = w + 'px'; this.el.stage.style.height = h + 'px';
     this.redraw();

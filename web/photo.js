@@ -28,7 +28,7 @@ export async function stagePhoto(file) {
 }
 
 function photoImage() {
-  const S = state.session, w = S.scene.width, h = S.scene.height;
+  const S = state.session, w = S.scene.paint_width || S.scene.width, h = S.scene.paint_height || S.scene.height;
   const src = state.photo.source;
   if (src.exr) return resizeImage(src.exr, w, h);
   return bitmapToImage(src.bmp, w, h, $('photo-fit').value);

@@ -44,13 +44,33 @@ export function texLookup(tex, u, v, flip, out) {
 }
 
 // The painting of one view: base times the texture where the mask is set.
+// The base may be s times the G-buffer's size a side (a scene painted above
+// its raster): each painted pixel then reads (u, v) interpolated bilinearly
+// between the G-buffer's pixel centres where all four are on the surface
+// and on one side of any seam of the (u, v) layout, the nearest G-buffer
+// pixel elsewhere.
 export function paintThrough(base, uv, tex, flip) {
   const out = newImage(base.w, base.h), rgb = [0, 0, 0];
   out.data.set(base.data);
-  if (uv.w !== base.w || uv.h !== base.h) throw new Error(`the G-buffer is ${uv.w}x${uv.h}, the view ${base.w}x${base.h}`);
-  for (let p = 0; p < base.w * base.h; p++) {
-    if (!(uv.data[3 * p + 2] > 0.5)) continue;
-    texLookup(tex, uv.data[3 * p], uv.data[3 * p + 1], flip, rgb);
+  const s = base.w / uv.w;
+  if (!(s >= 1 && Number.isInteger(s) && base.h === s * uv.h)) throw new Error(`the G-buffer is ${uv.w}x${uv.h}, the view ${base.w}x${base.h}`);
+  const on = i => uv.data[3 * i + 2] > 0.5;
+  for (let y = 0; y < base.h; y++) for (let x = 0; x < base.w; x++) {
+    const p = y * base.w + x, near = Math.floor(y / s) * uv.w + Math.floor(x / s);
+    if (!on(near)) continue;
+    let u = uv.data[3 * near], v = uv.data[3 * near + 1];
+    if (s > 1) {
+      const fx = Math.min(Math.max((x + 0.5) / s - 0.5, 0), uv.w - 1), fy = Math.min(Math.max((y + 0.5) / s - 0.5, 0), uv.h - 1);
+      const i = Math.min(Math.floor(fx), uv.w - 2), j = Math.min(Math.floor(fy), uv.h - 2), tx = fx - i, ty = fy - j;
+      const q = [j * uv.w + i, j * uv.w + i + 1, (j + 1) * uv.w + i, (j + 1) * uv.w + i + 1];
+      const span = c => Math.max(...q.map(a => uv.data[3 * a + c])) - Math.min(...q.map(a => uv.data[3 * a + c]));
+      if (q.every(on) && span(0) < 0.25 && span(1) < 0.25) {   // not across a seam of the (u, v) layout
+        const w4 = [(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty];
+        u = 0; v = 0;
+        for (let a = 0; a < 4; a++) { u += w4[a] * uv.data[3 * q[a]]; v += w4[a] * uv.data[3 * q[a] + 1]; }
+      }
+    }
+    texLookup(tex, u, v, flip, rgb);
     for (let c = 0; c < 3; c++) out.data[3 * p + c] = base.data[3 * p + c] * rgb[c];
   }
   return out;

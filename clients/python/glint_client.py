@@ -442,20 +442,22 @@ class GlintClient:
     # ---- scenes ---------------------------------------------------------
 
     def create_scene(self, mesh=None, mesh_id=None, width=None, height=None, views=None,
-                     light_angles=None, base=None, owner_key=None):
+                     light_angles=None, base=None, owner_key=None, paint_scale=None):
         """POST /api/v1/scenes: a scene on a built-in mesh (sphere, torus,
         teapot; the daemon's default is sphere) or an uploaded mesh_id.
         views: "ico12", "ico20" or a list of {eye, light, ...}; base: {brdf,
-        scale, env}. Returns Scene, whose owner_key (the one sent, or one the
-        daemon made) is shown only here."""
+        scale, env}; paint_scale: paint at 1..4 times the raster a side (the
+        fit still samples the raster). Returns Scene, whose owner_key (the
+        one sent, or one the daemon made) is shown only here."""
         if mesh is not None and mesh_id is not None:
             raise ValueError("give mesh or mesh_id, not both")
-        for name, v in (("width", width), ("height", height)):
+        for name, v in (("width", width), ("height", height), ("paint_scale", paint_scale)):
             if v is not None:
                 _index(v, name)
         body = {k: v for k, v in (("mesh", mesh), ("mesh_id", mesh_id), ("width", width),
                                    ("height", height), ("views", views),
-                                   ("light_angles", light_angles), ("base", base))
+                                   ("light_angles", light_angles), ("base", base),
+                                   ("paint_scale", paint_scale))
                 if v is not None}
         return self._call("POST", "/api/v1/scenes", json_body=body, owner_key=owner_key)
 
@@ -475,14 +477,16 @@ class GlintClient:
 
     def base_render(self, scene_id, view, format="png", brdf=None, scale=None, intensity=None,
                     env=None, env_rotation=None, env_intensity=None, lights=None, shadows=None,
-                    background=None):
+                    background=None, size=None):
         """GET /api/v1/scenes/{id}/views/{k}/base.png: a view's base render
         (Blob, PNG or float RGB OpenEXR); with brdf (a core spec such as
         ct:rough=0.3,kd=0.5), scale or intensity a render of that BRDF; with
         env an environment lights it (env_rotation degrees, env_intensity,
-        lights, shadows, background as booleans)."""
+        lights, shadows, background as booleans); size "paint" (the
+        painting's size, the default) or "raster"."""
         q = {"format": _choice(format, IMAGE_FORMATS, "format"), "brdf": brdf, "scale": scale,
-             "intensity": intensity}
+             "intensity": intensity,
+             "size": None if size is None else _choice(size, ("paint", "raster"), "size")}
         q.update(_env_query(env, env_rotation, env_intensity, lights, shadows, background))
         return self._call("GET", "/api/v1/scenes/%s/views/%d/base.png" % (
             _segment(scene_id), _index(view)), q, raw=True)

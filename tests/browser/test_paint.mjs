@@ -44,6 +44,8 @@ run({
     assert(/#\/session\/[0-9a-f]{32}\?token=/.test(page.url()), 'the URL is the session link: ' + page.url());
     assertEq(await page.locator('#thumbs .thumb').count(), 12, 'thumbnails');
     assertEq(await page.evaluate(() => window.glint.state.session.scene.mesh), 'torus', 'mesh');
+    // painted above the raster where the scene allows: 128 -> 512
+    assertEq(await page.evaluate(() => window.glint.state.session.scene.paint_scale), 4, 'paint_scale of a 128 scene');
     await page.waitForFunction(() => window.glint.state.session.views.every(v => v.state === 'ready'));
     await t.shot(page, '02-studio-empty.png');
   },
@@ -105,6 +107,63 @@ run({
     await page.mouse.click(box.x + x * box.width / 128, box.y + y * box.height / 128);
     await agree(t, page, 0, 'dab');
     await t.shot(page, '03-strokes.png');
+  },
+
+  async 'a scene painted at twice its raster: canvas, strokes, erase and a photo over the surface'(t) {
+    const { url, scene } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64, paint_scale: 2 });
+    assertEq(scene.paint_width, 128, 'the scene gives the painting\'s size');
+    const page = await t.page();
+    await openStudio(page, url);
+    const size = await page.evaluate(() => [document.getElementById('paint').width, document.getElementById('paint').height]);
+    assertEq(size.join('x'), '128x128', 'the canvas is the painting, not the raster');
+    // strokes beyond the raster's 64 pixels, in every mode, agree with the server
+    await setRange(page, 'diameter', 9); await setRange(page, 'kappa', 0.1);
+    await drawStroke(page, [[70, 40], [110, 52], [118, 90]]);
+    await agree(t, page, 0, '2x paint');
+    await page.keyboard.press('e');
+    await setRange(page, 'diameter', 6);
+    await drawStroke(page, [[100, 45], [112, 70]]);
+    await agree(t, page, 0, '2x erase');
+    await page.keyboard.press('b');
+    // a photo over the surface: every pixel of the painting is the base times the texture at its (u, v)
+    await page.evaluate(async () => {
+      const c = new OffscreenCanvas(64, 32), g = c.getContext('2d');
+      g.fillStyle = 'rgb(255,128,64)'; g.fillRect(0, 0, 32, 32);
+      g.fillStyle = 'rgb(64,128,255)'; g.fillRect(32, 0, 32, 32);
+      const dt = new DataTransfer();
+      dt.items.add(new File([await c.convertToBlob({ type: 'image/png' })], 'texture.png', { type: 'image/png' }));
+      document.getElementById('viewport').dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    });
+    await page.waitForSelector('#photo-bar:not(.hidden)');
+    await page.selectOption('#photo-place', 'surface');
+    await page.waitForFunction(() => window.glint.state.photo && window.glint.state.photo.texture);
+    await page.click('#photo-apply');
+    await page.waitForSelector('#photo-bar.hidden', { state: 'attached', timeout: 30000 });
+    await settled(page, 2);
+    const res = await page.evaluate(async () => {
+      const S = window.glint.state.session;
+      const { decodeEXR } = await import('/exr.js');
+      const get = async path => (await fetch(path, { headers: { 'X-Glint-Token': S.token } })).arrayBuffer();
+      const G = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/2/gbuffer.exr`), ['uv.U', 'uv.V', 'mask']);
+      const B = await decodeEXR(await get(`/api/v1/scenes/${S.scene.id}/views/2/base.png?format=exr`));
+      const P = await decodeEXR(await get(`/api/v1/sessions/${S.id}/views/2/painting?format=exr`));
+      const A = [1, 128 / 255, 64 / 255], Bc = [64 / 255, 128 / 255, 1];
+      let n = 0, worst = 0;
+      // painting pixels whose raster pixel and its neighbours lie well inside one colour
+      for (let y = 0; y < P.h; y++) for (let x = 0; x < P.w; x++) {
+        const r = Math.floor(y / 2) * G.w + Math.floor(x / 2);
+        if (!(G.data[3 * r + 2] > 0.5) || Math.abs(G.data[3 * r] - 0.5) < 0.1 || G.data[3 * r] < 0.05 || G.data[3 * r] > 0.95) continue;
+        const p = y * P.w + x, col = G.data[3 * r] < 0.5 ? A : Bc;
+        for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(P.data[3 * p + c] - B.data[3 * p + c] * col[c]));
+        n++;
+      }
+      return { n, worst, w: P.w, bw: B.w };
+    });
+    t.log(`photo over the surface at 2x: ${res.n} painting pixels checked, worst ${res.worst.toExponential(2)}`);
+    assertEq(res.w + 'x' + res.bw, '128x128', 'the painting and the base at the painting\'s size');
+    assertGE(res.n, 500, 'pixels checked');
+    assertLE(res.worst, 1e-5, 'base x texture colour');
+    await t.shot(page, '03b-paint-2x.png');
   },
 
   async 'undo restores the canvas, redo brings the stroke back'(t) {

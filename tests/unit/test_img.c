@@ -1,6 +1,7 @@
 /* test_img.c: image I/O through img.h (and the OpenImageIO shim).
  * Every test works in one temporary directory, removed at exit. */
 #include <dirent.h>
+#include <math.h>
 #include <errno.h>
 #include <stdint.h>
 #include <sys/stat.h>
@@ -664,6 +665,64 @@ TEST(write_rules)
     img_free(&a);
 }
 
+/* A painting at a multiple of the raster read at the raster's pixel
+ * centres (img_to_raster): 1x copied, 2x and 4x the mean of the 2 x 2
+ * pixels around each centre, 3x the centre pixel, a painting replicated
+ * from a raster image reads back exactly, other sizes refused with both. */
+TEST(paintings_at_a_multiple_of_the_raster)
+{
+    img lo, hi, back;
+    glint_err e;
+    const int w = 5, h = 3;
+    ASSERT_OK(img_alloc(&lo, w, h, 3, &e));
+    for (size_t i = 0; i < (size_t)w * h * 3; i++)
+        lo.px[i] = (float)(0.1 * (double)i - 0.7);
+    for (int s = 1; s <= 4; s++) {
+        ASSERT_OK(img_alloc(&hi, w * s, h * s, 3, &e));
+        for (int y = 0; y < h * s; y++) /* replicated, plus a ramp inside each block */
+            for (int x = 0; x < w * s; x++)
+                for (int c = 0; c < 3; c++)
+                    hi.px[((size_t)y * w * s + x) * 3 + c] =
+                        lo.px[((size_t)(y / s) * w + x / s) * 3 + c] +
+                        (float)(0.01 * ((x % s) - (s - 1) / 2.0) + 0.02 * ((y % s) - (s - 1) / 2.0));
+        ASSERT_EQ(img_raster_scale(w * s, h * s, w, h), s);
+        ASSERT_OK(img_to_raster(&hi, w, h, &back, &e));
+        ASSERT_EQ(back.width, w);
+        ASSERT_EQ(back.height, h);
+        for (size_t i = 0; i < (size_t)w * h * 3; i++) {
+            /* the ramp is zero at the centre: its mean over the 2 x 2 pixels
+             * around it (s even) and its value at the centre pixel (s odd) */
+            double want = lo.px[i];
+            ASSERT_MSG(fabs(back.px[i] - want) < 1e-6, "s %d, value %zu: %g, want %g", s, i,
+                       back.px[i], want);
+        }
+        img_free(&back);
+        img_free(&hi);
+    }
+    /* a 2x painting: exactly the mean of the four around the centre */
+    ASSERT_OK(img_alloc(&hi, 2 * w, 2 * h, 1, &e));
+    for (size_t i = 0; i < (size_t)4 * w * h; i++)
+        hi.px[i] = (float)(i * i % 17);
+    ASSERT_OK(img_to_raster(&hi, w, h, &back, &e));
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const float *p = hi.px + (size_t)(2 * y) * 2 * w + 2 * x;
+            double want = 0.25 * ((double)p[0] + p[1] + p[2 * w] + p[2 * w + 1]);
+            ASSERT(fabs(back.px[(size_t)y * w + x] - want) < 1e-6);
+        }
+    img_free(&back);
+    img_free(&hi);
+    /* other sizes: refused, naming both */
+    ASSERT_EQ(img_raster_scale(2 * w, 3 * h, w, h), 0);
+    ASSERT_EQ(img_raster_scale(2 * w + 1, 2 * h, w, h), 0);
+    ASSERT_EQ(img_raster_scale(w - 1, h, w, h), 0);
+    ASSERT_OK(img_alloc(&hi, 2 * w, 3 * h, 3, &e));
+    ASSERT_EQ(img_to_raster(&hi, w, h, &back, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "10x9") && strstr(e.msg, "5x3"));
+    img_free(&hi);
+    img_free(&lo);
+}
+
 TEST_LIST {
     TEST_ENTRY(alloc_limits),
     TEST_ENTRY(check_finite),
@@ -680,6 +739,7 @@ TEST_LIST {
     TEST_ENTRY(missing_and_odd_paths),
     TEST_ENTRY(oversize_header),
     TEST_ENTRY(write_rules),
+    TEST_ENTRY(paintings_at_a_multiple_of_the_raster),
 };
 
 TEST_MAIN()
