@@ -146,13 +146,13 @@ TEST(matches_brute_force_on_small_problems)
          * a point that breaks the rows or the bounds (ignored): the same
          * optimum as the brute force */
         {
-            double q2[8], c3[8], cbad[8];
+            double q2[8], c3[8], cbad[9]; /* cbad + 1 is a start of n entries too */
             lsq_problem p2 = p;
             lsq_result r3;
-            for (int j = 0; j < n; j++) {
+            for (int j = 0; j < n; j++)
                 q2[j] = q[j] + 0.3 * (2.0 * urand() - 1.0);
+            for (int j = 0; j <= n; j++)
                 cbad[j] = j == 0 ? -1.0 : 1e3;
-            }
             p2.q = q2;
             p2.R0 = NULL;
             for (int start = 0; start < 3; start++) {
