@@ -17,7 +17,6 @@
 #include "ids.h"
 #include "material.h"
 #include "prep.h"
-#include "samples.h"
 #include "store.h"
 
 typedef struct gb_task {
