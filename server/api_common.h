@@ -94,6 +94,11 @@ int api_material_read(http_req *req, const char *mid, struct material *m, glint_
 struct method;
 int api_fit_body(const json_t *body, const struct method **m, void **params, glint_err *e);
 
+/* The answer to a fit request: 201 with the material `doc` (fitted now;
+ * the reference is taken) and its Location, else 202 with job `job_id`
+ * and its links.  api_fits.c. */
+http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id);
+
 /* G-buffer sets (api_gbuffers.c): 1 when the set `id` exists; 0 when the
  * request may use it (the API key, when one is set), else GLINT_EAUTH. */
 int api_gbuffer_set_exists(struct app *a, const char *id);

@@ -62,6 +62,30 @@ int api_fit_body(const json_t *body, const method **m, void **params, glint_err 
     return 0;
 }
 
+static json_t *job_with_links(json_t *jdoc);
+
+http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id)
+{
+    json_t *jdoc = NULL;
+    char loc[128];
+    glint_err e;
+    http_resp r;
+
+    if (doc) { /* fitted now */
+        snprintf(loc, sizeof loc, "/api/v1/materials/%s",
+                 json_string_value(json_object_get(doc, "id")));
+        r = http_json(201, doc);
+        http_header(&r, "Location", loc);
+        return r;
+    }
+    if (jobs_get(fitsvc_jobs(((app *)req->app)->fits), job_id, &jdoc, NULL, &e))
+        return api_error(&e);
+    snprintf(loc, sizeof loc, "/api/v1/jobs/%s", job_id);
+    r = http_json(202, json_pack("{s:o}", "job", job_with_links(jdoc)));
+    http_header(&r, "Location", loc);
+    return r;
+}
+
 static json_t *job_with_links(json_t *jdoc)
 {
     char b[3][160];
@@ -83,10 +107,10 @@ static http_resp fits_create(http_req *req)
 {
     app *a = req->app;
     const char *sid = req->param[0], *scid;
-    json_t *sdoc = NULL, *body = NULL, *doc = NULL, *jdoc = NULL;
+    json_t *sdoc = NULL, *body = NULL, *doc = NULL;
     const method *m = NULL;
     void *params = NULL;
-    char job_id[33], loc[128];
+    char job_id[33];
     http_resp r;
     glint_err e;
     int rc;
@@ -98,20 +122,8 @@ static http_resp fits_create(http_req *req)
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);
         goto done;
     }
-    if ((rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
-        goto done;
-    if (doc) { /* fitted now */
-        snprintf(loc, sizeof loc, "/api/v1/materials/%s",
-                 json_string_value(json_object_get(doc, "id")));
-        r = http_json(201, doc);
-        http_header(&r, "Location", loc);
-        goto done;
-    }
-    if ((rc = jobs_get(fitsvc_jobs(a->fits), job_id, &jdoc, NULL, &e)))
-        goto done;
-    snprintf(loc, sizeof loc, "/api/v1/jobs/%s", job_id);
-    r = http_json(202, json_pack("{s:o}", "job", job_with_links(jdoc)));
-    http_header(&r, "Location", loc);
+    if (!(rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
+        r = api_fit_answer(req, doc, job_id);
 done:
     if (rc)
         r = api_error(&e);

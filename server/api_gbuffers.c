@@ -519,12 +519,12 @@ static http_resp sets_fit(http_req *req)
 {
     app *a = req->app;
     const char *id = req->param[0];
-    json_t *rec = NULL, *body = NULL, *doc = NULL, *jdoc = NULL;
+    json_t *rec = NULL, *body = NULL, *doc = NULL;
     const method *m = NULL;
     void *params = NULL;
     samples s;
     float *rgb = NULL;
-    char job_id[33], loc[128];
+    char job_id[33];
     size_t bytes = 0;
     http_resp r;
     glint_err e;
@@ -541,27 +541,9 @@ static http_resp sets_fit(http_req *req)
     rc = gb_samples(a, id, m, n, w, h, &s, &rgb, &e);
     admit_leave(a->work, bytes);
     admitted = 0;
-    if (rc || (rc = fitsvc_fit_gbuffers(a->fits, id, m, params, &s, &rgb, &doc, job_id,
-                                        &req->timing, &e)))
-        goto done;
-    if (doc) { /* fitted now */
-        snprintf(loc, sizeof loc, "/api/v1/materials/%s",
-                 json_string_value(json_object_get(doc, "id")));
-        r = http_json(201, doc);
-        http_header(&r, "Location", loc);
-        goto done;
-    }
-    if ((rc = jobs_get(fitsvc_jobs(a->fits), job_id, &jdoc, NULL, &e)))
-        goto done;
-    {
-        char b[2][160];
-        snprintf(b[0], sizeof b[0], "/api/v1/jobs/%s", job_id);
-        snprintf(b[1], sizeof b[1], "/api/v1/jobs/%s/events", job_id);
-        json_object_set_new(jdoc, "links", json_pack("{s:s, s:s}", "self", b[0], "events", b[1]));
-    }
-    snprintf(loc, sizeof loc, "/api/v1/jobs/%s", job_id);
-    r = http_json(202, json_pack("{s:o}", "job", jdoc));
-    http_header(&r, "Location", loc);
+    if (!rc && !(rc = fitsvc_fit_gbuffers(a->fits, id, m, params, &s, &rgb, &doc, job_id,
+                                          &req->timing, &e)))
+        r = api_fit_answer(req, doc, job_id);
 done:
     if (rc)
         r = api_error(&e);

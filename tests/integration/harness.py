@@ -143,6 +143,26 @@ class Daemon:
         return self.request("DELETE", path, **kw)
 
 
+def fit_material(d, session, body, timeout=300):
+    """POST a fit of `body` ({"method", "params"}) to a session and wait for
+    its material: its id (201 at once, or the job's when it is done)."""
+    tok = {"X-Glint-Token": session["paint_token"]}
+    r = d.post("/api/v1/sessions/%s/fits" % session["id"],
+               headers=dict(tok, **{"Content-Type": "application/json"}), data=json.dumps(body))
+    assert r.status_code in (201, 202), r.text
+    if r.status_code == 201:
+        return r.json()["id"]
+    jid, deadline = r.json()["job"]["id"], time.time() + timeout
+    while True:
+        j = d.get("/api/v1/jobs/" + jid, headers=tok, status=200).json()["job"]
+        if j["state"] in ("done", "failed"):
+            break
+        assert time.time() < deadline, "the fit's job did not finish in %d s" % timeout
+        time.sleep(0.1)
+    assert j["state"] == "done", j
+    return j["material_id"]
+
+
 def run_tests(namespace, daemon_args=()):
     """Run every test_* function of a module, each given a shared Daemon;
     print one line per test and 'N passed, N failed'; exit non-zero on failure."""

@@ -19,7 +19,6 @@ GLINT_CRASH_SEED fixes the random choices; the seed used is printed.
 import os
 import random
 import sqlite3
-import struct
 import sys
 import threading
 import time

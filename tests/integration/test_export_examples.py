@@ -21,10 +21,9 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import run_tests  # noqa: E402
+from harness import fit_material, run_tests  # noqa: E402
 
 SIZE = 48
 CT = "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"
@@ -77,21 +76,7 @@ def fit(d, method, params, spec):
         d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
               headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}), data=img,
               status=200)
-    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
-               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
-               data=json.dumps({"method": method, "params": params}))
-    assert r.status_code in (201, 202), r.text
-    if r.status_code == 201:
-        return s, r.json()["id"]
-    jid, deadline = r.json()["job"]["id"], time.time() + 300
-    while True:
-        j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
-        if j["state"] in ("done", "failed"):
-            break
-        assert time.time() < deadline, "fit of %s did not finish" % method
-        time.sleep(0.2)
-    assert j["state"] == "done", j
-    return s, j["material_id"]
+    return s, fit_material(d, s, {"method": method, "params": params})
 
 
 def write(rel, data):

@@ -19,11 +19,10 @@ import struct
 import subprocess
 import sys
 import tempfile
-import time
 import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import run_tests  # noqa: E402
+from harness import fit_material, run_tests  # noqa: E402
 
 try:
     import numpy as np
@@ -67,21 +66,7 @@ def fitted(d, spec, body):
         d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
               headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}), data=img,
               status=200)
-    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
-               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
-               data=json.dumps(body))
-    assert r.status_code in (201, 202), r.text
-    if r.status_code == 201:
-        return s, r.json()["id"]
-    jid, deadline = r.json()["job"]["id"], time.time() + 300
-    while True:
-        j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
-        if j["state"] in ("done", "failed"):
-            break
-        assert time.time() < deadline
-        time.sleep(0.2)
-    assert j["state"] == "done", j
-    return s, j["material_id"]
+    return s, fit_material(d, s, body)
 
 
 # ---- an independent reader, after BRDFRead.cpp ---------------------------------------------
@@ -260,20 +245,7 @@ def test_04_measured_materials_paint_as_their_truth(d):
         d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
               headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
               data=d.get(url % (k, "merl:ct.binary"), status=200).content, status=200)
-    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
-               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
-               data=json.dumps({"method": "hf3", "params": {"res": 64}}))
-    assert r.status_code in (201, 202), r.text
-    mid = r.json()["id"] if r.status_code == 201 else None
-    if mid is None:
-        jid = r.json()["job"]["id"]
-        while True:
-            j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
-            if j["state"] in ("done", "failed"):
-                break
-            time.sleep(0.2)
-        assert j["state"] == "done", j
-        mid = j["material_id"]
+    mid = fit_material(d, s, {"method": "hf3", "params": {"res": 64}})
     summ = d.get("/api/v1/materials/%s/summary" % mid, headers=tok(s["view_token"]),
                  status=200, schema="MaterialSummary.json").json()
     print("fitted to the measured paintings: base colour", summ["base_colour"])
@@ -351,22 +323,8 @@ def test_05_a_spatial_material_bakes_textures(d):
             d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
                   headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
                   data=f.read(), status=200)
-    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
-               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
-               data=json.dumps({"method": "maps",
-                                "params": {"res": 32, "map_res": 32, "components": 3}}))
-    assert r.status_code in (201, 202), r.text
-    mid = r.json()["id"] if r.status_code == 201 else None
-    if mid is None:
-        jid, deadline = r.json()["job"]["id"], time.time() + 300
-        while True:
-            j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
-            if j["state"] in ("done", "failed"):
-                break
-            assert time.time() < deadline
-            time.sleep(0.2)
-        assert j["state"] == "done", j
-        mid = j["material_id"]
+    mid = fit_material(d, s, {"method": "maps",
+                              "params": {"res": 32, "map_res": 32, "components": 3}})
     h = tok(s["view_token"])
     url = "/api/v1/materials/%s/material.glb" % mid
     r = d.get(url + "?bake_res=16", headers=h, status=200)

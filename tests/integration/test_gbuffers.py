@@ -20,7 +20,6 @@ point-light method (hf3) and the environment-lit one (srbf):
   the surface refuse G-buffers without uv."""
 import json
 import os
-import struct
 import subprocess
 import sys
 import tempfile

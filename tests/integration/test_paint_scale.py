@@ -10,10 +10,9 @@ import json
 import os
 import struct
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import run_tests  # noqa: E402
+from harness import fit_material, run_tests  # noqa: E402
 from test_sessions import exr_encode, png_decode  # noqa: E402
 
 W = 32
@@ -41,22 +40,8 @@ def put(d, s, k, body, status=200):
 
 
 def fit(d, s):
-    r = d.post("/api/v1/sessions/%s/fits" % s["id"],
-               headers=dict(tok(s["paint_token"]), **{"Content-Type": "application/json"}),
-               data=json.dumps({"method": "hf3", "params": {"res": 16}}))
-    assert r.status_code in (201, 202), r.text
-    if r.status_code == 201:
-        return r.json()
-    jid, deadline = r.json()["job"]["id"], time.time() + 120
-    while True:
-        j = d.get("/api/v1/jobs/" + jid, headers=tok(s["paint_token"]), status=200).json()["job"]
-        if j["state"] in ("done", "failed"):
-            break
-        assert time.time() < deadline
-        time.sleep(0.1)
-    assert j["state"] == "done", j
-    return d.get("/api/v1/materials/" + j["material_id"], headers=tok(s["view_token"]),
-                 status=200).json()
+    mid = fit_material(d, s, {"method": "hf3", "params": {"res": 16}})
+    return d.get("/api/v1/materials/" + mid, headers=tok(s["view_token"]), status=200).json()
 
 
 def test_01_the_scene_gives_the_paintings_size(d):

@@ -252,7 +252,7 @@ def test_05_the_session_event_stream(d):
 
 
 def test_06_fits_jobs_and_materials(d):
-    s, sc = S["session"], S["scene"]
+    s = S["session"]
     p = GlintClient(d.base, token=s["paint_token"])
     raises(lambda: p.fit(s["id"], "hf3", {"res": 2}), 422)
     first = p.fit(s["id"], "hf3", {"res": 32})

@@ -17,7 +17,6 @@ import random
 import resource
 import shutil
 import signal
-import stat
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
