@@ -88,6 +88,11 @@ int api_material_load(struct app *a, const char *mid, struct material *m, glint_
 /* Both: the material `mid` loaded if the request may read it (OUT: *m). */
 int api_material_read(http_req *req, const char *mid, struct material *m, glint_err *err);
 
+/* A scene's base render when its creation names none (api_scenes.c,
+ * api_views.c): kd cos(theta_i) I, the Lambert 1/pi undone by the scale. */
+#define API_BASE_BRDF "lambert:kd=0.6"
+#define API_BASE_SCALE 3.14159265358979323846
+
 /* The method and parameters of a fit request's body {"method", "params"}
  * (the method's table checks every parameter; kind "invalid-parameter").
  * OUT: *m, *params (malloc'ed: free).  api_fits.c. */

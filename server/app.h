@@ -73,6 +73,8 @@ extern const http_route api_core_routes[];
 extern const int api_core_nroutes;
 extern const http_route api_scenes_routes[];     /* scenes, meshes */
 extern const int api_scenes_nroutes;
+extern const http_route api_views_routes[];      /* a scene's base renders and G-buffers */
+extern const int api_views_nroutes;
 extern const http_route api_sessions_routes[];   /* sessions, paintings, strokes, events */
 extern const int api_sessions_nroutes;
 extern const http_route api_tokens_routes[];     /* a session's links: revoke, expiry */

@@ -179,12 +179,12 @@ int main(int argc, char **argv)
                                       api_tokens_routes, api_fits_routes, api_materials_routes,
                                       api_methods_routes, api_envs_routes,
                                       api_measured_routes, api_exports_routes,
-                                      api_gbuffers_routes};
+                                      api_gbuffers_routes, api_views_routes};
         const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
                               api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
                               api_methods_nroutes, api_envs_nroutes,
                               api_measured_nroutes, api_exports_nroutes,
-                              api_gbuffers_nroutes};
+                              api_gbuffers_nroutes, api_views_nroutes};
         const int ntables = (int)(sizeof counts / sizeof counts[0]);
         int total = 0;
         for (int i = 0; i < ntables; i++)
