@@ -37,7 +37,7 @@
 #include "method.h"
 
 /* Texels beyond this make a shader that compilers take long over (Mesa's
- * llvmpipe: 2,100 texels in 1.6 s, 8,200 in 14 s, 134,400 not in 10
+ * llvmpipe: 80 KB of text in 1.6 s, 280 KB in 14 s, 134,400 texels not in 10
  * minutes): the MERL table is offered instead. */
 #define BRDFX_MAX_TEXELS 8192
 
