@@ -267,6 +267,20 @@ int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
     return img_read_mem_max(data, len, IMG_MAX_DIM, out, err);
 }
 
+/* The checks of an in-memory read (`what` names the caller); *max_dim
+ * brought into 1..IMG_MAX_DIM.  The output was zeroed by the caller. */
+static int mem_read_args(const char *what, const void *data, size_t len, int *max_dim,
+                         glint_err *err)
+{
+    if (!data && len)
+        return glint_err_set(err, GLINT_EINVAL, "%s: NULL data", what);
+    if (len == 0)
+        return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
+    if (*max_dim < 1 || *max_dim > IMG_MAX_DIM)
+        *max_dim = IMG_MAX_DIM;
+    return 0;
+}
+
 int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err)
 {
     img_oiio_pixels pix;
@@ -275,12 +289,8 @@ int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_
     if (!out)
         return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL output");
     memset(out, 0, sizeof *out);
-    if (!data && len)
-        return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL data");
-    if (len == 0)
-        return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
-    if (max_dim < 1 || max_dim > IMG_MAX_DIM)
-        max_dim = IMG_MAX_DIM;
+    if ((rc = mem_read_args("img_read_mem", data, len, &max_dim, err)))
+        return rc;
     rc = img_read_common(NULL, data, len, max_dim, 4, 0, &pix, err);
     if (rc)
         return rc;
@@ -318,12 +328,8 @@ int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channe
     if (!out)
         return glint_err_set(err, GLINT_EINVAL, "img_read_named_mem: NULL output");
     memset(out, 0, sizeof *out);
-    if (!data && len)
-        return glint_err_set(err, GLINT_EINVAL, "img_read_named_mem: NULL data");
-    if (len == 0)
-        return glint_err_set(err, GLINT_EFORMAT, "image in memory: empty (0 bytes)");
-    if (max_dim < 1 || max_dim > IMG_MAX_DIM)
-        max_dim = IMG_MAX_DIM;
+    if ((rc = mem_read_args("img_read_named_mem", data, len, &max_dim, err)))
+        return rc;
     if (max_channels < 1 || max_channels > IMG_MAX_NAMED_CHANNELS)
         max_channels = IMG_MAX_NAMED_CHANNELS;
     rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, &pix, err);

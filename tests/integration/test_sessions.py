@@ -21,6 +21,7 @@ import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import Daemon, run_tests  # noqa: E402
+import exr_named  # noqa: E402
 
 API = "/api/v1"
 JSON = {"Content-Type": "application/json"}
@@ -89,26 +90,8 @@ def png_encode(w, h, pixel):
 def exr_encode(w, h, pixel):
     """Uncompressed scanline OpenEXR, float channels B, G, R, of
     pixel(x, y) -> (r, g, b) floats (NaN and infinities allowed)."""
-    def attr(name, kind, body):
-        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(body)) + body
-    chl = b"".join(c + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in (b"B", b"G", b"R")) + b"\0"
-    box = struct.pack("<iiii", 0, 0, w - 1, h - 1)
-    header = (b"\x76\x2f\x31\x01" + struct.pack("<i", 2) + attr("channels", "chlist", chl)
-              + attr("compression", "compression", b"\0") + attr("dataWindow", "box2i", box)
-              + attr("displayWindow", "box2i", box) + attr("lineOrder", "lineOrder", b"\0")
-              + attr("pixelAspectRatio", "float", struct.pack("<f", 1.0))
-              + attr("screenWindowCenter", "v2f", struct.pack("<ff", 0, 0))
-              + attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
-    blocks = []
-    for y in range(h):
-        px = [pixel(x, y) for x in range(w)]
-        data = b"".join(struct.pack("<%df" % w, *[p[c] for p in px]) for c in (2, 1, 0))
-        blocks.append(struct.pack("<ii", y, len(data)) + data)
-    offsets, off = [], len(header) + 8 * h
-    for b in blocks:
-        offsets.append(off)
-        off += len(b)
-    return header + struct.pack("<%dQ" % h, *offsets) + b"".join(blocks)
+    px = [pixel(x, y) for y in range(h) for x in range(w)]
+    return exr_named.write(w, h, {n: [p[c] for p in px] for n, c in (("R", 0), ("G", 1), ("B", 2))})
 
 
 # ---------------------------------------------------------------------------
