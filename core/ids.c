@@ -29,6 +29,14 @@ int glint_id_new(char id[GLINT_ID_LEN], glint_err *err)
     return 0;
 }
 
+int glint_id_new_near(const char *near, char id[GLINT_ID_LEN], glint_err *err)
+{
+    int rc = glint_id_new(id, err);
+    if (!rc && glint_id_valid(near))
+        memcpy(id, near, GLINT_ID_ROUTE);
+    return rc;
+}
+
 int glint_id_valid(const char *s)
 {
     if (!s)

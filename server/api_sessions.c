@@ -216,7 +216,8 @@ static int session_create_do(http_req *req, json_t **out, char id[33], glint_err
             rc = api_reject(e, GLINT_EINVAL, "unknown-scene", "scene_id: %.400s", e->msg);
         goto done;
     }
-    if ((rc = glint_id_new(id, e)) || (rc = glint_id_new(pt, e)) || (rc = glint_id_new(vt, e)))
+    if ((rc = glint_id_new_near(json_string_value(jscene), id, e)) ||
+        (rc = glint_id_new(pt, e)) || (rc = glint_id_new(vt, e)))
         goto done;
     glint_time_iso_ms(now);
     doc = json_pack("{s:s, s:O, s:s, s:s, s:s}", "id", id, "scene_id", jscene, "paint_token", pt,

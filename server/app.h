@@ -30,6 +30,7 @@ typedef struct app_config {
     char address[64];
     int port;
     char data_dir[4096];
+    char database[1024];      /* PostgreSQL connection string ("" = SQLite in data_dir) */
     char web_dir[4096];
     char env_dir[4096];       /* HDR maps offered as data:<file> ("" = none) */
     char measured_dir[4096];  /* MERL tables offered as merl:<file> ("" = none) */

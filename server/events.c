@@ -165,6 +165,25 @@ void events_notify(events *ev, const char *session)
     pthread_mutex_unlock(&ev->lock);
 }
 
+void events_notify_all(events *ev)
+{
+    if (!ev)
+        return;
+    pthread_mutex_lock(&ev->lock);
+    for (ev_hub *h = ev->hubs; h; h = h->next)
+        h->gen++;
+    pthread_cond_broadcast(&ev->cond);
+    pthread_mutex_unlock(&ev->lock);
+}
+
+void events_on_store_change(void *ctx, const char *session)
+{
+    if (session)
+        events_notify(ctx, session);
+    else
+        events_notify_all(ctx);
+}
+
 void events_publish(events *ev, const char *session, const char *type, json_t *data)
 {
     glint_err e;

@@ -55,6 +55,12 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
 
 /* Wake the session's streams after its log grew. */
 void events_notify(events *ev, const char *session);
+/* Wake every stream (any log may have grown: another replica's changes
+ * could not be heard for a while). */
+void events_notify_all(events *ev);
+/* events_notify for store_listen: ctx is the events, session NULL means
+ * every session. */
+void events_on_store_change(void *ctx, const char *session);
 /* The session's tokens were revoked: every stream open now ends (a client
  * still holding a valid token reconnects with it, from its Last-Event-ID). */
 void events_revoke(events *ev, const char *session);

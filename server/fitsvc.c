@@ -341,7 +341,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     fit_s = glint_now() - t0;
     t0 = srv_timing_step(t->tm, "fit", t0);
     pre = json_object_get(m.info, "precomputation");
-    if ((rc = glint_id_new(mid, err)))
+    if ((rc = glint_id_new_near(t->session_id, mid, err)))
         goto done;
     snprintf(name, sizeof name, "materials/%s", mid);
     if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||

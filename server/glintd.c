@@ -31,6 +31,10 @@ static void usage(FILE *f)
           "  --address ADDR        listen address (127.0.0.1)\n"
           "  --port N              port, 0 for an ephemeral one (8080)\n"
           "  --data-dir DIR        scenes, sessions, paintings, materials, cache (./glint-data)\n"
+          "  --database CONNINFO   keep the metadata in PostgreSQL (a libpq connection\n"
+          "                        string, e.g. \"host=/run/postgresql dbname=glint\");\n"
+          "                        blobs stay in --data-dir, shared by the replicas that\n"
+          "                        share the database (default: SQLite in --data-dir)\n"
           "  --web-dir DIR         static files served at / (./web)\n"
           "  --env-dir DIR         HDR environment maps offered to fits as data:<file>\n"
           "  --measured-dir DIR    MERL tables (*.binary) offered to paint from as merl:<file>\n"
@@ -71,6 +75,7 @@ int main(int argc, char **argv)
     static const struct option lo[] = {
         {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
         {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
+        {"database", required_argument, 0, 1},
         {"env-dir", required_argument, 0, 1}, {"measured-dir", required_argument, 0, 1},
         {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
         {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
@@ -156,8 +161,11 @@ int main(int argc, char **argv)
             return 1;
         }
         fc.work = a.work;
-        if (store_open(a.cfg.data_dir, &a.store, &ge) || api_envs_store(a.store, &ge) ||
+        if (store_open_db(a.cfg.data_dir, a.cfg.database, &a.store, &ge) ||
+            api_envs_store(a.store, &ge) ||
             events_open(a.store, &a.events) ||
+            /* replicas on one database: their strokes reach this one's streams */
+            store_listen(a.store, events_on_store_change, a.events, &ge) ||
             fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
             render_open(8, 0, &a.render, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
@@ -218,8 +226,8 @@ int main(int argc, char **argv)
         free(routes);
         return 1;
     }
-    fprintf(stderr, "glintd: serving http://%s:%d/ (data %s)\n", a.cfg.address, port,
-            a.cfg.data_dir);
+    fprintf(stderr, "glintd: serving http://%s:%d/ (data %s, metadata in %s)\n", a.cfg.address,
+            port, a.cfg.data_dir, store_backend(a.store));
     if (port_file) {
         char buf[32];
         int n = snprintf(buf, sizeof buf, "%d\n", port);
@@ -235,6 +243,7 @@ int main(int argc, char **argv)
     free(routes);
     fitsvc_close(a.fits);
     render_close(a.render);
+    store_listen_stop(a.store); /* it wakes the streams: stop it first */
     events_close(a.events);
     store_close(a.store);
     admit_close(a.work);

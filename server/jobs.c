@@ -205,7 +205,7 @@ int jobs_submit(jobs *js, const char *kind, const char *owner, job_fn fn, void *
     snprintf(j->owner, sizeof j->owner, "%s", owner ? owner : "");
     snprintf(j->kind, sizeof j->kind, "%s", kind ? kind : "fit");
     snprintf(j->stage, sizeof j->stage, "queued");
-    if ((rc = glint_id_new(j->id, err))) {
+    if ((rc = glint_id_new_near(owner, j->id, err))) { /* routed with its owner */
         job_free(j);
         return rc;
     }

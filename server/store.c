@@ -7,7 +7,6 @@
  * next sequence number, the rows that use it, the commit) is never
  * interleaved with another. */
 #include <pthread.h>
-#include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,7 +16,7 @@
 #include "ids.h"
 #include "store_int.h"
 
-static const char *const store_schema[] = {
+static const char *const store_schema_sqlite[] = {
     "CREATE TABLE schema_version (version INTEGER NOT NULL)",
     "CREATE TABLE meshes (id TEXT PRIMARY KEY, info TEXT NOT NULL, created TEXT NOT NULL)",
     "CREATE TABLE scenes (id TEXT PRIMARY KEY, doc TEXT NOT NULL, created TEXT NOT NULL)",
@@ -35,18 +34,27 @@ static const char *const store_schema[] = {
     "CREATE INDEX materials_session ON materials (session)",
     NULL};
 
-/* ---- helpers ------------------------------------------------------------ */
+/* The same tables in PostgreSQL: 64-bit integers, and an explicit
+ * insertion order (ord) where SQLite's lists use its rowid. */
+static const char *const store_schema_postgres[] = {
+    "CREATE TABLE schema_version (version INTEGER NOT NULL)",
+    "CREATE TABLE meshes (id TEXT PRIMARY KEY, info TEXT NOT NULL, created TEXT NOT NULL)",
+    "CREATE TABLE scenes (id TEXT PRIMARY KEY, doc TEXT NOT NULL, created TEXT NOT NULL,"
+    " ord BIGSERIAL)",
+    "CREATE TABLE sessions (id TEXT PRIMARY KEY, scene_id TEXT NOT NULL, doc TEXT NOT NULL,"
+    " created TEXT NOT NULL, last_seq BIGINT NOT NULL DEFAULT 0)",
+    "CREATE INDEX sessions_scene ON sessions (scene_id)",
+    "CREATE TABLE paintings (session TEXT NOT NULL, view INTEGER NOT NULL,"
+    " version BIGINT NOT NULL, blob TEXT NOT NULL, updated TEXT NOT NULL,"
+    " PRIMARY KEY (session, view))",
+    "CREATE TABLE events (session TEXT NOT NULL, seq BIGINT NOT NULL, type TEXT NOT NULL,"
+    " view INTEGER, data TEXT NOT NULL, created TEXT NOT NULL, PRIMARY KEY (session, seq))",
+    "CREATE TABLE materials (id TEXT PRIMARY KEY, session TEXT, doc TEXT NOT NULL,"
+    " created TEXT NOT NULL, ord BIGSERIAL)",
+    "CREATE INDEX materials_session ON materials (session)",
+    NULL};
 
-int store_sqlerr(store *s, glint_err *err, const char *what)
-{
-    int code = sqlite3_errcode(s->db), sys = sqlite3_system_errno(s->db);
-    glint_err_set(err, GLINT_EIO, "database: %s: %s", what, sqlite3_errmsg(s->db));
-    if (code == SQLITE_FULL)
-        return glint_err_kind(err, "storage-full");
-    if (code == SQLITE_READONLY || code == SQLITE_PERM)
-        return glint_err_kind(err, "storage-read-only");
-    return fsio_err_kind(err, sys);
-}
+/* ---- helpers ------------------------------------------------------------ */
 
 /* Compact JSON text with every double exact (caller frees). */
 char *store_dump(const json_t *j)
@@ -64,71 +72,83 @@ json_t *store_load(const char *text, const char *what, glint_err *err)
     return j;
 }
 
-/* Run SQL without results. */
 int store_exec(store *s, const char *sql, glint_err *err)
 {
-    char *msg = NULL;
-    if (sqlite3_exec(s->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
-        int rc = glint_err_set(err, GLINT_EIO, "database: %s: %s", sql, msg ? msg : "error");
-        sqlite3_free(msg);
-        return rc;
-    }
-    return 0;
+    return db_exec(s->db, sql, err);
 }
 
-sqlite3_stmt *store_prep(store *s, const char *sql, glint_err *err)
+db_stmt *store_prep(store *s, const char *sql, glint_err *err)
 {
-    sqlite3_stmt *st = NULL;
-    if (sqlite3_prepare_v2(s->db, sql, -1, &st, NULL) != SQLITE_OK) {
-        store_sqlerr(s, err, "prepare");
-        sqlite3_finalize(st);
-        return NULL;
-    }
-    return st;
+    return db_prep(s->db, sql, err);
+}
+
+int store_run(db_stmt *st, const char *what, glint_err *err)
+{
+    int rc = db_step(st, what, err);
+    if (rc == DB_ROW)
+        return glint_err_set(err, GLINT_EIO, "database: %s: unexpected row", what);
+    return rc;
 }
 
 void store_rollback(store *s)
 {
-    if (!sqlite3_get_autocommit(s->db))
-        sqlite3_exec(s->db, "ROLLBACK", NULL, NULL, NULL);
+    db_rollback(s->db);
+}
+
+const char *store_pick(const store *s, const char *sqlite_sql, const char *postgres_sql)
+{
+    return db_kind_of(s->db) == DB_POSTGRES ? postgres_sql : sqlite_sql;
 }
 
 /* ---- open, schema ---------------------------------------------------------- */
 
-static int store_schema_init(store *s, glint_err *err)
+/* One integer from a query without parameters (OUT: *v, 0 when no row). */
+static int store_int(store *s, const char *sql, int64_t *v, glint_err *err)
 {
-    sqlite3_stmt *st;
-    int have = 0, version = 0, rc;
-
-    st = store_prep(s, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND "
-                       "name = 'schema_version'", err);
+    db_stmt *st = store_prep(s, sql, err);
+    int rc;
+    *v = 0;
     if (!st)
         return GLINT_EIO;
-    if (sqlite3_step(st) == SQLITE_ROW)
-        have = sqlite3_column_int(st, 0);
-    sqlite3_finalize(st);
+    rc = db_step(st, "reading the schema", err);
+    if (rc == DB_ROW)
+        *v = db_col_int(st, 0);
+    db_finalize(st);
+    return rc < 0 ? rc : 0;
+}
+
+static int store_schema_check(store *s, glint_err *err)
+{
+    const char *const *schema =
+        db_kind_of(s->db) == DB_POSTGRES ? store_schema_postgres : store_schema_sqlite;
+    int64_t have = 0, version = 0;
+    int rc;
+
+    if ((rc = store_int(s, store_pick(s, "SELECT count(*) FROM sqlite_master WHERE type = "
+                                         "'table' AND name = 'schema_version'",
+                                      "SELECT count(*) FROM information_schema.tables WHERE "
+                                      "table_schema = current_schema() AND "
+                                      "table_name = 'schema_version'"),
+                        &have, err)))
+        return rc;
     if (have) {
-        st = store_prep(s, "SELECT max(version) FROM schema_version", err);
-        if (!st)
-            return GLINT_EIO;
-        if (sqlite3_step(st) == SQLITE_ROW)
-            version = sqlite3_column_int(st, 0);
-        sqlite3_finalize(st);
+        if ((rc = store_int(s, "SELECT max(version) FROM schema_version", &version, err)))
+            return rc;
         if (version == STORE_SCHEMA_VERSION)
             return 0;
         if (version > STORE_SCHEMA_VERSION)
             return glint_err_set(err, GLINT_EUNSUPPORTED,
                                  "database schema version %d is newer than this glintd's (%d): "
                                  "use a newer glintd or another data directory",
-                                 version, STORE_SCHEMA_VERSION);
+                                 (int)version, STORE_SCHEMA_VERSION);
         return glint_err_set(err, GLINT_EUNSUPPORTED,
-                             "database schema version %d has no upgrade path to %d", version,
+                             "database schema version %d has no upgrade path to %d", (int)version,
                              STORE_SCHEMA_VERSION);
     }
-    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)))
+    if ((rc = db_begin(s->db, err)))
         return rc;
-    for (int i = 0; store_schema[i]; i++)
-        if ((rc = store_exec(s, store_schema[i], err)))
+    for (int i = 0; schema[i]; i++)
+        if ((rc = store_exec(s, schema[i], err)))
             goto fail;
     {
         char sql[96];
@@ -137,7 +157,7 @@ static int store_schema_init(store *s, glint_err *err)
         if ((rc = store_exec(s, sql, err)))
             goto fail;
     }
-    if ((rc = store_exec(s, "COMMIT", err)))
+    if ((rc = db_commit(s->db, err)))
         goto fail;
     return 0;
 fail:
@@ -145,12 +165,52 @@ fail:
     return rc;
 }
 
+/* PostgreSQL: replicas starting together create the tables once (a
+ * session-level advisory lock around the check and the creation). */
+static int store_schema_init(store *s, glint_err *err)
+{
+    int rc, pg = db_kind_of(s->db) == DB_POSTGRES;
+    if (pg && (rc = store_exec(s, "SELECT pg_advisory_lock(74736)", err)))
+        return rc;
+    rc = store_schema_check(s, err);
+    if (pg)
+        db_exec(s->db, "SELECT pg_advisory_unlock(74736)", NULL);
+    return rc;
+}
+
+/* SQLite: WAL with synchronous=FULL: every COMMIT fsyncs the log before it
+ * returns, so a committed transaction survives kill -9 and power loss. */
+static int store_sqlite_setup(store *s, const char *dbpath, glint_err *err)
+{
+    db_stmt *st = store_prep(s, "PRAGMA journal_mode = WAL", err);
+    const char *mode;
+    int rc;
+    if (!st)
+        return GLINT_EIO;
+    rc = db_step(st, "journal mode", err);
+    mode = rc == DB_ROW ? db_col_text(st, 0) : NULL;
+    if (rc >= 0 && (!mode || strcmp(mode, "wal") != 0))
+        rc = glint_err_set(err, GLINT_EIO, "database %s: cannot switch to WAL journal mode",
+                           dbpath);
+    db_finalize(st);
+    if (rc < 0)
+        return rc;
+    if ((rc = store_exec(s, "PRAGMA synchronous = FULL", err)) ||
+        (rc = store_exec(s, "PRAGMA foreign_keys = OFF", err)))
+        return rc;
+    return 0;
+}
+
 int store_open(const char *data_dir, store **out, glint_err *err)
+{
+    return store_open_db(data_dir, NULL, out, err);
+}
+
+int store_open_db(const char *data_dir, const char *database, store **out, glint_err *err)
 {
     store *s;
     char dbpath[STORE_PATH_MAX];
     int rc;
-    sqlite3_stmt *st;
 
     *out = NULL;
     s = calloc(1, sizeof *s);
@@ -165,32 +225,20 @@ int store_open(const char *data_dir, store **out, glint_err *err)
     }
     if ((rc = fsio_mkdirs(s->blobs, err)))
         goto fail_paths;
-    if (sqlite3_open_v2(dbpath, &s->db,
-                        SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
-                        NULL) != SQLITE_OK) {
-        rc = glint_err_set(err, GLINT_EIO, "cannot open database %s: %s", dbpath,
-                           s->db ? sqlite3_errmsg(s->db) : "out of memory");
-        goto fail_db;
+    if (database && *database) {
+        /* blobs may be shared with other glintd processes: the sweep
+         * spares what is younger than any write in progress could be */
+        s->sweep_grace = STORE_SHARED_SWEEP_GRACE;
+        if (!(s->conninfo = strdup(database)))
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory opening the store");
+        else
+            rc = db_open_postgres(database, &s->db, err);
+    } else {
+        rc = db_open_sqlite(dbpath, &s->db, err);
+        if (!rc)
+            rc = store_sqlite_setup(s, dbpath, err);
     }
-    sqlite3_busy_timeout(s->db, 10000);
-    /* WAL with synchronous=FULL: every COMMIT fsyncs the log before it
-     * returns, so a committed transaction survives kill -9 and power loss. */
-    st = store_prep(s, "PRAGMA journal_mode = WAL", err);
-    if (!st) {
-        rc = GLINT_EIO;
-        goto fail_db;
-    }
-    if (sqlite3_step(st) != SQLITE_ROW ||
-        strcmp((const char *)sqlite3_column_text(st, 0), "wal") != 0) {
-        sqlite3_finalize(st);
-        rc = glint_err_set(err, GLINT_EIO, "database %s: cannot switch to WAL journal mode",
-                           dbpath);
-        goto fail_db;
-    }
-    sqlite3_finalize(st);
-    if ((rc = store_exec(s, "PRAGMA synchronous = FULL", err)) ||
-        (rc = store_exec(s, "PRAGMA foreign_keys = OFF", err)) ||
-        (rc = store_schema_init(s, err)))
+    if (rc || (rc = store_schema_init(s, err)))
         goto fail_db;
     store_sweep(s);
     store_sweep_blobs(s);
@@ -199,18 +247,26 @@ int store_open(const char *data_dir, store **out, glint_err *err)
 
 fail_db:
     glint_err_prefix(err, "store %s", data_dir);
-    sqlite3_close(s->db);
+    db_close(s->db);
+    free(s->conninfo);
 fail_paths:
     pthread_mutex_destroy(&s->lock);
     free(s);
     return rc;
 }
 
+const char *store_backend(const store *s)
+{
+    return db_kind_of(s->db) == DB_POSTGRES ? "postgresql" : "sqlite";
+}
+
 void store_close(store *s)
 {
     if (!s)
         return;
-    sqlite3_close(s->db);
+    store_listen_stop(s);
+    db_close(s->db);
+    free(s->conninfo);
     pthread_mutex_destroy(&s->lock);
     free(s);
 }
@@ -221,7 +277,7 @@ void store_close(store *s)
 static int store_get_doc(store *s, const char *sql, const char *id, const char *what,
                          json_t **doc, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     int rc;
 
     *doc = NULL;
@@ -233,18 +289,16 @@ static int store_get_doc(store *s, const char *sql, const char *id, const char *
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
-        *doc = store_load((const char *)sqlite3_column_text(st, 0), what, err);
+    db_bind_text(st, 1, id);
+    rc = db_step(st, "reading", err);
+    if (rc == DB_ROW) {
+        *doc = store_load(db_col_text(st, 0), what, err);
         rc = *doc ? 0 : GLINT_EFORMAT;
-    } else if (rc == SQLITE_DONE) {
+    } else if (rc == DB_DONE) {
         rc = glint_err_set(err, GLINT_ENOTFOUND, "no %s with id %s", what, id);
-    } else {
-        rc = store_sqlerr(s, err, "reading");
     }
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     return rc;
 }
@@ -253,7 +307,7 @@ out:
 static int store_put_doc(store *s, const char *sql, const char *id, const json_t *doc,
                          const char *extra, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     char *text;
     char now[GLINT_TIME_LEN];
     int rc;
@@ -270,14 +324,14 @@ static int store_put_doc(store *s, const char *sql, const char *id, const json_t
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 2, text, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 3, now, -1, SQLITE_TRANSIENT);
+    db_bind_text(st, 1, id);
+    db_bind_text(st, 2, text);
+    db_bind_text(st, 3, now);
     if (extra)
-        sqlite3_bind_text(st, 4, extra, -1, SQLITE_TRANSIENT);
-    rc = sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "writing");
+        db_bind_text(st, 4, extra);
+    rc = store_run(st, "writing", err);
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     free(text);
     return rc;
@@ -353,7 +407,7 @@ int store_scene_get(store *s, const char *id, json_t **doc, glint_err *err)
 
 int store_scene_list(store *s, json_t **array, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     json_t *arr = json_array();
     int rc = 0, step;
 
@@ -361,23 +415,24 @@ int store_scene_list(store *s, json_t **array, glint_err *err)
     if (!arr)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory listing scenes");
     pthread_mutex_lock(&s->lock);
-    st = store_prep(s, "SELECT doc FROM scenes ORDER BY rowid", err);
+    st = store_prep(s, store_pick(s, "SELECT doc FROM scenes ORDER BY rowid",
+                                   "SELECT doc FROM scenes ORDER BY ord"), err);
     if (!st) {
         rc = GLINT_EIO;
         goto out;
     }
-    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
-        json_t *d = store_load((const char *)sqlite3_column_text(st, 0), "scene", err);
+    while ((step = db_step(st, "reading", err)) == DB_ROW) {
+        json_t *d = store_load(db_col_text(st, 0), "scene", err);
         if (!d || json_array_append_new(arr, d)) {
             rc = d ? glint_err_set(err, GLINT_ENOMEM, "out of memory listing scenes")
                    : GLINT_EFORMAT;
             goto out;
         }
     }
-    if (step != SQLITE_DONE)
-        rc = store_sqlerr(s, err, "listing scenes");
+    if (step < 0)
+        rc = step;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     if (rc)
         json_decref(arr);
@@ -388,7 +443,7 @@ out:
 
 int store_scene_delete(store *s, const char *id, glint_err *err)
 {
-    sqlite3_stmt *st = NULL;
+    db_stmt *st = NULL;
     json_t *sessions = json_array();
     int rc = 0, step;
     static const char *const dels[] = {
@@ -405,47 +460,49 @@ int store_scene_delete(store *s, const char *id, glint_err *err)
         return glint_err_set(err, GLINT_ENOTFOUND, "no scene with id \"%.40s\"", id ? id : "");
     }
     pthread_mutex_lock(&s->lock);
-    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)))
+    if ((rc = db_begin(s->db, err)))
         goto out;
-    st = store_prep(s, "SELECT count(*) FROM scenes WHERE id = ?1", err);
+    /* PostgreSQL: the row locked, so a session created on the scene by
+     * another process either commits first (and is deleted here) or waits
+     * and finds no scene */
+    st = store_prep(s, store_pick(s, "SELECT 1 FROM scenes WHERE id = ?1",
+                                  "SELECT 1 FROM scenes WHERE id = ?1 FOR UPDATE"), err);
     if (!st) {
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(st) != SQLITE_ROW || sqlite3_column_int(st, 0) == 0) {
-        rc = glint_err_set(err, GLINT_ENOTFOUND, "no scene with id %s", id);
+    db_bind_text(st, 1, id);
+    if ((step = db_step(st, "deleting a scene", err)) != DB_ROW) {
+        rc = step < 0 ? step : glint_err_set(err, GLINT_ENOTFOUND, "no scene with id %s", id);
         goto out;
     }
-    sqlite3_finalize(st);
+    db_finalize(st);
     st = store_prep(s, "SELECT id FROM sessions WHERE scene_id = ?1", err);
     if (!st) {
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    while ((step = sqlite3_step(st)) == SQLITE_ROW)
-        json_array_append_new(sessions, json_string((const char *)sqlite3_column_text(st, 0)));
-    if (step != SQLITE_DONE) {
-        rc = store_sqlerr(s, err, "deleting a scene");
+    db_bind_text(st, 1, id);
+    while ((step = db_step(st, "reading", err)) == DB_ROW)
+        json_array_append_new(sessions, json_string(db_col_text(st, 0)));
+    if (step < 0) {
+        rc = step;
         goto out;
     }
     for (int i = 0; dels[i]; i++) {
-        sqlite3_finalize(st);
+        db_finalize(st);
         st = store_prep(s, dels[i], err);
         if (!st) {
             rc = GLINT_EIO;
             goto out;
         }
-        sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-        if (sqlite3_step(st) != SQLITE_DONE) {
-            rc = store_sqlerr(s, err, "deleting a scene");
+        db_bind_text(st, 1, id);
+        if ((rc = store_run(st, "deleting a scene", err)))
             goto out;
-        }
     }
-    rc = store_exec(s, "COMMIT", err);
+    rc = db_commit(s->db, err);
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     if (rc)
         store_rollback(s);
     pthread_mutex_unlock(&s->lock);
@@ -467,7 +524,7 @@ out:
 int store_session_put(store *s, const char *id, const json_t *doc, glint_err *err)
 {
     const char *scene_id = json_string_value(json_object_get(doc, "scene_id"));
-    sqlite3_stmt *st;
+    db_stmt *st;
     char *text = NULL;
     char now[GLINT_TIME_LEN];
     int rc;
@@ -483,24 +540,28 @@ int store_session_put(store *s, const char *id, const json_t *doc, glint_err *er
     glint_time_iso_ms(now);
     pthread_mutex_lock(&s->lock);
     /* one statement: the session exists only if its scene does */
-    st = store_prep(s, "INSERT INTO sessions (id, scene_id, doc, created) SELECT ?1, ?2, ?3, ?4 "
-                       "WHERE EXISTS (SELECT 1 FROM scenes WHERE id = ?2)", err);
+    st = store_prep(s, store_pick(s, "INSERT INTO sessions (id, scene_id, doc, created) "
+                                     "SELECT ?1, ?2, ?3, ?4 "
+                                     "WHERE EXISTS (SELECT 1 FROM scenes WHERE id = ?2)",
+                                  "INSERT INTO sessions (id, scene_id, doc, created) "
+                                  "SELECT ?1, ?2, ?3, ?4 FROM scenes WHERE id = ?2 FOR SHARE"),
+                    err);
     if (!st) {
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 2, scene_id, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 3, text, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 4, now, -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(st) != SQLITE_DONE)
-        rc = store_sqlerr(s, err, "creating a session");
-    else if (sqlite3_changes(s->db) == 0)
+    db_bind_text(st, 1, id);
+    db_bind_text(st, 2, scene_id);
+    db_bind_text(st, 3, text);
+    db_bind_text(st, 4, now);
+    if ((rc = store_run(st, "creating a session", err)) < 0)
+        ;
+    else if (db_changes(st) == 0)
         rc = glint_err_set(err, GLINT_ENOTFOUND, "no scene with id %s", scene_id);
     else
         rc = 0;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     free(text);
     return rc;
@@ -509,7 +570,7 @@ out:
 int store_session_update(store *s, const char *id, const json_t *doc, glint_err *err)
 {
     json_t *copy = json_copy((json_t *)doc);
-    sqlite3_stmt *st;
+    db_stmt *st;
     char *text = NULL;
     int rc;
 
@@ -527,16 +588,16 @@ int store_session_update(store *s, const char *id, const json_t *doc, glint_err 
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 2, text, -1, SQLITE_TRANSIENT);
-    if (sqlite3_step(st) != SQLITE_DONE)
-        rc = store_sqlerr(s, err, "updating a session");
-    else if (sqlite3_changes(s->db) == 0)
+    db_bind_text(st, 1, id);
+    db_bind_text(st, 2, text);
+    if ((rc = store_run(st, "updating a session", err)) < 0)
+        ;
+    else if (db_changes(st) == 0)
         rc = glint_err_set(err, GLINT_ENOTFOUND, "no session with id %s", id);
     else
         rc = 0;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     free(text);
     return rc;
@@ -544,7 +605,7 @@ out:
 
 int store_session_get(store *s, const char *id, json_t **doc, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     int rc;
 
     *doc = NULL;
@@ -556,23 +617,21 @@ int store_session_get(store *s, const char *id, json_t **doc, glint_err *err)
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
-        *doc = store_load((const char *)sqlite3_column_text(st, 0), "session", err);
+    db_bind_text(st, 1, id);
+    rc = db_step(st, "reading", err);
+    if (rc == DB_ROW) {
+        *doc = store_load(db_col_text(st, 0), "session", err);
         if (*doc) {
-            json_object_set_new(*doc, "last_seq", json_integer(sqlite3_column_int64(st, 1)));
+            json_object_set_new(*doc, "last_seq", json_integer(db_col_int(st, 1)));
             rc = 0;
         } else {
             rc = GLINT_EFORMAT;
         }
-    } else if (rc == SQLITE_DONE) {
+    } else if (rc == DB_DONE) {
         rc = glint_err_set(err, GLINT_ENOTFOUND, "no session with id %s", id);
-    } else {
-        rc = store_sqlerr(s, err, "reading a session");
     }
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     return rc;
 }
@@ -592,7 +651,7 @@ int store_material_get(store *s, const char *id, json_t **doc, glint_err *err)
 
 int store_material_list(store *s, const char *session, json_t **array, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     json_t *arr = json_array();
     int rc = 0, step;
 
@@ -600,24 +659,26 @@ int store_material_list(store *s, const char *session, json_t **array, glint_err
     if (!arr)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory listing materials");
     pthread_mutex_lock(&s->lock);
-    st = store_prep(s, "SELECT doc FROM materials WHERE session = ?1 ORDER BY rowid", err);
+    st = store_prep(s, store_pick(s, "SELECT doc FROM materials WHERE session = ?1 ORDER BY rowid",
+                                   "SELECT doc FROM materials WHERE session = ?1 ORDER BY ord"),
+                    err);
     if (!st) {
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, session ? session : "", -1, SQLITE_TRANSIENT);
-    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
-        json_t *d = store_load((const char *)sqlite3_column_text(st, 0), "material", err);
+    db_bind_text(st, 1, session ? session : "");
+    while ((step = db_step(st, "reading", err)) == DB_ROW) {
+        json_t *d = store_load(db_col_text(st, 0), "material", err);
         if (!d) {
             rc = GLINT_EFORMAT;
             goto out;
         }
         json_array_append_new(arr, d);
     }
-    if (step != SQLITE_DONE)
-        rc = store_sqlerr(s, err, "listing materials");
+    if (step < 0)
+        rc = step;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     if (rc)
         json_decref(arr);

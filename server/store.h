@@ -1,7 +1,8 @@
 /* store.h: glintd's durable state in the data directory.
  *
  * Metadata lives in SQLite (data_dir/glint.db, WAL journal, synchronous=FULL
- * so a committed transaction survives a crash or kill -9); large blobs
+ * so a committed transaction survives a crash or kill -9) or in PostgreSQL
+ * (store_open_db; the same tables, commits durable: db.h); large blobs
  * (meshes, paintings, material files) live as files under data_dir/blobs/,
  * written atomically (fsio.h) BEFORE the row that names them is committed.
  * A call returns only after its data is durable: an answered request's
@@ -48,6 +49,35 @@
 typedef struct store store;
 
 int store_open(const char *data_dir, store **out, glint_err *err);
+/* The same with the metadata in PostgreSQL: `database` is a libpq
+ * connection string (NULL or "": SQLite in data_dir, as store_open).  The
+ * tables are created on first use, once, however many glintd processes
+ * start together; blobs stay under data_dir/blobs, which processes sharing
+ * the database must share too (one directory every replica mounts).  The
+ * sweep at open then removes only files older than a write in progress
+ * could be (STORE_SHARED_SWEEP_GRACE). */
+int store_open_db(const char *data_dir, const char *database, store **out, glint_err *err);
+/* Hear of other processes' changes to the sessions' logs (PostgreSQL):
+ * after any process on the same database commits a stroke, painting or
+ * event to a session's log, fn(ctx, session) runs on a thread of the
+ * store's own (PostgreSQL LISTEN/NOTIFY, on a connection of its own; this
+ * process's own commits are heard too).  When that connection was lost
+ * and made again, notifications may have been missed: fn(ctx, NULL) then
+ * means "any session may have changed".  The connection is retried every
+ * second while the server is away.  SQLite: 0 and nothing (no other
+ * process writes).  At most one listener per store; store_close stops it. */
+int store_listen(store *s, void (*fn)(void *ctx, const char *session), void *ctx,
+                 glint_err *err);
+/* Stop the listener (fn is not called after this returns; none: nothing). */
+void store_listen_stop(store *s);
+
+/* With a shared database (PostgreSQL), other glintd processes may share
+ * the blob directory too: the sweep at open leaves files younger than this
+ * (seconds), which a write in progress elsewhere may still be naming. */
+#define STORE_SHARED_SWEEP_GRACE 600
+
+/* "sqlite" or "postgresql". */
+const char *store_backend(const store *s);
 void store_close(store *s);
 
 /* ---- blobs (files under data_dir/blobs) ------------------------------------ */

@@ -5,29 +5,42 @@
 
 #include <jansson.h>
 #include <pthread.h>
-#include <sqlite3.h>
 
+#include "db.h"
 #include "store.h"
 
 #define STORE_PATH_MAX 4096
 #define STORE_BLOB_MAX ((size_t)1 << 31)
 
+/* The PostgreSQL notification channel of the sessions' logs; the payload
+ * is the session id. */
+#define STORE_CHANNEL "glint_log"
+
+typedef struct store_listener store_listener;
+
 struct store {
-    sqlite3 *db;
+    db *db;
+    char *conninfo;                  /* PostgreSQL (for the listener's connection) */
+    store_listener *listener;        /* store_listen's thread, or NULL */
+    int sweep_grace;                 /* seconds; 0: the store is alone */
     pthread_mutex_t lock;            /* one statement sequence at a time */
     char dir[STORE_PATH_MAX];
     char blobs[STORE_PATH_MAX];
 };
 
-/* GLINT_EIO with SQLite's message for `what`. */
-int store_sqlerr(store *s, glint_err *err, const char *what);
 /* Compact JSON text with every double exact (caller frees). */
 char *store_dump(const json_t *j);
 /* Parse stored JSON text (GLINT_EFORMAT naming `what` when malformed). */
 json_t *store_load(const char *text, const char *what, glint_err *err);
 /* Run SQL without results / prepare a statement (NULL with *err set). */
 int store_exec(store *s, const char *sql, glint_err *err);
-sqlite3_stmt *store_prep(store *s, const char *sql, glint_err *err);
+db_stmt *store_prep(store *s, const char *sql, glint_err *err);
+/* Step a statement that returns no rows: 0 or a negative code. */
+int store_run(db_stmt *st, const char *what, glint_err *err);
+/* The statement for this store's engine, where the two differ. */
+const char *store_pick(const store *s, const char *sqlite_sql, const char *postgres_sql);
+/* Is this file old enough for the sweep to remove (sweep_grace)? */
+int store_sweepable(const store *s, const char *path);
 /* Roll back the open transaction, if any. */
 void store_rollback(store *s);
 

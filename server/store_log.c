@@ -4,7 +4,6 @@
  * and the sweep of files a crash can leave behind. */
 #include <dirent.h>
 #include <pthread.h>
-#include <sqlite3.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,56 +13,81 @@
 #include "ids.h"
 #include "store_int.h"
 
-/* Inside a transaction: the session's last_seq (GLINT_ENOTFOUND if none). */
-static int store_tx_last_seq(store *s, const char *session, int64_t *last, glint_err *err)
+/* Inside a transaction: the session's last_seq (GLINT_ENOTFOUND if none).
+ * for_update: PostgreSQL locks the session's row until the commit, so two
+ * processes appending to one session take turns (SQLite's write
+ * transaction already holds the whole database). */
+static int store_tx_last_seq(store *s, const char *session, int for_update, int64_t *last,
+                             glint_err *err)
 {
-    sqlite3_stmt *st = store_prep(s, "SELECT last_seq FROM sessions WHERE id = ?1", err);
+    db_stmt *st = store_prep(s, for_update ? store_pick(s, "SELECT last_seq FROM sessions "
+                                                           "WHERE id = ?1",
+                                                        "SELECT last_seq FROM sessions "
+                                                        "WHERE id = ?1 FOR UPDATE")
+                                           : "SELECT last_seq FROM sessions WHERE id = ?1",
+                             err);
     int rc;
     if (!st)
         return GLINT_EIO;
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
-        *last = sqlite3_column_int64(st, 0);
+    db_bind_text(st, 1, session);
+    rc = db_step(st, "reading", err);
+    if (rc == DB_ROW) {
+        *last = db_col_int(st, 0);
         rc = 0;
-    } else if (rc == SQLITE_DONE) {
+    } else if (rc == DB_DONE) {
         rc = glint_err_set(err, GLINT_ENOTFOUND, "no session with id %s", session);
-    } else {
-        rc = store_sqlerr(s, err, "reading a session");
     }
-    sqlite3_finalize(st);
+    db_finalize(st);
     return rc;
 }
 
 static int store_tx_set_last_seq(store *s, const char *session, int64_t last, glint_err *err)
 {
-    sqlite3_stmt *st = store_prep(s, "UPDATE sessions SET last_seq = ?2 WHERE id = ?1", err);
+    db_stmt *st = store_prep(s, "UPDATE sessions SET last_seq = ?2 WHERE id = ?1", err);
     int rc;
     if (!st)
         return GLINT_EIO;
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int64(st, 2, last);
-    rc = sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "numbering");
-    sqlite3_finalize(st);
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, last);
+    rc = store_run(st, "numbering", err);
+    db_finalize(st);
     return rc;
 }
 
+/* Inside a transaction: tell other processes on the same database that
+ * the session's log grew, when the transaction commits (PostgreSQL's
+ * NOTIFY is transactional; store_listen receives it).  SQLite: nothing
+ * (one process). */
+static int store_tx_notify(store *s, const char *session, glint_err *err)
+{
+    db_stmt *st;
+    int rc;
+    if (db_kind_of(s->db) != DB_POSTGRES)
+        return 0;
+    if (!(st = store_prep(s, "SELECT pg_notify('" STORE_CHANNEL "', ?1)", err)))
+        return GLINT_EIO;
+    db_bind_text(st, 1, session);
+    rc = db_step(st, "notifying", err);
+    db_finalize(st);
+    return rc < 0 ? rc : 0;
+}
+
 /* Inside a transaction: insert one event row (data: JSON text). */
-static int store_tx_event(store *s, sqlite3_stmt *st, const char *session, int64_t seq,
+static int store_tx_event(store *s, db_stmt *st, const char *session, int64_t seq,
                           const char *type, int view, const char *data, const char *now,
                           glint_err *err)
 {
-    sqlite3_reset(st);
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int64(st, 2, seq);
-    sqlite3_bind_text(st, 3, type, -1, SQLITE_TRANSIENT);
+    db_reset(st);
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, seq);
+    db_bind_text(st, 3, type);
     if (view >= 0)
-        sqlite3_bind_int(st, 4, view);
+        db_bind_int(st, 4, view);
     else
-        sqlite3_bind_null(st, 4);
-    sqlite3_bind_text(st, 5, data, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 6, now, -1, SQLITE_TRANSIENT);
-    return sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "appending an event");
+        db_bind_null(st, 4);
+    db_bind_text(st, 5, data);
+    db_bind_text(st, 6, now);
+    return store_run(st, "appending an event", err);
 }
 
 static const char store_sql_event[] =
@@ -75,7 +99,7 @@ static int store_tx_painting(store *s, const char *session, int view, const char
                              const char *now, int64_t *version, char *old, size_t oldlen,
                              glint_err *err)
 {
-    sqlite3_stmt *st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 "
+    db_stmt *st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 "
                                      "AND view = ?2", err);
     int64_t v = 0;
     int rc;
@@ -83,28 +107,30 @@ static int store_tx_painting(store *s, const char *session, int view, const char
     old[0] = '\0';
     if (!st)
         return GLINT_EIO;
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int(st, 2, view);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
-        v = sqlite3_column_int64(st, 0);
-        snprintf(old, oldlen, "%s", (const char *)sqlite3_column_text(st, 1));
-    } else if (rc != SQLITE_DONE) {
-        sqlite3_finalize(st);
-        return store_sqlerr(s, err, "reading a painting");
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, view);
+    rc = db_step(st, "reading", err);
+    if (rc == DB_ROW) {
+        v = db_col_int(st, 0);
+        snprintf(old, oldlen, "%s", db_col_text(st, 1));
+    } else if (rc != DB_DONE) {
+        db_finalize(st);
+        return rc;
     }
-    sqlite3_finalize(st);
-    st = store_prep(s, "INSERT OR REPLACE INTO paintings (session, view, version, blob, updated) "
-                       "VALUES (?1, ?2, ?3, ?4, ?5)", err);
+    db_finalize(st);
+    st = store_prep(s, "INSERT INTO paintings (session, view, version, blob, updated) "
+                       "VALUES (?1, ?2, ?3, ?4, ?5) ON CONFLICT (session, view) DO UPDATE SET "
+                       "version = excluded.version, blob = excluded.blob, "
+                       "updated = excluded.updated", err);
     if (!st)
         return GLINT_EIO;
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int(st, 2, view);
-    sqlite3_bind_int64(st, 3, v + 1);
-    sqlite3_bind_text(st, 4, blob, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(st, 5, now, -1, SQLITE_TRANSIENT);
-    rc = sqlite3_step(st) == SQLITE_DONE ? 0 : store_sqlerr(s, err, "writing a painting");
-    sqlite3_finalize(st);
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, view);
+    db_bind_int(st, 3, v + 1);
+    db_bind_text(st, 4, blob);
+    db_bind_text(st, 5, now);
+    rc = store_run(st, "writing a painting", err);
+    db_finalize(st);
     *version = v + 1;
     return rc;
 }
@@ -146,7 +172,7 @@ static int store_log_commit(store *s, const char *session, int view, const void 
                             int64_t *first_seq, int64_t *version, glint_err *err)
 {
     char blob[160], old[160], now[GLINT_TIME_LEN], data[64];
-    sqlite3_stmt *st = NULL;
+    db_stmt *st = NULL;
     int64_t last = 0, v = 0;
     int rc;
 
@@ -155,8 +181,8 @@ static int store_log_commit(store *s, const char *session, int view, const void 
         return rc;
     glint_time_iso_ms(now);
     pthread_mutex_lock(&s->lock);
-    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)) ||
-        (rc = store_tx_last_seq(s, session, &last, err)) ||
+    if ((rc = db_begin(s->db, err)) ||
+        (rc = store_tx_last_seq(s, session, 1, &last, err)) ||
         (rc = store_tx_painting(s, session, view, blob, now, &v, old, sizeof old, err)))
         goto out;
     if (!(st = store_prep(s, store_sql_event, err))) {
@@ -170,10 +196,10 @@ static int store_log_commit(store *s, const char *session, int view, const void 
                                  texts ? texts[i] : data, now, err)))
             goto out;
     if ((rc = store_tx_set_last_seq(s, session, last + (int64_t)n, err)) ||
-        (rc = store_exec(s, "COMMIT", err)))
+        (rc = store_tx_notify(s, session, err)) || (rc = db_commit(s->db, err)))
         goto out;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     if (rc)
         store_rollback(s);
     pthread_mutex_unlock(&s->lock);
@@ -199,7 +225,7 @@ int store_painting_put(store *s, const char *session, int view, const void *exr,
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     int rc;
 
     *exr = NULL;
@@ -214,31 +240,29 @@ int store_painting_get(store *s, const char *session, int view, void **exr, size
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int(st, 2, view);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW) {
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, view);
+    rc = db_step(st, "reading", err);
+    if (rc == DB_ROW) {
         if (version)
-            *version = sqlite3_column_int64(st, 0);
-        rc = store_blob_get(s, (const char *)sqlite3_column_text(st, 1), exr, len, err);
+            *version = db_col_int(st, 0);
+        rc = store_blob_get(s, db_col_text(st, 1), exr, len, err);
         if (rc == GLINT_ENOTFOUND) /* a row without its file: never acceptable */
             rc = glint_err_set(err, GLINT_EIO, "painting of session %s view %d: file missing",
                                session, view);
-    } else if (rc == SQLITE_DONE) {
+    } else if (rc == DB_DONE) {
         rc = glint_err_set(err, GLINT_ENOTFOUND, "view %d of session %s has no painting", view,
                            session);
-    } else {
-        rc = store_sqlerr(s, err, "reading a painting");
     }
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     return rc;
 }
 
 int store_paintings_list(store *s, const char *session, json_t **array, glint_err *err)
 {
-    sqlite3_stmt *st;
+    db_stmt *st;
     json_t *arr = json_array();
     int rc = 0, step;
 
@@ -252,16 +276,16 @@ int store_paintings_list(store *s, const char *session, json_t **array, glint_er
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, session ? session : "", -1, SQLITE_TRANSIENT);
-    while ((step = sqlite3_step(st)) == SQLITE_ROW)
-        json_array_append_new(arr, json_pack("{s:i, s:I, s:s}", "view", sqlite3_column_int(st, 0),
-                                             "version", (json_int_t)sqlite3_column_int64(st, 1),
+    db_bind_text(st, 1, session ? session : "");
+    while ((step = db_step(st, "reading", err)) == DB_ROW)
+        json_array_append_new(arr, json_pack("{s:i, s:I, s:s}", "view", db_col_int(st, 0),
+                                             "version", (json_int_t)db_col_int(st, 1),
                                              "updated",
-                                             (const char *)sqlite3_column_text(st, 2)));
-    if (step != SQLITE_DONE)
-        rc = store_sqlerr(s, err, "listing paintings");
+                                             db_col_text(st, 2)));
+    if (step < 0)
+        rc = step;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     pthread_mutex_unlock(&s->lock);
     if (rc)
         json_decref(arr);
@@ -311,7 +335,7 @@ int store_event_append(store *s, const char *session, const char *type, int view
 {
     char now[GLINT_TIME_LEN];
     char *text;
-    sqlite3_stmt *st = NULL;
+    db_stmt *st = NULL;
     int64_t last = 0;
     int rc;
 
@@ -327,8 +351,8 @@ int store_event_append(store *s, const char *session, const char *type, int view
         return glint_err_set(err, GLINT_EINVAL, "event data must be a JSON object");
     glint_time_iso_ms(now);
     pthread_mutex_lock(&s->lock);
-    if ((rc = store_exec(s, "BEGIN IMMEDIATE", err)) ||
-        (rc = store_tx_last_seq(s, session, &last, err)))
+    if ((rc = db_begin(s->db, err)) ||
+        (rc = store_tx_last_seq(s, session, 1, &last, err)))
         goto out;
     st = store_prep(s, store_sql_event, err);
     if (!st) {
@@ -337,10 +361,10 @@ int store_event_append(store *s, const char *session, const char *type, int view
     }
     if ((rc = store_tx_event(s, st, session, last + 1, type, view, text, now, err)) ||
         (rc = store_tx_set_last_seq(s, session, last + 1, err)) ||
-        (rc = store_exec(s, "COMMIT", err)))
+        (rc = store_tx_notify(s, session, err)) || (rc = db_commit(s->db, err)))
         goto out;
 out:
-    sqlite3_finalize(st);
+    db_finalize(st);
     if (rc)
         store_rollback(s);
     pthread_mutex_unlock(&s->lock);
@@ -357,7 +381,7 @@ static int store_log_read(store *s, const char *session, int64_t since, int limi
                           int strokes_only, json_t **array, int *more, int64_t *last_seq,
                           glint_err *err)
 {
-    sqlite3_stmt *st = NULL;
+    db_stmt *st = NULL;
     json_t *arr = json_array();
     int rc = 0, step, count = 0;
     int64_t last_here;
@@ -376,9 +400,9 @@ static int store_log_read(store *s, const char *session, int64_t since, int limi
     }
     pthread_mutex_lock(&s->lock);
     /* one read transaction: the rows and last_seq agree */
-    if ((rc = store_exec(s, "BEGIN", err)))
+    if ((rc = db_begin_read(s->db, err)))
         goto out;
-    if ((rc = store_tx_last_seq(s, session, last_seq, err)))
+    if ((rc = store_tx_last_seq(s, session, 0, last_seq, err)))
         goto out;
     st = store_prep(s, strokes_only
                            ? "SELECT seq, type, view, data, created FROM events WHERE session = ?1 "
@@ -390,17 +414,17 @@ static int store_log_read(store *s, const char *session, int64_t since, int limi
         rc = GLINT_EIO;
         goto out;
     }
-    sqlite3_bind_text(st, 1, session, -1, SQLITE_TRANSIENT);
-    sqlite3_bind_int64(st, 2, since);
-    sqlite3_bind_int64(st, 3, limit > 0 ? (int64_t)limit + 1 : -1);
-    while ((step = sqlite3_step(st)) == SQLITE_ROW) {
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, since);
+    db_bind_int(st, 3, limit > 0 ? (int64_t)limit + 1 : INT64_MAX);
+    while ((step = db_step(st, "reading", err)) == DB_ROW) {
         json_t *data, *rec;
         if (limit > 0 && count == limit) {
             if (more)
                 *more = 1;
             break;
         }
-        data = store_load((const char *)sqlite3_column_text(st, 3), "event", err);
+        data = store_load(db_col_text(st, 3), "event", err);
         if (!data) {
             rc = GLINT_EFORMAT;
             goto out;
@@ -411,22 +435,26 @@ static int store_log_read(store *s, const char *session, int64_t since, int limi
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory reading events");
             goto out;
         }
-        json_object_set_new(rec, "seq", json_integer(sqlite3_column_int64(st, 0)));
+        json_object_set_new(rec, "seq", json_integer(db_col_int(st, 0)));
         if (!strokes_only)
-            json_object_set_new(rec, "type", json_string((const char *)sqlite3_column_text(st, 1)));
-        if (sqlite3_column_type(st, 2) != SQLITE_NULL)
-            json_object_set_new(rec, "view", json_integer(sqlite3_column_int(st, 2)));
+            json_object_set_new(rec, "type", json_string(db_col_text(st, 1)));
+        if (!db_col_null(st, 2))
+            json_object_set_new(rec, "view", json_integer(db_col_int(st, 2)));
         json_object_set_new(rec, strokes_only ? "stroke" : "data", data);
-        json_object_set_new(rec, "created", json_string((const char *)sqlite3_column_text(st, 4)));
+        json_object_set_new(rec, "created", json_string(db_col_text(st, 4)));
         json_array_append_new(arr, rec);
         count++;
     }
-    if (step != SQLITE_DONE && step != SQLITE_ROW)
-        rc = store_sqlerr(s, err, "reading events");
+    if (step < 0)
+        rc = step;
 out:
-    sqlite3_finalize(st);
-    if (!sqlite3_get_autocommit(s->db))
-        sqlite3_exec(s->db, rc ? "ROLLBACK" : "COMMIT", NULL, NULL, NULL);
+    db_finalize(st);
+    if (db_in_tx(s->db)) {
+        if (rc)
+            db_rollback(s->db);
+        else
+            db_commit(s->db, NULL);
+    }
     pthread_mutex_unlock(&s->lock);
     if (rc)
         json_decref(arr);
@@ -474,7 +502,7 @@ void store_sweep(store *s)
     char dir[STORE_PATH_MAX];
     DIR *d;
     struct dirent *e;
-    sqlite3_stmt *st;
+    db_stmt *st;
 
     if (snprintf(dir, sizeof dir, "%s/sessions", s->blobs) >= (int)sizeof dir)
         return;
@@ -503,16 +531,17 @@ void store_sweep(store *s)
             if (f->d_name[0] == '.')
                 continue;
             snprintf(name, sizeof name, "sessions/%s/%s", e->d_name, f->d_name);
-            sqlite3_reset(st);
-            sqlite3_bind_text(st, 1, e->d_name, -1, SQLITE_TRANSIENT);
-            sqlite3_bind_text(st, 2, name, -1, SQLITE_TRANSIENT);
-            keep = sqlite3_step(st) == SQLITE_ROW;
-            if (!keep && snprintf(path, sizeof path, "%s/%s", sdir, f->d_name) < (int)sizeof path)
+            db_reset(st);
+            db_bind_text(st, 1, e->d_name);
+            db_bind_text(st, 2, name);
+            keep = db_step(st, "sweeping", NULL) == DB_ROW;
+            if (!keep && snprintf(path, sizeof path, "%s/%s", sdir, f->d_name) < (int)sizeof path &&
+                store_sweepable(s, path))
                 unlink(path);
         }
         closedir(sd);
     }
-    sqlite3_finalize(st);
+    db_finalize(st);
     closedir(d);
 }
 

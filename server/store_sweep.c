@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "ids.h"
@@ -27,15 +28,25 @@
 static int has_row(store *s, const char *table, const char *id)
 {
     char sql[96];
-    sqlite3_stmt *st;
+    db_stmt *st;
     int r;
     snprintf(sql, sizeof sql, "SELECT 1 FROM %s WHERE id = ?1", table);
     if (!(st = store_prep(s, sql, NULL)))
         return -1;
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_TRANSIENT);
-    r = sqlite3_step(st);
-    sqlite3_finalize(st);
-    return r == SQLITE_ROW ? 1 : r == SQLITE_DONE ? 0 : -1;
+    db_bind_text(st, 1, id);
+    r = db_step(st, "sweeping", NULL);
+    db_finalize(st);
+    return r == DB_ROW ? 1 : r == DB_DONE ? 0 : -1;
+}
+
+int store_sweepable(const store *s, const char *path)
+{
+    struct stat st;
+    if (!s->sweep_grace)
+        return 1;
+    if (lstat(path, &st))
+        return 0;
+    return time(NULL) - st.st_mtime >= s->sweep_grace;
 }
 
 /* The id at the start of a file name ("<id>.<ext>"), or 0. */
@@ -51,7 +62,7 @@ static int id_stem(const char *name, char id[GLINT_ID_LEN])
 }
 
 /* Remove temporary files of interrupted atomic writes, at any depth. */
-static void sweep_tmp(const char *dir, int depth)
+static void sweep_tmp(const store *s, const char *dir, int depth)
 {
     DIR *d = opendir(dir);
     struct dirent *e;
@@ -67,8 +78,9 @@ static void sweep_tmp(const char *dir, int depth)
             continue;
         if (S_ISDIR(st.st_mode)) {
             if (depth < 4)
-                sweep_tmp(path, depth + 1);
-        } else if (S_ISREG(st.st_mode) && strstr(e->d_name, ".tmp-")) {
+                sweep_tmp(s, path, depth + 1);
+        } else if (S_ISREG(st.st_mode) && strstr(e->d_name, ".tmp-") &&
+                   store_sweepable(s, path)) {
             unlink(path);
         }
     }
@@ -85,8 +97,10 @@ static void sweep_rows(store *s, const char *kind, const char *table)
         !(d = opendir(dir)))
         return;
     while ((e = readdir(d))) {
-        char name[STORE_PATH_MAX];
-        if (!id_stem(e->d_name, id) || has_row(s, table, id) != 0)
+        char name[STORE_PATH_MAX], path[STORE_PATH_MAX];
+        if (!id_stem(e->d_name, id) || has_row(s, table, id) != 0 ||
+            snprintf(path, sizeof path, "%s/%s", dir, e->d_name) >= (int)sizeof path ||
+            !store_sweepable(s, path))
             continue;
         snprintf(name, sizeof name, "%s/%s", kind, e->d_name);
         store_blob_rmtree(s, name);
@@ -127,7 +141,7 @@ static void sweep_envs(store *s)
             orphan = !env_file(dir, id, ".json");
         else
             orphan = 0;
-        if (orphan)
+        if (orphan && store_sweepable(s, path))
             unlink(path);
     }
     closedir(d);
@@ -149,6 +163,9 @@ static void sweep_gbuffer_sets(store *s)
             snprintf(rec, sizeof rec, "%s/%s/set.json", dir, id) >= (int)sizeof rec ||
             stat(rec, &st) == 0)
             continue;
+        if (snprintf(rec, sizeof rec, "%s/%s", dir, id) >= (int)sizeof rec ||
+            !store_sweepable(s, rec))
+            continue;
         snprintf(name, sizeof name, "gbuffer-sets/%s", id);
         store_blob_rmtree(s, name);
     }
@@ -157,7 +174,7 @@ static void sweep_gbuffer_sets(store *s)
 
 void store_sweep_blobs(store *s)
 {
-    sweep_tmp(s->blobs, 0);
+    sweep_tmp(s, s->blobs, 0);
     sweep_rows(s, "materials", "materials");
     sweep_rows(s, "scenes", "scenes");
     sweep_rows(s, "meshes", "meshes");

@@ -65,6 +65,33 @@ def sanitizer_check(log_path):
             return
 
 
+# With GLINT_TEST_PG set (tests/with_postgres.sh started a PostgreSQL
+# server), every data directory gets a database of its own on that server
+# and glintd keeps its metadata there (--database): the same tests, the
+# other store engine.  A data directory reused by a later Daemon keeps its
+# database.
+PG = os.environ.get("GLINT_TEST_PG", "")
+_pg_databases = {}
+
+
+def pg_database(data_dir):
+    """The connection string of data_dir's database, created on first use."""
+    if data_dir not in _pg_databases:
+        name = "it_" + os.urandom(8).hex()
+        subprocess.run(["psql", "-q", "-X", "-v", "ON_ERROR_STOP=1", PG, "-c",
+                        "CREATE DATABASE %s" % name], check=True)
+        _pg_databases[data_dir] = "%s dbname=%s" % (PG, name)
+    return _pg_databases[data_dir]
+
+
+def pg_query(data_dir, sql):
+    """Rows of a query on data_dir's database, as lists of strings."""
+    out = subprocess.run(["psql", "-q", "-X", "-A", "-t", "-F", "\t", "-v", "ON_ERROR_STOP=1",
+                          pg_database(data_dir), "-c", sql],
+                         check=True, capture_output=True, text=True).stdout
+    return [line.split("\t") for line in out.splitlines() if line]
+
+
 class Daemon:
     """A running glintd; stop() sends SIGTERM and waits."""
 
@@ -72,6 +99,8 @@ class Daemon:
         self.tmp = tempfile.mkdtemp(prefix="glintd-test-")
         self.data_dir = data_dir or os.path.join(self.tmp, "data")
         self.args = list(args)
+        if PG and "--database" not in self.args:
+            self.args += ["--database", pg_database(os.path.realpath(self.data_dir))]
         self.proc = None
         self.preexec = None  # run in the child before glintd (limits, another user)
         self.glintd = GLINTD
@@ -95,6 +124,8 @@ class Daemon:
                 with open(port_file) as f:
                     txt = f.read().strip()
                 if txt:
+                    # on PostgreSQL no SQLite file is made
+                    assert not (PG and os.path.exists(os.path.join(self.data_dir, "glint.db")))
                     self.port = int(txt)
                     self.base = "http://127.0.0.1:%d" % self.port
                     return

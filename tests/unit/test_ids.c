@@ -42,9 +42,28 @@ TEST(secret_equal_at_every_edge)
     ASSERT(!glint_secret_equal("", "x") && !glint_secret_equal("x", ""));
 }
 
+TEST(ids_near_share_the_routing_digits_only)
+{
+    char scene[GLINT_ID_LEN], a[GLINT_ID_LEN], b[GLINT_ID_LEN];
+    ASSERT_OK(glint_id_new(scene, NULL));
+    ASSERT_OK(glint_id_new_near(scene, a, NULL));
+    ASSERT_OK(glint_id_new_near(scene, b, NULL));
+    ASSERT(glint_id_valid(a) && glint_id_valid(b));
+    ASSERT(memcmp(a, scene, GLINT_ID_ROUTE) == 0 && memcmp(b, scene, GLINT_ID_ROUTE) == 0);
+    /* the rest is random: distinct from the scene's and from each other */
+    ASSERT(strcmp(a + GLINT_ID_ROUTE, scene + GLINT_ID_ROUTE) != 0);
+    ASSERT(strcmp(a + GLINT_ID_ROUTE, b + GLINT_ID_ROUTE) != 0);
+    /* no id to be near: an id all the same */
+    ASSERT_OK(glint_id_new_near(NULL, a, NULL));
+    ASSERT(glint_id_valid(a));
+    ASSERT_OK(glint_id_new_near("../etc", a, NULL));
+    ASSERT(glint_id_valid(a));
+}
+
 TEST_LIST {
     TEST_ENTRY(new_ids_are_valid_and_distinct),
     TEST_ENTRY(secret_equal_at_every_edge),
+    TEST_ENTRY(ids_near_share_the_routing_digits_only),
 };
 
 TEST_MAIN()

@@ -324,8 +324,8 @@ TEST(session_that_does_not_exist)
     ASSERT_EQ(store_strokes_append(f.s, "x", 0, strokes, exr1, 4, &first, &last, NULL, NULL),
               GLINT_ENOTFOUND);
     /* nothing was written for it */
-    ASSERT_EQ(db_int(f.dir, "SELECT count(*) FROM events"), 0);
-    ASSERT_EQ(db_int(f.dir, "SELECT count(*) FROM paintings"), 0);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 0);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM paintings"), 0);
     {
         char dir[64];
         snprintf(dir, sizeof dir, "blobs/sessions/%s", unknown);
@@ -363,7 +363,7 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     doc = json_pack("{s:s}", "id", mat);
     ASSERT_OK(store_material_put(f.s, mat, f.session, doc, NULL));
     json_decref(doc);
-    ASSERT_EQ(db_int(f.dir, "SELECT count(*) FROM events"), 6);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 6);
 
     ASSERT_OK(store_scene_delete(f.s, f.scene, NULL));
     ASSERT_EQ(store_scene_get(f.s, f.scene, &doc, NULL), GLINT_ENOTFOUND);
@@ -376,10 +376,10 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
         char sql[160];
         snprintf(sql, sizeof sql, "SELECT count(*) FROM events WHERE session IN ('%s', '%s')",
                  f.session, s2);
-        ASSERT_EQ(db_int(f.dir, sql), 0);
+        ASSERT_EQ(db_int(&f, sql), 0);
         snprintf(sql, sizeof sql, "SELECT count(*) FROM paintings WHERE session IN ('%s', '%s')",
                  f.session, s2);
-        ASSERT_EQ(db_int(f.dir, sql), 0);
+        ASSERT_EQ(db_int(&f, sql), 0);
     }
     snprintf(name, sizeof name, "blobs/sessions/%s", f.session);
     ASSERT(!path_exists(f.dir, name));
@@ -401,7 +401,7 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     ASSERT(path_exists(f.dir, name));
     ASSERT_OK(store_material_get(f.s, mat, &doc, NULL));
     json_decref(doc);
-    ASSERT_EQ(db_int(f.dir, "SELECT count(*) FROM events"), 2);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 2);
     /* twice, or unknown */
     ASSERT_EQ(store_scene_delete(f.s, f.scene, NULL), GLINT_ENOTFOUND);
     ASSERT_OK(glint_id_new(unknown, NULL));
@@ -420,6 +420,7 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
 
 typedef struct appender {
     fixture *f;
+    store *s; /* the appender's own store (another process's), or NULL */
     int tag;
     int64_t first[APPENDS], last[APPENDS];
     int rc;
@@ -430,14 +431,17 @@ static void *append_main(void *arg)
     appender *a = arg;
     for (int i = 0; i < APPENDS && !a->rc; i++) {
         json_t *strokes = strokes_of(PER_APPEND, a->tag * 1000 + i);
-        a->rc = store_strokes_append(a->f->s, a->f->session, a->tag % 2, strokes, exr1, 8,
+        a->rc = store_strokes_append(a->s ? a->s : a->f->s, a->f->session, a->tag % 2, strokes, exr1, 8,
                                      &a->first[i], &a->last[i], NULL, NULL);
         json_decref(strokes);
     }
     return NULL;
 }
 
-TEST(concurrent_appends_are_numbered_without_gaps)
+/* Appenders on one store (threads of one glintd) or each on its own store
+ * opened on the same database (separate glintd processes: with PostgreSQL,
+ * replicas; with SQLite, several connections to one file). */
+static void appends_numbered(int own_stores)
 {
     fixture f;
     appender a[APPENDERS];
@@ -452,10 +456,15 @@ TEST(concurrent_appends_are_numbered_without_gaps)
         memset(&a[i], 0, sizeof a[i]);
         a[i].f = &f;
         a[i].tag = i + 1;
-        ASSERT_EQ(pthread_create(&t[i], NULL, append_main, &a[i]), 0);
+        if (own_stores)
+            ASSERT_OK(fx_store_open(&f, &a[i].s, NULL));
     }
     for (int i = 0; i < APPENDERS; i++)
+        ASSERT_EQ(pthread_create(&t[i], NULL, append_main, &a[i]), 0);
+    for (int i = 0; i < APPENDERS; i++)
         pthread_join(t[i], NULL);
+    for (int i = 0; i < APPENDERS; i++)
+        store_close(a[i].s);
     for (int i = 0; i < APPENDERS; i++) {
         ASSERT_OK(a[i].rc);
         for (int k = 0; k < APPENDS; k++) {
@@ -493,6 +502,16 @@ TEST(concurrent_appends_are_numbered_without_gaps)
     fx_close(&f);
 }
 
+TEST(concurrent_appends_are_numbered_without_gaps)
+{
+    appends_numbered(0);
+}
+
+TEST(appends_from_several_stores_on_one_database_share_one_numbering)
+{
+    appends_numbered(1);
+}
+
 TEST_LIST{
     TEST_ENTRY(painting_versions_and_seq),
     TEST_ENTRY(strokes_and_events_share_one_numbering),
@@ -500,6 +519,7 @@ TEST_LIST{
     TEST_ENTRY(session_that_does_not_exist),
     TEST_ENTRY(scene_delete_removes_sessions_logs_and_blobs),
     TEST_ENTRY(concurrent_appends_are_numbered_without_gaps),
+    TEST_ENTRY(appends_from_several_stores_on_one_database_share_one_numbering),
 };
 
 TEST_MAIN()
