@@ -75,7 +75,7 @@ static int gb_execute(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
     if ((rc = prep_fit(p, NULL, t->rgb, &m, err)))
         return rc;
     t0 = srv_timing_step(t->tm, "fit", t0);
-    if ((rc = glint_id_new(mid, err)))
+    if ((rc = glint_id_new_near(t->set_id, mid, err)))
         goto done;
     snprintf(name, sizeof name, "materials/%s", mid);
     if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||
