@@ -581,12 +581,15 @@ done:
     return rc;
 }
 
+/* Tries of a stroke request whose view another replica keeps changing. */
+#define STROKES_ATTEMPTS 8
+
 static http_resp strokes_post(http_req *req)
 {
     app *a = req->app;
     json_t *sdoc = NULL, *scene_doc = NULL, *canon = NULL;
     stroke *list = NULL;
-    int n = 0, k, w, h, ps, rc, need_base = 0, locked = 0;
+    int n = 0, k, w, h, ps, rc, need_base = 0, locked = 0, attempts = 0;
     img cur = {0}, base = {0};
     void *exr = NULL;
     size_t len = 0;
@@ -624,6 +627,7 @@ static http_resp strokes_post(http_req *req)
     pthread_mutex_lock(session_lock(req->param[0]));
     locked = 1;
     t0 = srv_timing_step(&req->timing, "lock", t0);
+again:
     if ((rc = view_current(a, req->param[0], scene_id, k, ps, &cur, &version, &e))) {
         glint_err_prefix(&e, "reading the view's image");
         goto done;
@@ -656,8 +660,18 @@ static http_resp strokes_post(http_req *req)
         goto done;
     }
     t0 = srv_timing_step(&req->timing, "encode", t0);
-    if ((rc = store_strokes_append(a->store, req->param[0], k, canon, exr, len, &first, &last,
-                                   &version, &e))) {
+    /* this process's lock serializes its own writers; another replica on
+     * the same database may still have painted the view since it was read:
+     * then the strokes go onto the new image */
+    if ((rc = store_strokes_append_at(a->store, req->param[0], k, version, canon, exr, len,
+                                      &first, &last, &version, &e))) {
+        if (rc == GLINT_ECONFLICT && ++attempts < STROKES_ATTEMPTS) {
+            free(exr);
+            exr = NULL;
+            img_free(&cur);
+            img_free(&base);
+            goto again;
+        }
         glint_err_prefix(&e, "storing the strokes");
         goto done;
     }

@@ -31,6 +31,7 @@ typedef struct app_config {
     int port;
     char data_dir[4096];
     char database[1024];      /* PostgreSQL connection string ("" = SQLite in data_dir) */
+    char replica_name[65];    /* X-Glint-Replica on every response ("" = none) */
     char web_dir[4096];
     char env_dir[4096];       /* HDR maps offered as data:<file> ("" = none) */
     char measured_dir[4096];  /* MERL tables offered as merl:<file> ("" = none) */

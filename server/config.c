@@ -66,7 +66,7 @@ static const struct {
     size_t off, cap;
 } str_opts[] = {
     STR_OPT("address", address),   STR_OPT("data-dir", data_dir),
-    STR_OPT("database", database),
+    STR_OPT("database", database), STR_OPT("replica-name", replica_name),
     STR_OPT("web-dir", web_dir),   STR_OPT("env-dir", env_dir),
     STR_OPT("measured-dir", measured_dir), STR_OPT("api-key", api_key),
     STR_OPT("allow-origin", allow_origin),

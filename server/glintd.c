@@ -35,6 +35,8 @@ static void usage(FILE *f)
           "                        string, e.g. \"host=/run/postgresql dbname=glint\");\n"
           "                        blobs stay in --data-dir, shared by the replicas that\n"
           "                        share the database (default: SQLite in --data-dir)\n"
+          "  --replica-name NAME   name this process on every response (X-Glint-Replica),\n"
+          "                        among replicas behind one proxy ([A-Za-z0-9._-], 1-64)\n"
           "  --web-dir DIR         static files served at / (./web)\n"
           "  --env-dir DIR         HDR environment maps offered to fits as data:<file>\n"
           "  --measured-dir DIR    MERL tables (*.binary) offered to paint from as merl:<file>\n"
@@ -75,7 +77,7 @@ int main(int argc, char **argv)
     static const struct option lo[] = {
         {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
         {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
-        {"database", required_argument, 0, 1},
+        {"database", required_argument, 0, 1}, {"replica-name", required_argument, 0, 1},
         {"env-dir", required_argument, 0, 1}, {"measured-dir", required_argument, 0, 1},
         {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
         {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
@@ -136,6 +138,13 @@ int main(int argc, char **argv)
         fprintf(stderr, "glintd: unexpected argument '%s'\n", argv[optind]);
         return 1;
     }
+    for (const char *ch = a.cfg.replica_name; *ch; ch++)
+        if (!((*ch >= 'A' && *ch <= 'Z') || (*ch >= 'a' && *ch <= 'z') ||
+              (*ch >= '0' && *ch <= '9') || *ch == '.' || *ch == '_' || *ch == '-')) {
+            fprintf(stderr, "glintd: --replica-name: only letters, digits, '.', '_' and '-' "
+                            "(got '%s')\n", a.cfg.replica_name);
+            return 1;
+        }
     if (fsio_mkdirs(a.cfg.data_dir, &ge)) {
         fprintf(stderr, "glintd: %s\n", ge.msg);
         return 1;
@@ -220,6 +229,7 @@ int main(int argc, char **argv)
     hc.static_dir = a.cfg.web_dir;
     hc.allow_origin = a.cfg.allow_origin[0] ? a.cfg.allow_origin : NULL;
     hc.quiet = a.cfg.quiet;
+    hc.replica = a.cfg.replica_name[0] ? a.cfg.replica_name : NULL;
     a.started = time(NULL);
     if (http_server_start(&hc, routes, nroutes, &a, &a.http, &port, err, sizeof err)) {
         fprintf(stderr, "glintd: %s\n", err);

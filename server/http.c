@@ -511,10 +511,13 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     if (cors) {
         MHD_add_response_header(resp.r, "Access-Control-Allow-Origin", origin);
         MHD_add_response_header(resp.r, "Access-Control-Expose-Headers",
-                                "Location, ETag, Content-Disposition, X-Glint-Env, Server-Timing");
+                                "Location, ETag, Content-Disposition, X-Glint-Env, Server-Timing, "
+                                "X-Glint-Replica");
     }
     if (origin)
         MHD_add_response_header(resp.r, MHD_HTTP_HEADER_VARY, "Origin");
+    if (s->cfg.replica)
+        MHD_add_response_header(resp.r, "X-Glint-Replica", s->cfg.replica);
     /* a health check's reserve connection, and any connection while the
      * limits are nearly reached, is not kept alive */
     lease = conn_lease(conn);

@@ -101,6 +101,9 @@ typedef struct http_config {
      * Host under http or https. */
     const char *allow_origin;
     int quiet;              /* no request log lines */
+    /* This process's name among replicas behind one proxy, sent on every
+     * response as X-Glint-Replica (NULL: no header). */
+    const char *replica;
 } http_config;
 
 /* Start serving `routes` (n entries, matched in order).  OUT: *out, and the

@@ -153,6 +153,15 @@ int store_paintings_list(store *s, const char *session, json_t **array, glint_er
 int store_strokes_append(store *s, const char *session, int view, const json_t *strokes,
                          const void *exr, size_t len, int64_t *first_seq, int64_t *last_seq,
                          int64_t *version, glint_err *err);
+/* The same, committed only if the view is still at painting version
+ * `base` (0: never painted), the version the image was made from:
+ * GLINT_ECONFLICT when another writer (another glintd on the same
+ * database) changed the view meanwhile; nothing is stored then and the
+ * caller applies its strokes again to the new image.  base -1: no check. */
+int store_strokes_append_at(store *s, const char *session, int view, int64_t base,
+                            const json_t *strokes, const void *exr, size_t len,
+                            int64_t *first_seq, int64_t *last_seq, int64_t *version,
+                            glint_err *err);
 /* Strokes with seq > since, in order, as a JSON array of
  * {"seq", "view", "stroke", "created"}. */
 int store_strokes_since(store *s, const char *session, int64_t since, json_t **array,

@@ -94,10 +94,11 @@ static const char store_sql_event[] =
     "INSERT INTO events (session, seq, type, view, data, created) VALUES (?1, ?2, ?3, ?4, ?5, ?6)";
 
 /* Inside a transaction: replace the painting row; OUT: *version, the old
- * blob name in old[] ("" if none). */
-static int store_tx_painting(store *s, const char *session, int view, const char *blob,
-                             const char *now, int64_t *version, char *old, size_t oldlen,
-                             glint_err *err)
+ * blob name in old[] ("" if none).  base >= 0: the version the new image
+ * was made from, GLINT_ECONFLICT if the view is at another one now. */
+static int store_tx_painting(store *s, const char *session, int view, int64_t base,
+                             const char *blob, const char *now, int64_t *version, char *old,
+                             size_t oldlen, glint_err *err)
 {
     db_stmt *st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 "
                                      "AND view = ?2", err);
@@ -118,6 +119,12 @@ static int store_tx_painting(store *s, const char *session, int view, const char
         return rc;
     }
     db_finalize(st);
+    if (base >= 0 && v != base) {
+        old[0] = '\0';
+        return glint_err_set(err, GLINT_ECONFLICT,
+                             "view %d is at painting version %lld, not %lld: another writer "
+                             "changed it meanwhile", view, (long long)v, (long long)base);
+    }
     st = store_prep(s, "INSERT INTO paintings (session, view, version, blob, updated) "
                        "VALUES (?1, ?2, ?3, ?4, ?5) ON CONFLICT (session, view) DO UPDATE SET "
                        "version = excluded.version, blob = excluded.blob, "
@@ -166,8 +173,10 @@ static int store_painting_blob(store *s, const char *session, int view, const vo
  * {"view", "version"}) numbered after the session's last sequence number;
  * then remove the replaced blob (or, on failure, the new one).  A crash
  * between the steps leaves a file no row names: store_sweep removes it.
- * OUT: *first_seq, *version (may be NULL). */
-static int store_log_commit(store *s, const char *session, int view, const void *exr,
+ * base >= 0: commit only if the view is still at that painting version
+ * (GLINT_ECONFLICT otherwise).  OUT: *first_seq, *version (may be NULL). */
+static int store_log_commit(store *s, const char *session, int view, int64_t base,
+                            const void *exr,
                             size_t len, const char *type, char *const *texts, size_t n,
                             int64_t *first_seq, int64_t *version, glint_err *err)
 {
@@ -183,7 +192,8 @@ static int store_log_commit(store *s, const char *session, int view, const void 
     pthread_mutex_lock(&s->lock);
     if ((rc = db_begin(s->db, err)) ||
         (rc = store_tx_last_seq(s, session, 1, &last, err)) ||
-        (rc = store_tx_painting(s, session, view, blob, now, &v, old, sizeof old, err)))
+        (rc = store_tx_painting(s, session, view, base, blob, now, &v, old, sizeof old,
+                                   err)))
         goto out;
     if (!(st = store_prep(s, store_sql_event, err))) {
         rc = GLINT_EIO;
@@ -219,7 +229,8 @@ out:
 int store_painting_put(store *s, const char *session, int view, const void *exr, size_t len,
                        int64_t *version, int64_t *seq, glint_err *err)
 {
-    return store_log_commit(s, session, view, exr, len, "painting", NULL, 1, seq, version, err);
+    return store_log_commit(s, session, view, -1, exr, len, "painting", NULL, 1, seq, version,
+                            err);
 }
 
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
@@ -302,6 +313,15 @@ int store_strokes_append(store *s, const char *session, int view, const json_t *
                          const void *exr, size_t len, int64_t *first_seq, int64_t *last_seq,
                          int64_t *version, glint_err *err)
 {
+    return store_strokes_append_at(s, session, view, -1, strokes, exr, len, first_seq, last_seq,
+                                   version, err);
+}
+
+int store_strokes_append_at(store *s, const char *session, int view, int64_t base,
+                            const json_t *strokes, const void *exr, size_t len,
+                            int64_t *first_seq, int64_t *last_seq, int64_t *version,
+                            glint_err *err)
+{
     size_t n = json_array_size(strokes), i;
     int64_t first = 0;
     char **texts;
@@ -316,7 +336,8 @@ int store_strokes_append(store *s, const char *session, int view, const json_t *
         if (!(texts[i] = store_dump(json_array_get(strokes, i))))
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory serializing strokes");
     if (!rc)
-        rc = store_log_commit(s, session, view, exr, len, "stroke", texts, n, &first, version,
+        rc = store_log_commit(s, session, view, base, exr, len, "stroke", texts, n, &first,
+                              version,
                               err);
     if (!rc) {
         if (first_seq)

@@ -412,6 +412,44 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     fx_close(&f);
 }
 
+/* Strokes made on an image of version `base` are stored only while the
+ * view is still there (another replica may have painted it meanwhile). */
+TEST(strokes_on_a_stale_image_are_refused)
+{
+    fixture f;
+    json_t *strokes = strokes_of(2, 7), *names;
+    int64_t first = 0, last = 0, version = 0;
+    char dir[64];
+    glint_err e;
+    ASSERT_OK(fx_open(&f));
+    /* never painted: base 0 */
+    ASSERT_OK(store_strokes_append_at(f.s, f.session, 1, 0, strokes, exr1, sizeof exr1, &first,
+                                      &last, &version, NULL));
+    ASSERT_EQ(version, 1);
+    ASSERT_EQ(last, 2);
+    /* made on version 0 again: refused, nothing stored */
+    ASSERT_EQ(store_strokes_append_at(f.s, f.session, 1, 0, strokes, exr2, sizeof exr2, &first,
+                                      &last, &version, &e),
+              GLINT_ECONFLICT);
+    ASSERT_MSG(strstr(e.msg, "version 1") != NULL, "%s", e.msg);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 2);
+    ASSERT_EQ(db_int(&f, "SELECT max(version) FROM paintings"), 1);
+    snprintf(dir, sizeof dir, "sessions/%s", f.session);
+    ASSERT_OK(store_blob_list(f.s, dir, &names, NULL));
+    ASSERT_EQ(json_array_size(names), 1); /* the refused image's file is gone */
+    json_decref(names);
+    /* on the current version it goes through; -1 never checks */
+    ASSERT_OK(store_strokes_append_at(f.s, f.session, 1, 1, strokes, exr2, sizeof exr2, &first,
+                                      &last, &version, NULL));
+    ASSERT_EQ(version, 2);
+    ASSERT_EQ(first, 3);
+    ASSERT_OK(store_strokes_append_at(f.s, f.session, 1, -1, strokes, exr1, sizeof exr1, &first,
+                                      &last, &version, NULL));
+    ASSERT_EQ(version, 3);
+    json_decref(strokes);
+    fx_close(&f);
+}
+
 /* ---- concurrency -------------------------------------------------------------------- */
 
 #define APPENDERS 4
@@ -518,6 +556,7 @@ TEST_LIST{
     TEST_ENTRY(paging_strokes_and_events),
     TEST_ENTRY(session_that_does_not_exist),
     TEST_ENTRY(scene_delete_removes_sessions_logs_and_blobs),
+    TEST_ENTRY(strokes_on_a_stale_image_are_refused),
     TEST_ENTRY(concurrent_appends_are_numbered_without_gaps),
     TEST_ENTRY(appends_from_several_stores_on_one_database_share_one_numbering),
 };
