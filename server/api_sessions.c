@@ -397,7 +397,7 @@ static int painting_decode(http_req *req, int k, int w, int h, int ps, img *im, 
 /* Conditional replace: If-Match names the painting version the client built
  * its image from ("0" for a view never painted).  Called under the session
  * lock, so no stroke can slip in between. */
-static int if_match(http_req *req, int k, glint_err *e)
+static int if_match(http_req *req, int k, int64_t *base, glint_err *e)
 {
     app *a = req->app;
     const char *hdr = http_header_in(req, "If-Match");
@@ -408,6 +408,7 @@ static int if_match(http_req *req, int k, glint_err *e)
     char *end;
     size_t i;
 
+    *base = -1;
     if (!hdr)
         return 0;
     want = strtoll(p, &end, 10);
@@ -426,6 +427,7 @@ static int if_match(http_req *req, int k, glint_err *e)
         return api_reject(e, GLINT_ECONFLICT, "painting-changed",
                           "view %d is at painting version %lld, not %lld (If-Match): someone "
                           "changed it; read it again", k, (long long)cur, want);
+    *base = want; /* checked again in the store's transaction: another replica */
     return 0;
 }
 
@@ -435,7 +437,7 @@ static http_resp painting_put(http_req *req)
     json_t *sdoc = NULL, *scene_doc = NULL;
     http_resp r = {0, NULL};
     img im = {0};
-    int64_t version = 0, seq = 0;
+    int64_t version = 0, seq = 0, base = -1;
     glint_err e;
     double t0 = glint_now();
     int k, w, h, ps, rc;
@@ -450,10 +452,16 @@ static http_resp painting_put(http_req *req)
      * and decodes to the same pixels whenever it is read */
     t0 = glint_now();
     pthread_mutex_lock(session_lock(req->param[0]));
-    rc = if_match(req, k, &e);
-    if (!rc && (rc = store_painting_put(a->store, req->param[0], k, req->body, req->body_len,
-                                        &version, &seq, &e)))
-        glint_err_prefix(&e, "storing the painting");
+    rc = if_match(req, k, &base, &e);
+    if (!rc && (rc = store_painting_put_at(a->store, req->param[0], k, base, req->body,
+                                           req->body_len, &version, &seq, &e))) {
+        if (rc == GLINT_ECONFLICT) {
+            char msg[GLINT_ERR_MSG_MAX];
+            snprintf(msg, sizeof msg, "%.400s (If-Match): read it again", e.msg);
+            api_reject(&e, rc, "painting-changed", "%s", msg);
+        } else
+            glint_err_prefix(&e, "storing the painting");
+    }
     pthread_mutex_unlock(session_lock(req->param[0]));
     if (rc)
         goto done;

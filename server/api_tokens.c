@@ -19,6 +19,7 @@
 #include "clock.h"
 #include "events.h"
 #include "ids.h"
+#include "log.h"
 #include "store.h"
 
 int api_expiry_parse(const json_t *v, json_t *doc, glint_err *e)
@@ -103,8 +104,14 @@ static http_resp tokens_post(http_req *req)
         json_object_set_new(doc, "view_token", json_string(vt));
     if ((rc = store_session_update(a->store, req->param[0], doc, &e)))
         goto done;
-    if (strcmp(what, "none") != 0)
+    if (strcmp(what, "none") != 0) {
+        glint_err ae;
         events_revoke(a->events, req->param[0]);
+        /* replicas on the same database end their streams too */
+        if (store_announce(a->store, req->param[0], "revoke", &ae))
+            log_line("tokens: streams on other replicas keep going until they reconnect: %s",
+                     ae.msg);
+    }
     pub = api_session_public(a, doc, 1);
     json_decref(doc);
     json_decref(body);

@@ -176,12 +176,14 @@ void events_notify_all(events *ev)
     pthread_mutex_unlock(&ev->lock);
 }
 
-void events_on_store_change(void *ctx, const char *session)
+void events_on_store_change(void *ctx, const char *session, const char *what)
 {
-    if (session)
-        events_notify(ctx, session);
-    else
+    if (!session)
         events_notify_all(ctx);
+    else if (!strcmp(what, "revoke"))
+        events_revoke(ctx, session);
+    else
+        events_notify(ctx, session);
 }
 
 void events_publish(events *ev, const char *session, const char *type, json_t *data)

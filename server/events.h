@@ -58,9 +58,10 @@ void events_notify(events *ev, const char *session);
 /* Wake every stream (any log may have grown: another replica's changes
  * could not be heard for a while). */
 void events_notify_all(events *ev);
-/* events_notify for store_listen: ctx is the events, session NULL means
- * every session. */
-void events_on_store_change(void *ctx, const char *session);
+/* For store_listen (ctx: the events): another process's change of a
+ * session: "log" wakes its streams, "revoke" ends them; session NULL:
+ * anything may have changed, every stream reads its log again. */
+void events_on_store_change(void *ctx, const char *session, const char *what);
 /* The session's tokens were revoked: every stream open now ends (a client
  * still holding a valid token reconnects with it, from its Last-Event-ID). */
 void events_revoke(events *ev, const char *session);

@@ -223,7 +223,7 @@ int store_open_db(const char *data_dir, const char *database, store **out, glint
         rc = glint_err_set(err, GLINT_ERANGE, "data directory path too long");
         goto fail_paths;
     }
-    if ((rc = fsio_mkdirs(s->blobs, err)))
+    if ((rc = fsio_mkdirs(s->blobs, err)) || (rc = glint_id_new(s->instance, err)))
         goto fail_paths;
     if (database && *database) {
         /* blobs may be shared with other glintd processes: the sweep

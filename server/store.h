@@ -57,17 +57,22 @@ int store_open(const char *data_dir, store **out, glint_err *err);
  * sweep at open then removes only files older than a write in progress
  * could be (STORE_SHARED_SWEEP_GRACE). */
 int store_open_db(const char *data_dir, const char *database, store **out, glint_err *err);
-/* Hear of other processes' changes to the sessions' logs (PostgreSQL):
- * after any process on the same database commits a stroke, painting or
- * event to a session's log, fn(ctx, session) runs on a thread of the
- * store's own (PostgreSQL LISTEN/NOTIFY, on a connection of its own; this
- * process's own commits are heard too).  When that connection was lost
- * and made again, notifications may have been missed: fn(ctx, NULL) then
- * means "any session may have changed".  The connection is retried every
- * second while the server is away.  SQLite: 0 and nothing (no other
+/* Hear of other processes' changes (PostgreSQL): after any process on the
+ * same database commits a stroke, painting or event to a session's log,
+ * fn(ctx, session, "log") runs on a thread of the store's own (PostgreSQL
+ * LISTEN/NOTIFY, on a connection of its own; this process's own commits
+ * are heard too); after another process announced something of a session
+ * (store_announce), fn(ctx, session, what).  When the connection was lost
+ * and made again, notifications may have been missed: fn(ctx, NULL, NULL)
+ * then means "any session may have changed".  The connection is retried
+ * every second while the server is away.  SQLite: 0 and nothing (no other
  * process writes).  At most one listener per store; store_close stops it. */
-int store_listen(store *s, void (*fn)(void *ctx, const char *session), void *ctx,
-                 glint_err *err);
+int store_listen(store *s, void (*fn)(void *ctx, const char *session, const char *what),
+                 void *ctx, glint_err *err);
+/* Tell the other processes' listeners `what` ([a-z]{1,16}, e.g. "revoke":
+ * the session's tokens were replaced) of a session, not this process's.
+ * SQLite: 0 and nothing. */
+int store_announce(store *s, const char *session, const char *what, glint_err *err);
 /* Stop the listener (fn is not called after this returns; none: nothing). */
 void store_listen_stop(store *s);
 
@@ -140,6 +145,11 @@ int store_session_update(store *s, const char *id, const json_t *doc, glint_err 
  * painted (the caller then uses the base render). */
 int store_painting_put(store *s, const char *session, int view, const void *exr, size_t len,
                        int64_t *version, int64_t *seq, glint_err *err);
+/* The same, only if the view is still at painting version `base` (0: never
+ * painted; -1: no check): GLINT_ECONFLICT otherwise (store_strokes_append_at). */
+int store_painting_put_at(store *s, const char *session, int view, int64_t base,
+                          const void *exr, size_t len, int64_t *version, int64_t *seq,
+                          glint_err *err);
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err);
 /* The painted views of a session: [{"view", "version", "updated"}] by view. */

@@ -22,6 +22,7 @@ struct store {
     db *db;
     char *conninfo;                  /* PostgreSQL (for the listener's connection) */
     store_listener *listener;        /* store_listen's thread, or NULL */
+    char instance[33];               /* random, per open: whose announcement */
     int sweep_grace;                 /* seconds; 0: the store is alone */
     pthread_mutex_t lock;            /* one statement sequence at a time */
     char dir[STORE_PATH_MAX];

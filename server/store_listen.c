@@ -25,7 +25,8 @@ struct store_listener {
     pthread_mutex_t lock;
     int stop;
     char *conninfo;
-    void (*fn)(void *ctx, const char *session);
+    void (*fn)(void *ctx, const char *session, const char *what);
+    char instance[GLINT_ID_LEN];     /* this process's announcements carry it */
     void *ctx;
 };
 
@@ -67,6 +68,31 @@ static PGconn *listener_connect(store_listener *l, int *warned)
     return NULL;
 }
 
+/* A notification's payload: "<session>" (its log grew) or
+ * "<what>:<session>:<instance>" (store_announce; our own are skipped). */
+static void listener_heard(store_listener *l, const char *payload)
+{
+    char what[17], session[GLINT_ID_LEN], instance[GLINT_ID_LEN];
+    const char *c1 = strchr(payload, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+    size_t wl;
+    if (!c1) {
+        if (glint_id_valid(payload))
+            l->fn(l->ctx, payload, "log");
+        return;
+    }
+    wl = (size_t)(c1 - payload);
+    if (!c2 || wl == 0 || wl >= sizeof what || (size_t)(c2 - c1 - 1) != GLINT_ID_LEN - 1 ||
+        strlen(c2 + 1) != GLINT_ID_LEN - 1)
+        return;
+    memcpy(what, payload, wl);
+    what[wl] = '\0';
+    memcpy(session, c1 + 1, GLINT_ID_LEN - 1);
+    session[GLINT_ID_LEN - 1] = '\0';
+    memcpy(instance, c2 + 1, GLINT_ID_LEN);
+    if (glint_id_valid(session) && glint_id_valid(instance) && strcmp(instance, l->instance))
+        l->fn(l->ctx, session, what);
+}
+
 static void *listener_main(void *arg)
 {
     store_listener *l = arg;
@@ -85,7 +111,7 @@ static void *listener_main(void *arg)
                 continue;
             }
             if (missed) {
-                l->fn(l->ctx, NULL);
+                l->fn(l->ctx, NULL, NULL);
                 missed = 0;
             }
         }
@@ -101,8 +127,7 @@ static void *listener_main(void *arg)
             continue;
         }
         while ((n = PQnotifies(c))) {
-            if (glint_id_valid(n->extra))
-                l->fn(l->ctx, n->extra);
+            listener_heard(l, n->extra);
             PQfreemem(n);
         }
         if (PQstatus(c) != CONNECTION_OK) {
@@ -115,8 +140,31 @@ static void *listener_main(void *arg)
     return NULL;
 }
 
-int store_listen(store *s, void (*fn)(void *ctx, const char *session), void *ctx,
-                 glint_err *err)
+int store_announce(store *s, const char *session, const char *what, glint_err *err)
+{
+    char payload[96];
+    db_stmt *st;
+    int rc;
+    if (db_kind_of(s->db) != DB_POSTGRES)
+        return 0;
+    if (!glint_id_valid(session) || !what || !*what || strlen(what) > 16 ||
+        strspn(what, "abcdefghijklmnopqrstuvwxyz") != strlen(what))
+        return glint_err_set(err, GLINT_EINVAL, "store_announce: bad session or kind");
+    snprintf(payload, sizeof payload, "%s:%s:%s", what, session, s->instance);
+    pthread_mutex_lock(&s->lock);
+    if (!(st = store_prep(s, "SELECT pg_notify('" STORE_CHANNEL "', ?1)", err))) {
+        pthread_mutex_unlock(&s->lock);
+        return GLINT_EIO;
+    }
+    db_bind_text(st, 1, payload);
+    rc = db_step(st, "announcing", err);
+    db_finalize(st);
+    pthread_mutex_unlock(&s->lock);
+    return rc < 0 ? rc : 0;
+}
+
+int store_listen(store *s, void (*fn)(void *ctx, const char *session, const char *what),
+                 void *ctx, glint_err *err)
 {
     store_listener *l;
     if (db_kind_of(s->db) != DB_POSTGRES)
@@ -129,6 +177,7 @@ int store_listen(store *s, void (*fn)(void *ctx, const char *session), void *ctx
     }
     l->fn = fn;
     l->ctx = ctx;
+    memcpy(l->instance, s->instance, GLINT_ID_LEN);
     pthread_mutex_init(&l->lock, NULL);
     if (pthread_create(&l->thread, NULL, listener_main, l)) {
         pthread_mutex_destroy(&l->lock);

@@ -229,7 +229,14 @@ out:
 int store_painting_put(store *s, const char *session, int view, const void *exr, size_t len,
                        int64_t *version, int64_t *seq, glint_err *err)
 {
-    return store_log_commit(s, session, view, -1, exr, len, "painting", NULL, 1, seq, version,
+    return store_painting_put_at(s, session, view, -1, exr, len, version, seq, err);
+}
+
+int store_painting_put_at(store *s, const char *session, int view, int64_t base,
+                          const void *exr, size_t len, int64_t *version, int64_t *seq,
+                          glint_err *err)
+{
+    return store_log_commit(s, session, view, base, exr, len, "painting", NULL, 1, seq, version,
                             err);
 }
 

@@ -196,6 +196,39 @@ def test_painters_on_different_replicas_see_each_other_live(c):
           "at most" % (1000 * max(lag)))
 
 
+def test_revoking_on_one_replica_ends_streams_on_another(c):
+    a, b, _ = c.replicas
+    scene, sess = new_painting(c, a)
+    r = requests.get("%s%s/sessions/%s/events" % (a.base, API, sess["id"]),
+                     headers=tok(sess["view_token"]), stream=True, timeout=30)
+    assert r.status_code == 200
+    ended = threading.Event()
+
+    def drain():
+        try:
+            for _ in r.iter_lines():
+                pass
+        except requests.RequestException:
+            pass
+        ended.set()
+
+    threading.Thread(target=drain, daemon=True).start()
+    time.sleep(0.3)
+    assert not ended.is_set()
+    t0 = time.time()
+    new = b.post("%s/sessions/%s/tokens" % (API, sess["id"]), status=200,
+                 json={"revoke": "both"}, headers=tok(sess["paint_token"])).json()
+    assert ended.wait(5), "the stream on replica 0 outlived the revocation on replica 1"
+    print("tokens revoked on replica 1: the stream on replica 0 ended after %.0f ms"
+          % (1000 * (time.time() - t0)))
+    r.close()
+    # the old token is refused everywhere, the new one works everywhere
+    for d in (a, b):
+        d.get("%s/sessions/%s" % (API, sess["id"]), status=403,
+              headers=tok(sess["view_token"]))
+        d.get("%s/sessions/%s" % (API, sess["id"]), status=200, headers=tok(new["view_token"]))
+
+
 def test_strokes_at_once_through_two_replicas_all_reach_the_painting(c):
     a, b, z = c.replicas
     scene, sess = new_painting(c, a)

@@ -446,6 +446,12 @@ TEST(strokes_on_a_stale_image_are_refused)
     ASSERT_OK(store_strokes_append_at(f.s, f.session, 1, -1, strokes, exr1, sizeof exr1, &first,
                                       &last, &version, NULL));
     ASSERT_EQ(version, 3);
+    /* an upload made against version 2 (If-Match) likewise */
+    ASSERT_EQ(store_painting_put_at(f.s, f.session, 1, 2, exr2, sizeof exr2, &version, NULL, &e),
+              GLINT_ECONFLICT);
+    ASSERT_OK(store_painting_put_at(f.s, f.session, 1, 3, exr2, sizeof exr2, &version, NULL,
+                                    NULL));
+    ASSERT_EQ(version, 4);
     json_decref(strokes);
     fx_close(&f);
 }
