@@ -15,14 +15,16 @@ mode=${1:-}
 BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config curl
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
-  libopenimageio-dev libmicrohttpd-dev libsqlite3-dev libassimp-dev
+  libopenimageio-dev libmicrohttpd-dev libsqlite3-dev libpq-dev libassimp-dev
   libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0 libembree-dev
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for
-# inspecting outputs, gnuplot for the benchmark plot, valgrind.
+# inspecting outputs, gnuplot for the benchmark plot, valgrind, and the
+# PostgreSQL server and nginx that the store's and the replicas' tests start
+# (tests/with_postgres.sh; nothing is left running).
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt python3-openimageio python3-matplotlib
-  openimageio-tools gnuplot-nox wrk chromium jq valgrind
+  openimageio-tools gnuplot-nox wrk chromium jq valgrind postgresql nginx
 )
 
 missing_packages() {
@@ -42,8 +44,21 @@ install_packages() {
     fi
     echo "== installing: $missing"
     apt-get update -qq
+    # Services the packages bring (PostgreSQL's default cluster, nginx on
+    # port 80) are not started: the tests start their own on loopback ports.
+    # (Debian's policy-rc.d convention, only while installing, and only when
+    # the machine has no policy of its own.)
+    local policy=""
+    if [ ! -e /usr/sbin/policy-rc.d ]; then
+      policy=/usr/sbin/policy-rc.d
+      printf '#!/bin/sh\nexit 101\n' > "$policy"
+      chmod 755 "$policy"
+    fi
     # shellcheck disable=SC2086
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing
+    local ok=0
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing || ok=$?
+    if [ -n "$policy" ]; then rm -f "$policy"; fi
+    if [ "$ok" -ne 0 ]; then exit "$ok"; fi
   fi
 }
 
