@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "api_common.h"
 #include "app.h"
@@ -589,8 +590,9 @@ done:
     return rc;
 }
 
-/* Tries of a stroke request whose view another replica keeps changing. */
-#define STROKES_ATTEMPTS 8
+/* How long a stroke request tries again while another replica keeps
+ * changing its view (seconds), before it answers 409. */
+#define STROKES_RETRY_S 15.0
 
 static http_resp strokes_post(http_req *req)
 {
@@ -606,7 +608,7 @@ static http_resp strokes_post(http_req *req)
     const char *scene_id;
     glint_err e;
     http_resp r = {0, NULL};
-    double t0 = glint_now();
+    double t0 = glint_now(), t_first = t0;
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
         (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &ps, &e)))
@@ -673,11 +675,17 @@ again:
      * then the strokes go onto the new image */
     if ((rc = store_strokes_append_at(a->store, req->param[0], k, version, canon, exr, len,
                                       &first, &last, &version, &e))) {
-        if (rc == GLINT_ECONFLICT && ++attempts < STROKES_ATTEMPTS) {
+        if (rc == GLINT_ECONFLICT && glint_now() - t_first < STROKES_RETRY_S) {
+            /* back off a random while (up to 2^attempts ms, at most 64), so
+             * two replicas that keep colliding fall out of step */
+            unsigned span = 1u << (attempts < 6 ? attempts : 6);
+            unsigned jitter = (unsigned)((glint_now() - t_first) * 1e9) ^ (unsigned)attempts;
+            attempts++;
             free(exr);
             exr = NULL;
             img_free(&cur);
             img_free(&base);
+            usleep(1000u * (jitter % (span + 1)));
             goto again;
         }
         glint_err_prefix(&e, "storing the strokes");

@@ -254,6 +254,29 @@ KINDS = ["scene", "scene", "delete_scene", "session", "painting", "painting", "s
          "strokes", "fit", "fit", "mesh", "env", "delete_env"]
 
 
+def describe(data, name):
+    """What an orphan is: its age, its entries, and whether a row names it
+    by now (a diagnosis for the failure message)."""
+    path = os.path.join(data, "blobs", name)
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return "gone"
+    out = "mtime %.3f s ago" % (time.time() - st.st_mtime)
+    if os.path.isdir(path):
+        out += ", entries %s" % sorted(os.listdir(path))
+    if name.startswith("materials/"):
+        q = "SELECT count(*) FROM materials WHERE id = '%s'" % name.split("/")[1][:32]
+        if PG:
+            n = pg_query(os.path.realpath(data), q)[0][0]
+        else:
+            db = sqlite3.connect("file:%s/glint.db?mode=ro" % data, uri=True)
+            n = db.execute(q).fetchone()[0]
+            db.close()
+        out += ", rows naming it now: %s" % n
+    return out
+
+
 def age_blobs(data, seconds=1200):
     """Every file and directory under blobs/ made `seconds` older."""
     old = time.time() - seconds
@@ -295,7 +318,8 @@ def test_kill_during_every_kind_of_write(d):
         d.start()
         verify(d, st)
         bad = orphans(d.data_dir)
-        assert not bad, "round %d (%s): orphans after recovery: %s" % (rnd, kind, bad[:10])
+        assert not bad, "round %d (%s): orphans after recovery: %s" % (
+            rnd, kind, [(b, describe(d.data_dir, b)) for b in bad[:10]])
     # the data is still good for work
     ss = [x for x in live_sessions(st) if any(k[0] == x["id"] for k in st.paint_version)]
     if ss:
