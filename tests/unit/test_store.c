@@ -121,6 +121,31 @@ TEST(newer_schema_is_refused_and_left_unchanged)
     fx_close(&f);
 }
 
+/* A database that cannot be reached is a clear error at open, whatever the
+ * connection string says; nothing is made but the data directory. */
+TEST(unreachable_postgresql_is_a_clear_error)
+{
+    fixture f;
+    store *s = (store *)(void *)&sentinel;
+    glint_err e;
+    static const char *const bad[] = {
+        "host=/nonexistent-socket-dir port=5 dbname=glint connect_timeout=2",
+        "host=127.0.0.1 port=1 dbname=glint connect_timeout=2",
+        "not a connection string = = =",
+        "postgresql://%zz",
+    };
+    ASSERT_OK(fx_mkdir(&f));
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        ASSERT(store_open_db(f.dir, bad[i], &s, &e) != 0);
+        ASSERT(s == NULL);
+        ASSERT_MSG(strstr(e.msg, "PostgreSQL") != NULL, "%s: %s", bad[i], e.msg);
+        s = (store *)(void *)&sentinel;
+    }
+    ASSERT(!path_exists(f.dir, "glint.db"));
+    f.s = NULL;
+    fx_close(&f);
+}
+
 /* ---- documents ------------------------------------------------------------------ */
 
 TEST(scenes_put_get_list_and_unknown_ids)
@@ -520,6 +545,7 @@ TEST(open_sweeps_every_kind_of_blob)
 TEST_LIST{
     TEST_ENTRY(open_fresh_records_schema_and_reopens),
     TEST_ENTRY(newer_schema_is_refused_and_left_unchanged),
+    TEST_ENTRY(unreachable_postgresql_is_a_clear_error),
     TEST_ENTRY(scenes_put_get_list_and_unknown_ids),
     TEST_ENTRY(meshes_put_get_data),
     TEST_ENTRY(sessions_need_their_scene_and_report_last_seq),
