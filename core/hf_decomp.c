@@ -30,8 +30,7 @@ double hf_rcond_default(hf_route route)
     return 1e-6;
 }
 
-/* ||A v||: the data rows' part of ||B v||, one pass over the samples. */
-static double data_norm(const hf_design *d, const double *v)
+double hf_data_norm2_part(const hf_design *d, const double *v)
 {
     int R = d->res;
     double a2 = 0.0;
@@ -45,18 +44,24 @@ static double data_norm(const hf_design *d, const double *v)
         }
         a2 += r * r;
     }
-    return sqrt(a2);
+    return a2;
 }
 
-/* Given eigen/singular pairs of the deflated problem, sorted with the two
- * gauge directions somewhere among them, keep the others in descending
- * order, less the null (rcond) and barely reached (data gain) ones.
- * vals[i] are singular values, vecs column-major n x m (m columns).
- * order: indices of columns sorted by descending value. */
-static int keep_non_gauge(const hf_design *d, hf_decomp *dc, const double *vals,
-                          const double *vecs, int m, const int *order, const double *Z,
-                          double rcond, glint_err *err)
+/* ||A v||: the data rows' part of ||B v||, one pass over the samples
+ * (hf_data_norm_fn for a design held whole). */
+static double data_norm(void *cls, int col, const double *v)
 {
+    (void)col;
+    return sqrt(hf_data_norm2_part(cls, v));
+}
+
+/* The keep rules (hf_int.h): gauge, null (rcond) and barely reached
+ * (data gain) directions out, the others kept in descending order. */
+int hf_decomp_keep(hf_decomp *dc, const double *vals, const double *vecs, int m,
+                   const int *order, const double *Z, hf_data_norm_fn norm, void *cls,
+                   glint_err *err)
+{
+    double rcond = dc->rcond;
     int n = dc->n, ngauge = 0, kept = 0, exact = 0;
     double smax = -1.0;
     int *keep = malloc((size_t)m * sizeof *keep);
@@ -93,7 +98,7 @@ static int keep_non_gauge(const hf_design *d, hf_decomp *dc, const double *vals,
         }
         if (vals[i] < 1.0) {
             /* gain = ||A v|| / s^2 <= 1 / s: only here can it exceed 1 */
-            double gain = data_norm(d, v) / (vals[i] * vals[i]);
+            double gain = norm(cls, i, v) / (vals[i] * vals[i]);
             if (gain > dc->gain_max) {
                 dc->weak_dims++;
                 if (vals[i] > dc->s_weak)
@@ -128,6 +133,38 @@ static int keep_non_gauge(const hf_design *d, hf_decomp *dc, const double *vals,
     return 0;
 }
 
+double hf_gauge_shift(const double *colsum, int n)
+{
+    double m = 0.0;
+    for (int c = 0; c < n; c++)
+        if (colsum[c] > m)
+            m = colsum[c];
+    return 2.0 * m + 1.0;
+}
+
+int hf_decomp_from_eig(hf_decomp *dc, const double *w, const double *vecs, const double *Z,
+                       hf_data_norm_fn norm, void *cls, glint_err *err)
+{
+    int n = dc->n, rc;
+    double *sv = malloc((size_t)n * sizeof *sv);
+    int *order = malloc((size_t)n * sizeof *order);
+
+    if (!sv || !order) {
+        free(sv);
+        free(order);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory in the decomposition");
+    }
+    /* Ascending eigenvalues: descending order is reverse. */
+    for (int i = 0; i < n; i++) {
+        sv[i] = sqrt(w[i] > 0.0 ? w[i] : 0.0);
+        order[i] = n - 1 - i;
+    }
+    rc = hf_decomp_keep(dc, sv, vecs, n, order, Z, norm, cls, err);
+    free(sv);
+    free(order);
+    return rc;
+}
+
 static int build_eig(const hf_design *d, hf_decomp *dc, const double *Z, glint_err *err)
 {
     int n = dc->n, rc;
@@ -135,23 +172,21 @@ static int build_eig(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
     double *G = malloc((size_t)n * n * sizeof *G);
     double *w = malloc((size_t)n * sizeof *w);
     double *sv = malloc((size_t)n * sizeof *sv);
-    int *order = malloc((size_t)n * sizeof *order);
-    double sigma = 0.0;
+    double sigma;
 
-    if (!G || !w || !sv || !order) {
+    if (!G || !w || !sv) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d normal matrix", n, n);
         goto done;
     }
     hf_normal_matrix(d, dc->lambda, G);
-    /* sigma above every eigenvalue: twice the largest absolute row sum. */
+    /* sigma above every eigenvalue: twice the largest absolute column sum. */
     for (int c = 0; c < n; c++) {
         double sum = 0.0;
         for (int r = 0; r < n; r++)
             sum += fabs(G[r + (size_t)n * c]);
-        if (sum > sigma)
-            sigma = sum;
+        sv[c] = sum;
     }
-    sigma = 2.0 * sigma + 1.0;
+    sigma = hf_gauge_shift(sv, n);
     for (int c = 0; c < n; c++)
         for (int r = 0; r < n; r++)
             G[r + (size_t)n * c] += sigma * (Z[r] * Z[c] + Z[n + r] * Z[n + c]);
@@ -162,17 +197,11 @@ static int build_eig(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
                            (int)info, n);
         goto done;
     }
-    /* Ascending eigenvalues: descending order is reverse. */
-    for (int i = 0; i < n; i++) {
-        sv[i] = sqrt(w[i] > 0.0 ? w[i] : 0.0);
-        order[i] = n - 1 - i;
-    }
-    rc = keep_non_gauge(d, dc, sv, G, n, order, Z, dc->rcond, err);
+    rc = hf_decomp_from_eig(dc, w, G, Z, data_norm, (void *)d, err);
 done:
     free(G);
     free(w);
     free(sv);
-    free(order);
     return rc;
 }
 
@@ -224,7 +253,7 @@ static int build_svd(const hf_design *d, hf_decomp *dc, const double *Z, glint_e
             vecs[r + (size_t)n * k] = vt[k + (size_t)n * r];
         order[k] = k;
     }
-    rc = keep_non_gauge(d, dc, s, vecs, n, order, Z, dc->rcond, err);
+    rc = hf_decomp_keep(dc, s, vecs, n, order, Z, data_norm, (void *)d, err);
 done:
     free(B);
     free(B2);
@@ -235,14 +264,11 @@ done:
     return rc;
 }
 
-int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
-                    double rcond, hf_decomp *out, glint_err *err)
+int hf_decomp_begin(int res, int nsamples, double lambda, hf_route route, double rcond,
+                    hf_decomp *out, glint_err *err)
 {
-    double t0 = hf_now(), *Z = NULL;
-    int rc;
-
     memset(out, 0, sizeof *out);
-    if (!d || d->n < 1 || d->res < HF_RES_MIN || d->res > HF_RES_MAX)
+    if (nsamples < 1 || res < HF_RES_MIN || res > HF_RES_MAX)
         return glint_err_set(err, GLINT_EINVAL, "decomposition needs a non-empty design");
     if (!isfinite(lambda) || lambda < 0.0 || lambda > HF_LAMBDA_MAX)
         return glint_err_set(err, GLINT_ERANGE, "lambda %g outside [0, %g]", lambda,
@@ -253,13 +279,27 @@ int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
         rcond = hf_rcond_default(route);
     if (!isfinite(rcond) || rcond >= 1.0)
         return glint_err_set(err, GLINT_ERANGE, "rcond %g outside (0, 1)", rcond);
-    out->res = d->res;
-    out->n = 3 * d->res;
-    out->nsamples = d->n;
+    out->res = res;
+    out->n = 3 * res;
+    out->nsamples = nsamples;
     out->lambda = lambda;
     out->route = route;
     out->rcond = rcond;
     out->gain_max = HF_GAIN_MAX;
+    return 0;
+}
+
+int hf_decomp_build(const hf_design *d, double lambda, hf_route route,
+                    double rcond, hf_decomp *out, glint_err *err)
+{
+    double t0 = hf_now(), *Z = NULL;
+    int rc;
+
+    memset(out, 0, sizeof *out);
+    if (!d)
+        return glint_err_set(err, GLINT_EINVAL, "decomposition needs a non-empty design");
+    if ((rc = hf_decomp_begin(d->res, d->n, lambda, route, rcond, out, err)))
+        return rc;
     Z = malloc((size_t)2 * out->n * sizeof *Z);
     if (!Z)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");

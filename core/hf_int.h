@@ -30,6 +30,47 @@ void hf_At_f(const hf_design *d, const double *f, double *t);
  * OUT: out[3 * n]). */
 void hf_A_y(const hf_design *d, const double *y, double *out);
 
+/* ---- the decomposition's rules, shared with the distributed route ---- */
+/* (hf_decomp.c; hf_mpi.c runs the same rules on eigenpairs it gathered) */
+
+/* Check the arguments of a decomposition of `nsamples` data rows and fill
+ * out's header (res, n, nsamples, lambda, route, rcond: the default when
+ * rcond <= 0, gain_max); everything else zeroed.  The errors of
+ * hf_decomp_build. */
+int hf_decomp_begin(int res, int nsamples, double lambda, hf_route route, double rcond,
+                    hf_decomp *out, glint_err *err);
+
+/* The gauge shift sigma added along the two gauge directions of the
+ * normal matrix: 2 max_c colsum[c] + 1, with colsum[c] = sum_r |G[r,c]|
+ * (above every eigenvalue of G). */
+double hf_gauge_shift(const double *colsum, int n);
+
+/* ||A v|| for direction v (column `col` of the vectors given to the keep
+ * rules): how the keep rules reach the samples.  Called only for
+ * directions with singular value below 1 (see hf_decomp in hf.h). */
+typedef double (*hf_data_norm_fn)(void *cls, int col, const double *v);
+
+/* Sum over the design's rows of (A v)_i^2: ||A v||^2 for a whole design,
+ * a part of it for a share of the rows. */
+double hf_data_norm2_part(const hf_design *d, const double *v);
+
+/* The keep rules: of m singular pairs (vals[i], column i of vecs, n x m
+ * column-major, n = dc->n) taken in the order order[0..m-1] (descending
+ * values), the first two must lie in the gauge space Z (else
+ * GLINT_ENUMERIC) and are dropped; of the others, those at or below
+ * rcond * s_max are null, those with gain norm() / s^2 above gain_max
+ * barely reached; the rest are kept.  dc's header must be filled
+ * (hf_decomp_begin); OUT: dc->s, dc->V, rank and the counts. */
+int hf_decomp_keep(hf_decomp *dc, const double *vals, const double *vecs, int m,
+                   const int *order, const double *Z, hf_data_norm_fn norm, void *cls,
+                   glint_err *err);
+
+/* The eig route's last step: eigenpairs (w ascending, as LAPACK's dsyevd
+ * returns them; vecs n x n column-major) of the normal matrix with the
+ * gauge shift added, through the keep rules. */
+int hf_decomp_from_eig(hf_decomp *dc, const double *w, const double *vecs, const double *Z,
+                       hf_data_norm_fn norm, void *cls, glint_err *err);
+
 /* ---- the sample-level passes of a fit (hf_stream.c) ---- */
 
 /* Chunks of the sample-level passes: at most HF_MAX_CHUNKS of at least
