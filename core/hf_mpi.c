@@ -262,6 +262,9 @@ static int reduce_and_solve(const grid *gr, MPI_Comm comm, const hf_design *loca
     pack_by_owner(gr, G, send, counts);
     st->t_gram = MPI_Wtime() - t0;
     t0 = MPI_Wtime();
+    MPI_Barrier(comm); /* the wait for the slowest share, timed apart */
+    st->t_wait = MPI_Wtime() - t0;
+    t0 = MPI_Wtime();
     MPI_Reduce_scatter(send, loc, counts, MPI_DOUBLE, MPI_SUM, comm);
     st->t_reduce = MPI_Wtime() - t0;
     free(G);
@@ -385,6 +388,8 @@ int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, do
     if ((rc = hf_mpi_agree(comm, rc, err)))
         goto fail;
     hf_gauge_vectors(local->res, Z);
+    /* the peak: the accumulation and its packed copy with the local blocks
+     * (rank 0 later holds the gathered copy and V instead: no more) */
     st->bytes_local = (double)2 * n * n * sizeof(double) + 2.0 * nloc_elems * sizeof(double);
     if ((rc = reduce_and_solve(&gr, comm, local, out->lambda, Z, loc, zloc, w, st, err)))
         goto fail;
@@ -404,8 +409,6 @@ int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, do
                 displs[q] = off;
                 off += counts[q];
             }
-            if (2.0 * n * n * sizeof(double) > st->bytes_local)
-                st->bytes_local = 2.0 * n * n * sizeof(double) + 2.0 * nloc_elems * sizeof(double);
         }
     }
     if ((rc = hf_mpi_agree(comm, rc, err)))

@@ -46,7 +46,8 @@
 typedef struct hf_mpi_stats {
     int nprocs, nprow, npcol, nb;  /* the process grid and block size */
     double t_gram;       /* this rank: its share of A^T A */
-    double t_reduce;     /* the reduce-scatter into the block-cyclic layout (incl. waiting) */
+    double t_wait;       /* waiting for the slowest rank's share (a barrier) */
+    double t_reduce;     /* the reduce-scatter into the block-cyclic layout */
     double t_eig;        /* pdsyevd (incl. workspace query and gauge shift) */
     double t_gather;     /* eigenvectors to rank 0 */
     double t_gain;       /* the data norms of the weak candidates, and the keep rules */

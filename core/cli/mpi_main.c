@@ -206,8 +206,8 @@ static void report(const mpi_args *a, const char *key, const char *path, const c
         "s_max", dc->rank ? dc->s[0] : 0.0, "s_min", dc->rank ? dc->s[dc->rank - 1] : 0.0,
         "ranks", nranks, "grid", st->nprow, st->npcol, "block", st->nb,
         "gain_dirs", st->gain_dirs,
-        "seconds", json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}",
-            "pattern", tp, "design", td, "gram", tg, "reduce", st->t_reduce,
+        "seconds", json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}",
+            "pattern", tp, "design", td, "gram", tg, "wait", st->t_wait, "reduce", st->t_reduce,
             "eig", st->t_eig, "gather", st->t_gather, "keep", st->t_gain, "save", t_save,
             "total", t_total),
         "per_rank", per);
