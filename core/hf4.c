@@ -76,13 +76,6 @@ static int data_row(const hf4_design *x, int i, int *col, double *w)
 
 /* Smoothing rows: those of p, q, r when lambda > 0, those of s when
  * lambda_s > 0 (a zero weight adds no row). */
-typedef struct rows_ctx {
-    const hf4_design *x;
-    double lambda, lambda_s;
-    int off[5];          /* the factors' unknowns: p, q, r, s */
-    int grid[4];         /* hfx_rows.grid: s's side when it is smoothed */
-} rows_ctx;
-
 static int rows_1d(int R, double lambda)
 {
     return lambda > 0.0 ? 3 * (R - 2) : 0;
@@ -90,7 +83,7 @@ static int rows_1d(int R, double lambda)
 
 static int any_row(const void *ctx, int r, int *col, double *w)
 {
-    const rows_ctx *c = ctx;
+    const hf4_rows_ctx *c = ctx;
     int R = c->x->d.res;
     if (r < c->x->d.n)
         return data_row(c->x, r, col, w);
@@ -100,7 +93,17 @@ static int any_row(const void *ctx, int r, int *col, double *w)
     return hfx_smooth_2d(3 * R, c->x->sres, c->lambda_s, r - rows_1d(R, c->lambda), col, w);
 }
 
-static hfx_rows rows_of(rows_ctx *c)
+static hfx_rows rows_of(hf4_rows_ctx *c);
+
+hfx_rows hf4_rows(const hf4_design *x, double lambda, double lambda_s, hf4_rows_ctx *c)
+{
+    c->x = x;
+    c->lambda = lambda;
+    c->lambda_s = lambda_s;
+    return rows_of(c);
+}
+
+static hfx_rows rows_of(hf4_rows_ctx *c)
 {
     int R = c->x->d.res, S = c->x->sres;
     hfx_rows r = {.ctx = c, .n = 3 * R + S * S, .nsamples = c->x->d.n, .row = any_row,
@@ -129,7 +132,7 @@ static int lambda_ok(double l)
 int hf4_decomp_build(const hf4_design *x, double lambda, double lambda_s, double rcond,
                      hf4_decomp *dc, glint_err *err)
 {
-    rows_ctx c = {.x = x, .lambda = lambda, .lambda_s = lambda_s};
+    hf4_rows_ctx c = {.x = x, .lambda = lambda, .lambda_s = lambda_s};
     hfx_rows r;
 
     memset(dc, 0, sizeof *dc);
@@ -220,7 +223,7 @@ int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_mod
 {
     int R = x->d.res, S = x->sres, n = dc->x.n, rc;
     int off[5] = {0, R, 2 * R, 3 * R, 3 * R + S * S};
-    rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_s = dc->lambda_s};
+    hf4_rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_s = dc->lambda_s};
     hfx_rows r = rows_of(&c);
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->d.cos_i, .nfactors = 4,
                       .off = off, .log_max = HF4_LOG_MAX};

@@ -96,6 +96,19 @@ int hf4_decomp_build(const hf4_design *d, double lambda, double lambda_s, double
                      hf4_decomp *out, glint_err *err);
 void hf4_decomp_free(hf4_decomp *dc);
 
+/* B's rows as hfx.h's rows: the data rows of d's samples, then lambda's
+ * and lambda_s's smoothing rows (none for a zero weight), with the
+ * factors' node ranges.  c is the storage the rows refer to (it and d must
+ * outlive them).  What hf4_decomp_build decomposes, and what a
+ * distributed route splits (hfx_mpi.h). */
+typedef struct hf4_rows_ctx {
+    const hf4_design *x;
+    double lambda, lambda_s;
+    int off[5];          /* the factors' unknowns: p, q, r, s */
+    int grid[4];         /* hfx_rows.grid: s's side when it is smoothed */
+} hf4_rows_ctx;
+hfx_rows hf4_rows(const hf4_design *d, double lambda, double lambda_s, hf4_rows_ctx *c);
+
 typedef struct hf4_factors {
     int res, sres;
     hf_model model;

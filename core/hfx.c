@@ -54,12 +54,36 @@ void hfx_decomp_free(hfx_decomp *dc)
     memset(dc, 0, sizeof *dc);
 }
 
+int hfx_decomp_from_eig(const double *e, const double *vecs, int n, double rcond,
+                        hfx_decomp *dc, glint_err *err)
+{
+    double cut;
+    int rank = 0;
+
+    dc->s_max = e[n - 1] > 0.0 ? sqrt(e[n - 1]) : 0.0;
+    cut = rcond * dc->s_max;
+    for (int i = n - 1; i >= 0 && e[i] > cut * cut && e[i] > 0.0; i--)
+        rank++;
+    dc->s2 = malloc((size_t)(rank ? rank : 1) * sizeof *dc->s2);
+    dc->V = malloc((size_t)n * (rank ? rank : 1) * sizeof *dc->V);
+    if (!dc->s2 || !dc->V)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
+    for (int k = 0; k < rank; k++) { /* descending */
+        int src = n - 1 - k;
+        dc->s2[k] = e[src];
+        memcpy(dc->V + (size_t)n * k, vecs + (size_t)n * src, (size_t)n * sizeof *dc->V);
+    }
+    dc->rank = rank;
+    dc->s_min_kept = rank ? sqrt(dc->s2[rank - 1]) : 0.0;
+    return 0;
+}
+
 /* The kept directions of the normal matrix G (n x n, upper triangle;
  * destroyed). */
 static int decomp_normal(double *G, int n, double rcond, hfx_decomp *dc, glint_err *err)
 {
-    double *e = malloc((size_t)n * sizeof *e), cut;
-    int info, rank = 0;
+    double *e = malloc((size_t)n * sizeof *e);
+    int info, rc;
     if (!e)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     info = (int)LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', n, G, n, e);
@@ -68,25 +92,9 @@ static int decomp_normal(double *G, int n, double rcond, hfx_decomp *dc, glint_e
         return glint_err_set(err, GLINT_ENUMERIC, "eigendecomposition failed (LAPACK info %d)",
                              info);
     }
-    dc->s_max = e[n - 1] > 0.0 ? sqrt(e[n - 1]) : 0.0;
-    cut = rcond * dc->s_max;
-    for (int i = n - 1; i >= 0 && e[i] > cut * cut && e[i] > 0.0; i--)
-        rank++;
-    dc->s2 = malloc((size_t)(rank ? rank : 1) * sizeof *dc->s2);
-    dc->V = malloc((size_t)n * (rank ? rank : 1) * sizeof *dc->V);
-    if (!dc->s2 || !dc->V) {
-        free(e);
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
-    }
-    for (int k = 0; k < rank; k++) { /* descending */
-        int src = n - 1 - k;
-        dc->s2[k] = e[src];
-        memcpy(dc->V + (size_t)n * k, G + (size_t)n * src, (size_t)n * sizeof *dc->V);
-    }
-    dc->rank = rank;
-    dc->s_min_kept = rank ? sqrt(dc->s2[rank - 1]) : 0.0;
+    rc = hfx_decomp_from_eig(e, G, n, rcond, dc, err);
     free(e);
-    return 0;
+    return rc;
 }
 
 /* The kept directions from the SVD of B (rows x n, rows <= n; destroyed). */
@@ -154,17 +162,8 @@ int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp
      * zero */
     if (!(idx = malloc((size_t)n * sizeof *idx)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    for (int t = 0; t < n; t++)
-        idx[t] = -1;
-    for (size_t r = 0; r < rows; r++) {
-        int m = x->row(x->ctx, (int)r, col, w);
-        for (int a = 0; a < m; a++)
-            if (w[a] != 0.0)
-                idx[col[a]] = 0;
-    }
-    for (int t = 0; t < n; t++)
-        if (idx[t] == 0)
-            idx[t] = nr++;
+    hfx_reached(x, idx);
+    nr = hfx_number_reached(idx, n);
     dc->unreached = n - nr;
     if (rows < (size_t)nr) { /* the dense rows x n matrix is the smaller */
         double *B = calloc(rows * (size_t)nr, sizeof *B);
@@ -191,42 +190,87 @@ int hfx_decomp_build(const hfx_rows *x, double rcond, int gauge_dims, hfx_decomp
             free(idx);
             return glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", nr, nr);
         }
-        for (size_t r = 0; r < rows; r++) {
-            int m = x->row(x->ctx, (int)r, col, w);
-            for (int a = 0; a < m; a++)
-                for (int b = 0; b < m; b++)
-                    if (w[a] != 0.0 && w[b] != 0.0 && idx[col[a]] <= idx[col[b]])
-                        G[idx[col[a]] + (size_t)nr * idx[col[b]]] += w[a] * w[b];
-        }
-        /* rounding reaches the eigenvalues of B^T B at about n eps e_max: the
-         * normal form resolves singular values down to sqrt(n eps) s_max */
-        if (rcond < sqrt(nr * DBL_EPSILON))
-            dc->rcond = rcond = sqrt(nr * DBL_EPSILON);
+        hfx_normal_add(x, idx, nr, G);
+        dc->rcond = rcond = hfx_normal_rcond(rcond, nr);
         rc = decomp_normal(G, nr, rcond, dc, err);
         free(G);
     }
-    if (!rc && nr < n && !dc->M) { /* V back to every unknown: zero rows where none reaches */
-        double *V = calloc((size_t)n * (dc->rank ? dc->rank : 1), sizeof *V);
-        if (!V) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
-        } else {
-            for (int k = 0; k < dc->rank; k++)
-                for (int t = 0; t < n; t++)
-                    if (idx[t] >= 0)
-                        V[(size_t)n * k + t] = dc->V[(size_t)nr * k + idx[t]];
-            free(dc->V);
-            dc->V = V;
-        }
-    }
+    if (!rc)
+        rc = hfx_decomp_finish(dc, idx, nr, err);
     free(idx);
     if (rc) {
         hfx_decomp_free(dc);
         return rc;
     }
+    dc->seconds = glint_now() - t0;
+    return 0;
+}
+
+void hfx_reached(const hfx_rows *x, int *idx)
+{
+    int col[HFX_ROW_MAX];
+    double w[HFX_ROW_MAX];
+    size_t rows = (size_t)x->nsamples + x->nsmooth;
+
+    for (int t = 0; t < x->n; t++)
+        idx[t] = -1;
+    for (size_t r = 0; r < rows; r++) {
+        int m = x->row(x->ctx, (int)r, col, w);
+        for (int a = 0; a < m; a++)
+            if (w[a] != 0.0)
+                idx[col[a]] = 0;
+    }
+}
+
+int hfx_number_reached(int *idx, int n)
+{
+    int nr = 0;
+    for (int t = 0; t < n; t++)
+        if (idx[t] == 0)
+            idx[t] = nr++;
+    return nr;
+}
+
+void hfx_normal_add(const hfx_rows *x, const int *idx, int nr, double *G)
+{
+    int col[HFX_ROW_MAX];
+    double w[HFX_ROW_MAX];
+    size_t rows = (size_t)x->nsamples + x->nsmooth;
+
+    for (size_t r = 0; r < rows; r++) {
+        int m = x->row(x->ctx, (int)r, col, w);
+        for (int a = 0; a < m; a++)
+            for (int b = 0; b < m; b++)
+                if (w[a] != 0.0 && w[b] != 0.0 && idx[col[a]] <= idx[col[b]])
+                    G[idx[col[a]] + (size_t)nr * idx[col[b]]] += w[a] * w[b];
+    }
+}
+
+double hfx_normal_rcond(double rcond, int nr)
+{
+    /* rounding reaches the eigenvalues of B^T B at about n eps e_max: the
+     * normal form resolves singular values down to sqrt(n eps) s_max */
+    return rcond < sqrt(nr * DBL_EPSILON) ? sqrt(nr * DBL_EPSILON) : rcond;
+}
+
+int hfx_decomp_finish(hfx_decomp *dc, const int *idx, int nr, glint_err *err)
+{
+    int n = dc->n;
+
+    if (nr < n && !dc->M) { /* V back to every unknown: zero rows where none reaches */
+        double *V = calloc((size_t)n * (dc->rank ? dc->rank : 1), sizeof *V);
+        if (!V)
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory for the decomposition");
+        for (int k = 0; k < dc->rank; k++)
+            for (int t = 0; t < n; t++)
+                if (idx[t] >= 0)
+                    V[(size_t)n * k + t] = dc->V[(size_t)nr * k + idx[t]];
+        free(dc->V);
+        dc->V = V;
+    }
     dc->null_dims = n - dc->gauge_dims - dc->rank;
     if (dc->null_dims < 0)
         dc->null_dims = 0;
-    dc->seconds = glint_now() - t0;
     return 0;
 }
 

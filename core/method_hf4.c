@@ -63,13 +63,17 @@ static void level_free(void *data)
     free(x);
 }
 
+void hf4_level_key(const hf4_params_t *p, const char pattern_hash[33], char *key, size_t len)
+{
+    snprintf(key, len, "hf4:%s:%d:%d:%.17g:%.17g:%.17g", pattern_hash, p->res, p->sres,
+             p->lambda, p->lambda_s, p->rcond);
+}
+
 static void level_key(const void *params, const samples *s, const char *prev_key, char *key,
                       size_t len)
 {
-    const hf4_params_t *p = params;
     (void)prev_key;
-    snprintf(key, len, "hf4:%s:%d:%d:%.17g:%.17g:%.17g", s->hash, p->res, p->sres, p->lambda,
-             p->lambda_s, p->rcond);
+    hf4_level_key(params, s->hash, key, len);
 }
 
 static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
@@ -106,21 +110,25 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
  * millisecond). */
 #define HF4_MAGIC "GLHF4D02"
 
-static int level_save(const method_build_in *in, const char *dir, const char *key,
-                      const cache_value *v, glint_err *err)
+int hf4_decomp_save(const hf4_decomp *dc, const char *dir, const char *key, glint_err *err)
 {
-    const hf4_decomp *dc = &((const hf4_level *)v->data)->dc;
     char name[64];
     cfile_w b;
     uint32_t u[2] = {(uint32_t)dc->res, (uint32_t)dc->sres};
     double d[2] = {dc->lambda, dc->lambda_s};
-    (void)in;
     cfile_begin(&b, HF4_MAGIC, 1);
     cfile_put(&b, u, sizeof u);
     cfile_put(&b, d, sizeof d);
     hfx_decomp_put(&b, &dc->x);
     cfile_name(key, ".hf4", name, sizeof name);
     return cfile_write(&b, dir, name, err);
+}
+
+static int level_save(const method_build_in *in, const char *dir, const char *key,
+                      const cache_value *v, glint_err *err)
+{
+    (void)in;
+    return hf4_decomp_save(&((const hf4_level *)v->data)->dc, dir, key, err);
 }
 
 static int level_load(const method_build_in *in, const char *dir, const char *key,

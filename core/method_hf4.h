@@ -30,6 +30,12 @@ typedef struct hf4_params_t {
     hf_model model;
 } hf4_params_t;
 
+/* The decomposition level's key for p and a pattern hash (OUT: key), and
+ * its file <dir>/<XXH3-128 of the key>.hf4 written from a decomposition:
+ * what the level's disk layer reads (glint-mpi writes it too). */
+void hf4_level_key(const hf4_params_t *p, const char pattern_hash[33], char *key, size_t len);
+int hf4_decomp_save(const hf4_decomp *dc, const char *dir, const char *key, glint_err *err);
+
 /* The factors of an hf4 material (NULL for another method's). */
 const hf4_factors *hf4_of(const material *m);
 
