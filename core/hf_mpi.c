@@ -52,7 +52,7 @@ int hf_mpi_agree(MPI_Comm comm, int rc, glint_err *err)
         snprintf(m.msg, sizeof m.msg, "%s", err->code == rc ? err->msg : "failed");
     }
     MPI_Bcast(&m, (int)sizeof m, MPI_BYTE, lowest, comm);
-    if (nprocs > 1 && strncmp(m.msg, "rank ", 5) != 0)
+    if (lowest > 0 && strncmp(m.msg, "rank ", 5) != 0)
         return glint_err_set(err, m.code, "rank %d: %s", lowest, m.msg);
     return glint_err_set(err, m.code, "%s", m.msg);
 }
@@ -150,15 +150,16 @@ static double gathered_norm(void *cls, int col, const double *v)
 
 /* Steps 4-5 (hf_mpi.h): ||A v|| of the directions below 1 over every
  * rank's rows, then the keep rules on rank 0.  w replicated; V on rank 0. */
-static int gains_and_keep(const grid *gr, MPI_Comm comm, const hf_design *local,
-                          const double *w, const double *V, const double *Z, hf_decomp *dc,
-                          hf_mpi_stats *st, glint_err *err)
+static int gains_and_keep(MPI_Comm comm, const hf_design *local, const double *w,
+                          const double *V, const double *Z, hf_decomp *dc, hf_mpi_stats *st,
+                          glint_err *err)
 {
-    int n = gr->n, k = 0, rc = 0;
+    int n = 3 * local->res, k = 0, rc = 0, rank;
     int *idx = malloc((size_t)n * sizeof *idx);
     double *cols = NULL, *part = NULL, *sum2 = NULL;
 
-    if (gr->rank == 0 && idx)
+    MPI_Comm_rank(comm, &rank);
+    if (rank == 0 && idx)
         for (int i = 0; i < n; i++)
             if (sqrt(w[i] > 0.0 ? w[i] : 0.0) < 1.0)
                 idx[k++] = i;
@@ -170,7 +171,7 @@ static int gains_and_keep(const grid *gr, MPI_Comm comm, const hf_design *local,
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for %d directions' data norms", k);
     if ((rc = hf_mpi_agree(comm, rc, err)))
         goto done;
-    if (gr->rank == 0)
+    if (rank == 0)
         for (int a = 0; a < k; a++)
             memcpy(cols + (size_t)n * a, V + (size_t)n * idx[a], (size_t)n * sizeof *cols);
     MPI_Bcast(idx, k, MPI_INT, 0, comm);
@@ -180,7 +181,7 @@ static int gains_and_keep(const grid *gr, MPI_Comm comm, const hf_design *local,
     MPI_Reduce(part, sum2, k, MPI_DOUBLE, MPI_SUM, 0, comm);
     if (st)
         st->gain_dirs = k;
-    if (gr->rank == 0) {
+    if (rank == 0) {
         gains gs = {k, 0, idx, sum2};
         rc = hf_decomp_from_eig(dc, w, V, Z, gathered_norm, &gs, err);
         if (rc == 0 && gs.missing)
@@ -239,47 +240,42 @@ static int grid_open(MPI_Comm comm, int n, grid *g, glint_err *err)
     return 0;
 }
 
-/* Steps 1-3: the local share, the reduce-scatter, the gauge shift and
- * pdsyevd.  OUT: loc (G, destroyed), zloc (eigenvectors, local), w. */
-static int reduce_and_solve(const grid *gr, MPI_Comm comm, const hf_design *local,
-                            double lambda, const double *Z, double *loc, double *zloc, double *w,
-                            hf_mpi_stats *st, glint_err *err)
+/* The reduce-scatter of every rank's G, the gauge shift along Z (if given)
+ * and pdsyevd.  OUT: loc (the sum, destroyed), zloc (eigenvectors,
+ * local), w (on every rank: rank 0's). */
+static int reduce_and_solve(const grid *gr, MPI_Comm comm, const double *G, const double *Z,
+                            double *loc, double *zloc, double *w, hf_mpi_stats *st,
+                            glint_err *err)
 {
     int n = gr->n, rc = 0, info = 0, desc[9], lwork = -1, liwork = -1, one = 1, izero = 0;
-    double *G = malloc((size_t)n * n * sizeof *G), *send = malloc((size_t)n * n * sizeof *send);
+    double *send = malloc((size_t)n * n * sizeof *send);
     double *colsum = calloc((size_t)n, sizeof *colsum), *work = NULL, wq = 0.0, sigma, t0;
     int *counts = malloc((size_t)gr->nprocs * sizeof *counts), *iwork = NULL, iwq = 0;
 
-    if (!G || !send || !colsum || !counts)
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d normal matrix", n, n);
+    if (!send || !colsum || !counts)
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", n, n);
     if ((rc = hf_mpi_agree(comm, rc, err)))
         goto done;
-    t0 = MPI_Wtime();
-    {
-        hf_design d = *local; /* 0 rows on a rank without samples */
-        hf_normal_matrix(&d, gr->rank == 0 ? lambda : 0.0, G);
-    }
     pack_by_owner(gr, G, send, counts);
-    st->t_gram = MPI_Wtime() - t0;
     t0 = MPI_Wtime();
     MPI_Barrier(comm); /* the wait for the slowest share, timed apart */
     st->t_wait = MPI_Wtime() - t0;
     t0 = MPI_Wtime();
     MPI_Reduce_scatter(send, loc, counts, MPI_DOUBLE, MPI_SUM, comm);
     st->t_reduce = MPI_Wtime() - t0;
-    free(G);
     free(send);
-    G = send = NULL;
+    send = NULL;
 
     t0 = MPI_Wtime();
-    for (int lj = 0; lj < gr->nloc; lj++) {
+    for (int lj = 0; Z && lj < gr->nloc; lj++) {
         int j = l2g(lj, gr->nb, gr->mycol, gr->npcol);
         for (int li = 0; li < gr->mloc; li++)
             colsum[j] += fabs(loc[li + (size_t)gr->lld * lj]);
     }
-    MPI_Allreduce(MPI_IN_PLACE, colsum, n, MPI_DOUBLE, MPI_SUM, comm);
+    if (Z)
+        MPI_Allreduce(MPI_IN_PLACE, colsum, n, MPI_DOUBLE, MPI_SUM, comm);
     sigma = hf_gauge_shift(colsum, n);
-    for (int lj = 0; lj < gr->nloc; lj++) {
+    for (int lj = 0; Z && lj < gr->nloc; lj++) {
         int j = l2g(lj, gr->nb, gr->mycol, gr->npcol);
         for (int li = 0; li < gr->mloc; li++) {
             int i = l2g(li, gr->nb, gr->myrow, gr->nprow);
@@ -341,7 +337,6 @@ static int reduce_and_solve(const grid *gr, MPI_Comm comm, const hf_design *loca
     MPI_Bcast(w, n, MPI_DOUBLE, 0, comm);
     st->t_eig = MPI_Wtime() - t0;
 done:
-    free(G);
     free(send);
     free(colsum);
     free(counts);
@@ -350,30 +345,20 @@ done:
     return rc;
 }
 
-int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, double lambda,
-                        double rcond, hf_decomp *out, hf_mpi_stats *st, glint_err *err)
+int hf_mpi_eig_sum(MPI_Comm comm, int n, const double *G, const double *Z, double *w,
+                   double **V, hf_mpi_stats *st, glint_err *err)
 {
-    hf_mpi_stats own;
     grid gr = {.ctxt = -1, .handle = -1};
-    double t_start = MPI_Wtime(), t0, *loc = NULL, *zloc = NULL, *w = NULL, *Z = NULL;
-    double *V = NULL, *gath = NULL;
-    int *counts = NULL, *displs = NULL, rc = 0, n;
+    double t0, *loc = NULL, *zloc = NULL, *gath = NULL;
+    int *counts = NULL, *displs = NULL, rc = 0;
     size_t nloc_elems;
 
-    if (!st)
-        st = &own;
-    memset(st, 0, sizeof *st);
-    memset(out, 0, sizeof *out);
-    if (nsamples < 1 || nsamples > SAMPLES_MAX)
-        rc = glint_err_set(err, GLINT_ERANGE, "%ld samples outside 1..%d", nsamples,
-                           SAMPLES_MAX);
-    else
-        rc = hf_decomp_begin(local->res, (int)nsamples, lambda, HF_ROUTE_EIG, rcond, out, err);
-    if ((rc = hf_mpi_agree(comm, rc, err)))
-        goto fail;
-    n = out->n;
-    if ((rc = grid_open(comm, n, &gr, err)))
-        goto fail;
+    *V = NULL;
+    if (n < 1 || (double)n * n > INT_MAX)
+        rc = glint_err_set(err, GLINT_ERANGE, "a %dx%d matrix is beyond the distributed "
+                           "eigensolver's int counts", n, n);
+    if ((rc = hf_mpi_agree(comm, rc, err)) || (rc = grid_open(comm, n, &gr, err)))
+        goto done;
     st->nprocs = gr.nprocs;
     st->nprow = gr.nprow;
     st->npcol = gr.npcol;
@@ -381,26 +366,25 @@ int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, do
     nloc_elems = (size_t)gr.lld * (gr.nloc > 0 ? gr.nloc : 1);
     loc = malloc(nloc_elems * sizeof *loc);
     zloc = malloc(nloc_elems * sizeof *zloc);
-    w = malloc((size_t)n * sizeof *w);
-    Z = malloc((size_t)2 * n * sizeof *Z);
-    if (!loc || !zloc || !w || !Z)
+    if (!loc || !zloc)
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the local blocks");
     if ((rc = hf_mpi_agree(comm, rc, err)))
-        goto fail;
-    hf_gauge_vectors(local->res, Z);
-    /* the peak: the accumulation and its packed copy with the local blocks
+        goto done;
+    /* the peak: the caller's G and the packed copy with the local blocks
      * (rank 0 later holds the gathered copy and V instead: no more) */
     st->bytes_local = (double)2 * n * n * sizeof(double) + 2.0 * nloc_elems * sizeof(double);
-    if ((rc = reduce_and_solve(&gr, comm, local, out->lambda, Z, loc, zloc, w, st, err)))
-        goto fail;
+    if ((rc = reduce_and_solve(&gr, comm, G, Z, loc, zloc, w, st, err)))
+        goto done;
+    free(loc);
+    loc = NULL;
 
     t0 = MPI_Wtime();
     if (gr.rank == 0) {
         counts = malloc((size_t)gr.nprocs * sizeof *counts);
         displs = malloc((size_t)gr.nprocs * sizeof *displs);
         gath = malloc((size_t)n * n * sizeof *gath);
-        V = malloc((size_t)n * n * sizeof *V);
-        if (!counts || !displs || !gath || !V) {
+        *V = malloc((size_t)n * n * sizeof **V);
+        if (!counts || !displs || !gath || !*V) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory gathering %dx%d eigenvectors",
                                n, n);
         } else {
@@ -412,36 +396,76 @@ int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, do
         }
     }
     if ((rc = hf_mpi_agree(comm, rc, err)))
-        goto fail;
-    free(loc);
-    loc = NULL;
+        goto done;
     MPI_Gatherv(zloc, gr.mloc * gr.nloc, MPI_DOUBLE, gath, counts, displs, MPI_DOUBLE, 0, comm);
     if (gr.rank == 0)
-        unpack_gathered(&gr, gath, V);
-    free(gath);
-    gath = NULL;
+        unpack_gathered(&gr, gath, *V);
     st->t_gather = MPI_Wtime() - t0;
+done:
+    if (rc) {
+        free(*V);
+        *V = NULL;
+    }
+    grid_close(&gr);
+    free(loc);
+    free(zloc);
+    free(gath);
+    free(counts);
+    free(displs);
+    return rc;
+}
 
+int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, double lambda,
+                        double rcond, hf_decomp *out, hf_mpi_stats *st, glint_err *err)
+{
+    hf_mpi_stats own;
+    double t_start = MPI_Wtime(), t0, *G = NULL, *w = NULL, *Z = NULL, *V = NULL;
+    int rc = 0, n, rank;
+
+    if (!st)
+        st = &own;
+    memset(st, 0, sizeof *st);
+    memset(out, 0, sizeof *out);
+    MPI_Comm_rank(comm, &rank);
+    if (nsamples < 1 || nsamples > SAMPLES_MAX)
+        rc = glint_err_set(err, GLINT_ERANGE, "%ld samples outside 1..%d", nsamples,
+                           SAMPLES_MAX);
+    else
+        rc = hf_decomp_begin(local->res, (int)nsamples, lambda, HF_ROUTE_EIG, rcond, out, err);
+    if ((rc = hf_mpi_agree(comm, rc, err)))
+        goto fail;
+    n = out->n;
+    G = malloc((size_t)n * n * sizeof *G);
+    w = malloc((size_t)n * sizeof *w);
+    Z = malloc((size_t)2 * n * sizeof *Z);
+    if (!G || !w || !Z)
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d normal matrix", n, n);
+    if ((rc = hf_mpi_agree(comm, rc, err)))
+        goto fail;
+    hf_gauge_vectors(local->res, Z);
     t0 = MPI_Wtime();
-    rc = gains_and_keep(&gr, comm, local, w, V, Z, out, st, err);
+    hf_normal_matrix(local, rank == 0 ? out->lambda : 0.0, G); /* 0 rows: lambda^2 L^T L or 0 */
+    st->t_gram = MPI_Wtime() - t0;
+    rc = hf_mpi_eig_sum(comm, n, G, Z, w, &V, st, err);
+    free(G);
+    G = NULL;
+    if (rc)
+        goto fail;
+    t0 = MPI_Wtime();
+    rc = gains_and_keep(comm, local, w, V, Z, out, st, err);
     st->t_gain = MPI_Wtime() - t0;
     if (rc)
         goto fail;
     out->build_seconds = MPI_Wtime() - t_start;
-    if (gr.rank != 0)
+    if (rank != 0)
         memset(out, 0, sizeof *out);
     goto done;
 fail:
     hf_decomp_free(out);
 done:
-    grid_close(&gr);
-    free(loc);
-    free(zloc);
+    free(G);
     free(w);
     free(Z);
     free(V);
-    free(gath);
-    free(counts);
-    free(displs);
     return rc;
 }

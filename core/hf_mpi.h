@@ -29,8 +29,8 @@
  * gathered eigenvectors and the result.
  *
  * Errors: the call is collective and so is its outcome: every rank returns
- * the same code, with the message of the lowest rank that failed (its rank
- * named).  MPI itself is assumed to work (a failed MPI call aborts the job,
+ * the same code, with the message of the lowest rank that failed (named
+ * when it is not rank 0).  MPI itself is assumed to work (a failed MPI call aborts the job,
  * MPI's default error handler). */
 #ifndef GLINT_HF_MPI_H
 #define GLINT_HF_MPI_H
@@ -65,9 +65,22 @@ typedef struct hf_mpi_stats {
 int hf_mpi_decomp_build(MPI_Comm comm, const hf_design *local, long nsamples, double lambda,
                         double rcond, hf_decomp *out, hf_mpi_stats *st, glint_err *err);
 
+/* The collective eigensolver under both routes: the eigendecomposition of
+ * G = sum over the ranks of G_r (n x n, column-major; the upper triangle
+ * is read) plus, when Z is given (2 n: hf3's gauge directions), sigma Z Z^T
+ * with sigma = hf_gauge_shift of G's column sums (both triangles of every
+ * G_r must then be filled).  G_r stays the caller's.  OUT: w[n] on every
+ * rank, ascending (rank 0's values); *V on rank 0 the n x n eigenvectors,
+ * column-major (malloc'ed: the caller frees), NULL elsewhere; st's grid,
+ * t_wait, t_reduce, t_eig, t_gather, bytes_local, bytes_work. */
+int hf_mpi_eig_sum(MPI_Comm comm, int n, const double *G, const double *Z, double *w,
+                   double **V, hf_mpi_stats *st, glint_err *err);
+
 /* Agree on an outcome: every rank passes its own rc (0 or a code) and
  * message; all return the code of the lowest failing rank (0 if none) and
- * *err holds its message, prefixed with "rank K: " when P > 1. */
+ * *err holds its message, prefixed with "rank K: " when K is not rank 0
+ * (rank 0's own failures, and those every rank meets alike, read as
+ * they would on one process). */
 int hf_mpi_agree(MPI_Comm comm, int rc, glint_err *err);
 
 #endif

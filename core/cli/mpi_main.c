@@ -4,11 +4,14 @@
  *   mpirun -np N glint-mpi decompose scene.json [--paintings DIR | --views LIST]
  *          [--cache-dir DIR] [--threads T] [--force] [--quiet] [hf3 options]
  *
- * decompose makes hf3's decomposition (hf_mpi.h) of the pattern that
+ * decompose makes the decomposition of the pattern that
  * `glint fit scene.json --paintings DIR` (or glintd, for the same views)
- * uses, under the key that fit computes (pcache_key_hf of the pattern hash
- * and --res, --lambda, --route, --rcond), so that the fit then loads it
- * from the cache instead of building it.  The views: those with a painting
+ * uses, under the key that fit computes, so that the fit then loads it
+ * from the cache instead of building it: hf3's (the default method;
+ * hf_mpi.h; pcache_key_hf of the pattern hash and --res, --lambda,
+ * --route, --rcond: a .hfd file) or hf4's (--method hf4; hfx_mpi.h, its
+ * normal form; hf4_level_key of the pattern hash and --res, --s_res,
+ * --lambda, --lambda_s, --rcond: a .hf4 file).  The views: those with a painting
  * in DIR (view_KK.exr, ... as fit reads them), or the list given, or every
  * view.  Each rank rasterizes its share of the used views (the k-th used
  * view goes to rank k mod N) on T threads (default: this node's cores
@@ -32,8 +35,11 @@
 #include <sys/resource.h>
 
 #include "cli.h"
+#include "cfile.h"
 #include "hf_mpi.h"
+#include "hfx_mpi.h"
 #include "method_hf3.h"
+#include "method_hf4.h"
 #include "pattern.h"
 #include "pcache.h"
 #include "samples.h"
@@ -45,11 +51,12 @@ static int my_rank, nranks;
 static const char usage_text[] =
     "usage: mpirun -np N glint-mpi decompose scene.json [--paintings DIR | --views LIST]\n"
     "         [--cache-dir DIR] [--threads T] [--force] [--quiet] [hf3 options]\n"
-    "  hf3's decomposition of the scene's pattern, distributed over the ranks, written\n"
-    "  to the cache directory under the key `glint fit` looks up (same views, same\n"
-    "  --res, --lambda, --route, --rcond).  Views: those with a painting in DIR, or\n"
-    "  LIST (\"0,1,5\"), or all.  --force rebuilds a decomposition already cached.\n"
-    "  Route eig only.  glint-mpi help | version\n";
+    "  The decomposition of the scene's pattern (--method hf3, the default, or hf4),\n"
+    "  distributed over the ranks, written to the cache directory under the key\n"
+    "  `glint fit` looks up (same views, same method options).  Views: those with a\n"
+    "  painting in DIR, or LIST (\"0,1,5\"), or all.  --force rebuilds a decomposition\n"
+    "  already cached.  hf3: route eig only; hf4: its normal form only.\n"
+    "  glint-mpi help | version\n";
 
 /* What the command line asked for. */
 typedef struct mpi_args {
@@ -98,10 +105,10 @@ static int parse_args(int argc, char **argv, mpi_args *a)
                        "here, and neither HOME nor XDG_CACHE_HOME is set)");
     if ((rc = fit_opts_resolve(&a->o)))
         return rc;
-    if (a->o.m != &method_hf3)
-        return fail(1, "--method %s: glint-mpi decomposes hf3's constraint matrix only",
-                    a->o.m->name);
-    if (((const fit_params *)a->o.params)->route != HF_ROUTE_EIG)
+    if (a->o.m != &method_hf3 && a->o.m != &method_hf4)
+        return fail(1, "--method %s: glint-mpi decomposes hf3's and hf4's constraint matrices "
+                       "only", a->o.m->name);
+    if (a->o.m == &method_hf3 && ((const fit_params *)a->o.params)->route != HF_ROUTE_EIG)
         return fail(1, "--route svd: glint-mpi runs the eig route only (the svd route is "
                        "the single-process reference)");
     return 0;
@@ -178,8 +185,15 @@ static double peak_rss_mb(void)
     return getrusage(RUSAGE_SELF, &ru) ? 0.0 : ru.ru_maxrss / 1024.0; /* KiB on Linux */
 }
 
+/* What the report says of a decomposition, whichever method made it. */
+typedef struct summary {
+    int nsamples, n, rank, gauge_dims, null_dims, weak_dims;
+    double lambda, rcond, s_max, s_min;
+    const char *form;
+} summary;
+
 static void report(const mpi_args *a, const char *key, const char *path, const char *phash,
-                   const hf_decomp *dc, const hf_mpi_stats *st, const rank_figures *all,
+                   const summary *dc, const hf_mpi_stats *st, const rank_figures *all,
                    double t_save, double t_total)
 {
     json_t *per = json_array(), *j;
@@ -197,13 +211,13 @@ static void report(const mpi_args *a, const char *key, const char *path, const c
             "gram_seconds", f->t_gram, "peak_rss_mb", f->rss_mb,
             "matrix_mb", f->bytes_local / 1048576.0, "workspace_mb", f->bytes_work / 1048576.0));
     }
-    j = json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:i, s:f, s:f, s:i, s:i, s:i, s:i, s:f, s:f,"
+    j = json_pack("{s:s, s:s, s:s, s:s, s:i, s:s, s:i, s:f, s:f, s:i, s:i, s:i, s:i, s:f, s:f,"
                   " s:i, s:[i, i], s:i, s:i, s:o, s:o}",
         "scene", a->scene_path, "key", key, "file", path, "pattern_hash", phash,
-        "samples", dc->nsamples, "res", dc->res, "n", dc->n, "lambda", dc->lambda,
+        "samples", dc->nsamples, "method", a->o.m->name, "n", dc->n, "lambda", dc->lambda,
         "rcond", dc->rcond, "rank", dc->rank, "gauge_dims", dc->gauge_dims,
         "null_dims", dc->null_dims, "weak_dims", dc->weak_dims,
-        "s_max", dc->rank ? dc->s[0] : 0.0, "s_min", dc->rank ? dc->s[dc->rank - 1] : 0.0,
+        "s_max", dc->s_max, "s_min", dc->s_min,
         "ranks", nranks, "grid", st->nprow, st->npcol, "block", st->nb,
         "gain_dirs", st->gain_dirs,
         "seconds", json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}",
@@ -212,6 +226,11 @@ static void report(const mpi_args *a, const char *key, const char *path, const c
             "total", t_total),
         "per_rank", per);
     json_object_set_new(j, "peak_rss_mb_max", json_real(rss));
+    if (dc->form) { /* hfx's counts: unreached unknowns, no gain cut */
+        json_object_set_new(j, "form", json_string(dc->form));
+        json_object_set_new(j, "unreached", json_integer(dc->weak_dims));
+        json_object_del(j, "weak_dims");
+    }
     if (j && !a->quiet)
         print_json(j);
     json_decref(j);
@@ -219,19 +238,29 @@ static void report(const mpi_args *a, const char *key, const char *path, const c
 
 /* This rank's share of the used views: its pattern and design.  OUT: *d
  * (0 rows when it has no view or its views have no sample). */
+/* This rank's design: hf3's (d3) or hf4's (d4), as the method says. */
+typedef struct designs {
+    hf_design d3;
+    hf4_design d4;
+} designs;
+
 static int local_share(const mpi_args *a, const scene *sc, const char *shash,
-                       const unsigned char *use, int threads, hf_design *d, rank_figures *f,
+                       const unsigned char *use, int threads, designs *ds, rank_figures *f,
                        glint_err *e)
 {
-    const fit_params *p = a->o.params;
+    int is4 = a->o.m == &method_hf4;
+    int res = is4 ? ((const hf4_params_t *)a->o.params)->res : ((const fit_params *)a->o.params)->res;
     unsigned char *mine = calloc((size_t)sc->nviews, 1);
     samples s;
     int k = 0, rc = 0;
     double t0 = MPI_Wtime();
 
     memset(&s, 0, sizeof s);
-    memset(d, 0, sizeof *d);
-    d->res = p->res;
+    memset(ds, 0, sizeof *ds);
+    ds->d3.res = res;
+    ds->d4.d.res = res;
+    if (is4)
+        ds->d4.sres = ((const hf4_params_t *)a->o.params)->sres;
     if (!mine)
         return glint_err_set(e, GLINT_ENOMEM, "out of memory");
     for (int v = 0; v < sc->nviews; v++)
@@ -250,25 +279,119 @@ static int local_share(const mpi_args *a, const scene *sc, const char *shash,
     f->t_pattern = MPI_Wtime() - t0;
     t0 = MPI_Wtime();
     if (rc == 0 && s.n > 0)
-        rc = hf_design_build(&s, p->res, d, e);
+        rc = is4 ? hf4_design_build(&s, res, ds->d4.sres, &ds->d4, e)
+                 : hf_design_build(&s, res, &ds->d3, e);
     f->t_design = MPI_Wtime() - t0;
-    f->samples = d->n;
+    f->samples = is4 ? ds->d4.d.n : ds->d3.n;
     samples_free(&s);
     free(mine);
     return rc;
+}
+
+/* The cache file glint fit reads for these options (OUT: key, path). */
+static int cache_file(const mpi_args *a, const char *phash, char *key, size_t klen, char *path,
+                      size_t plen, glint_err *e)
+{
+    if (a->o.m == &method_hf4) {
+        char name[64];
+        hf4_level_key(a->o.params, phash, key, klen);
+        cfile_name(key, ".hf4", name, sizeof name);
+        if ((size_t)snprintf(path, plen, "%s/%s", a->o.cache_dir, name) >= plen)
+            return glint_err_set(e, GLINT_ERANGE, "cache path too long");
+        return 0;
+    } else {
+        const fit_params *p = a->o.params;
+        char k[33];
+        pcache_key_hf(phash, p->res, p->lambda, p->route, p->rcond, k);
+        snprintf(key, klen, "%s", k);
+        return pcache_path(a->o.cache_dir, k, path, plen, e);
+    }
+}
+
+/* Rank 0: 1 (reported) when the decomposition is on disk already: hf3's
+ * read and checked, hf4's present (a damaged one is rebuilt by the fit
+ * that reads it). */
+static int already_cached(const mpi_args *a, const char *key, const char *path)
+{
+    hf_decomp old;
+    glint_err e;
+
+    if (a->force || access(path, R_OK) != 0)
+        return 0;
+    if (a->o.m == &method_hf4) {
+        if (!a->quiet)
+            printf("{\"key\": \"%s\", \"file\": \"%s\", \"cached\": true}\n", key, path);
+        return 1;
+    }
+    if (pcache_decomp_load(a->o.cache_dir, key, &old, &e) != 0)
+        return 0;
+    if (!a->quiet)
+        printf("{\"key\": \"%s\", \"file\": \"%s\", \"cached\": true, \"samples\": %d, "
+               "\"rank\": %d}\n", key, path, old.nsamples, old.rank);
+    hf_decomp_free(&old);
+    return 1;
+}
+
+/* Collective: the distributed decomposition of every rank's design ds
+ * (total samples), saved by rank 0 under key.  OUT: *sum (rank 0), *st,
+ * *t_save. */
+static int build_and_save(const mpi_args *a, designs *ds, long total, const char *key,
+                          summary *sum, hf_mpi_stats *st, double *t_save, glint_err *e)
+{
+    int rc = 0;
+    double t0;
+
+    memset(sum, 0, sizeof *sum);
+    if (a->o.m == &method_hf4) {
+        const hf4_params_t *p = a->o.params;
+        hf4_rows_ctx ctx;
+        hf4_decomp dc = {p->res, p->sres, p->lambda, p->lambda_s, {0}};
+        /* the smoothing rows once, on rank 0 */
+        hfx_rows rows = hf4_rows(&ds->d4, my_rank == 0 ? p->lambda : 0.0,
+                                 my_rank == 0 ? p->lambda_s : 0.0, &ctx);
+        if ((rc = agree(hfx_mpi_decomp_build(MPI_COMM_WORLD, &rows, total,
+                                             p->rcond > 0.0 ? p->rcond : HF4_RCOND_DEFAULT, 3,
+                                             &dc.x, st, e), e)))
+            return rc;
+        if (my_rank == 0) {
+            const hfx_decomp *x = &dc.x;
+            summary su = {x->nsamples, x->n, x->rank, x->gauge_dims, x->null_dims,
+                          x->unreached, p->lambda, x->rcond, x->s_max, x->s_min_kept, x->form};
+            *sum = su;
+            t0 = MPI_Wtime();
+            rc = hf4_decomp_save(&dc, a->o.cache_dir, key, e);
+            *t_save = MPI_Wtime() - t0;
+        }
+        hf4_decomp_free(&dc);
+    } else {
+        const fit_params *p = a->o.params;
+        hf_decomp dc;
+        if ((rc = agree(hf_mpi_decomp_build(MPI_COMM_WORLD, &ds->d3, total, p->lambda, p->rcond,
+                                            &dc, st, e), e)))
+            return rc;
+        if (my_rank == 0) {
+            summary su = {dc.nsamples, dc.n, dc.rank, dc.gauge_dims, dc.null_dims,
+                          dc.weak_dims, dc.lambda, dc.rcond, dc.s[0], dc.s[dc.rank - 1], NULL};
+            *sum = su;
+            t0 = MPI_Wtime();
+            rc = pcache_decomp_save(a->o.cache_dir, key, &dc, e);
+            *t_save = MPI_Wtime() - t0;
+        }
+        hf_decomp_free(&dc);
+    }
+    return agree(rc, e);
 }
 
 static int cmd_decompose(int argc, char **argv)
 {
     mpi_args a;
     scene sc;
-    hf_design d;
-    hf_decomp dc;
+    designs ds;
+    summary sum;
     hf_mpi_stats st;
     rank_figures mine, *all = NULL;
     unsigned char *use = NULL;
-    char shash[33], phash[33], key[33], path[4096];
-    const fit_params *p;
+    char shash[33], phash[33], key[256], path[4096];
     glint_err e;
     int rc = 0, err_fd = -1, cached = 0;
     long total = 0;
@@ -276,8 +399,7 @@ static int cmd_decompose(int argc, char **argv)
 
     memset(&a, 0, sizeof a);
     memset(&sc, 0, sizeof sc);
-    memset(&d, 0, sizeof d);
-    memset(&dc, 0, sizeof dc);
+    memset(&ds, 0, sizeof ds);
     memset(&mine, 0, sizeof mine);
     memset(&e, 0, sizeof e);
     fit_opts_init(&a.o);
@@ -293,10 +415,10 @@ static int cmd_decompose(int argc, char **argv)
         fflush(stderr);
         dup2(err_fd, 2);
         close(err_fd);
+        err_fd = -1;
     }
     if (rc)
         goto done;
-    p = a.o.params;
 
     rc = agree(scene_load(a.scene_path, &sc, &e), &e);
     if (rc)
@@ -321,31 +443,21 @@ static int cmd_decompose(int argc, char **argv)
         goto done;
     scene_hash(&sc, shash);
     if ((rc = agree(samples_pattern_hash(a.o.m->pattern_rule, shash, use, sc.nviews, phash, &e),
-                    &e)))
+                    &e)) ||
+        (rc = agree(cache_file(&a, phash, key, sizeof key, path, sizeof path, &e), &e)))
         goto done;
-    pcache_key_hf(phash, p->res, p->lambda, p->route, p->rcond, key);
-    if ((rc = agree(pcache_path(a.o.cache_dir, key, path, sizeof path, &e), &e)))
-        goto done;
-    if (my_rank == 0 && !a.force && access(path, R_OK) == 0) {
-        hf_decomp old;
-        if (pcache_decomp_load(a.o.cache_dir, key, &old, &e) == 0) {
-            cached = 1;
-            if (!a.quiet)
-                printf("{\"key\": \"%s\", \"file\": \"%s\", \"cached\": true, \"samples\": %d, "
-                       "\"rank\": %d}\n", key, path, old.nsamples, old.rank);
-            hf_decomp_free(&old);
-        }
-    }
+    if (my_rank == 0)
+        cached = already_cached(&a, key, path);
     MPI_Bcast(&cached, 1, MPI_INT, 0, MPI_COMM_WORLD);
     if (cached)
         goto done;
 
-    rc = local_share(&a, &sc, shash, use, a.threads > 0 ? a.threads : default_threads(), &d,
+    rc = local_share(&a, &sc, shash, use, a.threads > 0 ? a.threads : default_threads(), &ds,
                      &mine, &e);
     if ((rc = agree(rc, &e)))
         goto done;
     {
-        long n_local = d.n;
+        long n_local = (long)mine.samples;
         MPI_Allreduce(&n_local, &total, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
     }
     if (total < 1) {
@@ -353,15 +465,7 @@ static int cmd_decompose(int argc, char **argv)
                                     "decompose") : 1;
         goto done;
     }
-    if ((rc = agree(hf_mpi_decomp_build(MPI_COMM_WORLD, &d, total, p->lambda, p->rcond, &dc,
-                                        &st, &e), &e)))
-        goto done;
-    if (my_rank == 0) {
-        double t0 = MPI_Wtime();
-        rc = pcache_decomp_save(a.o.cache_dir, key, &dc, &e);
-        t_save = MPI_Wtime() - t0;
-    }
-    if ((rc = agree(rc, &e)))
+    if ((rc = build_and_save(&a, &ds, total, key, &sum, &st, &t_save, &e)))
         goto done;
     mine.t_gram = st.t_gram;
     mine.bytes_local = st.bytes_local;
@@ -374,12 +478,12 @@ static int cmd_decompose(int argc, char **argv)
     MPI_Gather(&mine, (int)RANK_FIGURES, MPI_DOUBLE, all, (int)RANK_FIGURES, MPI_DOUBLE, 0,
                MPI_COMM_WORLD);
     if (my_rank == 0)
-        report(&a, key, path, phash, &dc, &st, all, t_save, MPI_Wtime() - t_start);
+        report(&a, key, path, phash, &sum, &st, all, t_save, MPI_Wtime() - t_start);
 done:
     free(all);
     free(use);
-    hf_decomp_free(&dc);
-    hf_design_free(&d);
+    hf_design_free(&ds.d3);
+    hf4_design_free(&ds.d4);
     scene_free(&sc);
     fit_opts_free(&a.o);
     return rc;
