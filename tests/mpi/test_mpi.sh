@@ -9,10 +9,13 @@
 #   - `glint fit` on glint-mpi's directory loads the decomposition from
 #     disk (a cache hit, not a rebuild) and gives the same fit errors;
 #   - settings: res 32 with lambda 0.1 (the default) on 2 ranks and on 4
-#     (a 2 x 2 process grid); res 24 with lambda 0; one painted view at
+#     (a 2 x 2 process grid); one painted view at
 #     res 96 with lambda 0 on 3 ranks (a 1 x 3 grid; two ranks get no
 #     view, hence no rows; 4 null and 1 barely reached directions: the
 #     keep rules cut both on the gathered result as on one process);
+#   - hf4 (--method hf4, hfx's normal form): 2 ranks at s_res 24, 3 ranks
+#     at s_res 16 without smoothing of s; the fit from glint-mpi's file
+#     against the single-process fit, factor by factor;
 #   - wrong input gives a clear message and status, never a hang.
 # usage: test_mpi.sh path/to/glint path/to/glint-mpi path/to/mpi_compare
 # Skips (77) when mpirun is absent.  Every mpirun runs under a timeout.
@@ -78,9 +81,61 @@ EOF
 }
 
 compare res32 2 "$T/paint" --res 32
-compare res24-lambda0 2 "$T/paint" --res 24 --lambda 0
 compare view0-res96-lambda0-3ranks 3 "$T/paint1" --res 96 --lambda 0
 compare res32-4ranks 4 "$T/paint" --res 32
+
+# compare_hf4 NAME NP PAINTINGS FIT-OPTIONS...: hf4's normal form end to end.
+# No operator tool here: the fits are compared, every log-factor (p, q, r
+# and the spatial s, at full precision in material.json) within the
+# operator's perturbation bound 64 n eps (s_max / s_min)^2 max |y|.
+compare_hf4() {
+  local name=$1 np=$2 pdir=$3; shift 3
+  local c0="$T/c0-$name" c1="$T/c1-$name"
+  if ! "$G" fit "$T/scene.json" --paintings "$pdir" -o "$T/m0-$name" --cache-dir "$c0" \
+       --method hf4 "$@" > "$T/f0-$name.json" 2>"$T/err"; then
+    bad "$name: single-process fit"; sed 's/^/    /' "$T/err"; return
+  fi
+  if ! "${MPIRUN[@]}" -np "$np" "$GM" decompose "$T/scene.json" --paintings "$pdir" \
+       --cache-dir "$c1" --method hf4 "$@" > "$T/d-$name.json" 2>"$T/err"; then
+    bad "$name: mpirun -np $np glint-mpi decompose --method hf4"; sed 's/^/    /' "$T/err"
+    return
+  fi
+  ok "$name: mpirun -np $np glint-mpi decompose --method hf4"
+  local file
+  file=$(basename "$(field "$T/d-$name.json" file)")
+  [ -f "$c0/$file" ] && ok "$name: same file as glint fit ($file)" ||
+      bad "$name: glint fit wrote no $file ($(ls "$c0"))"
+  if "$G" fit "$T/scene.json" --paintings "$pdir" -o "$T/m1-$name" --cache-dir "$c1" \
+       --method hf4 "$@" > "$T/f1-$name.json" 2>"$T/err" &&
+     python3 - "$T/d-$name.json" "$T/f1-$name.json" "$T/m0-$name/material.json" \
+       "$T/m1-$name/material.json" > "$T/cmp" 2>&1 <<'EOF'
+import json, sys
+rep, fit = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+lv = fit["precomputation"]["cache"]["levels"]["decomposition"]
+assert lv["disk"] == "loaded", "decomposition was %s, not loaded" % lv["disk"]
+def flat(x):
+    if isinstance(x, dict):
+        x = [x[k] for k in sorted(x)]
+    if isinstance(x, list):
+        return [v for e in x for v in flat(e)]
+    return [x] if isinstance(x, (int, float)) else []
+a, b = (json.load(open(p)) for p in sys.argv[3:5])
+ya = flat(a["log_factors"]) + flat(a["log_s"])
+yb = flat(b["log_factors"]) + flat(b["log_s"])
+assert len(ya) == len(yb) > 0
+diff = max(abs(x - y) for x, y in zip(ya, yb))
+tol = 64 * rep["n"] * 2.220446049250313e-16 * (rep["s_max"] / rep["s_min"]) ** 2 * \
+    max(abs(x) for x in ya)
+print("log-factor diff %.3g, tolerance %.3g, rank %d, form %s" % (diff, tol, rep["rank"],
+                                                                 rep["form"]))
+assert diff <= tol
+EOF
+  then ok "$name: glint fit loads it (cache hit), same factors: $(cat "$T/cmp")"
+  else bad "$name: glint fit after glint-mpi: $(cat "$T/cmp")"; sed 's/^/    /' "$T/err"; fi
+}
+
+compare_hf4 hf4-sres24 2 "$T/paint" --res 32 --s_res 24
+compare_hf4 hf4-sres16-lambdas0-3ranks 3 "$T/paint" --res 32 --s_res 16 --lambda_s 0
 
 # a decomposition already cached is not rebuilt (unless --force)
 if "${MPIRUN[@]}" -np 2 "$GM" decompose "$T/scene.json" --paintings "$T/paint" \
@@ -97,8 +152,14 @@ expect_err() {
 }
 S=$T/scene.json
 expect_err "svd route refused" 1 "eig route only" decompose "$S" --cache-dir "$T/x" --route svd
-expect_err "other method refused" 1 "hf3's constraint matrix only" decompose "$S" \
-    --cache-dir "$T/x" --method hf2d
+expect_err "other method refused" 1 "hf3's and hf4's constraint matrices only" decompose \
+    "$S" --cache-dir "$T/x" --method hf2d
+"$G" scene create --size 32 -o "$T/small.json" >/dev/null
+expect_err "hf4's kernel form refused" 1 "kernel form there, which is not distributed" decompose \
+    "$T/small.json" --cache-dir "$T/x" --method hf4 --s_res 64 --views 0
+expect_err "hf4's dense form refused" 1 "dense form there, which is not distributed" decompose \
+    "$T/small.json" --cache-dir "$T/x" --method hf4 --s_res 64 --views 0 --lambda 0 \
+    --lambda_s 0
 expect_err "res out of range" 1 "res" decompose "$S" --cache-dir "$T/x" --res 3
 expect_err "bad view list" 1 "--views '0,x'" decompose "$S" --cache-dir "$T/x" --views 0,x
 expect_err "view out of range" 1 "in 0..11" decompose "$S" --cache-dir "$T/x" --views 40
