@@ -7,7 +7,8 @@
  *   1. accumulates the normal matrix of its own share of the data rows,
  *      A_r^T A_r (n x n, n = 3 res; rank 0 adds lambda^2 L^T L), from a
  *      design of its own samples (hf_design_build on its views);
- *   2. one MPI_Reduce_scatter sums the shares straight into ScaLAPACK's 2D
+ *   2. (hf_mpi_eig_sum, below, which hfx_mpi.h's route shares) one
+ *      MPI_Reduce_scatter sums the shares straight into ScaLAPACK's 2D
  *      block-cyclic layout (NB x NB blocks on a P_r x P_c grid, P_r the
  *      largest divisor of P at most sqrt(P)): each rank then holds n^2 / P
  *      of G = A^T A + lambda^2 L^T L;
@@ -30,8 +31,8 @@
  *
  * Errors: the call is collective and so is its outcome: every rank returns
  * the same code, with the message of the lowest rank that failed (named
- * when it is not rank 0).  MPI itself is assumed to work (a failed MPI call aborts the job,
- * MPI's default error handler). */
+ * when it is not rank 0).  MPI itself is assumed to work (a failed MPI
+ * call aborts the job: MPI's default error handler). */
 #ifndef GLINT_HF_MPI_H
 #define GLINT_HF_MPI_H
 
