@@ -57,9 +57,12 @@ def event_lag(poster, listener, sess, n):
     """Seconds from posting a stroke to `poster` until the event arrives on
     a stream open on `listener`."""
     got, ready = {}, threading.Event()
+    since = requests.get("%s/api/v1/sessions/%s" % (listener, sess["id"]),
+                         headers={"X-Glint-Token": sess["view_token"]},
+                         timeout=30).json()["last_seq"]
 
     def read():
-        r = requests.get("%s/api/v1/sessions/%s/events" % (listener, sess["id"]),
+        r = requests.get("%s/api/v1/sessions/%s/events?since=%d" % (listener, sess["id"], since),
                          headers={"X-Glint-Token": sess["view_token"]}, stream=True, timeout=60)
         ready.set()
         ev = None
