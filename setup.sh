@@ -21,10 +21,13 @@ BUILD_PKGS=(
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind, and the
 # PostgreSQL server and nginx that the store's and the replicas' tests start
-# (tests/with_postgres.sh; nothing is left running).
+# (tests/with_postgres.sh; nothing is left running), and Open MPI with
+# ScaLAPACK, with which the build adds glint-mpi (distributed
+# decompositions, tests/mpi).
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt python3-openimageio python3-matplotlib
   openimageio-tools gnuplot-nox wrk chromium jq valgrind postgresql nginx
+  openmpi-bin libopenmpi-dev libscalapack-openmpi-dev
 )
 
 missing_packages() {
@@ -120,6 +123,11 @@ case "$mode" in
     # it drives Debian's /usr/bin/chromium (no browser download).
     command -v node >/dev/null && command -v npm >/dev/null || install_packages nodejs npm
     npm ci --prefix tests/browser --no-audit --no-fund --loglevel=error
+    # a build configured before Open MPI was installed (./setup.sh run)
+    # learns of it: glint-mpi and its tests join
+    if [ -f build/build.ninja ] && ! grep -q glint-mpi build/build.ninja; then
+      meson setup --reconfigure build
+    fi
     build build
     echo "== unit, CLI and integration tests"
     meson test -C build --print-errorlogs
