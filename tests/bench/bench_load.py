@@ -27,7 +27,6 @@ import argparse
 import os
 import random
 import socket
-import statistics
 import sys
 import tempfile
 import threading

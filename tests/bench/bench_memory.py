@@ -16,7 +16,6 @@ G-buffer at 2048 x 2048, a cold fit of 12 painted views.
 usage: tests/bench/bench_memory.py [--build DIR] [--glintd PATH]
 """
 import argparse
-import json
 import os
 import shutil
 import subprocess

@@ -17,7 +17,7 @@ import struct
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Daemon, run_tests  # noqa: E402,F401
+from harness import run_tests  # noqa: E402
 
 API = "/api/v1"
 
