@@ -91,9 +91,12 @@ static int local_cols(const grid *g, int q)
     return numroc_(&g->n, &g->nb, &g->coord[2 * q + 1], (const int[]){0}, &g->npcol);
 }
 
-/* Pack the full n x n matrix G by destination rank, each destination's
- * local block-cyclic array in turn (OUT: send[n^2], counts[P]). */
-static void pack_by_owner(const grid *g, const double *G, double *send, int *counts)
+/* The full n x n matrix `full` and every rank's local block-cyclic array
+ * laid one after another, rank by rank (`packed`): to_packed copies full
+ * into packed (and sets counts[P], the local arrays' sizes), otherwise
+ * packed into full (full is only read when to_packed). */
+static void block_cyclic_copy(const grid *g, double *full, double *packed, int to_packed,
+                              int *counts)
 {
     size_t off = 0;
     int n = g->n;
@@ -103,28 +106,17 @@ static void pack_by_owner(const grid *g, const double *G, double *send, int *cou
         int pr = g->coord[2 * q], pc = g->coord[2 * q + 1];
         for (int lj = 0; lj < nq; lj++) {
             int j = l2g(lj, g->nb, pc, g->npcol);
-            for (int li = 0; li < mq; li++)
-                send[off + li + (size_t)mq * lj] = G[l2g(li, g->nb, pr, g->nprow) + (size_t)n * j];
+            for (int li = 0; li < mq; li++) {
+                double *a = &full[l2g(li, g->nb, pr, g->nprow) + (size_t)n * j];
+                double *b = &packed[off + li + (size_t)mq * lj];
+                if (to_packed)
+                    *b = *a;
+                else
+                    *a = *b;
+            }
         }
-        counts[q] = mq * nq;
-        off += (size_t)mq * nq;
-    }
-}
-
-/* Rank 0: unpack the gathered local arrays into V (n x n). */
-static void unpack_gathered(const grid *g, const double *buf, double *V)
-{
-    size_t off = 0;
-    int n = g->n;
-
-    for (int q = 0; q < g->nprocs; q++) {
-        int mq = local_rows(g, q), nq = local_cols(g, q);
-        int pr = g->coord[2 * q], pc = g->coord[2 * q + 1];
-        for (int lj = 0; lj < nq; lj++) {
-            int j = l2g(lj, g->nb, pc, g->npcol);
-            for (int li = 0; li < mq; li++)
-                V[l2g(li, g->nb, pr, g->nprow) + (size_t)n * j] = buf[off + li + (size_t)mq * lj];
-        }
+        if (counts)
+            counts[q] = mq * nq;
         off += (size_t)mq * nq;
     }
 }
@@ -256,7 +248,7 @@ static int reduce_and_solve(const grid *gr, MPI_Comm comm, const double *G, cons
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for a %dx%d matrix", n, n);
     if ((rc = hf_mpi_agree(comm, rc, err)))
         goto done;
-    pack_by_owner(gr, G, send, counts);
+    block_cyclic_copy(gr, (double *)G, send, 1, counts);
     t0 = MPI_Wtime();
     MPI_Barrier(comm); /* the wait for the slowest share, timed apart */
     st->t_wait = MPI_Wtime() - t0;
@@ -399,7 +391,7 @@ int hf_mpi_eig_sum(MPI_Comm comm, int n, const double *G, const double *Z, doubl
         goto done;
     MPI_Gatherv(zloc, gr.mloc * gr.nloc, MPI_DOUBLE, gath, counts, displs, MPI_DOUBLE, 0, comm);
     if (gr.rank == 0)
-        unpack_gathered(&gr, gath, *V);
+        block_cyclic_copy(&gr, *V, gath, 0, NULL);
     st->t_gather = MPI_Wtime() - t0;
 done:
     if (rc) {
