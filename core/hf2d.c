@@ -119,12 +119,7 @@ int hf2d_design_build(const samples *s, const hf2d_shape *sh, hf2d_design *out, 
 
 /* ---- rows ------------------------------------------------------------------------ */
 
-typedef struct rows_ctx {
-    const hf2d_design *x;
-    double lambda, lambda_2d;
-    int start[4];        /* first smoothing row of each factor (relative), and the total */
-    int grid[3];         /* S for a 2D factor with smoothing (hfx_rows.grid) */
-} rows_ctx;
+typedef hf2d_rows_ctx rows_ctx;
 
 static int data_row(const hf2d_design *x, int i, int *col, double *w)
 {
@@ -169,9 +164,12 @@ static int any_row(const void *ctx, int r, int *col, double *w)
     return hfx_smooth_2d(x->off[j], x->sh.sres, c->lambda_2d, r, col, w);
 }
 
-static hfx_rows rows_of(rows_ctx *c)
+hfx_rows hf2d_rows(const hf2d_design *d, double lambda, double lambda_2d, hf2d_rows_ctx *c)
 {
-    const hf2d_design *x = c->x;
+    const hf2d_design *x = d;
+    c->x = d;
+    c->lambda = lambda;
+    c->lambda_2d = lambda_2d;
     hfx_rows r = {.ctx = c, .n = x->off[3], .nsamples = x->n, .row = any_row, .nfactors = 3,
                   .off = x->off, .grid = c->grid};
     c->start[0] = 0;
@@ -203,7 +201,7 @@ void hf2d_decomp_free(hf2d_decomp *dc)
 int hf2d_decomp_build(const hf2d_design *d, double lambda, double lambda_2d, double rcond,
                       hf2d_decomp *dc, glint_err *err)
 {
-    rows_ctx c = {.x = d, .lambda = lambda, .lambda_2d = lambda_2d};
+    rows_ctx c;
     hfx_rows r;
     memset(dc, 0, sizeof *dc);
     if (!lambda_ok(lambda) || !lambda_ok(lambda_2d))
@@ -213,7 +211,7 @@ int hf2d_decomp_build(const hf2d_design *d, double lambda, double lambda_2d, dou
         rcond = HF4_RCOND_DEFAULT;
     if (!(rcond < 1.0) || !isfinite(rcond))
         return glint_err_set(err, GLINT_ERANGE, "rcond %g must be below 1", rcond);
-    r = rows_of(&c);
+    r = hf2d_rows(d, lambda, lambda_2d, &c);
     dc->sh = d->sh;
     dc->lambda = lambda;
     dc->lambda_2d = lambda_2d;
@@ -231,8 +229,8 @@ void hf2d_factors_free(hf2d_factors *f)
 int hf2d_fit(const hf2d_design *x, const hf2d_decomp *dc, const hf_map *map, hf_model model,
              const float *rgb, hf2d_factors *fac, hfx_fit_stats *st, glint_err *err)
 {
-    rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_2d = dc->lambda_2d};
-    hfx_rows r = rows_of(&c);
+    rows_ctx c;
+    hfx_rows r = hf2d_rows(x, dc->lambda, dc->lambda_2d, &c);
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->cos_i, .nfactors = 3,
                       .off = x->off, .log_max = HF2D_LOG_MAX};
     int n = x->off[3], rc;

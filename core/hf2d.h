@@ -88,6 +88,19 @@ int hf2d_decomp_build(const hf2d_design *d, double lambda, double lambda_2d, dou
                       hf2d_decomp *out, glint_err *err);
 void hf2d_decomp_free(hf2d_decomp *dc);
 
+/* B's rows as hfx.h's rows: the data rows of d's samples, then lambda's
+ * (1D factors) and lambda_2d's (2D factors) smoothing rows, none for a
+ * zero weight.  c is the storage the rows refer to (it and d must outlive
+ * them).  What hf2d_decomp_build decomposes, and what a distributed route
+ * splits (hfx_mpi.h). */
+typedef struct hf2d_rows_ctx {
+    const hf2d_design *x;
+    double lambda, lambda_2d;
+    int start[4];        /* first smoothing row of each factor (relative), and the total */
+    int grid[3];         /* S for a 2D factor with smoothing (hfx_rows.grid) */
+} hf2d_rows_ctx;
+hfx_rows hf2d_rows(const hf2d_design *d, double lambda, double lambda_2d, hf2d_rows_ctx *c);
+
 typedef struct hf2d_factors {
     hf2d_shape sh;
     int off[4];

@@ -77,7 +77,7 @@ static void hf2d_params_default(void *params)
     p->rcond = HF4_RCOND_DEFAULT;
 }
 
-static hf2d_shape shape_of(const hf2d_params_t *p)
+hf2d_shape hf2d_shape_of(const hf2d_params_t *p)
 {
     hf2d_shape sh = {.res = p->res, .sres = p->sres};
     for (int j = 0; j < 3; j++)
@@ -102,13 +102,17 @@ static void level_free(void *data)
     free(x);
 }
 
+void hf2d_level_key(const hf2d_params_t *p, const char pattern_hash[33], char *key, size_t len)
+{
+    snprintf(key, len, "hf2d:%s:%d:%d:%d%d%d:%.17g:%.17g:%.17g", pattern_hash, p->res, p->sres,
+             p->dims[0] + 1, p->dims[1] + 1, p->dims[2] + 1, p->lambda, p->lambda_2d, p->rcond);
+}
+
 static void level_key(const void *params, const samples *s, const char *prev_key, char *key,
                       size_t len)
 {
-    const hf2d_params_t *p = params;
     (void)prev_key;
-    snprintf(key, len, "hf2d:%s:%d:%d:%d%d%d:%.17g:%.17g:%.17g", s->hash, p->res, p->sres,
-             p->dims[0] + 1, p->dims[1] + 1, p->dims[2] + 1, p->lambda, p->lambda_2d, p->rcond);
+    hf2d_level_key(params, s->hash, key, len);
 }
 
 static size_t level_bytes(const hf2d_level *x)
@@ -121,7 +125,7 @@ static size_t level_bytes(const hf2d_level *x)
 static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
     const hf2d_params_t *p = in->params;
-    hf2d_shape sh = shape_of(p);
+    hf2d_shape sh = hf2d_shape_of(p);
     hf2d_level *x = calloc(1, sizeof *x);
     double t0 = glint_now();
     int rc;
@@ -151,16 +155,13 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
  * hfx.h's hfx_decomp_put.  The design is rebuilt from the pattern. */
 #define HF2D_MAGIC "GLHF2D01"
 
-static int level_save(const method_build_in *in, const char *dir, const char *key,
-                      const cache_value *v, glint_err *err)
+int hf2d_decomp_save(const hf2d_decomp *dc, const char *dir, const char *key, glint_err *err)
 {
-    const hf2d_decomp *dc = &((const hf2d_level *)v->data)->dc;
     char name[64];
     cfile_w b;
     uint32_t u[5] = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres, (uint32_t)dc->sh.dims[0],
                      (uint32_t)dc->sh.dims[1], (uint32_t)dc->sh.dims[2]};
     double d[2] = {dc->lambda, dc->lambda_2d};
-    (void)in;
     cfile_begin(&b, HF2D_MAGIC, 1);
     cfile_put(&b, u, sizeof u);
     cfile_put(&b, d, sizeof d);
@@ -169,11 +170,18 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
     return cfile_write(&b, dir, name, err);
 }
 
+static int level_save(const method_build_in *in, const char *dir, const char *key,
+                      const cache_value *v, glint_err *err)
+{
+    (void)in;
+    return hf2d_decomp_save(&((const hf2d_level *)v->data)->dc, dir, key, err);
+}
+
 static int level_load(const method_build_in *in, const char *dir, const char *key,
                       cache_value *out, glint_err *err)
 {
     const hf2d_params_t *p = in->params;
-    hf2d_shape sh = shape_of(p);
+    hf2d_shape sh = hf2d_shape_of(p);
     hf2d_level *x = calloc(1, sizeof *x);
     char name[64];
     cfile_r r;
@@ -275,7 +283,7 @@ static int hf2d_fit_op(const method_fit_in *in, material *out, glint_err *err)
 static size_t hf2d_fit_bytes(const void *params, long nsamples)
 {
     const hf2d_params_t *p = params;
-    hf2d_shape sh = shape_of(p);
+    hf2d_shape sh = hf2d_shape_of(p);
     int off[4];
     double n = hf2d_offsets(&sh, off), N = (double)nsamples;
     double b = 320.0 * N + 3.0 * n * n * 8.0 + 112.0 * N;
@@ -287,7 +295,7 @@ static size_t hf2d_fit_bytes(const void *params, long nsamples)
 static int hf2d_holdout_ok(const void *params)
 {
     const hf2d_params_t *p = params;
-    hf2d_shape sh = shape_of(p);
+    hf2d_shape sh = hf2d_shape_of(p);
     int off[4];
     return hf2d_offsets(&sh, off) <= 2200;
 }

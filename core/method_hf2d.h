@@ -31,6 +31,14 @@ typedef struct hf2d_params_t {
     hf_model model;
 } hf2d_params_t;
 
+/* The shape of p's factors; the decomposition level's key for p and a
+ * pattern hash (OUT: key); its file <dir>/<XXH3-128 of the key>.hf2d
+ * written from a decomposition: what the level's disk layer reads
+ * (glint-mpi writes it too). */
+hf2d_shape hf2d_shape_of(const hf2d_params_t *p);
+void hf2d_level_key(const hf2d_params_t *p, const char pattern_hash[33], char *key, size_t len);
+int hf2d_decomp_save(const hf2d_decomp *dc, const char *dir, const char *key, glint_err *err);
+
 /* The factors of an hf2d material (NULL for another method's). */
 const hf2d_factors *hf2d_of(const material *m);
 

@@ -9,9 +9,10 @@
  * uses, under the key that fit computes, so that the fit then loads it
  * from the cache instead of building it: hf3's (the default method;
  * hf_mpi.h; pcache_key_hf of the pattern hash and --res, --lambda,
- * --route, --rcond: a .hfd file) or hf4's (--method hf4; hfx_mpi.h, its
+ * --route, --rcond: a .hfd file), hf4's (--method hf4; hfx_mpi.h, its
  * normal form; hf4_level_key of the pattern hash and --res, --s_res,
- * --lambda, --lambda_s, --rcond: a .hf4 file).  The views: those with a painting
+ * --lambda, --lambda_s, --rcond: a .hf4 file) or hf2d's (--method hf2d;
+ * the same normal form; hf2d_level_key: a .hf2d file).  The views: those with a painting
  * in DIR (view_KK.exr, ... as fit reads them), or the list given, or every
  * view.  Each rank rasterizes its share of the used views (the k-th used
  * view goes to rank k mod N) on T threads (default: this node's cores
@@ -38,6 +39,7 @@
 #include "cfile.h"
 #include "hf_mpi.h"
 #include "hfx_mpi.h"
+#include "method_hf2d.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
 #include "pattern.h"
@@ -51,11 +53,11 @@ static int my_rank, nranks;
 static const char usage_text[] =
     "usage: mpirun -np N glint-mpi decompose scene.json [--paintings DIR | --views LIST]\n"
     "         [--cache-dir DIR] [--threads T] [--force] [--quiet] [hf3 options]\n"
-    "  The decomposition of the scene's pattern (--method hf3, the default, or hf4),\n"
+    "  The decomposition of the scene's pattern (--method hf3, the default, hf4 or hf2d),\n"
     "  distributed over the ranks, written to the cache directory under the key\n"
     "  `glint fit` looks up (same views, same method options).  Views: those with a\n"
     "  painting in DIR, or LIST (\"0,1,5\"), or all.  --force rebuilds a decomposition\n"
-    "  already cached.  hf3: route eig only; hf4: its normal form only.\n"
+    "  already cached.  hf3: route eig only; hf4 and hf2d: their normal form only.\n"
     "  glint-mpi help | version\n";
 
 /* What the command line asked for. */
@@ -105,9 +107,9 @@ static int parse_args(int argc, char **argv, mpi_args *a)
                        "here, and neither HOME nor XDG_CACHE_HOME is set)");
     if ((rc = fit_opts_resolve(&a->o)))
         return rc;
-    if (a->o.m != &method_hf3 && a->o.m != &method_hf4)
-        return fail(1, "--method %s: glint-mpi decomposes hf3's and hf4's constraint matrices "
-                       "only", a->o.m->name);
+    if (a->o.m != &method_hf3 && a->o.m != &method_hf4 && a->o.m != &method_hf2d)
+        return fail(1, "--method %s: glint-mpi decomposes hf3's, hf4's and hf2d's constraint "
+                       "matrices only", a->o.m->name);
     if (a->o.m == &method_hf3 && ((const fit_params *)a->o.params)->route != HF_ROUTE_EIG)
         return fail(1, "--route svd: glint-mpi runs the eig route only (the svd route is "
                        "the single-process reference)");
@@ -238,18 +240,22 @@ static void report(const mpi_args *a, const char *key, const char *path, const c
 
 /* This rank's share of the used views: its pattern and design.  OUT: *d
  * (0 rows when it has no view or its views have no sample). */
-/* This rank's design: hf3's (d3) or hf4's (d4), as the method says. */
+/* This rank's design: hf3's (d3), hf4's (d4) or hf2d's (d2), as the
+ * method says. */
 typedef struct designs {
     hf_design d3;
     hf4_design d4;
+    hf2d_design d2;
 } designs;
 
 static int local_share(const mpi_args *a, const scene *sc, const char *shash,
                        const unsigned char *use, int threads, designs *ds, rank_figures *f,
                        glint_err *e)
 {
-    int is4 = a->o.m == &method_hf4;
-    int res = is4 ? ((const hf4_params_t *)a->o.params)->res : ((const fit_params *)a->o.params)->res;
+    int is4 = a->o.m == &method_hf4, is2d = a->o.m == &method_hf2d;
+    int res = is4    ? ((const hf4_params_t *)a->o.params)->res
+              : is2d ? ((const hf2d_params_t *)a->o.params)->res
+                     : ((const fit_params *)a->o.params)->res;
     unsigned char *mine = calloc((size_t)sc->nviews, 1);
     samples s;
     int k = 0, rc = 0;
@@ -278,11 +284,21 @@ static int local_share(const mpi_args *a, const scene *sc, const char *shash,
     }
     f->t_pattern = MPI_Wtime() - t0;
     t0 = MPI_Wtime();
-    if (rc == 0 && s.n > 0)
-        rc = is4 ? hf4_design_build(&s, res, ds->d4.sres, &ds->d4, e)
-                 : hf_design_build(&s, res, &ds->d3, e);
+    if (is2d) { /* a rank without samples still has the shape */
+        ds->d2.sh = hf2d_shape_of(a->o.params);
+        hf2d_offsets(&ds->d2.sh, ds->d2.off);
+    }
+    if (rc == 0 && s.n > 0) {
+        if (is2d) {
+            hf2d_shape sh = hf2d_shape_of(a->o.params);
+            rc = hf2d_design_build(&s, &sh, &ds->d2, e);
+        } else {
+            rc = is4 ? hf4_design_build(&s, res, ds->d4.sres, &ds->d4, e)
+                     : hf_design_build(&s, res, &ds->d3, e);
+        }
+    }
     f->t_design = MPI_Wtime() - t0;
-    f->samples = is4 ? ds->d4.d.n : ds->d3.n;
+    f->samples = is4 ? ds->d4.d.n : is2d ? ds->d2.n : ds->d3.n;
     samples_free(&s);
     free(mine);
     return rc;
@@ -292,10 +308,13 @@ static int local_share(const mpi_args *a, const scene *sc, const char *shash,
 static int cache_file(const mpi_args *a, const char *phash, char *key, size_t klen, char *path,
                       size_t plen, glint_err *e)
 {
-    if (a->o.m == &method_hf4) {
+    if (a->o.m == &method_hf4 || a->o.m == &method_hf2d) {
         char name[64];
-        hf4_level_key(a->o.params, phash, key, klen);
-        cfile_name(key, ".hf4", name, sizeof name);
+        if (a->o.m == &method_hf4)
+            hf4_level_key(a->o.params, phash, key, klen);
+        else
+            hf2d_level_key(a->o.params, phash, key, klen);
+        cfile_name(key, a->o.m == &method_hf4 ? ".hf4" : ".hf2d", name, sizeof name);
         if ((size_t)snprintf(path, plen, "%s/%s", a->o.cache_dir, name) >= plen)
             return glint_err_set(e, GLINT_ERANGE, "cache path too long");
         return 0;
@@ -309,8 +328,8 @@ static int cache_file(const mpi_args *a, const char *phash, char *key, size_t kl
 }
 
 /* Rank 0: 1 (reported) when the decomposition is on disk already: hf3's
- * read and checked, hf4's present (a damaged one is rebuilt by the fit
- * that reads it). */
+ * read and checked, hf4's and hf2d's present (a damaged one is rebuilt by
+ * the fit that reads it). */
 static int already_cached(const mpi_args *a, const char *key, const char *path)
 {
     hf_decomp old;
@@ -318,7 +337,7 @@ static int already_cached(const mpi_args *a, const char *key, const char *path)
 
     if (a->force || access(path, R_OK) != 0)
         return 0;
-    if (a->o.m == &method_hf4) {
+    if (a->o.m == &method_hf4 || a->o.m == &method_hf2d) {
         if (!a->quiet)
             printf("{\"key\": \"%s\", \"file\": \"%s\", \"cached\": true}\n", key, path);
         return 1;
@@ -363,6 +382,32 @@ static int build_and_save(const mpi_args *a, designs *ds, long total, const char
             *t_save = MPI_Wtime() - t0;
         }
         hf4_decomp_free(&dc);
+    } else if (a->o.m == &method_hf2d) {
+        const hf2d_params_t *p = a->o.params;
+        hf2d_rows_ctx ctx;
+        hf2d_decomp dc;
+        hfx_rows rows;
+        memset(&dc, 0, sizeof dc);
+        dc.sh = ds->d2.sh;
+        dc.lambda = p->lambda;
+        dc.lambda_2d = p->lambda_2d;
+        /* the smoothing rows once, on rank 0 */
+        rows = hf2d_rows(&ds->d2, my_rank == 0 ? p->lambda : 0.0,
+                         my_rank == 0 ? p->lambda_2d : 0.0, &ctx);
+        if ((rc = agree(hfx_mpi_decomp_build(MPI_COMM_WORLD, &rows, total,
+                                             p->rcond > 0.0 ? p->rcond : HF4_RCOND_DEFAULT, 2,
+                                             &dc.x, st, e), e)))
+            return rc;
+        if (my_rank == 0) {
+            const hfx_decomp *x = &dc.x;
+            summary su = {x->nsamples, x->n, x->rank, x->gauge_dims, x->null_dims,
+                          x->unreached, p->lambda, x->rcond, x->s_max, x->s_min_kept, x->form};
+            *sum = su;
+            t0 = MPI_Wtime();
+            rc = hf2d_decomp_save(&dc, a->o.cache_dir, key, e);
+            *t_save = MPI_Wtime() - t0;
+        }
+        hf2d_decomp_free(&dc);
     } else {
         const fit_params *p = a->o.params;
         hf_decomp dc;
@@ -484,6 +529,7 @@ done:
     free(use);
     hf_design_free(&ds.d3);
     hf4_design_free(&ds.d4);
+    hf2d_design_free(&ds.d2);
     scene_free(&sc);
     fit_opts_free(&a.o);
     return rc;

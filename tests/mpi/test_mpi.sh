@@ -14,8 +14,10 @@
 #     view, hence no rows; 4 null and 1 barely reached directions: the
 #     keep rules cut both on the gathered result as on one process);
 #   - hf4 (--method hf4, hfx's normal form): 2 ranks at s_res 24, 3 ranks
-#     at s_res 16 without smoothing of s; the fit from glint-mpi's file
-#     against the single-process fit, factor by factor;
+#     at s_res 16 without smoothing of s; hf2d (the same normal form): 2
+#     ranks with q 2D at res_2d 16, 3 ranks with all three 2D at 12; the
+#     fit from glint-mpi's file against the single-process fit, factor by
+#     factor;
 #   - wrong input gives a clear message and status, never a hang.
 # usage: test_mpi.sh path/to/glint path/to/glint-mpi path/to/mpi_compare
 # Skips (77) when mpirun is absent.  Every mpirun runs under a timeout.
@@ -86,29 +88,30 @@ compare res32 2 "$T/paint" --res 32
 compare view0-res96-lambda0-3ranks 3 "$T/paint1" --res 96 --lambda 0
 compare res32-4ranks 4 "$T/paint" --res 32
 
-# compare_hf4 NAME NP PAINTINGS FIT-OPTIONS...: hf4's normal form end to end.
-# No operator tool here: the fits are compared, every log-factor (p, q, r
-# and the spatial s, at full precision in material.json) within the
-# operator's perturbation bound 64 n eps (s_max / s_min)^2 max |y|.
-compare_hf4() {
-  local name=$1 np=$2 pdir=$3; shift 3
+# compare_hfx METHOD NAME NP PAINTINGS FIT-OPTIONS...: hf4's or hf2d's
+# normal form end to end.  No operator tool here: the fits are compared,
+# every log value of material.json (hf4: p, q, r and the spatial s; hf2d:
+# its 1D and 2D factors' nodes; at full precision) within the operator's
+# perturbation bound 64 n eps (s_max / s_min)^2 max |y|.
+compare_hfx() {
+  local method=$1 name=$2 np=$3 pdir=$4; shift 4
   local c0="$T/c0-$name" c1="$T/c1-$name"
   if ! "$G" fit "$T/scene.json" --paintings "$pdir" -o "$T/m0-$name" --cache-dir "$c0" \
-       --method hf4 "$@" > "$T/f0-$name.json" 2>"$T/err"; then
+       --method "$method" "$@" > "$T/f0-$name.json" 2>"$T/err"; then
     bad "$name: single-process fit"; sed 's/^/    /' "$T/err"; return
   fi
   if ! "${MPIRUN[@]}" -np "$np" "$GM" decompose "$T/scene.json" --paintings "$pdir" \
-       --cache-dir "$c1" --method hf4 "$@" > "$T/d-$name.json" 2>"$T/err"; then
-    bad "$name: mpirun -np $np glint-mpi decompose --method hf4"; sed 's/^/    /' "$T/err"
+       --cache-dir "$c1" --method "$method" "$@" > "$T/d-$name.json" 2>"$T/err"; then
+    bad "$name: mpirun -np $np glint-mpi decompose --method $method"; sed 's/^/    /' "$T/err"
     return
   fi
-  ok "$name: mpirun -np $np glint-mpi decompose --method hf4"
+  ok "$name: mpirun -np $np glint-mpi decompose --method $method"
   local file
   file=$(basename "$(field "$T/d-$name.json" file)")
   [ -f "$c0/$file" ] && ok "$name: same file as glint fit ($file)" ||
       bad "$name: glint fit wrote no $file ($(ls "$c0"))"
   if "$G" fit "$T/scene.json" --paintings "$pdir" -o "$T/m1-$name" --cache-dir "$c1" \
-       --method hf4 "$@" > "$T/f1-$name.json" 2>"$T/err" &&
+       --method "$method" "$@" > "$T/f1-$name.json" 2>"$T/err" &&
      python3 - "$T/d-$name.json" "$T/f1-$name.json" "$T/m0-$name/material.json" \
        "$T/m1-$name/material.json" > "$T/cmp" 2>&1 <<'EOF'
 import json, sys
@@ -122,8 +125,9 @@ def flat(x):
         return [v for e in x for v in flat(e)]
     return [x] if isinstance(x, (int, float)) else []
 a, b = (json.load(open(p)) for p in sys.argv[3:5])
-ya = flat(a["log_factors"]) + flat(a["log_s"])
-yb = flat(b["log_factors"]) + flat(b["log_s"])
+keys = ["log_factors", "log_s", "log_nodes"]
+ya = [v for k in keys if k in a for v in flat(a[k])]
+yb = [v for k in keys if k in b for v in flat(b[k])]
 assert len(ya) == len(yb) > 0
 diff = max(abs(x - y) for x, y in zip(ya, yb))
 tol = 64 * rep["n"] * 2.220446049250313e-16 * (rep["s_max"] / rep["s_min"]) ** 2 * \
@@ -136,8 +140,10 @@ EOF
   else bad "$name: glint fit after glint-mpi: $(cat "$T/cmp")"; sed 's/^/    /' "$T/err"; fi
 }
 
-compare_hf4 hf4-sres24 2 "$T/paint" --res 32 --s_res 24
-compare_hf4 hf4-sres16-lambdas0-3ranks 3 "$T/paint" --res 32 --s_res 16 --lambda_s 0
+compare_hfx hf4 hf4-sres24 2 "$T/paint" --res 32 --s_res 24
+compare_hfx hf4 hf4-sres16-lambdas0-3ranks 3 "$T/paint" --res 32 --s_res 16 --lambda_s 0
+compare_hfx hf2d hf2d-q2d 2 "$T/paint" --res 32 --res_2d 16
+compare_hfx hf2d hf2d-pqr2d-3ranks 3 "$T/paint" --res 32 --res_2d 12 --p 2d --r 2d
 
 # a decomposition already cached is not rebuilt (unless --force)
 if "${MPIRUN[@]}" -np 2 "$GM" decompose "$T/scene.json" --paintings "$T/paint" \
@@ -164,8 +170,8 @@ expect_err1() {
 }
 S=$T/scene.json
 expect_err "svd route refused" 1 "eig route only" decompose "$S" --cache-dir "$T/x" --route svd
-expect_err1 "other method refused" 1 "hf3's and hf4's constraint matrices only" decompose \
-    "$S" --cache-dir "$T/x" --method hf2d
+expect_err1 "other method refused" 1 "hf3's, hf4's and hf2d's constraint matrices only" \
+    decompose "$S" --cache-dir "$T/x" --method maps
 "$G" scene create --size 32 -o "$T/small.json" >/dev/null
 expect_err "hf4's kernel form refused" 1 "kernel form there, which is not distributed" decompose \
     "$T/small.json" --cache-dir "$T/x" --method hf4 --s_res 64 --views 0
