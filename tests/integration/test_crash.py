@@ -110,7 +110,8 @@ def verify(d, scene, sess, acked, sent, bases, swept_all=False):
     # the store swept what the kill left behind: one file per painted view,
     # no orphaned painting versions, no temporary files
     sdir = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
-    files = sorted(os.listdir(sdir))
+    # (none yet when the kill came before the first stroke was stored)
+    files = sorted(os.listdir(sdir)) if os.path.isdir(sdir) else []
     painted = sorted(p["view"] for p in g["paintings"])
     if PG and swept_all is False:
         # blobs shared by replicas: the sweep leaves files younger than its
