@@ -351,6 +351,22 @@ static int already_cached(const mpi_args *a, const char *key, const char *path)
     return 1;
 }
 
+/* The hfx operator (hf4's and hf2d's normal form) of `rows` over the ranks,
+ * with gauge_dims gauge directions; *sum filled on rank 0. */
+static int build_hfx(hfx_rows *rows, long total, double rcond, int gauge_dims, double lambda,
+                     hfx_decomp *x, summary *sum, hf_mpi_stats *st, glint_err *e)
+{
+    int rc = agree(hfx_mpi_decomp_build(MPI_COMM_WORLD, rows, total,
+                                        rcond > 0.0 ? rcond : HF4_RCOND_DEFAULT, gauge_dims, x,
+                                        st, e), e);
+    if (rc == 0 && my_rank == 0) {
+        summary su = {x->nsamples, x->n, x->rank, x->gauge_dims, x->null_dims, x->unreached,
+                      lambda, x->rcond, x->s_max, x->s_min_kept, x->form};
+        *sum = su;
+    }
+    return rc;
+}
+
 /* Collective: the distributed decomposition of every rank's design ds
  * (total samples), saved by rank 0 under key.  OUT: *sum (rank 0), *st,
  * *t_save. */
@@ -368,15 +384,9 @@ static int build_and_save(const mpi_args *a, designs *ds, long total, const char
         /* the smoothing rows once, on rank 0 */
         hfx_rows rows = hf4_rows(&ds->d4, my_rank == 0 ? p->lambda : 0.0,
                                  my_rank == 0 ? p->lambda_s : 0.0, &ctx);
-        if ((rc = agree(hfx_mpi_decomp_build(MPI_COMM_WORLD, &rows, total,
-                                             p->rcond > 0.0 ? p->rcond : HF4_RCOND_DEFAULT, 3,
-                                             &dc.x, st, e), e)))
+        if ((rc = build_hfx(&rows, total, p->rcond, 3, p->lambda, &dc.x, sum, st, e)))
             return rc;
         if (my_rank == 0) {
-            const hfx_decomp *x = &dc.x;
-            summary su = {x->nsamples, x->n, x->rank, x->gauge_dims, x->null_dims,
-                          x->unreached, p->lambda, x->rcond, x->s_max, x->s_min_kept, x->form};
-            *sum = su;
             t0 = MPI_Wtime();
             rc = hf4_decomp_save(&dc, a->o.cache_dir, key, e);
             *t_save = MPI_Wtime() - t0;
@@ -394,15 +404,9 @@ static int build_and_save(const mpi_args *a, designs *ds, long total, const char
         /* the smoothing rows once, on rank 0 */
         rows = hf2d_rows(&ds->d2, my_rank == 0 ? p->lambda : 0.0,
                          my_rank == 0 ? p->lambda_2d : 0.0, &ctx);
-        if ((rc = agree(hfx_mpi_decomp_build(MPI_COMM_WORLD, &rows, total,
-                                             p->rcond > 0.0 ? p->rcond : HF4_RCOND_DEFAULT, 2,
-                                             &dc.x, st, e), e)))
+        if ((rc = build_hfx(&rows, total, p->rcond, 2, p->lambda, &dc.x, sum, st, e)))
             return rc;
         if (my_rank == 0) {
-            const hfx_decomp *x = &dc.x;
-            summary su = {x->nsamples, x->n, x->rank, x->gauge_dims, x->null_dims,
-                          x->unreached, p->lambda, x->rcond, x->s_max, x->s_min_kept, x->form};
-            *sum = su;
             t0 = MPI_Wtime();
             rc = hf2d_decomp_save(&dc, a->o.cache_dir, key, e);
             *t_save = MPI_Wtime() - t0;
