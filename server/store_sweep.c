@@ -172,12 +172,16 @@ static void sweep_gbuffer_sets(store *s)
     closedir(d);
 }
 
+/* Whole entries first, temporary files after: removing a temporary file
+ * makes its directory young again, and with shared blobs (sweep_grace) a
+ * young directory is spared as another process's write in progress, so a
+ * material's directory that held only an interrupted write would stay. */
 void store_sweep_blobs(store *s)
 {
-    sweep_tmp(s, s->blobs, 0);
     sweep_rows(s, "materials", "materials");
     sweep_rows(s, "scenes", "scenes");
     sweep_rows(s, "meshes", "meshes");
     sweep_envs(s);
     sweep_gbuffer_sets(s);
+    sweep_tmp(s, s->blobs, 0);
 }

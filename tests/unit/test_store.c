@@ -473,6 +473,7 @@ TEST(open_sweeps_every_kind_of_blob)
 {
     fixture f;
     char keep_m[33], lost_m[33], lost_s[33], keep_e[33], lost_e[33], lost_r[33], mesh[33];
+    char tmp_m[33], tmp_s[33];
     char p[40][160];
     int n = 0;
     json_t *doc;
@@ -480,7 +481,8 @@ TEST(open_sweeps_every_kind_of_blob)
     ASSERT_OK(glint_id_new(keep_m, NULL) || glint_id_new(lost_m, NULL) ||
               glint_id_new(lost_s, NULL) || glint_id_new(keep_e, NULL) ||
               glint_id_new(lost_e, NULL) || glint_id_new(lost_r, NULL) ||
-              glint_id_new(mesh, NULL));
+              glint_id_new(mesh, NULL) || glint_id_new(tmp_m, NULL) ||
+              glint_id_new(tmp_s, NULL));
     doc = json_pack("{s:s}", "id", keep_m);
     ASSERT_OK(store_material_put(f.s, keep_m, f.session, doc, NULL));
     json_decref(doc);
@@ -518,6 +520,13 @@ TEST(open_sweeps_every_kind_of_blob)
     FILE_("blobs/environments/%s.json", lost_r);
     FILE_("blobs/materials/%s/material.json.tmp-Xy12Zw", keep_m);
     FILE_("blobs/environments/%s.hdr.tmp-Ab34Cd", keep_e);
+    /* a material's or scene's directory whose first file was still being
+     * written: removing the temporary file makes the directory young again,
+     * which must not save it (shared blobs: the grace) */
+    MKDIR("blobs/materials/%s", tmp_m);
+    FILE_("blobs/materials/%s/material.json.tmp-Ef56Gh", tmp_m);
+    MKDIR("blobs/scenes/%s", tmp_s);
+    FILE_("blobs/scenes/%s/base0.exr.tmp-Ij78Kl", tmp_s);
 #undef MKDIR
 #undef FILE_
     for (int i = 0; i < n; i++)
