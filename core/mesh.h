@@ -133,8 +133,10 @@ int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
                   mesh_report *report, glint_err *err);
 
 /* Import in the calling process instead of a child (on != 0).  Only for a
- * fuzzer, which must see the importer's coverage and wants its crashes: a
- * malformed file may then crash or hang the caller.  Not thread-safe. */
+ * fuzzer, which must see the importer's coverage and wants its crashes, and
+ * for a test under memcheck, which must see the import's memory: a malformed
+ * file may then crash or hang the caller.  Set it before any import (it is
+ * not synchronised with imports in flight). */
 void mesh_import_in_process(int on);
 
 /* Smooth per-vertex normals, area-weighted (replaces m->nrm). */

@@ -206,7 +206,7 @@ static double mio_now(void)
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* mesh_import_in_process (mesh.h): for fuzzing only. */
+/* mesh_import_in_process (mesh.h): for fuzzing and memcheck only. */
 static int mio_in_process;
 
 void mesh_import_in_process(int on)
