@@ -61,7 +61,6 @@ lsq_work *lsq_work_new(int n, int m)
     w->up = malloc((m + 1) * sizeof *w->up);
     w->R = malloc(((size_t)n * n + 1) * sizeof *w->R);
     w->col = malloc((n + 1) * sizeof *w->col);
-    w->gcv = malloc((m + 1) * sizeof *w->gcv);
     w->gcu = malloc((m + 1) * sizeof *w->gcu);
     w->gpx = malloc((m + 1) * sizeof *w->gpx);
     w->gmax = malloc((m + 1) * sizeof *w->gmax);
@@ -72,7 +71,7 @@ lsq_work *lsq_work_new(int n, int m)
     w->at = malloc((n + 1) * sizeof *w->at);
     w->Q = malloc(((size_t)n + 1) * ((size_t)n + 1) * sizeof *w->Q);
     if (!w->gcu || !w->gpx || !w->gmax || !w->pblk || !w->bnz || !w->bnd || !w->up || !w->R ||
-        !w->col || !w->gcv || !w->ord ||
+        !w->col || !w->ord ||
         !w->at || !w->Q || !w->freev || !w->rows || !w->isfree || !w->cand || !w->inrow ||
         !w->noblock || !w->K || !w->rhs || !w->x || !w->p || !w->grad || !w->gp || !w->mu) {
         lsq_work_free(w);
@@ -102,7 +101,6 @@ void lsq_work_free(lsq_work *w)
     free(w->up);
     free(w->R);
     free(w->col);
-    free(w->gcv);
     free(w->Gtw);
     free(w->gcu);
     free(w->gpx);
@@ -295,6 +293,8 @@ static void finish(const lsq_problem *p, lsq_mode mode, const double *c, lsq_res
     if (mode == LSQ_ENERGY)
         for (int r = 0; r < p->m; r++) {
             double g = lsq_dot4(p->G + (size_t)r * n, c, n);
+            if (p->gc)
+                p->gc[r] = g;
             if (g - p->u[r] > viol)
                 viol = g - p->u[r];
             if (p->u[r] - g < slack)
@@ -600,16 +600,14 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                     nz++;
             }
             if (nz > 1) {
-                int inc = block_incremental(nz, w->k, 0);
-                for (int a = nf - 1; a >= 0; a--) { /* the last first: shorter shifts */
+                for (int a = 0; a < nf; a++) {
                     int j = w->freev[a];
-                    if (c[j] == 0.0 && w->p[j] < 0.0) {
+                    if (c[j] == 0.0 && w->p[j] < 0.0)
                         w->isfree[j] = 0;
-                        if (inc)
-                            lsq_chol_remove(p, w, w->at[j]);
-                    }
                 }
-                if (!inc)
+                if (block_incremental(nz, w->k, 0))
+                    lsq_chol_remove_unfree(p, w);
+                else
                     lsq_chol_rebuild(p, w);
                 continue;
             }
@@ -629,7 +627,7 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
         /* rows: a row whose bound on G c plus the most this step can add
          * (from the rows' block maxima and the step's positive and
          * negative mass per block) stays under its budget cannot block;
-         * the others are computed exactly */
+         * the others' G p is computed exactly */
         double p1 = 0.0, x1 = 0.0;
         int nb = LSQ_NBLK(n), bycol = m && 2 * nf <= n;
         for (int a = 0; a < nf; a++) {
@@ -637,15 +635,14 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             x1 += fabs(w->x[w->freev[a]]);
         }
         if (bycol) {
-            /* few free variables: G p and G c for every row at once,
-             * as sums of the free columns of G (contiguous rows of G', no
-             * reduction chain), which costs less than any row skipped */
-            double *restrict gpv = w->gp, *restrict gcv = w->gcv;
-            memset(gpv, 0, (size_t)m * sizeof *gpv);
-            memset(gcv, 0, (size_t)m * sizeof *gcv);
+            /* few free variables: G p for every row at once, as a sum of
+             * the free columns of G (contiguous rows of G', no reduction
+             * chain), which costs less than any row skipped */
             /* four columns per pass: a load and a store of each sum per
              * four terms, not per term */
+            double *restrict gpv = w->gp;
             int a = 0;
+            memset(gpv, 0, (size_t)m * sizeof *gpv);
             for (; a + 4 <= nf; a += 4) {
                 const double *restrict g0 = w->Gt + (size_t)w->freev[a] * m;
                 const double *restrict g1 = w->Gt + (size_t)w->freev[a + 1] * m;
@@ -653,23 +650,16 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                 const double *restrict g3 = w->Gt + (size_t)w->freev[a + 3] * m;
                 double p0 = w->p[w->freev[a]], p1_ = w->p[w->freev[a + 1]];
                 double p2 = w->p[w->freev[a + 2]], p3 = w->p[w->freev[a + 3]];
-                double c0 = c[w->freev[a]], c1 = c[w->freev[a + 1]];
-                double c2 = c[w->freev[a + 2]], c3 = c[w->freev[a + 3]];
 #pragma omp simd
-                for (int r = 0; r < m; r++) {
+                for (int r = 0; r < m; r++)
                     gpv[r] += (p0 * g0[r] + p1_ * g1[r]) + (p2 * g2[r] + p3 * g3[r]);
-                    gcv[r] += (c0 * g0[r] + c1 * g1[r]) + (c2 * g2[r] + c3 * g3[r]);
-                }
             }
             for (; a < nf; a++) {
-                int j = w->freev[a];
-                const double *restrict gt = w->Gt + (size_t)j * m;
-                double pj = w->p[j], cj = c[j];
+                const double *restrict gt = w->Gt + (size_t)w->freev[a] * m;
+                double pj = w->p[w->freev[a]];
 #pragma omp simd
-                for (int r = 0; r < m; r++) {
+                for (int r = 0; r < m; r++)
                     gpv[r] += pj * gt[r];
-                    gcv[r] += cj * gt[r];
-                }
             }
         } else if (m) {
             /* the bound of every row at once: sums of the rows of gblk
@@ -706,7 +696,6 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
             }
             if (bycol) {
                 gp = w->gp[r];
-                gc = w->gcv[r];
             } else {
                 double bound = w->bnd[r];
                 if (w->gcu[r] + alpha * bound < w->up[r]) {
@@ -714,19 +703,21 @@ int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, do
                     w->gp[r] = bound;
                     continue;
                 }
-                /* p and c are zero on the bounds: whole rows, contiguous
-                 * (two dot products vectorize; one pass with both does not) */
-                const double *g = p->G + (size_t)r * n;
-                gp = lsq_dot4(g, w->p, n);
-                gc = lsq_dot4(g, c, n);
+                /* p is zero on the bounds: a whole row, contiguous */
+                gp = lsq_dot4(p->G + (size_t)r * n, w->p, n);
             }
-            w->gcu[r] = gc;
             w->gpx[r] = gp;
             /* a gp at the rounding level of x (the step's end, whose
              * rounding G p inherits: a row that depends on the working rows
              * has G p = 0 up to that) has no sign, and the row cannot
              * block; it is then crossed by at most 1e-12 gmax |x|_1 */
-            if (gp > 1e-12 * w->gmax[r] * (p1 + x1)) {
+            double eps = 1e-12 * w->gmax[r] * (p1 + x1);
+            /* gcu bounds G c from above (to that rounding), so a row whose
+             * step to the bound by gcu is no shorter than alpha cannot
+             * block; the others' G c is computed exactly */
+            if (gp > eps && w->up[r] - w->gcu[r] < alpha * gp + eps) {
+                gc = lsq_dot4(p->G + (size_t)r * n, c, n);
+                w->gcu[r] = gc;
                 double t = (w->up[r] - gc) / gp;
                 if (t < 0.0)
                     t = 0.0;

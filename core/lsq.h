@@ -62,6 +62,8 @@ typedef struct lsq_problem {
     const double *c0;         /* n: a start (an earlier solution with the same G and u:
                                  a warm start); used when c0 >= 0 and G c0 <= u, else
                                  ignored; NULL: start at 0 */
+    double *gc;               /* OUT when not NULL (LSQ_ENERGY): G c at the answer, m
+                                 entries, as the result's slack and violation see it */
 } lsq_problem;
 
 #define LSQ_MAX_N 4096

@@ -64,6 +64,69 @@ void lsq_chol_remove(const lsq_problem *pr, lsq_work *w, int p)
     w->k = k - 1;
 }
 
+/* Remove every variable of the factor that is no longer free (isfree 0)
+ * at once: each row of R is read once with those columns left out, and
+ * the rows of the removed variables, kept aside, are rotated into each
+ * kept row in turn (Givens), which restores the triangle.  The same
+ * rotations as removing the columns one by one, without a shift of every
+ * row per column. */
+void lsq_chol_remove_unfree(const lsq_problem *pr, lsq_work *w)
+{
+    int n = pr->n, k = w->k, kk = 0, nz = 0;
+    double *restrict v = w->col, *Z = w->K;
+    int *keep = w->freev; /* the kept positions (freev is refilled per iteration) */
+
+    for (int p = 0; p < k; p++)
+        if (w->isfree[w->ord[p]])
+            keep[kk++] = p;
+    if (kk == k)
+        return;
+    for (int r = 0, c = 0; r < k; r++) {
+        const double *rr = w->R + (size_t)r * n;
+        int kept = w->isfree[w->ord[r]];
+        /* row r on the kept columns: zero before column c (the first kept
+         * position at or after r) */
+        for (int a = 0; a < c; a++)
+            v[a] = 0.0;
+        for (int a = c; a < kk; a++)
+            v[a] = rr[keep[a]];
+        if (!kept) {
+            if (c < kk) /* a removed row after the last kept one is zero */
+                memcpy(Z + (size_t)nz++ * kk, v, (size_t)kk * sizeof *v);
+            continue;
+        }
+        /* the rows set aside start at column c: rotate each into row r */
+        for (int z = 0; z < nz; z++) {
+            double *restrict zr = Z + (size_t)z * kk;
+            double a = v[c], b = zr[c], aa = fabs(a), ab = fabs(b);
+            double mx = aa > ab ? aa : ab;
+            double h, cs, sn;
+            if (b == 0.0)
+                continue;
+            h = mx > 1e-150 && mx < 1e150 ? sqrt(a * a + b * b) : hypot(a, b);
+            cs = a / h;
+            sn = b / h;
+#pragma omp simd
+            for (int col = c; col < kk; col++) {
+                double x = v[col], y = zr[col];
+                v[col] = cs * x + sn * y;
+                zr[col] = -sn * x + cs * y;
+            }
+        }
+        /* row r becomes row c of the factor (c <= r: that row was read) */
+        memcpy(w->R + (size_t)c * n, v, (size_t)kk * sizeof *v);
+        c++;
+    }
+    for (int p = 0; p < k; p++)
+        if (!w->isfree[w->ord[p]])
+            w->at[w->ord[p]] = -1;
+    for (int a = 0; a < kk; a++) {
+        w->ord[a] = w->ord[keep[a]];
+        w->at[w->ord[a]] = a;
+    }
+    w->k = kk;
+}
+
 /* The factor of H over ord[0..k) into R (stride ld): a right-looking
  * Cholesky over contiguous rows, each pivot with lsq_chol_add's floor. */
 static void chol_factor(const double *H, int n, const int *ord, int k, double dscale,
@@ -148,9 +211,7 @@ void lsq_chol_rebuild(const lsq_problem *pr, lsq_work *w)
                    (size_t)(n - j) * sizeof *w->R);
         }
         w->k = n;
-        for (int j = n - 1; j >= 0; j--) /* the last first: shorter shifts */
-            if (!w->isfree[j])
-                lsq_chol_remove(pr, w, w->at[j]);
+        lsq_chol_remove_unfree(pr, w);
         return;
     }
     w->k = k;

@@ -28,7 +28,6 @@ struct lsq_work {
     double *bnd;   /* m: the step's bound on G p from gblk and pblk */
     double *R;     /* n x n: upper Cholesky factor of H over the free variables */
     double *col;   /* n: a column of R being formed (chol_add) */
-    double *gcv;   /* m: G c of a step (with gp: G p), from columns */
     double *Gtw;   /* n x m: G transposed when the problem brings none (on first use) */
     const double *Gt;
     int *ord;      /* the free variables in the factor's order */
@@ -44,6 +43,7 @@ struct lsq_work {
  * when H_jj <= 0), a ridge on that variable alone. */
 void lsq_chol_add(const lsq_problem *pr, lsq_work *w, int j);
 void lsq_chol_remove(const lsq_problem *pr, lsq_work *w, int p);
+void lsq_chol_remove_unfree(const lsq_problem *pr, lsq_work *w);
 void lsq_chol_rebuild(const lsq_problem *pr, lsq_work *w);
 void lsq_solve_rt(const lsq_work *w, int n, double *v);
 void lsq_solve_r(const lsq_work *w, int n, double *v);

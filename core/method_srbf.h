@@ -131,14 +131,16 @@ typedef struct srbf_transfer_data {
     int nl_rows;
     /* each channel's factor of the fit's H (lsq_factor) by (smooth, diffuse
      * fitted), made by the first fit that needs it and kept with the level:
-     * a repaint starts from it (srbf_kept_factor); and each channel's last
-     * answer, where a warm repaint starts (srbf_kept_start) */
+     * a repaint starts from it (srbf_kept_factor), with the H it factors
+     * (a repaint reads it in place of gathering it again); and each
+     * channel's last answer, where a warm repaint starts (srbf_kept_start) */
     pthread_mutex_t kept_lock;
     int kept_init, nkept;
     struct {
         double smooth;
         int fitd;
         double *R[3];
+        double *H[3];
         double *c[3];
     } kept[SRBF_KEPT_MAX];
     /* each channel's last painted radiance b (nrows) and T'b on the reached
@@ -215,10 +217,14 @@ int srbf_cast_shadows(const method_build_in *in, const srbf_visdata *vd, const e
 int srbf_transfer_reach(srbf_transfer_data *x, const srbf_energy *en, glint_err *err);
 void srbf_transfer_clear(srbf_transfer_data *x);
 /* The kept factor of channel ch's H (nu x nu) for (smooth, fitd), made from
- * H on first use; NULL when no room is left (the solver then factors per
- * call) or memory runs out.  OUT *kept: 1 when an earlier fit made it. */
+ * H on first use (and a copy of H kept with it); NULL when no room is left
+ * (the solver then factors per call) or memory runs out.  OUT *kept: 1 when
+ * an earlier fit made it. */
 const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, int ch,
                                const double *H, int nu, int *kept);
+/* The H kept with that factor (nu x nu, read-only while the level lives),
+ * or NULL when none is kept yet. */
+const double *srbf_kept_gram(srbf_transfer_data *x, double smooth, int fitd, int ch);
 /* The last answer (nu entries) kept for (smooth, fitd) and channel ch:
  * copied to c0 and 1 returned, or 0 when none is kept.  srbf_kept_answer
  * keeps c (where srbf_kept_factor made room; otherwise nothing). */

@@ -38,6 +38,7 @@ void srbf_transfer_clear(srbf_transfer_data *x)
     for (int k = 0; k < x->nkept; k++)
         for (int ch = 0; ch < 3; ch++) {
             free(x->kept[k].R[ch]);
+            free(x->kept[k].H[ch]);
             free(x->kept[k].c[ch]);
         }
     for (int ch = 0; ch < 3; ch++) {
@@ -60,7 +61,8 @@ size_t srbf_transfer_bytes(const srbf_transfer_data *x)
            4 * J * J * sizeof(double) + 3 * J * sizeof(double) + J * (1 + sizeof(int)) +
            (size_t)x->nl_rows * (3 * nr + 4) * sizeof(double) +
            (size_t)x->nl_rows * 4 * LSQ_NBLK(nr + 1) * sizeof(double) +
-           (size_t)SRBF_KEPT_MAX * 3 * (nr + 2) * (nr + 1) * sizeof(double) +
+           /* kept per slot and channel: R and H (nu x nu) and c (nu) */
+           (size_t)SRBF_KEPT_MAX * 3 * (2 * (nr + 1) + 1) * (nr + 1) * sizeof(double) +
            3 * (n + nr) * sizeof(double);
 }
 
@@ -186,7 +188,7 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
                                const double *H, int nu, int *kept)
 {
     const double *R = NULL;
-    double *made;
+    double *made, *Hc = NULL;
     int k, full;
     *kept = 0;
     if (!x->kept_init)
@@ -204,10 +206,12 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
         return R;
     /* made outside the lock (the channels make theirs at once); a factor
      * another fit kept meanwhile wins */
-    if (!(made = malloc((size_t)nu * nu * sizeof *made)) || lsq_factor(H, nu, made, NULL)) {
+    if (!(made = malloc((size_t)nu * nu * sizeof *made)) || lsq_factor(H, nu, made, NULL) ||
+        !(Hc = malloc((size_t)nu * nu * sizeof *Hc))) {
         free(made);
         return NULL;
     }
+    memcpy(Hc, H, (size_t)nu * nu * sizeof *Hc);
     pthread_mutex_lock(&x->kept_lock);
     for (k = 0; k < x->nkept; k++)
         if (x->kept[k].smooth == smooth && x->kept[k].fitd == fitd)
@@ -216,19 +220,35 @@ const double *srbf_kept_factor(srbf_transfer_data *x, double smooth, int fitd, i
         x->kept[k].smooth = smooth;
         x->kept[k].fitd = fitd;
         memset(x->kept[k].R, 0, sizeof x->kept[k].R);
+        memset(x->kept[k].H, 0, sizeof x->kept[k].H);
         memset(x->kept[k].c, 0, sizeof x->kept[k].c);
         x->nkept++;
     }
     if (k < x->nkept) {
         if (!x->kept[k].R[ch]) {
             x->kept[k].R[ch] = made;
-            made = NULL;
+            x->kept[k].H[ch] = Hc;
+            made = Hc = NULL;
         }
         R = x->kept[k].R[ch];
     }
     pthread_mutex_unlock(&x->kept_lock);
     free(made);
+    free(Hc);
     return R;
+}
+
+const double *srbf_kept_gram(srbf_transfer_data *x, double smooth, int fitd, int ch)
+{
+    const double *H = NULL;
+    if (!x->kept_init)
+        return NULL;
+    pthread_mutex_lock(&x->kept_lock);
+    for (int k = 0; k < x->nkept; k++)
+        if (x->kept[k].smooth == smooth && x->kept[k].fitd == fitd)
+            H = x->kept[k].H[ch];
+    pthread_mutex_unlock(&x->kept_lock);
+    return H;
 }
 
 static int kept_find(const srbf_transfer_data *x, double smooth, int fitd)
