@@ -3,14 +3,12 @@
  * lobes the painted pixels reach, with the diffuse albedo given or fitted
  * as one more unknown. */
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "clock.h"
 #include "method_srbf.h"
+#include "par.h"
 #include "vmath.h"
 
 #ifndef M_PI
@@ -41,7 +39,7 @@ typedef struct chan_report {
 } chan_report;
 
 /* One colour channel's problem and answer: the buffers are its own, so
- * channels are solved on threads at once (chan_worker). */
+ * channels are solved on threads at once (chan_task). */
 typedef struct chan_job {
     const method_fit_in *in;
     int ch, nu;
@@ -72,9 +70,8 @@ static void chan_free(chan_job *j)
     lsq_work_free(j->w);
 }
 
-static void *chan_solve(void *arg)
+static void chan_solve(chan_job *j)
 {
-    chan_job *j = arg;
     const method_fit_in *in = j->in;
     const srbf_params *p = in->params;
     const srbf_energy *en = in->levels[0];
@@ -165,10 +162,10 @@ static void *chan_solve(void *arg)
         j->rc = lsq_solve(&pr, (lsq_mode)p->constraints, 0.0, j->w, c, &j->rep.r, &j->err);
         j->rep.solve_seconds = glint_now() - ts;
         if (j->rc)
-            return NULL;
+            return;
     }
     if (j->rep.r.status == LSQ_INFEASIBLE)
-        return NULL;
+        return;
     if (j->rep.r.status == LSQ_OK && p->constraints != LSQ_NONE)
         srbf_kept_answer((srbf_transfer_data *)tr, p->smooth, fitd, ch, nu, c);
     for (int a = 0; a < nr; a++)
@@ -195,22 +192,12 @@ static void *chan_solve(void *arg)
         if (al > j->prof[bn])
             j->prof[bn] = al;
     }
-    return NULL;
+    return;
 }
 
-/* The channels' jobs, taken in turn by the threads of a fit. */
-typedef struct chan_queue {
-    chan_job *jobs;
-    atomic_int next;
-} chan_queue;
-
-static void *chan_worker(void *arg)
+static void chan_task(void *ctx, int ch)
 {
-    chan_queue *qu = arg;
-    int ch;
-    while ((ch = atomic_fetch_add(&qu->next, 1)) < 3)
-        chan_solve(&qu->jobs[ch]);
-    return NULL;
+    chan_solve((chan_job *)ctx + ch);
 }
 
 int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
@@ -227,8 +214,6 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     double prof[NPROF][3];
     chan_job jobs[3];
     chan_report rep[3];
-    pthread_t th[2];
-    int started[2] = {0, 0};
     srbf_material sm;
     int *rowbin = NULL;
     json_t *info, *chans;
@@ -275,23 +260,17 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
             goto done;
         }
     }
-    /* the three channels on as many threads as there are cores (at most
-     * three), each thread taking the next channel when it is done.  Three
-     * threads on two cores leave one waiting for the scheduler: measured
-     * here (bench_srbf --table1), the median fit then took a whole 4 ms
-     * tick, against at most 2 ms with two threads.  The unconstrained
-     * mode calls LAPACK, which has threads of its own. */
-    {
-        chan_queue qu = {jobs, 0};
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        int extra = p->constraints == LSQ_NONE ? 0 : cores >= 3 ? 2 : cores == 2 ? 1 : 0;
-        for (int t = 0; t < extra; t++)
-            started[t] = pthread_create(&th[t], NULL, chan_worker, &qu) == 0;
-        chan_worker(&qu);
-        for (int t = 0; t < extra; t++)
-            if (started[t])
-                pthread_join(th[t], NULL);
-    }
+    /* the three channels on the pool (par.h: one thread per core, the
+     * caller's included; each takes the next channel when it is done).
+     * Three threads of their own on two cores left one waiting for the
+     * scheduler: measured here (bench_srbf --table1), the median fit then
+     * took a whole 4 ms tick, against at most 2 ms on two threads.  The
+     * unconstrained mode calls LAPACK, which has threads of its own. */
+    if (p->constraints == LSQ_NONE)
+        for (int ch = 0; ch < 3; ch++)
+            chan_task(jobs, ch);
+    else
+        par_run(3, chan_task, jobs);
     for (int ch = 0; ch < 3; ch++) {
         chan_job *j = &jobs[ch];
         if (j->rc) {
