@@ -12,6 +12,7 @@
 
 #include "check.h"
 #include "lsq.h"
+#include "lsq_impl.h"
 
 static double urand(void)
 {
@@ -241,9 +242,110 @@ TEST(modes_infeasibility_and_bad_input)
     ASSERT_EQ(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e), GLINT_EINVAL);
 }
 
+/* Many columns leave the factor at once (lsq_chol_remove_unfree, a block
+ * step): the result must be the Cholesky factor of H over the variables
+ * left, which LAPACK's dpotrf computes independently (the factor with a
+ * positive diagonal is unique).  None, the first, the last, all but one,
+ * all, every other one and random halves, at sizes 1 to 147. */
+TEST(many_columns_leave_the_factor_at_once)
+{
+    static const int sizes[] = {1, 2, 7, 40, 147};
+    srand(5);
+    for (int si = 0; si < 5; si++) {
+        int n = sizes[si];
+        for (int pat = 0; pat < 8; pat++) {
+            double *A = malloc((size_t)n * n * sizeof *A), *H = malloc((size_t)n * n * sizeof *H);
+            double *S = malloc((size_t)n * n * sizeof *S);
+            int *keep = malloc((size_t)n * sizeof *keep), kk = 0;
+            lsq_work *w = lsq_work_new(n, 0);
+            lsq_problem p = {.n = n};
+            glint_err e;
+            ASSERT(A && H && S && keep && w);
+            /* H = A'A + n I: well conditioned, dense */
+            for (int i = 0; i < n * n; i++)
+                A[i] = urand() - 0.5;
+            for (int i = 0; i < n; i++)
+                for (int j = 0; j < n; j++) {
+                    double s = i == j ? n : 0.0;
+                    for (int k = 0; k < n; k++)
+                        s += A[k * n + i] * A[k * n + j];
+                    H[i * n + j] = s;
+                }
+            p.H = H;
+            ASSERT_OK(lsq_factor(H, n, w->R, &e));
+            w->k = n;
+            w->dscale = 1.0;
+            for (int j = 0; j < n; j++) {
+                int free_ = pat == 0   ? 1
+                            : pat == 1 ? j != 0
+                            : pat == 2 ? j != n - 1
+                            : pat == 3 ? j == n / 2
+                            : pat == 4 ? 0
+                            : pat == 5 ? j % 2
+                                       : urand() < 0.5;
+                w->ord[j] = j;
+                w->at[j] = j;
+                w->isfree[j] = (unsigned char)free_;
+                if (free_)
+                    keep[kk++] = j;
+            }
+            lsq_chol_remove_unfree(&p, w);
+            ASSERT_EQ(w->k, kk);
+            for (int a = 0; a < kk; a++) {
+                ASSERT_EQ(w->ord[a], keep[a]);
+                ASSERT_EQ(w->at[keep[a]], a);
+                for (int b = 0; b < kk; b++)
+                    S[a * kk + b] = H[keep[a] * n + keep[b]];
+            }
+            if (kk) {
+                double worst = 0.0, big = 0.0;
+                ASSERT_EQ(LAPACKE_dpotrf(LAPACK_ROW_MAJOR, 'U', kk, S, kk), 0);
+                for (int a = 0; a < kk; a++)
+                    for (int b = a; b < kk; b++) {
+                        worst = fmax(worst, fabs(w->R[(size_t)a * n + b] - S[a * kk + b]));
+                        big = fmax(big, fabs(S[a * kk + b]));
+                    }
+                ASSERT_MSG(worst <= 1e-12 * big, "n %d pattern %d: %d kept, |R - dpotrf| %.3g of %.3g",
+                           n, pat, kk, worst, big);
+            }
+            lsq_work_free(w);
+            free(A);
+            free(H);
+            free(S);
+            free(keep);
+        }
+    }
+}
+
+/* lsq_problem.gc: the solver hands back G c at its answer, as computed
+ * here from c. */
+TEST(the_rows_at_the_answer_are_handed_back)
+{
+    srand(7);
+    for (int trial = 0; trial < 50; trial++) {
+        int n = 2 + trial % 5, m = 1 + trial % 4;
+        double H[64], q[8], G[64], u[8], c[8], gc[8];
+        lsq_problem p;
+        lsq_result r;
+        glint_err e;
+        random_problem(n, m, 12, H, q, G, u);
+        p = (lsq_problem){.n = n, .H = H, .q = q, .m = m, .G = G, .u = u, .gc = gc};
+        ASSERT_OK(lsq_solve(&p, LSQ_ENERGY, 0, NULL, c, &r, &e));
+        for (int l = 0; l < m; l++) {
+            double g = 0.0;
+            for (int j = 0; j < n; j++)
+                g += G[l * n + j] * c[j];
+            ASSERT_NEAR(gc[l], g, 1e-14 * (1.0 + fabs(g)));
+            ASSERT_LE(gc[l], u[l] + 1e-9);
+        }
+    }
+}
+
 TEST_LIST{
     TEST_ENTRY(matches_brute_force_on_small_problems),
     TEST_ENTRY(modes_infeasibility_and_bad_input),
+    TEST_ENTRY(many_columns_leave_the_factor_at_once),
+    TEST_ENTRY(the_rows_at_the_answer_are_handed_back),
 };
 
 TEST_MAIN()
