@@ -262,10 +262,11 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
     }
     /* the three channels on the pool (par.h: one thread per core, the
      * caller's included; each takes the next channel when it is done).
-     * Three threads of their own on two cores left one waiting for the
-     * scheduler: measured here (bench_srbf --table1), the median fit then
-     * took a whole 4 ms tick, against at most 2 ms on two threads.  The
-     * unconstrained mode calls LAPACK, which has threads of its own. */
+     * Three threads of the fit's own on two cores left one waiting for
+     * the scheduler when other work ran: measured here (bench_srbf
+     * --table1, BENCHMARKS.md), the median fit then took a whole 4 ms
+     * tick, against at most 2 ms on two threads.  The unconstrained mode
+     * calls LAPACK, which has threads of its own. */
     if (p->constraints == LSQ_NONE)
         for (int ch = 0; ch < 3; ch++)
             chan_task(jobs, ch);
