@@ -33,6 +33,23 @@ void lsq_chol_add(const lsq_problem *pr, lsq_work *w, int j)
     w->k = k + 1;
 }
 
+/* The Givens rotation of rows x and y over columns [c, end) that zeroes
+ * y[c] and leaves x[c] = hypot(x[c], y[c]) >= 0; both removals use it. */
+static void rotate_into(double *restrict x, double *restrict y, int c, int end)
+{
+    double a = x[c], b = y[c], aa = fabs(a), ab = fabs(b);
+    double mx = aa > ab ? aa : ab;
+    /* hypot without its call where squares cannot over- or underflow */
+    double h = mx > 1e-150 && mx < 1e150 ? sqrt(a * a + b * b) : hypot(a, b);
+    double cs = h > 0 ? a / h : 1.0, sn = h > 0 ? b / h : 0.0;
+#pragma omp simd
+    for (int col = c; col < end; col++) {
+        double u = x[col], v = y[col];
+        x[col] = cs * u + sn * v;
+        y[col] = -sn * u + cs * v;
+    }
+}
+
 /* Remove the variable at position p: its column leaves, Givens rotations
  * restore the triangle. */
 void lsq_chol_remove(const lsq_problem *pr, lsq_work *w, int p)
@@ -47,20 +64,8 @@ void lsq_chol_remove(const lsq_problem *pr, lsq_work *w, int p)
     for (int r = 0; r < k; r++)
         memmove(w->R + (size_t)r * n + p, w->R + (size_t)r * n + p + 1,
                 (size_t)(k - 1 - p) * sizeof *w->R);
-    for (int c = p; c < k - 1; c++) {
-        double *restrict rc = w->R + (size_t)c * n, *restrict rd = w->R + (size_t)(c + 1) * n;
-        double a = rc[c], b = rd[c], aa = fabs(a), ab = fabs(b);
-        double mx = aa > ab ? aa : ab;
-        /* hypot without its call where squares cannot over- or underflow */
-        double h = mx > 1e-150 && mx < 1e150 ? sqrt(a * a + b * b) : hypot(a, b);
-        double cs = h > 0 ? a / h : 1.0, sn = h > 0 ? b / h : 0.0;
-#pragma omp simd
-        for (int col = c; col < k - 1; col++) {
-            double x = rc[col], y = rd[col];
-            rc[col] = cs * x + sn * y;
-            rd[col] = -sn * x + cs * y;
-        }
-    }
+    for (int c = p; c < k - 1; c++)
+        rotate_into(w->R + (size_t)c * n, w->R + (size_t)(c + 1) * n, c, k - 1);
     w->k = k - 1;
 }
 
@@ -97,21 +102,9 @@ void lsq_chol_remove_unfree(const lsq_problem *pr, lsq_work *w)
         }
         /* the rows set aside start at column c: rotate each into row r */
         for (int z = 0; z < nz; z++) {
-            double *restrict zr = Z + (size_t)z * kk;
-            double a = v[c], b = zr[c], aa = fabs(a), ab = fabs(b);
-            double mx = aa > ab ? aa : ab;
-            double h, cs, sn;
-            if (b == 0.0)
-                continue;
-            h = mx > 1e-150 && mx < 1e150 ? sqrt(a * a + b * b) : hypot(a, b);
-            cs = a / h;
-            sn = b / h;
-#pragma omp simd
-            for (int col = c; col < kk; col++) {
-                double x = v[col], y = zr[col];
-                v[col] = cs * x + sn * y;
-                zr[col] = -sn * x + cs * y;
-            }
+            double *zr = Z + (size_t)z * kk;
+            if (zr[c] != 0.0)
+                rotate_into(v, zr, c, kk);
         }
         /* row r becomes row c of the factor (c <= r: that row was read) */
         memcpy(w->R + (size_t)c * n, v, (size_t)kk * sizeof *v);

@@ -84,7 +84,7 @@ static void chan_solve(chan_job *j)
     const double *LtL = tr->LtL;
     const double *Hc = tr->H + (size_t)ch * J * J, *TE = tr->TE + (size_t)ch * J;
     double rho = fitd ? 0.0 : p->diffuse.rgb[ch], ff = 0.0, trace = 0.0, ct0 = glint_now();
-    double *f = j->f, *H = j->H, *q = j->q, *u = j->u, *c = j->c, smu = 0.0;
+    double *f = j->f, *H, *q = j->q, *u = j->u, *c = j->c, smu = 0.0;
     const double *Hk;
     lsq_problem pr = {0};
 
@@ -113,6 +113,11 @@ static void chan_solve(chan_job *j)
     /* H is the same for every painting with these parameters: the level
      * keeps it with its factor, and a repaint reads it there */
     if (!(Hk = srbf_kept_gram((srbf_transfer_data *)tr, p->smooth, fitd, ch))) {
+        if (!(H = j->H = malloc((size_t)nu * nu * sizeof *H))) {
+            j->rc = glint_err_set(&j->err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)",
+                                  nu);
+            return;
+        }
         for (int a = 0; a < nr; a++)
             for (int b = 0; b < nr; b++)
                 H[(size_t)a * nu + b] = Hc[(size_t)idx[a] * J + idx[b]];
@@ -134,7 +139,7 @@ static void chan_solve(chan_job *j)
     for (int l = 0; l < nl; l++)
         u[l] = 1.0 - SRBF_ENERGY_MARGIN - rho;
     pr.n = nu;
-    pr.H = Hk ? Hk : H;
+    pr.H = Hk ? Hk : j->H;
     pr.q = q;
     pr.ff = ff;
     pr.m = p->constraints == LSQ_ENERGY ? nl : 0;
@@ -241,7 +246,6 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         j->nu = nu;
         j->csm = sm.c;
         j->f = malloc((size_t)n * sizeof *j->f);
-        j->H = malloc((size_t)nu * nu * sizeof *j->H);
         j->q = malloc((size_t)nu * sizeof *j->q);
         j->u = malloc((size_t)nl * sizeof *j->u);
         j->c = malloc((size_t)nu * sizeof *j->c);
@@ -255,7 +259,7 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         j->gmax = tr->gmax[fitd ? 1 : 0];
         j->gblk = tr->gblk[fitd ? 1 : 0];
         j->Gt = tr->Gt;
-        if (!j->f || !j->H || !j->q || !j->u || !j->c || !j->c0 || !j->gc || !j->w) {
+        if (!j->f || !j->q || !j->u || !j->c || !j->c0 || !j->gc || !j->w) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)", nu);
             goto done;
         }
