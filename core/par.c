@@ -23,6 +23,12 @@ static struct {
 } P = {.lock = PTHREAD_MUTEX_INITIALIZER, .go = PTHREAD_COND_INITIALIZER, .done = PTHREAD_COND_INITIALIZER};
 
 static int nthreads = -1;
+static __thread int background;
+
+void par_background(int on)
+{
+    background = on != 0;
+}
 static pthread_once_t threads_once = PTHREAD_ONCE_INIT;
 
 static void threads_init(void)
@@ -104,7 +110,7 @@ void par_run(int ntasks, par_fn fn, void *ctx)
 {
     if (ntasks <= 0)
         return;
-    if (ntasks == 1 || par_threads() == 1 || atomic_exchange(&P.busy, 1)) {
+    if (ntasks == 1 || background || par_threads() == 1 || atomic_exchange(&P.busy, 1)) {
         for (int t = 0; t < ntasks; t++)
             fn(ctx, t);
         return;

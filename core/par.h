@@ -15,7 +15,8 @@
  * on a condition variable between runs (no spinning: a daemon that is not
  * fitting costs nothing).  One run at a time uses the pool: a par_run that
  * finds it busy (another thread's fit) runs its tasks on its own thread,
- * never waiting for the other.  par_run is therefore safe from any thread,
+ * never waiting for the other (and a thread marked par_background() never
+ * takes it).  par_run is therefore safe from any thread,
  * and from inside a task (the nested run is serial).
  *
  * Costs measured here (2 cores): waking the worker and joining it take
@@ -35,6 +36,11 @@ int par_threads(void);
 
 /* Run tasks 0..ntasks-1 (ntasks <= 0: nothing). */
 void par_run(int ntasks, par_fn fn, void *ctx);
+
+/* Background work (a measurement no one waits for) on the calling thread:
+ * while on, this thread's par_run runs every task itself and never takes
+ * the pool, which stays free for the fits people wait for.  Per thread. */
+void par_background(int on);
 
 /* Whether `work` units (e.g. samples times channels) are enough to be
  * worth waking the pool for (at least PAR_MIN_WORK). */

@@ -8,6 +8,7 @@
 #include "admit.h"
 #include "fitsvc_int.h"
 #include "log.h"
+#include "par.h"
 #include "prep.h"
 
 /* ---- held-out error ---------------------------------------------------------------- */
@@ -61,8 +62,13 @@ static int holdout_job(job *j, void *arg, json_t **result, glint_err *err)
     if (h->f->work && (rc = admit_wait(h->f->work, h->bytes, "a held-out measurement",
                                        fitsvc_job_cancelled, j, err)))
         return rc;
+    /* off the worker pool: a painter's fit that starts meanwhile finds the
+     * pool free (par.h), instead of running on its own thread beside a
+     * measurement no one waits for */
+    par_background(1);
     rc = prep_holdout(h->m, h->params, cache_data(h->pattern), h->paintings, fitsvc_job_cancelled,
                       fitsvc_job_progress, j, &r, err);
+    par_background(0);
     if (h->f->work)
         admit_leave(h->f->work, h->bytes);
     if (rc)

@@ -3,6 +3,10 @@
  * (core/par.c) and the streamed passes of a fit, whose results must not
  * depend on the number of threads. */
 #include <float.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <time.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -257,6 +261,87 @@ TEST(pool_runs_every_task_once)
     ASSERT(par_threads() >= 1);
 }
 
+/* A thread marked par_background runs its tasks itself and leaves the pool
+ * free: a run started meanwhile on another thread gets the pool's worker.
+ * (With the mark ignored, the background run holds the pool, the second
+ * run is serial, and its first task waits out the 20 s cap alone.) */
+typedef struct meet_ctx {
+    pthread_t who[8];
+    atomic_int arrived, started, release;
+} meet_ctx;
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+static void record_task(void *ctx, int t)
+{
+    ((meet_ctx *)ctx)->who[t] = pthread_self();
+}
+
+static void block_task(void *ctx, int t)
+{
+    meet_ctx *m = ctx;
+    double t0 = now_s();
+    (void)t;
+    atomic_fetch_add(&m->started, 1);
+    while (!atomic_load(&m->release) && now_s() - t0 < 20.0)
+        usleep(200);
+}
+
+/* each task waits (at most 20 s) until both tasks have begun */
+static void meet_task(void *ctx, int t)
+{
+    meet_ctx *m = ctx;
+    double t0 = now_s();
+    m->who[t] = pthread_self();
+    atomic_fetch_add(&m->arrived, 1);
+    while (atomic_load(&m->arrived) < 2 && now_s() - t0 < 20.0)
+        usleep(200);
+}
+
+static void *background_run(void *ctx)
+{
+    par_background(1);
+    par_run(2, block_task, ctx);
+    par_background(0);
+    return NULL;
+}
+
+TEST(background_runs_leave_the_pool_free)
+{
+    meet_ctx bg, fg, own;
+    pthread_t th;
+    double t0;
+
+    if (par_threads() < 2) {
+        printf("  one thread here (GLINT_THREADS or one CPU): nothing to check\n");
+        return;
+    }
+    memset(&own, 0, sizeof own);
+    par_background(1);
+    par_run(8, record_task, &own);
+    par_background(0);
+    for (int t = 0; t < 8; t++)
+        ASSERT(pthread_equal(own.who[t], pthread_self()));
+
+    memset(&bg, 0, sizeof bg);
+    memset(&fg, 0, sizeof fg);
+    ASSERT_EQ(pthread_create(&th, NULL, background_run, &bg), 0);
+    for (t0 = now_s(); atomic_load(&bg.started) == 0 && now_s() - t0 < 20.0;)
+        usleep(200);
+    ASSERT_EQ(atomic_load(&bg.started), 1); /* its first task, on its own thread */
+    par_run(2, meet_task, &fg);
+    atomic_store(&bg.release, 1);
+    pthread_join(th, NULL);
+    ASSERT_EQ(atomic_load(&fg.arrived), 2);
+    ASSERT(!pthread_equal(fg.who[0], fg.who[1])); /* the worker took one */
+    ASSERT_EQ(atomic_load(&bg.started), 2);        /* and the background ran both */
+}
+
 /* A fit on the sphere seen from the 12 icosahedron views at size x size
  * pixels, res texels, a random painting. */
 typedef struct fit_case {
@@ -382,6 +467,7 @@ TEST_LIST {
     TEST_ENTRY(logf_map3_as_the_scalar_mapping),
     TEST_ENTRY(exp_matches_libm),
     TEST_ENTRY(pool_runs_every_task_once),
+    TEST_ENTRY(background_runs_leave_the_pool_free),
     TEST_ENTRY(fit_same_bits_on_any_thread_count),
     TEST_ENTRY(diagnostics_subsample_above_the_limit),
 };
