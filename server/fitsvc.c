@@ -373,20 +373,13 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     if (json_object_get(m.info, "choice")) /* method auto: what it chose and why */
         json_object_set(d, "choice", json_object_get(m.info, "choice"));
     json_object_set_new(d, "links", fitsvc_material_links(mid, t->session_id, t->scene_id));
-    if ((rc = store_material_put(f->st, mid, t->session_id, d, err)))
-        goto done;
-    t0 = srv_timing_step(t->tm, "record", t0);
-    {
-        char *text = json_dumps(d, JSON_COMPACT | JSON_REAL_PRECISION(17));
-        if (text)
-            memo_doc_put(f->memo, mid, t->session_id, t->scene_id, text, strlen(text));
-        free(text);
-    }
-    /* the studio hears of it; the scene's record grows */
+    /* the record and the session's "fit" event, in one commit; the studio
+     * hears of it and the scene's record grows */
     rms = json_number_value(json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
     {
         json_t *cr = json_object_get(pre, "cache");
         const char *memory = json_string_value(json_object_get(cr, "memory"));
+        json_t *res = json_object_get(d, "res");
         json_t *ev = json_pack("{s:s, s:s, s:{s:s, s:f, s:f, s:i, s:s}}", "material_id", mid,
                                "href",
                                json_string_value(json_object_get(
@@ -394,11 +387,29 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
                                "summary", "method", t->m->name, "rms_painted", rms,
                                "fit_seconds", fit_s, "views", t->nused, "cache",
                                memory ? memory : "?");
-        json_t *res = json_object_get(d, "res");
-        glint_err pe;
-        if (ev && res)
+        if (!ev) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "cannot build the fit's event");
+            goto done;
+        }
+        if (res)
             json_object_set(json_object_get(ev, "summary"), "res", res);
-        events_publish(f->ev, t->session_id, "fit", ev);
+        rc = store_material_put_event(f->st, mid, t->session_id, d, "fit", ev, NULL, err);
+        json_decref(ev);
+        if (rc)
+            goto done;
+    }
+    t0 = srv_timing_step(t->tm, "record", t0);
+    {
+        char *text = json_dumps(d, JSON_COMPACT | JSON_REAL_PRECISION(17));
+        if (text)
+            memo_doc_put(f->memo, mid, t->session_id, t->scene_id, text, strlen(text));
+        free(text);
+    }
+    events_notify(f->ev, t->session_id);
+    {
+        json_t *cr = json_object_get(pre, "cache");
+        const char *memory = json_string_value(json_object_get(cr, "memory"));
+        glint_err pe;
         points_key(t->m, t->params, t->use, t->nviews, key, sizeof key);
         if (points_record(f->points, ps->hash, key, t->m->name, json_object_get(m.info, "params"),
                           json_object_get(d, "views_used"), prep_samples(p)->n, fit_s,

@@ -199,6 +199,13 @@ int store_events_since(store *s, const char *session, int64_t since, int limit,
  * export) are blobs named "materials/<id>/<file>". */
 int store_material_put(store *s, const char *id, const char *session, const json_t *doc,
                        glint_err *err);
+/* The material's row and the session's event announcing it (`type`,
+ * `data` as store_event_append) in one transaction: one durable commit,
+ * and no material without its event or event without its material.
+ * OUT: *seq (may be NULL), the event's number. */
+int store_material_put_event(store *s, const char *id, const char *session, const json_t *doc,
+                             const char *type, const json_t *data, int64_t *seq,
+                             glint_err *err);
 int store_material_get(store *s, const char *id, json_t **doc, glint_err *err);
 int store_material_list(store *s, const char *session, json_t **array, glint_err *err);
 

@@ -358,15 +358,12 @@ int store_strokes_append_at(store *s, const char *session, int view, int64_t bas
     return rc;
 }
 
-int store_event_append(store *s, const char *session, const char *type, int view,
-                       const json_t *data, int64_t *seq, glint_err *err)
+/* The checks and text of an event store_event_append or
+ * store_material_put_event appends.  OUT: *text (the caller frees it). */
+static int event_text(const char *session, const char *type, const json_t *data, char **text,
+                      glint_err *err)
 {
-    char now[GLINT_TIME_LEN];
-    char *text;
-    db_stmt *st = NULL;
-    int64_t last = 0;
-    int rc;
-
+    *text = NULL;
     if (!glint_id_valid(session))
         return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"",
                              session ? session : "");
@@ -374,31 +371,99 @@ int store_event_append(store *s, const char *session, const char *type, int view
         !strcmp(type, "painting"))
         return glint_err_set(err, GLINT_EINVAL, "event type \"%.40s\" cannot be appended here",
                              type ? type : "");
-    text = json_is_object(data) ? store_dump(data) : NULL;
-    if (!text)
+    if (!(*text = json_is_object(data) ? store_dump(data) : NULL))
         return glint_err_set(err, GLINT_EINVAL, "event data must be a JSON object");
+    return 0;
+}
+
+/* Inside a transaction: the session's next event (text from event_text),
+ * numbered, and the word to other processes.  OUT: *seq. */
+static int store_tx_append(store *s, const char *session, const char *type, int view,
+                           const char *text, const char *now, int64_t *seq, glint_err *err)
+{
+    int64_t last = 0;
+    db_stmt *st = NULL;
+    int rc;
+
+    if ((rc = store_tx_last_seq(s, session, 1, &last, err)))
+        return rc;
+    if (!(st = store_prep(s, store_sql_event, err)))
+        return GLINT_EIO;
+    if (!(rc = store_tx_event(s, st, session, last + 1, type, view, text, now, err)) &&
+        !(rc = store_tx_set_last_seq(s, session, last + 1, err)))
+        rc = store_tx_notify(s, session, err);
+    db_finalize(st);
+    if (!rc)
+        *seq = last + 1;
+    return rc;
+}
+
+int store_event_append(store *s, const char *session, const char *type, int view,
+                       const json_t *data, int64_t *seq, glint_err *err)
+{
+    char now[GLINT_TIME_LEN], *text;
+    int64_t at = 0;
+    int rc;
+
+    if ((rc = event_text(session, type, data, &text, err)))
+        return rc;
     glint_time_iso_ms(now);
     pthread_mutex_lock(&s->lock);
     if ((rc = db_begin(s->db, err)) ||
-        (rc = store_tx_last_seq(s, session, 1, &last, err)))
+        (rc = store_tx_append(s, session, type, view, text, now, &at, err)) ||
+        (rc = db_commit(s->db, err)))
+        store_rollback(s);
+    pthread_mutex_unlock(&s->lock);
+    free(text);
+    if (!rc && seq)
+        *seq = at;
+    return rc;
+}
+
+int store_material_put_event(store *s, const char *id, const char *session, const json_t *doc,
+                             const char *type, const json_t *data, int64_t *seq,
+                             glint_err *err)
+{
+    char now[GLINT_TIME_LEN], *text, *mtext = NULL;
+    db_stmt *st = NULL;
+    int64_t at = 0;
+    int rc;
+
+    if ((rc = event_text(session, type, data, &text, err)))
+        return rc;
+    if (!glint_id_valid(id)) {
+        free(text);
+        return glint_err_set(err, GLINT_EINVAL, "invalid id \"%.40s\"", id ? id : "");
+    }
+    if (!(mtext = store_dump(doc))) {
+        free(text);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory serializing a document");
+    }
+    glint_time_iso_ms(now);
+    pthread_mutex_lock(&s->lock);
+    if ((rc = db_begin(s->db, err)))
         goto out;
-    st = store_prep(s, store_sql_event, err);
-    if (!st) {
+    if (!(st = store_prep(s, "INSERT INTO materials (id, doc, created, session) "
+                             "VALUES (?1, ?2, ?3, ?4)", err))) {
         rc = GLINT_EIO;
         goto out;
     }
-    if ((rc = store_tx_event(s, st, session, last + 1, type, view, text, now, err)) ||
-        (rc = store_tx_set_last_seq(s, session, last + 1, err)) ||
-        (rc = store_tx_notify(s, session, err)) || (rc = db_commit(s->db, err)))
-        goto out;
+    db_bind_text(st, 1, id);
+    db_bind_text(st, 2, mtext);
+    db_bind_text(st, 3, now);
+    db_bind_text(st, 4, session);
+    if (!(rc = store_run(st, "writing", err)) &&
+        !(rc = store_tx_append(s, session, type, -1, text, now, &at, err)))
+        rc = db_commit(s->db, err);
 out:
     db_finalize(st);
     if (rc)
         store_rollback(s);
     pthread_mutex_unlock(&s->lock);
     free(text);
+    free(mtext);
     if (!rc && seq)
-        *seq = last + 1;
+        *seq = at;
     return rc;
 }
 

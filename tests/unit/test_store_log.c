@@ -336,6 +336,50 @@ TEST(session_that_does_not_exist)
     fx_close(&f);
 }
 
+TEST(a_material_and_its_event_commit_together)
+{
+    fixture f;
+    char mid[33], mid2[33], unknown[33];
+    json_t *doc = json_pack("{s:s, s:f}", "method", "hf3", "rms", 0.25);
+    json_t *ev = json_pack("{s:s}", "material_id", "x"), *got = NULL, *arr = NULL;
+    int64_t seq = -1, last = -1;
+
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(glint_id_new(mid, NULL));
+    ASSERT_OK(glint_id_new(mid2, NULL));
+    ASSERT_OK(glint_id_new(unknown, NULL));
+    ASSERT_OK(store_event_append(f.s, f.session, "note", -1, ev, &seq, NULL));
+    ASSERT_EQ(seq, 1);
+    ASSERT_OK(store_material_put_event(f.s, mid, f.session, doc, "fit", ev, &seq, NULL));
+    ASSERT_EQ(seq, 2); /* numbered after the session's last event */
+    ASSERT_OK(store_material_get(f.s, mid, &got, NULL));
+    ASSERT_NEAR(json_number_value(json_object_get(got, "rms")), 0.25, 0.0);
+    json_decref(got);
+    ASSERT_OK(store_events_since(f.s, f.session, 1, 0, &arr, &last, NULL));
+    ASSERT_EQ((int)json_array_size(arr), 1);
+    ASSERT_EQ(last, 2);
+    ASSERT(!strcmp(json_string_value(json_object_get(json_array_get(arr, 0), "type")), "fit"));
+    json_decref(arr);
+    /* a session that is gone: neither the material nor the event */
+    ASSERT_EQ(store_material_put_event(f.s, mid2, unknown, doc, "fit", ev, NULL, NULL),
+              GLINT_ENOTFOUND);
+    ASSERT_EQ(store_material_get(f.s, mid2, &got, NULL), GLINT_ENOTFOUND);
+    /* refused before anything is written: a bad id, a type of the log's own */
+    ASSERT_EQ(store_material_put_event(f.s, "../x", f.session, doc, "fit", ev, NULL, NULL),
+              GLINT_EINVAL);
+    ASSERT_EQ(store_material_put_event(f.s, mid2, f.session, doc, "stroke", ev, NULL, NULL),
+              GLINT_EINVAL);
+    /* the same id twice: the second insert fails and its event is rolled back */
+    ASSERT(store_material_put_event(f.s, mid, f.session, doc, "fit", ev, NULL, NULL) != 0);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM materials"), 1);
+    ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 2);
+    ASSERT_OK(store_event_append(f.s, f.session, "note", -1, ev, &seq, NULL));
+    ASSERT_EQ(seq, 3); /* no gap left by the refused ones */
+    json_decref(doc);
+    json_decref(ev);
+    fx_close(&f);
+}
+
 TEST(scene_delete_removes_sessions_logs_and_blobs)
 {
     fixture f;
@@ -561,6 +605,7 @@ TEST_LIST{
     TEST_ENTRY(strokes_and_events_share_one_numbering),
     TEST_ENTRY(paging_strokes_and_events),
     TEST_ENTRY(session_that_does_not_exist),
+    TEST_ENTRY(a_material_and_its_event_commit_together),
     TEST_ENTRY(scene_delete_removes_sessions_logs_and_blobs),
     TEST_ENTRY(strokes_on_a_stale_image_are_refused),
     TEST_ENTRY(concurrent_appends_are_numbered_without_gaps),
