@@ -330,6 +330,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     material m;
     char mid[33], name[128], dir[4096], created[GLINT_TIME_LEN], key[1024];
     json_t *d = NULL, *paintings, *pre, *summary;
+    const char *memory;
     double t0 = glint_now(), fit_s, rms;
     int rc, was_hit = prep_was_hit(p);
 
@@ -376,9 +377,8 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     /* the record and the session's "fit" event, in one commit; the studio
      * hears of it and the scene's record grows */
     rms = json_number_value(json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
+    memory = json_string_value(json_object_get(json_object_get(pre, "cache"), "memory"));
     {
-        json_t *cr = json_object_get(pre, "cache");
-        const char *memory = json_string_value(json_object_get(cr, "memory"));
         json_t *res = json_object_get(d, "res");
         json_t *ev = json_pack("{s:s, s:s, s:{s:s, s:f, s:f, s:i, s:s}}", "material_id", mid,
                                "href",
@@ -407,8 +407,6 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     }
     events_notify(f->ev, t->session_id);
     {
-        json_t *cr = json_object_get(pre, "cache");
-        const char *memory = json_string_value(json_object_get(cr, "memory"));
         glint_err pe;
         points_key(t->m, t->params, t->use, t->nviews, key, sizeof key);
         if (points_record(f->points, ps->hash, key, t->m->name, json_object_get(m.info, "params"),
