@@ -468,6 +468,7 @@ static http_resp painting_put(http_req *req)
         goto done;
     t0 = srv_timing_step(&req->timing, "store", t0);
     memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &im);
+    fitsvc_painting_stored(a->fits, req->param[0], k, (long long)version);
     events_notify(a->events, req->param[0]);
     srv_timing_step(&req->timing, "notify", t0);
     r = http_json(200, json_pack("{s:i, s:I, s:I}", "view", k, "version", (json_int_t)version,
@@ -696,6 +697,7 @@ again:
     locked = 0;
     /* the memo keeps the decoded image, so a fit need not decode it */
     memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &cur);
+    fitsvc_painting_stored(a->fits, req->param[0], k, (long long)version);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I, s:I, s:i, s:I}", "view", k, "first_seq",
                                  (json_int_t)first, "last_seq", (json_int_t)last, "version",

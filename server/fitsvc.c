@@ -127,38 +127,67 @@ static void task_free(void *p)
     free(t);
 }
 
-/* Decoding the paintings the memo does not hold, one view per task on the
- * worker pool (par.h): after a restart a 12-view fit decodes 12 images. */
-typedef struct decode_ctx {
-    void **data;
-    size_t *len;
+/* Reading the paintings the memo does not hold, one view per task on the
+ * worker pool (par.h): after a restart a 12-view fit reads 12 images.  A
+ * view's decoded pixels kept beside its upload (store.h) are read first;
+ * else the upload is read and decoded.  Its version may have moved on
+ * since the list: version[v] says what was read (0: no painting now). */
+typedef struct read_ctx {
+    fit_task *t;
     img *im;
     int *rc;
     glint_err *err;
     int *views;
-} decode_ctx;
+    int64_t *version;
+    unsigned char *kept, *invalid;
+} read_ctx;
 
-static void decode_run(void *ctx, int i)
+static void read_run(void *ctx, int i)
 {
-    decode_ctx *x = ctx;
-    int v = x->views[i];
-    x->rc[v] = img_read_mem(x->data[v], x->len[v], &x->im[v], &x->err[v]);
-    if (!x->rc[v] && (x->rc[v] = img_to_rgb(&x->im[v], &x->err[v])))
-        img_free(&x->im[v]);
+    read_ctx *x = ctx;
+    int v = x->views[i], rc;
+    void *data = NULL;
+    size_t len = 0;
+    glint_err pe;
+
+    rc = store_painting_pixels_get(x->t->f->st, x->t->session_id, v, 0, &x->im[v],
+                                   &x->version[v], &pe);
+    if (rc == 0 && (rc = img_to_rgb(&x->im[v], &pe)) == 0) {
+        x->kept[v] = 1;
+        return;
+    }
+    img_free(&x->im[v]);
+    if (rc == GLINT_EFORMAT) /* decoded again below, and kept again after */
+        log_line("painting of session %s view %d: %s", x->t->session_id, v, pe.msg);
+    rc = store_painting_get(x->t->f->st, x->t->session_id, v, &data, &len, &x->version[v],
+                            &x->err[v]);
+    if (rc == GLINT_ENOTFOUND) {
+        x->version[v] = 0;
+        return;
+    }
+    if (!rc) {
+        rc = img_read_mem(data, len, &x->im[v], &x->err[v]);
+        if (!rc && (rc = img_to_rgb(&x->im[v], &x->err[v])))
+            img_free(&x->im[v]);
+        x->invalid[v] = rc != 0;
+    }
+    free(data);
+    x->rc[v] = rc;
 }
 
 /* The views' paintings (task_read_paintings); listed[nviews]: scratch. */
 static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *err)
 {
-    int nv = sc->nviews, nread = 0, rc = 0;
+    int nv = sc->nviews, nread = 0, npixels = 0, rc = 0;
     json_t *list = NULL, *it;
-    void **data = calloc((size_t)nv, sizeof *data);
-    size_t *len = calloc((size_t)nv, sizeof *len), i;
+    size_t i;
     img *im = calloc((size_t)nv, sizeof *im);
     int *rcs = calloc((size_t)nv, sizeof *rcs), *views = calloc((size_t)nv, sizeof *views);
     glint_err *errs = calloc((size_t)nv, sizeof *errs);
+    int64_t *version = calloc((size_t)nv, sizeof *version);
+    unsigned char *flags = calloc((size_t)nv, 2);
 
-    if (!data || !len || !im || !rcs || !views || !errs) {
+    if (!im || !rcs || !views || !errs || !version || !flags) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
@@ -172,43 +201,39 @@ static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *
             listed[v] = json_integer_value(json_object_get(it, "version"));
     }
     json_decref(list);
-    for (int v = 0; v < nv; v++) {
-        int64_t version = listed[v];
-        if (version <= 0)
-            continue; /* never painted: not in the pattern */
-        if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
-            continue;
-        /* not in the memo: read it (its version may have moved on since the list) */
-        rc = store_painting_get(t->f->st, t->session_id, v, &data[v], &len[v], &version, err);
-        if (rc == GLINT_ENOTFOUND) {
-            listed[v] = 0;
-            rc = 0;
-            continue;
-        }
-        if (rc)
-            goto done;
-        listed[v] = version;
-        if (memo_painting_get(t->f->memo, t->session_id, v, version, &t->pins[v]) == 0)
-            continue;
-        views[nread++] = v;
-    }
+    for (int v = 0; v < nv; v++)
+        if (listed[v] > 0 && /* else never painted: not in the pattern */
+            memo_painting_get(t->f->memo, t->session_id, v, listed[v], &t->pins[v]) != 0)
+            views[nread++] = v;
     {
-        decode_ctx x = {data, len, im, rcs, errs, views};
-        par_run(nread, decode_run, &x);
+        read_ctx x = {t, im, rcs, errs, views, version, flags, flags + nv};
+        par_run(nread, read_run, &x);
     }
     for (int k = 0; k < nread; k++) {
         int v = views[k];
         if (rcs[v]) {
             *err = errs[v];
             glint_err_prefix(err, "painting of view %d", v);
-            rc = glint_err_kind(err, "invalid-painting");
+            if (flags[nv + v])
+                rc = glint_err_kind(err, "invalid-painting");
+            else
+                rc = rcs[v];
             goto done;
         }
+        listed[v] = version[v];
+        if (version[v] <= 0)
+            continue;
+        npixels += flags[v];
+        if (memo_painting_get(t->f->memo, t->session_id, v, version[v], &t->pins[v]) == 0)
+            continue; /* another fit put it meanwhile */
         if (memo_painting_put(t->f->memo, t->session_id, v, listed[v], &im[v], &t->pins[v])) {
             t->paintings[v] = im[v]; /* not kept by the memo: the task's own */
             memset(&im[v], 0, sizeof im[v]);
+        } else if (!flags[v]) { /* decoded: kept beside its upload for the next restart */
+            fitsvc_painting_stored(t->f, t->session_id, v, listed[v]);
         }
     }
+    fitsvc_pixels_count(t->f, npixels, nread - npixels);
     for (int v = 0; v < nv; v++) {
         if (listed[v] <= 0)
             continue;
@@ -242,16 +267,14 @@ static int read_views(fit_task *t, const scene *sc, int64_t *listed, glint_err *
         rc = glint_err_kind(err, "no-paintings");
     }
 done:
-    for (int v = 0; data && v < nv; v++)
-        free(data[v]);
     for (int v = 0; im && v < nv; v++)
         img_free(&im[v]);
-    free(data);
-    free(len);
     free(im);
     free(rcs);
     free(views);
     free(errs);
+    free(version);
+    free(flags);
     return rc;
 }
 
@@ -556,7 +579,8 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
         (rc = memo_open(cfg->budget / 8, cfg->budget / 32, &f->memo, err)) ||
         (rc = points_open(cfg->cache_dir ? dir : NULL, &f->points, err)) ||
         (rc = jobs_open(cfg->threads, idle_flush, f->points, POINTS_SAVE_PERIOD_S, &f->jobs,
-                        err))) {
+                        err)) ||
+        (st && (rc = fitsvc_pixels_start(f, err)))) {
         fitsvc_close(f);
         return rc;
     }
@@ -581,6 +605,7 @@ void fitsvc_close(fitsvc *f)
     if (!f)
         return;
     jobs_close(f->jobs); /* running jobs finish first: they hold cache entries */
+    fitsvc_pixels_stop(f); /* holds the memo's paintings while it writes */
     points_close(f->points);
     memo_close(f->memo);
     cache_close(f->cache);
@@ -677,5 +702,6 @@ void fitsvc_metrics(fitsvc *f, FILE *o)
         fprintf(o, "glintd_fitcache_disk_total{outcome=\"rebuilt\"} %llu\n", rebuilds);
     }
     memo_metrics(f->memo, o);
+    fitsvc_pixels_metrics(f, o);
     jobs_metrics(f->jobs, o);
 }

@@ -101,4 +101,9 @@ int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err
 /* Prometheus text for /metrics: fit requests, cache levels, jobs, memos. */
 void fitsvc_metrics(fitsvc *f, FILE *out);
 
+/* A painting was stored as `version` of (session, view) and offered to the
+ * memo: its decoded pixels are written beside its blob, behind, once the
+ * view rests (store.h, "Decoded paintings"; fitsvc_pixels.c). */
+void fitsvc_painting_stored(fitsvc *f, const char *session, int view, long long version);
+
 #endif

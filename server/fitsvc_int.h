@@ -15,6 +15,8 @@
 #include "store.h"
 #include "timing.h"
 
+typedef struct pix_writer pix_writer;
+
 struct fitsvc {
     cache *cache;
     jobs *jobs;
@@ -26,6 +28,7 @@ struct fitsvc {
     pthread_mutex_t lock;
     unsigned long long hits, misses; /* fit requests: precomputation in memory or not */
     json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
+    pix_writer *pix;                 /* fitsvc_pixels.c; NULL: none */
 };
 
 /* Everything a fit needs, owned by the request or by its job. */
@@ -47,6 +50,14 @@ typedef struct fit_task {
 /* Schedule the held-out measurement of a fit point (key: the point's) in
  * the background, unless one for it is pending; failures are logged. */
 void fitsvc_holdout_schedule(fit_task *t, prep *p, const char *material_id, const char *key);
+
+/* The writer of paintings' pixels (fitsvc_pixels.c): started after the
+ * memo, stopped before it; count: paintings a fit read from the store, by
+ * how; metrics: its counters. */
+int fitsvc_pixels_start(fitsvc *f, glint_err *err);
+void fitsvc_pixels_stop(fitsvc *f);
+void fitsvc_pixels_count(fitsvc *f, int read, int decoded);
+void fitsvc_pixels_metrics(fitsvc *f, FILE *o);
 
 /* Job callbacks for the precomputation (cls: the job). */
 int fitsvc_job_cancelled(void *cls);

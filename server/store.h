@@ -44,6 +44,8 @@
 
 #include "err.h"
 
+struct img; /* img.h */
+
 #define STORE_SCHEMA_VERSION 1
 
 typedef struct store store;
@@ -152,6 +154,18 @@ int store_painting_put_at(store *s, const char *session, int view, int64_t base,
                           glint_err *err);
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err);
+/* Decoded paintings (store_pixels.c): a painting's pixels as decoded, kept
+ * beside its blob so that a restart reads them rather than decoding the
+ * image again (img_raw.h: checksummed, not fsynced, rebuildable).  They go
+ * with their blob.  put: GLINT_ECONFLICT when the view is no longer at
+ * `version` (nothing is left behind then).  get: the pixels of the
+ * view's current painting and its version; GLINT_ENOTFOUND when there are
+ * none (never painted, never kept, or replaced meanwhile), GLINT_EFORMAT
+ * when the file is torn or not one (the caller decodes the blob). */
+int store_painting_pixels_put(store *s, const char *session, int view, int64_t version,
+                              const struct img *im, glint_err *err);
+int store_painting_pixels_get(store *s, const char *session, int view, int max_dim,
+                              struct img *out, int64_t *version, glint_err *err);
 /* The painted views of a session: [{"view", "version", "updated"}] by view. */
 int store_paintings_list(store *s, const char *session, json_t **array, glint_err *err);
 

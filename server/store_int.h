@@ -49,6 +49,11 @@ void store_rollback(store *s);
 int store_random_name(char *buf, size_t len, const char *prefix, const char *suffix,
                       glint_err *err);
 
+/* A painting's decoded pixels: "<blob>" STORE_PIXELS_SUFFIX (store_pixels.c). */
+#define STORE_PIXELS_SUFFIX ".px"
+/* Remove the pixels of a blob, if any (best effort). */
+void store_pixels_delete(store *s, const char *blob);
+
 /* Remove painting files no row names and temporary files of interrupted
  * writes (at open, before anyone writes). */
 void store_sweep(store *s);

@@ -217,8 +217,10 @@ out:
         store_blob_delete(s, blob, NULL);
         return rc;
     }
-    if (old[0])
+    if (old[0]) {
         store_blob_delete(s, old, NULL);
+        store_pixels_delete(s, old);
+    }
     if (first_seq)
         *first_seq = last + 1;
     if (version)
@@ -624,6 +626,11 @@ void store_sweep(store *s)
             if (f->d_name[0] == '.')
                 continue;
             snprintf(name, sizeof name, "sessions/%s/%s", e->d_name, f->d_name);
+            {   /* a blob's decoded pixels go with it (store_pixels.c) */
+                size_t nl = strlen(name), sl = strlen(STORE_PIXELS_SUFFIX);
+                if (nl > sl && strcmp(name + nl - sl, STORE_PIXELS_SUFFIX) == 0)
+                    name[nl - sl] = '\0';
+            }
             db_reset(st);
             db_bind_text(st, 1, e->d_name);
             db_bind_text(st, 2, name);

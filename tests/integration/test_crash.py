@@ -112,6 +112,11 @@ def verify(d, scene, sess, acked, sent, bases, swept_all=False):
     sdir = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
     # (none yet when the kill came before the first stroke was stored)
     files = sorted(os.listdir(sdir)) if os.path.isdir(sdir) else []
+    # a painting's decoded pixels ("<blob>.px") go with their blob: none
+    # without it
+    pixels = [f for f in files if f.endswith(".px")]
+    files = [f for f in files if not f.endswith(".px")]
+    assert all(p[:-3] in files for p in pixels), (pixels, files)
     painted = sorted(p["view"] for p in g["paintings"])
     if PG and swept_all is False:
         # blobs shared by replicas: the sweep leaves files younger than its

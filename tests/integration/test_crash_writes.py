@@ -236,7 +236,9 @@ def orphans(data):
     top = os.path.join(blobs, "sessions")
     for sid in os.listdir(top) if os.path.isdir(top) else []:
         for name in os.listdir(os.path.join(top, sid)):
-            if "sessions/%s/%s" % (sid, name) not in paintings and ".tmp-" not in name:
+            # a painting's decoded pixels, "<blob>.px", belong to its blob's row
+            blob = name[:-3] if name.endswith(".px") else name
+            if "sessions/%s/%s" % (sid, blob) not in paintings and ".tmp-" not in name:
                 bad.append("sessions/%s/%s" % (sid, name))
     top = os.path.join(blobs, "environments")
     names = os.listdir(top) if os.path.isdir(top) else []

@@ -662,5 +662,56 @@ def test_13_restart_reuses_the_disk_cache_and_rebuilds_corrupt_files(d):
     assert p and p[0]["disk_seconds"] is not None, p
 
 
+def pixels_idle(d, timeout=30.0):
+    """Wait until glintd has no painting's pixels queued or being written."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if (metric(d, "glintd_painting_pixels_queue", {"state": "queued"}) == 0 and
+                metric(d, "glintd_painting_pixels_queue", {"state": "writing"}) == 0):
+            return
+        time.sleep(0.02)
+    raise AssertionError("the pixel writer did not go idle in %g s" % timeout)
+
+
+def reads(d):
+    return {k: metric(d, "glintd_painting_reads_total", {"from": k})
+            for k in ("pixels", "decoded")}
+
+
+def test_14_a_restart_reads_paintings_as_pixels_kept_beside_them(d):
+    """Each painting's decoded pixels are written beside its upload; after a
+    restart a fit reads them instead of decoding the OpenEXR again, and a
+    damaged or missing pixels file is decoded from the upload and kept
+    again: the material is the same either way."""
+    pixels_idle(d)
+    sdir = os.path.join(d.data_dir, "blobs", "sessions", S["session"])
+    names = sorted(os.listdir(sdir))
+    pixels = [n for n in names if n.endswith(".px")]
+    assert len(pixels) == S["nviews"] and all(p[:-3] in names for p in pixels), names
+    d.stop()
+    d.start()
+    m = fit_material(d, {"res": 32})
+    assert reads(d) == {"pixels": S["nviews"], "decoded": 0}, reads(d)
+    assert abs(m["errors"]["rms_painted"] - S["m32"]["errors"]["rms_painted"]) < 1e-9
+    # one damaged (a flipped byte), one gone
+    with open(os.path.join(sdir, pixels[0]), "r+b") as f:
+        f.seek(1000)
+        b = f.read(1)
+        f.seek(1000)
+        f.write(bytes([b[0] ^ 0x20]))
+    os.unlink(os.path.join(sdir, pixels[1]))
+    d.stop()
+    d.start()
+    m = fit_material(d, {"res": 32})
+    assert reads(d) == {"pixels": S["nviews"] - 2, "decoded": 2}, reads(d)
+    assert abs(m["errors"]["rms_painted"] - S["m32"]["errors"]["rms_painted"]) < 1e-9
+    pixels_idle(d)  # both kept again
+    assert sorted(n for n in os.listdir(sdir) if n.endswith(".px")) == pixels
+    d.stop()
+    d.start()
+    fit_material(d, {"res": 32})
+    assert reads(d) == {"pixels": S["nviews"], "decoded": 0}, reads(d)
+
+
 if __name__ == "__main__":
     run_tests(globals())

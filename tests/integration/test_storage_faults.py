@@ -18,6 +18,7 @@ import resource
 import shutil
 import signal
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import GLINTD, run_tests  # noqa: E402
@@ -98,12 +99,25 @@ def writes_fail(d, sc, s, kind, status):
     return sum(r.status_code == status for r in big + small)
 
 
+def pixels_idle(d, timeout=30.0):
+    """Wait until glintd keeps no painting's pixels in its queue or its hands."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        text = d.get("/metrics", status=200).text
+        if ('glintd_painting_pixels_queue{state="queued"} 0' in text and
+                'glintd_painting_pixels_queue{state="writing"} 0' in text):
+            return
+        time.sleep(0.02)
+    raise AssertionError("the pixel writer did not go idle in %g s" % timeout)
+
+
 def afterwards(d, sc, s, mid):
     reads_work(d, sc, s, mid)
     h = tok(s["paint_token"])
     d.post("%s/sessions/%s/views/0/strokes" % (API, s["id"]), status=200, headers=h,
            json={"strokes": [{"color": [0, 0, 1], "diameter": 5, "points": [[20, 20]]}]})
     d.post(API + "/sessions", status=201, json={"scene_id": sc["id"]})
+    pixels_idle(d)  # the stroke's pixels are written behind: a temporary file meanwhile
     bad = orphans(d.data_dir)
     assert not bad, bad
     leftovers = [f for _, _, fs in os.walk(d.data_dir) for f in fs if ".tmp-" in f]

@@ -11,6 +11,7 @@
 #include "gbuf.h"
 #include "img.h"
 #include "img_oiio.h"
+#include "img_raw.h"
 
 /* ---- helpers ----------------------------------------------------------- */
 
@@ -723,6 +724,62 @@ TEST(paintings_at_a_multiple_of_the_raster)
     img_free(&lo);
 }
 
+/* Decoded pixels as a cache file (img_raw.h): back bit for bit, every
+ * channel count; missing, cut, flipped, non-finite and oversize files are
+ * told apart and never returned. */
+TEST(raw_pixels_roundtrip_and_damage)
+{
+    const char *dir = tmp_path("raw");
+    img im, got;
+    glint_err e;
+    char path[600];
+
+    for (int c = 1; c <= 4; c++) {
+        ASSERT_OK(img_alloc(&im, 7, 5, c, &e));
+        for (int i = 0; i < 7 * 5 * c; i++)
+            im.px[i] = (float)(i % 11) * 0.37f - 1.5f + (i == 3 ? 1e30f : 0.0f);
+        ASSERT_OK(img_raw_save(&im, dir, "a.px", &e));
+        ASSERT_OK(img_raw_load(dir, "a.px", 0, &got, &e));
+        ASSERT(got.width == 7 && got.height == 5 && got.channels == c);
+        ASSERT(memcmp(got.px, im.px, sizeof(float) * 7 * 5 * (size_t)c) == 0);
+        img_free(&got);
+        img_free(&im);
+    }
+    ASSERT_EQ(img_raw_load(dir, "none.px", 0, &got, &e), GLINT_ENOTFOUND);
+    /* larger than the caller allows: refused from the header */
+    ASSERT_EQ(img_raw_load(dir, "a.px", 6, &got, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "limits") != NULL);
+    ASSERT_OK(img_raw_load(dir, "a.px", 7, &got, &e));
+    img_free(&got);
+    /* a flipped bit of a pixel: the checksum */
+    snprintf(path, sizeof path, "%s/a.px", dir);
+    {
+        FILE *fp = fopen(path, "r+b");
+        unsigned char b;
+        ASSERT(fp && fseek(fp, 60, SEEK_SET) == 0 && fread(&b, 1, 1, fp) == 1);
+        b ^= 1;
+        ASSERT(fseek(fp, 60, SEEK_SET) == 0 && fwrite(&b, 1, 1, fp) == 1);
+        fclose(fp);
+    }
+    ASSERT_EQ(img_raw_load(dir, "a.px", 0, &got, &e), GLINT_EFORMAT);
+    ASSERT(got.px == NULL);
+    /* cut short */
+    ASSERT_OK(img_alloc(&im, 7, 5, 3, &e));
+    ASSERT_OK(img_raw_save(&im, dir, "a.px", &e));
+    ASSERT_OK(truncate(path, 100));
+    ASSERT_EQ(img_raw_load(dir, "a.px", 0, &got, &e), GLINT_EFORMAT);
+    /* a value that is not finite, checksum good */
+    im.px[17] = NAN;
+    ASSERT_OK(img_raw_save(&im, dir, "a.px", &e));
+    ASSERT_EQ(img_raw_load(dir, "a.px", 0, &got, &e), GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "finite") != NULL);
+    img_free(&im);
+    /* not an image */
+    ASSERT_EQ(img_raw_save(&im, dir, "b.px", &e), GLINT_EINVAL);
+    unlink(path);
+    rmdir(dir);
+}
+
 TEST_LIST {
     TEST_ENTRY(alloc_limits),
     TEST_ENTRY(check_finite),
@@ -740,6 +797,7 @@ TEST_LIST {
     TEST_ENTRY(oversize_header),
     TEST_ENTRY(write_rules),
     TEST_ENTRY(paintings_at_a_multiple_of_the_raster),
+    TEST_ENTRY(raw_pixels_roundtrip_and_damage),
 };
 
 TEST_MAIN()

@@ -12,6 +12,7 @@
 
 #include "check.h"
 #include "ids.h"
+#include "img.h"
 #include "store.h"
 #include "store_fixture.h"
 
@@ -122,7 +123,7 @@ TEST(strokes_and_events_share_one_numbering)
     fixture f;
     json_t *strokes = strokes_of(3, 1), *more = strokes_of(2, 2), *arr, *data;
     int64_t first = 0, last = 0, version = 0, seq = 0;
-    void *img;
+    void *bytes;
     size_t len;
     ASSERT_OK(fx_open(&f));
     ASSERT_OK(store_strokes_append(f.s, f.session, 2, strokes, exr1, sizeof exr1, &first, &last,
@@ -131,10 +132,10 @@ TEST(strokes_and_events_share_one_numbering)
     ASSERT_EQ(last, 3);
     ASSERT_EQ(version, 1);
     /* the painting the strokes produced is committed with them */
-    ASSERT_OK(store_painting_get(f.s, f.session, 2, &img, &len, &version, NULL));
+    ASSERT_OK(store_painting_get(f.s, f.session, 2, &bytes, &len, &version, NULL));
     ASSERT_EQ(version, 1);
-    ASSERT(memcmp(img, exr1, sizeof exr1) == 0);
-    free(img);
+    ASSERT(memcmp(bytes, exr1, sizeof exr1) == 0);
+    free(bytes);
     data = json_pack("{s:s}", "material_id", "m");
     ASSERT_OK(store_event_append(f.s, f.session, "fit", -1, data, &seq, NULL));
     ASSERT_EQ(seq, 4);
@@ -386,7 +387,7 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     char s2[33], keep_scene[33], keep_session[33], mat[33], name[128], unknown[33];
     json_t *strokes = strokes_of(2, 0), *data = json_pack("{s:i}", "k", 1), *doc, *arr;
     int64_t first, last;
-    void *img;
+    void *bytes;
     size_t len;
     ASSERT_OK(fx_open(&f));
     ASSERT_OK(fx_session(f.s, f.scene, s2));
@@ -413,8 +414,8 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     ASSERT_EQ(store_scene_get(f.s, f.scene, &doc, NULL), GLINT_ENOTFOUND);
     ASSERT_EQ(store_session_get(f.s, f.session, &doc, NULL), GLINT_ENOTFOUND);
     ASSERT_EQ(store_session_get(f.s, s2, &doc, NULL), GLINT_ENOTFOUND);
-    ASSERT_EQ(store_painting_get(f.s, f.session, 0, &img, &len, NULL, NULL), GLINT_ENOTFOUND);
-    ASSERT_EQ(store_painting_get(f.s, s2, 1, &img, &len, NULL, NULL), GLINT_ENOTFOUND);
+    ASSERT_EQ(store_painting_get(f.s, f.session, 0, &bytes, &len, NULL, NULL), GLINT_ENOTFOUND);
+    ASSERT_EQ(store_painting_get(f.s, s2, 1, &bytes, &len, NULL, NULL), GLINT_ENOTFOUND);
     ASSERT_EQ(store_events_since(f.s, s2, 0, 0, &arr, &last, NULL), GLINT_ENOTFOUND);
     {
         char sql[160];
@@ -434,9 +435,9 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     /* the other scene, its session and the material are untouched */
     ASSERT_OK(store_scene_get(f.s, keep_scene, &doc, NULL));
     json_decref(doc);
-    ASSERT_OK(store_painting_get(f.s, keep_session, 0, &img, &len, NULL, NULL));
-    ASSERT(memcmp(img, exr2, 4) == 0);
-    free(img);
+    ASSERT_OK(store_painting_get(f.s, keep_session, 0, &bytes, &len, NULL, NULL));
+    ASSERT(memcmp(bytes, exr2, 4) == 0);
+    free(bytes);
     ASSERT_OK(store_events_since(f.s, keep_session, 0, 0, &arr, &last, NULL));
     ASSERT_EQ(json_array_size(arr), 2);
     ASSERT_EQ(last, 2);
@@ -600,6 +601,121 @@ TEST(appends_from_several_stores_on_one_database_share_one_numbering)
     appends_numbered(1);
 }
 
+/* ---- a painting's decoded pixels (store_pixels.c) ------------------------------- */
+
+/* The one blob of view `view` and its pixels' path (OUT: rel, under f->dir). */
+static int pixels_rel(const fixture *f, char *rel, size_t len)
+{
+    char dir[64];
+    json_t *names;
+    size_t i;
+    json_t *n;
+    int found = -1;
+    snprintf(dir, sizeof dir, "sessions/%s", f->session);
+    if (store_blob_list(f->s, dir, &names, NULL))
+        return -1;
+    json_array_foreach(names, i, n) {
+        const char *s = json_string_value(n);
+        size_t l = strlen(s);
+        if (l > 3 && strcmp(s + l - 3, ".px") == 0)
+            continue;
+        snprintf(rel, len, "blobs/%s/%s.px", dir, s);
+        found = 0;
+    }
+    json_decref(names);
+    return found;
+}
+
+static int flip_byte(const char *dir, const char *rel, long at)
+{
+    char path[1024];
+    unsigned char b;
+    FILE *fp;
+    int rc;
+    snprintf(path, sizeof path, "%s/%s", dir, rel);
+    if (!(fp = fopen(path, "r+b")) || fseek(fp, at, SEEK_SET) || fread(&b, 1, 1, fp) != 1) {
+        if (fp)
+            fclose(fp);
+        return -1;
+    }
+    b ^= 0x40;
+    rc = fseek(fp, at, SEEK_SET) || fwrite(&b, 1, 1, fp) != 1;
+    return fclose(fp) || rc ? -1 : 0;
+}
+
+TEST(a_paintings_pixels_live_and_go_with_its_blob)
+{
+    fixture f;
+    img im, got;
+    int64_t version = 0;
+    char rel[256], sdir[128], orphan[256];
+    glint_err e;
+
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(img_alloc(&im, 5, 3, 3, &e));
+    for (int i = 0; i < 5 * 3 * 3; i++)
+        im.px[i] = 0.25f * (float)i - 1.0f;
+    snprintf(sdir, sizeof sdir, "blobs/sessions/%s", f.session);
+    /* none before a painting, none kept yet after it */
+    ASSERT_EQ(store_painting_pixels_put(f.s, f.session, 0, 1, &im, &e), GLINT_ENOTFOUND);
+    ASSERT_OK(store_painting_put(f.s, f.session, 0, exr1, sizeof exr1, &version, NULL, NULL));
+    ASSERT_EQ(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e),
+              GLINT_ENOTFOUND);
+    /* kept at the view's version only */
+    ASSERT_EQ(store_painting_pixels_put(f.s, f.session, 0, 2, &im, &e), GLINT_ECONFLICT);
+    ASSERT_EQ(files_in(f.dir, sdir), 1);
+    ASSERT_OK(store_painting_pixels_put(f.s, f.session, 0, 1, &im, &e));
+    ASSERT_EQ(files_in(f.dir, sdir), 2);
+    ASSERT_OK(pixels_rel(&f, rel, sizeof rel));
+    ASSERT(path_exists(f.dir, rel));
+    version = 0;
+    ASSERT_OK(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e));
+    ASSERT_EQ(version, 1);
+    ASSERT(got.width == 5 && got.height == 3 && got.channels == 3);
+    ASSERT(memcmp(got.px, im.px, sizeof(float) * 45) == 0);
+    img_free(&got);
+    /* sizes beyond the caller's bound are refused before any pixel is read */
+    ASSERT_EQ(store_painting_pixels_get(f.s, f.session, 0, 4, &got, &version, &e),
+              GLINT_EFORMAT);
+    /* a damaged file is told, never returned */
+    ASSERT_OK(flip_byte(f.dir, rel, 40));
+    ASSERT_EQ(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e),
+              GLINT_EFORMAT);
+    ASSERT(got.px == NULL);
+    /* a new painting takes the old one's pixels with its blob */
+    ASSERT_OK(store_painting_put(f.s, f.session, 0, exr2, sizeof exr2, &version, NULL, NULL));
+    ASSERT_EQ(version, 2);
+    ASSERT(!path_exists(f.dir, rel));
+    ASSERT_EQ(files_in(f.dir, sdir), 1);
+    ASSERT_EQ(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e),
+              GLINT_ENOTFOUND);
+    ASSERT_OK(store_painting_pixels_put(f.s, f.session, 0, 2, &im, &e));
+    ASSERT_OK(pixels_rel(&f, rel, sizeof rel));
+    /* the sweep at open: pixels whose blob no row names go, the others stay */
+    store_close(f.s);
+    f.s = NULL;
+    snprintf(orphan, sizeof orphan, "%s/view0-00112233aabbccdd.exr.px", sdir);
+    {
+        char path[512];
+        FILE *fp;
+        snprintf(path, sizeof path, "%s/%s", f.dir, orphan);
+        ASSERT((fp = fopen(path, "wb")) != NULL);
+        fputs("pixels of a blob that is gone", fp);
+        fclose(fp);
+    }
+    if (fx_pg(&f))
+        ASSERT_OK(fx_age_blobs(&f));
+    ASSERT_OK(fx_store_open(&f, &f.s, NULL));
+    ASSERT(!path_exists(f.dir, orphan));
+    ASSERT(path_exists(f.dir, rel));
+    ASSERT_OK(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e));
+    ASSERT_EQ(version, 2);
+    ASSERT(memcmp(got.px, im.px, sizeof(float) * 45) == 0);
+    img_free(&got);
+    img_free(&im);
+    fx_close(&f);
+}
+
 TEST_LIST{
     TEST_ENTRY(painting_versions_and_seq),
     TEST_ENTRY(strokes_and_events_share_one_numbering),
@@ -610,6 +726,7 @@ TEST_LIST{
     TEST_ENTRY(strokes_on_a_stale_image_are_refused),
     TEST_ENTRY(concurrent_appends_are_numbered_without_gaps),
     TEST_ENTRY(appends_from_several_stores_on_one_database_share_one_numbering),
+    TEST_ENTRY(a_paintings_pixels_live_and_go_with_its_blob),
 };
 
 TEST_MAIN()
