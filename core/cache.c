@@ -174,6 +174,41 @@ static void release_locked(cache *c, cache_entry *e)
     evict_locked(c);
 }
 
+/* Is x a or built from it (a among its parents)? */
+static int built_from(const cache_entry *x, const cache_entry *a)
+{
+    for (; x; x = x->parent)
+        if (x == a)
+            return 1;
+    return 0;
+}
+
+void cache_forget(cache *c, cache_entry *e)
+{
+    if (!e)
+        return;
+    pthread_mutex_lock(&c->lock);
+    for (;;) {
+        /* one at a time: destroying an entry may release others */
+        cache_entry *x = NULL;
+        for (int b = 0; b < NBUCKETS && !x; b++)
+            for (x = c->table[b]; x; x = x->hnext)
+                if (x->state == E_READY && built_from(x, e))
+                    break;
+        if (!x)
+            break;
+        lru_remove(&c->lru, &x->lru);
+        table_remove(c, x);
+        c->st.bytes -= x->val.bytes;
+        c->st.entries--;
+        c->st.level[x->level].bytes -= x->val.bytes;
+        c->st.level[x->level].entries--;
+        if (x->refs == 0)
+            destroy_locked(c, x);
+    }
+    pthread_mutex_unlock(&c->lock);
+}
+
 void cache_release(cache *c, cache_entry *e)
 {
     if (!e)

@@ -118,6 +118,12 @@ void cache_hit(cache *c, cache_entry *e);
 /* One more reference on an entry the caller holds (returns e). */
 cache_entry *cache_ref(cache *c, cache_entry *e);
 
+/* Drop e and every entry built from it (its children, theirs, ...) from
+ * the cache, e.g. when what e's value read is found damaged: the next
+ * acquisition of their keys builds them again.  Holders keep what they
+ * hold until they release it.  Accepts NULL. */
+void cache_forget(cache *c, cache_entry *e);
+
 /* Drop one reference.  Accepts NULL. */
 void cache_release(cache *c, cache_entry *e);
 

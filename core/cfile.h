@@ -71,6 +71,45 @@ size_t cfile_stream_left(const cfile_s *r);
 int cfile_stream_end(cfile_s *r, const char *name, glint_err *err);
 void cfile_stream_close(cfile_s *r);
 
+/* Being mapped (a large level used in place: nothing copied, no memory of
+ * the process's own zeroed for it): cfile_map_open maps dir/name and
+ * checks its size, magic, kind and checksum before returning;
+ * cfile_map_take gives the next n bytes of fields where they lie (NULL
+ * past the fields); cfile_map_align skips to the next multiple of `a`
+ * bytes from the file's start (-1 past the fields; the writer put the
+ * same padding with cfile_pad).  The mapping is private and writable (a
+ * write stays the process's own).  cfile_map_keep makes it the caller's
+ * (base, size) until cfile_unmap (-1 when the process keeps 4096 already:
+ * the caller copies what it needs, then cfile_map_close unmaps).
+ *
+ * Cut short.  glint replaces cache files by rename and never truncates
+ * one in place, but another process may.  Reading a page of a kept
+ * mapping beyond its file's new end would kill the process (SIGBUS); a
+ * handler installed by the first cfile_map_keep maps a zeroed page there
+ * instead and marks the mapping torn (cfile_map_torn): what was read from
+ * it since may be zeros, and its owner must drop it (prep.c drops the
+ * pattern and what was built from it, and fails the fit that read it).
+ * A SIGBUS anywhere else goes to the action there was before. */
+typedef struct cfile_m {
+    unsigned char *base;   /* the mapping; NULL: none */
+    size_t size;           /* bytes mapped (the file's) */
+    size_t len, at;        /* field bytes (the checksum excluded), bytes taken */
+} cfile_m;
+
+int cfile_map_open(const char *dir, const char *name, const char magic[8], uint32_t kind,
+                   size_t max_bytes, cfile_m *m, glint_err *err);
+const void *cfile_map_take(cfile_m *m, size_t n);
+int cfile_map_align(cfile_m *m, size_t a);
+/* The mapping is the caller's now (OUT: *base, *size; m forgets it). */
+int cfile_map_keep(cfile_m *m, void **base, size_t *size);
+/* Was a kept mapping cut short under the process (see above)? */
+int cfile_map_torn(const void *base);
+void cfile_map_close(cfile_m *m);
+void cfile_unmap(void *base, size_t size);
+/* Zeros up to the next multiple of `a` bytes of the file (a mapped
+ * reader's arrays then lie aligned). */
+void cfile_pad(cfile_w *b, size_t a);
+
 /* A file name for a cache key of any characters: 32 hex digits of its
  * XXH3-128, then `ext` (OUT: name, at least 34 + strlen(ext) bytes). */
 void cfile_name(const char *key, const char *ext, char *name, size_t len);

@@ -12,14 +12,18 @@
  * of any thread wins; the others stop at their next band.
  *
  * Files.  pattern_save() writes a pattern to <dir>/<hash of key>.pattern,
- * a checksummed cache file (cfile.h, magic "GLPATT01", kind 1):
+ * a checksummed cache file (cfile.h, magic "GLPATT01", kind 2):
  *   u32 n, nviews, width, height, rule, has_pos, key length; the key;
  *   the pattern hash (32 hex digits); used[nviews];
  *   view[n], pixel[n] (i32); nrm[3n], wi[3n], wo[3n] (f32);
- *   cos_i[n], intensity[n] (f64); pos[3n] (f32); uv[2n] (f32);
+ *   cos_i[n], intensity[n] (f64); pos[3n] (f32); uv[2n] (f32), each array
+ *   starting at a multiple of 64 bytes from the file's start (zeros
+ *   between);
  *   the XXH64 checksum of every byte before it.
- * 80 bytes a sample (31.5 MB for 12 views of a sphere at 256x256).
- * pattern_load() reads it back, straight into the arrays, and trusts
+ * 80 bytes a sample (31.5 MB for 12 views of a sphere at 256x256).  A
+ * kind 1 file (the arrays unaligned) is GLINT_EFORMAT: rebuilt.
+ * pattern_load() maps it and uses the arrays where they lie (the samples
+ * hold the mapping: samples.h, map), and trusts
  * nothing in it: the checksum must match, the key, the counts and sizes
  * must be the scene's, the used flags the request's, the hash what
  * samples_end would compute; every sample must lie in a used view, in

@@ -278,6 +278,11 @@ void prep_release(cache *c, prep *p)
 {
     if (!p)
         return;
+    /* a pattern whose cache file was cut short under it: never used again
+     * (nor what was built from it); the next fit reads the file again,
+     * finds it short and rebuilds it */
+    if (p->pattern && samples_torn(cache_data(p->pattern)))
+        cache_forget(c, p->pattern);
     for (int i = p->m->nlevels - 1; i >= 0; i--)
         cache_release(c, p->lv[i]);
     cache_release(c, p->pattern);
@@ -344,6 +349,13 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
     prep_pattern_key(ps, rq->use, rq->m->pattern_rule, key);
     rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
                        &p->pattern_spent, err);
+    if (!rc && samples_torn(cache_data(p->pattern))) { /* cut short under another fit */
+        cache_forget(c, p->pattern);
+        cache_release(c, p->pattern);
+        p->pattern = NULL;
+        rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
+                           &p->pattern_spent, err);
+    }
     if (!rc)
         rc = acquire_levels(c, p, ps->sc, cb, cls, err);
     if (rc) {
@@ -593,6 +605,12 @@ int prep_fit(const prep *p, const img *paintings, const float *rgb, material *ou
     free(own);
     if (rc)
         return rc;
+    if (samples_torn(s)) {
+        material_free(out);
+        return glint_err_set(err, GLINT_EIO, "the sampling pattern's cache file was cut short "
+                                             "while this fit read it: it is read again, or "
+                                             "rebuilt, by the next fit");
+    }
     /* the fit's own time includes reading the paintings */
     {
         json_t *sec = json_object_get(out->info, "seconds");
@@ -767,6 +785,11 @@ int prep_holdout(const method *m, const void *params, const samples *all,
         if (mabs > mx)
             mx = mabs;
         done++;
+    }
+    if (samples_torn(all)) {
+        rc = glint_err_set(err, GLINT_EIO, "the sampling pattern's cache file was cut short "
+                                           "while the held-out measurement read it");
+        goto out;
     }
     *result = json_pack("{s:s, s:f, s:f, s:I, s:i, s:o, s:f}", "method", "leave-one-view-out",
                         "rms", total ? sqrt(ss / (3.0 * (double)total)) : 0.0, "max_abs", mx,

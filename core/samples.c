@@ -8,6 +8,7 @@
 #include <string.h>
 #include <xxhash.h>
 
+#include "cfile.h"
 #include "par.h"
 
 void samples_free(samples *s)
@@ -15,6 +16,11 @@ void samples_free(samples *s)
     if (!s)
         return;
     free(s->used);
+    if (s->map) {
+        cfile_unmap(s->map, s->map_size);
+        memset(s, 0, sizeof *s);
+        return;
+    }
     free(s->view);
     free(s->pixel);
     free(s->nrm);
@@ -27,10 +33,18 @@ void samples_free(samples *s)
     memset(s, 0, sizeof *s);
 }
 
+int samples_torn(const samples *s)
+{
+    return s && s->map && cfile_map_torn(s->map);
+}
+
 /* Grow every per-sample array of s to hold `cap` samples. */
 static int samples_reserve(samples *s, size_t cap, glint_err *err)
 {
     void *p;
+    if (s->map)
+        return glint_err_set(err, GLINT_EINVAL, "a pattern loaded from its cache file is "
+                             "read-only");
 #define GROW(field, per)                                                            \
     do {                                                                            \
         if (!(p = realloc(s->field, cap * (per) * sizeof *s->field)))                \

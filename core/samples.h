@@ -44,7 +44,16 @@ typedef struct samples {
     int rule;              /* SAMPLES_LIT (default) or SAMPLES_SEEN */
     char hash[33];         /* pattern hash: scene hash + used views + rule */
     size_t cap;            /* samples the arrays hold room for (while building) */
+    void *map;             /* non-NULL: the arrays (not used) lie in this mapping of a
+                              cache file (pattern_load), map_size bytes; read-only by
+                              contract, unmapped by samples_free */
+    size_t map_size;
 } samples;
+
+/* Were the arrays of a pattern loaded from its cache file (map) cut short
+ * under the process since (cfile_map_torn)?  What was read from them may
+ * be zeros then. */
+int samples_torn(const samples *s);
 
 /* Collect the samples of `nviews` gbufs.  `use` (nviews flags) selects the
  * views that take part, or NULL for all.  `scene_hash` is the scene's

@@ -3,7 +3,8 @@
  * one bit for bit (rules LIT and SEEN, views left out, bands of rows), an
  * error on any thread is reported, a pattern saved through the cache loads
  * back equal, and files that are short, damaged, another scene's or not a
- * rasterized pattern at all are detected and rebuilt. */
+ * rasterized pattern at all are detected and rebuilt, and a file cut short
+ * while it is mapped fails the fit that read it, not the process. */
 #include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -307,7 +308,13 @@ TEST(a_pattern_saved_through_the_cache_loads_back_equal)
     ASSERT_OK(acquire(&f, 0, &M_LIT, USE, &want, &d));
     ASSERT_EQ(d, CACHE_DISK_BUILT);
     ASSERT_OK(file_size(path, &size));
-    ASSERT_EQ(size, 8 + 4 + 7 * 4 + (long)strlen(key) + 32 + 12 + 80L * want.n + 8);
+    {   /* the header, then each array at a multiple of 64 bytes (pattern.h) */
+        const long per[9] = {4, 4, 12, 12, 12, 8, 8, 12, 8};
+        long at = 8 + 4 + 7 * 4 + (long)strlen(key) + 32 + 12;
+        for (int i = 0; i < 9; i++)
+            at = (at + 63) / 64 * 64 + per[i] * want.n;
+        ASSERT_EQ(size, at + 8);
+    }
     ASSERT_OK(acquire(&f, 0, &M_LIT, USE, &want, &d));
     ASSERT_EQ(d, CACHE_DISK_LOADED);
     /* the SEEN rule has a file of its own */
@@ -352,6 +359,86 @@ TEST(a_pattern_saved_through_the_cache_loads_back_equal)
     }
     samples_free(&want);
     samples_free(&seen);
+    fixture_close(&f);
+}
+
+/* A fit that reads every sample (so every page of the pattern) and makes
+ * an empty material. */
+static volatile double touched; /* read by nobody: volatile keeps the reads */
+static int touch_fit(const method_fit_in *in, struct material *out, glint_err *err)
+{
+    const samples *s = in->s;
+    double sum = 0.0;
+    (void)err;
+    for (int i = 0; i < s->n; i++)
+        sum += s->view[i] + s->pixel[i] + s->nrm[3 * i] + s->wi[3 * i] + s->wo[3 * i] +
+               s->cos_i[i] + s->intensity[i] + s->pos[3 * i] + s->uv[2 * i];
+    touched = sum;
+    memset(out, 0, sizeof *out);
+    return 0;
+}
+
+static const method M_TOUCH = {.name = "pattern-touch", .params_size = sizeof(int),
+                               .pattern_rule = SAMPLES_LIT, .fit = touch_fit};
+
+/* A pattern's file cut short in place while the loaded pattern (a mapping
+ * of it) is held: reading it gives zeros instead of killing the process
+ * (SIGBUS), the pattern says it is torn, the fit that read it fails, and
+ * the pattern is dropped from memory and rebuilt by the next fit. */
+TEST(a_pattern_file_cut_short_under_its_mapping_fails_the_fit_not_the_process)
+{
+    fixture f;
+    cache *c;
+    cache_entry *se;
+    prep_scene_source src = {borrowed, NULL, &SC};
+    samples want;
+    char key[CACHE_KEY_MAX], path[512];
+    cache_disk d;
+    prep *p;
+    material m;
+    float *rgb;
+    long size, zeros = 0;
+    glint_err e;
+
+    ASSERT_OK(fixture_open(&f));
+    ASSERT_OK(raster(&SC, HASH, USE, SAMPLES_LIT, 1, 40, NULL, &want, &e));
+    ASSERT_OK(acquire(&f, 0, &M_TOUCH, USE, &want, &d)); /* the file */
+    ASSERT_EQ(d, CACHE_DISK_BUILT);
+    file_of(&f, 0, &M_TOUCH, USE, key, path, sizeof path);
+    ASSERT_OK(file_size(path, &size));
+    /* a cache that keeps what it loads */
+    ASSERT_OK(cache_open(f.dir, (size_t)1 << 30, &c, &e));
+    ASSERT_OK(prep_scene_acquire(c, "a", &src, &se, &e));
+    {
+        prep_request rq = {&M_TOUCH, &(int){0}, se, USE};
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
+        ASSERT_EQ(cache_disk_of(prep_pattern(p)), CACHE_DISK_LOADED);
+        ASSERT(prep_samples(p)->map != NULL); /* used where it lies */
+        ASSERT(!samples_torn(prep_samples(p)));
+        ASSERT(rgb = calloc((size_t)3 * want.n, sizeof *rgb));
+        ASSERT_OK(prep_fit(p, NULL, rgb, &m, &e));
+        material_free(&m);
+        ASSERT_OK(truncate(path, size / 4));
+        ASSERT_EQ(prep_fit(p, NULL, rgb, &m, &e), GLINT_EIO);
+        ASSERT_MSG(strstr(e.msg, "cut short") != NULL, "%s", e.msg);
+        ASSERT(samples_torn(prep_samples(p)));
+        for (int i = 0; i < want.n; i++) /* cos_i > 0 for every lit sample, where read */
+            zeros += prep_samples(p)->cos_i[i] == 0.0;
+        ASSERT(zeros > 0);
+        prep_release(c, p);
+        /* dropped: read again, found short, rebuilt, whole */
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
+        ASSERT_EQ(cache_disk_of(prep_pattern(p)), CACHE_DISK_REBUILT);
+        ASSERT(same_samples(prep_samples(p), &want));
+        ASSERT(!samples_torn(prep_samples(p)));
+        ASSERT_OK(prep_fit(p, NULL, rgb, &m, &e));
+        material_free(&m);
+        prep_release(c, p);
+        free(rgb);
+    }
+    cache_release(c, se);
+    cache_close(c);
+    samples_free(&want);
     fixture_close(&f);
 }
 
@@ -431,12 +518,12 @@ TEST(short_damaged_and_foreign_files_are_rebuilt)
         ASSERT_OK(acquire(&f, 0, &M_LIT, USE, &want, &d));
         ASSERT_EQ(d, CACHE_DISK_REBUILT);
     }
-    /* a file of another kind under the name */
+    /* a file of another kind under the name (1: the arrays unaligned) */
     {
         cfile_w b;
         char name[64];
         pattern_file_name(key, name, sizeof name);
-        cfile_begin(&b, "GLPATT01", 2);
+        cfile_begin(&b, "GLPATT01", 1);
         cfile_put_u32(&b, 7);
         ASSERT_OK(cfile_write(&b, f.dir, name, &e));
         ASSERT_OK(acquire(&f, 0, &M_LIT, USE, &want, &d));
@@ -601,6 +688,7 @@ TEST_LIST{
     TEST_ENTRY(a_pattern_saved_through_the_cache_loads_back_equal),
     TEST_ENTRY(short_damaged_and_foreign_files_are_rebuilt),
     TEST_ENTRY(files_that_are_not_the_pattern_of_their_key_are_refused),
+    TEST_ENTRY(a_pattern_file_cut_short_under_its_mapping_fails_the_fit_not_the_process),
 };
 
 TEST_MAIN()
