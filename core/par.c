@@ -1,6 +1,7 @@
 /* par.c: the worker pool of par.h. */
 #include "par.h"
 
+#include <dlfcn.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -135,4 +136,25 @@ void par_run(int ntasks, par_fn fn, void *ctx)
         pthread_cond_wait(&P.done, &P.lock);
     pthread_mutex_unlock(&P.lock);
     atomic_store(&P.busy, 0);
+}
+
+int par_blas_single(void)
+{
+    void (*set)(int);
+    if (getenv("OPENBLAS_NUM_THREADS") || getenv("GOTO_NUM_THREADS") ||
+        getenv("OMP_NUM_THREADS"))
+        return 0;
+    int (*shutdown)(void);
+    /* looked up, not linked: the BLAS is whichever the system provides */
+    *(void **)&set = dlsym(RTLD_DEFAULT, "openblas_set_num_threads");
+    if (!set)
+        return 0;
+    set(1);
+    /* its threads, started when it loaded, would spin out their timeout
+     * first: stopped now (OpenBLAS's own shutdown, which a fork also
+     * uses; one thread never starts them again) */
+    *(void **)&shutdown = dlsym(RTLD_DEFAULT, "blas_thread_shutdown_");
+    if (shutdown)
+        shutdown();
+    return 1;
 }

@@ -42,6 +42,17 @@ void par_run(int ntasks, par_fn fn, void *ctx);
  * the pool, which stays free for the fits people wait for.  Per thread. */
 void par_background(int on);
 
+/* BLAS on the calling thread only, for a process whose own loops are
+ * parallel (par_run) and whose BLAS calls are small: OpenBLAS's idle
+ * threads spin (sched_yield) for about 0.1 s after its start and after
+ * each call it splits, taking a core from whatever runs next (measured:
+ * the first fit after glintd starts, 64-72 ms with them, 46-47 ms
+ * without).  Calls openblas_set_num_threads(1) when the process's BLAS is
+ * OpenBLAS and the environment does not say otherwise
+ * (OPENBLAS_NUM_THREADS, GOTO_NUM_THREADS, OMP_NUM_THREADS win).  Returns
+ * 1 if it did. */
+int par_blas_single(void);
+
 /* Whether `work` units (e.g. samples times channels) are enough to be
  * worth waking the pool for (at least PAR_MIN_WORK). */
 #define PAR_MIN_WORK 60000

@@ -22,6 +22,7 @@
 #include "fitsvc.h"
 #include "fsio.h"
 #include "log.h"
+#include "par.h"
 #include "render.h"
 #include "store.h"
 
@@ -103,6 +104,7 @@ int main(int argc, char **argv)
     int nroutes = 0;
 
     memset(&a, 0, sizeof a);
+    par_blas_single(); /* glint's loops are parallel; BLAS's idle threads would spin */
     config_default(&a.cfg);
     /* the config file first, so that options override it: a first pass of
      * getopt finds --config (either form), the second applies the rest */

@@ -349,6 +349,8 @@ def main():
     ap.add_argument("--against", help="another glintd to compare warm round trips with")
     ap.add_argument("--settle", action="store_true",
                     help="let background jobs finish before the warm round trips")
+    ap.add_argument("--restarts", type=int, default=5,
+                    help="restarts timed, each followed by the first fit (median shown)")
     ap.add_argument("--client", choices=("http.client", "requests"), default="http.client",
                     help="the HTTP client timed (default: a thin one over http.client)")
     a = ap.parse_args()
@@ -452,15 +454,22 @@ def main():
         if a.against:
             rows += against(d, http, pngs, tmp, a)
 
-        # restart: the decomposition from the disk cache
-        d.stop()
-        d.start()
-        cpu0, steps = cpu_ms(d.proc.pid), {}
-        m, job, dt = fit(http, d.base, s12["id"], s12["paint_token"], 64, steps)
-        cpu = cpu_ms(d.proc.pid) - cpu0
-        c = m["precomputation"]["cache"]
-        rows.append(("after a restart, 12 views, res 64: job wall time (disk %s)" % c["disk"],
-                     ms(dt), "ms"))
+        # restart: the decomposition from the disk cache, the paintings
+        # from their kept pixels; `--restarts` of them, the median's
+        # breakdown shown
+        runs = []
+        for _ in range(a.restarts):
+            d.stop()
+            d.start()
+            cpu0, steps = cpu_ms(d.proc.pid), {}
+            m, job, dt = fit(http, d.base, s12["id"], s12["paint_token"], 64, steps)
+            cpu = cpu_ms(d.proc.pid) - cpu0
+            runs.append((dt, steps, m["precomputation"]["cache"], cpu))
+        runs.sort(key=lambda r: r[0])
+        dt, steps, c, cpu = runs[(len(runs) - 1) // 2]
+        rows.append(("after a restart, 12 views, res 64: job wall time (disk %s), median of %d "
+                     "restarts" % (c["disk"], len(runs)), ms(dt), "ms"))
+        rows.append(("... min / max", "%s / %s" % (ms(runs[0][0]), ms(runs[-1][0])), "ms"))
         rows.append(("... the POST before the job (Server-Timing): %s" % " / ".join(steps),
                      " / ".join("%.1f" % v[0] for v in steps.values()), "ms"))
         rows.append(("... its precomputation: %s" % " / ".join(c["levels"]), " / ".join(

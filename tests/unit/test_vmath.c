@@ -2,7 +2,11 @@
  * the whole double range and at the special values, and the worker pool
  * (core/par.c) and the streamed passes of a fit, whose results must not
  * depend on the number of threads. */
+#include <cblas.h>
+#include <dirent.h>
+#include <dlfcn.h>
 #include <float.h>
+#include <stdlib.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <time.h>
@@ -460,6 +464,63 @@ TEST(diagnostics_subsample_above_the_limit)
     fit_case_free(&fc);
 }
 
+/* Threads of this process now. */
+static int task_count(void)
+{
+    DIR *d = opendir("/proc/self/task");
+    struct dirent *e;
+    int n = 0;
+    if (!d)
+        return -1;
+    while ((e = readdir(d)))
+        n += e->d_name[0] != '.';
+    closedir(d);
+    return n;
+}
+
+/* par_blas_single: OpenBLAS to one thread and its idle threads stopped,
+ * unless the environment names a count; BLAS still right after. */
+TEST(blas_can_be_kept_on_the_calling_thread)
+{
+    int (*get)(void);
+    int before, threads;
+    double a[64 * 64], b[64 * 64], c[64 * 64], worst = 0.0;
+
+    *(void **)&get = dlsym(RTLD_DEFAULT, "openblas_get_num_threads");
+    if (!get) {
+        printf("  (this BLAS is not OpenBLAS: nothing to check)\n");
+        ASSERT_EQ(par_blas_single(), 0);
+        return;
+    }
+    threads = get();
+    before = task_count();
+    ASSERT_OK(setenv("OPENBLAS_NUM_THREADS", "3", 1));
+    ASSERT_EQ(par_blas_single(), 0); /* the environment's word wins */
+    ASSERT_EQ(get(), threads);
+    ASSERT_OK(unsetenv("OPENBLAS_NUM_THREADS"));
+    ASSERT_OK(unsetenv("GOTO_NUM_THREADS"));
+    ASSERT_OK(unsetenv("OMP_NUM_THREADS"));
+    ASSERT_EQ(par_blas_single(), 1);
+    ASSERT_EQ(get(), 1);
+    /* its idle threads are gone (none were there if it started with one) */
+    ASSERT_EQ(task_count(), before - (threads - 1));
+    for (int i = 0; i < 64 * 64; i++) {
+        a[i] = (double)((i * 7) % 13) - 6.0;
+        b[i] = (double)((i * 5) % 11) - 5.0;
+    }
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, 64, 64, 64, 1.0, a, 64, b, 64, 0.0,
+                c, 64);
+    for (int i = 0; i < 64; i++)
+        for (int j = 0; j < 64; j++) {
+            double want = 0.0;
+            for (int k = 0; k < 64; k++)
+                want += a[i * 64 + k] * b[k * 64 + j];
+            worst = fmax(worst, fabs(want - c[i * 64 + j]));
+        }
+    ASSERT(worst == 0.0); /* small integers: exact */
+    ASSERT_EQ(task_count(), before - (threads - 1)); /* and none started again */
+}
+
 TEST_LIST {
     TEST_ENTRY(log_within_one_ulp_everywhere),
     TEST_ENTRY(log_special_values_as_libm),
@@ -468,6 +529,7 @@ TEST_LIST {
     TEST_ENTRY(exp_matches_libm),
     TEST_ENTRY(pool_runs_every_task_once),
     TEST_ENTRY(background_runs_leave_the_pool_free),
+    TEST_ENTRY(blas_can_be_kept_on_the_calling_thread),
     TEST_ENTRY(fit_same_bits_on_any_thread_count),
     TEST_ENTRY(diagnostics_subsample_above_the_limit),
 };
