@@ -261,14 +261,15 @@ static struct map_slot {
     _Atomic int torn;
 } map_slots[MAP_SLOTS];
 static pthread_mutex_t map_lock = PTHREAD_MUTEX_INITIALIZER;
-static struct sigaction bus_before;
+static struct sigaction bus_before, segv_before;
 static uintptr_t page_size;
 static int bus_installed;
 
+/* SIGBUS is what the kernel raises; valgrind reports the same access as
+ * SIGSEGV ("not within mapped region"), so both come here. */
 static void on_sigbus(int sig, siginfo_t *si, void *uc)
 {
     uintptr_t a = (uintptr_t)si->si_addr;
-    (void)sig;
     (void)uc;
     for (int i = 0; i < MAP_SLOTS; i++) {
         uintptr_t s = atomic_load(&map_slots[i].start);
@@ -282,7 +283,7 @@ static void on_sigbus(int sig, siginfo_t *si, void *uc)
         }
     }
     /* not a kept mapping's: the fault comes again, under the action before */
-    sigaction(SIGBUS, &bus_before, NULL);
+    sigaction(sig, sig == SIGBUS ? &bus_before : &segv_before, NULL);
 }
 
 /* Register a kept mapping (-1 when every slot is taken). */
@@ -297,7 +298,8 @@ static int map_register(void *base, size_t size)
         sa.sa_flags = SA_SIGINFO;
         sigemptyset(&sa.sa_mask);
         page_size = (uintptr_t)sysconf(_SC_PAGESIZE);
-        if (sigaction(SIGBUS, &sa, &bus_before) == 0)
+        if (sigaction(SIGBUS, &sa, &bus_before) == 0 &&
+            sigaction(SIGSEGV, &sa, &segv_before) == 0)
             bus_installed = 1;
     }
     for (int i = 0; bus_installed && i < MAP_SLOTS && slot < 0; i++)

@@ -89,7 +89,8 @@ void cfile_stream_close(cfile_s *r);
  * instead and marks the mapping torn (cfile_map_torn): what was read from
  * it since may be zeros, and its owner must drop it (prep.c drops the
  * pattern and what was built from it, and fails the fit that read it).
- * A SIGBUS anywhere else goes to the action there was before. */
+ * The handler takes SIGSEGV too (valgrind reports the access so); a
+ * fault anywhere else goes to the action there was before. */
 typedef struct cfile_m {
     unsigned char *base;   /* the mapping; NULL: none */
     size_t size;           /* bytes mapped (the file's) */

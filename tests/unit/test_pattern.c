@@ -363,7 +363,7 @@ TEST(a_pattern_saved_through_the_cache_loads_back_equal)
 }
 
 /* A fit that reads every sample (so every page of the pattern) and makes
- * an empty material. */
+ * an empty material (an info object only). */
 static volatile double touched; /* read by nobody: volatile keeps the reads */
 static int touch_fit(const method_fit_in *in, struct material *out, glint_err *err)
 {
@@ -375,7 +375,8 @@ static int touch_fit(const method_fit_in *in, struct material *out, glint_err *e
                s->cos_i[i] + s->intensity[i] + s->pos[3 * i] + s->uv[2 * i];
     touched = sum;
     memset(out, 0, sizeof *out);
-    return 0;
+    out->info = json_object(); /* prep_fit adds its report there */
+    return out->info ? 0 : GLINT_ENOMEM;
 }
 
 static const method M_TOUCH = {.name = "pattern-touch", .params_size = sizeof(int),
@@ -418,6 +419,19 @@ TEST(a_pattern_file_cut_short_under_its_mapping_fails_the_fit_not_the_process)
         ASSERT(rgb = calloc((size_t)3 * want.n, sizeof *rgb));
         ASSERT_OK(prep_fit(p, NULL, rgb, &m, &e));
         material_free(&m);
+        if (getenv("GLINT_TEST_UNDER_MEMCHECK")) {
+            /* memcheck ends the process at the first read past the cut
+             * (SIGSEGV, default action) instead of passing the kernel's
+             * SIGBUS to the handler: the cut is checked without it */
+            printf("  (under memcheck: the file is not cut)\n");
+            prep_release(c, p);
+            free(rgb);
+            cache_release(c, se);
+            cache_close(c);
+            samples_free(&want);
+            fixture_close(&f);
+            return;
+        }
         ASSERT_OK(truncate(path, size / 4));
         ASSERT_EQ(prep_fit(p, NULL, rgb, &m, &e), GLINT_EIO);
         ASSERT_MSG(strstr(e.msg, "cut short") != NULL, "%s", e.msg);
