@@ -1,7 +1,5 @@
 #include "fsio.h"
 
-#include "par.h"
-
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -90,41 +88,19 @@ static int sync_path(const char *path, int dir)
     return rc;
 }
 
-typedef struct sync_ctx {
-    char **paths;
-    int *errs;
-} sync_ctx;
-
-static void sync_run(void *ctx, int i)
-{
-    sync_ctx *x = ctx;
-    x->errs[i] = sync_path(x->paths[i], 0) != 0 ? (errno ? errno : EIO) : 0;
-}
-
 int fsio_group_end(fsio_group *g, glint_err *err)
 {
     int rc = 0, nfiles;
     cur_group = NULL;
     if (g->failed)
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory making files durable");
-    if (!rc && g->n) {
-        /* the files' fsyncs at once, on the worker pool: the disk's
-         * flushes overlap */
-        int *errs = calloc((size_t)g->n, sizeof *errs);
-        sync_ctx x = {g->paths, errs};
-        if (!errs) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory making files durable");
-        } else {
-            par_run(g->n, sync_run, &x);
-            for (int i = 0; i < g->n && !rc; i++)
-                if (errs[i]) {
-                    rc = glint_err_set(err, GLINT_EIO, "%s: fsync failed: %s", g->paths[i],
-                                       strerror(errs[i]));
-                    fsio_err_kind(err, errs[i]);
-                }
-            free(errs);
+    for (int i = 0; i < g->n && !rc; i++)
+        if (sync_path(g->paths[i], 0) != 0) {
+            int e = errno;
+            rc = glint_err_set(err, GLINT_EIO, "%s: fsync failed: %s", g->paths[i],
+                               strerror(e));
+            fsio_err_kind(err, e);
         }
-    }
     /* then each directory once (best effort, as sync_dir) */
     nfiles = g->n;
     for (int i = 0; i < nfiles && !rc; i++) {
