@@ -24,7 +24,7 @@
 
 #define PIXELS_QUEUE 64
 #define PIXELS_REST_S 0.25
-#define PIXELS_MAX_WAIT_S 2.0
+#define PIXELS_MAX_WAIT_S 10.0
 
 typedef struct pix_item {
     char session[33];

@@ -277,7 +277,10 @@ def against(d, http, pngs, tmp, a):
         for dd in (d, other):
             sc = check(http.post(dd.base + "/api/v1/scenes", json={"width": 256, "height": 256}),
                        201).json()
-            s = new_session(http, dd.base, sc["id"], tmp + "/png0", [0], "png")
+            if a.against_views == 12:
+                s = new_session(http, dd.base, sc["id"], tmp + "/exr", range(12), "exr")
+            else:
+                s = new_session(http, dd.base, sc["id"], tmp + "/png0", [0], "png")
             fit(http, dd.base, s["id"], s["paint_token"], 64)
             round_trips(http, dd.base, s, pngs, 3, 64)
             sessions.append(s)
@@ -288,7 +291,8 @@ def against(d, http, pngs, tmp, a):
     finally:
         other.stop()
     m = [statistics.median(t) for t in times]
-    return [("warm round trip, 1 view, alternating rounds (8 x 25): this build / --against",
+    return [("warm round trip, %d view%s painted, alternating rounds (8 x 25): this build / "
+             "--against" % (a.against_views, "s" if a.against_views > 1 else ""),
              "%s / %s" % (ms(m[0]), ms(m[1])), "ms"),
             ("... ratio this / --against", "%.3f" % (m[0] / m[1]), "")]
 
@@ -347,6 +351,8 @@ def main():
     ap.add_argument("--threads", type=int, default=2, help="glintd --threads (job workers)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary directory")
     ap.add_argument("--against", help="another glintd to compare warm round trips with")
+    ap.add_argument("--against-views", type=int, choices=(1, 12), default=1,
+                    help="views painted in the --against comparison")
     ap.add_argument("--settle", action="store_true",
                     help="let background jobs finish before the warm round trips")
     ap.add_argument("--restarts", type=int, default=5,
