@@ -135,6 +135,18 @@ static void destroy_locked(cache *c, cache_entry *e)
         release_locked(c, parent);
 }
 
+/* Take a READY entry out of the table, the LRU list and the counts (it
+ * is freed by whoever drops its last reference). */
+static void unlist_locked(cache *c, cache_entry *e)
+{
+    lru_remove(&c->lru, &e->lru);
+    table_remove(c, e);
+    c->st.bytes -= e->val.bytes;
+    c->st.entries--;
+    c->st.level[e->level].bytes -= e->val.bytes;
+    c->st.level[e->level].entries--;
+}
+
 /* Evict unpinned READY entries, least recently used first, until the
  * bytes fit.  Evicting a child may unpin its parent: scan again from the
  * tail after each eviction. */
@@ -152,12 +164,7 @@ static void evict_locked(cache *c)
         }
         if (!e)
             return; /* everything left is pinned */
-        lru_remove(&c->lru, &e->lru);
-        table_remove(c, e);
-        c->st.bytes -= e->val.bytes;
-        c->st.entries--;
-        c->st.level[e->level].bytes -= e->val.bytes;
-        c->st.level[e->level].entries--;
+        unlist_locked(c, e);
         c->st.level[e->level].evictions++;
         destroy_locked(c, e);
     }
@@ -197,12 +204,7 @@ void cache_forget(cache *c, cache_entry *e)
                     break;
         if (!x)
             break;
-        lru_remove(&c->lru, &x->lru);
-        table_remove(c, x);
-        c->st.bytes -= x->val.bytes;
-        c->st.entries--;
-        c->st.level[x->level].bytes -= x->val.bytes;
-        c->st.level[x->level].entries--;
+        unlist_locked(c, x);
         if (x->refs == 0)
             destroy_locked(c, x);
     }

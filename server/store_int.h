@@ -49,6 +49,13 @@ void store_rollback(store *s);
 int store_random_name(char *buf, size_t len, const char *prefix, const char *suffix,
                       glint_err *err);
 
+/* The painting row of (session, view): its version and blob name (OUT;
+ * the lock held).  0, GLINT_ENOTFOUND (no session, never painted) or
+ * another code. */
+#define STORE_BLOB_NAME_MAX 512
+int store_painting_row(store *s, const char *session, int view, int64_t *version, char *blob,
+                       size_t len, glint_err *err);
+
 /* A painting's decoded pixels: "<blob>" STORE_PIXELS_SUFFIX (store_pixels.c). */
 #define STORE_PIXELS_SUFFIX ".px"
 /* Remove the pixels of a blob, if any (best effort). */

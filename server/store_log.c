@@ -242,40 +242,54 @@ int store_painting_put_at(store *s, const char *session, int view, int64_t base,
                             err);
 }
 
-int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
-                       int64_t *version, glint_err *err)
+int store_painting_row(store *s, const char *session, int view, int64_t *version, char *blob,
+                       size_t len, glint_err *err)
 {
     db_stmt *st;
     int rc;
 
-    *exr = NULL;
     if (!glint_id_valid(session))
         return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"", session);
-    /* under the lock, so a concurrent put cannot remove the file between
-     * reading its name and reading it */
-    pthread_mutex_lock(&s->lock);
     st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 AND view = ?2",
                     err);
-    if (!st) {
-        rc = GLINT_EIO;
-        goto out;
-    }
+    if (!st)
+        return GLINT_EIO;
     db_bind_text(st, 1, session);
     db_bind_int(st, 2, view);
     rc = db_step(st, "reading", err);
     if (rc == DB_ROW) {
-        if (version)
-            *version = db_col_int(st, 0);
-        rc = store_blob_get(s, db_col_text(st, 1), exr, len, err);
-        if (rc == GLINT_ENOTFOUND) /* a row without its file: never acceptable */
-            rc = glint_err_set(err, GLINT_EIO, "painting of session %s view %d: file missing",
-                               session, view);
+        *version = db_col_int(st, 0);
+        rc = snprintf(blob, len, "%s", db_col_text(st, 1)) >= (int)len
+                 ? glint_err_set(err, GLINT_EFORMAT, "a painting's blob name is too long")
+                 : 0;
     } else if (rc == DB_DONE) {
         rc = glint_err_set(err, GLINT_ENOTFOUND, "view %d of session %s has no painting", view,
                            session);
     }
-out:
     db_finalize(st);
+    return rc;
+}
+
+int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
+                       int64_t *version, glint_err *err)
+{
+    char blob[STORE_BLOB_NAME_MAX];
+    int64_t v = 0;
+    int rc;
+
+    *exr = NULL;
+    /* under the lock, so a concurrent put cannot remove the file between
+     * reading its name and reading it */
+    pthread_mutex_lock(&s->lock);
+    rc = store_painting_row(s, session, view, &v, blob, sizeof blob, err);
+    if (rc == 0) {
+        if (version)
+            *version = v;
+        rc = store_blob_get(s, blob, exr, len, err);
+        if (rc == GLINT_ENOTFOUND) /* a row without its file: never acceptable */
+            rc = glint_err_set(err, GLINT_EIO, "painting of session %s view %d: file missing",
+                               session, view);
+    }
     pthread_mutex_unlock(&s->lock);
     return rc;
 }

@@ -11,40 +11,16 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "ids.h"
 #include "img_raw.h"
 #include "store_int.h"
 
-/* The blob of (session, view) now, and its version; under the lock.  0,
- * GLINT_ENOTFOUND (never painted) or another code. */
+/* The blob of (session, view) now, and its version. */
 static int current_blob(store *s, const char *session, int view, int64_t *version, char *blob,
                         size_t len, glint_err *err)
 {
-    db_stmt *st;
     int rc;
-
-    if (!glint_id_valid(session))
-        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"", session);
     pthread_mutex_lock(&s->lock);
-    st = store_prep(s, "SELECT version, blob FROM paintings WHERE session = ?1 AND view = ?2",
-                    err);
-    if (!st) {
-        pthread_mutex_unlock(&s->lock);
-        return GLINT_EIO;
-    }
-    db_bind_text(st, 1, session);
-    db_bind_int(st, 2, view);
-    rc = db_step(st, "reading", err);
-    if (rc == DB_ROW) {
-        *version = db_col_int(st, 0);
-        rc = snprintf(blob, len, "%s", db_col_text(st, 1)) >= (int)len
-                 ? glint_err_set(err, GLINT_EFORMAT, "a painting's blob name is too long")
-                 : 0;
-    } else if (rc == DB_DONE) {
-        rc = glint_err_set(err, GLINT_ENOTFOUND, "view %d of session %s has no painting", view,
-                           session);
-    }
-    db_finalize(st);
+    rc = store_painting_row(s, session, view, version, blob, len, err);
     pthread_mutex_unlock(&s->lock);
     return rc;
 }
@@ -69,7 +45,7 @@ static int pixels_path(store *s, const char *blob, char *dir, size_t dlen, char 
 int store_painting_pixels_put(store *s, const char *session, int view, int64_t version,
                               const img *im, glint_err *err)
 {
-    char blob[512], dir[STORE_PATH_MAX], name[600];
+    char blob[STORE_BLOB_NAME_MAX], dir[STORE_PATH_MAX], name[600];
     int64_t now = 0;
     int rc;
 
@@ -95,7 +71,7 @@ int store_painting_pixels_put(store *s, const char *session, int view, int64_t v
 int store_painting_pixels_get(store *s, const char *session, int view, int max_dim, img *out,
                               int64_t *version, glint_err *err)
 {
-    char blob[512], dir[STORE_PATH_MAX], name[600];
+    char blob[STORE_BLOB_NAME_MAX], dir[STORE_PATH_MAX], name[600];
     int rc;
 
     memset(out, 0, sizeof *out);
