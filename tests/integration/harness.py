@@ -9,6 +9,7 @@ usage in a test file:
 """
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -92,11 +93,17 @@ def pg_query(data_dir, sql):
     return [line.split("\t") for line in out.splitlines() if line]
 
 
+# Every Daemon this process made: run_tests removes their directories when
+# every test passed (and keeps them, named, for a look when one failed).
+daemons = []
+
+
 class Daemon:
     """A running glintd; stop() sends SIGTERM and waits."""
 
     def __init__(self, *args, data_dir=None):
         self.tmp = tempfile.mkdtemp(prefix="glintd-test-")
+        daemons.append(self)
         self.data_dir = data_dir or os.path.join(self.tmp, "data")
         self.args = list(args)
         if PG and "--database" not in self.args:
@@ -218,4 +225,19 @@ def run_tests(namespace, daemon_args=()):
         print("FAIL sanitizer report in %s:\n%s" % (path, excerpt))
         failed += 1
     print("%d passed, %d failed" % (passed, failed))
+    remove_dirs(failed)
     sys.exit(1 if failed else 0)
+
+
+def remove_dirs(failed, more=()):
+    """The directories of every Daemon made (and `more`): removed when no
+    test failed, else named and kept for a look."""
+    for path in [x.tmp for x in daemons] + list(more):
+        if failed:
+            print("kept: %s" % path)
+        else:
+            shutil.rmtree(path, ignore_errors=True)
+    for x in daemons:
+        if not failed and x.proc and x.proc.poll() is None:
+            x.proc.kill()
+            x.proc.wait()

@@ -30,7 +30,7 @@ import time
 import requests
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import PG, SRC, Daemon, fit_material, validate  # noqa: E402
+from harness import PG, SRC, Daemon, fit_material, remove_dirs, validate  # noqa: E402
 from test_crash import random_stroke, same_stroke, stored_strokes  # noqa: E402
 from test_sessions import API, brush_apply, get_png, max_diff, to_float, tok  # noqa: E402
 
@@ -345,6 +345,7 @@ def main():
     finally:
         c.stop()
     print("%d passed, %d failed" % (passed, failed))
+    remove_dirs(failed, [c.tmp])
     sys.exit(1 if failed else 0)
 
 
