@@ -274,13 +274,18 @@ static prep *prep_new(const method *m, const void *params, glint_err *err)
     return p;
 }
 
+/* A pattern's cache file was cut short while `who` read it (samples.h). */
+static int torn_error(glint_err *err, const char *who)
+{
+    return glint_err_set(err, GLINT_EIO, "the sampling pattern's cache file was cut short while "
+                         "%s read it: the next fit reads it again, or rebuilds it", who);
+}
+
 void prep_release(cache *c, prep *p)
 {
     if (!p)
         return;
-    /* a pattern whose cache file was cut short under it: never used again
-     * (nor what was built from it); the next fit reads the file again,
-     * finds it short and rebuilds it */
+    /* a pattern cut short under it is dropped with what was built from it */
     if (p->pattern && samples_torn(cache_data(p->pattern)))
         cache_forget(c, p->pattern);
     for (int i = p->m->nlevels - 1; i >= 0; i--)
@@ -607,9 +612,7 @@ int prep_fit(const prep *p, const img *paintings, const float *rgb, material *ou
         return rc;
     if (samples_torn(s)) {
         material_free(out);
-        return glint_err_set(err, GLINT_EIO, "the sampling pattern's cache file was cut short "
-                                             "while this fit read it: it is read again, or "
-                                             "rebuilt, by the next fit");
+        return torn_error(err, "this fit");
     }
     /* the fit's own time includes reading the paintings */
     {
@@ -787,8 +790,7 @@ int prep_holdout(const method *m, const void *params, const samples *all,
         done++;
     }
     if (samples_torn(all)) {
-        rc = glint_err_set(err, GLINT_EIO, "the sampling pattern's cache file was cut short "
-                                           "while the held-out measurement read it");
+        rc = torn_error(err, "the held-out measurement");
         goto out;
     }
     *result = json_pack("{s:s, s:f, s:f, s:I, s:i, s:o, s:f}", "method", "leave-one-view-out",
