@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <stdlib.h>
 
 #if defined(__x86_64__) && defined(__GLIBC__) && defined(GLINT_HAVE_LIBMVEC)
 #include <immintrin.h>
@@ -49,24 +50,68 @@ static void exp_sse2(const double *in, double *out, size_t n)
         out[i] = exp(in[i]);
 }
 
+/* The instruction sets in use: what the CPU has, capped by GLINT_VMATH
+ * (read once; see vmath.h). */
+enum { ISA_NONE, ISA_AVX2, ISA_FMA, ISA_512 };
+
+static int isa_cpu(void)
+{
+    int lv = ISA_NONE;
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx2")) {
+        lv = ISA_AVX2;
+        if (__builtin_cpu_supports("fma")) {
+            lv = ISA_FMA;
+            if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                __builtin_cpu_supports("avx512vl"))
+                lv = ISA_512;
+        }
+    }
+    return lv;
+}
+
+static int isa_cap(const char *cap)
+{
+    if (cap && strcmp(cap, "avx2") == 0)
+        return ISA_FMA;
+    if (cap && strcmp(cap, "sse2") == 0)
+        return ISA_NONE;
+    return ISA_512;
+}
+
+static int isa_now = -1;
+
+static int isa_level(void)
+{
+    if (isa_now < 0) {
+        int lv = isa_cpu(), mx = isa_cap(getenv("GLINT_VMATH"));
+        isa_now = lv < mx ? lv : mx;
+    }
+    return isa_now;
+}
+
+int vmath_limit(const char *cap)
+{
+    int lv = isa_cpu(), mx = isa_cap(cap ? cap : getenv("GLINT_VMATH"));
+    if (cap && strcmp(cap, "avx2") && strcmp(cap, "sse2") && strcmp(cap, "avx512"))
+        return -1;
+    isa_now = lv < mx ? lv : mx;
+    return 0;
+}
+
 static int have_avx2(void)
 {
-    static int v = -1;
-    if (v < 0) {
-        __builtin_cpu_init();
-        v = __builtin_cpu_supports("avx2") ? 1 : 0;
-    }
-    return v;
+    return isa_level() >= ISA_AVX2;
 }
 
 static int have_fma(void)
 {
-    static int v = -1;
-    if (v < 0) {
-        __builtin_cpu_init();
-        v = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? 1 : 0;
-    }
-    return v;
+    return isa_level() >= ISA_FMA;
+}
+
+static int have_512(void)
+{
+    return isa_level() >= ISA_512;
 }
 
 /* log on AVX2 + FMA, four lanes at a time: x = 2^k (1 + f) with 1 + f in
@@ -83,26 +128,34 @@ typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef unsigned long long v4u __attribute__((vector_size(32)));
 
+/* The reduction and polynomial of log4 and log8, on vectors of type VD
+ * (doubles) with VL / VU the signed / unsigned 64-bit integer vectors of
+ * the same width: the same operations lane for lane, so both give the same
+ * bits. */
+#define GLINT_LOG_BODY(VD, VL, VU, x)                                                          \
+    do {                                                                                       \
+        const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,           \
+                     Lg3 = 2.857142874366239149e-01, Lg4 = 2.222219843214978396e-01,           \
+                     Lg5 = 1.818357216161805012e-01, Lg6 = 1.531383769920937332e-01,           \
+                     Lg7 = 1.479819860511658591e-01, ln2_hi = 6.93147180369123816490e-01,      \
+                     ln2_lo = 1.90821492927058770002e-10;                                      \
+        VL u_ = (VL)(x);                                                                       \
+        /* the exponent k such that x / 2^k lies in [sqrt(2)/2, sqrt(2)) */                    \
+        VL tmp_ = u_ - 0x3fe6a09e667f3bcdLL;                                                   \
+        VU k12_ = (((VU)tmp_) >> 52) + 2048; /* k + 2048, 12 bits */                          \
+        VD k_ = (VD)((VL)(k12_ & 4095) | 0x4330000000000000LL) - (4503599627370496.0 + 2048.0); \
+        VD f_ = (VD)(u_ - (tmp_ & (long long)0xfff0000000000000ULL)) - 1.0;                    \
+        VD s_ = f_ / (2.0 + f_), z_ = s_ * s_, w_ = z_ * z_;                                  \
+        VD r_ = w_ * (Lg2 + w_ * (Lg4 + w_ * Lg6)) + z_ * (Lg1 + w_ * (Lg3 + w_ * (Lg5 + w_ * Lg7))); \
+        VD hfsq_ = 0.5 * f_ * f_;                                                              \
+        (x) = k_ * ln2_hi - ((hfsq_ - (s_ * (hfsq_ + r_) + k_ * ln2_lo)) - f_);                \
+    } while (0)
+
 __attribute__((target("avx2,fma"), always_inline, optimize("fp-contract=fast"))) static inline v4d
 log4(v4d x)
 {
-    const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,
-                 Lg3 = 2.857142874366239149e-01, Lg4 = 2.222219843214978396e-01,
-                 Lg5 = 1.818357216161805012e-01, Lg6 = 1.531383769920937332e-01,
-                 Lg7 = 1.479819860511658591e-01, ln2_hi = 6.93147180369123816490e-01,
-                 ln2_lo = 1.90821492927058770002e-10;
-    const v4l expmask = {(long long)0xfff0000000000000ULL, (long long)0xfff0000000000000ULL,
-                         (long long)0xfff0000000000000ULL, (long long)0xfff0000000000000ULL};
-    v4l u = (v4l)x;
-    /* the exponent k such that x / 2^k lies in [sqrt(2)/2, sqrt(2)) */
-    v4l tmp = u - 0x3fe6a09e667f3bcdLL;
-    v4u k12 = (((v4u)tmp) >> 52) + 2048;                  /* k + 2048, 12 bits */
-    v4d k = (v4d)((v4l)(k12 & 4095) | 0x4330000000000000LL) - (4503599627370496.0 + 2048.0);
-    v4d f = (v4d)(u - (tmp & expmask)) - 1.0;
-    v4d s = f / (2.0 + f), z = s * s, w = z * z;
-    v4d r = w * (Lg2 + w * (Lg4 + w * Lg6)) + z * (Lg1 + w * (Lg3 + w * (Lg5 + w * Lg7)));
-    v4d hfsq = 0.5 * f * f;
-    return k * ln2_hi - ((hfsq - (s * (hfsq + r) + k * ln2_lo)) - f);
+    GLINT_LOG_BODY(v4d, v4l, v4u, x);
+    return x;
 }
 
 __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static void log_fma(const double *in, double *out, size_t n)
@@ -132,127 +185,165 @@ static int log_map3_generic(const double *in, double *out, size_t n, const doubl
 static int logf_map3_generic(const float *in, float *out, size_t n, const float off[3],
                              float sign, float floor, long clamped[3]);
 
-/* vmath_log_map3 on AVX2: twelve values (three vectors, four channel
- * periods) per step, so each lane's channel is fixed: vector k lane l is
- * channel (4k + l) % 3. */
-__attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int log_map3_fma(const double *in, double *out,
-                                                            size_t n, const double off[3],
-                                                            double sign, double floor,
-                                                            long clamped[3])
+/* The loop of vmath_log_map3 / vmath_logf_map3 on W-lane vectors of type
+ * VD (VI: integers of the lanes' width, VU unsigned): 3W values (three
+ * vectors, W channel periods) per step, so each lane's channel is fixed:
+ * vector k lane l is channel (W k + l) % 3.  OK(a) is all-ones in the lanes
+ * whose value the vector log LOGV takes (positive, normal, finite); the
+ * others take the scalar SLOG's, lane by lane, so a value's log does not
+ * depend on its neighbours or on W.  Sets i to the first value
+ * left and nonfinite when an input was inf or NaN. */
+#define GLINT_MAP3_LOOP(VD, VI, VU, W, LOGV, SLOG, OK)                                          \
+    do {                                                                                       \
+        VD fl_, o_[3];                                                                         \
+        VI cnt_[3], bad_;                                                                      \
+        memset(cnt_, 0, sizeof cnt_);                                                          \
+        memset(&bad_, 0, sizeof bad_);                                                         \
+        for (int l = 0; l < (W); l++)                                                          \
+            fl_[l] = floor;                                                                    \
+        for (int k = 0; k < 3; k++)                                                            \
+            for (int l = 0; l < (W); l++)                                                      \
+                o_[k][l] = off[((W) * k + l) % 3];                                             \
+        for (; i + 3 * (W) <= n; i += 3 * (W)) {                                               \
+            VD a_[3];                                                                          \
+            VI ok_[3];                                                                         \
+            int all_ = 1;                                                                      \
+            for (int k = 0; k < 3; k++) {                                                      \
+                VD x_;                                                                         \
+                VI low_;                                                                       \
+                memcpy(&x_, in + i + (W) * k, sizeof x_);                                      \
+                bad_ |= (VI)((x_ - x_) != 0);  /* inf - inf, NaN: not 0 */                   \
+                a_[k] = o_[k] + sign * x_;                                                     \
+                low_ = ~(VI)(a_[k] > fl_);     /* NaN too */                                  \
+                cnt_[k] -= low_;                                                               \
+                a_[k] = (VD)(((VI)a_[k] & ~low_) | ((VI)fl_ & low_));                          \
+                ok_[k] = OK(a_[k]);                                                            \
+                for (int l = 0; l < (W); l++)                                                  \
+                    all_ &= ok_[k][l] != 0;                                                    \
+            }                                                                                  \
+            for (int k = 0; k < 3; k++) {                                                      \
+                VD y_ = LOGV(a_[k]);                                                           \
+                if (!all_)                                                                     \
+                    for (int l = 0; l < (W); l++)                                              \
+                        if (!ok_[k][l])                                                        \
+                            y_[l] = SLOG(a_[k][l]);                                            \
+                memcpy(out + i + (W) * k, &y_, sizeof y_);                                     \
+            }                                                                                  \
+        }                                                                                      \
+        for (int k = 0; k < 3; k++)                                                            \
+            for (int l = 0; l < (W); l++)                                                      \
+                clamped[((W) * k + l) % 3] += cnt_[k][l];                                      \
+        for (int l = 0; l < (W); l++)                                                          \
+            nonfinite |= bad_[l] != 0;                                                         \
+    } while (0)
+
+/* normal, positive, finite: 0x0010.. <= bits < 0x7ff0.. (one unsigned
+ * compare), as lane masks */
+#define GLINT_OK_D(VI, VU, a) ((VI)(((VU)(a) - 0x0010000000000000ULL) < 0x7fe0000000000000ULL))
+/* the same in single precision: 0x00800000 <= bits < 0x7f800000 */
+#define GLINT_OK_F(VI, a)                                                                      \
+    ((VI)(((VI)(a) - 0x00800000) < 0x7f000000) & (VI)((VI)(a) >= 0x00800000))
+
+#define OK4(a) GLINT_OK_D(v4l, v4u, a)
+
+/* vmath_log_map3 on AVX2 + FMA: twelve values per step. */
+__attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
+log_map3_fma(const double *in, double *out, size_t n, const double off[3], double sign,
+             double floor, long clamped[3])
 {
-    const v4d fl = {floor, floor, floor, floor};
-    v4d o[3];
-    v4l cnt[3] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 0}}, bad = {0, 0, 0, 0};
     size_t i = 0;
     int nonfinite = 0;
-    for (int k = 0; k < 3; k++)
-        for (int l = 0; l < 4; l++)
-            o[k][l] = off[(4 * k + l) % 3];
-    for (; i + 12 <= n; i += 12) {
-        v4d a[3];
-        v4u ok = {~0ULL, ~0ULL, ~0ULL, ~0ULL};
-        for (int k = 0; k < 3; k++) {
-            v4d x;
-            v4l low;
-            memcpy(&x, in + i + 4 * k, sizeof x);
-            bad |= (v4l)((x - x) != 0.0);         /* inf - inf, NaN: not 0 */
-            a[k] = o[k] + sign * x;
-            low = ~(v4l)(a[k] > fl);              /* NaN too */
-            cnt[k] -= low;
-            a[k] = (v4d)(((v4l)a[k] & ~low) | ((v4l)fl & low));
-            ok &= ((v4u)a[k] - 0x0010000000000000ULL) < 0x7fe0000000000000ULL;
-        }
-        if (ok[0] & ok[1] & ok[2] & ok[3]) {
-            for (int k = 0; k < 3; k++) {
-                v4d y = log4(a[k]);
-                memcpy(out + i + 4 * k, &y, sizeof y);
-            }
-        } else {
-            for (int k = 0; k < 3; k++)
-                for (int l = 0; l < 4; l++)
-                    out[i + 4 * k + l] = log(a[k][l]);
-        }
-    }
-    for (int k = 0; k < 3; k++)
-        for (int l = 0; l < 4; l++)
-            clamped[(4 * k + l) % 3] += cnt[k][l];
-    nonfinite = (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
+    GLINT_MAP3_LOOP(v4d, v4l, v4u, 4, log4, log, OK4);
     /* the rest (i is a multiple of 3: the channels line up) */
     return nonfinite | log_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
-/* logf in eight lanes: the same reduction as log4 in single precision,
- * with fdlibm's e_logf.c minimax (Lg1..Lg4). */
+/* ... and on AVX-512 (avx512f, dq, vl): the same loop at twice the width,
+ * 24 values per step, lane for lane the same operations as log_map3_fma,
+ * so the same bits (tests/unit/test_vmath.c checks it). */
+typedef double v8d __attribute__((vector_size(64)));
+typedef long long v8l __attribute__((vector_size(64)));
+typedef unsigned long long v8u __attribute__((vector_size(64)));
+
+#define GLINT_512 "avx512f,avx512dq,avx512vl,fma"
+
+__attribute__((target(GLINT_512), always_inline, optimize("fp-contract=fast"))) static inline v8d
+log8(v8d x)
+{
+    GLINT_LOG_BODY(v8d, v8l, v8u, x);
+    return x;
+}
+
+#define OK8(a) GLINT_OK_D(v8l, v8u, a)
+
+__attribute__((target(GLINT_512), optimize("fp-contract=fast"))) static int
+log_map3_512(const double *in, double *out, size_t n, const double off[3], double sign,
+             double floor, long clamped[3])
+{
+    size_t i = 0;
+    int nonfinite = 0;
+    GLINT_MAP3_LOOP(v8d, v8l, v8u, 8, log8, log, OK8);
+    return nonfinite | log_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
+}
+
+/* logf in eight (sixteen) lanes: the same reduction as log4 in single
+ * precision, with fdlibm's e_logf.c minimax (Lg1..Lg4). */
+#define GLINT_LOGF_BODY(VF, VI, x)                                                             \
+    do {                                                                                       \
+        const float Lg1 = 6.6666662693e-01f, Lg2 = 4.0000972152e-01f,                          \
+                    Lg3 = 2.8498786688e-01f, Lg4 = 2.4279078841e-01f,                          \
+                    ln2_hi = 6.9313812256e-01f, ln2_lo = 9.0580006145e-06f;                    \
+        VI u_ = (VI)(x);                                                                       \
+        VI tmp_ = u_ - 0x3f3504f3;             /* sqrt(0.5) */                                \
+        VI ki_ = tmp_ >> 23;                   /* arithmetic: the exponent k */               \
+        VF k_ = __builtin_convertvector(ki_, VF);                                              \
+        VF f_ = (VF)(u_ - (tmp_ & (int)0xff800000)) - 1.0f;                                    \
+        VF s_ = f_ / (2.0f + f_), z_ = s_ * s_, w_ = z_ * z_;                                 \
+        VF r_ = w_ * (Lg2 + w_ * Lg4) + z_ * (Lg1 + w_ * Lg3);                                 \
+        VF hfsq_ = 0.5f * f_ * f_;                                                             \
+        (x) = k_ * ln2_hi - ((hfsq_ - (s_ * (hfsq_ + r_) + k_ * ln2_lo)) - f_);                \
+    } while (0)
+
 typedef float v8f __attribute__((vector_size(32)));
 typedef int v8i __attribute__((vector_size(32)));
+typedef float v16f __attribute__((vector_size(64)));
+typedef int v16i __attribute__((vector_size(64)));
 
 __attribute__((target("avx2,fma"), always_inline, optimize("fp-contract=fast"))) static inline v8f
 logf8(v8f x)
 {
-    const float Lg1 = 6.6666662693e-01f, Lg2 = 4.0000972152e-01f, Lg3 = 2.8498786688e-01f,
-                Lg4 = 2.4279078841e-01f, ln2_hi = 6.9313812256e-01f, ln2_lo = 9.0580006145e-06f;
-    v8i u = (v8i)x;
-    v8i tmp = u - 0x3f3504f3;                 /* sqrt(0.5) */
-    v8i ki = tmp >> 23;                       /* arithmetic: the exponent k */
-    v8f k = __builtin_convertvector(ki, v8f);
-    v8f f = (v8f)(u - (tmp & (int)0xff800000)) - 1.0f;
-    v8f s = f / (2.0f + f), z = s * s, w = z * z;
-    v8f r = w * (Lg2 + w * Lg4) + z * (Lg1 + w * Lg3);
-    v8f hfsq = 0.5f * f * f;
-    return k * ln2_hi - ((hfsq - (s * (hfsq + r) + k * ln2_lo)) - f);
+    GLINT_LOGF_BODY(v8f, v8i, x);
+    return x;
 }
+
+__attribute__((target(GLINT_512), always_inline, optimize("fp-contract=fast"))) static inline v16f
+logf16(v16f x)
+{
+    GLINT_LOGF_BODY(v16f, v16i, x);
+    return x;
+}
+
+#define OKF8(a) GLINT_OK_F(v8i, a)
+#define OKF16(a) GLINT_OK_F(v16i, a)
 
 __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
 logf_map3_fma(const float *in, float *out, size_t n, const float off[3], float sign, float floor,
               long clamped[3])
 {
-    const v8f fl = {floor, floor, floor, floor, floor, floor, floor, floor};
-    v8f o[3];
-    v8i cnt[3], bad = {0};
     size_t i = 0;
     int nonfinite = 0;
-    memset(cnt, 0, sizeof cnt);
-    for (int k = 0; k < 3; k++)
-        for (int l = 0; l < 8; l++)
-            o[k][l] = off[(8 * k + l) % 3];
-    for (; i + 24 <= n; i += 24) {
-        v8f a[3];
-        v8i ok = {~0, ~0, ~0, ~0, ~0, ~0, ~0, ~0};
-        for (int k = 0; k < 3; k++) {
-            v8f x;
-            v8i low;
-            memcpy(&x, in + i + 8 * k, sizeof x);
-            bad |= (v8i)((x - x) != 0.0f);
-            a[k] = o[k] + sign * x;
-            low = ~(v8i)(a[k] > fl);
-            cnt[k] -= low;
-            a[k] = (v8f)(((v8i)a[k] & ~low) | ((v8i)fl & low));
-            /* normal, positive, finite: 0x00800000 <= bits < 0x7f800000 */
-            ok &= (v8i)(((v8i)a[k] - 0x00800000) < 0x7f000000) &
-                  (v8i)((v8i)a[k] >= 0x00800000);
-        }
-        {
-            int all = 1;
-            for (int l = 0; l < 8; l++)
-                all &= ok[l] != 0;
-            if (all) {
-                for (int k = 0; k < 3; k++) {
-                    v8f y = logf8(a[k]);
-                    memcpy(out + i + 8 * k, &y, sizeof y);
-                }
-            } else {
-                for (int k = 0; k < 3; k++)
-                    for (int l = 0; l < 8; l++)
-                        out[i + 8 * k + l] = logf(a[k][l]);
-            }
-        }
-    }
-    for (int k = 0; k < 3; k++)
-        for (int l = 0; l < 8; l++)
-            clamped[(8 * k + l) % 3] += cnt[k][l];
-    for (int l = 0; l < 8; l++)
-        nonfinite |= bad[l] != 0;
+    GLINT_MAP3_LOOP(v8f, v8i, v8i, 8, logf8, logf, OKF8);
     return nonfinite | logf_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
+}
+
+__attribute__((target(GLINT_512), optimize("fp-contract=fast"))) static int
+logf_map3_512(const float *in, float *out, size_t n, const float off[3], float sign, float floor,
+              long clamped[3])
+{
+    size_t i = 0;
+    int nonfinite = 0;
+    GLINT_MAP3_LOOP(v16f, v16i, v16i, 16, logf16, logf, OKF16);
+    return nonfinite | logf_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
 void vmath_log(const double *in, double *out, size_t n)
@@ -276,6 +367,8 @@ void vmath_exp(const double *in, double *out, size_t n)
 int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
                    double floor, long clamped[3])
 {
+    if (have_512())
+        return log_map3_512(in, out, n, off, sign, floor, clamped);
     if (have_fma())
         return log_map3_fma(in, out, n, off, sign, floor, clamped);
     return log_map3_generic(in, out, n, off, sign, floor, clamped);
@@ -284,6 +377,8 @@ int vmath_log_map3(const double *in, double *out, size_t n, const double off[3],
 int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], float sign,
                     float floor, long clamped[3])
 {
+    if (have_512())
+        return logf_map3_512(in, out, n, off, sign, floor, clamped);
     if (have_fma())
         return logf_map3_fma(in, out, n, off, sign, floor, clamped);
     return logf_map3_generic(in, out, n, off, sign, floor, clamped);
@@ -291,8 +386,10 @@ int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], f
 
 const char *vmath_impl(void)
 {
-    return have_fma() ? "log: glint-avx2-fma, exp: libmvec-avx2"
-                      : have_avx2() ? "libmvec-avx2" : "libmvec-sse2";
+    return have_512()   ? "log: glint-avx512, exp: libmvec-avx2"
+           : have_fma()  ? "log: glint-avx2-fma, exp: libmvec-avx2"
+           : have_avx2() ? "libmvec-avx2"
+                         : "libmvec-sse2";
 }
 
 #else
@@ -329,6 +426,13 @@ void vmath_exp(const double *in, double *out, size_t n)
 const char *vmath_impl(void)
 {
     return "libm";
+}
+
+int vmath_limit(const char *cap)
+{
+    if (cap && strcmp(cap, "avx2") && strcmp(cap, "sse2") && strcmp(cap, "avx512"))
+        return -1;
+    return 0;
 }
 
 #endif

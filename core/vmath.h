@@ -25,12 +25,26 @@ int vmath_log_map3(const double *in, double *out, size_t n, const double off[3],
 
 /* The same in single precision, for fits that ask for it (hf's
  * HF_F32): logf of arg, eight lanes at a time on AVX2 (within 1 ulp of
- * libm's logf), libm's logf elsewhere. */
+ * libm's logf), libm's logf elsewhere.
+ *
+ * Both run twice as wide on AVX-512 (avx512f, dq and vl), with the same
+ * operations lane for lane, so a fit gives the same bits on an AVX2 or an
+ * AVX-512 machine (about 1.2 times the throughput of the AVX2 loops on the
+ * Zen 4 here; BENCHMARKS.md). */
 int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], float sign,
                     float floor, long clamped[3]);
 
-/* Which implementation is in use ("libmvec-avx2", "libmvec-sse2", "libm"). */
+/* Which implementation is in use ("log: glint-avx512, exp: libmvec-avx2",
+ * "log: glint-avx2-fma, ...", "libmvec-avx2", "libmvec-sse2", "libm"). */
 const char *vmath_impl(void);
+
+/* The instruction sets in use are what the CPU has, up to a cap: "avx512"
+ * (no cap), "avx2" (AVX2 + FMA at most) or "sse2"; NULL restores the cap
+ * of the environment variable GLINT_VMATH (same names; read at the first
+ * call otherwise).  For tests and benchmarks that compare the
+ * implementations; not thread-safe against calls running meanwhile.
+ * Returns -1 for an unknown name (nothing changes). */
+int vmath_limit(const char *cap);
 
 /* a . b over n in four partial sums: independent chains, so a long scan is
  * not bound by the latency of one add per term (and it vectorizes). */
