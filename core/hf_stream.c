@@ -243,6 +243,8 @@ static void diag_run(void *ctx, int c)
     int R = d->res, idx[HF_BLOCK], clamped[3] = {0, 0, 0}, bad = 0;
     long j0 = (long)c * w->chunk, j1 = j0 + w->chunk;
     double fb[3 * HF_BLOCK], lb[3 * HF_BLOCK], ss = 0.0, se = 0.0, mx = 0.0;
+    const hf_map_kind kind = fac->map.kind;
+    const double a3[3] = {fac->a_used[0], fac->a_used[1], fac->a_used[2]};
 
     if (j1 > w->count)
         j1 = w->count;
@@ -253,30 +255,45 @@ static void diag_run(void *ctx, int c)
         map_block(x, idx, 0, nb, fb, clamped, &bad);
         for (int b = 0; b < nb; b++) {
             int i = idx[b];
-            double acc[3] = {0.0, 0.0, 0.0};
+            /* the three channels' sums in registers (an array here stayed in
+             * memory, one store and load per term) */
+            double a0 = 0.0, a1 = 0.0, a2 = 0.0, e0, e1, e2;
             for (int j = 0; j < 3; j++) {
                 const double *yk = fac->logf + 3 * (j * R + d->k0[3 * i + j]);
                 double w1 = d->t[3 * i + j], w0 = 1.0 - w1;
-                for (int ch = 0; ch < 3; ch++)
-                    acc[ch] += w0 * yk[ch] + w1 * yk[3 + ch];
+                a0 += w0 * yk[0] + w1 * yk[3];
+                a1 += w0 * yk[1] + w1 * yk[4];
+                a2 += w0 * yk[2] + w1 * yk[5];
             }
-            for (int ch = 0; ch < 3; ch++) {
-                double e = acc[ch] - fb[3 * b + ch];
-                ss += e * e;
-                lb[3 * b + ch] = acc[ch] > 700.0 ? 700.0 : acc[ch];
-            }
+            e0 = a0 - fb[3 * b];
+            e1 = a1 - fb[3 * b + 1];
+            e2 = a2 - fb[3 * b + 2];
+            ss += e0 * e0;
+            ss += e1 * e1;
+            ss += e2 * e2;
+            lb[3 * b] = a0 > 700.0 ? 700.0 : a0;
+            lb[3 * b + 1] = a1 > 700.0 ? 700.0 : a1;
+            lb[3 * b + 2] = a2 > 700.0 ? 700.0 : a2;
         }
         vmath_exp(lb, lb, (size_t)3 * nb);
+        /* the reconstruction (hf_map_inverse, inlined: the call in this
+         * loop kept the sums in memory), then the errors */
+        for (int j = 0; j < 3 * nb; j++) {
+            double v = kind == HF_MAP_ADD   ? lb[j] - a3[j % 3]
+                       : kind == HF_MAP_SUB ? a3[j % 3] - lb[j]
+                                            : lb[j];
+            lb[j] = v > 0.0 ? v : 0.0;
+        }
+        if (fac->model == HF_MODEL_BRDF)
+            for (int b = 0; b < nb; b++)
+                for (int ch = 0; ch < 3; ch++)
+                    lb[3 * b + ch] *= d->cos_i[idx[b]];
         for (int b = 0; b < nb; b++) {
-            int i = idx[b];
-            double wgt = fac->model == HF_MODEL_BRDF ? d->cos_i[i] : 1.0;
+            const float *px = x->rgb + 3 * (size_t)idx[b];
             for (int ch = 0; ch < 3; ch++) {
-                float rec = (float)(wgt * hf_map_inverse(&fac->map, fac->a_used[ch],
-                                                          lb[3 * b + ch]));
-                double e = (double)rec - (double)x->rgb[3 * i + ch];
+                double e = (double)(float)lb[3 * b + ch] - (double)px[ch];
                 se += e * e;
-                if (fabs(e) > mx)
-                    mx = fabs(e);
+                mx = fabs(e) > mx ? fabs(e) : mx;
             }
         }
     }

@@ -325,20 +325,22 @@ static void warm(FILE *md, int quick)
     printf("threads %d (GLINT_THREADS), vector math %s; memory bandwidth (triad) one thread "
            "%.1f GB/s, %d threads %.1f GB/s\n",
            par_threads(), vmath_impl(), bw1 / 1e9, par_threads(), bwp / 1e9);
-    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n", "res",
-           "N", "stream", "M t", "factor.", "f32", "diag", "fit_run", "MB read", "bound",
-           "ratio", "diag N", "RMS");
-    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n", "", "",
-           "ms", "ms", "ms", "ms", "ms", "ms", "", "ms", "", "", "painted");
+    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n",
+           "res", "N", "stream", "M t", "factor.", "f32", "gather", "diag", "fit_run", "MB read",
+           "bound", "ratio", "diag N", "RMS");
+    printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n", "",
+           "", "ms", "ms", "ms", "ms", "ms", "ms", "ms", "", "ms", "", "", "painted");
     fprintf(md, "\nThe warm fit at the full raster (128x128 x 12 views, one RGB painting): "
                 "threads %d, %s, triad %.1f GB/s (one thread) and %.1f GB/s (%d threads)\n\n",
             par_threads(), vmath_impl(), bw1 / 1e9, bwp / 1e9, par_threads());
     fprintf(md, "| res | samples | stream (ms) | M t (ms) | factorization, double (ms) | "
-                "factorization, single (ms) | diagnostics (ms) | fit_run (ms) | MB read | "
-                "bound (ms) | factorization / bound | diagnostic samples | RMS painted |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "factorization, single (ms) | gather (ms) | diagnostics (ms) | fit_run (ms) | "
+                "MB read | bound (ms) | factorization / bound | diagnostic samples | RMS painted |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
-        double st[201], mt[201], fa[201], f32[201], dg[201], run[201], bytes, bound, rms = 0.0;
+        double st[201], mt[201], fa[201], f32[201], dg[201], run[201], ga[201], bytes, bound,
+            rms = 0.0;
+        float *grgb;
         long dn = 0;
         fit_params p;
         fit_prep fp, fp32;
@@ -350,9 +352,15 @@ static void warm(FILE *md, int quick)
         p.prec = HF_F32;
         if (fit_prepare(&fp32, &s.sc, s.g, NULL, &p, NULL, &e))
             die("prepare f32", &e);
+        if (!(grgb = malloc((size_t)3 * fp.s.n * sizeof *grgb)))
+            die("out of memory", NULL);
         for (int k = 0; k < reps; k++) {
             material m;
             double t0 = now();
+            if (samples_gather(&fp.s, s.paint, grgb, &e))
+                die("gather", &e);
+            ga[k] = now() - t0;
+            t0 = now();
             if (fit_run(&fp, s.paint, NULL, &m, &e))
                 die("fit", &e);
             run[k] = now() - t0;
@@ -377,20 +385,23 @@ static void warm(FILE *md, int quick)
         {
             double ms = median(st, reps), mm = median(mt, reps), mf = median(fa, reps);
             double m32 = median(f32, reps), md_ = median(dg, reps), mr = median(run, reps);
-            printf("%-4d %-6d | %-9.3f %-9.3f %-9.3f %-9.3f | %-9.3f %-9.3f | %-8.2f %-8.3f %-7.2f "
-                   "| %-7ld %-8.4f\n",
-                   res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * md_, 1e3 * mr,
-                   bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
-            fprintf(md, "| %d | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f "
-                        "| %ld | %.4f |\n",
-                    res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * md_, 1e3 * mr,
-                    bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
+            double mg = median(ga, reps);
+            printf("%-4d %-6d | %-9.3f %-9.3f %-9.3f %-9.3f | %-9.3f %-9.3f %-9.3f | %-8.2f %-8.3f "
+                   "%-7.2f | %-7ld %-8.4f\n",
+                   res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * mg, 1e3 * md_,
+                   1e3 * mr, bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
+            fprintf(md, "| %d | %d | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | "
+                        "%.2f | %ld | %.4f |\n",
+                    res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * mg, 1e3 * md_,
+                    1e3 * mr, bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
         }
+        free(grgb);
         fit_prep_free(&fp);
         fit_prep_free(&fp32);
     }
     printf("(stream: the pass over the samples (mapping, logs, A^T f); M t: the operator; "
-           "factorization: both + offsets + gauge;\n diag: the error diagnostics; fit_run: also "
+           "factorization: both + offsets + gauge;\n gather: the samples' values read from the "
+           "painting (samples_gather, apart); diag: the error diagnostics; fit_run: also "
            "reading the painting; bound: MB read / the %d-thread bandwidth)\n",
            par_threads());
     free_setup(&s);
