@@ -218,8 +218,13 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
                 cnt_[k] -= low_;                                                               \
                 a_[k] = (VD)(((VI)a_[k] & ~low_) | ((VI)fl_ & low_));                          \
                 ok_[k] = OK(a_[k]);                                                            \
+            }                                                                                  \
+            {                                                                                  \
+                VI not_ = ~ok_[0] | ~ok_[1] | ~ok_[2];                                         \
+                long long any_ = 0;                                                            \
                 for (int l = 0; l < (W); l++)                                                  \
-                    all_ &= ok_[k][l] != 0;                                                    \
+                    any_ |= not_[l];                                                           \
+                all_ = any_ == 0;                                                              \
             }                                                                                  \
             for (int k = 0; k < 3; k++) {                                                      \
                 VD y_ = LOGV(a_[k]);                                                           \

@@ -301,6 +301,48 @@ static void table1(FILE *md, int quick)
            " bound: operator bytes (M and the sparse rows of A) / 30 GB/s)\n");
 }
 
+/* The fused log mappings alone, on 768 values in L1 (fastest of 2000 x
+ * 10 calls), under each instruction set this CPU offers (vmath_limit):
+ * what the stream's logs cost per value. */
+static void log_rates(void)
+{
+    enum { N = 768 };
+    static double in[N], out[N];
+    static float fin[N], fout[N];
+    const double off[3] = {0.0, 0.0, 0.0};
+    const float offf[3] = {0.0f, 0.0f, 0.0f};
+    const char *caps[] = {"avx2", "avx512"};
+    for (int i = 0; i < N; i++) {
+        in[i] = 0.01 + (double)(i * 37 % 1000) / 500.0;
+        fin[i] = (float)in[i];
+    }
+    printf("fused log mapping in L1, ns per value (double / single):");
+    for (int c = 0; c < 2; c++) {
+        double bd = 1.0, bf = 1.0;
+        const char *impl;
+        vmath_limit(caps[c]);
+        impl = vmath_impl();
+        if (c == 1 && !strstr(impl, "avx512"))
+            break; /* the CPU has no AVX-512 */
+        for (int rep = 0; rep < 2000; rep++) {
+            long cl[3] = {0, 0, 0};
+            double t0 = now(), t;
+            for (int k = 0; k < 10; k++)
+                vmath_log_map3(in, out, N, off, 1.0, 1e-6, cl);
+            if ((t = now() - t0) < bd)
+                bd = t;
+            t0 = now();
+            for (int k = 0; k < 10; k++)
+                vmath_logf_map3(fin, fout, N, offf, 1.0f, 1e-6f, cl);
+            if ((t = now() - t0) < bf)
+                bf = t;
+        }
+        printf("  %s %.2f / %.2f", caps[c], 1e9 * bd / (10.0 * N), 1e9 * bf / (10.0 * N));
+    }
+    vmath_limit(NULL);
+    printf("\n");
+}
+
 /* ---- Part 0: the warm path at the full raster ---------------------------------------- */
 
 static double secs(const material *m, const char *key)
@@ -325,6 +367,7 @@ static void warm(FILE *md, int quick)
     printf("threads %d (GLINT_THREADS), vector math %s; memory bandwidth (triad) one thread "
            "%.1f GB/s, %d threads %.1f GB/s\n",
            par_threads(), vmath_impl(), bw1 / 1e9, par_threads(), bwp / 1e9);
+    log_rates();
     printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n",
            "res", "N", "stream", "M t", "factor.", "f32", "gather", "diag", "fit_run", "MB read",
            "bound", "ratio", "diag N", "RMS");
