@@ -286,6 +286,8 @@ typedef struct hf_fit_stats {
     double total_seconds;  /* the fast factorization: offsets + application + gauge
                               (+ damping, when needed) */
     double diag_seconds;   /* the diagnostics above, not in total */
+    int stream_chunks;     /* chunks of the pass over the samples (hf_chunking) */
+    int stream_chunks_reused; /* of those, taken from a memo (hf_fit_with) */
 } hf_fit_stats;
 
 /* The fitted log-factors in the canonical gauge, with what is needed to
@@ -324,6 +326,40 @@ typedef struct hf_factors {
 int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map,
            hf_model model, const float *rgb, hf_factors *fac,
            hf_fit_stats *stats, glint_err *err);
+
+/* hf_fit again after some views' paintings changed.  The pass over the
+ * samples sums A^T f in chunks of samples fixed by the sample count
+ * (hf_chunking), and adds the chunks' sums in chunk order.  A chunk whose
+ * samples all come from views whose paintings have not changed since an
+ * earlier fit through the same memo, with the same key and parameters,
+ * has the same sums: they are taken from the memo instead of reading and
+ * mapping its samples again, and the result is the same bits as hf_fit's.
+ *
+ * The caller owns the memo (hf_memo_new / hf_memo_free) and must not use
+ * one in two fits at once.  What the sums depend on besides the values is
+ * named by key (the caller's: the design, e.g. its pattern and
+ * resolution) and by the fit's own mapping, offsets, model and precision
+ * (the memo adds those).  Which values a view holds is named by tags[v]:
+ * equal tags promise equal values of every sample of view v (view[i]: the
+ * view of sample i, nondecreasing over i, as samples_build makes them;
+ * otherwise nothing is reused).  A memo whose key differs is emptied. */
+typedef struct hf_memo hf_memo;
+hf_memo *hf_memo_new(void);
+void hf_memo_free(hf_memo *m);
+
+typedef struct hf_fit_reuse {
+    hf_memo *memo;
+    const char *key;
+    const int *view;         /* d->n */
+    const uint64_t *tags;    /* nviews */
+    int nviews;
+} hf_fit_reuse;
+
+/* hf_fit with reuse (NULL: hf_fit); stats->stream_chunks_reused says how
+ * many of stats->stream_chunks came from the memo. */
+int hf_fit_with(const hf_design *d, const hf_op *op, const hf_map *map, hf_model model,
+                const float *rgb, const hf_fit_reuse *reuse, hf_factors *fac,
+                hf_fit_stats *stats, glint_err *err);
 
 /* Evaluate fitted factors at the design's samples (OUT: rgb[3 * d->n]). */
 void hf_factors_eval_design(const hf_factors *fac, const hf_design *d, float *rgb);

@@ -264,6 +264,13 @@ void hf_factors_free(hf_factors *f)
 int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model model,
            const float *rgb, hf_factors *fac, hf_fit_stats *stats, glint_err *err)
 {
+    return hf_fit_with(d, op, map, model, rgb, NULL, fac, stats, err);
+}
+
+int hf_fit_with(const hf_design *d, const hf_op *op, const hf_map *map, hf_model model,
+                const float *rgb, const hf_fit_reuse *reuse, hf_factors *fac,
+                hf_fit_stats *stats, glint_err *err)
+{
     double t0 = hf_now(), t1, t2;
     int n, N, rc = 0;
     double *t = NULL, *y = NULL;
@@ -322,7 +329,11 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map, hf_model mode
     x.model = model;
     x.a = fac->a_used;
     x.single = op->prec == HF_F32;
-    if ((rc = hf_stream_forward(&x, t, st.clamped)) < 0) {
+    {
+        int chunk;
+        hf_chunking(N, &chunk, &st.stream_chunks);
+    }
+    if ((rc = hf_stream_forward(&x, reuse, t, st.clamped, &st.stream_chunks_reused)) < 0) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory fitting %d samples", N);
         goto fail;
     }

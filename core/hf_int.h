@@ -92,9 +92,11 @@ typedef struct hf_stream {
 } hf_stream;
 
 /* t = A^T f~ with f~ the log-mapped samples (OUT: t[9R], clamped[3]:
- * samples floored at eps per channel).  -1 when out of memory, 1 when a
- * sample is not finite (t is then meaningless), else 0. */
-int hf_stream_forward(const hf_stream *x, double *t, int clamped[3]);
+ * samples floored at eps per channel; *reused: chunks whose sums came from
+ * reuse's memo, see hf_fit_with).  -1 when out of memory, 1 when a sample
+ * is not finite (t is then meaningless), else 0.  reuse may be NULL. */
+int hf_stream_forward(const hf_stream *x, const hf_fit_reuse *reuse, double *t,
+                      int clamped[3], int *reused);
 
 /* log_residual, rms, max_abs, diag_samples and diag_stride of *st for the
  * factors fac (hf.h).  -1 when out of memory (st untouched). */

@@ -17,6 +17,7 @@
  * the same way over every sample, or over an evenly strided subsample of
  * HF_DIAG_SAMPLES when there are more (see hf.h, hf_fit_stats). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -114,6 +115,7 @@ static void map_block_f(const hf_stream *x, int first, int nb, float *buf, int *
 typedef struct fwd_task {
     const hf_stream *x;
     int chunk, nchunks;
+    const int *todo;     /* the chunks to sum (task k: chunk todo[k]) */
     double *part;        /* nchunks x 9R */
     int *clamped;        /* nchunks x 3 */
     int *bad;            /* nchunks: a non-finite sample was seen */
@@ -126,15 +128,17 @@ typedef struct fwd_task {
 #define HF_CLONES
 #endif
 
-HF_CLONES static void fwd_run(void *ctx, int c)
+HF_CLONES static void fwd_run(void *ctx, int task)
 {
     fwd_task *w = ctx;
     const hf_design *d = w->x->d;
-    int R = d->res, i0 = c * w->chunk, i1 = i0 + w->chunk;
+    int c = w->todo[task], R = d->res, i0 = c * w->chunk, i1 = i0 + w->chunk;
     size_t len = (size_t)9 * R;
     double buf[3 * HF_BLOCK], *acc = calloc(4 * len, sizeof *acc), *out = w->part + c * len;
     int *clamped = w->clamped + 3 * c;
 
+    clamped[0] = clamped[1] = clamped[2] = 0;
+    w->bad[c] = 0;
     if (i1 > d->n)
         i1 = d->n;
     if (!acc) {
@@ -181,32 +185,182 @@ HF_CLONES static void fwd_run(void *ctx, int c)
     free(acc);
 }
 
-int hf_stream_forward(const hf_stream *x, double *t, int clamped[3])
+/* ---- the memo of a pass's chunk sums (hf.h) -------------------------------------------- */
+
+struct hf_memo {
+    char *key;           /* the caller's key and the pass's parameters */
+    int nviews, nchunks;
+    size_t len;          /* 9R */
+    int sorted;          /* the samples' views never decrease: chunks span view ranges */
+    double *part;        /* nchunks x len: each chunk's sums */
+    int *clamped;        /* nchunks x 3 */
+    int *bad;            /* nchunks */
+    unsigned char *valid; /* nchunks: part holds the sums for tags[] */
+    int *vlo, *vhi;      /* nchunks: the views a chunk's samples come from */
+    int *toff;           /* nchunks + 1: chunk c's views' tags at tags[toff[c]..] */
+    uint64_t *tags;      /* the paintings' tags the valid sums were made from */
+};
+
+hf_memo *hf_memo_new(void)
+{
+    return calloc(1, sizeof(hf_memo));
+}
+
+static void memo_clear(hf_memo *m)
+{
+    free(m->key);
+    free(m->part);
+    free(m->clamped);
+    free(m->bad);
+    free(m->valid);
+    free(m->vlo);
+    free(m->vhi);
+    free(m->toff);
+    free(m->tags);
+    memset(m, 0, sizeof *m);
+}
+
+void hf_memo_free(hf_memo *m)
+{
+    if (!m)
+        return;
+    memo_clear(m);
+    free(m);
+}
+
+/* The memo's key for this pass: the caller's, and every parameter of the
+ * pass besides the paintings (exact bits of the doubles). */
+static char *memo_key(const hf_stream *x, const hf_fit_reuse *r)
+{
+    const hf_design *d = x->d;
+    size_t len = strlen(r->key) + 256;
+    char *k = malloc(len);
+    if (k)
+        snprintf(k, len, "%s|n%d|r%d|m%d,%a,%a,%a|a%a,%a,%a|o%d|s%d|v%d", r->key, d->n, d->res,
+                 (int)x->map->kind, x->map->eps, x->map->a, x->map->margin, x->a[0], x->a[1],
+                 x->a[2], (int)x->model, x->single, r->nviews);
+    return k;
+}
+
+/* Make m the memo of this pass (key k, taken over), every chunk invalid:
+ * 0, or -1 out of memory (m is left empty). */
+static int memo_reset(hf_memo *m, char *k, const hf_stream *x, const hf_fit_reuse *r,
+                      int chunk, int nchunks)
+{
+    const hf_design *d = x->d;
+    int total = 0;
+
+    memo_clear(m);
+    m->key = k;
+    m->nviews = r->nviews;
+    m->nchunks = nchunks;
+    m->len = (size_t)9 * d->res;
+    m->sorted = 1;
+    for (long i = 1; i < d->n && m->sorted; i++)
+        m->sorted = r->view[i] >= r->view[i - 1];
+    for (long i = 0; i < d->n && m->sorted; i++)
+        m->sorted = r->view[i] >= 0 && r->view[i] < r->nviews;
+    m->part = malloc((size_t)nchunks * m->len * sizeof *m->part);
+    m->clamped = calloc((size_t)nchunks * 3, sizeof *m->clamped);
+    m->bad = calloc((size_t)nchunks, sizeof *m->bad);
+    m->valid = calloc((size_t)nchunks, 1);
+    m->vlo = malloc((size_t)nchunks * sizeof *m->vlo);
+    m->vhi = malloc((size_t)nchunks * sizeof *m->vhi);
+    m->toff = malloc(((size_t)nchunks + 1) * sizeof *m->toff);
+    if (!m->part || !m->clamped || !m->bad || !m->valid || !m->vlo || !m->vhi || !m->toff) {
+        memo_clear(m);
+        return -1;
+    }
+    for (int c = 0; c < nchunks; c++) {
+        long i0 = (long)c * chunk, i1 = i0 + chunk < d->n ? i0 + chunk : d->n;
+        m->vlo[c] = m->sorted ? r->view[i0] : 0;
+        m->vhi[c] = m->sorted ? r->view[i1 - 1] : -1;
+        m->toff[c] = total;
+        total += m->vhi[c] - m->vlo[c] + 1;
+    }
+    m->toff[nchunks] = total;
+    m->tags = malloc(((size_t)total + 1) * sizeof *m->tags);
+    if (!m->tags) {
+        memo_clear(m);
+        return -1;
+    }
+    return 0;
+}
+
+/* Are chunk c's sums in the memo those of these paintings? */
+static int memo_fresh(const hf_memo *m, int c, const uint64_t *tags)
+{
+    if (!m->sorted || !m->valid[c])
+        return 0;
+    for (int v = m->vlo[c]; v <= m->vhi[c]; v++)
+        if (m->tags[m->toff[c] + v - m->vlo[c]] != tags[v])
+            return 0;
+    return 1;
+}
+
+int hf_stream_forward(const hf_stream *x, const hf_fit_reuse *reuse, double *t,
+                      int clamped[3], int *reused)
 {
     const hf_design *d = x->d;
     size_t len = (size_t)9 * d->res;
+    hf_memo *m = NULL;
+    int *todo = NULL, ntodo = 0, rc = 0;
     fwd_task w;
-    int rc = 0;
 
     memset(&w, 0, sizeof w);
     w.x = x;
+    *reused = 0;
     hf_chunking(d->n, &w.chunk, &w.nchunks);
-    w.part = malloc((size_t)w.nchunks * len * sizeof *w.part);
-    w.clamped = calloc((size_t)w.nchunks * 3, sizeof *w.clamped);
-    w.bad = calloc((size_t)w.nchunks, sizeof *w.bad);
-    if (!w.part || !w.clamped || !w.bad) {
+    if (reuse && reuse->memo && reuse->key && reuse->view && reuse->tags && reuse->nviews > 0) {
+        char *k = memo_key(x, reuse);
+        m = reuse->memo;
+        if (!k)
+            m = NULL;
+        else if (m->key && strcmp(m->key, k) == 0 && m->nchunks == w.nchunks)
+            free(k);
+        else if (memo_reset(m, k, x, reuse, w.chunk, w.nchunks)) /* takes k */
+            m = NULL;
+    }
+    if (m) {
+        w.part = m->part;
+        w.clamped = m->clamped;
+        w.bad = m->bad;
+    } else {
+        w.part = malloc((size_t)w.nchunks * len * sizeof *w.part);
+        w.clamped = calloc((size_t)w.nchunks * 3, sizeof *w.clamped);
+        w.bad = calloc((size_t)w.nchunks, sizeof *w.bad);
+    }
+    todo = malloc((size_t)w.nchunks * sizeof *todo);
+    if (!w.part || !w.clamped || !w.bad || !todo) {
         rc = -1;
         goto done;
     }
-    if (par_worth((size_t)3 * d->n))
-        par_run(w.nchunks, fwd_run, &w);
+    for (int c = 0; c < w.nchunks; c++) {
+        if (m && memo_fresh(m, c, reuse->tags))
+            continue;
+        if (m)
+            m->valid[c] = 0;
+        todo[ntodo++] = c;
+    }
+    *reused = w.nchunks - ntodo;
+    w.todo = todo;
+    if (ntodo > 1 && par_worth((size_t)3 * d->n * ntodo / w.nchunks))
+        par_run(ntodo, fwd_run, &w);
     else
-        for (int c = 0; c < w.nchunks; c++)
-            fwd_run(&w, c);
+        for (int k = 0; k < ntodo; k++)
+            fwd_run(&w, k);
     if (w.oom) {
         rc = -1;
         goto done;
     }
+    if (m && m->sorted) /* the chunks just summed now hold these paintings' sums */
+        for (int k = 0; k < ntodo; k++) {
+            int c = todo[k];
+            for (int v = m->vlo[c]; v <= m->vhi[c]; v++)
+                m->tags[m->toff[c] + v - m->vlo[c]] = reuse->tags[v];
+            m->valid[c] = !m->bad[c];
+        }
+    /* the chunks' sums added in chunk order, however they were made */
     memcpy(t, w.part, len * sizeof *t);
     for (int c = 1; c < w.nchunks; c++)
         for (size_t k = 0; k < len; k++)
@@ -218,9 +372,14 @@ int hf_stream_forward(const hf_stream *x, double *t, int clamped[3])
         rc |= w.bad[c];
     }
 done:
-    free(w.part);
-    free(w.clamped);
-    free(w.bad);
+    if (!m) {
+        free(w.part);
+        free(w.clamped);
+        free(w.bad);
+    } else if (rc < 0) {
+        memset(m->valid, 0, (size_t)m->nchunks);
+    }
+    free(todo);
     return rc;
 }
 

@@ -70,6 +70,15 @@ const method *method_at(int i)
     return m;
 }
 
+void method_memo_clear(method_memo *mm)
+{
+    if (!mm)
+        return;
+    if (mm->data && mm->free)
+        mm->free(mm->data);
+    memset(mm, 0, sizeof *mm);
+}
+
 const method *method_find(const char *name)
 {
     const method *m = NULL;

@@ -29,6 +29,7 @@
 
 #include <jansson.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "cache.h"
 #include "err.h"
@@ -105,6 +106,20 @@ typedef struct method_level {
 
 /* ---- fit ------------------------------------------------------------------------------ */
 
+/* What a method may keep from one fit to the next of one caller (a
+ * painter's session), to spend less on views whose paintings did not
+ * change (prep_fit_reusing): the method's own data, freed by its own
+ * function.  A fit that finds another method's data there clears it first.
+ * One fit at a time per memo. */
+typedef struct method_memo {
+    const struct method *owner;
+    void *data;
+    void (*free)(void *data);
+} method_memo;
+
+/* Free the data and zero *mm (accepts NULL and a zeroed memo). */
+void method_memo_clear(method_memo *mm);
+
 /* What a fit sees: the prepared levels and the painted values. */
 typedef struct method_fit_in {
     const void *params;
@@ -116,6 +131,11 @@ typedef struct method_fit_in {
     const double *spent;          /* seconds it spent on each (building or waiting) */
     const cache_disk *disk;       /* what the disk layer answered when each was made */
     double pattern_seconds;       /* seconds it spent on the pattern (0 when in memory) */
+    /* Optional (NULL: none): the caller's memo, and per view (s->nviews) a
+     * tag naming its painting: equal tags in two fits promise equal
+     * paintings of that view (a method may then reuse what it kept). */
+    method_memo *memo;
+    const uint64_t *view_tags;
 } method_fit_in;
 
 /* ---- the material ------------------------------------------------------------------------ */

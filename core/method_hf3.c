@@ -252,7 +252,8 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
     int rc;
 
     memset(out, 0, sizeof *out);
-    rc = hf_fit(pp->d, pp->op, &pp->params->map, pp->params->model, rgb, &fac, &st, err);
+    rc = hf_fit_with(pp->d, pp->op, &pp->params->map, pp->params->model, rgb, pp->reuse, &fac,
+                     &st, err);
     if (rc)
         return rc;
     snprintf(key, sizeof key, "%s", pp->cache_key ? pp->cache_key : "");
@@ -271,6 +272,10 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
     json_object_set_new(pre, "gain_max", json_real(pp->dc->gain_max));
     json_object_set_new(pre, "gain_kept", json_real(pp->dc->gain_kept));
     json_object_set_new(pre, "s_weak", json_real(pp->dc->s_weak));
+    /* the pass over the samples: its chunks, and how many an earlier fit's
+     * sums served (views whose paintings had not changed, hf_fit_with) */
+    json_object_set_new(pre, "stream_chunks", json_integer(st.stream_chunks));
+    json_object_set_new(pre, "stream_chunks_reused", json_integer(st.stream_chunks_reused));
     tim = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f}", "samples",
                     pp->t_samples, "design", pp->t_design, "decomposition", pp->t_decomp,
                     "operator", pp->t_op, "map", st.map_seconds, "stream", st.stream_seconds,
@@ -287,6 +292,11 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
                      method_params_to_json(&method_hf3, pp->params), "precomputation", pre,
                      "seconds", tim, "errors", errs);
     return hf3_material_init(out, &fac, info, err);
+}
+
+static void memo_free(void *data)
+{
+    hf_memo_free(data);
 }
 
 static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
@@ -309,6 +319,29 @@ static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
     pp.t_design = in->how[0] == CACHE_BUILT ? x->t_design : 0.0;
     pp.t_decomp = in->how[0] == CACHE_BUILT ? x->t_decomp : in->spent[0];
     pp.t_op = in->spent[1];
+    if (in->memo && in->view_tags) {
+        /* the pass's chunk sums of views not repainted since the last fit */
+        hf_fit_reuse r;
+        char key[128];
+        if (in->memo->owner != &method_hf3) {
+            method_memo_clear(in->memo);
+            if ((in->memo->data = hf_memo_new())) {
+                in->memo->owner = &method_hf3;
+                in->memo->free = memo_free;
+            }
+        }
+        if (in->memo->data) {
+            /* the design: its pattern and the decomposition's key */
+            snprintf(key, sizeof key, "%s/%s", in->s->hash, in->keys[0]);
+            r.memo = in->memo->data;
+            r.key = key;
+            r.view = in->s->view;
+            r.tags = in->view_tags;
+            r.nviews = in->s->nviews;
+            pp.reuse = &r;
+            return hf3_fit_material(&pp, in->rgb, t0, out, err);
+        }
+    }
     return hf3_fit_material(&pp, in->rgb, t0, out, err);
 }
 

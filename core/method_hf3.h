@@ -63,6 +63,7 @@ typedef struct hf3_prepared {
     const char *cache_key;      /* the decomposition's key */
     int cache_hit;              /* disk: 1 loaded, 0 built, -1 rebuilt */
     double t_samples, t_design, t_decomp, t_op;
+    const hf_fit_reuse *reuse;  /* NULL: none (hf_fit_with) */
 } hf3_prepared;
 
 /* Fit painted values (3 s->n, per unit light) and make the material with

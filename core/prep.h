@@ -106,6 +106,13 @@ int prep_try_samples(cache *c, const method *m, const void *params, const sample
  * material's info gets precomputation.cache (prep_report). */
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err);
+/* prep_fit for a caller that fits the same views again and again (a
+ * painter's session): tags (s->nviews, one per view) name each view's
+ * painting, memo keeps what the method may reuse for the views whose tag
+ * did not change (method_memo; one fit at a time).  The material is the
+ * same bits as prep_fit's.  tags or memo NULL: prep_fit. */
+int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
+                     const uint64_t *tags, method_memo *memo, material *out, glint_err *err);
 
 /* The painted values the method's own model gives the preparation's
  * samples with material m (fitted by the same method): OUT rgb[3 n], NaN

@@ -360,8 +360,29 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     *doc = NULL;
     if (j)
         job_progress(j, "fit", 0.9);
-    if ((rc = prep_fit(p, t->paintings, NULL, &m, err)))
-        return rc;
+    {
+        /* the session's memo of this point: what the views not repainted
+         * since its last fit still give (prep_fit_reusing) */
+        uint64_t *tags = calloc((size_t)t->nviews, sizeof *tags);
+        method_memo mm;
+        points_key(t->m, t->params, t->use, t->nviews, key, sizeof key);
+        fitsvc_memo_take(f, t->session_id, key, &mm);
+        for (int v = 0; tags && v < t->nviews; v++)
+            tags[v] = t->use[v] ? (uint64_t)t->versions[v] : 0;
+        rc = prep_fit_reusing(p, t->paintings, NULL, tags, tags ? &mm : NULL, &m, err);
+        free(tags);
+        if (rc) { /* what the memo holds stays true of its tags */
+            fitsvc_memo_put(f, t->session_id, key, &mm, 0, 0);
+            return rc;
+        }
+        {
+            json_t *pc = json_object_get(m.info, "precomputation");
+            fitsvc_memo_put(
+                f, t->session_id, key, &mm,
+                (int)json_integer_value(json_object_get(pc, "stream_chunks_reused")),
+                (int)json_integer_value(json_object_get(pc, "stream_chunks")));
+        }
+    }
     fit_s = glint_now() - t0;
     t0 = srv_timing_step(t->tm, "fit", t0);
     pre = json_object_get(m.info, "precomputation");
@@ -606,6 +627,7 @@ void fitsvc_close(fitsvc *f)
         return;
     jobs_close(f->jobs); /* running jobs finish first: they hold cache entries */
     fitsvc_pixels_stop(f); /* holds the memo's paintings while it writes */
+    fitsvc_memo_close(f);
     points_close(f->points);
     memo_close(f->memo);
     cache_close(f->cache);
@@ -703,5 +725,6 @@ void fitsvc_metrics(fitsvc *f, FILE *o)
     }
     memo_metrics(f->memo, o);
     fitsvc_pixels_metrics(f, o);
+    fitsvc_memo_metrics(f, o);
     jobs_metrics(f->jobs, o);
 }

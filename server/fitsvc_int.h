@@ -17,6 +17,16 @@
 
 typedef struct pix_writer pix_writer;
 
+/* A session's fit memo (fitsvc_memo.c): its session, fit point (points.h's
+ * key) and when it was last put back (0: free slot). */
+#define FITSVC_MEMOS 8
+typedef struct fit_memo_slot {
+    char session[33];
+    char key[1024];
+    method_memo mm;
+    unsigned long long used;
+} fit_memo_slot;
+
 struct fitsvc {
     cache *cache;
     jobs *jobs;
@@ -29,6 +39,8 @@ struct fitsvc {
     unsigned long long hits, misses; /* fit requests: precomputation in memory or not */
     json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
     pix_writer *pix;                 /* fitsvc_pixels.c; NULL: none */
+    fit_memo_slot memos[FITSVC_MEMOS]; /* under lock */
+    unsigned long long memo_clock, memo_chunks, memo_reused;
 };
 
 /* Everything a fit needs, owned by the request or by its job. */
@@ -58,6 +70,16 @@ int fitsvc_pixels_start(fitsvc *f, glint_err *err);
 void fitsvc_pixels_stop(fitsvc *f);
 void fitsvc_pixels_count(fitsvc *f, int read, int decoded);
 void fitsvc_pixels_metrics(fitsvc *f, FILE *o);
+
+/* The fit memos (fitsvc_memo.c): take the one of (session, point key) for
+ * a fit (OUT: *mm, zeroed when there is none) and put it back after (its
+ * stream chunks, reused of chunks, are counted for /metrics); close frees
+ * them all. */
+void fitsvc_memo_take(fitsvc *f, const char *session, const char *key, method_memo *mm);
+void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_memo *mm,
+                     int reused, int chunks);
+void fitsvc_memo_close(fitsvc *f);
+void fitsvc_memo_metrics(fitsvc *f, FILE *o);
 
 /* Job callbacks for the precomputation (cls: the job). */
 int fitsvc_job_cancelled(void *cls);

@@ -11,6 +11,7 @@ harness).  Tests run in name order and share the state below.
 import io
 import json
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -615,6 +616,56 @@ def test_12b_a_new_painting_is_fitted_not_a_cached_one(d):
     assert abs(m2["errors"]["rms_painted"] - m1["errors"]["rms_painted"]) > 1e-6
     kind, m3 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
     assert m3["errors"] == m2["errors"]
+
+
+def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
+    """A session's next fit sums again only the chunks of samples of the
+    views repainted since its last fit; the others' sums come from its
+    memo, and the material is the same bits as a fit of the same paintings
+    in a session that has no memo."""
+    memo0 = metric(d, "glintd_fit_stream_chunks_total", {"from": "memo"})
+    s = make_session(d, range(S["nviews"]))
+    kind, m1 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    chunks = m1["precomputation"]["stream_chunks"]
+    assert chunks > 4 and m1["precomputation"]["stream_chunks_reused"] == 0, m1["precomputation"]
+    kind, m1b = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    assert m1b["precomputation"]["stream_chunks_reused"] == chunks
+    assert m1b["errors"] == m1["errors"]
+    with open(os.path.join(S["paint2_dir"], "view_05.exr"), "rb") as f:
+        body = f.read()
+    d.put("/api/v1/sessions/%s/views/5/painting" % s["id"],
+          headers={"Content-Type": "image/x-exr", "X-Glint-Token": s["paint_token"]},
+          data=body, status=200, schema="PaintingVersion.json")
+    kind, m2 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    reused = m2["precomputation"]["stream_chunks_reused"]
+    assert 0 < reused < chunks, m2["precomputation"]
+    assert m2["errors"] != m1["errors"]
+    # the same paintings, fitted from nothing
+    s2 = make_session(d, range(S["nviews"]))
+    d.put("/api/v1/sessions/%s/views/5/painting" % s2["id"],
+          headers={"Content-Type": "image/x-exr", "X-Glint-Token": s2["paint_token"]},
+          data=body, status=200, schema="PaintingVersion.json")
+    kind, m3 = fit(d, {"res": 32}, token=s2["paint_token"], session=s2["id"], expect=201)
+    assert m3["precomputation"]["stream_chunks_reused"] == 0
+    assert m3["errors"] == m2["errors"], (m3["errors"], m2["errors"])
+    f2 = d.get("/api/v1/materials/%s/factors.exr" % m2["id"], headers=tok(s["view_token"]),
+               status=200)
+    f3 = d.get("/api/v1/materials/%s/factors.exr" % m3["id"], headers=tok(s2["view_token"]),
+               status=200)
+    # the same file but for the time it was written (the header's DateTime)
+    stamp = re.compile(rb"\d{4}:\d\d:\d\d \d\d:\d\d:\d\d")
+    assert stamp.sub(b"", f2.content) == stamp.sub(b"", f3.content)
+    # another point of the same session keeps its own memo
+    kind, m4 = fit(d, {"res": 16}, token=s["paint_token"], session=s["id"])
+    if kind == "job":
+        m4 = get_material(d, wait_job(d, m4["id"], s["paint_token"])["material_id"],
+                          s["paint_token"])
+    assert m4["precomputation"]["stream_chunks_reused"] == 0
+    kind, m5 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    assert m5["precomputation"]["stream_chunks_reused"] == chunks
+    assert m5["errors"] == m2["errors"]
+    assert metric(d, "glintd_fit_stream_chunks_total", {"from": "memo"}) >= \
+        (memo0 or 0) + chunks + reused + chunks
 
 
 # ---- the disk layer: restart and corruption ---------------------------------------------

@@ -1,0 +1,90 @@
+/* fitsvc_memo.c: what a session's fits keep from one to the next
+ * (method_memo, prep_fit_reusing): a few memos, one per session and fit
+ * point, the least recently used making room.  A fit takes its memo out of
+ * the table for its run and puts it back after, so no two fits use one at
+ * once (a second fit of the same point meanwhile starts from an empty
+ * one, and the later of the two to finish is kept).  Memory: an hf3 memo
+ * is 9 res doubles per chunk of samples (at most 32 chunks: 147 KB at res
+ * 64), held for at most FITSVC_MEMOS points. */
+#include <stdio.h>
+#include <string.h>
+
+#include "fitsvc_int.h"
+
+static int slot_of(fitsvc *f, const char *session, const char *key)
+{
+    for (int i = 0; i < FITSVC_MEMOS; i++)
+        if (f->memos[i].used && strcmp(f->memos[i].session, session) == 0 &&
+            strcmp(f->memos[i].key, key) == 0)
+            return i;
+    return -1;
+}
+
+void fitsvc_memo_take(fitsvc *f, const char *session, const char *key, method_memo *mm)
+{
+    int i;
+    memset(mm, 0, sizeof *mm);
+    pthread_mutex_lock(&f->lock);
+    if ((i = slot_of(f, session, key)) >= 0) {
+        *mm = f->memos[i].mm;
+        memset(&f->memos[i], 0, sizeof f->memos[i]);
+    }
+    pthread_mutex_unlock(&f->lock);
+}
+
+void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_memo *mm,
+                     int reused, int chunks)
+{
+    method_memo old;
+    int i, lru = 0;
+
+    memset(&old, 0, sizeof old);
+    if (strlen(session) >= sizeof f->memos[0].session || strlen(key) >= sizeof f->memos[0].key) {
+        method_memo_clear(mm);
+        return;
+    }
+    pthread_mutex_lock(&f->lock);
+    f->memo_chunks += (unsigned long long)(chunks > 0 ? chunks : 0);
+    f->memo_reused += (unsigned long long)(reused > 0 ? reused : 0);
+    if ((i = slot_of(f, session, key)) < 0) {
+        for (i = 0; i < FITSVC_MEMOS && f->memos[i].used; i++)
+            if (f->memos[i].used < f->memos[lru].used)
+                lru = i;
+        if (i == FITSVC_MEMOS)
+            i = lru;
+    }
+    old = f->memos[i].mm; /* a memo put back meanwhile, or the evicted one */
+    snprintf(f->memos[i].session, sizeof f->memos[i].session, "%s", session);
+    snprintf(f->memos[i].key, sizeof f->memos[i].key, "%s", key);
+    f->memos[i].mm = *mm;
+    f->memos[i].used = ++f->memo_clock;
+    pthread_mutex_unlock(&f->lock);
+    memset(mm, 0, sizeof *mm);
+    method_memo_clear(&old);
+}
+
+void fitsvc_memo_close(fitsvc *f)
+{
+    for (int i = 0; i < FITSVC_MEMOS; i++)
+        method_memo_clear(&f->memos[i].mm);
+    memset(f->memos, 0, sizeof f->memos);
+}
+
+void fitsvc_memo_metrics(fitsvc *f, FILE *o)
+{
+    unsigned long long chunks, reused;
+    int held = 0;
+    pthread_mutex_lock(&f->lock);
+    chunks = f->memo_chunks;
+    reused = f->memo_reused;
+    for (int i = 0; i < FITSVC_MEMOS; i++)
+        held += f->memos[i].used != 0;
+    pthread_mutex_unlock(&f->lock);
+    fprintf(o, "# HELP glintd_fit_stream_chunks_total Chunks of samples of the fits' passes, "
+               "by whether a session's earlier fit served their sums (views not repainted) or "
+               "they were summed.\n# TYPE glintd_fit_stream_chunks_total counter\n");
+    fprintf(o, "glintd_fit_stream_chunks_total{from=\"memo\"} %llu\n", reused);
+    fprintf(o, "glintd_fit_stream_chunks_total{from=\"summed\"} %llu\n", chunks - reused);
+    fprintf(o, "# HELP glintd_fit_memos Sessions' fit memos held.\n"
+               "# TYPE glintd_fit_memos gauge\nglintd_fit_memos %d\n", held);
+}
