@@ -133,7 +133,9 @@ typedef struct method_fit_in {
     double pattern_seconds;       /* seconds it spent on the pattern (0 when in memory) */
     /* Optional (NULL: none): the caller's memo, and per view (s->nviews) a
      * tag naming its painting: equal tags in two fits promise equal
-     * paintings of that view (a method may then reuse what it kept). */
+     * paintings of that view, so equal rgb over its samples (a method may
+     * then reuse what it kept).  A method that fits another on samples or
+     * values of its own making (maps, auto) passes it neither. */
     method_memo *memo;
     const uint64_t *view_tags;
 } method_fit_in;

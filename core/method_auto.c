@@ -495,6 +495,8 @@ static int fit_on(const method_fit_in *in, const method *m, const void *mp, cons
     ci.params = mp;
     ci.s = s;
     ci.rgb = rgb;
+    ci.memo = NULL; /* samples and values of auto's own choosing */
+    ci.view_tags = NULL;
     ci.levels = lv;
     ci.keys = ky;
     ci.how = how;

@@ -74,6 +74,8 @@ static int src_fit(void *cls, const float *rgb, material *out, glint_err *err)
     const src_ctx *x = cls;
     method_fit_in in = *x->in;
     in.rgb = rgb;
+    in.memo = NULL; /* values of the maps' own, not the tagged paintings */
+    in.view_tags = NULL;
     return x->product->fit(&in, out, err);
 }
 
