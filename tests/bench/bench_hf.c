@@ -360,6 +360,7 @@ static void warm(FILE *md, int quick)
     brdf b;
     setup s;
     double bw1 = triad_bandwidth(), bwp = triad_bandwidth_pool();
+    int wide;
 
     brdf_parse("ct0.2", &b, NULL);
     setup_make(&s, 128, 128, SCENE_VIEWS_ICO12, 0, &b, 0.0);
@@ -368,6 +369,10 @@ static void warm(FILE *md, int quick)
            "%.1f GB/s, %d threads %.1f GB/s\n",
            par_threads(), vmath_impl(), bw1 / 1e9, par_threads(), bwp / 1e9);
     log_rates();
+    vmath_limit("avx512");
+    wide = strstr(vmath_impl(), "avx512") != NULL;
+    vmath_limit(NULL);
+    wide = wide && strstr(vmath_impl(), "avx512") != NULL; /* not capped by GLINT_VMATH */
     printf("%-4s %-6s | %-9s %-9s %-9s %-9s | %-9s %-9s %-9s | %-8s %-8s %-7s | %-7s %-8s\n",
            "res", "N", "stream", "M t", "factor.", "f32", "gather", "diag", "fit_run", "MB read",
            "bound", "ratio", "diag N", "RMS");
@@ -381,8 +386,8 @@ static void warm(FILE *md, int quick)
                 "MB read | bound (ms) | factorization / bound | diagnostic samples | RMS painted |\n"
                 "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
-        double st[201], mt[201], fa[201], f32[201], dg[201], run[201], ga[201], bytes, bound,
-            rms = 0.0;
+        double st[201], mt[201], fa[201], f32[201], dg[201], run[201], ga[201], fa2[201],
+            bytes, bound, rms = 0.0;
         float *grgb;
         long dn = 0;
         fit_params p;
@@ -420,6 +425,14 @@ static void warm(FILE *md, int quick)
                 die("fit f32", &e);
             f32[k] = secs(&m, "factorization");
             material_free(&m);
+            if (wide) { /* the same fit with the AVX2 loops, interleaved */
+                vmath_limit("avx2");
+                if (fit_run(&fp, s.paint, NULL, &m, &e))
+                    die("fit avx2", &e);
+                fa2[k] = secs(&m, "factorization");
+                material_free(&m);
+                vmath_limit(NULL);
+            }
         }
         /* the bytes the factorization reads: RGB (float), texel indices
          * (int32) and weights (double) per sample and factor, the operator */
@@ -437,6 +450,10 @@ static void warm(FILE *md, int quick)
                         "%.2f | %ld | %.4f |\n",
                     res[r], fp.s.n, 1e3 * ms, 1e3 * mm, 1e3 * mf, 1e3 * m32, 1e3 * mg, 1e3 * md_,
                     1e3 * mr, bytes / 1e6, 1e3 * bound, mf / bound, dn, rms);
+            if (wide)
+                printf("     (the same fits with the AVX2 loops, interleaved with them: "
+                       "factorization %.3f ms)\n",
+                       1e3 * median(fa2, reps));
         }
         free(grgb);
         fit_prep_free(&fp);
