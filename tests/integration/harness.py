@@ -20,6 +20,13 @@ import traceback
 import jsonschema
 import requests
 
+# Every temporary directory of a run (the Daemons', and those the tests make
+# through tempfile) lies under one, removed with the Daemons' when every test
+# passed (remove_dirs).
+RUN_TMP = tempfile.mkdtemp(prefix="glint-itest-")
+os.chmod(RUN_TMP, 0o755)  # a test runs glintd as another user from a directory in it
+tempfile.tempdir = RUN_TMP
+
 SRC = os.environ.get("GLINT_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
 GLINTD = os.environ.get("GLINTD", os.path.join(SRC, "build", "server", "glintd"))
 SCHEMA_DIR = os.path.join(SRC, "proto", "schemas")
@@ -241,3 +248,7 @@ def remove_dirs(failed, more=()):
         if not failed and x.proc and x.proc.poll() is None:
             x.proc.kill()
             x.proc.wait()
+    if failed:
+        print("kept: %s" % RUN_TMP)
+    else:
+        shutil.rmtree(RUN_TMP, ignore_errors=True)
