@@ -2,9 +2,11 @@
  * files (material.h).  Method-specific work goes through material_ops. */
 #include "material.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "brdfx.h"
 #include "fsio.h"
@@ -245,7 +247,9 @@ json_t *material_to_json(const material *m)
     return m->method ? manifest_of(m, NULL) : NULL;
 }
 
-int material_save(const material *m, const char *dir, glint_err *err)
+/* material_save, material_save_deferred: `defer` leaves the method's
+ * derived files unwritten. */
+static int save(const material *m, const char *dir, int defer, glint_err *err)
 {
     char path[4096];
     json_t *root = NULL;
@@ -259,9 +263,11 @@ int material_save(const material *m, const char *dir, glint_err *err)
         return rc;
     if (!(root = manifest_of(m, err)))
         return err && err->code ? err->code : GLINT_ENOMEM;
+    defer = defer && m->method->mat->derived_files;
     /* the files are made durable together, at the end (fsio.h) */
     fsio_group_begin(&grp);
-    if (m->method->mat->save_files && (rc = m->method->mat->save_files(m->data, dir, root, err)))
+    if (m->method->mat->save_files &&
+        (rc = m->method->mat->save_files(m->data, defer ? NULL : dir, root, err)))
         goto done;
     text = json_dumps(root, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
     if (!text) {
@@ -283,6 +289,81 @@ done:
     }
     free(text);
     json_decref(root);
+    return rc;
+}
+
+int material_save(const material *m, const char *dir, glint_err *err)
+{
+    return save(m, dir, 0, err);
+}
+
+int material_save_deferred(const material *m, const char *dir, glint_err *err)
+{
+    return save(m, dir, 1, err);
+}
+
+/* 1 when dir/name is there (a regular file), 0 when it is not, minus an
+ * errno value when it cannot be told or is something else. */
+static int file_there(const char *dir, const char *name)
+{
+    char path[4096];
+    struct stat st;
+    if (fsio_join(path, sizeof path, dir, name, NULL))
+        return -ENAMETOOLONG;
+    if (stat(path, &st) == 0)
+        return S_ISREG(st.st_mode) ? 1 : -EISDIR;
+    return errno == ENOENT ? 0 : -errno;
+}
+
+int material_files_ensure(const char *dir, int *written, glint_err *err)
+{
+    material m;
+    json_t *root = NULL;
+    fsio_group grp;
+    int rc, missing = 0;
+
+    if (written)
+        *written = 0;
+    if ((rc = material_load(dir, &m, err)))
+        return rc;
+    if (!m.method->mat->derived_files || !m.method->mat->save_files) {
+        material_free(&m);
+        return 0;
+    }
+    for (const char *const *f = m.method->mat->derived_files; *f; f++) {
+        int there = file_there(dir, *f);
+        if (there < 0) {
+            material_free(&m);
+            return glint_err_set(err, GLINT_EIO, "%s/%s: %s", dir, *f,
+                                 there == -EISDIR ? "not a regular file" : strerror(-there));
+        }
+        missing += !there;
+    }
+    if (!missing) {
+        material_free(&m);
+        return 0;
+    }
+    /* written again in full: the manifest made here is thrown away (the one
+     * on disk already holds what save_files adds) */
+    if (!(root = manifest_of(&m, err))) {
+        material_free(&m);
+        return err && err->code ? err->code : GLINT_ENOMEM;
+    }
+    fsio_group_begin(&grp);
+    rc = m.method->mat->save_files(m.data, dir, root, err);
+    {
+        glint_err gerr;
+        int grc = fsio_group_end(&grp, &gerr);
+        if (!rc && grc) {
+            rc = grc;
+            if (err)
+                *err = gerr;
+        }
+    }
+    if (!rc && written)
+        *written = missing;
+    json_decref(root);
+    material_free(&m);
     return rc;
 }
 

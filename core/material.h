@@ -11,7 +11,9 @@
  *                  "method": name, <the method's members>, "info": {...}}
  *                  (for hf3: res, texels, model, mapping, a_used, the
  *                  log-factors at full precision, gauge, png_scale)
- *   other files    written by the method (hf3: factors.exr, factors.png).
+ *   other files    written by the method (hf3: factors.exr, factors.png;
+ *                  material_save_deferred leaves these to
+ *                  material_files_ensure).
  * material_load() finds the method by name and validates everything.
  *
  * Ownership: a material owns its data and info (a jansson reference,
@@ -108,6 +110,21 @@ json_t *material_to_json(const material *m);
 /* Write the directory described above (created if missing; every file
  * written atomically, material.json last). */
 int material_save(const material *m, const char *dir, glint_err *err);
+
+/* As material_save, but the method's derived files (material_ops.
+ * derived_files: for hf3 factors.exr and factors.png) are left unwritten:
+ * only material.json, durable when this returns.  For a caller that answers
+ * before anyone reads those files (glintd's fit); material_files_ensure
+ * writes them on first use.  Methods without derived files: material_save. */
+int material_save_deferred(const material *m, const char *dir, glint_err *err);
+
+/* Write the material's derived files when any of them is not in dir: the
+ * same files material_save writes, from the manifest alone, each renamed
+ * into place and durable when this returns.  When all are there nothing is
+ * written.  Concurrent callers are safe: a reader sees a whole file, old or
+ * new, with the same content.  OUT: *written (may be NULL), how many were
+ * missing. */
+int material_files_ensure(const char *dir, int *written, glint_err *err);
 
 /* Read a material from its manifest (a material.json path or its
  * directory).  Validates format, version, method and the method's data. */

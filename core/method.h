@@ -189,8 +189,14 @@ typedef struct material_ops {
     int (*to_json)(const void *data, json_t *manifest, glint_err *err);
     /* Read them back (validated; `file` names the source in messages). */
     int (*from_json)(const json_t *manifest, const char *file, void **data, glint_err *err);
-    /* Files beside material.json (may add members to `manifest`). */
+    /* Files beside material.json (may add members to `manifest`).  With
+     * derived_files set, dir may be NULL: add the manifest's members only. */
     int (*save_files)(const void *data, const char *dir, json_t *manifest, glint_err *err);
+    /* Optional: the names of the files save_files writes, NULL-terminated,
+     * when each is a pure function of material.json (what from_json reads
+     * back).  material_save_deferred then leaves them to be written on first
+     * use (material_files_ensure).  NULL: written with the manifest. */
+    const char *const *derived_files;
     int (*gpu)(const void *data, material_gpu *out, glint_err *err);
     /* A few members for the API's material object (e.g. {"res": 64}). */
     json_t *(*summary)(const void *data);

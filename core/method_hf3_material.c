@@ -169,7 +169,8 @@ fail:
 }
 
 /* factors.exr (linear factor values) and factors.png (each row over its
- * maximum, the scales in the manifest as png_scale). */
+ * maximum, the scales in the manifest as png_scale); dir NULL: png_scale
+ * only.  Both files follow from the log-factors in the manifest. */
 static int hf3_save_files(const void *data, const char *dir, json_t *root, glint_err *err)
 {
     const hf_factors *f = data;
@@ -199,7 +200,7 @@ static int hf3_save_files(const void *data, const char *dir, json_t *root, glint
         json_object_set_new(scales, factor_names[j], sc);
     }
     json_object_set(root, "png_scale", scales);
-    rc = img_write_pair(dir, "factors", &lin, &png, err);
+    rc = dir ? img_write_pair(dir, "factors", &lin, &png, err) : 0;
 done:
     json_decref(scales);
     img_free(&lin);
@@ -321,12 +322,15 @@ static int hf3_gpu(const void *data, material_gpu *g, glint_err *err)
     return 0;
 }
 
+static const char *const hf3_derived_files[] = {"factors.exr", "factors.png", NULL};
+
 const material_ops hf3_material_ops = {
     .eval = hf3_eval,
     .free = hf3_free,
     .to_json = hf3_to_json,
     .from_json = hf3_from_json,
     .save_files = hf3_save_files,
+    .derived_files = hf3_derived_files,
     .gpu = hf3_gpu,
     .summary = hf3_summary,
     .brdf_explorer = hf3_brdf_explorer,

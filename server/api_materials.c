@@ -15,11 +15,16 @@
  *
  * A material's files are blobs "materials/<id>/": material.json and what
  * its method writes (material_save), written before its row is committed.
+ * A fit writes material.json alone (material_save_deferred); the files its
+ * method derives from it (hf3: factors.exr, factors.png) are written on
+ * first read (files_ensure), durable before they are answered.
  * The shader export (shader/, render_export_shader) is a pure function of the
  * material and is written on first use (GET shader, shader files,
  * package).  Reading needs the token of the material's session. */
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
+#include <sys/stat.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -64,6 +69,39 @@ static http_resp blob_resp(app *a, const char *mid, const char *file, const char
     return http_bytes_owned(200, ctype, data, len);
 }
 
+static pthread_mutex_t files_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* Write the material's derived files if they are not there yet: a fit
+ * saves material.json alone (material_save_deferred), and its method's
+ * other files follow from it.  One writer at a time, so two first reads
+ * do not both encode them. */
+static int files_ensure(app *a, const char *mid, glint_err *e)
+{
+    char name[128], dir[4096];
+    int rc;
+    snprintf(name, sizeof name, "materials/%s", mid);
+    if ((rc = store_blob_path(a->store, name, dir, sizeof dir, e)))
+        return rc;
+    pthread_mutex_lock(&files_lock);
+    rc = material_files_ensure(dir, NULL, e);
+    pthread_mutex_unlock(&files_lock);
+    if (rc == GLINT_EFORMAT)
+        return glint_err_set(e, GLINT_EINTERNAL, "material %s: %.400s", mid, e->msg);
+    return rc;
+}
+
+/* Whether the blob "materials/<mid>/<file>" is there (an error counts as
+ * there: reading it reports the error). */
+static int blob_there(app *a, const char *mid, const char *file)
+{
+    char name[256], path[4096];
+    struct stat st;
+    snprintf(name, sizeof name, "materials/%s/%s", mid, file);
+    if (store_blob_path(a->store, name, path, sizeof path, NULL))
+        return 1;
+    return stat(path, &st) == 0 || errno != ENOENT;
+}
+
 static http_resp material_file(http_req *req, const char *file, const char *ctype)
 {
     memo_doc doc;
@@ -71,6 +109,9 @@ static http_resp material_file(http_req *req, const char *file, const char *ctyp
     if (api_material(req, req->param[0], &doc, &e))
         return api_error(&e);
     free(doc.text);
+    /* not written yet (or not a file of this method: still 404 after) */
+    if (!blob_there(req->app, req->param[0], file) && files_ensure(req->app, req->param[0], &e))
+        return api_error(&e);
     return blob_resp(req->app, req->param[0], file, ctype);
 }
 
@@ -344,7 +385,8 @@ static http_resp package_get(http_req *req)
     if (api_material(req, mid, &doc, &e))
         return api_error(&e);
     free(doc.text);
-    if (shader_ensure(a, mid, &e) || tar_dir(a, &t, mid, "", now, &e) ||
+    if (files_ensure(a, mid, &e) || shader_ensure(a, mid, &e) ||
+        tar_dir(a, &t, mid, "", now, &e) ||
         tar_dir(a, &t, mid, "shader", now, &e)) {
         glint_buf_free(&t);
         return api_error(&e);

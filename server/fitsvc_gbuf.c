@@ -79,7 +79,7 @@ static int gb_execute(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
         goto done;
     snprintf(name, sizeof name, "materials/%s", mid);
     if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||
-        (rc = material_save(&m, dir, err)))
+        (rc = material_save_deferred(&m, dir, err)))
         goto done;
     t0 = srv_timing_step(t->tm, "save", t0);
     glint_time_iso(time(NULL), created);

@@ -1,5 +1,6 @@
 /* Tests of fitted materials: files, evaluation, CPU shading (core/material,
  * core/fit). */
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -78,6 +79,88 @@ TEST(save_load_round_trip)
     ASSERT_NEAR(ex.px[(1 * hf3_factors(&M)->res + 5) * 3 + 2], exp(hf3_factors(&M)->logf[(hf3_factors(&M)->res + 5) * 3 + 2]), 1e-5);
     img_free(&ex);
     material_free(&b);
+}
+
+/* The bytes of dir/name (OUT: *len), NULL when unreadable. */
+static char *slurp(const char *d, const char *name, size_t *len)
+{
+    char path[512], *data = NULL;
+    snprintf(path, sizeof path, "%s/%s", d, name);
+    if (fsio_read_all(path, 1u << 26, &data, len, NULL))
+        return NULL;
+    return data;
+}
+
+static ino_t inode_of(const char *d, const char *name)
+{
+    char path[512];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%s", d, name);
+    return stat(path, &st) == 0 ? st.st_ino : 0;
+}
+
+/* A deferred save writes material.json alone, the same bytes as a full
+ * save's; material_files_ensure then writes the files a full save writes
+ * (the same PNG bytes, the same EXR pixels), only those that are missing. */
+TEST(deferred_save_writes_the_files_on_first_use)
+{
+    char full[300], lazy[300], path[400], *a, *b;
+    size_t la, lb;
+    int written = -1;
+    img x, y;
+    glint_err e;
+    ASSERT_OK(setup());
+    snprintf(full, sizeof full, "%s/full", dir);
+    snprintf(lazy, sizeof lazy, "%s/lazy", dir);
+    ASSERT_OK(material_save(&M, full, &e));
+    ASSERT_OK(material_save_deferred(&M, lazy, &e));
+    ASSERT(inode_of(lazy, "material.json") != 0);
+    ASSERT(inode_of(lazy, "factors.exr") == 0);
+    ASSERT(inode_of(lazy, "factors.png") == 0);
+    ASSERT((a = slurp(full, "material.json", &la)) && (b = slurp(lazy, "material.json", &lb)));
+    ASSERT(la == lb && memcmp(a, b, la) == 0);
+    free(a);
+    free(b);
+
+    ASSERT_OK(material_files_ensure(lazy, &written, &e));
+    ASSERT_EQ(written, 2);
+    ASSERT((a = slurp(full, "factors.png", &la)) && (b = slurp(lazy, "factors.png", &lb)));
+    ASSERT(la == lb && memcmp(a, b, la) == 0);
+    free(a);
+    free(b);
+    snprintf(path, sizeof path, "%s/factors.exr", full);
+    ASSERT_OK(img_read(path, &x, &e));
+    snprintf(path, sizeof path, "%s/factors.exr", lazy);
+    ASSERT_OK(img_read(path, &y, &e));
+    ASSERT(x.width == y.width && x.height == y.height && x.channels == y.channels);
+    ASSERT(memcmp(x.px, y.px, (size_t)x.width * x.height * x.channels * sizeof *x.px) == 0);
+    img_free(&x);
+    img_free(&y);
+    /* the manifest is not rewritten */
+    ASSERT((b = slurp(lazy, "material.json", &lb)) && (a = slurp(full, "material.json", &la)));
+    ASSERT(la == lb && memcmp(a, b, la) == 0);
+    free(a);
+    free(b);
+
+    /* when all are there nothing is written; when one is missing it is */
+    ino_t exr = inode_of(lazy, "factors.exr"), png = inode_of(lazy, "factors.png");
+    ASSERT_OK(material_files_ensure(lazy, &written, &e));
+    ASSERT_EQ(written, 0);
+    ASSERT(inode_of(lazy, "factors.exr") == exr && inode_of(lazy, "factors.png") == png);
+    snprintf(path, sizeof path, "%s/factors.png", lazy);
+    ASSERT(unlink(path) == 0);
+    ASSERT_OK(material_files_ensure(lazy, &written, &e));
+    ASSERT_EQ(written, 1);
+    ASSERT(inode_of(lazy, "factors.png") != 0);
+
+    /* something else in a file's place, and no manifest: errors */
+    ASSERT(unlink(path) == 0 && mkdir(path, 0755) == 0);
+    ASSERT_EQ(material_files_ensure(lazy, &written, &e), GLINT_EIO);
+    ASSERT(strstr(e.msg, "factors.png") != NULL);
+    ASSERT(rmdir(path) == 0);
+    snprintf(path, sizeof path, "%s/material.json", lazy);
+    ASSERT(unlink(path) == 0);
+    ASSERT_EQ(material_files_ensure(lazy, &written, &e), GLINT_ENOTFOUND);
 }
 
 static int write_text(const char *name, const char *text)
@@ -177,6 +260,7 @@ TEST(cleanup)
 
 TEST_LIST {
     TEST_ENTRY(save_load_round_trip),
+    TEST_ENTRY(deferred_save_writes_the_files_on_first_use),
     TEST_ENTRY(corrupt_manifests_are_rejected),
     TEST_ENTRY(shading_matches_evaluation),
     TEST_ENTRY(render_reproduces_the_fit_on_its_own_views),
