@@ -34,6 +34,7 @@
 #include "ids.h"
 #include "img.h"
 #include "memo.h"
+#include "upload.h"
 #include "scenes.h"
 #include "store.h"
 #include "stroke.h"
@@ -269,132 +270,6 @@ static http_resp session_get(http_req *req)
 
 /* ---- paintings ---------------------------------------------------------------------- */
 
-/* The body as a painting of w x h: a PNG, JPEG or OpenEXR image.  OUT:
- * *im (RGB, finite). */
-/* The image formats a painting may come in: what their bytes begin with and
- * the media types that name them. */
-static const struct {
-    const char *name, *magic, *types[3];
-    size_t magic_len;
-} painting_formats[] = {
-    {"PNG", "\x89PNG\r\n\x1a\n", {"image/png", NULL}, 8},
-    {"JPEG", "\xff\xd8\xff", {"image/jpeg", "image/jpg", NULL}, 3},
-    {"OpenEXR", "\x76\x2f\x31\x01", {"image/x-exr", "image/exr", NULL}, 4},
-};
-enum { PAINTING_NFORMATS = sizeof painting_formats / sizeof painting_formats[0] };
-
-/* The body's format by its first bytes (-1: none of them). */
-static int painting_sniff(const void *body, size_t len)
-{
-    for (int i = 0; i < PAINTING_NFORMATS; i++)
-        if (len >= painting_formats[i].magic_len &&
-            memcmp(body, painting_formats[i].magic, painting_formats[i].magic_len) == 0)
-            return i;
-    return -1;
-}
-
-/* Content-Type against the body: none or application/octet-stream leaves
- * the bytes to tell; an image type must name the format the bytes are in;
- * anything else is refused (415).  Only PNG, JPEG and OpenEXR bytes reach the
- * image decoder. */
-static int painting_check_type(http_req *req, int w, int h, glint_err *e)
-{
-    const char *ct = http_header_in(req, "Content-Type");
-    int f = painting_sniff(req->body, req->body_len);
-    char type[64];
-    size_t n = 0;
-
-    if (ct) {
-        while (*ct == ' ')
-            ct++;
-        while (ct[n] && ct[n] != ';' && ct[n] != ' ' && n + 1 < sizeof type) {
-            type[n] = (char)tolower((unsigned char)ct[n]);
-            n++;
-        }
-        type[n] = 0;
-    }
-    if (ct && n && strcmp(type, "application/octet-stream")) {
-        int named = -1;
-        for (int i = 0; i < PAINTING_NFORMATS && named < 0; i++)
-            for (int j = 0; painting_formats[i].types[j]; j++)
-                if (strcmp(type, painting_formats[i].types[j]) == 0)
-                    named = i;
-        if (named < 0)
-            return api_reject(e, GLINT_EUNSUPPORTED, "unsupported-media-type",
-                              "Content-Type \"%.64s\" is not a painting's: send image/png, "
-                              "image/jpeg, image/x-exr or application/octet-stream", ct);
-        if (f != named)
-            return api_reject(e, GLINT_EUNSUPPORTED, "unsupported-media-type",
-                              "Content-Type says %s but the body is %s", type,
-                              f < 0 ? "none of PNG, JPEG or OpenEXR" : painting_formats[f].name);
-    }
-    if (f < 0)
-        return api_reject(e, GLINT_EINVAL, "invalid-image",
-                          "the body is not a PNG, JPEG or OpenEXR image (its first bytes say "
-                          "none of them); this view expects %dx%d", w, h);
-    return 0;
-}
-
-/* Decode and check an uploaded painting: the view's image size w x h (the
- * scene's paint_scale ps times its raster), or the raster's (accepted at
- * any ps: the fit reads both, img_to_raster). */
-static int painting_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err *e)
-{
-    app *a = req->app;
-    double t0;
-    int rc;
-
-    memset(im, 0, sizeof *im);
-    if (req->body_too_large)
-        return api_reject(e, GLINT_ETOOBIG, "body-too-large",
-                          "the painting exceeds the request body limit of %zu bytes "
-                          "(max_body, glintd --max-body-mb %zu)",
-                          a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
-    if (req->body_len == 0)
-        return api_reject(e, GLINT_EINVAL, "empty-body",
-                          "the body must be the painting: PNG, JPEG or OpenEXR bytes, %dx%d", w,
-                          h);
-    if ((rc = painting_check_type(req, w, h, e)))
-        return rc;
-    t0 = glint_now();
-    rc = img_read_mem(req->body, req->body_len, im, e);
-    t0 = srv_timing_step(&req->timing, "decode", t0);
-    if (rc == GLINT_ENONFINITE)
-        return api_reject(e, rc, "non-finite", "the painting has non-finite pixels: %.400s",
-                          e->msg);
-    if (rc == GLINT_ENOMEM)
-        return glint_err_prefix(e, "decoding the painting");
-    if (rc)
-        return api_reject(e, GLINT_EINVAL, "invalid-image",
-                          "the body is not a readable PNG, JPEG or OpenEXR image: %.400s",
-                          e->msg);
-    if (im->width > a->cfg.lim.max_image_dim || im->height > a->cfg.lim.max_image_dim)
-        rc = api_reject(e, GLINT_ETOOBIG, "image-too-large",
-                        "the painting is %dx%d, beyond the limit of %d pixels a side "
-                        "(max_image_dim, glintd --max-image-dim); this view expects %dx%d",
-                        im->width, im->height, a->cfg.lim.max_image_dim, w, h);
-    else if ((im->width != w || im->height != h) &&
-             (im->width != w / ps || im->height != h / ps))
-        rc = ps > 1 ? api_reject(e, GLINT_EINVAL, "wrong-size",
-                                 "the painting is %dx%d; view %d of this scene expects %dx%d "
-                                 "(the painting's size: %d times the raster) or %dx%d (the "
-                                 "raster's)",
-                                 im->width, im->height, k, w, h, ps, w / ps, h / ps)
-                    : api_reject(e, GLINT_EINVAL, "wrong-size",
-                                 "the painting is %dx%d; view %d of this scene expects exactly "
-                                 "%dx%d (the scene's raster size)",
-                                 im->width, im->height, k, w, h);
-    else if ((rc = img_to_rgb(im, e)) || (rc = img_check_finite(im, e)))
-        rc = rc == GLINT_ENONFINITE ? api_reject(e, rc, "non-finite",
-                                                 "the painting has non-finite pixels: %.400s",
-                                                 e->msg)
-                                    : rc;
-    srv_timing_step(&req->timing, "validate", t0);
-    if (rc)
-        img_free(im);
-    return rc;
-}
-
 /* Conditional replace: If-Match names the painting version the client built
  * its image from ("0" for a view never painted).  Called under the session
  * lock, so no stroke can slip in between. */
@@ -440,22 +315,39 @@ static http_resp painting_put(http_req *req)
     img im = {0};
     int64_t version = 0, seq = 0, base = -1;
     glint_err e;
+    upload_blob bw;
     double t0 = glint_now();
-    int k, w, h, ps, rc;
+    int k, w, h, ps, rc, wrc;
 
     if ((rc = api_session(req, req->param[0], 1, &sdoc, &e)) ||
         (rc = session_view(req, sdoc, &scene_doc, &k, &w, &h, &ps, &e)))
         goto done;
     srv_timing_step(&req->timing, "session", t0);
-    if ((rc = painting_decode(req, k, w, h, ps, &im, &e)))
+    if ((rc = upload_precheck(req, w, h, &e)))
         goto done;
-    /* the upload is stored as it came: it was decoded and checked above,
-     * and decodes to the same pixels whenever it is read */
+    /* the upload is stored as it came: it is decoded and checked while its
+     * blob is written, committed only when it passed, and decodes to the
+     * same pixels whenever it is read */
+    upload_blob_start(&bw, a->store, req->param[0], k, req->body, req->body_len);
+    rc = upload_decode(req, k, w, h, ps, &im, &e);
     t0 = glint_now();
+    wrc = upload_blob_join(&bw);
+    t0 = srv_timing_step(&req->timing, "write", t0);
+    if (rc || wrc) {
+        if (!wrc) /* a blob no row will name */
+            store_blob_delete(a->store, bw.name, NULL);
+        else if (!rc) {
+            e = bw.err;
+            rc = wrc;
+            glint_err_prefix(&e, "storing the painting");
+        }
+        goto done;
+    }
     pthread_mutex_lock(session_lock(req->param[0]));
-    rc = if_match(req, k, &base, &e);
-    if (!rc && (rc = store_painting_put_at(a->store, req->param[0], k, base, req->body,
-                                           req->body_len, &version, &seq, &e))) {
+    if ((rc = if_match(req, k, &base, &e)))
+        store_blob_delete(a->store, bw.name, NULL);
+    else if ((rc = store_painting_commit_at(a->store, req->param[0], k, base, bw.name, &version,
+                                            &seq, &e))) {
         if (rc == GLINT_ECONFLICT) {
             char msg[GLINT_ERR_MSG_MAX];
             snprintf(msg, sizeof msg, "%.400s (If-Match): read it again", e.msg);

@@ -152,6 +152,16 @@ int store_painting_put(store *s, const char *session, int view, const void *exr,
 int store_painting_put_at(store *s, const char *session, int view, int64_t base,
                           const void *exr, size_t len, int64_t *version, int64_t *seq,
                           glint_err *err);
+/* store_painting_put_at in two steps, so that a caller may write the blob
+ * while it checks the image: blob_put writes the bytes durably as a new
+ * blob of the view (OUT: its name, namelen >= 160), which nothing names
+ * yet; commit_at then does what put_at does after writing, or removes the
+ * blob if the commit fails.  A blob never committed: the caller removes it
+ * (store_blob_delete), or store_sweep does after a crash. */
+int store_painting_blob_put(store *s, const char *session, int view, const void *data,
+                            size_t len, char *name, size_t namelen, glint_err *err);
+int store_painting_commit_at(store *s, const char *session, int view, int64_t base,
+                             const char *blob, int64_t *version, int64_t *seq, glint_err *err);
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err);
 /* Decoded paintings (store_pixels.c): a painting's pixels as decoded, kept

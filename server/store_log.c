@@ -167,6 +167,11 @@ static int store_painting_blob(store *s, const char *session, int view, const vo
     return rc ? rc : store_blob_put(s, name, exr, len, err);
 }
 
+static int store_log_commit_blob(store *s, const char *session, int view, int64_t base,
+                                 const char *blob, const char *type, char *const *texts,
+                                 size_t n, int64_t *first_seq, int64_t *version,
+                                 glint_err *err);
+
 /* The one commit of a view's new image: write its blob, then in one
  * transaction replace the painting row and append `n` events of `type`
  * (texts[i]; for type "painting", texts is NULL and the event is
@@ -180,14 +185,25 @@ static int store_log_commit(store *s, const char *session, int view, int64_t bas
                             size_t len, const char *type, char *const *texts, size_t n,
                             int64_t *first_seq, int64_t *version, glint_err *err)
 {
-    char blob[160], old[160], now[GLINT_TIME_LEN], data[64];
+    char blob[160];
+    int rc = store_painting_blob(s, session, view, exr, len, blob, sizeof blob, err);
+    return rc ? rc
+              : store_log_commit_blob(s, session, view, base, blob, type, texts, n, first_seq,
+                                      version, err);
+}
+
+/* store_log_commit's transaction and what follows it, the blob written. */
+static int store_log_commit_blob(store *s, const char *session, int view, int64_t base,
+                                 const char *blob, const char *type, char *const *texts,
+                                 size_t n, int64_t *first_seq, int64_t *version,
+                                 glint_err *err)
+{
+    char old[160], now[GLINT_TIME_LEN], data[64];
     db_stmt *st = NULL;
     int64_t last = 0, v = 0;
     int rc;
 
     old[0] = '\0';
-    if ((rc = store_painting_blob(s, session, view, exr, len, blob, sizeof blob, err)))
-        return rc;
     glint_time_iso_ms(now);
     pthread_mutex_lock(&s->lock);
     if ((rc = db_begin(s->db, err)) ||
@@ -240,6 +256,27 @@ int store_painting_put_at(store *s, const char *session, int view, int64_t base,
 {
     return store_log_commit(s, session, view, base, exr, len, "painting", NULL, 1, seq, version,
                             err);
+}
+
+int store_painting_blob_put(store *s, const char *session, int view, const void *data,
+                            size_t len, char *name, size_t namelen, glint_err *err)
+{
+    return store_painting_blob(s, session, view, data, len, name, namelen, err);
+}
+
+int store_painting_commit_at(store *s, const char *session, int view, int64_t base,
+                             const char *blob, int64_t *version, int64_t *seq, glint_err *err)
+{
+    char prefix[96];
+    size_t np;
+    /* only a blob of this session's view (store_painting_blob_put's names) */
+    snprintf(prefix, sizeof prefix, "sessions/%s/view%d-", session, view);
+    np = strlen(prefix);
+    if (!blob || strncmp(blob, prefix, np) != 0 || strchr(blob + np, '/'))
+        return glint_err_set(err, GLINT_EINVAL, "not a blob of view %d of session %.40s", view,
+                             session);
+    return store_log_commit_blob(s, session, view, base, blob, "painting", NULL, 1, seq, version,
+                                 err);
 }
 
 int store_painting_row(store *s, const char *session, int view, int64_t *version, char *blob,
