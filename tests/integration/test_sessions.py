@@ -491,6 +491,11 @@ def test_painting_conditional_replace(d):
     r = d.put(p, status=200, data=img, headers=dict(h, **{"If-Match": '"2"'}))
     assert r.json()["version"] == 3
     d.put(p, status=400, data=img, headers=dict(h, **{"If-Match": "abc"}))
+    d.put(p, status=412, data=img, headers=dict(h, **{"If-Match": '"1"'}))
+    # the refused uploads left no blob: the view's one image is all there is
+    top = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
+    names = [f for f in os.listdir(top) if not f.endswith(".px")]
+    assert len(names) == 1 and names[0].startswith("view1-"), names
 
 
 def test_painting_errors(d):
@@ -512,9 +517,12 @@ def test_painting_errors(d):
           data=png_encode(W, H, lambda x, y: (0, 0, 0)))
     d.put("%s/sessions/%s/views/-1/painting" % (API, sess["id"]), status=404, headers=h,
           data=png_encode(W, H, lambda x, y: (0, 0, 0)))
-    # none of this changed the view
+    # none of this changed the view, nor left a file: an upload's blob is
+    # written while it is decoded, and removed when the image is refused
     r = d.get(p, status=200, headers=h)
     assert r.headers["X-Glint-Painted"] == "0"
+    top = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
+    assert not os.path.isdir(top) or os.listdir(top) == [], os.listdir(top)
 
 
 def test_oversize_uploads(d):
@@ -649,7 +657,7 @@ def test_uploads_kept_as_sent_and_timed(d):
         body = png_encode(W, H, pix)
         up = r.put(p, status=200, data=body, headers=dict(h, **{"Content-Type": "image/png"}))
         st = server_timing(up)
-        assert {"session", "decode", "validate", "store", "notify"} <= set(st), st
+        assert {"session", "decode", "validate", "write", "store", "notify"} <= set(st), st
         assert all(v >= 0 for v in st.values()) and "encode" not in st, st
         stored = os.listdir(os.path.join(r.data_dir, "blobs", "sessions", sess["id"]))
         assert [f.rsplit(".", 1)[1] for f in stored] == ["png"], stored
