@@ -19,6 +19,7 @@ import {
 const CLI = path.join(process.env.GLINT_BUILD_DIR || path.join(path.dirname(new URL(import.meta.url).pathname), '..', '..', 'build'), 'core', 'glint');
 const MDIR = fs.mkdtempSync(path.join(os.tmpdir(), 'glint-measured-'));
 const haveCli = fs.existsSync(CLI);
+process.on('exit', () => fs.rmSync(MDIR, { recursive: true, force: true }));
 if (haveCli) execFileSync(CLI, ['export-merl', '--brdf', 'ct:kd=0.5/0.2/0.1,f0=0.3,rough=0.15', '-o', path.join(MDIR, 'red-ct.binary')], { stdio: 'ignore' });
 
 async function setRange(page, id, v) {
