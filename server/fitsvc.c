@@ -303,21 +303,60 @@ static int task_read_paintings(fit_task *t, glint_err *err)
 
 /* The fit's memory bound: the method's for the samples of the painted views
  * (counted when the scene was created), and the paintings.  OUT: t->bytes. */
+/* The samples of the task's views, from fitsvc's scene counts or the
+ * scene's document (then kept there).  Under no lock. */
+static int task_samples(fit_task *t, long *n, glint_err *err)
+{
+    fitsvc *f = t->f;
+    fit_scene_counts got, *slot = NULL;
+    json_t *doc = NULL, *views;
+    int rc, found = 0;
+
+    pthread_mutex_lock(&f->lock);
+    for (int i = 0; i < FITSVC_SCENES && !found; i++)
+        if (strcmp(f->counts[i].id, t->scene_id) == 0 && f->counts[i].nviews == t->nviews) {
+            f->counts[i].used = ++f->memo_clock;
+            memcpy(got.n, f->counts[i].n, (size_t)t->nviews * sizeof got.n[0]);
+            found = 1;
+        }
+    pthread_mutex_unlock(&f->lock);
+    if (!found) {
+        if (t->nviews > SCENE_MAX_VIEWS)
+            return glint_err_set(err, GLINT_EINTERNAL, "scene %s has %d views", t->scene_id,
+                                 t->nviews);
+        if ((rc = store_scene_get(f->st, t->scene_id, &doc, err)))
+            return rc;
+        views = json_object_get(doc, "views");
+        for (int v = 0; v < t->nviews; v++)
+            got.n[v] = (long)json_integer_value(
+                json_object_get(json_array_get(views, (size_t)v), "samples"));
+        json_decref(doc);
+        pthread_mutex_lock(&f->lock);
+        for (int i = 0; i < FITSVC_SCENES; i++) /* an empty slot, or the least recent */
+            if (!slot || !f->counts[i].id[0] ||
+                (slot->id[0] && f->counts[i].used < slot->used))
+                slot = &f->counts[i];
+        snprintf(slot->id, sizeof slot->id, "%s", t->scene_id);
+        slot->nviews = t->nviews;
+        slot->used = ++f->memo_clock;
+        memcpy(slot->n, got.n, (size_t)t->nviews * sizeof got.n[0]);
+        pthread_mutex_unlock(&f->lock);
+    }
+    *n = 0;
+    for (int v = 0; v < t->nviews; v++)
+        if (t->use[v])
+            *n += got.n[v];
+    return 0;
+}
+
 static int task_bytes(fit_task *t, glint_err *err)
 {
     const scene *sc = prep_scene_of(t->scene)->sc;
-    json_t *doc = NULL, *views;
     long n = 0;
     int rc;
 
-    if ((rc = store_scene_get(t->f->st, t->scene_id, &doc, err)))
+    if ((rc = task_samples(t, &n, err)))
         return rc;
-    views = json_object_get(doc, "views");
-    for (int v = 0; v < t->nviews; v++)
-        if (t->use[v])
-            n += (long)json_integer_value(json_object_get(json_array_get(views, (size_t)v),
-                                                          "samples"));
-    json_decref(doc);
     t->bytes = method_fit_bytes(t->m, t->params, n) +
                (size_t)t->nused * (size_t)sc->width * (size_t)sc->height * 3 * sizeof(float);
     return 0;

@@ -27,6 +27,17 @@ typedef struct fit_memo_slot {
     unsigned long long used;
 } fit_memo_slot;
 
+/* A scene's samples per view, for the fits' memory bound (task_bytes):
+ * scenes never change once made, so their documents need not be read and
+ * parsed again on every fit. */
+#define FITSVC_SCENES 8
+typedef struct fit_scene_counts {
+    char id[33];             /* "": empty slot */
+    int nviews;
+    unsigned long long used; /* fitsvc's memo_clock when last used */
+    long n[SCENE_MAX_VIEWS];
+} fit_scene_counts;
+
 struct fitsvc {
     cache *cache;
     jobs *jobs;
@@ -41,6 +52,7 @@ struct fitsvc {
     pix_writer *pix;                 /* fitsvc_pixels.c; NULL: none */
     fit_memo_slot memos[FITSVC_MEMOS]; /* under lock */
     unsigned long long memo_clock, memo_chunks, memo_reused;
+    fit_scene_counts counts[FITSVC_SCENES]; /* under lock */
 };
 
 /* Everything a fit needs, owned by the request or by its job. */
