@@ -203,7 +203,8 @@ static double expo(double x)
 }
 
 /* factors.exr (linear node values in the layout) and factors.png (each
- * channel over its maximum, png_scale). */
+ * channel over its maximum, png_scale); dir NULL: the manifest's members
+ * only.  Both follow from the log nodes in the manifest. */
 static int save_files(const void *data, const char *dir, json_t *root, glint_err *err)
 {
     const hf2d_factors *f = data;
@@ -226,12 +227,14 @@ static int save_files(const void *data, const char *dir, json_t *root, glint_err
                                   "first_row", row0[0], row0[1], row0[2], "nodes",
                                   "1D: node k at column k of its row; 2D: node (i, j) at "
                                   "column i, row first_row + j"));
-    rc = img_write_pair(dir, "factors", &lin, &png, err);
+    rc = dir ? img_write_pair(dir, "factors", &lin, &png, err) : 0;
 done:
     img_free(&lin);
     img_free(&png);
     return rc;
 }
+
+static const char *const derived_files[] = {"factors.exr", "factors.png", NULL};
 
 static json_t *summary(const void *data)
 {
@@ -291,6 +294,7 @@ const material_ops hf2d_material_ops = {
     .to_json = to_json,
     .from_json = from_json,
     .save_files = save_files,
+    .derived_files = derived_files,
     .gpu = gpu,
     .summary = summary,
     .spatial = 0,

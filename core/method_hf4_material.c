@@ -120,7 +120,11 @@ static int hf4_from_json(const json_t *root, const char *file, void **data, glin
 }
 
 /* factors.exr / .png as hf3 writes them; spatial.exr (linear s) and
- * spatial.png (each channel over its maximum, spatial_png_scale). */
+ * spatial.png (each channel over its maximum, spatial_png_scale); dir NULL:
+ * the manifest's members only.  All four follow from the manifest. */
+static const char *const hf4_derived_files[] = {"factors.exr", "factors.png", "spatial.exr",
+                                                "spatial.png", NULL};
+
 static int hf4_save_files(const void *data, const char *dir, json_t *root, glint_err *err)
 {
     const hf4_factors *f = data;
@@ -143,7 +147,7 @@ static int hf4_save_files(const void *data, const char *dir, json_t *root, glint
         for (int c = 0; c < 3; c++)
             png.px[3 * t + c] = mx[c] > 0.0 ? (float)(lin.px[3 * t + c] / mx[c]) : 0.0f;
     json_object_set_new(root, "spatial_png_scale", json_pack("[f,f,f]", mx[0], mx[1], mx[2]));
-    rc = img_write_pair(dir, "spatial", &lin, &png, err);
+    rc = dir ? img_write_pair(dir, "spatial", &lin, &png, err) : 0;
 done:
     img_free(&lin);
     img_free(&png);
@@ -210,6 +214,7 @@ const material_ops hf4_material_ops = {
     .to_json = hf4_to_json,
     .from_json = hf4_from_json,
     .save_files = hf4_save_files,
+    .derived_files = hf4_derived_files,
     .gpu = hf4_gpu,
     .summary = hf4_summary,
     .spatial = 1,
