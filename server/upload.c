@@ -3,6 +3,7 @@
 
 #include <ctype.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "api_common.h"
@@ -139,33 +140,104 @@ int upload_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err
     return rc;
 }
 
+/* What the caller and the thread share: who writes the blob (the first
+ * to claim it), and when it is written. */
+enum { JOB_WAITING, JOB_THREAD, JOB_CALLER, JOB_DONE };
+struct upload_job {
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    int state, refs;
+    upload_blob *b; /* the caller's: read and written only by whoever claimed it */
+};
+
+static void job_unref(upload_job *j)
+{
+    int left;
+    pthread_mutex_lock(&j->mu);
+    left = --j->refs;
+    pthread_mutex_unlock(&j->mu);
+    if (!left) {
+        pthread_cond_destroy(&j->cv);
+        pthread_mutex_destroy(&j->mu);
+        free(j);
+    }
+}
+
+static void blob_write(upload_blob *b)
+{
+    b->rc = store_painting_blob_put(b->s, b->session, b->view, b->data, b->len, b->name,
+                                    sizeof b->name, &b->err);
+}
+
 static void *blob_main(void *arg)
 {
-    upload_blob *bw = arg;
-    bw->rc = store_painting_blob_put(bw->s, bw->session, bw->view, bw->data, bw->len, bw->name,
-                                     sizeof bw->name, &bw->err);
+    upload_job *j = arg;
+    pthread_mutex_lock(&j->mu);
+    if (j->state == JOB_WAITING) {
+        j->state = JOB_THREAD;
+        pthread_mutex_unlock(&j->mu);
+        blob_write(j->b);
+        pthread_mutex_lock(&j->mu);
+        j->state = JOB_DONE;
+        pthread_cond_broadcast(&j->cv);
+    }
+    pthread_mutex_unlock(&j->mu);
+    job_unref(j);
     return NULL;
 }
 
 void upload_blob_start(upload_blob *bw, store *s, const char *session, int view,
                        const void *data, size_t len)
 {
+    upload_job *j;
+    pthread_attr_t at;
+    pthread_t th;
+
     memset(bw, 0, sizeof *bw);
     bw->s = s;
     bw->session = session;
     bw->view = view;
     bw->data = data;
     bw->len = len;
-    bw->threaded = pthread_create(&bw->th, NULL, blob_main, bw) == 0;
+    if (!(j = calloc(1, sizeof *j)))
+        return; /* written at the join */
+    pthread_mutex_init(&j->mu, NULL);
+    pthread_cond_init(&j->cv, NULL);
+    j->state = JOB_WAITING;
+    j->refs = 2;
+    j->b = bw;
+    bw->job = j;
+    if (pthread_attr_init(&at) == 0) {
+        pthread_attr_setdetachstate(&at, PTHREAD_CREATE_DETACHED);
+        if (pthread_create(&th, &at, blob_main, j) != 0)
+            j->refs = 1; /* no thread: the join writes it */
+        pthread_attr_destroy(&at);
+    } else {
+        j->refs = 1;
+    }
 }
 
 int upload_blob_join(upload_blob *bw)
 {
-    if (bw->threaded)
-        pthread_join(bw->th, NULL);
-    else
-        blob_main(bw);
-    bw->threaded = 0;
+    upload_job *j = bw->job;
+    int mine = 1;
+
+    if (j) {
+        pthread_mutex_lock(&j->mu);
+        if (j->state == JOB_WAITING)
+            j->state = JOB_CALLER;
+        else {
+            mine = 0;
+            while (j->state != JOB_DONE)
+                pthread_cond_wait(&j->cv, &j->mu);
+        }
+        pthread_mutex_unlock(&j->mu);
+    }
+    if (mine)
+        blob_write(bw);
+    bw->by_thread = !mine;
+    if (j)
+        job_unref(j);
+    bw->job = NULL;
     return bw->rc;
 }
-

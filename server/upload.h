@@ -25,10 +25,14 @@ int upload_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err
 /* The upload's blob (store_painting_blob_put), written on a thread of its
  * own while the request's thread decodes and checks the image: the durable
  * write (file, fsync, rename, directory) and the decode take about as
- * long, and neither needs the other.  Written at join when no thread could
- * be made.  data must outlive the join.  After a join that returned 0,
- * name is a blob nothing names yet: commit it (store_painting_commit_at)
- * or remove it (store_blob_delete). */
+ * long, and neither needs the other.  When the thread has not started by
+ * the join (both cores busy: a held-out measurement, another fit), the
+ * join writes the blob itself and the thread, when it runs, finds nothing
+ * to do: never later than writing it after the decode.  Written at join
+ * too when no thread could be made.  data and session must outlive the
+ * join.  After a join that returned 0, name is a blob nothing names yet:
+ * commit it (store_painting_commit_at) or remove it (store_blob_delete). */
+typedef struct upload_job upload_job;
 typedef struct upload_blob {
     store *s;
     const char *session;
@@ -36,9 +40,10 @@ typedef struct upload_blob {
     const void *data;
     size_t len;
     char name[160];
-    glint_err err; /* when join returned non-zero */
-    int rc, threaded;
-    pthread_t th;
+    glint_err err;   /* when join returned non-zero */
+    int rc;
+    int by_thread;   /* after the join: 1 when the thread wrote it */
+    upload_job *job; /* shared with the thread; NULL: none */
 } upload_blob;
 
 void upload_blob_start(upload_blob *b, store *s, const char *session, int view,
