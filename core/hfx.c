@@ -462,3 +462,55 @@ short_file:
     return glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
                          name);
 }
+
+int hfx_decomp_file_save(const char *magic, const char *ext, const uint32_t *u, int nu,
+                         const double *d, int nd, const hfx_decomp *g, const char *dir,
+                         const char *key, glint_err *err)
+{
+    char name[64];
+    cfile_w b;
+    cfile_begin(&b, magic, 1);
+    cfile_put(&b, u, (size_t)nu * sizeof *u);
+    cfile_put(&b, d, (size_t)nd * sizeof *d);
+    hfx_decomp_put(&b, g);
+    cfile_name(key, ext, name, sizeof name);
+    return cfile_write(&b, dir, name, err);
+}
+
+int hfx_decomp_file_load(const char *magic, const char *ext, const uint32_t *u, int nu,
+                         const double *d, int nd, int n, int nsamples, hfx_decomp *g,
+                         const char *dir, const char *key, glint_err *err)
+{
+    char name[64];
+    uint32_t fu[8];
+    double fd[8];
+    cfile_r r;
+    int rc;
+
+    if (nu < 0 || nu > 8 || nd < 0 || nd > 8)
+        return glint_err_set(err, GLINT_EINVAL, "hfx_decomp_file_load: header of %d + %d", nu,
+                             nd);
+    cfile_name(key, ext, name, sizeof name);
+    if ((rc = cfile_open(dir, name, magic, 1, (size_t)16 << 30, &r, err)))
+        return rc;
+    rc = GLINT_EFORMAT;
+    if (cfile_get(&r, fu, (size_t)nu * sizeof *fu) || cfile_get(&r, fd, (size_t)nd * sizeof *fd) ||
+        memcmp(fu, u, (size_t)nu * sizeof *fu) != 0) {
+        glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name, key);
+        goto done;
+    }
+    for (int i = 0; i < nd; i++)
+        if (fd[i] != d[i]) {
+            glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
+                          key);
+            goto done;
+        }
+    if ((rc = hfx_decomp_get(&r, n, nsamples, g, name, err)))
+        goto done;
+    if (!cfile_done(&r))
+        rc = glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
+                           name);
+done:
+    cfile_close(&r);
+    return rc;
+}

@@ -52,6 +52,8 @@
 #ifndef GLINT_HFX_H
 #define GLINT_HFX_H
 
+#include <stdint.h>
+
 #include "err.h"
 #include "hf.h"
 
@@ -111,6 +113,19 @@ struct cfile_r;
 void hfx_decomp_put(struct cfile_w *b, const hfx_decomp *g);
 int hfx_decomp_get(struct cfile_r *r, int n, int nsamples, hfx_decomp *g, const char *name,
                    glint_err *err);
+
+/* A decomposition's file in a cache directory: <dir>/<hash of key><ext>
+ * (cfile.h, kind 1, magic 8 bytes), a header of nu u32 and nd doubles (the
+ * method's shape and weights), then hfx_decomp_put.  load checks the
+ * header against u and d exactly and reads the decomposition for n
+ * unknowns and nsamples samples (GLINT_EFORMAT, naming the file, when
+ * anything differs).  nu, nd at most 8. */
+int hfx_decomp_file_save(const char *magic, const char *ext, const uint32_t *u, int nu,
+                         const double *d, int nd, const hfx_decomp *g, const char *dir,
+                         const char *key, glint_err *err);
+int hfx_decomp_file_load(const char *magic, const char *ext, const uint32_t *u, int nu,
+                         const double *d, int nd, int n, int nsamples, hfx_decomp *g,
+                         const char *dir, const char *key, glint_err *err);
 
 typedef struct hfx_fit_stats {
     int clamped[3];      /* samples floored at eps before the log, per channel */

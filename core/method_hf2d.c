@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cfile.h"
 #include "clock.h"
 #include "hf4.h"
 #include "method_hf2d.h"
@@ -157,17 +156,10 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
 
 int hf2d_decomp_save(const hf2d_decomp *dc, const char *dir, const char *key, glint_err *err)
 {
-    char name[64];
-    cfile_w b;
     uint32_t u[5] = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres, (uint32_t)dc->sh.dims[0],
                      (uint32_t)dc->sh.dims[1], (uint32_t)dc->sh.dims[2]};
     double d[2] = {dc->lambda, dc->lambda_2d};
-    cfile_begin(&b, HF2D_MAGIC, 1);
-    cfile_put(&b, u, sizeof u);
-    cfile_put(&b, d, sizeof d);
-    hfx_decomp_put(&b, &dc->x);
-    cfile_name(key, ".hf2d", name, sizeof name);
-    return cfile_write(&b, dir, name, err);
+    return hfx_decomp_file_save(HF2D_MAGIC, ".hf2d", u, 5, d, 2, &dc->x, dir, key, err);
 }
 
 static int level_save(const method_build_in *in, const char *dir, const char *key,
@@ -183,48 +175,26 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
     const hf2d_params_t *p = in->params;
     hf2d_shape sh = hf2d_shape_of(p);
     hf2d_level *x = calloc(1, sizeof *x);
-    char name[64];
-    cfile_r r;
-    uint32_t u[5];
-    double d[2], t0 = glint_now();
+    uint32_t u[5] = {(uint32_t)sh.res, (uint32_t)sh.sres, (uint32_t)sh.dims[0],
+                     (uint32_t)sh.dims[1], (uint32_t)sh.dims[2]};
+    double d[2] = {p->lambda, p->lambda_2d}, t0 = glint_now();
     int rc, off[4];
 
     if (!x)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    cfile_name(key, ".hf2d", name, sizeof name);
-    if ((rc = cfile_open(dir, name, HF2D_MAGIC, 1, (size_t)16 << 30, &r, err))) {
-        free(x);
-        return rc;
-    }
-    rc = GLINT_EFORMAT;
-    if (cfile_get(&r, u, sizeof u) || cfile_get(&r, d, sizeof d) || (int)u[0] != sh.res ||
-        (int)u[1] != sh.sres || (int)u[2] != sh.dims[0] || (int)u[3] != sh.dims[1] ||
-        (int)u[4] != sh.dims[2] || d[0] != p->lambda || d[1] != p->lambda_2d) {
-        glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
-                      key);
-        goto done;
-    }
     x->dc.sh = sh;
     x->dc.lambda = d[0], x->dc.lambda_2d = d[1];
-    if ((rc = hfx_decomp_get(&r, hf2d_offsets(&sh, off), in->s->n, &x->dc.x, name, err)))
-        goto done;
-    if (!cfile_done(&r)) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
-                           name);
-        goto done;
+    if ((rc = hfx_decomp_file_load(HF2D_MAGIC, ".hf2d", u, 5, d, 2, hf2d_offsets(&sh, off),
+                                   in->s->n, &x->dc.x, dir, key, err)) ||
+        (rc = hf2d_design_build(in->s, &sh, &x->d, err))) {
+        level_free(x);
+        return rc;
     }
-    if ((rc = hf2d_design_build(in->s, &sh, &x->d, err)))
-        goto done;
     x->t_load = x->t_design = glint_now() - t0;
     out->data = x;
     out->bytes = level_bytes(x);
     out->free = level_free;
-    rc = 0;
-done:
-    cfile_close(&r);
-    if (rc)
-        level_free(x);
-    return rc;
+    return 0;
 }
 
 static const method_level hf2d_levels[] = {

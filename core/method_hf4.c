@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cfile.h"
 #include "clock.h"
 #include "fsio.h"
 #include "hf4.h"
@@ -112,16 +111,9 @@ static int level_build(const method_build_in *in, cache_value *out, glint_err *e
 
 int hf4_decomp_save(const hf4_decomp *dc, const char *dir, const char *key, glint_err *err)
 {
-    char name[64];
-    cfile_w b;
     uint32_t u[2] = {(uint32_t)dc->res, (uint32_t)dc->sres};
     double d[2] = {dc->lambda, dc->lambda_s};
-    cfile_begin(&b, HF4_MAGIC, 1);
-    cfile_put(&b, u, sizeof u);
-    cfile_put(&b, d, sizeof d);
-    hfx_decomp_put(&b, &dc->x);
-    cfile_name(key, ".hf4", name, sizeof name);
-    return cfile_write(&b, dir, name, err);
+    return hfx_decomp_file_save(HF4_MAGIC, ".hf4", u, 2, d, 2, &dc->x, dir, key, err);
 }
 
 static int level_save(const method_build_in *in, const char *dir, const char *key,
@@ -136,49 +128,26 @@ static int level_load(const method_build_in *in, const char *dir, const char *ke
 {
     const hf4_params_t *p = in->params;
     hf4_level *x = calloc(1, sizeof *x);
-    hf4_decomp *dc;
-    char name[64];
-    cfile_r r;
-    uint32_t u[2];
-    double d[2], t0 = glint_now();
+    uint32_t u[2] = {(uint32_t)p->res, (uint32_t)p->sres};
+    double d[2] = {p->lambda, p->lambda_s}, t0 = glint_now();
     int rc;
 
     if (!x)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    dc = &x->dc;
-    cfile_name(key, ".hf4", name, sizeof name);
-    if ((rc = cfile_open(dir, name, HF4_MAGIC, 1, (size_t)16 << 30, &r, err))) {
-        free(x);
+    x->dc.res = p->res, x->dc.sres = p->sres, x->dc.lambda = d[0], x->dc.lambda_s = d[1];
+    if ((rc = hfx_decomp_file_load(HF4_MAGIC, ".hf4", u, 2, d, 2,
+                                   3 * p->res + p->sres * p->sres, in->s->n, &x->dc.x, dir, key,
+                                   err)) ||
+        (rc = hf4_design_build(in->s, p->res, p->sres, &x->d, err))) {
+        level_free(x);
         return rc;
     }
-    rc = GLINT_EFORMAT;
-    if (cfile_get(&r, u, sizeof u) || cfile_get(&r, d, sizeof d) || (int)u[0] != p->res ||
-        (int)u[1] != p->sres || d[0] != p->lambda || d[1] != p->lambda_s) {
-        glint_err_set(err, rc, "%s: the cached decomposition does not match (key %s)", name,
-                      key);
-        goto done;
-    }
-    dc->res = p->res, dc->sres = p->sres, dc->lambda = d[0], dc->lambda_s = d[1];
-    if ((rc = hfx_decomp_get(&r, 3 * p->res + p->sres * p->sres, in->s->n, &dc->x, name, err)))
-        goto done;
-    if (!cfile_done(&r)) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "%s: the cached decomposition has the wrong size",
-                           name);
-        goto done;
-    }
-    if ((rc = hf4_design_build(in->s, p->res, p->sres, &x->d, err)))
-        goto done;
     x->t_load = x->t_design = glint_now() - t0;
     out->data = x;
-    out->bytes = sizeof *x + op_doubles(dc) * sizeof(double) +
+    out->bytes = sizeof *x + op_doubles(&x->dc) * sizeof(double) +
                  (size_t)x->d.d.n * (3 * (sizeof(int32_t) + sizeof(double)) + 2 * 12);
     out->free = level_free;
-    rc = 0;
-done:
-    cfile_close(&r);
-    if (rc)
-        level_free(x);
-    return rc;
+    return 0;
 }
 
 const method_level hf4_levels[HF4_NLEVELS] = {
