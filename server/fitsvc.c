@@ -301,8 +301,6 @@ static int task_read_paintings(fit_task *t, glint_err *err)
     return rc;
 }
 
-/* The fit's memory bound: the method's for the samples of the painted views
- * (counted when the scene was created), and the paintings.  OUT: t->bytes. */
 /* The samples of the task's views, from fitsvc's scene counts or the
  * scene's document (then kept there).  Under no lock. */
 static int task_samples(fit_task *t, long *n, glint_err *err)
@@ -349,6 +347,8 @@ static int task_samples(fit_task *t, long *n, glint_err *err)
     return 0;
 }
 
+/* The fit's memory bound: the method's for the samples of the painted views
+ * (counted when the scene was created), and the paintings.  OUT: t->bytes. */
 static int task_bytes(fit_task *t, glint_err *err)
 {
     const scene *sc = prep_scene_of(t->scene)->sc;
