@@ -128,11 +128,20 @@ typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef unsigned long long v4u __attribute__((vector_size(32)));
 
+/* The exponent k as a double, from tmp = x's bits less the reduction's
+ * offset: through the 2^52 + 2048 magic (AVX2 has no conversion from
+ * int64), or converted directly (AVX-512 DQ, three instructions fewer).
+ * Both are exact, so they give the same k. */
+#define GLINT_K_MAGIC(VD, VL, VU, tmp)                                                         \
+    ((VD)((VL)(((((VU)(tmp)) >> 52) + 2048) & 4095) | 0x4330000000000000LL) -                 \
+     (4503599627370496.0 + 2048.0))
+#define GLINT_K_CVT(VD, VL, VU, tmp) __builtin_convertvector((tmp) >> 52, VD)
+
 /* The reduction and polynomial of log4 and log8, on vectors of type VD
  * (doubles) with VL / VU the signed / unsigned 64-bit integer vectors of
- * the same width: the same operations lane for lane, so both give the same
- * bits. */
-#define GLINT_LOG_BODY(VD, VL, VU, x)                                                          \
+ * the same width, KF one of the two above: the same operations lane for
+ * lane, so both give the same bits. */
+#define GLINT_LOG_BODY(VD, VL, VU, x, KF)                                                      \
     do {                                                                                       \
         const double Lg1 = 6.666666666666735130e-01, Lg2 = 3.999999999940941908e-01,           \
                      Lg3 = 2.857142874366239149e-01, Lg4 = 2.222219843214978396e-01,           \
@@ -142,8 +151,7 @@ typedef unsigned long long v4u __attribute__((vector_size(32)));
         VL u_ = (VL)(x);                                                                       \
         /* the exponent k such that x / 2^k lies in [sqrt(2)/2, sqrt(2)) */                    \
         VL tmp_ = u_ - 0x3fe6a09e667f3bcdLL;                                                   \
-        VU k12_ = (((VU)tmp_) >> 52) + 2048; /* k + 2048, 12 bits */                          \
-        VD k_ = (VD)((VL)(k12_ & 4095) | 0x4330000000000000LL) - (4503599627370496.0 + 2048.0); \
+        VD k_ = KF(VD, VL, VU, tmp_);                                                          \
         VD f_ = (VD)(u_ - (tmp_ & (long long)0xfff0000000000000ULL)) - 1.0;                    \
         VD s_ = f_ / (2.0 + f_), z_ = s_ * s_, w_ = z_ * z_;                                  \
         VD r_ = w_ * (Lg2 + w_ * (Lg4 + w_ * Lg6)) + z_ * (Lg1 + w_ * (Lg3 + w_ * (Lg5 + w_ * Lg7))); \
@@ -154,7 +162,7 @@ typedef unsigned long long v4u __attribute__((vector_size(32)));
 __attribute__((target("avx2,fma"), always_inline, optimize("fp-contract=fast"))) static inline v4d
 log4(v4d x)
 {
-    GLINT_LOG_BODY(v4d, v4l, v4u, x);
+    GLINT_LOG_BODY(v4d, v4l, v4u, x, GLINT_K_MAGIC);
     return x;
 }
 
@@ -186,61 +194,80 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
                              float sign, float floor, long clamped[3]);
 
 /* The loop of vmath_log_map3 / vmath_logf_map3 on W-lane vectors of type
- * VD (VI: integers of the lanes' width, VU unsigned): 3W values (three
- * vectors, W channel periods) per step, so each lane's channel is fixed:
- * vector k lane l is channel (W k + l) % 3.  OK(a) is all-ones in the lanes
- * whose value the vector log LOGV takes (positive, normal, finite); the
- * others take the scalar SLOG's, lane by lane, so a value's log does not
- * depend on its neighbours or on W.  Sets i to the first value
- * left and nonfinite when an input was inf or NaN. */
-#define GLINT_MAP3_LOOP(VD, VI, VU, W, LOGV, SLOG, OK)                                          \
+ * VD (VI: integers of the lanes' width): 3W values (three vectors, W
+ * channel periods) per step, so each lane's channel is fixed: vector k
+ * lane l is channel (W k + l) % 3.  OK(a) is all-ones in the lanes whose
+ * value the vector log LOGV takes (positive, normal, finite); ANY(v) tells
+ * whether a lane of v is not zero.  A step with a lane outside LOGV's range
+ * goes to FIX (GLINT_MAP3_FIX), which gives that lane libm's log, so a
+ * value's log does not depend on its neighbours or on W.  The three
+ * vectors are named, not an array, and the rare step is out of line: an
+ * array indexed lane by lane kept them in memory (about 15% of the loop's
+ * time).  Sets i to the first value left and nonfinite when an input was
+ * inf or NaN. */
+#define GLINT_MAP3_LOOP(VD, VI, W, LOGV, OK, ANY, FIX)                                         \
     do {                                                                                       \
-        VD fl_, o_[3];                                                                         \
-        VI cnt_[3], bad_;                                                                      \
-        memset(cnt_, 0, sizeof cnt_);                                                          \
-        memset(&bad_, 0, sizeof bad_);                                                         \
-        for (int l = 0; l < (W); l++)                                                          \
+        VD fl_, o0_, o1_, o2_;                                                                 \
+        VI c0_, c1_, c2_, bad_;                                                                \
+        memset(&c0_, 0, sizeof c0_);                                                           \
+        c1_ = c2_ = bad_ = c0_;                                                                \
+        for (int l = 0; l < (W); l++) {                                                        \
             fl_[l] = floor;                                                                    \
-        for (int k = 0; k < 3; k++)                                                            \
-            for (int l = 0; l < (W); l++)                                                      \
-                o_[k][l] = off[((W) * k + l) % 3];                                             \
+            o0_[l] = off[l % 3];                                                               \
+            o1_[l] = off[((W) + l) % 3];                                                       \
+            o2_[l] = off[(2 * (W) + l) % 3];                                                   \
+        }                                                                                      \
         for (; i + 3 * (W) <= n; i += 3 * (W)) {                                               \
-            VD a_[3];                                                                          \
-            VI ok_[3];                                                                         \
-            int all_ = 1;                                                                      \
-            for (int k = 0; k < 3; k++) {                                                      \
-                VD x_;                                                                         \
-                VI low_;                                                                       \
-                memcpy(&x_, in + i + (W) * k, sizeof x_);                                      \
-                bad_ |= (VI)((x_ - x_) != 0);  /* inf - inf, NaN: not 0 */                   \
-                a_[k] = o_[k] + sign * x_;                                                     \
-                low_ = ~(VI)(a_[k] > fl_);     /* NaN too */                                  \
-                cnt_[k] -= low_;                                                               \
-                a_[k] = (VD)(((VI)a_[k] & ~low_) | ((VI)fl_ & low_));                          \
-                ok_[k] = OK(a_[k]);                                                            \
-            }                                                                                  \
-            {                                                                                  \
-                VI not_ = ~ok_[0] | ~ok_[1] | ~ok_[2];                                         \
-                long long any_ = 0;                                                            \
-                for (int l = 0; l < (W); l++)                                                  \
-                    any_ |= not_[l];                                                           \
-                all_ = any_ == 0;                                                              \
-            }                                                                                  \
-            for (int k = 0; k < 3; k++) {                                                      \
-                VD y_ = LOGV(a_[k]);                                                           \
-                if (!all_)                                                                     \
-                    for (int l = 0; l < (W); l++)                                              \
-                        if (!ok_[k][l])                                                        \
-                            y_[l] = SLOG(a_[k][l]);                                            \
-                memcpy(out + i + (W) * k, &y_, sizeof y_);                                     \
+            VD a0_, a1_, a2_;                                                                  \
+            VI k0_, k1_, k2_;                                                                  \
+            GLINT_MAP3_ARG(VD, VI, in + i, o0_, a0_, c0_, k0_, OK);                            \
+            GLINT_MAP3_ARG(VD, VI, in + i + (W), o1_, a1_, c1_, k1_, OK);                      \
+            GLINT_MAP3_ARG(VD, VI, in + i + 2 * (W), o2_, a2_, c2_, k2_, OK);                  \
+            if (!ANY(~k0_ | ~k1_ | ~k2_)) {                                                    \
+                VD y0_ = LOGV(a0_), y1_ = LOGV(a1_), y2_ = LOGV(a2_);                          \
+                memcpy(out + i, &y0_, sizeof y0_);                                             \
+                memcpy(out + i + (W), &y1_, sizeof y1_);                                       \
+                memcpy(out + i + 2 * (W), &y2_, sizeof y2_);                                   \
+            } else {                                                                           \
+                FIX(a0_, k0_, out + i);                                                        \
+                FIX(a1_, k1_, out + i + (W));                                                  \
+                FIX(a2_, k2_, out + i + 2 * (W));                                              \
             }                                                                                  \
         }                                                                                      \
-        for (int k = 0; k < 3; k++)                                                            \
-            for (int l = 0; l < (W); l++)                                                      \
-                clamped[((W) * k + l) % 3] += cnt_[k][l];                                      \
-        for (int l = 0; l < (W); l++)                                                          \
+        for (int l = 0; l < (W); l++) {                                                        \
+            clamped[l % 3] += c0_[l];                                                          \
+            clamped[((W) + l) % 3] += c1_[l];                                                  \
+            clamped[(2 * (W) + l) % 3] += c2_[l];                                              \
             nonfinite |= bad_[l] != 0;                                                         \
+        }                                                                                      \
     } while (0)
+
+/* one vector of GLINT_MAP3_LOOP's arguments: A = max(O + sign X, floor)
+ * (NaN floored), CNT counting the floored lanes, K the lanes LOGV takes */
+#define GLINT_MAP3_ARG(VD, VI, src, O, A, CNT, K, OK)                                          \
+    do {                                                                                       \
+        VD x_;                                                                                 \
+        VI low_;                                                                               \
+        memcpy(&x_, (src), sizeof x_);                                                         \
+        bad_ |= (VI)((x_ - x_) != 0); /* inf - inf, NaN: not 0 */                             \
+        A = O + sign * x_;                                                                     \
+        low_ = ~(VI)(A > fl_); /* NaN too */                                                   \
+        CNT -= low_;                                                                           \
+        A = (VD)(((VI)A & ~low_) | ((VI)fl_ & low_));                                          \
+        K = OK(A);                                                                             \
+    } while (0)
+
+/* The rare step of GLINT_MAP3_LOOP with a lane outside the vector log's
+ * range: that lane's log from libm, the others' from the vector log. */
+#define GLINT_MAP3_FIX(NAME, ATTR, VD, VI, W, LOGV, SLOG, T)                                   \
+    ATTR __attribute__((noinline)) static void NAME(VD a, VI ok, T *out)                       \
+    {                                                                                          \
+        VD y = LOGV(a);                                                                        \
+        for (int l = 0; l < (W); l++)                                                          \
+            if (!ok[l])                                                                        \
+                y[l] = SLOG(a[l]);                                                             \
+        memcpy(out, &y, sizeof y);                                                             \
+    }
 
 /* normal, positive, finite: 0x0010.. <= bits < 0x7ff0.. (one unsigned
  * compare), as lane masks */
@@ -250,6 +277,16 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
     ((VI)(((VI)(a) - 0x00800000) < 0x7f000000) & (VI)((VI)(a) >= 0x00800000))
 
 #define OK4(a) GLINT_OK_D(v4l, v4u, a)
+/* a lane not zero: one test instruction (a loop over the lanes took eight
+ * moves out of the vector) */
+#define ANY256(v) (!_mm256_testz_si256((__m256i)(v), (__m256i)(v)))
+#define ANY512D(v) (_mm512_test_epi64_mask((__m512i)(v), (__m512i)(v)) != 0)
+#define ANY512F(v) (_mm512_test_epi32_mask((__m512i)(v), (__m512i)(v)) != 0)
+
+#define GLINT_FMA_FN __attribute__((target("avx2,fma"), optimize("fp-contract=fast")))
+#define GLINT_512_FN __attribute__((target(GLINT_512), optimize("fp-contract=fast")))
+
+GLINT_MAP3_FIX(fix4, GLINT_FMA_FN, v4d, v4l, 4, log4, log, double)
 
 /* vmath_log_map3 on AVX2 + FMA: twelve values per step. */
 __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
@@ -258,7 +295,7 @@ log_map3_fma(const double *in, double *out, size_t n, const double off[3], doubl
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v4d, v4l, v4u, 4, log4, log, OK4);
+    GLINT_MAP3_LOOP(v4d, v4l, 4, log4, OK4, ANY256, fix4);
     /* the rest (i is a multiple of 3: the channels line up) */
     return nonfinite | log_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
@@ -275,11 +312,12 @@ typedef unsigned long long v8u __attribute__((vector_size(64)));
 __attribute__((target(GLINT_512), always_inline, optimize("fp-contract=fast"))) static inline v8d
 log8(v8d x)
 {
-    GLINT_LOG_BODY(v8d, v8l, v8u, x);
+    GLINT_LOG_BODY(v8d, v8l, v8u, x, GLINT_K_CVT);
     return x;
 }
 
 #define OK8(a) GLINT_OK_D(v8l, v8u, a)
+GLINT_MAP3_FIX(fix8, GLINT_512_FN, v8d, v8l, 8, log8, log, double)
 
 __attribute__((target(GLINT_512), optimize("fp-contract=fast"))) static int
 log_map3_512(const double *in, double *out, size_t n, const double off[3], double sign,
@@ -287,7 +325,7 @@ log_map3_512(const double *in, double *out, size_t n, const double off[3], doubl
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v8d, v8l, v8u, 8, log8, log, OK8);
+    GLINT_MAP3_LOOP(v8d, v8l, 8, log8, OK8, ANY512D, fix8);
     return nonfinite | log_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
@@ -330,6 +368,8 @@ logf16(v16f x)
 
 #define OKF8(a) GLINT_OK_F(v8i, a)
 #define OKF16(a) GLINT_OK_F(v16i, a)
+GLINT_MAP3_FIX(fixf8, GLINT_FMA_FN, v8f, v8i, 8, logf8, logf, float)
+GLINT_MAP3_FIX(fixf16, GLINT_512_FN, v16f, v16i, 16, logf16, logf, float)
 
 __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
 logf_map3_fma(const float *in, float *out, size_t n, const float off[3], float sign, float floor,
@@ -337,7 +377,7 @@ logf_map3_fma(const float *in, float *out, size_t n, const float off[3], float s
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v8f, v8i, v8i, 8, logf8, logf, OKF8);
+    GLINT_MAP3_LOOP(v8f, v8i, 8, logf8, OKF8, ANY256, fixf8);
     return nonfinite | logf_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
@@ -347,7 +387,7 @@ logf_map3_512(const float *in, float *out, size_t n, const float off[3], float s
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v16f, v16i, v16i, 16, logf16, logf, OKF16);
+    GLINT_MAP3_LOOP(v16f, v16i, 16, logf16, OKF16, ANY512F, fixf16);
     return nonfinite | logf_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 

@@ -138,6 +138,23 @@ TEST(log_map3_as_the_scalar_mapping)
         ASSERT(isfinite(out[at]) || in[at] == INFINITY);
         in[at] = save;
     }
+    {
+        /* lanes outside the vector log's range (a subnormal floor, +inf)
+         * take libm's log, their neighbours the vector log's */
+        const double zero[3] = {0.0, 0.0, 0.0}, tiny = 1e-310;
+        double x[48], y[48];
+        long cl[3] = {0, 0, 0};
+        for (int i = 0; i < 48; i++)
+            x[i] = i % 11 == 3 ? 0.0 : i % 13 == 5 ? INFINITY : 0.25 + 0.1 * i;
+        ASSERT(vmath_log_map3(x, y, 48, zero, 1.0, tiny, cl) == 1);
+        for (int i = 0; i < 48; i++) {
+            double arg = x[i] > tiny ? x[i] : tiny;
+            if (arg == tiny || isinf(arg))
+                ASSERT_MSG(y[i] == log(arg), "value %d: %.17g, libm %.17g", i, y[i], log(arg));
+            else
+                ASSERT_MSG(ulps(y[i], log(arg)) <= 1.0, "value %d: %.17g", i, y[i]);
+        }
+    }
 }
 
 static double ulpsf(float a, float b)
@@ -202,6 +219,23 @@ TEST(logf_map3_as_the_scalar_mapping)
         in[at] = at % 2 ? NAN : INFINITY;
         ASSERT(vmath_logf_map3(in, out, 48, offs[0], 1.0f, eps, cl) == 1);
         in[at] = save;
+    }
+    {
+        /* lanes outside the vector logf's range (a subnormal floor, +inf)
+         * take libm's logf, their neighbours the vector logf's */
+        const float zero[3] = {0.0f, 0.0f, 0.0f}, tiny = 1e-40f;
+        float x[96], y[96];
+        long cl[3] = {0, 0, 0};
+        for (int i = 0; i < 96; i++)
+            x[i] = i % 11 == 3 ? 0.0f : i % 13 == 5 ? INFINITY : 0.25f + 0.1f * (float)i;
+        ASSERT(vmath_logf_map3(x, y, 96, zero, 1.0f, tiny, cl) == 1);
+        for (int i = 0; i < 96; i++) {
+            float arg = x[i] > tiny ? x[i] : tiny;
+            if (arg == tiny || isinf(arg))
+                ASSERT_MSG(y[i] == logf(arg), "value %d: %.9g, libm %.9g", i, y[i], logf(arg));
+            else
+                ASSERT_MSG(ulpsf(y[i], logf(arg)) <= 1.0, "value %d: %.9g", i, y[i]);
+        }
     }
 }
 
