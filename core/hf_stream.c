@@ -6,7 +6,8 @@
  * block of HF_BLOCK samples at a time into a buffer that stays in L1
  * (values, floor, logs) and scatters the block into four interleaved
  * partial sums (sample i into copy i % 4, which breaks the chains of
- * dependent read-modify-writes on a texel that neighbouring samples share).
+ * dependent read-modify-writes on a texel that neighbouring samples share),
+ * a texel's channels in a slot of their own (fwd_run).
  * Chunks run on the pool's threads (par.h); each chunk's sum is kept apart
  * and the chunks are added in chunk order, so t is the same bits on one
  * thread or many.  Nothing of size n is written: the pass reads the RGB
@@ -28,7 +29,6 @@
 #define HF_BLOCK 256
 
 typedef double v4d __attribute__((vector_size(32)));
-typedef double v2d __attribute__((vector_size(16)));
 #define COS_FLOOR 1e-6
 
 void hf_chunking(long n, int *chunk, int *nchunks)
@@ -128,13 +128,23 @@ typedef struct fwd_task {
 #define HF_CLONES
 #endif
 
+/* One chunk of the forward pass.  Each copy of the sums keeps a texel's
+ * three channels in a 32-byte slot of its own (RGB and a lane that stays
+ * 0): a sample adds one four-lane vector to texel k0's slot and one to
+ * k0 + 1's, each lane the scalar w * f + sum.  Every load of a slot then
+ * matches the last store to it, which the store buffer forwards; with the
+ * slots packed (texel k0 + 1 three doubles after k0), a sample's load
+ * straddled the stores of the sample four before it on a neighbouring
+ * texel, which cannot be forwarded and waits for them to reach the cache.
+ * The same sums in the same order as packed slots, so the same bits. */
 HF_CLONES static void fwd_run(void *ctx, int task)
 {
     fwd_task *w = ctx;
     const hf_design *d = w->x->d;
     int c = w->todo[task], R = d->res, i0 = c * w->chunk, i1 = i0 + w->chunk;
-    size_t len = (size_t)9 * R;
-    double buf[3 * HF_BLOCK], *acc = calloc(4 * len, sizeof *acc), *out = w->part + c * len;
+    size_t len = (size_t)9 * R, slen = (size_t)12 * R; /* a copy: 3R slots of 4 */
+    double buf[3 * HF_BLOCK], *out = w->part + c * len;
+    double *acc = aligned_alloc(64, 4 * slen * sizeof *acc); /* 384 R bytes */
     int *clamped = w->clamped + 3 * c;
 
     clamped[0] = clamped[1] = clamped[2] = 0;
@@ -145,6 +155,7 @@ HF_CLONES static void fwd_run(void *ctx, int task)
         w->oom = 1;
         return;
     }
+    memset(acc, 0, 4 * slen * sizeof *acc);
     for (int b0 = i0; b0 < i1; b0 += HF_BLOCK) {
         int nb = i1 - b0 < HF_BLOCK ? i1 - b0 : HF_BLOCK;
         if (w->x->single) {
@@ -160,28 +171,25 @@ HF_CLONES static void fwd_run(void *ctx, int task)
             const double *fi = buf + 3 * b;
             const int32_t *k0 = d->k0 + 3 * (size_t)i;
             const double *tt = d->t + 3 * (size_t)i;
-            double *base = acc + (size_t)(i & 3) * len;
-            /* the six sums of a hat pair (texel k: RGB, texel k + 1: RGB)
-             * are contiguous: a four- and a two-lane update, each lane
-             * the scalar w * f + sum */
-            v4d fa = {fi[0], fi[1], fi[2], fi[0]};
-            v2d fb = {fi[1], fi[2]};
+            double *base = acc + (size_t)(i & 3) * slen;
+            const v4d f4 = {fi[0], fi[1], fi[2], 0.0}, one = {1.0, 1.0, 1.0, 1.0};
             for (int j = 0; j < 3; j++) {
-                double *tk = base + 3 * (j * R + k0[j]);
-                double w1 = tt[j], w0 = 1.0 - w1;
-                v4d wa = {w0, w0, w0, w1}, sa;
-                v2d wb = {w1, w1}, sb;
-                memcpy(&sa, tk, sizeof sa);
-                memcpy(&sb, tk + 4, sizeof sb);
-                sa += wa * fa;
-                sb += wb * fb;
-                memcpy(tk, &sa, sizeof sa);
-                memcpy(tk + 4, &sb, sizeof sb);
+                double *tk = base + 4 * (j * R + k0[j]);
+                v4d w1 = {tt[j], tt[j], tt[j], tt[j]}, w0 = one - w1, s0, s1;
+                memcpy(&s0, tk, sizeof s0);
+                memcpy(&s1, tk + 4, sizeof s1);
+                s0 += w0 * f4;
+                s1 += w1 * f4;
+                memcpy(tk, &s0, sizeof s0);
+                memcpy(tk + 4, &s1, sizeof s1);
             }
         }
     }
-    for (size_t k = 0; k < len; k++)
-        out[k] = (acc[k] + acc[len + k]) + (acc[2 * len + k] + acc[3 * len + k]);
+    for (size_t k = 0; k < (size_t)3 * R; k++)
+        for (int ch = 0; ch < 3; ch++) {
+            size_t q = 4 * k + ch;
+            out[3 * k + ch] = (acc[q] + acc[slen + q]) + (acc[2 * slen + q] + acc[3 * slen + q]);
+        }
     free(acc);
 }
 
