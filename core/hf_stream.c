@@ -16,7 +16,9 @@
  *
  * The diagnostics pass (log residual, linear RMS and maximum error) runs
  * the same way over every sample, or over an evenly strided subsample of
- * HF_DIAG_SAMPLES when there are more (see hf.h, hf_fit_stats). */
+ * HF_DIAG_SAMPLES when there are more (see hf.h, hf_fit_stats); its sums
+ * are kept in vector lanes (diag_run), in an order fixed by the chunking,
+ * so they too are the same bits on any thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -401,7 +403,22 @@ typedef struct diag_task {
     double *ss, *se, *mx; /* per chunk */
 } diag_task;
 
-static void diag_run(void *ctx, int c)
+typedef float v4f __attribute__((vector_size(16)));
+typedef long long v4l __attribute__((vector_size(32)));
+
+/* One chunk of the diagnostics.  Per sample, in scalar code: the three
+ * channels' log-space reconstruction (the texel loads are random) and its
+ * residual.  Then, eight lanes at a time over a block's 3 nb values: the
+ * squared residuals, the reconstruction mapped back and rounded to float
+ * as a material stores it, its squared error and |error|.  Each of the
+ * three vectors of a 12-value step keeps its own lane sums (lane l of
+ * vector q sums channel (4q + l) % 3), added in a fixed order at the end
+ * of the chunk with the scalar tail's: the sums are those of one chain per
+ * figure in another order (the maximum is the same), and the order is a
+ * function of the chunking alone, so the figures are the same bits on any
+ * thread count and any of the clones.  One chain per figure was a
+ * dependent addition per value, which bounded the loop. */
+HF_CLONES static void diag_run(void *ctx, int c)
 {
     diag_task *w = ctx;
     const hf_stream *x = w->x;
@@ -409,62 +426,98 @@ static void diag_run(void *ctx, int c)
     const hf_factors *fac = w->fac;
     int R = d->res, idx[HF_BLOCK], clamped[3] = {0, 0, 0}, bad = 0;
     long j0 = (long)c * w->chunk, j1 = j0 + w->chunk;
-    double fb[3 * HF_BLOCK], lb[3 * HF_BLOCK], ss = 0.0, se = 0.0, mx = 0.0;
+    double fb[3 * HF_BLOCK], lb[3 * HF_BLOCK], rb[3 * HF_BLOCK], pb[3 * HF_BLOCK],
+        cb[3 * HF_BLOCK];
+    double sst = 0.0, set = 0.0, mxt = 0.0;
     const hf_map_kind kind = fac->map.kind;
     const double a3[3] = {fac->a_used[0], fac->a_used[1], fac->a_used[2]};
     const int brdf = fac->model == HF_MODEL_BRDF;
+    const v4d zero = {0.0, 0.0, 0.0, 0.0};
+    v4d ssv[3], sev[3], mxv[3], av[3];
 
+    for (int q = 0; q < 3; q++) {
+        ssv[q] = sev[q] = mxv[q] = zero;
+        for (int l = 0; l < 4; l++)
+            av[q][l] = a3[(4 * q + l) % 3];
+    }
     if (j1 > w->count)
         j1 = w->count;
     for (long b0 = j0; b0 < j1; b0 += HF_BLOCK) {
-        int nb = j1 - b0 < HF_BLOCK ? (int)(j1 - b0) : HF_BLOCK;
+        int nb = j1 - b0 < HF_BLOCK ? (int)(j1 - b0) : HF_BLOCK, m = 3 * nb, j;
         for (int b = 0; b < nb; b++)
             idx[b] = (int)((b0 + b) * w->stride);
         map_block(x, idx, 0, nb, fb, clamped, &bad);
         for (int b = 0; b < nb; b++) {
             int i = idx[b];
+            const float *px = x->rgb + 3 * (size_t)i;
             /* the three channels' sums in registers (an array here stayed in
              * memory, one store and load per term) */
-            double a0 = 0.0, a1 = 0.0, a2 = 0.0, e0, e1, e2;
-            for (int j = 0; j < 3; j++) {
-                const double *yk = fac->logf + 3 * (j * R + d->k0[3 * i + j]);
-                double w1 = d->t[3 * i + j], w0 = 1.0 - w1;
+            double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+            for (int k = 0; k < 3; k++) {
+                const double *yk = fac->logf + 3 * (k * R + d->k0[3 * i + k]);
+                double w1 = d->t[3 * i + k], w0 = 1.0 - w1;
                 a0 += w0 * yk[0] + w1 * yk[3];
                 a1 += w0 * yk[1] + w1 * yk[4];
                 a2 += w0 * yk[2] + w1 * yk[5];
             }
-            e0 = a0 - fb[3 * b];
-            e1 = a1 - fb[3 * b + 1];
-            e2 = a2 - fb[3 * b + 2];
-            ss += e0 * e0;
-            ss += e1 * e1;
-            ss += e2 * e2;
+            rb[3 * b] = a0 - fb[3 * b];
+            rb[3 * b + 1] = a1 - fb[3 * b + 1];
+            rb[3 * b + 2] = a2 - fb[3 * b + 2];
             lb[3 * b] = a0 > 700.0 ? 700.0 : a0;
             lb[3 * b + 1] = a1 > 700.0 ? 700.0 : a1;
             lb[3 * b + 2] = a2 > 700.0 ? 700.0 : a2;
+            pb[3 * b] = px[0];
+            pb[3 * b + 1] = px[1];
+            pb[3 * b + 2] = px[2];
+            if (brdf) /* the radiance model's cosine is 1.0, an exact product */
+                cb[3 * b] = cb[3 * b + 1] = cb[3 * b + 2] = d->cos_i[i];
         }
-        vmath_exp(lb, lb, (size_t)3 * nb);
-        /* the reconstruction (hf_map_inverse, inlined: the call in this
-         * loop kept the sums in memory), then the errors, in one pass per
-         * sample: no j % 3, and the clamp at 0 a max, not a branch that
-         * mispredicts (half the values of an add mapping are near 0).  The
-         * cosine of the radiance model is 1.0, an exact product. */
-        for (int b = 0; b < nb; b++) {
-            const float *px = x->rgb + 3 * (size_t)idx[b];
-            const double cw = brdf ? (double)d->cos_i[idx[b]] : 1.0;
-            for (int ch = 0; ch < 3; ch++) {
-                double v = lb[3 * b + ch], e;
-                v = kind == HF_MAP_ADD ? v - a3[ch] : kind == HF_MAP_SUB ? a3[ch] - v : v;
-                v = v > 0.0 ? v : 0.0;
-                e = (double)(float)(v * cw) - (double)px[ch];
-                se += e * e;
-                mx = fabs(e) > mx ? fabs(e) : mx;
+        vmath_exp(lb, lb, (size_t)m);
+        /* the reconstruction (hf_map_inverse, inlined), clamped at 0 (NaN
+         * too), as the material stores it (float), against the painting */
+        for (j = 0; j + 12 <= m; j += 12)
+            for (int q = 0; q < 3; q++) {
+                v4d r, v, p, e, ae;
+                memcpy(&r, rb + j + 4 * q, sizeof r);
+                memcpy(&v, lb + j + 4 * q, sizeof v);
+                memcpy(&p, pb + j + 4 * q, sizeof p);
+                ssv[q] += r * r;
+                v = kind == HF_MAP_ADD ? v - av[q] : kind == HF_MAP_SUB ? av[q] - v : v;
+                v = (v4d)((v4l)v & (v4l)(v > zero)); /* v > 0 ? v : 0 */
+                if (brdf) {
+                    v4d cw;
+                    memcpy(&cw, cb + j + 4 * q, sizeof cw);
+                    v *= cw;
+                }
+                e = __builtin_convertvector(__builtin_convertvector(v, v4f), v4d) - p;
+                sev[q] += e * e;
+                ae = (v4d)((v4l)e & 0x7fffffffffffffffLL); /* fabs */
+                {
+                    v4l gt = (v4l)(ae > mxv[q]);
+                    mxv[q] = (v4d)(((v4l)ae & gt) | ((v4l)mxv[q] & ~gt));
+                }
             }
+        for (; j < m; j++) { /* the block's last values, one by one */
+            double v = lb[j], e;
+            v = kind == HF_MAP_ADD ? v - a3[j % 3] : kind == HF_MAP_SUB ? a3[j % 3] - v : v;
+            v = v > 0.0 ? v : 0.0;
+            if (brdf)
+                v *= cb[j];
+            e = (double)(float)v - pb[j];
+            sst += rb[j] * rb[j];
+            set += e * e;
+            mxt = fabs(e) > mxt ? fabs(e) : mxt;
         }
     }
-    w->ss[c] = ss;
-    w->se[c] = se;
-    w->mx[c] = mx;
+    for (int q = 0; q < 3; q++)
+        for (int l = 0; l < 4; l++) {
+            sst += ssv[q][l];
+            set += sev[q][l];
+            mxt = mxv[q][l] > mxt ? mxv[q][l] : mxt;
+        }
+    w->ss[c] = sst;
+    w->se[c] = set;
+    w->mx[c] = mxt;
 }
 
 int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stats *st)

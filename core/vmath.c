@@ -13,6 +13,8 @@ __m128d _ZGVbN2v_exp(__m128d x);
 /* the AVX2 variants take and return ymm registers: declared for avx2 code */
 __attribute__((target("avx2"))) __m256d _ZGVdN4v_log(__m256d x);
 __attribute__((target("avx2"))) __m256d _ZGVdN4v_exp(__m256d x);
+/* ... and the AVX-512 exp, eight lanes (zmm registers) */
+__attribute__((target("avx512f"))) __m512d _ZGVeN8v_exp(__m512d x);
 
 __attribute__((target("avx2"))) static void log_avx2(const double *in, double *out, size_t n)
 {
@@ -30,6 +32,18 @@ __attribute__((target("avx2"))) static void exp_avx2(const double *in, double *o
         _mm256_storeu_pd(out + i, _ZGVdN4v_exp(_mm256_loadu_pd(in + i)));
     for (; i < n; i++)
         out[i] = exp(in[i]);
+}
+
+/* libmvec's AVX-512 exp: the same bits as its AVX2 variant over every value
+ * tests/unit/test_vmath.c tries, at about 0.75 times the time per value
+ * (0.84 against 1.12 ns in a throwaway harness, 4M values over [-700,
+ * 700]); the diagnostics take one exp per value. */
+__attribute__((target("avx512f"))) static void exp_512(const double *in, double *out, size_t n)
+{
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8)
+        _mm512_storeu_pd(out + i, _ZGVeN8v_exp(_mm512_loadu_pd(in + i)));
+    exp_avx2(in + i, out + i, n - i);
 }
 
 static void log_sse2(const double *in, double *out, size_t n)
@@ -403,7 +417,9 @@ void vmath_log(const double *in, double *out, size_t n)
 
 void vmath_exp(const double *in, double *out, size_t n)
 {
-    if (have_avx2())
+    if (have_512())
+        exp_512(in, out, n);
+    else if (have_avx2())
         exp_avx2(in, out, n);
     else
         exp_sse2(in, out, n);
@@ -431,7 +447,7 @@ int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], f
 
 const char *vmath_impl(void)
 {
-    return have_512()   ? "log: glint-avx512, exp: libmvec-avx2"
+    return have_512()   ? "log: glint-avx512, exp: libmvec-avx512"
            : have_fma()  ? "log: glint-avx2-fma, exp: libmvec-avx2"
            : have_avx2() ? "libmvec-avx2"
                          : "libmvec-sse2";

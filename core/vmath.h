@@ -34,7 +34,7 @@ int vmath_log_map3(const double *in, double *out, size_t n, const double off[3],
 int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], float sign,
                     float floor, long clamped[3]);
 
-/* Which implementation is in use ("log: glint-avx512, exp: libmvec-avx2",
+/* Which implementation is in use ("log: glint-avx512, exp: libmvec-avx512",
  * "log: glint-avx2-fma, ...", "libmvec-avx2", "libmvec-sse2", "libm"). */
 const char *vmath_impl(void);
 

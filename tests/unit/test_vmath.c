@@ -287,6 +287,31 @@ TEST(log_map3_same_bits_on_avx2_and_avx512)
     ASSERT(vmath_limit("avx9") == -1);
 }
 
+/* vmath_exp (libmvec) on AVX-512 and on AVX2: the same bits, over the
+ * range the diagnostics use (below 700), past it, and at lengths that
+ * leave a tail for the narrower loop. */
+TEST(exp_same_bits_on_avx2_and_avx512)
+{
+    enum { N = 100003 };
+    static double x[N], e512[N], e2[N];
+    long diff = 0;
+    for (int i = 0; i < N; i++) {
+        double u = uniform();
+        x[i] = u < 0.001 ? INFINITY : u < 0.002 ? -INFINITY : u < 0.003 ? NAN
+               : u < 0.5 ? (uniform() - 0.5) * 1500.0 : (uniform() - 0.5) * 8.0;
+    }
+    for (int len = N - 7; len <= N; len += 7) {
+        ASSERT(vmath_limit("avx512") == 0);
+        vmath_exp(x, e512, (size_t)len);
+        ASSERT(vmath_limit("avx2") == 0);
+        vmath_exp(x, e2, (size_t)len);
+        for (int i = 0; i < len; i++)
+            diff += memcmp(&e512[i], &e2[i], sizeof e2[i]) != 0;
+    }
+    vmath_limit(NULL);
+    ASSERT_MSG(diff == 0, "%ld values differ", diff);
+}
+
 TEST(exp_matches_libm)
 {
     enum { N = 4096 };
@@ -712,6 +737,7 @@ TEST_LIST {
     TEST_ENTRY(logf_map3_as_the_scalar_mapping),
     TEST_ENTRY(log_map3_same_bits_on_avx2_and_avx512),
     TEST_ENTRY(exp_matches_libm),
+    TEST_ENTRY(exp_same_bits_on_avx2_and_avx512),
     TEST_ENTRY(pool_runs_every_task_once),
     TEST_ENTRY(background_runs_leave_the_pool_free),
     TEST_ENTRY(blas_can_be_kept_on_the_calling_thread),
