@@ -74,8 +74,9 @@
 #define HF_GAIN_MAX HF_LOG_FACTOR_MAX
 
 /* Samples the error diagnostics of a fit are computed over, at most
- * (hf_fit_stats). */
+ * (hf_fit_stats), in runs of HF_DIAG_RUN consecutive samples. */
 #define HF_DIAG_SAMPLES 65536
+#define HF_DIAG_RUN 64
 
 /* ---- Design: the sparse data rows of A ----------------------------------- */
 
@@ -270,15 +271,20 @@ typedef struct hf_fit_stats {
     double damping;        /* Tikhonov alpha the fit added to stay within
                               HF_LOG_FACTOR_MAX (0: none was needed) */
     /* Diagnostics: over every sample when there are at most HF_DIAG_SAMPLES,
-     * else over samples 0, s, 2s, ... (s = diag_stride = ceil(n /
-     * HF_DIAG_SAMPLES)): an estimate whose relative standard error is
-     * about 1 / sqrt(3 diag_samples) for the RMS figures, and a lower bound
-     * for max_abs. */
+     * else over diag_runs = HF_DIAG_SAMPLES / HF_DIAG_RUN runs of
+     * HF_DIAG_RUN consecutive samples, run k from sample k s (s =
+     * diag_stride = floor(n / diag_runs)): an estimate of the RMS figures
+     * over samples spread evenly over the views, and a lower bound for
+     * max_abs.  Runs, not every s-th sample: a run reads its samples' data
+     * in whole cache lines, where every s-th sample read nearly every line
+     * of the design (at 12 views of 256x256 the diagnostics took 2.4-2.9 ms
+     * of a 4.6 ms fit). */
     double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
     double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
     double max_abs;        /* max |reconstruction - sample| */
     long diag_samples;     /* samples the three figures above are over */
-    long diag_stride;      /* 1: every sample */
+    long diag_stride;      /* 1: every sample; else the first samples of two runs apart */
+    long diag_runs;        /* runs of consecutive samples (1: every sample) */
     double map_seconds;    /* the mapping's offsets (SUB: a pass for the largest values) */
     double stream_seconds; /* the pass over the samples: mapping, logs and A^T f, fused */
     double op_seconds;     /* M t */

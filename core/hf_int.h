@@ -98,7 +98,7 @@ typedef struct hf_stream {
 int hf_stream_forward(const hf_stream *x, const hf_fit_reuse *reuse, double *t,
                       int clamped[3], int *reused);
 
-/* log_residual, rms, max_abs, diag_samples and diag_stride of *st for the
+/* log_residual, rms, max_abs, diag_samples, diag_stride and diag_runs of *st for the
  * factors fac (hf.h).  -1 when out of memory (st untouched). */
 int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stats *st);
 

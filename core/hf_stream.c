@@ -15,8 +15,8 @@
  * model) once.
  *
  * The diagnostics pass (log residual, linear RMS and maximum error) runs
- * the same way over every sample, or over an evenly strided subsample of
- * HF_DIAG_SAMPLES when there are more (see hf.h, hf_fit_stats); its sums
+ * the same way over every sample, or over HF_DIAG_SAMPLES in evenly spaced
+ * runs of consecutive samples when there are more (hf.h, hf_fit_stats); its sums
  * are kept in vector lanes (diag_run), in an order fixed by the chunking,
  * so they too are the same bits on any thread count. */
 #include <math.h>
@@ -398,7 +398,8 @@ done:
 typedef struct diag_task {
     const hf_stream *x;
     const hf_factors *fac;
-    long stride, count;  /* samples j * stride, j < count */
+    long stride, count;  /* j < count: sample (j / run) stride + j % run */
+    long run;
     int chunk, nchunks;
     double *ss, *se, *mx; /* per chunk */
 } diag_task;
@@ -445,7 +446,7 @@ HF_CLONES static void diag_run(void *ctx, int c)
     for (long b0 = j0; b0 < j1; b0 += HF_BLOCK) {
         int nb = j1 - b0 < HF_BLOCK ? (int)(j1 - b0) : HF_BLOCK, m = 3 * nb, j;
         for (int b = 0; b < nb; b++)
-            idx[b] = (int)((b0 + b) * w->stride);
+            idx[b] = (int)((b0 + b) / w->run * w->stride + (b0 + b) % w->run);
         map_block(x, idx, 0, nb, fb, clamped, &bad);
         for (int b = 0; b < nb; b++) {
             int i = idx[b];
@@ -530,8 +531,15 @@ int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stat
     memset(&w, 0, sizeof w);
     w.x = x;
     w.fac = fac;
-    w.stride = n > HF_DIAG_SAMPLES ? (n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES : 1;
-    w.count = (n + w.stride - 1) / w.stride;
+    if (n > HF_DIAG_SAMPLES) { /* runs of HF_DIAG_RUN, evenly spaced (hf.h) */
+        w.run = HF_DIAG_RUN;
+        w.stride = n / (HF_DIAG_SAMPLES / HF_DIAG_RUN);
+        w.count = HF_DIAG_SAMPLES;
+    } else {
+        w.run = n > 0 ? n : 1;
+        w.stride = 1;
+        w.count = n;
+    }
     hf_chunking(w.count, &w.chunk, &w.nchunks);
     w.ss = malloc((size_t)w.nchunks * sizeof *w.ss);
     w.se = malloc((size_t)w.nchunks * sizeof *w.se);
@@ -556,6 +564,7 @@ int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stat
     st->max_abs = mx;
     st->diag_samples = w.count;
     st->diag_stride = w.stride;
+    st->diag_runs = w.count / w.run;
 done:
     free(w.ss);
     free(w.se);

@@ -286,8 +286,10 @@ int hf3_fit_material(const hf3_prepared *pp, const float *rgb, double t_start, m
                      "max_abs_painted", st.max_abs, "log_residual_rms", st.log_residual,
                      "clamped", st.clamped[0], st.clamped[1], st.clamped[2], "log_max",
                      st.log_max, "damping", st.damping);
-    /* over every sample, or an evenly strided subsample (hf.h) */
+    /* over every sample (one run), or evenly spaced runs of consecutive
+     * samples (hf.h) */
     json_object_set_new(errs, "diagnostic_samples", json_integer(st.diag_samples));
+    json_object_set_new(errs, "diagnostic_runs", json_integer(st.diag_runs));
     info = json_pack("{s:o, s:o, s:o, s:o}", "params",
                      method_params_to_json(&method_hf3, pp->params), "precomputation", pre,
                      "seconds", tim, "errors", errs);

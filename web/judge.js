@@ -403,7 +403,7 @@ export class Judge extends EventTarget {
     const lobe = mat.method === 'srbf';
     $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>` + (e.max_abs_painted != null ? `, max ${fmtErr(e.max_abs_painted)}` : '') +
       (e.diagnostic_samples != null && mat.precomputation && e.diagnostic_samples < mat.precomputation.samples
-        ? ` <span title="estimated on an evenly spaced subsample: one sample in ${Math.ceil(mat.precomputation.samples / e.diagnostic_samples)}">over ${e.diagnostic_samples} of ${mat.precomputation.samples} samples</span>`
+        ? ` <span title="estimated on an evenly spaced subsample${e.diagnostic_runs > 1 ? `: ${e.diagnostic_runs} runs of ${Math.round(e.diagnostic_samples / e.diagnostic_runs)} consecutive samples` : ''}">over ${e.diagnostic_samples} of ${mat.precomputation.samples} samples</span>`
         : ` over ${mat.precomputation ? mat.precomputation.samples : '?'} samples`) +
       ` · ${lobe ? mat.lobes + ' lobes under ' + mat.params.env : mat.res + ' texels'} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
       (lobe && e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');

@@ -534,7 +534,7 @@ TEST(fit_same_bits_on_any_thread_count)
     ASSERT_OK(f.rc);
     ASSERT(memcmp(a.logf, f.fac.logf, (size_t)9 * fc.d.res * sizeof *a.logf) == 0);
     ASSERT(sa.rms == f.st.rms && sa.log_residual == f.st.log_residual);
-    ASSERT(sa.diag_samples == fc.s.n && sa.diag_stride == 1);
+    ASSERT(sa.diag_samples == fc.s.n && sa.diag_stride == 1 && sa.diag_runs == 1);
     hf_factors_free(&a);
     hf_factors_free(&f.fac);
     fit_case_free(&fc);
@@ -644,7 +644,8 @@ TEST(a_memo_gives_unchanged_views_sums_and_the_same_bits)
 
 TEST(diagnostics_subsample_above_the_limit)
 {
-    /* more samples than HF_DIAG_SAMPLES: every k-th, counted and labelled */
+    /* more samples than HF_DIAG_SAMPLES: runs of consecutive samples,
+     * counted and labelled */
     fit_case fc;
     hf_factors a;
     hf_fit_stats st;
@@ -652,9 +653,32 @@ TEST(diagnostics_subsample_above_the_limit)
     ASSERT_OK(fit_case_make(&fc, 128, 16));
     ASSERT(fc.s.n > HF_DIAG_SAMPLES);
     ASSERT_OK(hf_fit(&fc.d, &fc.op, &fc.map, HF_MODEL_RADIANCE, fc.rgb, &a, &st, NULL));
-    ASSERT_EQ(st.diag_stride, (fc.s.n + HF_DIAG_SAMPLES - 1) / HF_DIAG_SAMPLES);
-    ASSERT_EQ(st.diag_samples, (fc.s.n + st.diag_stride - 1) / st.diag_stride);
-    ASSERT(st.diag_samples <= HF_DIAG_SAMPLES);
+    ASSERT_EQ(st.diag_runs, HF_DIAG_SAMPLES / HF_DIAG_RUN);
+    ASSERT_EQ(st.diag_stride, fc.s.n / st.diag_runs);
+    ASSERT_EQ(st.diag_samples, HF_DIAG_SAMPLES);
+    ASSERT(st.diag_stride >= HF_DIAG_RUN); /* the runs do not overlap */
+    {
+        /* the figures are those of exactly these samples: the maximum error
+         * over the runs, recomputed here, against the fit's */
+        float *rec = malloc((size_t)3 * fc.s.n * sizeof *rec);
+        double mx = 0.0, se = 0.0, rms;
+        ASSERT(rec);
+        hf_factors_eval_design(&a, &fc.d, rec);
+        for (long i = 0; i < 3L * fc.s.n; i++) {
+            double e = (double)rec[i] - fc.rgb[i];
+            long smp = i / 3, k = smp / st.diag_stride;
+            if (k < st.diag_runs && smp - k * st.diag_stride < HF_DIAG_RUN) {
+                se += e * e;
+                mx = fabs(e) > mx ? fabs(e) : mx;
+            }
+        }
+        free(rec);
+        rms = sqrt(se / (3.0 * HF_DIAG_SAMPLES));
+        printf("  over the runs, recomputed: RMS %.12g (the fit's %.12g), max %.9g (%.9g)\n",
+               rms, st.rms, mx, st.max_abs);
+        ASSERT_NEAR(st.rms / rms, 1.0, 1e-9);
+        ASSERT(mx == st.max_abs);
+    }
     {
         /* the estimate against the exact RMS over every sample */
         float *rec = malloc((size_t)3 * fc.s.n * sizeof *rec);
