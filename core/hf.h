@@ -277,8 +277,7 @@ typedef struct hf_fit_stats {
      * over samples spread evenly over the views, and a lower bound for
      * max_abs.  Runs, not every s-th sample: a run reads its samples' data
      * in whole cache lines, where every s-th sample read nearly every line
-     * of the design (at 12 views of 256x256 the diagnostics took 2.4-2.9 ms
-     * of a 4.6 ms fit). */
+     * of the design (BENCHMARKS.md, the warm path's sixth pass). */
     double log_residual;   /* RMS of (A y - f~) over the data rows, log space, mean over channels */
     double rms;            /* RMS of (reconstruction - sample) over samples and channels, linear */
     double max_abs;        /* max |reconstruction - sample| */
