@@ -409,7 +409,7 @@ typedef long long v4l __attribute__((vector_size(32)));
 
 /* One chunk of the diagnostics.  Per sample, in scalar code: the three
  * channels' log-space reconstruction (the texel loads are random) and its
- * residual.  Then, eight lanes at a time over a block's 3 nb values: the
+ * residual.  Then, four lanes at a time over a block's 3 nb values: the
  * squared residuals, the reconstruction mapped back and rounded to float
  * as a material stores it, its squared error and |error|.  Each of the
  * three vectors of a 12-value step keeps its own lane sums (lane l of
