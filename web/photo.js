@@ -57,12 +57,15 @@ export async function renderPhoto() {
   const surf = onSurface();
   $('photo-fit-wrap').classList.toggle('hidden', surf);
   $('photo-flip-wrap').classList.toggle('hidden', !surf);
-  const photo = state.photo;
+  const photo = state.photo, flip = $('photo-flip').checked, k = state.k;
+  const gen = photo.gen = (photo.gen || 0) + 1;
   let img;
-  try { img = surf ? await photoThrough(state.k) : photoImage(); } catch (e) { showError(e); return; }
-  if (state.photo !== photo) return;
-  state.photo.image = img;
-  state.photo.imageView = state.k;
+  try { img = surf ? await photoThrough(k) : photoImage(); } catch (e) { showError(e); return; }
+  // only the newest render lands: one for an earlier placement may end later
+  if (state.photo !== photo || photo.gen !== gen) return;
+  photo.image = img;
+  photo.imageView = k;
+  photo.imageFor = surf ? `surface:${flip}` : 'flat';
   const c = $('overlay-photo');
   blit(c.getContext('2d'), img, null, state.painter.exposure);
   c.classList.remove('hidden');
@@ -87,7 +90,11 @@ async function applyPhoto() {
       // every view, one after another (each its own undo step)
       let n = 0;
       for (const v of S.views) {
-        const img = v.k === state.photo.imageView && state.photo.image ? state.photo.image : await photoThrough(v.k);
+        // the preview's image only if it was made for this view, over the
+        // surface, with this flip (a click can come before its render ends)
+        const ready = state.photo.image && v.k === state.photo.imageView &&
+          state.photo.imageFor === `surface:${$('photo-flip').checked}`;
+        const img = ready ? state.photo.image : await photoThrough(v.k);
         await S.uploadImage(v.k, img);
         n++;
         $('photo-apply').textContent = `Painting ${n} of ${S.views.length}…`;
@@ -95,7 +102,7 @@ async function applyPhoto() {
       cancelPhoto();
       toast('Paintings replaced', `${n} views now show ${name} over the surface`);
     } else {
-      const img = state.photo.image || photoImage();
+      const img = state.photo.image && state.photo.imageFor === 'flat' ? state.photo.image : photoImage();
       await S.uploadImage(k, img);
       cancelPhoto();
       toast('Painting replaced', `view ${k} now shows ${name || 'the image'}`);

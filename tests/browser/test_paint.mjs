@@ -370,12 +370,17 @@ run({
       vp.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
     });
     await page.waitForSelector('#photo-bar:not(.hidden)');
-    await page.selectOption('#photo-place', 'surface');
-    await page.waitForSelector('#photo-flip-wrap:not(.hidden)');
-    await page.waitForFunction(() => window.glint.state.photo && window.glint.state.photo.texture);
-    await t.shot(page, '06b-texture-over-surface.png');
-    await page.click('#photo-apply');
+    // "over the surface", and "Use as painting" in the same task, while the
+    // preview over the surface is still being rendered: view 0 must not
+    // take the flat photo's preview
+    await page.evaluate(() => {
+      const place = document.getElementById('photo-place');
+      place.value = 'surface';
+      place.dispatchEvent(new Event('change'));
+      document.getElementById('photo-apply').click();
+    });
     await page.waitForSelector('#photo-bar.hidden', { state: 'attached', timeout: 30000 });
+    await t.shot(page, '06b-texture-over-surface.png');
     const nviews = await page.evaluate(() => window.glint.state.session.views.length);
     let checked = 0;
     for (const k of [0, 5, nviews - 1]) {
