@@ -445,8 +445,16 @@ HF_CLONES static void diag_run(void *ctx, int c)
         j1 = w->count;
     for (long b0 = j0; b0 < j1; b0 += HF_BLOCK) {
         int nb = j1 - b0 < HF_BLOCK ? (int)(j1 - b0) : HF_BLOCK, m = 3 * nb, j;
-        for (int b = 0; b < nb; b++)
-            idx[b] = (int)((b0 + b) / w->run * w->stride + (b0 + b) % w->run);
+        { /* sample (j / run) stride + j % run, one division per block */
+            long r = b0 / w->run, o = b0 % w->run;
+            for (int b = 0; b < nb; b++) {
+                idx[b] = (int)(r * w->stride + o);
+                if (++o == w->run) {
+                    o = 0;
+                    r++;
+                }
+            }
+        }
         map_block(x, idx, 0, nb, fb, clamped, &bad);
         for (int b = 0; b < nb; b++) {
             int i = idx[b];
