@@ -419,6 +419,40 @@ typedef long long v4l __attribute__((vector_size(32)));
  * function of the chunking alone, so the figures are the same bits on any
  * thread count and any of the clones.  One chain per figure was a
  * dependent addition per value, which bounded the loop. */
+/* The start of the cache line holding p. */
+static const char *line_of(const void *p)
+{
+    return (const char *)((uintptr_t)p & ~(uintptr_t)63);
+}
+
+/* Ask for the cache lines of the samples of the block at j (before j1)
+ * of the diagnostics' runs: its values, texel indices and weights (and
+ * n.wi).  Runs far apart start new streams the hardware has not seen;
+ * fetched a block ahead, their first lines do not wait for memory. */
+static void diag_prefetch(const hf_stream *x, const diag_task *w, long j, long j1)
+{
+    const hf_design *d = x->d;
+    long je = j + HF_BLOCK < j1 ? j + HF_BLOCK : j1;
+    while (j < je) {
+        long o = j % w->run, len = w->run - o < je - j ? w->run - o : je - j;
+        size_t i = (size_t)(j / w->run * w->stride + o), e = i + (size_t)len;
+        for (const char *q = line_of(x->rgb + 3 * i); q < (const char *)(x->rgb + 3 * e);
+             q += 64)
+            __builtin_prefetch(q);
+        for (const char *q = line_of(d->k0 + 3 * i); q < (const char *)(d->k0 + 3 * e);
+             q += 64)
+            __builtin_prefetch(q);
+        for (const char *q = line_of(d->t + 3 * i); q < (const char *)(d->t + 3 * e);
+             q += 64)
+            __builtin_prefetch(q);
+        if (x->model == HF_MODEL_BRDF)
+            for (const char *q = line_of(d->cos_i + i); q < (const char *)(d->cos_i + e);
+                 q += 64)
+                __builtin_prefetch(q);
+        j += len;
+    }
+}
+
 HF_CLONES static void diag_run(void *ctx, int c)
 {
     diag_task *w = ctx;
@@ -454,6 +488,8 @@ HF_CLONES static void diag_run(void *ctx, int c)
                     r++;
                 }
             }
+            if (w->run < HF_BLOCK) /* runs apart: the next block's, fetched now */
+                diag_prefetch(x, w, b0 + HF_BLOCK, j1);
         }
         map_block(x, idx, 0, nb, fb, clamped, &bad);
         for (int b = 0; b < nb; b++) {
