@@ -70,12 +70,26 @@ const method *method_at(int i)
     return m;
 }
 
-void method_memo_clear(method_memo *mm)
+void method_memo_drop_data(method_memo *mm)
 {
     if (!mm)
         return;
     if (mm->data && mm->free)
         mm->free(mm->data);
+    mm->owner = NULL;
+    mm->data = NULL;
+    mm->free = NULL;
+}
+
+void method_memo_clear(method_memo *mm)
+{
+    if (!mm)
+        return;
+    method_memo_drop_data(mm);
+    free(mm->values);
+    free(mm->values_tags);
+    free(mm->values_ok);
+    free(mm->values_key);
     memset(mm, 0, sizeof *mm);
 }
 

@@ -115,10 +115,24 @@ typedef struct method_memo {
     const struct method *owner;
     void *data;
     void (*free)(void *data);
+    /* The painted values of the last fit's samples, kept by
+     * prep_fit_reusing (methods leave them alone): 3 values_n floats of the
+     * pattern named values_key, view v's samples holding the values of the
+     * painting tagged values_tags[v] where values_ok[v]; a fit reads again
+     * only the views whose tags changed. */
+    float *values;
+    uint64_t *values_tags;
+    unsigned char *values_ok;
+    char *values_key;
+    int values_n, values_nviews;
 } method_memo;
 
-/* Free the data and zero *mm (accepts NULL and a zeroed memo). */
+/* Free everything and zero *mm (accepts NULL and a zeroed memo). */
 void method_memo_clear(method_memo *mm);
+
+/* Free the method's data alone (owner, data, free), keeping the values:
+ * what a method does when it finds another method's data there. */
+void method_memo_drop_data(method_memo *mm);
 
 /* What a fit sees: the prepared levels and the painted values. */
 typedef struct method_fit_in {

@@ -326,7 +326,7 @@ static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
         hf_fit_reuse r;
         char key[128];
         if (in->memo->owner != &method_hf3) {
-            method_memo_clear(in->memo);
+            method_memo_drop_data(in->memo);
             if ((in->memo->data = hf_memo_new())) {
                 in->memo->owner = &method_hf3;
                 in->memo->free = memo_free;

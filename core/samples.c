@@ -362,6 +362,7 @@ fail:
 typedef struct gather_ctx {
     const samples *s;
     const img *paintings;
+    const unsigned char *views; /* NULL: every view */
     float *rgb;
     int chunk, nchunks;
     int *bad; /* per chunk: 3 i + channel of its first non-finite value, or -1 */
@@ -377,8 +378,12 @@ static void gather_run(void *ctx, int c)
     g->bad[c] = -1;
     for (int i = i0; i < i1; i++) {
         const img *im = &g->paintings[s->view[i]];
-        const float *px = im->px + (size_t)s->pixel[i] * im->channels;
-        double inv = 1.0 / s->intensity[i];
+        const float *px;
+        double inv;
+        if (g->views && !g->views[s->view[i]])
+            continue;
+        px = im->px + (size_t)s->pixel[i] * im->channels;
+        inv = 1.0 / s->intensity[i];
         for (int ch = 0; ch < 3; ch++) {
             float v = im->channels == 1 ? px[0] : px[ch];
             if (!isfinite(v)) {
@@ -392,9 +397,15 @@ static void gather_run(void *ctx, int c)
 
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
 {
+    return samples_gather_views(s, paintings, NULL, rgb, err);
+}
+
+int samples_gather_views(const samples *s, const img *paintings, const unsigned char *views,
+                         float *rgb, glint_err *err)
+{
     for (int v = 0; v < s->nviews; v++) {
         const img *im = &paintings[v];
-        if (!s->used[v])
+        if (!s->used[v] || (views && !views[v]))
             continue;
         if (!im->px || im->width != s->width || im->height != s->height)
             return glint_err_set(err, GLINT_EINVAL,
@@ -407,7 +418,7 @@ int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err
                                  im->channels);
     }
     {
-        gather_ctx g = {s, paintings, rgb, 0, 0, NULL};
+        gather_ctx g = {s, paintings, views, rgb, 0, 0, NULL};
         int rc = 0;
         g.chunk = GATHER_CHUNK;
         g.nchunks = (int)(((long)s->n + GATHER_CHUNK - 1) / GATHER_CHUNK);

@@ -117,6 +117,12 @@ int samples_subset(const samples *all, const unsigned char *use, const char scen
 int samples_gather(const samples *s, const img *paintings, float *rgb,
                    glint_err *err);
 
+/* The same for the samples of the views flagged in views[nviews] alone
+ * (NULL: every view); the other samples' entries of rgb are left as they
+ * are, and the other views' images are not looked at. */
+int samples_gather_views(const samples *s, const img *paintings, const unsigned char *views,
+                         float *rgb, glint_err *err);
+
 /* Scatter per-sample RGB values (3 * n) into one RGB image per view
  * (OUT: imgs[nviews], allocated here; non-sample pixels get `fill`). */
 int samples_scatter(const samples *s, const float *rgb, float fill,

@@ -3,9 +3,11 @@
  * point, the least recently used making room.  A fit takes its memo out of
  * the table for its run and puts it back after, so no two fits use one at
  * once (a second fit of the same point meanwhile starts from an empty
- * one, and the later of the two to finish is kept).  Memory: an hf3 memo
- * is 9 res doubles per chunk of samples (at most 32 chunks: 147 KB at res
- * 64), held for at most FITSVC_MEMOS points. */
+ * one, and the later of the two to finish is kept).  Memory, for at most
+ * FITSVC_MEMOS points: an hf3 memo's sums are 9 res doubles per chunk of
+ * samples (at most 32 chunks: 147 KB at res 64); every memo keeps the
+ * pattern's painted values, 12 bytes a sample up to 16 MiB (prep.c; 4.7
+ * MB for 12 views of 256x256), its fit's buffer kept rather than freed. */
 #include <stdio.h>
 #include <string.h>
 
@@ -74,11 +76,15 @@ void fitsvc_memo_metrics(fitsvc *f, FILE *o)
 {
     unsigned long long chunks, reused;
     int held = 0;
+    unsigned long long values = 0;
     pthread_mutex_lock(&f->lock);
     chunks = f->memo_chunks;
     reused = f->memo_reused;
-    for (int i = 0; i < FITSVC_MEMOS; i++)
+    for (int i = 0; i < FITSVC_MEMOS; i++) {
         held += f->memos[i].used != 0;
+        if (f->memos[i].used && f->memos[i].mm.values)
+            values += (unsigned long long)f->memos[i].mm.values_n * 3 * sizeof(float);
+    }
     pthread_mutex_unlock(&f->lock);
     fprintf(o, "# HELP glintd_fit_stream_chunks_total Chunks of samples of the fits' passes, "
                "by whether a session's earlier fit served their sums (views not repainted) or "
@@ -87,4 +93,8 @@ void fitsvc_memo_metrics(fitsvc *f, FILE *o)
     fprintf(o, "glintd_fit_stream_chunks_total{from=\"summed\"} %llu\n", chunks - reused);
     fprintf(o, "# HELP glintd_fit_memos Sessions' fit memos held.\n"
                "# TYPE glintd_fit_memos gauge\nglintd_fit_memos %d\n", held);
+    fprintf(o, "# HELP glintd_fit_memo_values_bytes Painted values the memos keep, so that "
+               "a fit reads again only the views repainted since.\n"
+               "# TYPE glintd_fit_memo_values_bytes gauge\nglintd_fit_memo_values_bytes %llu\n",
+            values);
 }

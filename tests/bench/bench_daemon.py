@@ -425,8 +425,8 @@ def main():
                         "%.2f" % statistics.median(v) for v in st.values()), "ms"))
             # the fit step's own parts, as the material reports them
             st = {k: v for k, v in server.get("inner", {}).items()
-                  if k in ("map", "stream", "apply_operator", "apply", "factorization",
-                           "diagnostics", "fit")}
+                  if k in ("gather", "map", "stream", "apply_operator", "apply",
+                           "factorization", "diagnostics", "fit")}
             rows.append(("...... its fit step (the material's seconds, medians): %s" % (
                 " / ".join(st)), " / ".join("%.2f" % statistics.median(v) for v in st.values()),
                 "ms"))

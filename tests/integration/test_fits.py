@@ -628,8 +628,11 @@ def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
     kind, m1 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
     chunks = m1["precomputation"]["stream_chunks"]
     assert chunks > 4 and m1["precomputation"]["stream_chunks_reused"] == 0, m1["precomputation"]
+    nused = len(m1["views_used"])
+    assert nused > 1 and m1["precomputation"]["values_views_read"] == nused
     kind, m1b = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
     assert m1b["precomputation"]["stream_chunks_reused"] == chunks
+    assert m1b["precomputation"]["values_views_read"] == 0
     assert m1b["errors"] == m1["errors"]
     with open(os.path.join(S["paint2_dir"], "view_05.exr"), "rb") as f:
         body = f.read()
@@ -639,6 +642,7 @@ def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
     kind, m2 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
     reused = m2["precomputation"]["stream_chunks_reused"]
     assert 0 < reused < chunks, m2["precomputation"]
+    assert m2["precomputation"]["values_views_read"] == 1
     assert m2["errors"] != m1["errors"]
     # the same paintings, fitted from nothing
     s2 = make_session(d, range(S["nviews"]))
@@ -647,6 +651,7 @@ def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
           data=body, status=200, schema="PaintingVersion.json")
     kind, m3 = fit(d, {"res": 32}, token=s2["paint_token"], session=s2["id"], expect=201)
     assert m3["precomputation"]["stream_chunks_reused"] == 0
+    assert m3["precomputation"]["values_views_read"] == nused
     assert m3["errors"] == m2["errors"], (m3["errors"], m2["errors"])
     f2 = d.get("/api/v1/materials/%s/factors.exr" % m2["id"], headers=tok(s["view_token"]),
                status=200)
@@ -663,7 +668,11 @@ def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
     assert m4["precomputation"]["stream_chunks_reused"] == 0
     kind, m5 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
     assert m5["precomputation"]["stream_chunks_reused"] == chunks
+    assert m5["precomputation"]["values_views_read"] == 0
     assert m5["errors"] == m2["errors"]
+    held = [float(line.split()[-1]) for line in d.get("/metrics", status=200).text.splitlines()
+            if line.startswith("glintd_fit_memo_values_bytes ")]
+    assert held and held[0] >= 12 * m5["precomputation"]["samples"], held
     assert metric(d, "glintd_fit_stream_chunks_total", {"from": "memo"}) >= \
         (memo0 or 0) + chunks + reused + chunks
 

@@ -4,12 +4,15 @@
  * through prep equals the direct path (fit.h), materials render in bands
  * exactly as they shade whole G-buffers, and the held-out measurement on
  * samples equals the error measured on G-buffers. */
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "brdf.h"
 #include "cache.h"
 #include "check.h"
 #include "fit.h"
+#include "img.h"
 #include "material.h"
 #include "method_hf3.h"
 #include "paint.h"
@@ -270,6 +273,130 @@ TEST(a_fit_through_the_cache_equals_the_direct_path)
     cache_close(c);
 }
 
+/* Copies of the paintings (OUT: q[12]). */
+static int copy_paintings(img *q)
+{
+    glint_err e;
+    for (int v = 0; v < 12; v++) {
+        size_t n = (size_t)P[v].width * P[v].height * P[v].channels;
+        if (img_alloc(&q[v], P[v].width, P[v].height, P[v].channels, &e))
+            return -1;
+        memcpy(q[v].px, P[v].px, n * sizeof *q[v].px);
+    }
+    return 0;
+}
+
+/* A fit through a memo, against a fit of the same paintings from nothing:
+ * the same log-factors (bits) and error figures.  OUT: *read, the views it
+ * read (values_views_read). */
+static int memo_fit_same(const prep *p, const img *q, const uint64_t *tags, method_memo *mm,
+                         int *read)
+{
+    material a, b;
+    glint_err e;
+    int same, res;
+    if (prep_fit_reusing(p, q, NULL, tags, mm, &a, &e))
+        return -1;
+    if (prep_fit(p, q, NULL, &b, &e)) {
+        material_free(&a);
+        return -1;
+    }
+    res = hf3_factors(&a)->res;
+    same = res == hf3_factors(&b)->res &&
+           memcmp(hf3_factors(&a)->logf, hf3_factors(&b)->logf,
+                  (size_t)9 * res * sizeof(double)) == 0 &&
+           json_equal(json_object_get(a.info, "errors"), json_object_get(b.info, "errors"));
+    *read = (int)json_integer_value(
+        json_object_get(json_object_get(a.info, "precomputation"), "values_views_read"));
+    material_free(&a);
+    material_free(&b);
+    return same ? 0 : 1;
+}
+
+TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
+{
+    prep_scene_source src = {borrowed, NULL, &SC};
+    unsigned char use[12];
+    uint64_t tags[12];
+    fit_params fp;
+    method_memo mm;
+    img q[12];
+    cache *c;
+    cache_entry *se;
+    prep *p = NULL;
+    const samples *s;
+    long i5 = -1;
+    int read = -1;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    memset(use, 1, sizeof use);
+    memset(&mm, 0, sizeof mm);
+    memset(q, 0, sizeof q);
+    fit_params_default(&fp);
+    fp.res = 16;
+    ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
+    ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
+    {
+        prep_request rq = {&method_hf3, &fp, se, use};
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
+    }
+    s = prep_samples(p);
+    ASSERT_OK(copy_paintings(q));
+    for (int v = 0; v < 12; v++)
+        tags[v] = 1 + (uint64_t)v;
+    /* the first fit reads every view; the second none */
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 12);
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 0);
+    ASSERT(mm.values && mm.values_n == s->n);
+    /* view 3 repainted: read again alone */
+    for (long k = 0; k < (long)q[3].width * q[3].height * q[3].channels; k++)
+        q[3].px[k] *= 0.7f;
+    tags[3] = 100;
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 1);
+    /* view 5 repainted with a non-finite value in its last sample fails
+     * the fit after most of its values were read over the memo's; back to
+     * its first painting and tag, it is read again, not taken as kept */
+    for (long i = 0; i < s->n; i++)
+        if (s->view[i] == 5)
+            i5 = i;
+    ASSERT(i5 >= 0);
+    {
+        material m;
+        size_t np = (size_t)q[5].width * q[5].height * q[5].channels;
+        float *keep = malloc(np * sizeof *keep);
+        ASSERT(keep);
+        memcpy(keep, q[5].px, np * sizeof *keep);
+        for (size_t k = 0; k < np; k++)
+            q[5].px[k] *= 0.5f;
+        q[5].px[(size_t)s->pixel[i5] * q[5].channels] = NAN;
+        tags[5] = 200;
+        ASSERT_EQ(prep_fit_reusing(p, q, NULL, tags, &mm, &m, &e), GLINT_ENONFINITE);
+        memcpy(q[5].px, keep, np * sizeof *keep);
+        free(keep);
+        tags[5] = 6;
+    }
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 1);
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 0);
+    /* another method's data in the memo is dropped, the values kept */
+    method_memo_drop_data(&mm);
+    ASSERT(mm.values && !mm.data);
+    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_EQ(read, 0);
+    method_memo_clear(&mm);
+    ASSERT(!mm.values && !mm.values_ok && !mm.values_key);
+    for (int v = 0; v < 12; v++)
+        img_free(&q[v]);
+    prep_release(c, p);
+    cache_release(c, se);
+    cache_close(c);
+}
+
 TEST(rendering_in_bands_equals_shading_the_whole_view)
 {
     fit_params fp;
@@ -360,6 +487,7 @@ TEST_LIST{
     TEST_ENTRY(samples_carry_the_texture_coordinates_of_their_pixels),
     TEST_ENTRY(spatially_varying_truths_follow_the_texture_coordinates),
     TEST_ENTRY(a_fit_through_the_cache_equals_the_direct_path),
+    TEST_ENTRY(a_memo_reads_again_only_the_views_whose_tags_changed),
     TEST_ENTRY(rendering_in_bands_equals_shading_the_whole_view),
     TEST_ENTRY(held_out_error_on_samples_equals_the_error_on_the_view),
     TEST_ENTRY(sample_counts_equal_the_pattern),
