@@ -81,15 +81,27 @@ void method_memo_drop_data(method_memo *mm)
     mm->free = NULL;
 }
 
+void method_memo_drop_values(method_memo *mm)
+{
+    if (!mm)
+        return;
+    free(mm->values);
+    free(mm->values_tags);
+    free(mm->values_ok);
+    free(mm->values_key);
+    mm->values = NULL;
+    mm->values_tags = NULL;
+    mm->values_ok = NULL;
+    mm->values_key = NULL;
+    mm->values_n = mm->values_nviews = 0;
+}
+
 void method_memo_clear(method_memo *mm)
 {
     if (!mm)
         return;
     method_memo_drop_data(mm);
-    free(mm->values);
-    free(mm->values_tags);
-    free(mm->values_ok);
-    free(mm->values_key);
+    method_memo_drop_values(mm);
     memset(mm, 0, sizeof *mm);
 }
 

@@ -134,6 +134,9 @@ void method_memo_clear(method_memo *mm);
  * what a method does when it finds another method's data there. */
 void method_memo_drop_data(method_memo *mm);
 
+/* Free the values alone and zero their fields. */
+void method_memo_drop_values(method_memo *mm);
+
 /* What a fit sees: the prepared levels and the painted values. */
 typedef struct method_fit_in {
     const void *params;

@@ -571,10 +571,7 @@ static int values_for(method_memo *mm, const char *key, int n, int nviews)
     if (mm->values && mm->values_n == n && mm->values_nviews == nviews && mm->values_key &&
         strcmp(mm->values_key, key) == 0)
         return 0;
-    free(mm->values);
-    free(mm->values_tags);
-    free(mm->values_ok);
-    free(mm->values_key);
+    method_memo_drop_values(mm);
     mm->values = malloc((size_t)3 * n * sizeof *mm->values);
     mm->values_tags = calloc((size_t)nviews, sizeof *mm->values_tags);
     mm->values_ok = calloc((size_t)nviews, 1);
@@ -583,15 +580,7 @@ static int values_for(method_memo *mm, const char *key, int n, int nviews)
     mm->values_nviews = nviews;
     if (mm->values && mm->values_tags && mm->values_ok && mm->values_key)
         return 0;
-    free(mm->values);
-    free(mm->values_tags);
-    free(mm->values_ok);
-    free(mm->values_key);
-    mm->values = NULL;
-    mm->values_tags = NULL;
-    mm->values_ok = NULL;
-    mm->values_key = NULL;
-    mm->values_n = mm->values_nviews = 0;
+    method_memo_drop_values(mm);
     return -1;
 }
 
