@@ -407,18 +407,6 @@ typedef struct diag_task {
 typedef float v4f __attribute__((vector_size(16)));
 typedef long long v4l __attribute__((vector_size(32)));
 
-/* One chunk of the diagnostics.  Per sample, in scalar code: the three
- * channels' log-space reconstruction (the texel loads are random) and its
- * residual.  Then, four lanes at a time over a block's 3 nb values: the
- * squared residuals, the reconstruction mapped back and rounded to float
- * as a material stores it, its squared error and |error|.  Each of the
- * three vectors of a 12-value step keeps its own lane sums (lane l of
- * vector q sums channel (4q + l) % 3), added in a fixed order at the end
- * of the chunk with the scalar tail's: the sums are those of one chain per
- * figure in another order (the maximum is the same), and the order is a
- * function of the chunking alone, so the figures are the same bits on any
- * thread count and any of the clones.  One chain per figure was a
- * dependent addition per value, which bounded the loop. */
 /* The start of the cache line holding p. */
 static const char *line_of(const void *p)
 {
@@ -453,6 +441,18 @@ static void diag_prefetch(const hf_stream *x, const diag_task *w, long j, long j
     }
 }
 
+/* One chunk of the diagnostics.  Per sample, in scalar code: the three
+ * channels' log-space reconstruction (the texel loads are random) and its
+ * residual.  Then, four lanes at a time over a block's 3 nb values: the
+ * squared residuals, the reconstruction mapped back and rounded to float
+ * as a material stores it, its squared error and |error|.  Each of the
+ * three vectors of a 12-value step keeps its own lane sums (lane l of
+ * vector q sums channel (4q + l) % 3), added in a fixed order at the end
+ * of the chunk with the scalar tail's: the sums are those of one chain per
+ * figure in another order (the maximum is the same), and the order is a
+ * function of the chunking alone, so the figures are the same bits on any
+ * thread count and any of the clones.  One chain per figure was a
+ * dependent addition per value, which bounded the loop. */
 HF_CLONES static void diag_run(void *ctx, int c)
 {
     diag_task *w = ctx;
