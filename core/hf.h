@@ -347,7 +347,12 @@ int hf_fit(const hf_design *d, const hf_op *op, const hf_map *map,
  * (the memo adds those).  Which values a view holds is named by tags[v]:
  * equal tags promise equal values of every sample of view v (view[i]: the
  * view of sample i, nondecreasing over i, as samples_build makes them;
- * otherwise nothing is reused).  A memo whose key differs is emptied. */
+ * otherwise tags reuse nothing).  change (optional) says span by span
+ * where the values changed since earlier fits (samples.h): a chunk whose
+ * spans did not change since its sums were made is reused too, whatever
+ * its views' tags, so a fit after a brush stroke passes over the chunks
+ * the stroke touched.  A fit with no change forgets the memo's history.
+ * A memo whose key differs is emptied. */
 typedef struct hf_memo hf_memo;
 hf_memo *hf_memo_new(void);
 void hf_memo_free(hf_memo *m);
@@ -358,6 +363,7 @@ typedef struct hf_fit_reuse {
     const int *view;         /* d->n */
     const uint64_t *tags;    /* nviews */
     int nviews;
+    const samples_change *change; /* NULL: none */
 } hf_fit_reuse;
 
 /* hf_fit with reuse (NULL: hf_fit); stats->stream_chunks_reused says how

@@ -209,6 +209,11 @@ struct hf_memo {
     int *vlo, *vhi;      /* nchunks: the views a chunk's samples come from */
     int *toff;           /* nchunks + 1: chunk c's views' tags at tags[toff[c]..] */
     uint64_t *tags;      /* the paintings' tags the valid sums were made from */
+    /* the values' history (samples_change) the valid sums are known in:
+     * chunk c's sums are those of the values as of read epoch[c] of the
+     * history change_id (0: none) */
+    uint64_t change_id;
+    uint64_t *epoch;     /* nchunks */
 };
 
 hf_memo *hf_memo_new(void)
@@ -227,6 +232,7 @@ static void memo_clear(hf_memo *m)
     free(m->vhi);
     free(m->toff);
     free(m->tags);
+    free(m->epoch);
     memset(m, 0, sizeof *m);
 }
 
@@ -277,7 +283,9 @@ static int memo_reset(hf_memo *m, char *k, const hf_stream *x, const hf_fit_reus
     m->vlo = malloc((size_t)nchunks * sizeof *m->vlo);
     m->vhi = malloc((size_t)nchunks * sizeof *m->vhi);
     m->toff = malloc(((size_t)nchunks + 1) * sizeof *m->toff);
-    if (!m->part || !m->clamped || !m->bad || !m->valid || !m->vlo || !m->vhi || !m->toff) {
+    m->epoch = calloc((size_t)nchunks, sizeof *m->epoch);
+    if (!m->part || !m->clamped || !m->bad || !m->valid || !m->vlo || !m->vhi || !m->toff ||
+        !m->epoch) {
         memo_clear(m);
         return -1;
     }
@@ -297,14 +305,26 @@ static int memo_reset(hf_memo *m, char *k, const hf_stream *x, const hf_fit_reus
     return 0;
 }
 
-/* Are chunk c's sums in the memo those of these paintings? */
-static int memo_fresh(const hf_memo *m, int c, const uint64_t *tags)
+/* Are chunk c's sums in the memo those of these paintings: its views'
+ * tags unchanged, or none of its spans' values changed since the sums
+ * were made? */
+static int memo_fresh(const hf_memo *m, int c, const hf_fit_reuse *r, int chunk, long n)
 {
-    if (!m->sorted || !m->valid[c])
+    const samples_change *ch = r->change;
+    int same = m->sorted;
+
+    if (!m->valid[c])
         return 0;
-    for (int v = m->vlo[c]; v <= m->vhi[c]; v++)
-        if (m->tags[m->toff[c] + v - m->vlo[c]] != tags[v])
-            return 0;
+    for (int v = m->vlo[c]; v <= m->vhi[c] && same; v++)
+        same = m->tags[m->toff[c] + v - m->vlo[c]] == r->tags[v];
+    if (same || !ch || ch->id != m->change_id)
+        return same;
+    {
+        long i0 = (long)c * chunk, i1 = i0 + chunk < n ? i0 + chunk : n;
+        for (long k = i0 / SAMPLES_SPAN; k <= (i1 - 1) / SAMPLES_SPAN; k++)
+            if (ch->gen[k] > m->epoch[c])
+                return 0;
+    }
     return 1;
 }
 
@@ -346,7 +366,7 @@ int hf_stream_forward(const hf_stream *x, const hf_fit_reuse *reuse, double *t,
         goto done;
     }
     for (int c = 0; c < w.nchunks; c++) {
-        if (m && memo_fresh(m, c, reuse->tags))
+        if (m && memo_fresh(m, c, reuse, w.chunk, d->n))
             continue;
         if (m)
             m->valid[c] = 0;
@@ -363,13 +383,23 @@ int hf_stream_forward(const hf_stream *x, const hf_fit_reuse *reuse, double *t,
         rc = -1;
         goto done;
     }
-    if (m && m->sorted) /* the chunks just summed now hold these paintings' sums */
-        for (int k = 0; k < ntodo; k++) {
-            int c = todo[k];
+    if (m) {
+        /* Every valid chunk now holds the sums of these paintings, the
+         * values as of this read: the chunks just summed, and those
+         * reused, by their tags (equal tags, equal values) or their
+         * spans.  A fit without a history forgets the memo's. */
+        const samples_change *ch = reuse->change;
+        for (int k = 0; k < ntodo; k++)
+            m->valid[todo[k]] = !m->bad[todo[k]];
+        for (int c = 0; c < w.nchunks; c++) {
+            if (!m->valid[c])
+                continue;
             for (int v = m->vlo[c]; v <= m->vhi[c]; v++)
                 m->tags[m->toff[c] + v - m->vlo[c]] = reuse->tags[v];
-            m->valid[c] = !m->bad[c];
+            m->epoch[c] = ch ? ch->epoch : 0;
         }
+        m->change_id = ch ? ch->id : 0;
+    }
     /* the chunks' sums added in chunk order, however they were made */
     memcpy(t, w.part, len * sizeof *t);
     for (int c = 1; c < w.nchunks; c++)

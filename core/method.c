@@ -89,11 +89,14 @@ void method_memo_drop_values(method_memo *mm)
     free(mm->values_tags);
     free(mm->values_ok);
     free(mm->values_key);
+    free(mm->values_gen);
     mm->values = NULL;
     mm->values_tags = NULL;
     mm->values_ok = NULL;
     mm->values_key = NULL;
+    mm->values_gen = NULL;
     mm->values_n = mm->values_nviews = 0;
+    mm->values_epoch = mm->values_id = 0;
 }
 
 void method_memo_clear(method_memo *mm)

@@ -119,12 +119,16 @@ typedef struct method_memo {
      * prep_fit_reusing (methods leave them alone): 3 values_n floats of the
      * pattern named values_key, view v's samples holding the values of the
      * painting tagged values_tags[v] where values_ok[v]; a fit reads again
-     * only the views whose tags changed. */
+     * only the views whose tags changed.  values_gen, values_epoch and
+     * values_id record where the values changed from one read to the next
+     * (samples_change: values_gen per span of SAMPLES_SPAN samples). */
     float *values;
     uint64_t *values_tags;
     unsigned char *values_ok;
     char *values_key;
     int values_n, values_nviews;
+    uint64_t *values_gen;
+    uint64_t values_epoch, values_id;
 } method_memo;
 
 /* Free everything and zero *mm (accepts NULL and a zeroed memo). */
@@ -155,6 +159,11 @@ typedef struct method_fit_in {
      * values of its own making (maps, auto) passes it neither. */
     method_memo *memo;
     const uint64_t *view_tags;
+    /* Optional, with memo: where the painted values changed since earlier
+     * fits through this memo, span by span (samples.h), so that a method
+     * may reuse what it kept for samples whose values did not change even
+     * in a repainted view (a brush stroke changes a few spans). */
+    const samples_change *values_change;
 } method_fit_in;
 
 /* ---- the material ------------------------------------------------------------------------ */

@@ -322,7 +322,8 @@ static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
     pp.t_decomp = in->how[0] == CACHE_BUILT ? x->t_decomp : in->spent[0];
     pp.t_op = in->spent[1];
     if (in->memo && in->view_tags) {
-        /* the pass's chunk sums of views not repainted since the last fit */
+        /* the pass's chunk sums of views not repainted since the last fit,
+         * or of spans the values did not change in */
         hf_fit_reuse r;
         char key[128];
         if (in->memo->owner != &method_hf3) {
@@ -340,6 +341,7 @@ static int hf3_fit(const method_fit_in *in, material *out, glint_err *err)
             r.view = in->s->view;
             r.tags = in->view_tags;
             r.nviews = in->s->nviews;
+            r.change = in->values_change;
             pp.reuse = &r;
             return hf3_fit_material(&pp, in->rgb, t0, out, err);
         }

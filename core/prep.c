@@ -572,13 +572,18 @@ static int values_for(method_memo *mm, const char *key, int n, int nviews)
         strcmp(mm->values_key, key) == 0)
         return 0;
     method_memo_drop_values(mm);
-    mm->values = malloc((size_t)3 * n * sizeof *mm->values);
+    /* zeroed: the first read compares what it writes with these */
+    mm->values = calloc((size_t)3 * n, sizeof *mm->values);
     mm->values_tags = calloc((size_t)nviews, sizeof *mm->values_tags);
     mm->values_ok = calloc((size_t)nviews, 1);
     mm->values_key = strdup(key);
+    mm->values_gen = calloc(((size_t)n + SAMPLES_SPAN - 1) / SAMPLES_SPAN,
+                            sizeof *mm->values_gen);
     mm->values_n = n;
     mm->values_nviews = nviews;
-    if (mm->values && mm->values_tags && mm->values_ok && mm->values_key)
+    mm->values_epoch = 0;
+    mm->values_id = samples_change_id();
+    if (mm->values && mm->values_tags && mm->values_ok && mm->values_key && mm->values_gen)
         return 0;
     method_memo_drop_values(mm);
     return -1;
@@ -587,20 +592,30 @@ static int values_for(method_memo *mm, const char *key, int n, int nviews)
 /* The samples' values through the memo: read again from the paintings
  * only for the views whose tags changed since the memo's values were
  * read (equal tags promise equal paintings, method.h), so the values are
- * those samples_gather gives.  OUT: *rgb (the memo's), *read (views read).
- * 1: the memo cannot hold them (too large, out of memory): gather apart. */
+ * those samples_gather gives.  The read is numbered (values_epoch) and
+ * the spans whose values it changed get its number (values_gen); a read
+ * that fails gives the memo a new history (values_id).  OUT: *rgb (the
+ * memo's), *read (views read).  1: the memo cannot hold them (too large,
+ * out of memory): gather apart. */
 static int gather_reusing(const prep *p, const samples *s, const img *paintings,
                           const uint64_t *tags, method_memo *mm, const float **rgb, int *read,
                           glint_err *err)
 {
-    unsigned char *which;
+    size_t nspans = ((size_t)s->n + SAMPLES_SPAN - 1) / SAMPLES_SPAN;
+    unsigned char *which, *changed;
     int rc;
 
     if ((size_t)3 * s->n * sizeof(float) > PREP_MEMO_VALUES_MAX ||
         values_for(mm, cache_key(p->pattern), s->n, s->nviews))
         return 1;
-    if (!(which = calloc((size_t)s->nviews, 1)))
+    which = calloc((size_t)s->nviews, 1);
+    changed = calloc(nspans, 1);
+    if (!which || !changed) {
+        free(which);
+        free(changed);
         return 1;
+    }
+    mm->values_epoch++;
     *read = 0;
     for (int v = 0; v < s->nviews; v++)
         if (s->used[v] && (!mm->values_ok[v] || mm->values_tags[v] != tags[v])) {
@@ -608,14 +623,21 @@ static int gather_reusing(const prep *p, const samples *s, const img *paintings,
             mm->values_ok[v] = 0; /* until read whole */
             (*read)++;
         }
-    rc = *read ? samples_gather_views(s, paintings, which, mm->values, err) : 0;
-    if (!rc)
+    rc = *read ? samples_gather_views(s, paintings, which, mm->values, changed, err) : 0;
+    for (size_t k = 0; k < nspans; k++)
+        if (changed[k])
+            mm->values_gen[k] = mm->values_epoch;
+    if (!rc) {
         for (int v = 0; v < s->nviews; v++)
             if (which[v]) {
                 mm->values_ok[v] = 1;
                 mm->values_tags[v] = tags[v];
             }
+    } else {
+        mm->values_id = samples_change_id();
+    }
     free(which);
+    free(changed);
     if (rc)
         return rc; /* a glint error (< 0) */
     *rgb = mm->values;
@@ -630,6 +652,7 @@ int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
     const char *keys[METHOD_MAX_LEVELS];
     cache_disk disk[METHOD_MAX_LEVELS];
     method_fit_in in;
+    samples_change change;
     float *own = NULL;
     json_t *pre;
     double t0 = glint_now(), t_gather = -1.0;
@@ -657,14 +680,22 @@ int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
     if (memo && tags) {
         in.memo = memo;
         in.view_tags = tags;
+        if (read >= 0) { /* the values are the memo's */
+            change.id = memo->values_id;
+            change.epoch = memo->values_epoch;
+            change.gen = memo->values_gen;
+            in.values_change = &change;
+        }
     }
     rc = p->m->fit(&in, out, err);
     free(own);
     if (rc)
         return rc;
     if (samples_torn(s)) {
-        if (read >= 0) /* what was read from a torn pattern is not kept */
+        if (read >= 0) { /* what was read from a torn pattern is not kept */
             memset(memo->values_ok, 0, (size_t)s->nviews);
+            memo->values_id = samples_change_id();
+        }
         material_free(out);
         return prep_torn_error(err, "this fit");
     }

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -356,14 +357,17 @@ fail:
 }
 
 /* The gather runs in chunks on the worker pool (par.h); each sample is
- * independent, so the result does not depend on the threads. */
+ * independent, so the result does not depend on the threads.  A chunk
+ * holds whole spans, so no two chunks flag the same one. */
 #define GATHER_CHUNK 16384
+_Static_assert(GATHER_CHUNK % SAMPLES_SPAN == 0, "a gather chunk holds whole spans");
 
 typedef struct gather_ctx {
     const samples *s;
     const img *paintings;
     const unsigned char *views; /* NULL: every view */
     float *rgb;
+    unsigned char *changed;     /* per span, or NULL */
     int chunk, nchunks;
     int *bad; /* per chunk: 3 i + channel of its first non-finite value, or -1 */
 } gather_ctx;
@@ -385,23 +389,37 @@ static void gather_run(void *ctx, int c)
         px = im->px + (size_t)s->pixel[i] * im->channels;
         inv = 1.0 / s->intensity[i];
         for (int ch = 0; ch < 3; ch++) {
-            float v = im->channels == 1 ? px[0] : px[ch];
+            float v = im->channels == 1 ? px[0] : px[ch], x;
+            uint32_t now, was;
             if (!isfinite(v)) {
                 g->bad[c] = 3 * i + ch;
                 return;
             }
-            g->rgb[3 * i + ch] = (float)(v * inv);
+            x = (float)(v * inv);
+            if (g->changed) {
+                memcpy(&now, &x, sizeof now);
+                memcpy(&was, &g->rgb[3 * i + ch], sizeof was);
+                if (now != was)
+                    g->changed[i / SAMPLES_SPAN] = 1;
+            }
+            g->rgb[3 * i + ch] = x;
         }
     }
 }
 
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
 {
-    return samples_gather_views(s, paintings, NULL, rgb, err);
+    return samples_gather_views(s, paintings, NULL, rgb, NULL, err);
+}
+
+uint64_t samples_change_id(void)
+{
+    static _Atomic uint64_t last;
+    return atomic_fetch_add(&last, 1) + 1;
 }
 
 int samples_gather_views(const samples *s, const img *paintings, const unsigned char *views,
-                         float *rgb, glint_err *err)
+                         float *rgb, unsigned char *changed, glint_err *err)
 {
     for (int v = 0; v < s->nviews; v++) {
         const img *im = &paintings[v];
@@ -418,7 +436,7 @@ int samples_gather_views(const samples *s, const img *paintings, const unsigned 
                                  im->channels);
     }
     {
-        gather_ctx g = {s, paintings, views, rgb, 0, 0, NULL};
+        gather_ctx g = {s, paintings, views, rgb, changed, 0, 0, NULL};
         int rc = 0;
         g.chunk = GATHER_CHUNK;
         g.nchunks = (int)(((long)s->n + GATHER_CHUNK - 1) / GATHER_CHUNK);

@@ -15,6 +15,8 @@
 #ifndef GLINT_SAMPLES_H
 #define GLINT_SAMPLES_H
 
+#include <stdint.h>
+
 #include "err.h"
 #include "gbuf.h"
 #include "img.h"
@@ -119,9 +121,35 @@ int samples_gather(const samples *s, const img *paintings, float *rgb,
 
 /* The same for the samples of the views flagged in views[nviews] alone
  * (NULL: every view); the other samples' entries of rgb are left as they
- * are, and the other views' images are not looked at. */
+ * are, and the other views' images are not looked at.  changed (NULL:
+ * not asked), one flag per span of SAMPLES_SPAN samples (sample i in span
+ * i / SAMPLES_SPAN): set to 1 where a value written differs in its bits
+ * from the one rgb held, left alone elsewhere.  On an error some values
+ * may have been written (and flagged). */
 int samples_gather_views(const samples *s, const img *paintings, const unsigned char *views,
-                         float *rgb, glint_err *err);
+                         float *rgb, unsigned char *changed, glint_err *err);
+
+/* Sample values kept from one read to the next (a painter's session,
+ * prep_fit_reusing) are compared in spans of SAMPLES_SPAN consecutive
+ * samples. */
+#define SAMPLES_SPAN 1024
+
+/* Where kept sample values changed, for whoever keeps results made from
+ * them: the reads into the buffer are numbered (epoch: this read's), and
+ * gen[k] is the number of the last read that changed a value of span k.
+ * Results made from the values as of read e are still those of the
+ * values now over every span with gen <= e.  id names the buffer's
+ * history: it is new (samples_change_id) whenever values may have changed
+ * without being recorded (a new buffer, a failed read), so that numbers
+ * are compared only within one history. */
+typedef struct samples_change {
+    uint64_t id;         /* never 0 */
+    uint64_t epoch;
+    const uint64_t *gen; /* (n + SAMPLES_SPAN - 1) / SAMPLES_SPAN */
+} samples_change;
+
+/* A new history id: unique in the process, never 0 (thread-safe). */
+uint64_t samples_change_id(void);
 
 /* Scatter per-sample RGB values (3 * n) into one RGB image per view
  * (OUT: imgs[nviews], allocated here; non-sample pixels get `fill`). */

@@ -677,6 +677,44 @@ def test_12c_a_repainted_view_leaves_the_others_sums_to_the_memo(d):
         (memo0 or 0) + chunks + reused + chunks
 
 
+def test_12d_a_stroke_leaves_the_sums_of_the_samples_it_did_not_change(d):
+    """After a brush stroke a session's next fit compares the view's values
+    with those it kept and sums again only the chunks of samples whose
+    values changed: the same figures as a fit of the stroked painting from
+    nothing.  The same stroke again changes no value: nothing is summed
+    again."""
+    s = make_session(d, range(S["nviews"]))
+    kind, m1 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    chunks = m1["precomputation"]["stream_chunks"]
+    assert chunks > 4, m1["precomputation"]
+    stroke = {"strokes": [{"color": [0.9, 0.2, 0.1], "diameter": 3,
+                           "points": [[SIZE // 2, SIZE // 2]]}]}
+    url = "/api/v1/sessions/%s/views/0/strokes" % s["id"]
+    d.post(url, json=stroke, headers=tok(s["paint_token"]), status=200)
+    kind, m2 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    pre = m2["precomputation"]
+    assert pre["values_views_read"] == 1, pre
+    assert 1 <= chunks - pre["stream_chunks_reused"] <= 2, pre
+    assert m2["errors"] != m1["errors"]
+    # the stroked painting, fitted from nothing
+    body = d.get("/api/v1/sessions/%s/views/0/painting?format=exr" % s["id"],
+                 headers=tok(s["view_token"]), status=200).content
+    s2 = make_session(d, range(1, S["nviews"]))
+    d.put("/api/v1/sessions/%s/views/0/painting" % s2["id"],
+          headers={"Content-Type": "image/x-exr", "X-Glint-Token": s2["paint_token"]},
+          data=body, status=200, schema="PaintingVersion.json")
+    kind, m3 = fit(d, {"res": 32}, token=s2["paint_token"], session=s2["id"], expect=201)
+    assert m3["precomputation"]["stream_chunks_reused"] == 0
+    assert m3["errors"] == m2["errors"], (m3["errors"], m2["errors"])
+    # the same stroke again: a new version of the view, the same values
+    d.post(url, json=stroke, headers=tok(s["paint_token"]), status=200)
+    kind, m4 = fit(d, {"res": 32}, token=s["paint_token"], session=s["id"], expect=201)
+    assert m4["paintings"][0]["version"] == m2["paintings"][0]["version"] + 1
+    assert m4["precomputation"]["values_views_read"] == 1
+    assert m4["precomputation"]["stream_chunks_reused"] == chunks, m4["precomputation"]
+    assert m4["errors"] == m2["errors"]
+
+
 # ---- the disk layer: restart and corruption ---------------------------------------------
 
 def test_13_restart_reuses_the_disk_cache_and_rebuilds_corrupt_files(d):

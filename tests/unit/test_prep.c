@@ -12,6 +12,7 @@
 #include "cache.h"
 #include "check.h"
 #include "fit.h"
+#include "hf_int.h"
 #include "img.h"
 #include "material.h"
 #include "method_hf3.h"
@@ -287,11 +288,13 @@ static int copy_paintings(img *q)
 }
 
 /* A fit through a memo, against a fit of the same paintings from nothing:
- * the same log-factors (bits) and error figures.  OUT: *read, the views it
- * read (values_views_read). */
-static int memo_fit_same(const prep *p, const img *q, const uint64_t *tags, method_memo *mm,
-                         int *read)
+ * 0 when they have the same log-factors (bits) and error figures.  OUT:
+ * *read, the views it read (values_views_read), and when asked the chunks
+ * of its pass the memo gave (stream_chunks_reused) and their count. */
+static int memo_fit_counts(const prep *p, const img *q, const uint64_t *tags, method_memo *mm,
+                           int *read, int *reused, int *chunks)
 {
+    json_t *pre;
     material a, b;
     glint_err e;
     int same, res;
@@ -306,11 +309,21 @@ static int memo_fit_same(const prep *p, const img *q, const uint64_t *tags, meth
            memcmp(hf3_factors(&a)->logf, hf3_factors(&b)->logf,
                   (size_t)9 * res * sizeof(double)) == 0 &&
            json_equal(json_object_get(a.info, "errors"), json_object_get(b.info, "errors"));
-    *read = (int)json_integer_value(
-        json_object_get(json_object_get(a.info, "precomputation"), "values_views_read"));
+    pre = json_object_get(a.info, "precomputation");
+    *read = (int)json_integer_value(json_object_get(pre, "values_views_read"));
+    if (reused)
+        *reused = (int)json_integer_value(json_object_get(pre, "stream_chunks_reused"));
+    if (chunks)
+        *chunks = (int)json_integer_value(json_object_get(pre, "stream_chunks"));
     material_free(&a);
     material_free(&b);
     return same ? 0 : 1;
+}
+
+static int memo_fit_same(const prep *p, const img *q, const uint64_t *tags, method_memo *mm,
+                         int *read)
+{
+    return memo_fit_counts(p, q, tags, mm, read, NULL, NULL);
 }
 
 TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
@@ -390,6 +403,71 @@ TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
     ASSERT_EQ(read, 0);
     method_memo_clear(&mm);
     ASSERT(!mm.values && !mm.values_ok && !mm.values_key);
+    for (int v = 0; v < 12; v++)
+        img_free(&q[v]);
+    prep_release(c, p);
+    cache_release(c, se);
+    cache_close(c);
+}
+
+TEST(a_memo_sums_again_only_the_chunks_whose_values_changed)
+{
+    /* a view repainted with what it held, then with a dab of a few
+     * pixels: the values read again are compared with the kept ones, and
+     * the pass sums again only the chunks whose values changed */
+    prep_scene_source src = {borrowed, NULL, &SC};
+    unsigned char use[12];
+    uint64_t tags[12];
+    fit_params fp;
+    method_memo mm;
+    img q[12];
+    cache *c;
+    cache_entry *se;
+    prep *p = NULL;
+    const samples *s;
+    long last = -1;
+    int read = -1, reused = -1, chunks = -1, chunk, nchunks;
+    glint_err e;
+
+    ASSERT_OK(setup());
+    memset(use, 1, sizeof use);
+    memset(&mm, 0, sizeof mm);
+    memset(q, 0, sizeof q);
+    fit_params_default(&fp);
+    fp.res = 16;
+    ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
+    ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
+    {
+        prep_request rq = {&method_hf3, &fp, se, use};
+        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
+    }
+    s = prep_samples(p);
+    ASSERT_OK(copy_paintings(q));
+    for (int v = 0; v < 12; v++)
+        tags[v] = 1 + (uint64_t)v;
+    for (long i = 0; i < s->n; i++)
+        if (s->view[i] == 7)
+            last = i;
+    hf_chunking(s->n, &chunk, &nchunks);
+    ASSERT(nchunks > 1 && last >= 0);
+    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT(read == 12 && reused == 0 && chunks == nchunks);
+    /* view 7 under a new tag, its painting as it was: read, nothing summed */
+    tags[7] = 70;
+    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT(read == 1 && reused == chunks);
+    /* a dab on the pixel of view 7's last sample: its chunk alone */
+    for (int ch = 0; ch < q[7].channels; ch++)
+        q[7].px[(size_t)s->pixel[last] * q[7].channels + ch] *= 0.5f;
+    tags[7] = 71;
+    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT(read == 1 && chunks - reused == 1);
+    /* and back: summed again, not the dab's sums kept */
+    memcpy(q[7].px, P[7].px, (size_t)P[7].width * P[7].height * P[7].channels * sizeof *q[7].px);
+    tags[7] = 72;
+    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT(read == 1 && chunks - reused == 1);
+    method_memo_clear(&mm);
     for (int v = 0; v < 12; v++)
         img_free(&q[v]);
     prep_release(c, p);
@@ -488,6 +566,7 @@ TEST_LIST{
     TEST_ENTRY(spatially_varying_truths_follow_the_texture_coordinates),
     TEST_ENTRY(a_fit_through_the_cache_equals_the_direct_path),
     TEST_ENTRY(a_memo_reads_again_only_the_views_whose_tags_changed),
+    TEST_ENTRY(a_memo_sums_again_only_the_chunks_whose_values_changed),
     TEST_ENTRY(rendering_in_bands_equals_shading_the_whole_view),
     TEST_ENTRY(held_out_error_on_samples_equals_the_error_on_the_view),
     TEST_ENTRY(sample_counts_equal_the_pattern),

@@ -18,7 +18,7 @@
 #include "check.h"
 #include "hf.h"
 #include "samples.h"
-#include "sphere_fixture.h"
+#include "fit_case.h"
 #include "par.h"
 #include "vmath.h"
 
@@ -453,51 +453,6 @@ TEST(background_runs_leave_the_pool_free)
     ASSERT_EQ(atomic_load(&bg.started), 2);        /* and the background ran both */
 }
 
-/* A fit on the sphere seen from the 12 icosahedron views at size x size
- * pixels, res texels, a random painting. */
-typedef struct fit_case {
-    samples s;
-    hf_design d;
-    hf_decomp dc;
-    hf_op op;
-    hf_map map;
-    float *rgb;
-} fit_case;
-
-static int fit_case_make(fit_case *fc, int size, int res)
-{
-    double dirs[12][3];
-    gbuf g[12];
-    hf_reg reg;
-    int rc;
-    memset(fc, 0, sizeof *fc);
-    fixture_ico(dirs);
-    if (fixture_sphere_gbufs(g, 12, (const double(*)[3])dirs, 20.0, 70.0, size, size))
-        return -1;
-    rc = samples_build(g, NULL, 12, NULL, "0123456789abcdef0123456789abcdef", &fc->s, NULL);
-    for (int v = 0; v < 12; v++)
-        gbuf_free(&g[v]);
-    if (rc || !(fc->rgb = malloc((size_t)3 * fc->s.n * sizeof *fc->rgb)))
-        return -1;
-    for (int i = 0; i < 3 * fc->s.n; i++)
-        fc->rgb[i] = (float)(0.05 + 0.9 * uniform());
-    hf_map_default(&fc->map, HF_MAP_LOG);
-    if (hf_reg_parse("trunc:full", &reg, NULL) || hf_design_build(&fc->s, res, &fc->d, NULL) ||
-        hf_decomp_build(&fc->d, 0.1, HF_ROUTE_EIG, 0, &fc->dc, NULL) ||
-        hf_op_build(&fc->dc, &reg, HF_F64, &fc->op, NULL))
-        return -1;
-    return 0;
-}
-
-static void fit_case_free(fit_case *fc)
-{
-    hf_op_free(&fc->op);
-    hf_decomp_free(&fc->dc);
-    hf_design_free(&fc->d);
-    samples_free(&fc->s);
-    free(fc->rgb);
-}
-
 typedef struct fit_ctx {
     const fit_case *fc;
     hf_factors fac;
@@ -537,108 +492,6 @@ TEST(fit_same_bits_on_any_thread_count)
     ASSERT(sa.diag_samples == fc.s.n && sa.diag_stride == 1 && sa.diag_runs == 1);
     hf_factors_free(&a);
     hf_factors_free(&f.fac);
-    fit_case_free(&fc);
-}
-
-/* One fit through a memo against one without, the same bits: OUT: the
- * chunks the memo gave. */
-static int fit_pair(const fit_case *fc, const hf_map *map, const float *rgb,
-                    const hf_fit_reuse *r, int *reused, int *chunks)
-{
-    hf_factors a, b;
-    hf_fit_stats sa, sb;
-    int same;
-    if (hf_fit(&fc->d, &fc->op, map, HF_MODEL_RADIANCE, rgb, &a, &sa, NULL) ||
-        hf_fit_with(&fc->d, &fc->op, map, HF_MODEL_RADIANCE, rgb, r, &b, &sb, NULL))
-        return -1;
-    same = memcmp(a.logf, b.logf, (size_t)9 * fc->d.res * sizeof *a.logf) == 0 &&
-           memcmp(sa.clamped, sb.clamped, sizeof sa.clamped) == 0 && sa.rms == sb.rms &&
-           sa.stream_chunks_reused == 0;
-    *reused = sb.stream_chunks_reused;
-    *chunks = sb.stream_chunks;
-    hf_factors_free(&a);
-    hf_factors_free(&b);
-    return same ? 0 : 1;
-}
-
-TEST(a_memo_gives_unchanged_views_sums_and_the_same_bits)
-{
-    fit_case fc;
-    uint64_t tags[12];
-    hf_memo *memo = hf_memo_new();
-    hf_fit_reuse r;
-    hf_map eps2;
-    int reused, chunks, *shuffled;
-    long first3 = -1, n3 = 0;
-
-    ASSERT(memo);
-    ASSERT_OK(fit_case_make(&fc, 96, 16));
-    for (int v = 0; v < 12; v++)
-        tags[v] = 100 + v;
-    r = (hf_fit_reuse){memo, "sphere96/res16", fc.s.view, tags, 12};
-    /* the first fit fills the memo; the second takes every chunk from it */
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    ASSERT_EQ(reused, 0);
-    ASSERT(chunks > 4);
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    ASSERT_EQ(reused, chunks);
-    /* view 3 repainted: its chunks are summed again, the others not */
-    for (long i = 0; i < fc.s.n; i++)
-        if (fc.s.view[i] == 3) {
-            if (first3 < 0)
-                first3 = i;
-            n3++;
-            for (int c = 0; c < 3; c++)
-                fc.rgb[3 * i + c] *= 0.7f;
-        }
-    ASSERT(n3 > 0);
-    tags[3] = 7;
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    printf("  view 3 repainted (%ld of %d samples): %d of %d chunks from the memo\n", n3,
-           fc.s.n, reused, chunks);
-    ASSERT(reused > 0 && reused < chunks);
-    ASSERT(chunks - reused <= (int)(n3 / (fc.s.n / chunks)) + 2);
-    /* another mapping: nothing reused, the memo starts again */
-    eps2 = fc.map;
-    eps2.eps *= 2.0;
-    ASSERT_OK(fit_pair(&fc, &eps2, fc.rgb, &r, &reused, &chunks));
-    ASSERT_EQ(reused, 0);
-    /* another key: the same */
-    r.key = "sphere96/res16/other";
-    ASSERT_OK(fit_pair(&fc, &eps2, fc.rgb, &r, &reused, &chunks));
-    ASSERT_EQ(reused, 0);
-    /* views out of order (not as samples_build makes them): nothing reused */
-    shuffled = malloc((size_t)fc.s.n * sizeof *shuffled);
-    ASSERT(shuffled);
-    memcpy(shuffled, fc.s.view, (size_t)fc.s.n * sizeof *shuffled);
-    shuffled[0] = 11;
-    r.view = shuffled;
-    r.key = "shuffled";
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    ASSERT_EQ(reused, 0);
-    free(shuffled);
-    /* a non-finite value: the fit fails, and its chunk is not kept */
-    r.view = fc.s.view;
-    r.key = "nan";
-    ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-    {
-        hf_factors f;
-        float keep = fc.rgb[3 * first3];
-        fc.rgb[3 * first3] = NAN;
-        tags[3] = 9;
-        ASSERT(hf_fit_with(&fc.d, &fc.op, &fc.map, HF_MODEL_RADIANCE, fc.rgb, &r, &f, NULL,
-                           NULL) == GLINT_ENONFINITE);
-        /* the same painting again: found again, not taken from the memo */
-        ASSERT(hf_fit_with(&fc.d, &fc.op, &fc.map, HF_MODEL_RADIANCE, fc.rgb, &r, &f, NULL,
-                           NULL) == GLINT_ENONFINITE);
-        fc.rgb[3 * first3] = keep;
-        tags[3] = 8; /* the painting as it was, under a new tag */
-        ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
-        ASSERT(reused < chunks);
-    }
-    hf_memo_free(memo);
-    hf_memo_free(NULL);
     fit_case_free(&fc);
 }
 
@@ -767,7 +620,6 @@ TEST_LIST {
     TEST_ENTRY(blas_can_be_kept_on_the_calling_thread),
     TEST_ENTRY(fit_same_bits_on_any_thread_count),
     TEST_ENTRY(diagnostics_subsample_above_the_limit),
-    TEST_ENTRY(a_memo_gives_unchanged_views_sums_and_the_same_bits),
 };
 
 TEST_MAIN()
