@@ -26,6 +26,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "bench_hf.h"
 #include "brdf.h"
 #include "fit.h"
 #include "fsio.h"
@@ -37,7 +38,7 @@
 #include "raster.h"
 #include "scene.h"
 
-static double now(void)
+double now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -50,13 +51,13 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static double median(double *v, int n)
+double median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-static void die(const char *what, const glint_err *e)
+void die(const char *what, const glint_err *e)
 {
     fprintf(stderr, "bench_hf: %s: %s\n", what, e ? e->msg : "failed");
     exit(1);
@@ -417,6 +418,7 @@ static double part_time(part_pass *w, int logs)
 static void warm(FILE *md, int quick)
 {
     static const int res[] = {16, 64, 128};
+    stroke_row strokes[sizeof res / sizeof res[0]];
     int reps = quick ? 51 : 201;
     brdf b;
     setup s;
@@ -533,9 +535,33 @@ static void warm(FILE *md, int quick)
                        "factorization %.3f ms)\n",
                        1e3 * median(fa2, reps));
         }
+        {
+            stroke_row *w = &strokes[r];
+            stroke_fits(&fp, s.paint, reps, w);
+            printf("     (after a stroke on view 0, through the session's memo: %.0f of %d chunks "
+                   "summed again; view read and compared %.3f ms; stream %.3f ms, "
+                   "factorization %.3f ms (from nothing, interleaved: %.3f ms), %.2f MB read, "
+                   "%.2f x its bound; diag %.3f ms)\n",
+                   w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream, 1e3 * w->factor,
+                   1e3 * w->full, w->bytes / 1e6, w->factor / (w->bytes / bwp), 1e3 * w->diag);
+        }
         free(grgb);
         fit_prep_free(&fp);
         fit_prep_free(&fp32);
+    }
+    fprintf(md, "\nThe fit after a stroke (20 discs of diameter 12 at 256 pixels, scaled, on "
+                "view 0) through a session's memo: the view read again and compared with the "
+                "kept values, the chunks whose values changed summed again\n\n"
+                "| res | samples | chunks summed again | of | read and compare (ms) | "
+                "stream (ms) | factorization (ms) | from nothing (ms) | MB read | bound (ms) | "
+                "factorization / bound | diagnostics (ms) |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
+        const stroke_row *w = &strokes[r];
+        fprintf(md, "| %d | %d | %.0f | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f |\n",
+                w->res, w->n, w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream,
+                1e3 * w->factor, 1e3 * w->full, w->bytes / 1e6, 1e3 * w->bytes / bwp,
+                w->factor / (w->bytes / bwp), 1e3 * w->diag);
     }
     printf("(stream: the pass over the samples (mapping, logs, A^T f); M t: the operator; "
            "factorization: both + offsets + gauge;\n gather: the samples' values read from the "
