@@ -270,6 +270,37 @@ def strokes(http, base, s, runs, server):
     return times
 
 
+def stroke_round_trips(http, base, s, view, runs, res, server):
+    """A painter's loop: POST one stroke (as strokes()) to a painted view, POST
+    a fit (201), GET the material, runs times.  Returns the times, the
+    fits' chunks summed again and of how many; server receives the steps'
+    Server-Timing ("stroke", "fit") and the fits' own seconds ("inner")."""
+    h = {"X-Glint-Token": s["paint_token"]}
+    times, again, chunks = [], [], 0
+    for i in range(runs):
+        pts = [[20 + 10 * k, 40 + (i * 7) % 160] for k in range(20)]
+        body = {"strokes": [{"color": [0.2 + 0.6 * (i % 2), 0.3, 0.5], "diameter": 12,
+                             "points": pts}]}
+        t0 = time.perf_counter()
+        rs = check(http.post(base + "/api/v1/sessions/%s/views/%d/strokes" % (s["id"], view),
+                             headers=h, json=body), 200)
+        r = check(http.post(base + "/api/v1/sessions/%s/fits" % s["id"],
+                            headers=dict(h, **{"Content-Type": "application/json"}),
+                            data=json.dumps({"params": {"res": res}})), 201)
+        check(http.get(base + r.headers["Location"], headers=h), 200)
+        times.append(time.perf_counter() - t0)
+        server_timing(rs, server.setdefault("stroke", {}))
+        server_timing(r, server.setdefault("fit", {}))
+        m = r.json()
+        inner = server.setdefault("inner", {})
+        for k, v in m.get("seconds", {}).items():
+            inner.setdefault(k, []).append(1e3 * v)
+        pre = m["precomputation"]
+        chunks = pre.get("stream_chunks", 0)
+        again.append(chunks - pre.get("stream_chunks_reused", 0))
+    return times, again, chunks
+
+
 def against(d, http, pngs, tmp, a):
     """Warm round trips (1 view painted) against this daemon and another one,
     alternating rounds so that both see the same load."""
@@ -448,6 +479,29 @@ def main():
                      % a.runs, ms(statistics.median(t)), "ms"))
         rows.append(("... inside glintd (Server-Timing medians): %s" % " / ".join(server),
                      " / ".join("%.2f" % statistics.median(v) for v in server.values()), "ms"))
+        # the painter's loop: a stroke, a fit, the material
+        for label, s in (("1 view painted", s1), ("12 views painted", s12)):
+            server = {}
+            stroke_round_trips(http, d.base, s, 0, 3, 64, {})
+            t, again, chunks = stroke_round_trips(http, d.base, s, 0, a.runs, 64, server)
+            t.sort()
+            rows.append(("stroke round trip (POST stroke on view 0 + POST fit res 64 + GET "
+                         "material), %s: median of %d" % (label, a.runs),
+                         ms(statistics.median(t)), "ms"))
+            rows.append(("... p90 / min / max", "%s / %s / %s" % (
+                ms(t[int(0.9 * (len(t) - 1))]), ms(t[0]), ms(t[-1])), "ms"))
+            rows.append(("... chunks of the fit's pass summed again (median, of %d)" % chunks,
+                         "%g" % statistics.median(again), ""))
+            for k, what in (("stroke", "POST stroke"), ("fit", "POST fit")):
+                st = server.get(k, {})
+                rows.append(("... %s inside glintd (Server-Timing medians): %s" % (
+                    what, " / ".join(st)), " / ".join(
+                        "%.2f" % statistics.median(v) for v in st.values()), "ms"))
+            st = {k: v for k, v in server.get("inner", {}).items()
+                  if k in ("gather", "stream", "apply", "factorization", "diagnostics", "fit")}
+            rows.append(("...... its fit step (the material's seconds, medians): %s" % (
+                " / ".join(st)), " / ".join("%.2f" % statistics.median(v) for v in st.values()),
+                "ms"))
         warm = check(http.get(d.base + "/api/v1/materials/" + m12["id"],
                               headers={"X-Glint-Token": s12["paint_token"]}), 200)
         rows.append(("material JSON size", str(len(warm.content)), "bytes"))
