@@ -372,39 +372,59 @@ typedef struct gather_ctx {
     int *bad; /* per chunk: 3 i + channel of its first non-finite value, or -1 */
 } gather_ctx;
 
+/* The flag of span `span` set when diff says a value of it changed.  A
+ * store through unsigned char may alias anything, so it is made once per
+ * span, not per value (per value it had the loop reload its pointers). */
+static void gather_flag(unsigned char *changed, long span, uint32_t diff)
+{
+    if (changed && diff)
+        changed[span] = 1;
+}
+
 static void gather_run(void *ctx, int c)
 {
     gather_ctx *g = ctx;
     const samples *s = g->s;
+    const img *paintings = g->paintings;
+    const unsigned char *views = g->views;
+    unsigned char *changed = g->changed;
+    float *rgb = g->rgb;
     int i0 = c * g->chunk, i1 = i0 + g->chunk;
+    uint32_t diff = 0; /* the bits that changed in the current span */
     if (i1 > s->n)
         i1 = s->n;
     g->bad[c] = -1;
     for (int i = i0; i < i1; i++) {
-        const img *im = &g->paintings[s->view[i]];
-        const float *px;
-        double inv;
-        if (g->views && !g->views[s->view[i]])
+        const img *im = &paintings[s->view[i]];
+        if (i % SAMPLES_SPAN == 0) {
+            gather_flag(changed, i / SAMPLES_SPAN - 1, diff);
+            diff = 0;
+        }
+        if (views && !views[s->view[i]])
             continue;
-        px = im->px + (size_t)s->pixel[i] * im->channels;
-        inv = 1.0 / s->intensity[i];
-        for (int ch = 0; ch < 3; ch++) {
-            float v = im->channels == 1 ? px[0] : px[ch], x;
-            uint32_t now, was;
-            if (!isfinite(v)) {
-                g->bad[c] = 3 * i + ch;
-                return;
+        {
+            const float *px = im->px + (size_t)s->pixel[i] * im->channels;
+            double inv = 1.0 / s->intensity[i];
+            for (int ch = 0; ch < 3; ch++) {
+                float v = im->channels == 1 ? px[0] : px[ch], x;
+                uint32_t now, was;
+                if (!isfinite(v)) {
+                    g->bad[c] = 3 * i + ch;
+                    gather_flag(changed, i / SAMPLES_SPAN, diff);
+                    return;
+                }
+                x = (float)(v * inv);
+                if (changed) {
+                    memcpy(&now, &x, sizeof now);
+                    memcpy(&was, &rgb[3 * i + ch], sizeof was);
+                    diff |= now ^ was;
+                }
+                rgb[3 * i + ch] = x;
             }
-            x = (float)(v * inv);
-            if (g->changed) {
-                memcpy(&now, &x, sizeof now);
-                memcpy(&was, &g->rgb[3 * i + ch], sizeof was);
-                if (now != was)
-                    g->changed[i / SAMPLES_SPAN] = 1;
-            }
-            g->rgb[3 * i + ch] = x;
         }
     }
+    if (i1 > i0)
+        gather_flag(changed, (i1 - 1) / SAMPLES_SPAN, diff);
 }
 
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)

@@ -544,6 +544,9 @@ static void warm(FILE *md, int quick)
                    "%.2f x its bound; diag %.3f ms)\n",
                    w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream, 1e3 * w->factor,
                    1e3 * w->full, w->bytes / 1e6, w->factor / (w->bytes / bwp), 1e3 * w->diag);
+            printf("     (every view read: %.3f ms; compared with the kept values, none changed "
+                   "%.3f ms, all changed %.3f ms)\n",
+                   1e3 * w->read_all, 1e3 * w->same_all, 1e3 * w->diff_all);
         }
         free(grgb);
         fit_prep_free(&fp);
@@ -554,14 +557,18 @@ static void warm(FILE *md, int quick)
                 "kept values, the chunks whose values changed summed again\n\n"
                 "| res | samples | chunks summed again | of | read and compare (ms) | "
                 "stream (ms) | factorization (ms) | from nothing (ms) | MB read | bound (ms) | "
-                "factorization / bound | diagnostics (ms) |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "factorization / bound | diagnostics (ms) | every view read (ms) | "
+                "compared, none changed (ms) | compared, all changed (ms) |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
         const stroke_row *w = &strokes[r];
-        fprintf(md, "| %d | %d | %.0f | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f |\n",
+        fprintf(md,
+                "| %d | %d | %.0f | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f | "
+                "%.3f | %.3f | %.3f |\n",
                 w->res, w->n, w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream,
                 1e3 * w->factor, 1e3 * w->full, w->bytes / 1e6, 1e3 * w->bytes / bwp,
-                w->factor / (w->bytes / bwp), 1e3 * w->diag);
+                w->factor / (w->bytes / bwp), 1e3 * w->diag, 1e3 * w->read_all,
+                1e3 * w->same_all, 1e3 * w->diff_all);
     }
     printf("(stream: the pass over the samples (mapping, logs, A^T f); M t: the operator; "
            "factorization: both + offsets + gauge;\n gather: the samples' values read from the "

@@ -21,6 +21,9 @@ typedef struct stroke_row {
     double stream, factor, diag; /* the stroke's fit, seconds */
     double full;        /* the same fit without the memo, interleaved, seconds */
     double bytes;       /* what the stroke's factorization reads */
+    /* every view read, seconds: not compared; compared, no value changed;
+     * compared, every value changed */
+    double read_all, same_all, diff_all;
 } stroke_row;
 
 /* reps strokes on view 0 of paint (fp's views), each fitted through a

@@ -86,6 +86,50 @@ void stroke_fits(const fit_prep *fp, const img *paint, int reps, stroke_row *out
         die("fit", &e);
     hf_factors_free(&a);
     hf_chunking(s->n, &chunk, &nchunks);
+    /* what the comparison costs: every view read as it is (no value
+     * changes) and from the same paintings halved (every value changes),
+     * against the read without it */
+    {
+        img *half = calloc((size_t)s->nviews, sizeof *half);
+        double *t3 = calloc((size_t)3 * reps, sizeof *t3);
+        if (!half || !t3)
+            die("out of memory", NULL);
+        for (int v = 0; v < s->nviews; v++) {
+            size_t m = (size_t)paint[v].width * paint[v].height * paint[v].channels;
+            half[v] = paint[v];
+            if (!paint[v].px)
+                continue;
+            if (!(half[v].px = malloc(m * sizeof *half[v].px)))
+                die("out of memory", NULL);
+            for (size_t i = 0; i < m; i++)
+                half[v].px[i] = 0.5f * paint[v].px[i];
+        }
+        for (int k = 0; k < reps; k++) {
+            double t0 = now();
+            if (samples_gather_views(s, q, NULL, values, NULL, &e))
+                die("gather", &e);
+            t3[k] = now() - t0;
+            t0 = now();
+            if (samples_gather_views(s, q, NULL, values, changed, &e))
+                die("gather", &e);
+            t3[reps + k] = now() - t0;
+            t0 = now();
+            if (samples_gather_views(s, k % 2 ? q : half, NULL, values, changed, &e))
+                die("gather", &e);
+            t3[2 * reps + k] = now() - t0;
+        }
+        /* the kept values as the memo's first read left them */
+        if (samples_gather_views(s, q, NULL, values, NULL, &e))
+            die("gather", &e);
+        out->read_all = median(t3, reps);
+        out->same_all = median(t3 + reps, reps);
+        out->diff_all = median(t3 + 2 * reps, reps);
+        for (int v = 0; v < s->nviews; v++)
+            if (paint[v].px)
+                free(half[v].px);
+        free(half);
+        free(t3);
+    }
     for (int k = 0; k < reps; k++) {
         double t0;
         stroke(&q[0], k);
