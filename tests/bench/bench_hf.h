@@ -30,4 +30,9 @@ typedef struct stroke_row {
  * memo and from nothing (the same bits, or the program stops). */
 void stroke_fits(const fit_prep *fp, const img *paint, int reps, stroke_row *out);
 
+/* A row under the warm table's, and the markdown table of n rows (bwp:
+ * the bandwidth the bounds are taken at, bytes/s). */
+void stroke_print(const stroke_row *w, double bwp);
+void stroke_table(FILE *md, const stroke_row *rows, int n, double bwp);
+
 #endif

@@ -10,6 +10,7 @@
  * same fit from nothing, interleaved, checking that both are the same
  * bits. */
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -186,4 +187,39 @@ void stroke_fits(const fit_prep *fp, const img *paint, int reps, stroke_row *out
     free(fu);
     free(ag);
     hf_memo_free(memo);
+}
+
+void stroke_print(const stroke_row *w, double bwp)
+{
+    printf("     (after a stroke on view 0, through the session's memo: %.0f of %d chunks "
+           "summed again; view read and compared %.3f ms; stream %.3f ms, "
+           "factorization %.3f ms (from nothing, interleaved: %.3f ms), %.2f MB read, "
+           "%.2f x its bound; diag %.3f ms)\n",
+           w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream, 1e3 * w->factor,
+           1e3 * w->full, w->bytes / 1e6, w->factor / (w->bytes / bwp), 1e3 * w->diag);
+    printf("     (every view read: %.3f ms; compared with the kept values, none changed "
+           "%.3f ms, all changed %.3f ms)\n",
+           1e3 * w->read_all, 1e3 * w->same_all, 1e3 * w->diff_all);
+}
+
+void stroke_table(FILE *md, const stroke_row *rows, int n, double bwp)
+{
+    fprintf(md, "\nThe fit after a stroke (20 discs of diameter 12 at 256 pixels, scaled, on "
+                "view 0) through a session's memo: the view read again and compared with the "
+                "kept values, the chunks whose values changed summed again\n\n"
+                "| res | samples | chunks summed again | of | read and compare (ms) | "
+                "stream (ms) | factorization (ms) | from nothing (ms) | MB read | bound (ms) | "
+                "factorization / bound | diagnostics (ms) | every view read (ms) | "
+                "compared, none changed (ms) | compared, all changed (ms) |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (int r = 0; r < n; r++) {
+        const stroke_row *w = &rows[r];
+        fprintf(md,
+                "| %d | %d | %.0f | %d | %.3f | %.3f | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f | "
+                "%.3f | %.3f | %.3f |\n",
+                w->res, w->n, w->again, w->chunks, 1e3 * w->gather, 1e3 * w->stream,
+                1e3 * w->factor, 1e3 * w->full, w->bytes / 1e6, 1e3 * w->bytes / bwp,
+                w->factor / (w->bytes / bwp), 1e3 * w->diag, 1e3 * w->read_all,
+                1e3 * w->same_all, 1e3 * w->diff_all);
+    }
 }
