@@ -377,7 +377,7 @@ typedef struct gather_ctx {
  * span, not per value (per value it had the loop reload its pointers). */
 static void gather_flag(unsigned char *changed, long span, uint32_t diff)
 {
-    if (changed && diff)
+    if (changed && diff && span >= 0)
         changed[span] = 1;
 }
 
@@ -390,30 +390,36 @@ static void gather_run(void *ctx, int c)
     unsigned char *changed = g->changed;
     float *rgb = g->rgb;
     int i0 = c * g->chunk, i1 = i0 + g->chunk;
-    uint32_t diff = 0; /* the bits that changed in the current span */
+    long span = -1;    /* the span diff is of */
+    uint32_t diff = 0; /* the bits that changed in it */
     if (i1 > s->n)
         i1 = s->n;
     g->bad[c] = -1;
-    for (int i = i0; i < i1; i++) {
-        const img *im = &paintings[s->view[i]];
-        if (i % SAMPLES_SPAN == 0) {
-            gather_flag(changed, i / SAMPLES_SPAN - 1, diff);
+    for (int i = i0; i < i1;) {
+        int v = s->view[i];
+        const img *im = &paintings[v];
+        if (views && !views[v]) { /* the run of this view's samples, skipped */
+            while (++i < i1 && s->view[i] == v)
+                ;
+            continue;
+        }
+        if (i / SAMPLES_SPAN != span) {
+            gather_flag(changed, span, diff);
+            span = i / SAMPLES_SPAN;
             diff = 0;
         }
-        if (views && !views[s->view[i]])
-            continue;
         {
             const float *px = im->px + (size_t)s->pixel[i] * im->channels;
             double inv = 1.0 / s->intensity[i];
             for (int ch = 0; ch < 3; ch++) {
-                float v = im->channels == 1 ? px[0] : px[ch], x;
+                float x, p = im->channels == 1 ? px[0] : px[ch];
                 uint32_t now, was;
-                if (!isfinite(v)) {
+                if (!isfinite(p)) {
                     g->bad[c] = 3 * i + ch;
-                    gather_flag(changed, i / SAMPLES_SPAN, diff);
+                    gather_flag(changed, span, diff);
                     return;
                 }
-                x = (float)(v * inv);
+                x = (float)(p * inv);
                 if (changed) {
                     memcpy(&now, &x, sizeof now);
                     memcpy(&was, &rgb[3 * i + ch], sizeof was);
@@ -422,9 +428,9 @@ static void gather_run(void *ctx, int c)
                 rgb[3 * i + ch] = x;
             }
         }
+        i++;
     }
-    if (i1 > i0)
-        gather_flag(changed, (i1 - 1) / SAMPLES_SPAN, diff);
+    gather_flag(changed, span, diff);
 }
 
 int samples_gather(const samples *s, const img *paintings, float *rgb, glint_err *err)
