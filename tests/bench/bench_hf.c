@@ -15,7 +15,9 @@
  * Part 0 (--warm alone) times the warm fit of a painter's stroke at the
  * full 128x128 raster (98,434 samples): the pass over the samples, the
  * operator, the diagnostics, against the bytes read at the bandwidth
- * measured in the same run.
+ * measured in the same run; and the fit after a stroke through a
+ * session's memo, which sums again only the chunks the stroke changed
+ * (bench_hf_stroke.c).
  *
  * usage: bench_hf [--quick] [--warm] [--out DIR]   (DIR default: bench-out)
  * Timings are medians of repeated runs; the machine is shared and noisy. */
