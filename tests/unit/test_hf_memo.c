@@ -14,6 +14,18 @@
 #include "hf_int.h"
 #include "samples.h"
 
+/* The samples' views with the first sample's moved to view 11: out of
+ * order, as samples_build never makes them (malloc'ed; NULL out of memory). */
+static int *views_out_of_order(const fit_case *fc)
+{
+    int *v = malloc((size_t)fc->s.n * sizeof *v);
+    if (v) {
+        memcpy(v, fc->s.view, (size_t)fc->s.n * sizeof *v);
+        v[0] = 11;
+    }
+    return v;
+}
+
 /* One fit through a memo against one without, the same bits: OUT: the
  * chunks the memo gave. */
 static int fit_pair(const fit_case *fc, const hf_map *map, const float *rgb,
@@ -82,10 +94,7 @@ TEST(a_memo_gives_unchanged_views_sums_and_the_same_bits)
     ASSERT_OK(fit_pair(&fc, &eps2, fc.rgb, &r, &reused, &chunks));
     ASSERT_EQ(reused, 0);
     /* views out of order (not as samples_build makes them): nothing reused */
-    shuffled = malloc((size_t)fc.s.n * sizeof *shuffled);
-    ASSERT(shuffled);
-    memcpy(shuffled, fc.s.view, (size_t)fc.s.n * sizeof *shuffled);
-    shuffled[0] = 11;
+    ASSERT((shuffled = views_out_of_order(&fc)));
     r.view = shuffled;
     r.key = "shuffled";
     ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));
@@ -224,10 +233,8 @@ TEST(a_memo_sums_again_only_the_chunks_a_stroke_touched)
     ASSERT_EQ(chunks - reused, by_tags5);
     /* views out of order: tags reuse nothing, spans still do */
     {
-        int *shuffled = malloc((size_t)fc.s.n * sizeof *shuffled);
+        int *shuffled = views_out_of_order(&fc);
         ASSERT(shuffled);
-        memcpy(shuffled, fc.s.view, (size_t)fc.s.n * sizeof *shuffled);
-        shuffled[0] = 11;
         r.view = shuffled;
         r.key = "shuffled";
         ASSERT_OK(fit_pair(&fc, &fc.map, fc.rgb, &r, &reused, &chunks));

@@ -326,49 +326,83 @@ static int memo_fit_same(const prep *p, const img *q, const uint64_t *tags, meth
     return memo_fit_counts(p, q, tags, mm, read, NULL, NULL);
 }
 
-TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
-{
-    prep_scene_source src = {borrowed, NULL, &SC};
+/* The memo tests' session: the scene's 12 views prepared for hf3 at res
+ * 16 in a cache of their own, the paintings copied into q, tags 1..12,
+ * an empty memo. */
+typedef struct memo_case {
+    prep_scene_source src;
     unsigned char use[12];
-    uint64_t tags[12];
     fit_params fp;
-    method_memo mm;
-    img q[12];
     cache *c;
     cache_entry *se;
-    prep *p = NULL;
+    prep *p;
     const samples *s;
+    img q[12];
+    uint64_t tags[12];
+    method_memo mm;
+} memo_case;
+
+static int memo_case_open(memo_case *mc)
+{
+    glint_err e;
+    memset(mc, 0, sizeof *mc);
+    mc->src = (prep_scene_source){borrowed, NULL, &SC};
+    memset(mc->use, 1, sizeof mc->use);
+    fit_params_default(&mc->fp);
+    mc->fp.res = 16;
+    for (int v = 0; v < 12; v++)
+        mc->tags[v] = 1 + (uint64_t)v;
+    if (setup() || cache_open(NULL, 1 << 30, &mc->c, &e) ||
+        prep_scene_acquire(mc->c, "s", &mc->src, &mc->se, &e))
+        return -1;
+    {
+        prep_request rq = {&method_hf3, &mc->fp, mc->se, mc->use};
+        if (prep_acquire(mc->c, &rq, NULL, NULL, &mc->p, &e))
+            return -1;
+    }
+    mc->s = prep_samples(mc->p);
+    return copy_paintings(mc->q);
+}
+
+static void memo_case_close(memo_case *mc)
+{
+    method_memo_clear(&mc->mm);
+    for (int v = 0; v < 12; v++)
+        img_free(&mc->q[v]);
+    if (mc->p)
+        prep_release(mc->c, mc->p);
+    if (mc->se)
+        cache_release(mc->c, mc->se);
+    if (mc->c)
+        cache_close(mc->c);
+}
+
+TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
+{
+    memo_case mc;
+    method_memo *mm = &mc.mm;
+    const prep *p;
+    const samples *s;
+    uint64_t *tags = mc.tags;
+    img *q = mc.q;
     long i5 = -1;
     int read = -1;
     glint_err e;
 
-    ASSERT_OK(setup());
-    memset(use, 1, sizeof use);
-    memset(&mm, 0, sizeof mm);
-    memset(q, 0, sizeof q);
-    fit_params_default(&fp);
-    fp.res = 16;
-    ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
-    ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
-    {
-        prep_request rq = {&method_hf3, &fp, se, use};
-        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
-    }
-    s = prep_samples(p);
-    ASSERT_OK(copy_paintings(q));
-    for (int v = 0; v < 12; v++)
-        tags[v] = 1 + (uint64_t)v;
+    ASSERT_OK(memo_case_open(&mc));
+    p = mc.p;
+    s = mc.s;
     /* the first fit reads every view; the second none */
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 12);
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 0);
-    ASSERT(mm.values && mm.values_n == s->n);
+    ASSERT(mm->values && mm->values_n == s->n);
     /* view 3 repainted: read again alone */
     for (long k = 0; k < (long)q[3].width * q[3].height * q[3].channels; k++)
         q[3].px[k] *= 0.7f;
     tags[3] = 100;
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 1);
     /* view 5 repainted with a non-finite value in its last sample fails
      * the fit after most of its values were read over the memo's; back to
@@ -387,27 +421,23 @@ TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
             q[5].px[k] *= 0.5f;
         q[5].px[(size_t)s->pixel[i5] * q[5].channels] = NAN;
         tags[5] = 200;
-        ASSERT_EQ(prep_fit_reusing(p, q, NULL, tags, &mm, &m, &e), GLINT_ENONFINITE);
+        ASSERT_EQ(prep_fit_reusing(p, q, NULL, tags, mm, &m, &e), GLINT_ENONFINITE);
         memcpy(q[5].px, keep, np * sizeof *keep);
         free(keep);
         tags[5] = 6;
     }
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 1);
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 0);
     /* another method's data in the memo is dropped, the values kept */
-    method_memo_drop_data(&mm);
-    ASSERT(mm.values && !mm.data);
-    ASSERT_OK(memo_fit_same(p, q, tags, &mm, &read));
+    method_memo_drop_data(mm);
+    ASSERT(mm->values && !mm->data);
+    ASSERT_OK(memo_fit_same(p, q, tags, mm, &read));
     ASSERT_EQ(read, 0);
-    method_memo_clear(&mm);
-    ASSERT(!mm.values && !mm.values_ok && !mm.values_key);
-    for (int v = 0; v < 12; v++)
-        img_free(&q[v]);
-    prep_release(c, p);
-    cache_release(c, se);
-    cache_close(c);
+    method_memo_clear(mm);
+    ASSERT(!mm->values && !mm->values_ok && !mm->values_key);
+    memo_case_close(&mc);
 }
 
 TEST(a_memo_sums_again_only_the_chunks_whose_values_changed)
@@ -415,64 +445,41 @@ TEST(a_memo_sums_again_only_the_chunks_whose_values_changed)
     /* a view repainted with what it held, then with a dab of a few
      * pixels: the values read again are compared with the kept ones, and
      * the pass sums again only the chunks whose values changed */
-    prep_scene_source src = {borrowed, NULL, &SC};
-    unsigned char use[12];
-    uint64_t tags[12];
-    fit_params fp;
-    method_memo mm;
-    img q[12];
-    cache *c;
-    cache_entry *se;
-    prep *p = NULL;
+    memo_case mc;
+    method_memo *mm = &mc.mm;
+    const prep *p;
     const samples *s;
+    uint64_t *tags = mc.tags;
+    img *q = mc.q;
     long last = -1;
     int read = -1, reused = -1, chunks = -1, chunk, nchunks;
-    glint_err e;
 
-    ASSERT_OK(setup());
-    memset(use, 1, sizeof use);
-    memset(&mm, 0, sizeof mm);
-    memset(q, 0, sizeof q);
-    fit_params_default(&fp);
-    fp.res = 16;
-    ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
-    ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
-    {
-        prep_request rq = {&method_hf3, &fp, se, use};
-        ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
-    }
-    s = prep_samples(p);
-    ASSERT_OK(copy_paintings(q));
-    for (int v = 0; v < 12; v++)
-        tags[v] = 1 + (uint64_t)v;
+    ASSERT_OK(memo_case_open(&mc));
+    p = mc.p;
+    s = mc.s;
     for (long i = 0; i < s->n; i++)
         if (s->view[i] == 7)
             last = i;
     hf_chunking(s->n, &chunk, &nchunks);
     ASSERT(nchunks > 1 && last >= 0);
-    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 12 && reused == 0 && chunks == nchunks);
     /* view 7 under a new tag, its painting as it was: read, nothing summed */
     tags[7] = 70;
-    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 1 && reused == chunks);
     /* a dab on the pixel of view 7's last sample: its chunk alone */
     for (int ch = 0; ch < q[7].channels; ch++)
         q[7].px[(size_t)s->pixel[last] * q[7].channels + ch] *= 0.5f;
     tags[7] = 71;
-    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 1 && chunks - reused == 1);
     /* and back: summed again, not the dab's sums kept */
     memcpy(q[7].px, P[7].px, (size_t)P[7].width * P[7].height * P[7].channels * sizeof *q[7].px);
     tags[7] = 72;
-    ASSERT_OK(memo_fit_counts(p, q, tags, &mm, &read, &reused, &chunks));
+    ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 1 && chunks - reused == 1);
-    method_memo_clear(&mm);
-    for (int v = 0; v < 12; v++)
-        img_free(&q[v]);
-    prep_release(c, p);
-    cache_release(c, se);
-    cache_close(c);
+    memo_case_close(&mc);
 }
 
 TEST(rendering_in_bands_equals_shading_the_whole_view)
