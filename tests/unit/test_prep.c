@@ -442,8 +442,8 @@ TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
 
 TEST(a_memo_sums_again_only_the_chunks_whose_values_changed)
 {
-    /* a view repainted with what it held, then with a dab of a few
-     * pixels: the values read again are compared with the kept ones, and
+    /* a view repainted with what it held, then dabs of one pixel on two
+     * views: the values read again are compared with the kept ones, and
      * the pass sums again only the chunks whose values changed */
     memo_case mc;
     method_memo *mm = &mc.mm;
@@ -451,34 +451,46 @@ TEST(a_memo_sums_again_only_the_chunks_whose_values_changed)
     const samples *s;
     uint64_t *tags = mc.tags;
     img *q = mc.q;
-    long last = -1;
+    long first1 = -1, last10 = -1;
     int read = -1, reused = -1, chunks = -1, chunk, nchunks;
 
     ASSERT_OK(memo_case_open(&mc));
     p = mc.p;
     s = mc.s;
-    for (long i = 0; i < s->n; i++)
-        if (s->view[i] == 7)
-            last = i;
+    for (long i = 0; i < s->n; i++) {
+        if (s->view[i] == 1 && first1 < 0)
+            first1 = i;
+        if (s->view[i] == 10)
+            last10 = i;
+    }
     hf_chunking(s->n, &chunk, &nchunks);
-    ASSERT(nchunks > 1 && last >= 0);
+    /* the dabs lie in different chunks of the pass, and the first is not
+     * the last sample its read reaches */
+    ASSERT(nchunks > 1 && first1 >= 0 && last10 >= 0);
+    ASSERT(first1 / chunk < last10 / chunk);
     ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 12 && reused == 0 && chunks == nchunks);
     /* view 7 under a new tag, its painting as it was: read, nothing summed */
     tags[7] = 70;
     ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
     ASSERT(read == 1 && reused == chunks);
-    /* a dab on the pixel of view 7's last sample: its chunk alone */
-    for (int ch = 0; ch < q[7].channels; ch++)
-        q[7].px[(size_t)s->pixel[last] * q[7].channels + ch] *= 0.5f;
-    tags[7] = 71;
+    /* a dab on the pixel of view 1's first sample and one on view 10's
+     * last: their two chunks alone */
+    for (int ch = 0; ch < q[1].channels; ch++)
+        q[1].px[(size_t)s->pixel[first1] * q[1].channels + ch] += 0.25f;
+    for (int ch = 0; ch < q[10].channels; ch++)
+        q[10].px[(size_t)s->pixel[last10] * q[10].channels + ch] += 0.25f;
+    tags[1] = 50;
+    tags[10] = 71;
     ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
-    ASSERT(read == 1 && chunks - reused == 1);
-    /* and back: summed again, not the dab's sums kept */
-    memcpy(q[7].px, P[7].px, (size_t)P[7].width * P[7].height * P[7].channels * sizeof *q[7].px);
-    tags[7] = 72;
+    ASSERT(read == 2 && chunks - reused == 2);
+    /* and back: summed again, not the dabs' sums kept */
+    for (int v = 1; v <= 10; v += 9)
+        memcpy(q[v].px, P[v].px, (size_t)P[v].width * P[v].height * P[v].channels * sizeof *q[v].px);
+    tags[1] = 51;
+    tags[10] = 72;
     ASSERT_OK(memo_fit_counts(p, q, tags, mm, &read, &reused, &chunks));
-    ASSERT(read == 1 && chunks - reused == 1);
+    ASSERT(read == 2 && chunks - reused == 2);
     memo_case_close(&mc);
 }
 
