@@ -42,48 +42,73 @@ void hf_chunking(long n, int *chunk, int *nchunks)
     *nchunks = (int)((n + c - 1) / c);
 }
 
+/* Whether idx[0..nb-1] is runs of consecutive samples, each starting at a
+ * multiple of 8 in idx and a multiple of 8 long (the diagnostics' runs).
+ * Each run's 3 x 8k values are then whole steps of vmath_log_map3's loops,
+ * as they are in the block's, so mapping the runs one by one gives the
+ * block's bits. */
+static int runs_of_eight(const int *idx, int nb)
+{
+    for (int b = 0, e; b < nb; b = e) {
+        for (e = b + 1; e < nb && idx[e] == idx[e - 1] + 1; e++)
+            ;
+        if ((e - b) % 8)
+            return 0;
+    }
+    return 1;
+}
+
 /* The log-mapped values of samples idx[0..nb-1] (or first..first+nb-1 when
  * idx is NULL) into buf[3 nb]; counts floored values into clamped[3] and
- * sets *bad when a value is not finite.  The common mappings (log, add:
- * one offset for every channel) run as flat loops over the 3 nb values,
- * which the compiler vectorizes; the arithmetic is the same as
- * hf_map_arg's. */
+ * sets *bad when a value is not finite.  The mapping and logs run over the
+ * 3 nb values at once (vmath_log_map3; the arithmetic is hf_map_arg's);
+ * consecutive samples of the texture model (a block, or runs of eight
+ * samples or more) are mapped straight from the floats (vmath_log_map3_f32,
+ * the same bits), the others widened into buf first. */
 static void map_block(const hf_stream *x, const int *idx, int first, int nb, double *buf,
                       int *clamped, int *bad)
 {
     const hf_design *d = x->d;
     const float *rgb = x->rgb;
-    const double eps = x->map->eps;
+    const double eps = x->map->eps, sign = x->map->kind == HF_MAP_SUB ? -1.0 : 1.0;
+    /* hf_map_arg: log v, add a + v, sub a - v (a per channel) */
+    double off[3] = {0.0, 0.0, 0.0};
+    long cl[3] = {0, 0, 0};
     int m = 3 * nb;
 
-    if (idx) {
-        for (int b = 0; b < nb; b++)
-            for (int c = 0; c < 3; c++)
-                buf[3 * b + c] = rgb[3 * (size_t)idx[b] + c];
-    } else {
-        const float *src = rgb + 3 * (size_t)first;
-        for (int j = 0; j < m; j++)
-            buf[j] = src[j];
-    }
-    if (x->model == HF_MODEL_BRDF)
-        for (int b = 0; b < nb; b++) {
-            int i = idx ? idx[b] : first + b;
-            double cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
-            for (int c = 0; c < 3; c++)
-                buf[3 * b + c] /= cosd;
-        }
-    {
-        /* hf_map_arg: log v, add a + v, sub a - v (a per channel) */
-        double off[3] = {0.0, 0.0, 0.0};
-        long cl[3] = {0, 0, 0};
-        if (x->map->kind != HF_MAP_LOG)
-            for (int c = 0; c < 3; c++)
-                off[c] = x->a[c];
-        *bad |= vmath_log_map3(buf, buf, (size_t)m, off,
-                               x->map->kind == HF_MAP_SUB ? -1.0 : 1.0, eps, cl);
+    if (x->map->kind != HF_MAP_LOG)
         for (int c = 0; c < 3; c++)
-            clamped[c] += (int)cl[c];
+            off[c] = x->a[c];
+    if (!idx && x->model != HF_MODEL_BRDF) {
+        *bad |= vmath_log_map3_f32(rgb + 3 * (size_t)first, buf, (size_t)m, off, sign, eps, cl);
+    } else if (x->model != HF_MODEL_BRDF && runs_of_eight(idx, nb)) {
+        for (int b = 0, e; b < nb; b = e) {
+            for (e = b + 1; e < nb && idx[e] == idx[e - 1] + 1; e++)
+                ;
+            *bad |= vmath_log_map3_f32(rgb + 3 * (size_t)idx[b], buf + 3 * b,
+                                       (size_t)(3 * (e - b)), off, sign, eps, cl);
+        }
+    } else {
+        if (idx) {
+            for (int b = 0; b < nb; b++)
+                for (int c = 0; c < 3; c++)
+                    buf[3 * b + c] = rgb[3 * (size_t)idx[b] + c];
+        } else {
+            const float *src = rgb + 3 * (size_t)first;
+            for (int j = 0; j < m; j++)
+                buf[j] = src[j];
+        }
+        if (x->model == HF_MODEL_BRDF)
+            for (int b = 0; b < nb; b++) {
+                int i = idx ? idx[b] : first + b;
+                double cosd = d->cos_i[i] > COS_FLOOR ? d->cos_i[i] : COS_FLOOR;
+                for (int c = 0; c < 3; c++)
+                    buf[3 * b + c] /= cosd;
+            }
+        *bad |= vmath_log_map3(buf, buf, (size_t)m, off, sign, eps, cl);
     }
+    for (int c = 0; c < 3; c++)
+        clamped[c] += (int)cl[c];
 }
 
 /* map_block in single precision (HF_F32): the values, the mapping and the

@@ -1,5 +1,6 @@
 #include "vmath.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 #include <stdlib.h>
@@ -141,6 +142,7 @@ static int have_512(void)
 typedef double v4d __attribute__((vector_size(32)));
 typedef long long v4l __attribute__((vector_size(32)));
 typedef unsigned long long v4u __attribute__((vector_size(32)));
+typedef float v4f __attribute__((vector_size(16)));
 
 /* The exponent k as a double, from tmp = x's bits less the reduction's
  * offset: through the 2^52 + 2048 magic (AVX2 has no conversion from
@@ -219,7 +221,7 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
  * array indexed lane by lane kept them in memory (about 15% of the loop's
  * time).  Sets i to the first value left and nonfinite when an input was
  * inf or NaN. */
-#define GLINT_MAP3_LOOP(VD, VI, W, LOGV, OK, ANY, FIX)                                         \
+#define GLINT_MAP3_LOOP(VD, VI, W, LOGV, OK, ANY, FIX, LOAD)                                       \
     do {                                                                                       \
         VD fl_, o0_, o1_, o2_;                                                                 \
         VI c0_, c1_, c2_, bad_;                                                                \
@@ -234,9 +236,9 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
         for (; i + 3 * (W) <= n; i += 3 * (W)) {                                               \
             VD a0_, a1_, a2_;                                                                  \
             VI k0_, k1_, k2_;                                                                  \
-            GLINT_MAP3_ARG(VD, VI, in + i, o0_, a0_, c0_, k0_, OK);                            \
-            GLINT_MAP3_ARG(VD, VI, in + i + (W), o1_, a1_, c1_, k1_, OK);                      \
-            GLINT_MAP3_ARG(VD, VI, in + i + 2 * (W), o2_, a2_, c2_, k2_, OK);                  \
+            GLINT_MAP3_ARG(VD, VI, in + i, o0_, a0_, c0_, k0_, OK, LOAD);                      \
+            GLINT_MAP3_ARG(VD, VI, in + i + (W), o1_, a1_, c1_, k1_, OK, LOAD);                      \
+            GLINT_MAP3_ARG(VD, VI, in + i + 2 * (W), o2_, a2_, c2_, k2_, OK, LOAD);                  \
             if (!ANY(~k0_ | ~k1_ | ~k2_)) {                                                    \
                 VD y0_ = LOGV(a0_), y1_ = LOGV(a1_), y2_ = LOGV(a2_);                          \
                 memcpy(out + i, &y0_, sizeof y0_);                                             \
@@ -258,17 +260,27 @@ static int logf_map3_generic(const float *in, float *out, size_t n, const float 
 
 /* one vector of GLINT_MAP3_LOOP's arguments: A = max(O + sign X, floor)
  * (NaN floored), CNT counting the floored lanes, K the lanes LOGV takes */
-#define GLINT_MAP3_ARG(VD, VI, src, O, A, CNT, K, OK)                                          \
+#define GLINT_MAP3_ARG(VD, VI, src, O, A, CNT, K, OK, LOAD)                                    \
     do {                                                                                       \
         VD x_;                                                                                 \
         VI low_;                                                                               \
-        memcpy(&x_, (src), sizeof x_);                                                         \
+        LOAD(x_, (src));                                                                       \
         bad_ |= (VI)((x_ - x_) != 0); /* inf - inf, NaN: not 0 */                             \
         A = O + sign * x_;                                                                     \
         low_ = ~(VI)(A > fl_); /* NaN too */                                                   \
         CNT -= low_;                                                                           \
         A = (VD)(((VI)A & ~low_) | ((VI)fl_ & low_));                                          \
         K = OK(A);                                                                             \
+    } while (0)
+
+/* LOAD of GLINT_MAP3_LOOP: a vector of the input's own type, or four
+ * floats widened to doubles (exactly) */
+#define GLINT_LOAD_SAME(x, src) memcpy(&(x), (src), sizeof(x))
+#define GLINT_LOAD_W4(x, src)                                                                  \
+    do {                                                                                       \
+        v4f w_;                                                                                \
+        memcpy(&w_, (src), sizeof w_);                                                         \
+        (x) = __builtin_convertvector(w_, v4d);                                                \
     } while (0)
 
 /* The rare step of GLINT_MAP3_LOOP with a lane outside the vector log's
@@ -309,7 +321,7 @@ log_map3_fma(const double *in, double *out, size_t n, const double off[3], doubl
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v4d, v4l, 4, log4, OK4, ANY256, fix4);
+    GLINT_MAP3_LOOP(v4d, v4l, 4, log4, OK4, ANY256, fix4, GLINT_LOAD_SAME);
     /* the rest (i is a multiple of 3: the channels line up) */
     return nonfinite | log_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
@@ -339,8 +351,125 @@ log_map3_512(const double *in, double *out, size_t n, const double off[3], doubl
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v8d, v8l, 8, log8, OK8, ANY512D, fix8);
+    GLINT_MAP3_LOOP(v8d, v8l, 8, log8, OK8, ANY512D, fix8, GLINT_LOAD_SAME);
     return nonfinite | log_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
+}
+
+/* ---- vmath_log_map3_f32 ------------------------------------------------------------------ */
+
+typedef int (*map3_fn)(const double *, double *, size_t, const double[3], double, double, long[3]);
+
+/* in[0..n-1] widened into a buffer, FN over it, 240 values at a time: a
+ * multiple of every loop's step (24, 12) and of 3, so FN sees the same
+ * steps, channels and tail as over the whole array. */
+static int log_map3_f32_widen(const float *in, double *out, size_t n, const double off[3],
+                              double sign, double floor, long clamped[3], map3_fn fn)
+{
+    double buf[240];
+    int nonfinite = 0;
+    for (size_t i = 0; i < n; i += 240) {
+        size_t m = n - i < 240 ? n - i : 240;
+        for (size_t j = 0; j < m; j++)
+            buf[j] = in[i + j];
+        nonfinite |= fn(buf, out + i, m, off, sign, floor, clamped);
+    }
+    return nonfinite;
+}
+
+/* On AVX2 + FMA: log_map3_fma's loop, each vector widened as it is loaded. */
+__attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
+log_map3_f32_fma(const float *in, double *out, size_t n, const double off[3], double sign,
+                 double floor, long clamped[3])
+{
+    size_t i = 0;
+    int nonfinite = 0;
+    GLINT_MAP3_LOOP(v4d, v4l, 4, log4, OK4, ANY256, fix4, GLINT_LOAD_W4);
+    return nonfinite | log_map3_f32_widen(in + i, out + i, n - i, off, sign, floor, clamped,
+                                          log_map3_generic);
+}
+
+/* On AVX-512, one vector of arguments: eight floats widened, a = o + sign
+ * x (x itself when PLAIN: no offset, sign +1, which gives the same floored
+ * value), NF the lanes where a is inf or NaN (one class test), a floored
+ * where !(a > floor) (NaN too), CNT counting those lanes.  The same values
+ * as GLINT_MAP3_ARG's. */
+__attribute__((target(GLINT_512), always_inline, optimize("fp-contract=fast"))) static inline v8d
+argw8(const float *src, v8d o, v8d sg, v8d fl, int plain, v8l *cnt, __mmask8 *nf)
+{
+    __m512d x = _mm512_cvtps_pd(_mm256_loadu_ps(src)), a;
+    __mmask8 low;
+    a = plain ? x : _mm512_fmadd_pd((__m512d)sg, x, (__m512d)o);
+    *nf = _mm512_fpclass_pd_mask(a, 0x99); /* QNaN, +inf, -inf, SNaN */
+    low = _mm512_cmp_pd_mask(a, (__m512d)fl, _CMP_NGT_UQ);
+    *cnt = (v8l)_mm512_mask_sub_epi64((__m512i)*cnt, low, (__m512i)*cnt, _mm512_set1_epi64(-1));
+    return (v8d)_mm512_mask_mov_pd(a, low, (__m512d)fl);
+}
+
+/* The loop of log_map3_f32_512, 24 values a step, for a normal floor: a
+ * floored argument then lies in log8's range unless it is +inf, and an
+ * input that is inf or NaN makes its argument inf or NaN, so a step
+ * without such an argument needs neither libm nor the test of the inputs.
+ * A step with one tests its inputs and gives the lanes outside log8's
+ * range libm's log (fix8), as log_map3_512 does.  Sets *done to the
+ * values handled. */
+__attribute__((target(GLINT_512), always_inline, optimize("fp-contract=fast"))) static inline int
+f32_512_loop(const float *in, double *out, size_t n, const double off[3], double sign,
+             double floor, long clamped[3], int plain, size_t *done)
+{
+    v8d o0, o1, o2, fl, sg;
+    v8l c0, c1, c2;
+    size_t i = 0;
+    int nonfinite = 0;
+    memset(&c0, 0, sizeof c0);
+    c1 = c2 = c0;
+    for (int l = 0; l < 8; l++) {
+        fl[l] = floor;
+        sg[l] = sign;
+        o0[l] = off[l % 3];
+        o1[l] = off[(8 + l) % 3];
+        o2[l] = off[(16 + l) % 3];
+    }
+    for (; i + 24 <= n; i += 24) {
+        __mmask8 n0, n1, n2;
+        v8d a0 = argw8(in + i, o0, sg, fl, plain, &c0, &n0);
+        v8d a1 = argw8(in + i + 8, o1, sg, fl, plain, &c1, &n1);
+        v8d a2 = argw8(in + i + 16, o2, sg, fl, plain, &c2, &n2);
+        if (!(n0 | n1 | n2)) {
+            v8d y0 = log8(a0), y1 = log8(a1), y2 = log8(a2);
+            memcpy(out + i, &y0, sizeof y0);
+            memcpy(out + i + 8, &y1, sizeof y1);
+            memcpy(out + i + 16, &y2, sizeof y2);
+        } else {
+            for (int l = 0; l < 24; l++)
+                nonfinite |= !isfinite(in[i + l]);
+            fix8(a0, OK8(a0), out + i);
+            fix8(a1, OK8(a1), out + i + 8);
+            fix8(a2, OK8(a2), out + i + 16);
+        }
+    }
+    for (int l = 0; l < 8; l++) {
+        clamped[l % 3] += c0[l];
+        clamped[(8 + l) % 3] += c1[l];
+        clamped[(16 + l) % 3] += c2[l];
+    }
+    *done = i;
+    return nonfinite;
+}
+
+__attribute__((target(GLINT_512), optimize("fp-contract=fast"))) static int
+log_map3_f32_512(const float *in, double *out, size_t n, const double off[3], double sign,
+                 double floor, long clamped[3])
+{
+    size_t i = 0;
+    int nonfinite;
+    if (!(floor >= DBL_MIN && floor <= DBL_MAX)) /* not normal: log_map3_512's own tests */
+        return log_map3_f32_widen(in, out, n, off, sign, floor, clamped, log_map3_512);
+    if (off[0] == 0.0 && off[1] == 0.0 && off[2] == 0.0 && sign == 1.0)
+        nonfinite = f32_512_loop(in, out, n, off, sign, floor, clamped, 1, &i);
+    else
+        nonfinite = f32_512_loop(in, out, n, off, sign, floor, clamped, 0, &i);
+    return nonfinite | log_map3_f32_widen(in + i, out + i, n - i, off, sign, floor, clamped,
+                                          log_map3_fma);
 }
 
 /* logf in eight (sixteen) lanes: the same reduction as log4 in single
@@ -391,7 +520,7 @@ logf_map3_fma(const float *in, float *out, size_t n, const float off[3], float s
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v8f, v8i, 8, logf8, OKF8, ANY256, fixf8);
+    GLINT_MAP3_LOOP(v8f, v8i, 8, logf8, OKF8, ANY256, fixf8, GLINT_LOAD_SAME);
     return nonfinite | logf_map3_generic(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
@@ -401,7 +530,7 @@ logf_map3_512(const float *in, float *out, size_t n, const float off[3], float s
 {
     size_t i = 0;
     int nonfinite = 0;
-    GLINT_MAP3_LOOP(v16f, v16i, 16, logf16, OKF16, ANY512F, fixf16);
+    GLINT_MAP3_LOOP(v16f, v16i, 16, logf16, OKF16, ANY512F, fixf16, GLINT_LOAD_SAME);
     return nonfinite | logf_map3_fma(in + i, out + i, n - i, off, sign, floor, clamped);
 }
 
@@ -433,6 +562,16 @@ int vmath_log_map3(const double *in, double *out, size_t n, const double off[3],
     if (have_fma())
         return log_map3_fma(in, out, n, off, sign, floor, clamped);
     return log_map3_generic(in, out, n, off, sign, floor, clamped);
+}
+
+int vmath_log_map3_f32(const float *in, double *out, size_t n, const double off[3], double sign,
+                       double floor, long clamped[3])
+{
+    if (have_512())
+        return log_map3_f32_512(in, out, n, off, sign, floor, clamped);
+    if (have_fma())
+        return log_map3_f32_fma(in, out, n, off, sign, floor, clamped);
+    return log_map3_f32_widen(in, out, n, off, sign, floor, clamped, log_map3_generic);
 }
 
 int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], float sign,
@@ -476,6 +615,20 @@ int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], f
                     float floor, long clamped[3])
 {
     return logf_map3_generic(in, out, n, off, sign, floor, clamped);
+}
+
+int vmath_log_map3_f32(const float *in, double *out, size_t n, const double off[3], double sign,
+                       double floor, long clamped[3])
+{
+    double buf[240];
+    int nonfinite = 0;
+    for (size_t i = 0; i < n; i += 240) {
+        size_t m = n - i < 240 ? n - i : 240;
+        for (size_t j = 0; j < m; j++)
+            buf[j] = in[i + j];
+        nonfinite |= log_map3_generic(buf, out + i, m, off, sign, floor, clamped);
+    }
+    return nonfinite;
 }
 
 void vmath_exp(const double *in, double *out, size_t n)

@@ -23,6 +23,17 @@ void vmath_exp(const double *in, double *out, size_t n);
 int vmath_log_map3(const double *in, double *out, size_t n, const double off[3], double sign,
                    double floor, long clamped[3]);
 
+/* vmath_log_map3 on single-precision values: in[j] widened to double
+ * (exactly), then the same mapping and logs, so the same bits, clamped
+ * counts and return value as widening into a buffer and calling
+ * vmath_log_map3 on it.  It saves that buffer's store and load, and on
+ * AVX-512 the mapping tests a vector's lanes with fewer instructions: a
+ * finite argument above a normal floor always lies in the vector log's
+ * range, so one class test of the arguments (inf or NaN) decides whether
+ * a step needs libm for some lane.  in and out may not overlap. */
+int vmath_log_map3_f32(const float *in, double *out, size_t n, const double off[3], double sign,
+                       double floor, long clamped[3]);
+
 /* The same in single precision, for fits that ask for it (hf's
  * HF_F32): logf of arg, eight lanes at a time on AVX2 (within 1 ulp of
  * libm's logf), libm's logf elsewhere.

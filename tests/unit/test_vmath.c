@@ -287,6 +287,100 @@ TEST(log_map3_same_bits_on_avx2_and_avx512)
     ASSERT(vmath_limit("avx9") == -1);
 }
 
+/* vmath_log_map3_f32 against its definition: the floats widened into a
+ * buffer and vmath_log_map3 over it, the same bits, clamped counts and
+ * return, on every instruction set the CPU has.  The values mix every
+ * class (NaN, +-inf, +-0, subnormal and the largest floats, negatives,
+ * values at and around the floor); the mappings are the plain log (with a
+ * -0 offset too), an offset and a sign of -1, and an offset so large that
+ * every argument is inf; the floors normal and subnormal; the lengths
+ * leave every tail of the 24- and 12-value steps. */
+TEST(log_map3_f32_as_the_widened_mapping)
+{
+    enum { N = 3 * 4001 };
+    static float in[N];
+    static double wide[N], want[N], got[N];
+    const double offs[5][3] = {{0.0, 0.0, 0.0},
+                               {-0.0, 0.0, -0.0},
+                               {1.2, 0.9, 3.5},
+                               {0.1, 0.1, 0.1},
+                               {INFINITY, 1.0, 2.0}};
+    const double signs[5] = {1.0, 1.0, -1.0, 1.0, 1.0};
+    const double floors[3] = {1e-6, (double)FLT_MIN, 1e-310};
+    const char *caps[3] = {"avx512", "avx2", "sse2"};
+    long differ = 0, runs = 0;
+    for (int i = 0; i < N; i++) {
+        double u = uniform();
+        in[i] = u < 0.002   ? NAN
+                : u < 0.004 ? INFINITY
+                : u < 0.006 ? -INFINITY
+                : u < 0.010 ? 0.0f
+                : u < 0.012 ? -0.0f
+                : u < 0.016 ? FLT_MAX
+                : u < 0.020 ? 1e-40f /* subnormal float */
+                : u < 0.040 ? (float)(1e-6 * (0.5 + uniform()))
+                : u < 0.080 ? (float)-u
+                            : (float)exp((uniform() - 0.5) * 60.0);
+    }
+    /* one run of 240 with no special value at all: the fast steps alone */
+    for (int i = 0; i < 240; i++)
+        in[i] = (float)(0.01 + i * 0.37);
+    for (int c = 0; c < 3; c++) {
+        ASSERT(vmath_limit(caps[c]) == 0);
+        for (int mk = 0; mk < 5; mk++)
+            for (int fk = 0; fk < 3; fk++)
+                for (int len = 0; len <= N; len += len < 96 ? 3 : len < 240 ? 144 : 3 * 1253) {
+                    long cw[3] = {0, 0, 0}, cg[3] = {0, 0, 0};
+                    int rw, rg;
+                    for (int j = 0; j < len; j++)
+                        wide[j] = in[j];
+                    rw = vmath_log_map3(wide, want, (size_t)len, offs[mk], signs[mk],
+                                        floors[fk], cw);
+                    rg = vmath_log_map3_f32(in, got, (size_t)len, offs[mk], signs[mk],
+                                            floors[fk], cg);
+                    ASSERT_MSG(rw == rg, "%s map %d floor %d len %d: returned %d, want %d",
+                               caps[c], mk, fk, len, rg, rw);
+                    for (int k = 0; k < 3; k++)
+                        ASSERT_EQ(cg[k], cw[k]);
+                    for (int j = 0; j < len; j++)
+                        differ += memcmp(&got[j], &want[j], sizeof got[j]) != 0;
+                    runs++;
+                }
+    }
+    vmath_limit(NULL);
+    ASSERT_MSG(differ == 0, "%ld values differ over %ld runs", differ, runs);
+    for (int c = 0; c < 3; c++) {
+        /* one non-finite value alone, at every place of two steps, is
+         * reported (each class), and floored like its definition */
+        const float bad[4] = {NAN, -NAN, INFINITY, -INFINITY};
+        float x[48];
+        vmath_limit(caps[c]);
+        for (int at = 0; at < 48; at++)
+            for (int b = 0; b < 4; b++) {
+                long cw[3] = {0, 0, 0}, cg[3] = {0, 0, 0};
+                for (int j = 0; j < 48; j++)
+                    x[j] = 0.5f + 0.25f * (float)j;
+                x[at] = bad[b];
+                for (int j = 0; j < 48; j++)
+                    wide[j] = x[j];
+                ASSERT(vmath_log_map3(wide, want, 48, offs[0], 1.0, 1e-6, cw) == 1);
+                ASSERT_MSG(vmath_log_map3_f32(x, got, 48, offs[0], 1.0, 1e-6, cg) == 1,
+                           "%s: value %d class %d not reported", caps[c], at, b);
+                ASSERT(memcmp(got, want, 48 * sizeof *got) == 0);
+                ASSERT(memcmp(cg, cw, sizeof cg) == 0);
+            }
+    }
+    vmath_limit(NULL);
+    {
+        /* and the fast steps give what they should: the log of the value */
+        long cl[3] = {0, 0, 0};
+        ASSERT(vmath_log_map3_f32(in, got, 240, offs[0], 1.0, 1e-6, cl) == 0);
+        for (int j = 0; j < 240; j++)
+            ASSERT_MSG(ulps(got[j], log((double)in[j])) <= 1.0, "value %d", j);
+        ASSERT(cl[0] + cl[1] + cl[2] == 0);
+    }
+}
+
 /* vmath_exp (libmvec) on AVX-512 and on AVX2: the same bits, over the
  * range the diagnostics use (below 700), past it, and at lengths that
  * leave a tail for the narrower loop. */
@@ -514,23 +608,30 @@ TEST(diagnostics_subsample_above_the_limit)
         /* the figures are those of exactly these samples: the maximum error
          * over the runs, recomputed here, against the fit's */
         float *rec = malloc((size_t)3 * fc.s.n * sizeof *rec);
-        double mx = 0.0, se = 0.0, rms;
+        double mx = 0.0, se = 0.0, sl = 0.0, rms, lres;
         ASSERT(rec);
         hf_factors_eval_design(&a, &fc.d, rec);
         for (long i = 0; i < 3L * fc.s.n; i++) {
             double e = (double)rec[i] - fc.rgb[i];
+            /* the log residual from the reconstruction as stored (float):
+             * within about 1e-7 of the fit's, which is before rounding */
+            double l = log((double)rec[i]) - log(fmax(fc.rgb[i], fc.map.eps));
             long smp = i / 3, k = smp / st.diag_stride;
             if (k < st.diag_runs && smp - k * st.diag_stride < HF_DIAG_RUN) {
                 se += e * e;
+                sl += l * l;
                 mx = fabs(e) > mx ? fabs(e) : mx;
             }
         }
         free(rec);
         rms = sqrt(se / (3.0 * HF_DIAG_SAMPLES));
-        printf("  over the runs, recomputed: RMS %.12g (the fit's %.12g), max %.9g (%.9g)\n",
-               rms, st.rms, mx, st.max_abs);
+        lres = sqrt(sl / (3.0 * HF_DIAG_SAMPLES));
+        printf("  over the runs, recomputed: RMS %.12g (the fit's %.12g), max %.9g (%.9g), "
+               "log residual %.9g (%.9g)\n",
+               rms, st.rms, mx, st.max_abs, lres, st.log_residual);
         ASSERT_NEAR(st.rms / rms, 1.0, 1e-9);
         ASSERT(mx == st.max_abs);
+        ASSERT_NEAR(st.log_residual / lres, 1.0, 1e-6);
     }
     {
         /* the estimate against the exact RMS over every sample */
@@ -613,6 +714,7 @@ TEST_LIST {
     TEST_ENTRY(log_map3_as_the_scalar_mapping),
     TEST_ENTRY(logf_map3_as_the_scalar_mapping),
     TEST_ENTRY(log_map3_same_bits_on_avx2_and_avx512),
+    TEST_ENTRY(log_map3_f32_as_the_widened_mapping),
     TEST_ENTRY(exp_matches_libm),
     TEST_ENTRY(exp_same_bits_on_avx2_and_avx512),
     TEST_ENTRY(pool_runs_every_task_once),
