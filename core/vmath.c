@@ -168,8 +168,11 @@ typedef float v4f __attribute__((vector_size(16)));
         /* the exponent k such that x / 2^k lies in [sqrt(2)/2, sqrt(2)) */                    \
         VL tmp_ = u_ - 0x3fe6a09e667f3bcdLL;                                                   \
         VD k_ = KF(VD, VL, VU, tmp_);                                                          \
-        VD f_ = (VD)(u_ - (tmp_ & (long long)0xfff0000000000000ULL)) - 1.0;                    \
-        VD s_ = f_ / (2.0 + f_), z_ = s_ * s_, w_ = z_ * z_;                                  \
+        VD m_ = (VD)(u_ - (tmp_ & (long long)0xfff0000000000000ULL));                          \
+        /* f = m - 1 is exact (Sterbenz: m lies in [sqrt(2)/2, sqrt(2))), so 2 + f              \
+         * is m + 1, the same bits, with one add less before the division */                    \
+        VD f_ = m_ - 1.0;                                                                      \
+        VD s_ = f_ / (m_ + 1.0), z_ = s_ * s_, w_ = z_ * z_;                                  \
         VD r_ = w_ * (Lg2 + w_ * (Lg4 + w_ * Lg6)) + z_ * (Lg1 + w_ * (Lg3 + w_ * (Lg5 + w_ * Lg7))); \
         VD hfsq_ = 0.5 * f_ * f_;                                                              \
         (x) = k_ * ln2_hi - ((hfsq_ - (s_ * (hfsq_ + r_) + k_ * ln2_lo)) - f_);                \
@@ -483,8 +486,9 @@ log_map3_f32_512(const float *in, double *out, size_t n, const double off[3], do
         VI tmp_ = u_ - 0x3f3504f3;             /* sqrt(0.5) */                                \
         VI ki_ = tmp_ >> 23;                   /* arithmetic: the exponent k */               \
         VF k_ = __builtin_convertvector(ki_, VF);                                              \
-        VF f_ = (VF)(u_ - (tmp_ & (int)0xff800000)) - 1.0f;                                    \
-        VF s_ = f_ / (2.0f + f_), z_ = s_ * s_, w_ = z_ * z_;                                 \
+        VF m_ = (VF)(u_ - (tmp_ & (int)0xff800000));                                           \
+        VF f_ = m_ - 1.0f; /* exact: 2 + f is m + 1, as in GLINT_LOG_BODY */                  \
+        VF s_ = f_ / (m_ + 1.0f), z_ = s_ * s_, w_ = z_ * z_;                                 \
         VF r_ = w_ * (Lg2 + w_ * Lg4) + z_ * (Lg1 + w_ * Lg3);                                 \
         VF hfsq_ = 0.5f * f_ * f_;                                                             \
         (x) = k_ * ln2_hi - ((hfsq_ - (s_ * (hfsq_ + r_) + k_ * ln2_lo)) - f_);                \
