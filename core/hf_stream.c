@@ -28,7 +28,9 @@
 #include "par.h"
 #include "vmath.h"
 
+#ifndef HF_BLOCK
 #define HF_BLOCK 256
+#endif
 
 typedef double v4d __attribute__((vector_size(32)));
 #define COS_FLOOR 1e-6
@@ -457,6 +459,8 @@ typedef struct diag_task {
     long run;
     int chunk, nchunks;
     double *ss, *se, *mx; /* per chunk */
+    double *logf;         /* the factors' logf and one double more, so that a
+                           * texel's last channel loads as a four-lane vector */
 } diag_task;
 
 typedef float v4f __attribute__((vector_size(16)));
@@ -516,13 +520,15 @@ HF_CLONES static void diag_run(void *ctx, int c)
     const hf_factors *fac = w->fac;
     int R = d->res, idx[HF_BLOCK], clamped[3] = {0, 0, 0}, bad = 0;
     long j0 = (long)c * w->chunk, j1 = j0 + w->chunk;
-    double fb[3 * HF_BLOCK], lb[3 * HF_BLOCK], rb[3 * HF_BLOCK], pb[3 * HF_BLOCK],
+    /* one double more in fb, rb and lb: a sample's three channels load
+     * and store as a four-lane vector */
+    double fb[3 * HF_BLOCK + 1], lb[3 * HF_BLOCK + 1], rb[3 * HF_BLOCK + 1], pb[3 * HF_BLOCK],
         cb[3 * HF_BLOCK];
     double sst = 0.0, set = 0.0, mxt = 0.0;
     const hf_map_kind kind = fac->map.kind;
     const double a3[3] = {fac->a_used[0], fac->a_used[1], fac->a_used[2]};
     const int brdf = fac->model == HF_MODEL_BRDF;
-    const v4d zero = {0.0, 0.0, 0.0, 0.0};
+    const v4d zero = {0.0, 0.0, 0.0, 0.0}, cap = {700.0, 700.0, 700.0, 700.0};
     v4d ssv[3], sev[3], mxv[3], av[3];
 
     for (int q = 0; q < 3; q++) {
@@ -550,22 +556,24 @@ HF_CLONES static void diag_run(void *ctx, int c)
         for (int b = 0; b < nb; b++) {
             int i = idx[b];
             const float *px = x->rgb + 3 * (size_t)i;
-            /* the three channels' sums in registers (an array here stayed in
-             * memory, one store and load per term) */
-            double a0 = 0.0, a1 = 0.0, a2 = 0.0;
+            /* the three channels' sums in the lanes of one vector, each lane
+             * the scalar sum: 0 + (w0 y + w1 y') per factor, in factor
+             * order; lane 3 is not used (stored, then overwritten by the next
+             * sample's) */
+            v4d a = zero, f, r, l;
             for (int k = 0; k < 3; k++) {
-                const double *yk = fac->logf + 3 * (k * R + d->k0[3 * i + k]);
+                const double *yk = w->logf + 3 * (k * R + d->k0[3 * i + k]);
                 double w1 = d->t[3 * i + k], w0 = 1.0 - w1;
-                a0 += w0 * yk[0] + w1 * yk[3];
-                a1 += w0 * yk[1] + w1 * yk[4];
-                a2 += w0 * yk[2] + w1 * yk[5];
+                v4d y0, y1, w04 = {w0, w0, w0, w0}, w14 = {w1, w1, w1, w1};
+                memcpy(&y0, yk, sizeof y0);
+                memcpy(&y1, yk + 3, sizeof y1);
+                a += w04 * y0 + w14 * y1;
             }
-            rb[3 * b] = a0 - fb[3 * b];
-            rb[3 * b + 1] = a1 - fb[3 * b + 1];
-            rb[3 * b + 2] = a2 - fb[3 * b + 2];
-            lb[3 * b] = a0 > 700.0 ? 700.0 : a0;
-            lb[3 * b + 1] = a1 > 700.0 ? 700.0 : a1;
-            lb[3 * b + 2] = a2 > 700.0 ? 700.0 : a2;
+            memcpy(&f, fb + 3 * b, sizeof f);
+            r = a - f;
+            l = (v4d)(((v4l)a & ~(v4l)(a > cap)) | ((v4l)cap & (v4l)(a > cap)));
+            memcpy(rb + 3 * b, &r, sizeof r);
+            memcpy(lb + 3 * b, &l, sizeof l);
             pb[3 * b] = px[0];
             pb[3 * b + 1] = px[1];
             pb[3 * b + 2] = px[2];
@@ -643,10 +651,13 @@ int hf_stream_diagnostics(const hf_stream *x, const hf_factors *fac, hf_fit_stat
     w.ss = malloc((size_t)w.nchunks * sizeof *w.ss);
     w.se = malloc((size_t)w.nchunks * sizeof *w.se);
     w.mx = malloc((size_t)w.nchunks * sizeof *w.mx);
-    if (!w.ss || !w.se || !w.mx) {
+    w.logf = malloc(((size_t)9 * x->d->res + 1) * sizeof *w.logf);
+    if (!w.ss || !w.se || !w.mx || !w.logf) {
         rc = -1;
         goto done;
     }
+    memcpy(w.logf, fac->logf, (size_t)9 * x->d->res * sizeof *w.logf);
+    w.logf[9 * x->d->res] = 0.0;
     if (par_worth((size_t)3 * w.count))
         par_run(w.nchunks, diag_run, &w);
     else
@@ -668,5 +679,6 @@ done:
     free(w.ss);
     free(w.se);
     free(w.mx);
+    free(w.logf);
     return rc;
 }
