@@ -5,6 +5,28 @@
 #include <string.h>
 #include <stdlib.h>
 
+static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
+                            double sign, double floor, long clamped[3]);
+
+typedef int (*map3_fn)(const double *, double *, size_t, const double[3], double, double, long[3]);
+
+/* in[0..n-1] widened into a buffer, FN over it, 240 values at a time: a
+ * multiple of every loop's step (24, 12) and of 3, so FN sees the same
+ * steps, channels and tail as over the whole array. */
+static int log_map3_f32_widen(const float *in, double *out, size_t n, const double off[3],
+                              double sign, double floor, long clamped[3], map3_fn fn)
+{
+    double buf[240];
+    int nonfinite = 0;
+    for (size_t i = 0; i < n; i += 240) {
+        size_t m = n - i < 240 ? n - i : 240;
+        for (size_t j = 0; j < m; j++)
+            buf[j] = in[i + j];
+        nonfinite |= fn(buf, out + i, m, off, sign, floor, clamped);
+    }
+    return nonfinite;
+}
+
 #if defined(__x86_64__) && defined(__GLIBC__) && defined(GLINT_HAVE_LIBMVEC)
 #include <immintrin.h>
 
@@ -360,25 +382,6 @@ log_map3_512(const double *in, double *out, size_t n, const double off[3], doubl
 
 /* ---- vmath_log_map3_f32 ------------------------------------------------------------------ */
 
-typedef int (*map3_fn)(const double *, double *, size_t, const double[3], double, double, long[3]);
-
-/* in[0..n-1] widened into a buffer, FN over it, 240 values at a time: a
- * multiple of every loop's step (24, 12) and of 3, so FN sees the same
- * steps, channels and tail as over the whole array. */
-static int log_map3_f32_widen(const float *in, double *out, size_t n, const double off[3],
-                              double sign, double floor, long clamped[3], map3_fn fn)
-{
-    double buf[240];
-    int nonfinite = 0;
-    for (size_t i = 0; i < n; i += 240) {
-        size_t m = n - i < 240 ? n - i : 240;
-        for (size_t j = 0; j < m; j++)
-            buf[j] = in[i + j];
-        nonfinite |= fn(buf, out + i, m, off, sign, floor, clamped);
-    }
-    return nonfinite;
-}
-
 /* On AVX2 + FMA: log_map3_fma's loop, each vector widened as it is loaded. */
 __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static int
 log_map3_f32_fma(const float *in, double *out, size_t n, const double off[3], double sign,
@@ -624,15 +627,7 @@ int vmath_logf_map3(const float *in, float *out, size_t n, const float off[3], f
 int vmath_log_map3_f32(const float *in, double *out, size_t n, const double off[3], double sign,
                        double floor, long clamped[3])
 {
-    double buf[240];
-    int nonfinite = 0;
-    for (size_t i = 0; i < n; i += 240) {
-        size_t m = n - i < 240 ? n - i : 240;
-        for (size_t j = 0; j < m; j++)
-            buf[j] = in[i + j];
-        nonfinite |= log_map3_generic(buf, out + i, m, off, sign, floor, clamped);
-    }
-    return nonfinite;
+    return log_map3_f32_widen(in, out, n, off, sign, floor, clamped, log_map3_generic);
 }
 
 void vmath_exp(const double *in, double *out, size_t n)
