@@ -163,7 +163,8 @@ class Daemon:
     def request(self, method, path, status=None, schema=None, **kw):
         """HTTP request; checks the status, validates JSON (problem bodies
         against Problem.json, others against `schema`) and returns the response."""
-        r = requests.request(method, self.base + path, timeout=60, **kw)
+        kw.setdefault("timeout", 60)
+        r = requests.request(method, self.base + path, **kw)
         if status is not None:
             assert r.status_code == status, "%s %s: status %d, want %d: %s" % (
                 method, path, r.status_code, status, r.text[:500])

@@ -182,8 +182,10 @@ def test_06_previews_under_an_environment(d):
                             float(np.abs(imgs[0] - imgs[2]).max()), b.headers["X-Glint-Renderer"],
                             b.headers["X-Glint-Env"], a.headers["X-Glint-Env"])
     # a free camera needs no light under an environment; a map of the env dir, rotated
+    # (its lights are sampled from a new map: over a minute under ASAN on a
+    # slow machine, so this request waits longer than the harness's 60 s)
     d.get(url + "?eye=0,-3,1&env=data:bright.hdr&env_rotation=90&shadows=0&background=0",
-          headers=h, status=200)
+          headers=h, status=200, timeout=600)
     d.get(url + "?eye=0,-3,1", headers=h, status=422)
     for q, code in (("env=data:evil.hdr", 404), ("env=data:../x.hdr", 404),
                     ("env=a%20b", 422), ("view=0&env_rotation=10", 422),
