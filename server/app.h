@@ -40,6 +40,7 @@ typedef struct app_config {
     int work_slots;           /* ... pieces of it at once */
     int work_wait_s;          /* how long a request waits for room (admit.h) */
     int worker_threads;       /* background jobs */
+    int background_priority;  /* fitsvc.h FITSVC_BG_*: measurements no one waits for */
     unsigned timeout_s;       /* idle timeout of a kept-alive connection */
     unsigned max_connections; /* connections served at once (health reserve aside) */
     unsigned max_connections_per_ip; /* ... per client */

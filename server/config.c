@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "config.h"
+#include "fitsvc.h"
 #include "fsio.h"
 
 void config_default(app_config *c)
@@ -17,6 +18,7 @@ void config_default(app_config *c)
     strcpy(c->web_dir, "web");
     c->cache_bytes = (size_t)512 << 20;
     c->worker_threads = 2;
+    c->background_priority = FITSVC_BG_IDLE;
     c->work_bytes = (size_t)2048 << 20;
     c->work_slots = 4;
     c->work_wait_s = 10;
@@ -105,6 +107,19 @@ int config_apply(app_config *c, const char *name, const char *val, glint_err *er
 {
     size_t i;
     long v = 0;
+    if (!strcmp(name, "background-priority")) {
+        /* in the order of FITSVC_BG_* */
+        static const char *const names[] = {"idle", "low", "normal", NULL};
+        _Static_assert(FITSVC_BG_IDLE == 0 && FITSVC_BG_LOW == 1 && FITSVC_BG_NORMAL == 2,
+                       "names[] is in the order of FITSVC_BG_*");
+        for (i = 0; names[i]; i++)
+            if (!strcmp(val, names[i])) {
+                c->background_priority = (int)i;
+                return 0;
+            }
+        return glint_err_set(err, GLINT_EINVAL,
+                             "--background-priority '%.64s' must be idle, low or normal", val);
+    }
     for (i = 0; i < sizeof str_opts / sizeof *str_opts; i++)
         if (!strcmp(name, str_opts[i].name))
             return copy_str((char *)c + str_opts[i].off, str_opts[i].cap, val, name, err);

@@ -516,10 +516,22 @@ done:
     return rc;
 }
 
+static int fit_job_run(job *j, fit_task *t, json_t **result, glint_err *err);
+
 /* The job of a fit whose precomputation was not in memory. */
 static int fit_job(job *j, void *arg, json_t **result, glint_err *err)
 {
     fit_task *t = arg;
+    fitsvc *f = t->f;
+    int rc;
+    fitsvc_busy(f, 1);
+    rc = fit_job_run(j, t, result, err);
+    fitsvc_busy(f, -1);
+    return rc;
+}
+
+static int fit_job_run(job *j, fit_task *t, json_t **result, glint_err *err)
+{
     prep_request rq = {t->m, t->params, t->scene, t->use};
     prep *p = NULL;
     json_t *doc = NULL;
@@ -541,9 +553,24 @@ static int fit_job(job *j, void *arg, json_t **result, glint_err *err)
     return 0;
 }
 
+static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene_id,
+                            const method *m, const void *params, json_t **doc,
+                            char job_id[33], srv_timing *tm, glint_err *err);
+
 int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const method *m,
                const void *params, json_t **doc, char job_id[33], srv_timing *tm,
                glint_err *err)
+{
+    int rc;
+    fitsvc_busy(f, 1);
+    rc = fit_now_or_queue(f, session_id, scene_id, m, params, doc, job_id, tm, err);
+    fitsvc_busy(f, -1);
+    return rc;
+}
+
+static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene_id,
+                            const method *m, const void *params, json_t **doc,
+                            char job_id[33], srv_timing *tm, glint_err *err)
 {
     fit_task *t = calloc(1, sizeof *t);
     prep *p = NULL;
@@ -628,6 +655,7 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
     f->st = st;
     f->ev = ev;
     f->work = cfg->work;
+    f->background = cfg->background;
     pthread_mutex_init(&f->lock, NULL);
     if (!(f->holdouts = json_object())) {
         free(f);

@@ -43,7 +43,22 @@ typedef struct fitsvc_config {
                                 eighth of it more, material documents a thirty-second */
     int threads;             /* job workers (1..64) */
     struct admit *work;      /* admission of fits (admit.h); NULL: none */
+    int background;          /* FITSVC_BG_*: the held-out measurements' CPU priority */
 } fitsvc_config;
+
+/* The CPU priority of work no one waits for (a fit point's held-out
+ * measurement, scheduled after the fit): its own thread, at
+ *   FITSVC_BG_IDLE    SCHED_IDLE on Linux: it runs only on a core that
+ *                     would otherwise idle, so it takes no time from the
+ *                     fits, uploads and strokes people wait for, but under
+ *                     a load that never lets up it waits for the load to end;
+ *   FITSVC_BG_LOW     nice 19: a small share of a busy core, never starved;
+ *   FITSVC_BG_NORMAL  the requests' own priority.
+ * The default is FITSVC_BG_IDLE (glintd --background-priority).  Apart
+ * from its priority, the measurement waits before each of its views until
+ * no fit has run and no painting has been stored for a second
+ * (fitsvc_holdout.c, HOLDOUT_REST_S). */
+enum { FITSVC_BG_IDLE = 0, FITSVC_BG_LOW = 1, FITSVC_BG_NORMAL = 2 };
 
 /* Also sets glibc's malloc thresholds for the process (a fit allocates and
  * frees arrays of 0.1 to 30 MiB; kept in the heap they cost no page faults

@@ -59,8 +59,20 @@ static json_t *gb_links(const char *mid, const char *set_id)
                      "merl", b[6], "gbuffer_set", b[7]);
 }
 
-/* Fit with a prepared precomputation and store the material.  OUT: *doc. */
+static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err);
+
+/* Fit with a prepared precomputation and store the material (a painter's
+ * work to the held-out measurements, which wait: fitsvc_busy).  OUT: *doc. */
 static int gb_execute(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
+{
+    int rc;
+    fitsvc_busy(t->f, 1);
+    rc = gb_execute_run(t, p, j, doc, err);
+    fitsvc_busy(t->f, -1);
+    return rc;
+}
+
+static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
 {
     fitsvc *f = t->f;
     material m;

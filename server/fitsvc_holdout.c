@@ -1,17 +1,27 @@
 /* fitsvc_holdout.c: the held-out error of a fit point (fitsvc.h): one
  * background measurement per point at a time, sharing the memo's images. */
+#define _GNU_SOURCE
 #include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "admit.h"
+#include "clock.h"
 #include "fitsvc_int.h"
 #include "log.h"
 #include "par.h"
 #include "prep.h"
 
 /* ---- held-out error ---------------------------------------------------------------- */
+
+/* Seconds without fits or stored paintings a held-out measurement waits
+ * for before each of its views (holdout_gate). */
+#define HOLDOUT_REST_S 1.0
 
 typedef struct holdout_task {
     fitsvc *f;
@@ -52,29 +62,142 @@ static void holdout_free(void *p)
     free(h);
 }
 
+/* ---- the painters' activity (fitsvc_int.h) -------------------------------------- */
+
+void fitsvc_busy(fitsvc *f, int delta)
+{
+    pthread_mutex_lock(&f->lock);
+    f->active += delta;
+    f->last_active = glint_now();
+    pthread_mutex_unlock(&f->lock);
+}
+
+double fitsvc_quiet_for(fitsvc *f)
+{
+    double q;
+    pthread_mutex_lock(&f->lock);
+    q = f->active > 0 ? 0.0 : glint_now() - f->last_active;
+    pthread_mutex_unlock(&f->lock);
+    return q;
+}
+
+/* One measurement, on a thread of its own at the priority of background
+ * work (fitsvc.h, FITSVC_BG_*): the job's worker keeps the priority of the
+ * fits it runs next, and a thread that lowers its own priority cannot
+ * raise it again without privileges. */
+typedef struct holdout_run {
+    holdout_task *h;
+    job *j;
+    json_t *r;
+    glint_err err;
+    int rc;
+    double paused;  /* seconds waited for the painters (holdout_gate) */
+} holdout_run;
+
+/* Before each held-out view: 1 once the daemon stops, else 0 when no fit
+ * has run and no painting has been stored for HOLDOUT_REST_S, after
+ * waiting for that (fitsvc_quiet_for).  A painter's burst of strokes and
+ * fits then runs without the measurement beside it, which would take the
+ * other core and share the memory bus; it goes on in the pauses, a view at
+ * a time.  It does not wait while jobs are queued: it holds a worker they
+ * may need (with one worker, a painter's cold fits would otherwise queue
+ * behind it for as long as the painter works). */
+static int holdout_gate(void *cls)
+{
+    holdout_run *x = cls;
+    for (;;) {
+        double quiet, wait, t0;
+        struct timespec ts;
+        jobs_stats js;
+        if (job_cancelled(x->j))
+            return 1;
+        quiet = fitsvc_quiet_for(x->h->f);
+        jobs_stats_get(x->h->f->jobs, &js);
+        if (quiet >= HOLDOUT_REST_S || js.queued_fits > 0)
+            return 0;
+        /* in steps of at most 0.1 s: a stopping daemon is not kept waiting */
+        wait = HOLDOUT_REST_S - quiet < 0.1 ? HOLDOUT_REST_S - quiet : 0.1;
+        ts.tv_sec = 0;
+        ts.tv_nsec = (long)(wait * 1e9);
+        t0 = glint_now();
+        nanosleep(&ts, NULL);
+        x->paused += glint_now() - t0;
+    }
+}
+
+static void holdout_progress(void *cls, const char *stage, double p)
+{
+    holdout_run *x = cls;
+    job_progress(x->j, stage, p);
+}
+
+static void background_priority(int level)
+{
+#ifdef __linux__
+    if (level == FITSVC_BG_IDLE) {
+        struct sched_param sp;
+        memset(&sp, 0, sizeof sp);
+        if (pthread_setschedparam(pthread_self(), SCHED_IDLE, &sp) == 0)
+            return;
+        level = FITSVC_BG_LOW; /* refused: the lowest nice value instead */
+    }
+    if (level == FITSVC_BG_LOW)
+        (void)setpriority(PRIO_PROCESS, (id_t)gettid(), 19);
+#else
+    (void)level;
+#endif
+}
+
+static void *holdout_thread(void *arg)
+{
+    holdout_run *x = arg;
+    holdout_task *h = x->h;
+#ifdef __linux__
+    (void)pthread_setname_np(pthread_self(), "glintd-holdout"); /* seen in top, ps -L */
+#endif
+    background_priority(h->f->background);
+    /* off the worker pool: a painter's fit that starts meanwhile finds the
+     * pool free (par.h), instead of running on its own thread beside a
+     * measurement no one waits for */
+    par_background(1);
+    x->rc = prep_holdout(h->m, h->params, cache_data(h->pattern), h->paintings, holdout_gate,
+                         holdout_progress, x, &x->r, &x->err);
+    par_background(0);
+    return NULL;
+}
+
 static int holdout_job(job *j, void *arg, json_t **result, glint_err *err)
 {
     holdout_task *h = arg;
-    json_t *r = NULL;
+    holdout_run x;
+    pthread_t th;
     int rc;
 
     (void)result;
     if (h->f->work && (rc = admit_wait(h->f->work, h->bytes, "a held-out measurement",
                                        fitsvc_job_cancelled, j, err)))
         return rc;
-    /* off the worker pool: a painter's fit that starts meanwhile finds the
-     * pool free (par.h), instead of running on its own thread beside a
-     * measurement no one waits for */
-    par_background(1);
-    rc = prep_holdout(h->m, h->params, cache_data(h->pattern), h->paintings, fitsvc_job_cancelled,
-                      fitsvc_job_progress, j, &r, err);
-    par_background(0);
+    memset(&x, 0, sizeof x);
+    x.h = h;
+    x.j = j;
+    if (pthread_create(&th, NULL, holdout_thread, &x) == 0)
+        pthread_join(th, NULL);
+    else /* no thread to spare: not measured now (the point's next fit asks again) */
+        x.rc = glint_err_set(&x.err, GLINT_ENOMEM, "no thread for the held-out measurement");
     if (h->f->work)
         admit_leave(h->f->work, h->bytes);
-    if (rc)
+    if ((rc = x.rc)) {
+        *err = x.err;
         return rc;
-    json_object_set_new(r, "material_id", json_string(h->material_id));
-    return points_set_holdout(h->f->points, h->scene_hash, h->key, r, err);
+    }
+    json_object_set_new(x.r, "material_id", json_string(h->material_id));
+    {
+        /* its own time, and apart the time it waited for the painters */
+        double s = json_number_value(json_object_get(x.r, "seconds")) - x.paused;
+        json_object_set_new(x.r, "seconds", json_real(s > 0.0 ? s : 0.0));
+        json_object_set_new(x.r, "paused_seconds", json_real(x.paused));
+    }
+    return points_set_holdout(h->f->points, h->scene_hash, h->key, x.r, err);
 }
 
 void fitsvc_holdout_schedule(fit_task *t, prep *p, const char *material_id, const char *key)

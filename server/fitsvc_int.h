@@ -46,6 +46,10 @@ struct fitsvc {
     store *st;
     events *ev;
     admit *work;                     /* NULL: no admission */
+    int background;                  /* FITSVC_BG_*: held-out measurements' priority */
+    int active;                      /* fits running now (under lock) */
+    double last_active;              /* glint_now() when a fit began or ended or a painting
+                                        was stored, last (under lock) */
     pthread_mutex_t lock;
     unsigned long long hits, misses; /* fit requests: precomputation in memory or not */
     json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
@@ -96,5 +100,12 @@ void fitsvc_memo_metrics(fitsvc *f, FILE *o);
 /* Job callbacks for the precomputation (cls: the job). */
 int fitsvc_job_cancelled(void *cls);
 void fitsvc_job_progress(void *cls, const char *stage, double p);
+
+/* The painters' activity, which held-out measurements wait out
+ * (fitsvc_holdout.c): delta +1 when a fit begins, -1 when it ends, 0 for a
+ * painting stored.  fitsvc_quiet_for: seconds since the last of them, 0
+ * while a fit runs. */
+void fitsvc_busy(fitsvc *f, int delta);
+double fitsvc_quiet_for(fitsvc *f);
 
 #endif

@@ -150,6 +150,8 @@ void fitsvc_painting_stored(fitsvc *f, const char *session, int view, long long 
     pix_writer *w = f ? f->pix : NULL;
     double now = glint_now();
     int i;
+    if (f)
+        fitsvc_busy(f, 0); /* the painters are at work: held-out measurements wait */
     if (!w || strlen(session) >= sizeof w->q[0].session)
         return;
     pthread_mutex_lock(&w->lock);

@@ -43,6 +43,11 @@ static void usage(FILE *f)
           "  --measured-dir DIR    MERL tables (*.binary) offered to paint from as merl:<file>\n"
           "  --cache-mb N          in-memory precomputation cache budget (512)\n"
           "  --threads N           background job threads (2)\n"
+          "  --background-priority idle|low|normal\n"
+          "                        CPU priority of the held-out measurements run after\n"
+          "                        fits: idle only takes cores nothing else wants, low a\n"
+          "                        small share of busy ones (nice 19), normal the same as\n"
+          "                        requests (idle)\n"
           "  --work-mb N           memory for expensive work in flight: previews, base\n"
           "                        renders, G-buffers, fits; beyond it 503, or 413 for one\n"
           "                        piece that can never fit (2048)\n"
@@ -89,6 +94,7 @@ int main(int argc, char **argv)
         {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
         {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
         {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
+        {"background-priority", required_argument, 0, 1},
         {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
         {"config", required_argument, 0, 2},
         {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
@@ -165,7 +171,8 @@ int main(int argc, char **argv)
 
     {
         char cache_dir[4200];
-        fitsvc_config fc = {cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, NULL};
+        fitsvc_config fc = {cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, NULL,
+                            a.cfg.background_priority};
         snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
         if (admit_open(a.cfg.work_bytes, a.cfg.work_slots, a.cfg.work_wait_s, &a.work, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);

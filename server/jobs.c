@@ -479,6 +479,8 @@ void jobs_stats_get(jobs *js, jobs_stats *out)
         return;
     pthread_mutex_lock(&js->lock);
     out->queued = js->queued;
+    for (const job *j = js->qhead; j; j = j->qnext)
+        out->queued_fits += !is_holdout(j);
     out->running = js->running;
     out->done = js->done;
     out->failed = js->failed;

@@ -6,7 +6,8 @@
  * thread, and an event log ("progress" events, then one "done" or
  * "failed") that clients poll or stream.  Fit jobs run in submission
  * order, before any queued holdout job, and at most one holdout job runs
- * at a time (with two workers or more, one is always free for fits).
+ * at a time (with two workers or more, one is always free for fits; the
+ * measurement itself waits for the painters' pauses, fitsvc_holdout.c).
  * Jobs live in memory: finished jobs are kept JOBS_KEEP at most and
  * JOBS_KEEP_SECONDS at most; a restart forgets them (their results, e.g.
  * materials, are in the store).
@@ -72,6 +73,7 @@ int jobs_events(jobs *js, const char *id, long long since, double timeout_s, jso
 
 typedef struct jobs_stats {
     int queued, running;
+    int queued_fits; /* queued jobs that are not held-out measurements */
     unsigned long long done, failed;
 } jobs_stats;
 

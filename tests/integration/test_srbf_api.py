@@ -325,8 +325,9 @@ def test_04_parameters_are_checked_by_the_table(d):
 def test_09_held_out_error_under_the_environment(d):
     # two painted views: the fit's point gets a leave-one-view-out error,
     # each view rendered under the environment from the other's fit
-    # (measured in the background: wait for it)
-    deadline = time.time() + 120
+    # (measured in the background, below every request's priority and in
+    # the daemon's pauses: wait for it; the deadline only guards a hang)
+    deadline = time.time() + 300
     while True:
         m = d.get("/api/v1/methods?scene_id=" + S["scene"], status=200,
                   schema="Methods.json").json()
@@ -337,7 +338,7 @@ def test_09_held_out_error_under_the_environment(d):
         if p["held_out_rms"] is not None or time.time() > deadline:
             break
         time.sleep(0.2)
-    assert p["held_out_rms"] is not None, "no held-out error after 120 s"
+    assert p["held_out_rms"] is not None, "no held-out error after 300 s"
     h = p["held_out"]
     print("  held out rms %.4g (painted %.4g) in %.2f s" % (p["held_out_rms"], p["rms_painted"],
                                                           h.get("seconds", -1)))

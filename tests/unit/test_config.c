@@ -8,6 +8,7 @@
 
 #include "check.h"
 #include "config.h"
+#include "fitsvc.h"
 
 static int load(app_config *c, const char *text, glint_err *e)
 {
@@ -25,6 +26,34 @@ TEST(defaults_are_the_documented_ones)
     ASSERT_EQ(c.lim.max_body, (size_t)32 << 20);
     ASSERT_EQ(c.lim.max_image_dim, 4096);
     ASSERT(c.api_key[0] == '\0' && c.allow_origin[0] == '\0');
+    ASSERT_EQ(c.background_priority, FITSVC_BG_IDLE);
+}
+
+TEST(the_background_priority_by_name)
+{
+    static const struct { const char *name; int level; } ok[] = {
+        {"normal", FITSVC_BG_NORMAL}, {"low", FITSVC_BG_LOW}, {"idle", FITSVC_BG_IDLE}};
+    static const char *const bad[] = {"", "IDLE", "idle ", "high", "0", "2", "lowest"};
+    app_config c, before;
+    glint_err e;
+    config_default(&c);
+    for (size_t i = 0; i < sizeof ok / sizeof *ok; i++) {
+        ASSERT_OK(config_apply(&c, "background-priority", ok[i].name, &e));
+        ASSERT_EQ(c.background_priority, ok[i].level);
+    }
+    ASSERT_OK(config_apply(&c, "background-priority", "low", &e));
+    before = c;
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        ASSERT_MSG(config_apply(&c, "background-priority", bad[i], &e) == GLINT_EINVAL,
+                   "accepted '%s'", bad[i]);
+        ASSERT_MSG(strstr(e.msg, "--background-priority") && strstr(e.msg, "idle, low or normal"),
+                   "%s", e.msg);
+    }
+    ASSERT(memcmp(&c, &before, sizeof c) == 0);
+    ASSERT_OK(load(&c, "{\"background_priority\": \"normal\"}", &e));
+    ASSERT_EQ(c.background_priority, FITSVC_BG_NORMAL);
+    ASSERT(load(&c, "{\"background_priority\": 1}", &e) != 0);
+    ASSERT(strstr(e.msg, "idle, low or normal"));
 }
 
 TEST(every_number_at_its_ends_and_past_them)
@@ -163,6 +192,7 @@ TEST(a_file_too_big_or_missing)
 
 TEST_LIST {
     TEST_ENTRY(defaults_are_the_documented_ones),
+    TEST_ENTRY(the_background_priority_by_name),
     TEST_ENTRY(every_number_at_its_ends_and_past_them),
     TEST_ENTRY(the_units_of_sizes),
     TEST_ENTRY(strings_fit_their_field_or_are_refused),

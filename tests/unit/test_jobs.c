@@ -569,6 +569,12 @@ TEST(fits_run_before_queued_holdouts)
     ASSERT_OK(journal_wait_started(2)); /* both workers busy */
     ASSERT_OK(submit(js, "holdout", &h, id[2]));
     ASSERT_OK(submit(js, "fit", &f3, id[3])); /* submitted later, runs first */
+    {
+        jobs_stats st;
+        jobs_stats_get(js, &st);
+        ASSERT_EQ(st.queued, 2);
+        ASSERT_EQ(st.queued_fits, 1); /* the held-out measurement apart */
+    }
     gate_open(&g1);
     ASSERT_OK(wait_final(js, id[3], &log));
     json_decref(log);
