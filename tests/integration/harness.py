@@ -12,10 +12,12 @@ import os
 import shutil
 import signal
 import subprocess
+import struct
 import sys
 import tempfile
 import time
 import traceback
+import zlib
 
 import jsonschema
 import requests
@@ -187,6 +189,87 @@ class Daemon:
 
     def delete(self, path, **kw):
         return self.request("DELETE", path, **kw)
+
+
+def png_size(data):
+    """(width, height) of PNG bytes (IHDR), after checking the signature."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+    w, h = struct.unpack(">II", data[16:24])
+    return w, h
+
+
+def png_unfilter(raw, w, h, bpp):
+    """The rows (bytearrays of w * bpp bytes) of 8-bit PNG image data, once
+    inflated (`raw`): each row's filter byte undone (PNG specification,
+    filter types 0-4)."""
+    stride, rows = w * bpp, []
+    assert len(raw) == h * (stride + 1), (len(raw), w, h, bpp)
+    prev = bytearray(stride)
+    for y in range(h):
+        f = raw[y * (stride + 1)]
+        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        assert f <= 4, "filter type %d" % f
+        for x in range(stride):
+            a = line[x - bpp] if x >= bpp else 0
+            b = prev[x]
+            c = prev[x - bpp] if x >= bpp else 0
+            if f == 1:
+                line[x] = (line[x] + a) & 255
+            elif f == 2:
+                line[x] = (line[x] + b) & 255
+            elif f == 3:
+                line[x] = (line[x] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                pr = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+                line[x] = (line[x] + pr) & 255
+        rows.append(line)
+        prev = line
+    return rows
+
+
+def png_pixels(data):
+    """8-bit RGB(A) PNG (no interlace) -> (w, h, channels, bytes), filters undone."""
+    w, h = png_size(data)
+    depth, ctype = data[24], data[25]
+    assert depth == 8 and ctype in (2, 6), (depth, ctype)
+    ch = 3 if ctype == 2 else 4
+    pos, idat = 8, b""
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        if kind == b"IDAT":
+            idat += data[pos + 8:pos + 8 + n]
+        pos += 12 + n
+    return w, h, ch, b"".join(png_unfilter(zlib.decompress(idat), w, h, ch))
+
+
+def sse_events(d, path, headers, timeout=120, stop_types=("done", "failed")):
+    """Read a server-sent event stream; return [(id, type, data)] up to and
+    including the first event whose type is in stop_types."""
+    r = requests.get(d.base + path, headers=headers, stream=True, timeout=timeout)
+    assert r.status_code == 200, r.text
+    assert r.headers["Content-Type"].startswith("text/event-stream")
+    events, cur = [], {}
+    try:
+        for raw in r.iter_lines(decode_unicode=True):
+            if raw is None:
+                continue
+            if raw == "":
+                if "event" in cur or "data" in cur:
+                    events.append((cur.get("id"), cur.get("event", "message"),
+                                   json.loads(cur["data"]) if "data" in cur else None))
+                    if events[-1][1] in stop_types:
+                        break
+                cur = {}
+                continue
+            if raw.startswith(":"):
+                continue
+            k, _, v = raw.partition(":")
+            cur[k] = v[1:] if v.startswith(" ") else v
+    finally:
+        r.close()
+    return events
 
 
 def fit_material(d, session, body, timeout=300):

@@ -22,7 +22,7 @@ import tempfile
 import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import fit_material, run_tests  # noqa: E402
+from harness import fit_material, png_unfilter, run_tests  # noqa: E402
 
 try:
     import numpy as np
@@ -286,26 +286,7 @@ def png_decode(png):
         pos += 12 + n
     w, h, depth, ctype, _, _, interlace = hdr
     assert (depth, ctype, interlace) == (8, 2, 0), hdr  # 8-bit RGB, not interlaced
-    raw, rows, prev, bpp = zlib.decompress(idat), [], bytearray(3 * w), 3
-    for y in range(h):
-        f, line = raw[y * (3 * w + 1)], bytearray(raw[y * (3 * w + 1) + 1:(y + 1) * (3 * w + 1)])
-        for i in range(3 * w):
-            a = line[i - bpp] if i >= bpp else 0
-            b, c = prev[i], prev[i - bpp] if i >= bpp else 0
-            if f == 1:
-                line[i] = (line[i] + a) & 255
-            elif f == 2:
-                line[i] = (line[i] + b) & 255
-            elif f == 3:
-                line[i] = (line[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-            else:
-                assert f == 0, f
-        rows.append(line)
-        prev = line
+    rows = png_unfilter(zlib.decompress(idat), w, h, 3)
     return w, h, rows
 
 

@@ -12,17 +12,15 @@ import io
 import json
 import os
 import re
-import struct
 import subprocess
 import sys
 import tarfile
 import tempfile
 import threading
 import time
-import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import GLINTD, run_tests, validate  # noqa: E402
+from harness import GLINTD, png_pixels, png_size, run_tests, sse_events, validate  # noqa: E402
 
 import requests  # noqa: E402
 
@@ -41,80 +39,6 @@ def paint_headers(t=None):
     h = {"Content-Type": "application/json"}
     h.update(tok(t or S["paint"]))
     return h
-
-
-def png_size(data):
-    """(width, height) of PNG bytes (IHDR), after checking the signature."""
-    assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
-    w, h = struct.unpack(">II", data[16:24])
-    return w, h
-
-
-def png_pixels(data):
-    """8-bit RGB(A) PNG (no interlace) -> (w, h, channels, bytes), filters undone."""
-    w, h = png_size(data)
-    depth, ctype = data[24], data[25]
-    assert depth == 8 and ctype in (2, 6), (depth, ctype)
-    ch = 3 if ctype == 2 else 4
-    pos, idat = 8, b""
-    while pos < len(data):
-        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
-        if kind == b"IDAT":
-            idat += data[pos + 8:pos + 8 + n]
-        pos += 12 + n
-    raw = zlib.decompress(idat)
-    stride = w * ch
-    out = bytearray(h * stride)
-    prev = bytearray(stride)
-    for y in range(h):
-        f = raw[y * (stride + 1)]
-        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - ch] if x >= ch else 0
-            b = prev[x]
-            c = prev[x - ch] if x >= ch else 0
-            if f == 1:
-                line[x] = (line[x] + a) & 255
-            elif f == 2:
-                line[x] = (line[x] + b) & 255
-            elif f == 3:
-                line[x] = (line[x] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                pr = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-                line[x] = (line[x] + pr) & 255
-        out[y * stride:(y + 1) * stride] = line
-        prev = line
-    return w, h, ch, bytes(out)
-
-
-def sse_events(d, path, headers, timeout=120, stop_types=("done", "failed")):
-    """Read a server-sent event stream; return [(id, type, data)] up to and
-    including the first event whose type is in stop_types."""
-    r = requests.get(d.base + path, headers=headers, stream=True, timeout=timeout)
-    assert r.status_code == 200, r.text
-    assert r.headers["Content-Type"].startswith("text/event-stream")
-    events, cur = [], {}
-    try:
-        for raw in r.iter_lines(decode_unicode=True):
-            if raw is None:
-                continue
-            if raw == "":
-                if "event" in cur or "data" in cur:
-                    events.append((cur.get("id"), cur.get("event", "message"),
-                                   json.loads(cur["data"]) if "data" in cur else None))
-                    if events[-1][1] in stop_types:
-                        break
-                cur = {}
-                continue
-            if raw.startswith(":"):
-                continue
-            k, _, v = raw.partition(":")
-            cur[k] = v[1:] if v.startswith(" ") else v
-    finally:
-        r.close()
-    return events
 
 
 def wait_job(d, job_id, token, timeout=120):
@@ -544,8 +468,9 @@ def test_10_methods(d):
     assert {"res", "lambda", "regularization", "mapping", "model", "precision",
             "route"} <= names
     # the points measured on the scene, held-out error included (measured in
-    # the background: wait for it)
-    deadline = time.time() + 60
+    # the background, below every request's priority and in the daemon's
+    # pauses: wait for it; the deadline only guards a hang)
+    deadline = time.time() + 300
     while True:
         m = d.get("/api/v1/methods?scene_id=" + S["scene"], status=200,
                   schema="Methods.json").json()
@@ -559,7 +484,7 @@ def test_10_methods(d):
     assert p["fits"] >= 2 and p["fit_seconds"] > 0, p
     assert p["cold_seconds"] is not None and p["cold_seconds"] > 0, p
     assert abs(p["rms_painted"] - S["m32"]["errors"]["rms_painted"]) < 1e-9
-    assert p["held_out_rms"] is not None, "no held-out error after 60 s"
+    assert p["held_out_rms"] is not None, "no held-out error after 300 s"
     assert p["held_out"]["method"] == "leave-one-view-out" and p["held_out"]["views"] == 12
     assert p["held_out_rms"] >= p["rms_painted"] * 0.5
     assert "material_id" not in p

@@ -12,7 +12,7 @@ import struct
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import fit_material, run_tests  # noqa: E402
+from harness import fit_material, png_size, run_tests  # noqa: E402
 from test_sessions import exr_encode, png_decode  # noqa: E402
 
 W = 32
@@ -22,10 +22,6 @@ S = {}
 
 def tok(t):
     return {"X-Glint-Token": t}
-
-
-def png_size(data):
-    return struct.unpack(">II", data[16:24])
 
 
 def session(d):

@@ -20,7 +20,7 @@ import time
 import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Daemon, run_tests  # noqa: E402
+from harness import Daemon, png_unfilter, run_tests  # noqa: E402
 import exr_named  # noqa: E402
 
 API = "/api/v1"
@@ -48,31 +48,8 @@ def png_decode(data):
         elif kind == b"IEND":
             break
     bpp = {0: 1, 2: 3, 6: 4}[ctype]
-    raw = zlib.decompress(idat)
-    stride = w * bpp
-    prev = bytearray(stride)
-    rows = []
-    for y in range(h):
-        f = raw[y * (stride + 1)]
-        line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for i in range(stride):
-            a = line[i - bpp] if i >= bpp else 0
-            b = prev[i]
-            c = prev[i - bpp] if i >= bpp else 0
-            if f == 1:
-                line[i] = (line[i] + a) & 255
-            elif f == 2:
-                line[i] = (line[i] + b) & 255
-            elif f == 3:
-                line[i] = (line[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                pr = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-                line[i] = (line[i] + pr) & 255
-        rows.append([[line[x * bpp + (0 if bpp == 1 else ch)] for ch in range(3)]
-                     for x in range(w)])
-        prev = line
+    rows = [[[line[x * bpp + (0 if bpp == 1 else ch)] for ch in range(3)] for x in range(w)]
+            for line in png_unfilter(zlib.decompress(idat), w, h, bpp)]
     return w, h, rows
 
 
