@@ -99,9 +99,9 @@ typedef struct holdout_run {
  * waiting for that (fitsvc_quiet_for).  A painter's burst of strokes and
  * fits then runs without the measurement beside it, which would take the
  * other core and share the memory bus; it goes on in the pauses, a view at
- * a time.  It does not wait while jobs are queued: it holds a worker they
- * may need (with one worker, a painter's cold fits would otherwise queue
- * behind it for as long as the painter works). */
+ * a time.  It does not wait while fit jobs are queued: it holds a worker
+ * they may need (with one worker, a painter's cold fits would otherwise
+ * queue behind it for as long as the painter works). */
 static int holdout_gate(void *cls)
 {
     holdout_run *x = cls;
