@@ -57,28 +57,69 @@ typedef struct design_ctx {
     int chunk, nchunks;
 } design_ctx;
 
-static void design_run(void *ctx, int c)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DESIGN_CLONES __attribute__((target_clones("avx2", "default"), optimize("no-trapping-math")))
+#else
+#define DESIGN_CLONES
+#endif
+
+/* hf_project's tangent length and hf_hat, written out so that the loop
+ * over samples vectorizes: the same operations in the same order (no FMA
+ * in either clone), so the same bits as the two functions.  The clamps are
+ * selects, the NaN test included (!(u > 0) is true for NaN). */
+static inline __attribute__((always_inline)) double design_tangent(double vx, double vy, double vz, double nx, double ny,
+                                    double nz)
+{
+    double d = vx * nx + vy * ny + vz * nz;
+    double ax = vx - nx * d, ay = vy - ny * d, az = vz - nz * d;
+    double l = sqrt(ax * ax + ay * ay + az * az);
+    l = l < 0.0 ? 0.0 : l;
+    return l > 1.0 ? 1.0 : l;
+}
+
+static inline __attribute__((always_inline)) void design_hat(double u, int res, int32_t *k0, double *t)
+{
+    double x, f;
+    int k;
+    u = u > 0.0 ? u : 0.0;
+    u = u > 1.0 ? 1.0 : u;
+    x = u * (double)(res - 1);
+    f = floor(x);
+    k = (int)f;
+    k = k > res - 2 ? res - 2 : k;
+    *k0 = k;
+    *t = x - (double)k;
+}
+
+DESIGN_CLONES static void design_run(void *ctx, int c)
 {
     design_ctx *x = ctx;
     const samples *s = x->s;
     hf_design *out = x->out;
-    int i1 = (c + 1) * x->chunk < s->n ? (c + 1) * x->chunk : s->n;
-    for (int i = c * x->chunk; i < i1; i++) {
-        double n[3], wi[3], wo[3], pi[3];
-        for (int k = 0; k < 3; k++) {
-            n[k] = s->nrm[3 * i + k];
-            wi[k] = s->wi[3 * i + k];
-            wo[k] = s->wo[3 * i + k];
-        }
-        hf_project(n, wi, wo, pi);
-        for (int j = 0; j < 3; j++) {
-            int k;
-            double t;
-            hf_hat(pi[j], out->res, &k, &t);
-            out->k0[3 * i + j] = k;
-            out->t[3 * i + j] = t;
-        }
-        out->cos_i[i] = s->cos_i[i];
+    const float *restrict nrm = s->nrm, *restrict wi = s->wi, *restrict wo = s->wo;
+    const double *restrict cos_s = s->cos_i;
+    int32_t *restrict k0 = out->k0;
+    double *restrict t = out->t, *restrict cos_d = out->cos_i;
+    int res = out->res;
+    int i0 = c * x->chunk, i1 = (c + 1) * x->chunk < s->n ? (c + 1) * x->chunk : s->n;
+#pragma omp simd
+    for (int i = i0; i < i1; i++) {
+        double nx = nrm[3 * i], ny = nrm[3 * i + 1], nz = nrm[3 * i + 2];
+        double ix = wi[3 * i], iy = wi[3 * i + 1], iz = wi[3 * i + 2];
+        double ox = wo[3 * i], oy = wo[3 * i + 1], oz = wo[3 * i + 2];
+        double hx = ix + ox, hy = iy + oy, hz = iz + oz;
+        /* v3_normalize: where the length is 0 (or NaN) the vector stays as
+         * it is, and x * 1 is x to the bit; a multiply under a condition
+         * would keep the loop from vectorizing (it may trap) */
+        double hl = sqrt(hx * hx + hy * hy + hz * hz);
+        double r = 1.0 / (hl > 0.0 ? hl : 1.0);
+        hx = hx * r;
+        hy = hy * r;
+        hz = hz * r;
+        design_hat(design_tangent(ix, iy, iz, nx, ny, nz), res, &k0[3 * i], &t[3 * i]);
+        design_hat(design_tangent(hx, hy, hz, nx, ny, nz), res, &k0[3 * i + 1], &t[3 * i + 1]);
+        design_hat(design_tangent(ox, oy, oz, nx, ny, nz), res, &k0[3 * i + 2], &t[3 * i + 2]);
+        cos_d[i] = cos_s[i];
     }
 }
 

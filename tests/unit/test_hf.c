@@ -111,6 +111,96 @@ TEST(hat_weights)
     ASSERT_EQ(k, 0);
 }
 
+/* hf_design_build's vectorized loop against hf_project and hf_hat, sample
+ * by sample and bit for bit, on random directions and on the inputs where
+ * the two could part: a half vector of zero length (wi = -wo), lengths
+ * whose squares underflow or overflow, NaN and infinities, -0, vectors
+ * longer than 1 (the tangent length clamped), texel boundaries; at the
+ * smallest, a middle and the largest resolution.  The count is odd, so the
+ * loop's remainder runs too, and large enough to take the worker pool. */
+TEST(design_matches_project_and_hat)
+{
+    enum { N = 200003 };
+    static const float odd[][9] = {
+        {0, 0, 1, 0.6f, 0, 0.8f, -0.6f, 0, -0.8f},      /* wi = -wo: h = 0 */
+        {0, 0, 1, 1e-30f, 0, 0, -1e-30f, 1e-30f, 0},    /* |h|^2 underflows */
+        {0, 0, 1, 3e30f, 0, 0, 0, 3e30f, 0},            /* |h|^2 overflows */
+        {0, 0, 0, 0.6f, 0, 0.8f, 0, 0.6f, 0.8f},        /* zero normal */
+        {NAN, 0, 1, 0.6f, 0, 0.8f, 0, 0.6f, 0.8f},
+        {0, 0, 1, NAN, 0, 0.8f, 0, 0.6f, 0.8f},
+        {0, 0, 1, 0.6f, 0, 0.8f, 0, INFINITY, 0.8f},
+        {0, 0, 1, -INFINITY, 0, 0.8f, 0, 0.6f, 0.8f},
+        {-0.0f, -0.0f, 1, -0.0f, 0, 1, 0, -0.0f, 1},    /* all along n */
+        {0, 0, 1, 2, 0, 0, 0, 3, 0},                     /* tangents > 1: clamped */
+        {0, 0, 1, 0.5f, 0, 0.8660254f, 0, 0.25f, 0.9682458f},
+        {0, 0, 1, 1, 0, 0, 0, 1, 0},                     /* u = 1 exactly */
+        {0, 0, -1, 0.6f, 0, 0.8f, 0, 0.6f, 0.8f},       /* back-facing */
+    };
+    const int nodd = (int)(sizeof odd / sizeof odd[0]), res[] = {HF_RES_MIN, 64, HF_RES_MAX};
+    samples s;
+    unsigned rng = 12345u;
+    memset(&s, 0, sizeof s);
+    s.n = N;
+    s.nrm = malloc((size_t)3 * N * sizeof *s.nrm);
+    s.wi = malloc((size_t)3 * N * sizeof *s.wi);
+    s.wo = malloc((size_t)3 * N * sizeof *s.wo);
+    s.cos_i = malloc((size_t)N * sizeof *s.cos_i);
+    ASSERT(s.nrm && s.wi && s.wo && s.cos_i);
+    for (int i = 0; i < N; i++) {
+        float *v[3] = {s.nrm + 3 * i, s.wi + 3 * i, s.wo + 3 * i};
+        if (i < nodd || i >= N - nodd) {
+            const float *o = odd[i < nodd ? i : i - (N - nodd)];
+            for (int k = 0; k < 9; k++)
+                v[k / 3][k % 3] = o[k];
+        } else {
+            for (int a = 0; a < 3; a++) {
+                double x[3], l = 0;
+                for (int k = 0; k < 3; k++) {
+                    rng = rng * 1664525u + 1013904223u;
+                    x[k] = (double)(rng >> 8) / 8388608.0 - 1.0;
+                    l += x[k] * x[k];
+                }
+                l = sqrt(l) > 1e-3 ? sqrt(l) : 1.0;
+                for (int k = 0; k < 3; k++)
+                    v[a][k] = (float)(x[k] / l);
+            }
+        }
+        s.cos_i[i] = 0.25 + (double)(i % 7);
+    }
+    for (unsigned r = 0; r < sizeof res / sizeof res[0]; r++) {
+        hf_design d;
+        long mism = 0;
+        ASSERT_OK(hf_design_build(&s, res[r], &d, NULL));
+        for (int i = 0; i < N; i++) {
+            double n[3], wi[3], wo[3], pi[3];
+            for (int k = 0; k < 3; k++) {
+                n[k] = s.nrm[3 * i + k];
+                wi[k] = s.wi[3 * i + k];
+                wo[k] = s.wo[3 * i + k];
+            }
+            hf_project(n, wi, wo, pi);
+            for (int j = 0; j < 3; j++) {
+                int k;
+                double t;
+                hf_hat(pi[j], res[r], &k, &t);
+                if (d.k0[3 * i + j] != k || memcmp(&d.t[3 * i + j], &t, sizeof t) != 0) {
+                    if (mism++ < 5)
+                        fprintf(stderr, "res %d sample %d factor %d: k0 %d t %.17g, expected "
+                                "%d %.17g\n", res[r], i, j, d.k0[3 * i + j], d.t[3 * i + j], k, t);
+                }
+                ASSERT(d.k0[3 * i + j] >= 0 && d.k0[3 * i + j] <= res[r] - 2);
+            }
+            ASSERT(memcmp(&d.cos_i[i], &s.cos_i[i], sizeof(double)) == 0);
+        }
+        ASSERT_EQ(mism, 0);
+        hf_design_free(&d);
+    }
+    free(s.nrm);
+    free(s.wi);
+    free(s.wo);
+    free(s.cos_i);
+}
+
 TEST(constraint_rows)
 {
     const samples *s = sphere_samples();
@@ -590,6 +680,7 @@ TEST(eval_matches_design_eval)
 TEST_LIST {
     TEST_ENTRY(projections_known_vectors),
     TEST_ENTRY(hat_weights),
+    TEST_ENTRY(design_matches_project_and_hat),
     TEST_ENTRY(constraint_rows),
     TEST_ENTRY(laplacian_rows),
     TEST_ENTRY(gauge_is_null_for_every_lambda),
