@@ -57,18 +57,25 @@ typedef struct design_ctx {
     int chunk, nchunks;
 } design_ctx;
 
+/* no-trapping-math: GCC if-converts the selects of the loop below (and so
+ * vectorizes it) only where no floating-point operation may trap; it
+ * changes no value.  With an optimize attribute on the loop, GCC inlines
+ * the helpers only when told to always. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define DESIGN_CLONES __attribute__((target_clones("avx2", "default"), optimize("no-trapping-math")))
+#define DESIGN_CLONES                                                                      \
+    __attribute__((target_clones("avx2", "default"), optimize("no-trapping-math")))
+#define DESIGN_INLINE static inline __attribute__((always_inline))
 #else
 #define DESIGN_CLONES
+#define DESIGN_INLINE static inline
 #endif
 
 /* hf_project's tangent length and hf_hat, written out so that the loop
  * over samples vectorizes: the same operations in the same order (no FMA
  * in either clone), so the same bits as the two functions.  The clamps are
  * selects, the NaN test included (!(u > 0) is true for NaN). */
-static inline __attribute__((always_inline)) double design_tangent(double vx, double vy, double vz, double nx, double ny,
-                                    double nz)
+DESIGN_INLINE double design_tangent(double vx, double vy, double vz, double nx, double ny,
+                                   double nz)
 {
     double d = vx * nx + vy * ny + vz * nz;
     double ax = vx - nx * d, ay = vy - ny * d, az = vz - nz * d;
@@ -77,7 +84,7 @@ static inline __attribute__((always_inline)) double design_tangent(double vx, do
     return l > 1.0 ? 1.0 : l;
 }
 
-static inline __attribute__((always_inline)) void design_hat(double u, int res, int32_t *k0, double *t)
+DESIGN_INLINE void design_hat(double u, int res, int32_t *k0, double *t)
 {
     double x, f;
     int k;

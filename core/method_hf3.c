@@ -160,7 +160,11 @@ static int decomp_build(const method_build_in *in, cache_value *out, glint_err *
 }
 
 /* The disk layer keeps the decomposition; the design is rebuilt from the
- * pattern (it costs a few ms and depends only on the pattern and res). */
+ * pattern (it depends only on the pattern and res).  For 393,512 samples
+ * that takes 4 ms in memory already written once, 10-17 ms in glintd's
+ * first fit after a restart, most of it the kernel's faults on 17 MB of
+ * fresh pages; a design file mapped instead took 5 ms there, but writing
+ * it cost the cold fit 15-27 ms (BENCHMARKS.md, "restart"). */
 static int decomp_load(const method_build_in *in, const char *dir, const char *key,
                        cache_value *out, glint_err *err)
 {
