@@ -164,7 +164,7 @@ static int decomp_build(const method_build_in *in, cache_value *out, glint_err *
  * that takes 4 ms in memory already written once, 10-17 ms in glintd's
  * first fit after a restart, most of it the kernel's faults on 17 MB of
  * fresh pages; a design file mapped instead took 5 ms there, but writing
- * it cost the cold fit 15-27 ms (BENCHMARKS.md, "restart"). */
+ * it cost the cold fit 15-27 ms (BENCHMARKS.md, "eleventh pass"). */
 static int decomp_load(const method_build_in *in, const char *dir, const char *key,
                        cache_value *out, glint_err *err)
 {
