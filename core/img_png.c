@@ -62,6 +62,10 @@ int img_png_read(const void *mem, size_t len, int max_dim, int max_channels,
         png_destroy_read_struct(&png, &info, NULL);
         return 1;
     }
+    /* strict: a bad CRC in any chunk, or what libpng calls a benign error,
+     * stops this path, and OpenImageIO decides about the file */
+    png_set_crc_action(png, PNG_CRC_ERROR_QUIT, PNG_CRC_ERROR_QUIT);
+    png_set_benign_errors(png, 0);
     png_set_read_fn(png, &src, mem_read);
     png_read_info(png, info);
     png_get_IHDR(png, info, &w, &h, &depth, &ctype, &interlace, NULL, NULL);
