@@ -10,6 +10,7 @@
 
 #include "brdfx.h"
 #include "fsio.h"
+#include "json_text.h"
 #include "raster.h"
 
 #define MATERIAL_JSON_MAX (64u << 20)
@@ -269,7 +270,7 @@ static int save(const material *m, const char *dir, int defer, glint_err *err)
     if (m->method->mat->save_files &&
         (rc = m->method->mat->save_files(m->data, defer ? NULL : dir, root, err)))
         goto done;
-    text = json_dumps(root, JSON_INDENT(1) | JSON_REAL_PRECISION(17));
+    text = json_text(root, 1);
     if (!text) {
         rc = glint_err_set(err, GLINT_ENOMEM, "cannot serialize the material manifest");
         goto done;

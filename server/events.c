@@ -25,6 +25,7 @@
 #include "app.h"
 #include "buf.h"
 #include "ids.h"
+#include "json_text.h"
 #include "log.h"
 #include "store.h"
 
@@ -223,7 +224,7 @@ void events_publish(events *ev, const char *session, const char *type, json_t *d
 /* One SSE event: optional id, type, one line of JSON. */
 static int stream_event(ev_stream *s, long long id, const char *type, const json_t *data)
 {
-    char *text = json_dumps(data, JSON_COMPACT | JSON_REAL_PRECISION(17));
+    char *text = json_text(data, 0);
     int rc;
     if (!text)
         return -1;

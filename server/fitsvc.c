@@ -12,6 +12,7 @@
 #include "clock.h"
 #include "events.h"
 #include "ids.h"
+#include "json_text.h"
 #include "log.h"
 #include "material.h"
 #include "par.h"
@@ -95,7 +96,7 @@ int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err
         json_object_set_new(j, "links", fitsvc_material_links(id, sid, scid));
     snprintf(out->session, sizeof out->session, "%s", sid);
     snprintf(out->scene, sizeof out->scene, "%s", scid);
-    out->text = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(17));
+    out->text = json_text(j, 0);
     json_decref(j);
     if (!out->text)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -483,7 +484,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     }
     t0 = srv_timing_step(t->tm, "record", t0);
     {
-        char *text = json_dumps(d, JSON_COMPACT | JSON_REAL_PRECISION(17));
+        char *text = json_text(d, 0);
         if (text)
             memo_doc_put(f->memo, mid, t->session_id, t->scene_id, text, strlen(text));
         free(text);

@@ -15,6 +15,7 @@
 #include "fitsvc.h"
 #include "fitsvc_int.h"
 #include "ids.h"
+#include "json_text.h"
 #include "material.h"
 #include "prep.h"
 #include "store.h"
@@ -119,7 +120,7 @@ static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *
         goto done;
     srv_timing_step(t->tm, "record", t0);
     {
-        char *text = json_dumps(d, JSON_COMPACT | JSON_REAL_PRECISION(17));
+        char *text = json_text(d, 0);
         if (text)
             memo_doc_put(f->memo, mid, "", "", text, strlen(text));
         free(text);

@@ -20,6 +20,7 @@
 #include "http_front.h"
 #include "http_head.h"
 #include "http_origin.h"
+#include "json_text.h"
 
 #define HTTP_MAX_HEAD_DEFAULT (16u << 10)  /* libmicrohttpd's 32 KiB pool holds it with room */
 #define HTTP_MAX_TARGET_DEFAULT (8u << 10)
@@ -103,7 +104,7 @@ http_resp http_text(int status, const char *content_type, const char *text)
 
 http_resp http_json(int status, json_t *j)
 {
-    char *text = j ? json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(17)) : NULL;
+    char *text = j ? json_text(j, 0) : NULL;
     json_decref(j);
     if (!text)
         return http_text(500, "application/problem+json",

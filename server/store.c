@@ -14,6 +14,7 @@
 #include "clock.h"
 #include "fsio.h"
 #include "ids.h"
+#include "json_text.h"
 #include "store_int.h"
 
 static const char *const store_schema_sqlite[] = {
@@ -59,7 +60,7 @@ static const char *const store_schema_postgres[] = {
 /* Compact JSON text with every double exact (caller frees). */
 char *store_dump(const json_t *j)
 {
-    return json_dumps(j, JSON_COMPACT | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+    return json_text(j, 0);
 }
 
 json_t *store_load(const char *text, const char *what, glint_err *err)
