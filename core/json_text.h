@@ -14,7 +14,9 @@
  * (no JSON_ENSURE_ASCII, no JSON_ESCAPE_SLASH).  A real is printed with a
  * "." or an exponent, so that it reads back as a real.  Returns a
  * malloc'ed string, or NULL when out of memory, for a tree deeper than
- * JSON_TEXT_MAX_DEPTH (or a cycle), or indent outside 0..31. */
+ * JSON_TEXT_MAX_DEPTH (or a cycle), or indent outside 0..31.  The depth
+ * is twice what jansson's parser takes (2048), so a parsed document fits
+ * inside any response that wraps it. */
 #ifndef GLINT_JSON_TEXT_H
 #define GLINT_JSON_TEXT_H
 
@@ -22,7 +24,7 @@
 extern "C" {
 #endif
 
-#define JSON_TEXT_MAX_DEPTH 2048
+#define JSON_TEXT_MAX_DEPTH 4096
 
 #ifndef __cplusplus
 #include <jansson.h>
