@@ -11,19 +11,19 @@ extern "C" int glint_dtoa_shortest(double v, char *buf, int size)
 {
     char tmp[64]; /* the longest text is 24 bytes ("-2.2250738585072014e-308") */
     size_t n;
-    int point = 0;
+    if (!(v - v == 0.0)) /* inf or NaN */
+        return -1;
     try {
         n = (size_t)(fmt::format_to(tmp, FMT_COMPILE("{}"), v) - tmp);
     } catch (...) {
         return -1;
     }
-    for (size_t i = 0; i < n; i++)
-        point |= tmp[i] == '.' || tmp[i] == 'e' || tmp[i] == 'n' || tmp[i] == 'i';
-    if (!point) { /* "1" -> "1.0": it reads back as a real, as jansson's text does */
+    if (!memchr(tmp, '.', n) && !memchr(tmp, 'e', n)) {
+        /* "1" -> "1.0": it reads back as a real, as jansson's text does */
         tmp[n++] = '.';
         tmp[n++] = '0';
     }
-    if ((int)n + 1 > size || !(v - v == 0.0))
+    if (n + 1 > (size_t)(size > 0 ? size : 0))
         return -1;
     memcpy(buf, tmp, n);
     buf[n] = '\0';

@@ -2,8 +2,6 @@
  * (json_text.h). */
 #include "json_text.h"
 
-#include <inttypes.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,15 +83,15 @@ static void dump(jbuf *b, const json_t *j, int depth)
     case JSON_OBJECT: {
         const char *key;
         json_t *v;
-        size_t i = 0, count = json_object_size(j);
+        size_t i = 0, klen, count = json_object_size(j);
         if (!count) {
             put(b, "{}", 2);
             return;
         }
         put(b, "{", 1);
         newline(b, depth + 1);
-        json_object_foreach((json_t *)j, key, v) {
-            put_string(b, key, strlen(key));
+        json_object_keylen_foreach((json_t *)j, key, klen, v) {
+            put_string(b, key, klen); /* a key may hold a NUL (json_object_setn) */
             put(b, b->indent ? ": " : ":", b->indent ? 2 : 1);
             dump(b, v, depth + 1);
             if (++i < count) {

@@ -84,7 +84,10 @@ static json_t *some_tree(int depth, int reals)
         for (int i = 0; i < n; i++) {
             char key[16];
             snprintf(key, sizeof key, "k%d\t\"%d", (int)(next() % 1000), i);
-            json_object_set_new(o, key, some_tree(depth + 1, reals));
+            if (!reals && next() % 16 == 0) /* a NUL in a key: jansson writes it, never reads it */
+                json_object_setn_new(o, "nul\0key", 7, some_tree(depth + 1, reals));
+            else
+                json_object_set_new(o, key, some_tree(depth + 1, reals));
         }
         return o;
     }
