@@ -15,7 +15,7 @@ mode=${1:-}
 BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config curl
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
-  libopenimageio-dev libpng-dev libfmt-dev libmicrohttpd-dev libsqlite3-dev libpq-dev libassimp-dev
+  libopenimageio-dev libpng-dev libfmt-dev libdeflate-dev libmicrohttpd-dev libsqlite3-dev libpq-dev libassimp-dev
   libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0 libembree-dev
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for

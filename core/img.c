@@ -3,6 +3,7 @@
  * atomic file replacement live here; the pixels go through the
  * OpenImageIO shim in img_oiio.cpp (img_oiio.h). */
 #include "img.h"
+#include "img_exr.h"
 #include "fsio.h"
 
 #include <errno.h>
@@ -474,7 +475,9 @@ static int img_encode(const img_fmt *f, const img *im, const char *path, void **
     if ((f->u8 || strcmp(f->oiio, "hdr") == 0) && !q)
         return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", what);
     pixels = q ? q : (const void *)im->px;
-    if (path)
+    if (!path && !q && strcmp(f->oiio, "openexr") == 0 && (im->channels == 3 || im->channels == 4))
+        rc = img_exr_encode(im, mem, mem_len, err); /* a painting's strokes: img_exr.h */
+    else if (path)
         rc = img_write_atomic(path, f->oiio, im->width, im->height, im->channels, NULL,
                               f->u8, pixels, err);
     else

@@ -443,6 +443,13 @@ def test_painting_upload_and_read(d):
     assert r.json()["version"] == 2
     r = d.get(p + "?format=exr", status=200, headers=h)
     assert r.headers["Content-Type"] == "image/x-exr" and r.content[:4] == b"\x76\x2f\x31\x01"
+    # glint's own OpenEXR writer (core/img_exr.h), read by this independent
+    # reader: the floats uploaded, bit for bit
+    chans, ew, eh = exr_named.read(r.content)
+    f32 = lambda v: struct.unpack("<f", struct.pack("<f", v))[0]  # noqa: E731
+    assert (ew, eh) == (W, H) and sorted(chans) == ["B", "G", "R"], (ew, eh, sorted(chans))
+    assert all(chans["R"][y * W + x] == 2.5 and chans["G"][y * W + x] == -0.5
+               and chans["B"][y * W + x] == f32(x / W) for y in range(H) for x in range(W))
     _, (_, _, rows) = get_png(d, p, headers=h)
     assert rows[3][3][0] == 255 and rows[3][3][1] == 0
     # the view token reads it too
