@@ -101,7 +101,7 @@ static void encode_task(void *vctx, int t)
     size_t cap = (size_t)EXR_LINES * im->width * im->channels * 4;
     struct libdeflate_compressor *z = libdeflate_alloc_compressor(EXR_DEFLATE_LEVEL);
     unsigned char *split = malloc(cap), *pred = malloc(cap);
-    size_t bound = libdeflate_zlib_compress_bound(z, cap);
+    size_t bound = z ? libdeflate_zlib_compress_bound(z, cap) : 0;
 
     for (int b = t; z && split && pred && b < x->nblocks; b += x->ntasks) {
         size_t n = block_pred(im, b, split, pred), got;

@@ -106,6 +106,25 @@ static int op_image(glint_err *e)
     return rc;
 }
 
+/* A painting as a stroke stores it: OpenEXR (core/img_exr.h), read back. */
+static int op_exr(glint_err *e)
+{
+    img im, back;
+    void *data = NULL;
+    size_t len = 0;
+    int rc = img_alloc(&im, 40, 37, 4, e);
+    if (rc)
+        return rc;
+    for (int i = 0; i < 40 * 37 * 4; i++)
+        im.px[i] = (float)(i % 11) / 11.0f;
+    if ((rc = img_write_mem("exr", &im, &data, &len, e)) == 0 &&
+        (rc = img_read_mem(data, len, &back, e)) == 0)
+        img_free(&back);
+    free(data);
+    img_free(&im);
+    return rc;
+}
+
 static int op_env(glint_err *e)
 {
     env_map m;
@@ -236,6 +255,7 @@ TEST(image_decoding)
     ASSERT_OK(img_write_mem("hdr", &im, &hdr_data, &hdr_len, &e));
     img_free(&im);
     ASSERT_EQ(sweep("png", op_image), 0);
+    ASSERT_EQ(sweep("exr", op_exr), 0);
     ASSERT_EQ(sweep("environment", op_env), 0);
 }
 
