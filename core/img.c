@@ -476,7 +476,7 @@ static int img_encode(const img_fmt *f, const img *im, const char *path, void **
         return glint_err_set(err, GLINT_ENOMEM, "%s: out of memory", what);
     pixels = q ? q : (const void *)im->px;
     if (!path && !q && strcmp(f->oiio, "openexr") == 0 && (im->channels == 3 || im->channels == 4))
-        rc = img_exr_encode(im, mem, mem_len, err); /* a painting's strokes: img_exr.h */
+        rc = img_exr_encode(im, mem, mem_len, err); /* a stroke's painting, the API's EXRs */
     else if (path)
         rc = img_write_atomic(path, f->oiio, im->width, im->height, im->channels, NULL,
                               f->u8, pixels, err);

@@ -379,8 +379,9 @@ typedef struct gather_ctx {
  * which is the same bits.  Nothing branches per value: a non-finite pixel
  * read sets *nonfinite (its place is found again apart, gather_bad), and
  * the bits that changed against what rgb held are returned (0 unless cmp).
- * Per value the loop had a branch for the check, a division and the
- * compare's; 16.4% of bench_hf --warm was the gather then. */
+ * Per value the loop had a branch for the check, a division per sample
+ * and the compare's; perf put 15.7-17.7% of a bench_hf --warm run's
+ * samples in it then (BENCHMARKS.md, thirteenth pass). */
 static inline uint32_t gather_values(const samples *s, const img *im, int nch, int a, int b,
                                      float *restrict rgb, int cmp, int *nonfinite)
 {
