@@ -134,11 +134,14 @@ case "$mode" in
     echo "== unit tests under valgrind (memcheck; those that finish within minutes there)"
     meson test -C build --setup valgrind --suite valgrind --print-errorlogs
     echo "== unit tests and the fuzz corpora under AddressSanitizer + UndefinedBehaviorSanitizer"
+    # the sanitizers run the numerical programs two to three times slower:
+    # their timeouts are three times the plain build's (srbf_fit takes
+    # 226-246 s plain here and ran past its 600 s under them once)
     build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
     ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
     LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs
+      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs --timeout-multiplier 3
     # the daemon under the sanitizers, driven by the integration tests (a
     # sanitizer report in its log fails the test: tests/integration/harness.py);
     # its previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung under ASan)
