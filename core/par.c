@@ -3,9 +3,11 @@
 
 #include <dlfcn.h>
 #include <pthread.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <time.h>
 #include <unistd.h>
 
 static struct {
@@ -13,9 +15,10 @@ static struct {
     pthread_cond_t go, done;
     int nworkers;        /* started */
     int started;         /* start attempted */
-    unsigned long gen;   /* run generation */
+    unsigned long gen;   /* run generation (written under lock, read by spinners) */
+    unsigned long warm;  /* par_warm calls */
     int open;            /* the current run still takes workers */
-    int working;         /* workers inside the current run */
+    int working;         /* workers inside the current run (as gen) */
     par_fn fn;
     void *ctx;
     int ntasks;
@@ -24,6 +27,7 @@ static struct {
 } P = {.lock = PTHREAD_MUTEX_INITIALIZER, .go = PTHREAD_COND_INITIALIZER, .done = PTHREAD_COND_INITIALIZER};
 
 static int nthreads = -1;
+static long spin_ns = PAR_SPIN_US * 1000L;
 static __thread int background;
 
 void par_background(int on)
@@ -47,6 +51,13 @@ static void threads_init(void)
     if (n > PAR_MAX_THREADS)
         n = PAR_MAX_THREADS;
     nthreads = (int)n;
+    env = getenv("GLINT_POOL_SPIN_US");
+    if (env && *env) {
+        char *end;
+        long v = strtol(env, &end, 10);
+        if (*end == '\0' && v >= 0 && v <= 1000000)
+            spin_ns = v * 1000L;
+    }
 }
 
 int par_threads(void)
@@ -62,26 +73,68 @@ static void claim_loop(par_fn fn, void *ctx, int ntasks)
         fn(ctx, t);
 }
 
+static long now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1000000000L + ts.tv_nsec;
+}
+
+/* Spin, up to spin_ns, while *gen == x (gen not NULL) or while *cnt != 0:
+ * returns whether the wait ended before the time ran out.  Yields the CPU
+ * every few microseconds, so a spinner gives way to runnable threads. */
+static int spin_on(const unsigned long *gen, unsigned long x, const int *cnt)
+{
+    long t0 = 0;
+    if (spin_ns <= 0)
+        return 0;
+    for (unsigned k = 0;; k++) {
+        if (gen ? __atomic_load_n(gen, __ATOMIC_ACQUIRE) != x
+                : __atomic_load_n(cnt, __ATOMIC_ACQUIRE) == 0)
+            return 1;
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+        if ((k & 63) == 0) {
+            long t = now_ns();
+            if (k == 0)
+                t0 = t;
+            else if (t - t0 > spin_ns)
+                return 0;
+            else
+                sched_yield();
+        }
+    }
+}
+
 static void *worker(void *arg)
 {
-    unsigned long seen = 0;
+    unsigned long seen = 0, seen_warm = 0;
     (void)arg;
     pthread_mutex_lock(&P.lock);
     for (;;) {
         par_fn fn;
         void *ctx;
         int ntasks;
-        while (!(P.open && P.gen != seen))
+        if (!(P.open && P.gen != seen)) { /* the next run may come at once */
+            seen_warm = P.warm;
+            pthread_mutex_unlock(&P.lock);
+            spin_on(&P.gen, seen, NULL);
+            pthread_mutex_lock(&P.lock);
+        }
+        while (!(P.open && P.gen != seen) && P.warm == seen_warm)
             pthread_cond_wait(&P.go, &P.lock);
+        if (!(P.open && P.gen != seen))
+            continue; /* par_warm: spin */
         seen = P.gen;
-        P.working++;
+        __atomic_add_fetch(&P.working, 1, __ATOMIC_RELAXED);
         fn = P.fn;
         ctx = P.ctx;
         ntasks = P.ntasks;
         pthread_mutex_unlock(&P.lock);
         claim_loop(fn, ctx, ntasks);
         pthread_mutex_lock(&P.lock);
-        if (--P.working == 0)
+        if (__atomic_sub_fetch(&P.working, 1, __ATOMIC_RELEASE) == 0)
             pthread_cond_broadcast(&P.done);
     }
     return NULL;
@@ -123,7 +176,7 @@ void par_run(int ntasks, par_fn fn, void *ctx)
     P.ctx = ctx;
     P.ntasks = ntasks;
     atomic_store(&P.next, 0);
-    P.gen++;
+    __atomic_store_n(&P.gen, P.gen + 1, __ATOMIC_RELEASE);
     P.open = P.nworkers > 0;
     if (P.open)
         pthread_cond_broadcast(&P.go);
@@ -132,10 +185,27 @@ void par_run(int ntasks, par_fn fn, void *ctx)
     /* workers that have not woken by now are not waited for */
     pthread_mutex_lock(&P.lock);
     P.open = 0;
+    if (P.working > 0) { /* a worker's last task: about to end, most often */
+        pthread_mutex_unlock(&P.lock);
+        spin_on(NULL, 0, &P.working);
+        pthread_mutex_lock(&P.lock);
+    }
     while (P.working > 0)
         pthread_cond_wait(&P.done, &P.lock);
     pthread_mutex_unlock(&P.lock);
     atomic_store(&P.busy, 0);
+}
+
+void par_warm(void)
+{
+    if (background || par_threads() == 1)
+        return;
+    pthread_mutex_lock(&P.lock);
+    if (!P.started)
+        start_workers();
+    P.warm++;
+    pthread_cond_broadcast(&P.go);
+    pthread_mutex_unlock(&P.lock);
 }
 
 int par_blas_single(void)

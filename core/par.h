@@ -11,23 +11,29 @@
  *
  * The pool has par_threads() - 1 workers (the online CPUs, at most
  * PAR_MAX_THREADS; GLINT_THREADS=N in the environment sets N, 1 = no
- * workers), started at the first par_run that can use them.  Workers sleep
- * on a condition variable between runs (no spinning: a daemon that is not
- * fitting costs nothing).  One run at a time uses the pool: a par_run that
+ * workers), started at the first par_run that can use them.  After a run
+ * a worker spins for PAR_SPIN_US (yielding the CPU every few microseconds),
+ * then sleeps on a condition variable: a fit's runs follow one another
+ * within microseconds, and a daemon that is not fitting costs nothing.  The
+ * caller likewise spins that long for a worker still in its last task
+ * before it sleeps.  GLINT_POOL_SPIN_US=N in the environment sets the spin
+ * (0: none).  One run at a time uses the pool: a par_run that
  * finds it busy (another thread's fit) runs its tasks on its own thread,
  * never waiting for the other (and a thread marked par_background() never
  * takes it).  par_run is therefore safe from any thread,
  * and from inside a task (the nested run is serial).
  *
- * Costs measured here (2 cores): waking the worker and joining it take
- * 10-40 us, so loops under about 0.1 ms of work run serially
- * (par_worth()). */
+ * Costs measured (2 vCPUs of a virtual machine; `par_lat` in tests/bench):
+ * waking a sleeping worker takes 40-120 us there, more after the vCPU has
+ * idled, which is what the spin saves; loops under about 0.1 ms of work
+ * run serially (par_worth()). */
 #ifndef GLINT_PAR_H
 #define GLINT_PAR_H
 
 #include <stddef.h>
 
 #define PAR_MAX_THREADS 16
+#define PAR_SPIN_US 200
 
 typedef void (*par_fn)(void *ctx, int task);
 
@@ -41,6 +47,12 @@ void par_run(int ntasks, par_fn fn, void *ctx);
  * while on, this thread's par_run runs every task itself and never takes
  * the pool, which stays free for the fits people wait for.  Per thread. */
 void par_background(int on);
+
+/* Wake the pool's workers to spin (PAR_SPIN_US) without a run: a caller
+ * that is about to start a run after some serial work (a fit, before its
+ * first pass over the samples) calls it first, so that the wake-up
+ * overlaps that work.  Nothing for a background thread or one thread. */
+void par_warm(void);
 
 /* BLAS on the calling thread only, for a process whose own loops are
  * parallel (par_run) and whose BLAS calls are small: OpenBLAS's idle

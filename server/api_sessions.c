@@ -34,6 +34,7 @@
 #include "ids.h"
 #include "img.h"
 #include "memo.h"
+#include "par.h"
 #include "upload.h"
 #include "scenes.h"
 #include "store.h"
@@ -510,6 +511,7 @@ static http_resp strokes_post(http_req *req)
     if ((rc = strokes_parse(req, &list, &n, &canon, &e)))
         goto done;
     t0 = srv_timing_step(&req->timing, "parse", t0);
+    par_warm(); /* the encode's workers wake while the brush runs */
     for (int i = 0; i < n; i++)
         need_base |= list[i].mode == STROKE_ERASE;
     {

@@ -564,6 +564,7 @@ int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const me
 {
     int rc;
     fitsvc_busy(f, 1);
+    par_warm(); /* the pool's worker wakes while the scene and paintings are found */
     rc = fit_now_or_queue(f, session_id, scene_id, m, params, doc, job_id, tm, err);
     fitsvc_busy(f, -1);
     return rc;
