@@ -23,10 +23,10 @@
  * takes it).  par_run is therefore safe from any thread,
  * and from inside a task (the nested run is serial).
  *
- * Costs measured (2 vCPUs of a virtual machine; `par_lat` in tests/bench):
- * waking a sleeping worker takes 40-120 us there, more after the vCPU has
- * idled, which is what the spin saves; loops under about 0.1 ms of work
- * run serially (par_worth()). */
+ * Costs measured (2 vCPUs of a virtual machine; tests/bench/bench_par.c):
+ * a run of two 20 us tasks took 55-70 us (medians) with the worker asleep
+ * and 20-21 us with it spinning; loops under about 0.1 ms of work run
+ * serially (par_worth()). */
 #ifndef GLINT_PAR_H
 #define GLINT_PAR_H
 
