@@ -18,7 +18,8 @@ static struct {
     unsigned long gen;   /* run generation (written under lock, read by spinners) */
     unsigned long warm;  /* par_warm calls */
     int open;            /* the current run still takes workers */
-    int working;         /* workers inside the current run (as gen) */
+    int working;         /* workers inside the current run (written under
+                          * lock, read by the spinning caller) */
     par_fn fn;
     void *ctx;
     int ntasks;
@@ -80,18 +81,19 @@ static long now_ns(void)
     return ts.tv_sec * 1000000000L + ts.tv_nsec;
 }
 
-/* Spin, up to spin_ns, while *gen == x (gen not NULL) or while *cnt != 0:
- * returns whether the wait ended before the time ran out.  Yields the CPU
- * every few microseconds, so a spinner gives way to runnable threads. */
-static int spin_on(const unsigned long *gen, unsigned long x, const int *cnt)
+/* Spin, up to spin_ns, while *gen == x (gen not NULL) or while *cnt != 0;
+ * the caller then checks under the lock, and sleeps if it must.  Yields
+ * the CPU every few microseconds, so a spinner gives way to runnable
+ * threads. */
+static void spin_on(const unsigned long *gen, unsigned long x, const int *cnt)
 {
     long t0 = 0;
     if (spin_ns <= 0)
-        return 0;
+        return;
     for (unsigned k = 0;; k++) {
         if (gen ? __atomic_load_n(gen, __ATOMIC_ACQUIRE) != x
                 : __atomic_load_n(cnt, __ATOMIC_ACQUIRE) == 0)
-            return 1;
+            return;
 #if defined(__x86_64__) || defined(__i386__)
         __builtin_ia32_pause();
 #endif
@@ -100,7 +102,7 @@ static int spin_on(const unsigned long *gen, unsigned long x, const int *cnt)
             if (k == 0)
                 t0 = t;
             else if (t - t0 > spin_ns)
-                return 0;
+                return;
             else
                 sched_yield();
         }
