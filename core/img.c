@@ -562,6 +562,30 @@ int img_write_mem(const char *format, const img *im, void **out_data, size_t *ou
     return img_encode(f, im, NULL, out_data, out_len, err);
 }
 
+int img_write_exr_mem_reusing(const img *im, const void *prev, size_t prev_len, int y0, int y1,
+                              void **out_data, size_t *out_len, int *reused, glint_err *err)
+{
+    int rc;
+    if (reused)
+        *reused = 0;
+    if (!out_data || !out_len)
+        return glint_err_set(err, GLINT_EINVAL, "img_write_exr_mem_reusing: NULL output");
+    *out_data = NULL;
+    *out_len = 0;
+    if ((rc = img_validate(im, err)))
+        return rc;
+    if (im->channels != 3 && im->channels != 4)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "encoding to memory: %d channels, 3 or 4 expected", im->channels);
+    if ((rc = img_check_finite_array(im->px, im->width, im->height, im->channels, NULL,
+                                     "encoding to memory", err))) {
+        if (err)
+            glint_err_prefix(err, "refusing to write");
+        return rc;
+    }
+    return img_exr_encode_reusing(im, prev, prev_len, y0, y1, out_data, out_len, reused, err);
+}
+
 /* Checks of img_write_exr_named(_mem); `what` names the output. */
 static int exr_named_check(const char *what, int width, int height, int nch,
                            const char *const *names, const float *data, glint_err *err)

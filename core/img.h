@@ -69,6 +69,16 @@ int img_write_pair(const char *dir, const char *stem, const img *lin, const img 
 int img_write_mem(const char *format, const img *im, void **out_data,
                   size_t *out_len, glint_err *err);
 
+/* img_write_mem("exr", im) (3 or 4 channels) given prev, the file of an
+ * image that differs from im in lines y0..y1 at most (y1 < y0: none), as a
+ * stroke's bounding box gives: prev's compressed blocks clear of those
+ * lines are used again when prev has the layout img_write_mem("exr")
+ * writes for im (img_exr.h, img_exr_encode_reusing), so the cost is that
+ * of the lines changed.  prev may be NULL.  OUT: *reused (may be NULL), the
+ * blocks of 16 lines taken from prev. */
+int img_write_exr_mem_reusing(const img *im, const void *prev, size_t prev_len, int y0, int y1,
+                              void **out_data, size_t *out_len, int *reused, glint_err *err);
+
 /* Write an OpenEXR file with `nch` named float channels (names[i], e.g.
  * "N.X"), data interleaved width x height x nch.  nch in
  * 1..IMG_MAX_NAMED_CHANNELS, names non-empty and distinct, data finite;

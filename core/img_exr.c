@@ -39,6 +39,8 @@ typedef struct encode_ctx {
     const img *im;
     int nblocks, ntasks;
     block *blocks;
+    const int *todo; /* the blocks to encode, ntodo of them */
+    int ntodo;
     int failed; /* a task ran out of memory */
 } encode_ctx;
 
@@ -93,7 +95,8 @@ static size_t block_pred(const img *im, int b, unsigned char *restrict split,
     return n;
 }
 
-/* Task t: the blocks t, t + ntasks, ... with a compressor of its own. */
+/* Task t: the blocks todo[t], todo[t + ntasks], ... with a compressor of
+ * its own. */
 static void encode_task(void *vctx, int t)
 {
     encode_ctx *x = vctx;
@@ -103,7 +106,8 @@ static void encode_task(void *vctx, int t)
     unsigned char *split = malloc(cap), *pred = malloc(cap);
     size_t bound = z ? libdeflate_zlib_compress_bound(z, cap) : 0;
 
-    for (int b = t; z && split && pred && b < x->nblocks; b += x->ntasks) {
+    for (int j = t; z && split && pred && j < x->ntodo; j += x->ntasks) {
+        int b = x->todo[j];
         size_t n = block_pred(im, b, split, pred), got;
         unsigned char *out = malloc(bound > n ? bound : n);
         if (!out)
@@ -114,8 +118,8 @@ static void encode_task(void *vctx, int t)
         x->blocks[b].data = out;
         x->blocks[b].size = got;
     }
-    for (int b = t; b < x->nblocks; b += x->ntasks)
-        if (!x->blocks[b].data)
+    for (int j = t; j < x->ntodo; j += x->ntasks)
+        if (!x->blocks[x->todo[j]].data)
             x->failed = 1;
     free(split);
     free(pred);
@@ -182,15 +186,86 @@ static size_t header(const img *im, unsigned char *h)
     return (size_t)(q - h);
 }
 
-int img_exr_encode(const img *im, void **out, size_t *len, glint_err *err)
+/* Where block b of a file of NBLOCKS blocks lies in prev: at prev[*at ..
+ * *at + 8 + *size) (its line and size, then its data), when the offset
+ * table (after a header of HSIZE bytes) points at a block of line 16 b
+ * whose data lies within the file and is no larger than the block's raw
+ * bytes; -1 when it does not. */
+static int prev_block(const img *im, const unsigned char *prev, size_t prev_len, size_t hsize,
+                      int nblocks, int b, size_t *at, size_t *size)
+{
+    size_t table = hsize + 8 * (size_t)nblocks, raw;
+    uint64_t off;
+    uint32_t line, sz;
+    int y1 = (b + 1) * EXR_LINES < im->height ? (b + 1) * EXR_LINES : im->height;
+
+    if (prev_len < table)
+        return -1;
+    memcpy(&off, prev + hsize + 8 * (size_t)b, 8);
+    if (off < table || off > prev_len || prev_len - off < 8)
+        return -1;
+    memcpy(&line, prev + off, 4);
+    memcpy(&sz, prev + off + 4, 4);
+    raw = (size_t)(y1 - b * EXR_LINES) * im->width * im->channels * 4;
+    if (line != (uint32_t)(b * EXR_LINES) || sz == 0 || sz > raw || sz > prev_len - off - 8)
+        return -1;
+    *at = (size_t)off;
+    *size = sz;
+    return 0;
+}
+
+/* The file of x->im from its blocks: those in x->blocks, and where
+ * x->blocks[b].data is NULL, block b's bytes in prev at from[b]. */
+static int assemble(const encode_ctx *x, const unsigned char *prev, const size_t *from,
+                    void **out, size_t *len, glint_err *err)
+{
+    unsigned char h[512], *file, *q;
+    size_t hsize = header(x->im, h), total = hsize + 8 * (size_t)x->nblocks;
+
+    for (int b = 0; b < x->nblocks; b++) {
+        uint32_t sz;
+        if (x->blocks[b].data)
+            sz = (uint32_t)x->blocks[b].size;
+        else
+            memcpy(&sz, prev + from[b] + 4, 4);
+        total += 8 + (size_t)sz;
+    }
+    if (!(file = malloc(total)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory encoding an OpenEXR image");
+    memcpy(file, h, hsize);
+    q = file + hsize + 8 * (size_t)x->nblocks;
+    for (int b = 0; b < x->nblocks; b++) {
+        uint64_t at = (uint64_t)(q - file);
+        memcpy(file + hsize + 8 * (size_t)b, &at, 8);
+        if (x->blocks[b].data) {
+            q = put32(q, (uint32_t)(b * EXR_LINES));
+            q = put32(q, (uint32_t)x->blocks[b].size);
+            memcpy(q, x->blocks[b].data, x->blocks[b].size);
+            q += x->blocks[b].size;
+        } else {
+            uint32_t sz;
+            memcpy(&sz, prev + from[b] + 4, 4);
+            memcpy(q, prev + from[b], 8 + (size_t)sz);
+            q += 8 + (size_t)sz;
+        }
+    }
+    *out = file;
+    *len = total;
+    return 0;
+}
+
+int img_exr_encode_reusing(const img *im, const void *prev, size_t prev_len, int y0, int y1,
+                           void **out, size_t *len, int *reused, glint_err *err)
 {
     encode_ctx x;
-    unsigned char h[512], *file = NULL, *q;
-    size_t hsize, total;
-    int rc = 0;
+    unsigned char h[512];
+    size_t hsize, *from = NULL;
+    int *todo = NULL, rc = 0, nreused = 0;
 
     *out = NULL;
     *len = 0;
+    if (reused)
+        *reused = 0;
     if (!im || !im->px || (im->channels != 3 && im->channels != 4) || im->width < 1 ||
         im->height < 1)
         return glint_err_set(err, GLINT_EINVAL, "img_exr_encode: an RGB or RGBA image expected");
@@ -198,43 +273,64 @@ int img_exr_encode(const img *im, void **out, size_t *len, glint_err *err)
     x.im = im;
     x.nblocks = (im->height + EXR_LINES - 1) / EXR_LINES;
     x.blocks = calloc((size_t)x.nblocks, sizeof *x.blocks);
-    if (!x.blocks)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory encoding an OpenEXR image");
+    todo = malloc((size_t)x.nblocks * sizeof *todo);
+    from = malloc((size_t)x.nblocks * sizeof *from);
+    if (!x.blocks || !todo || !from) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory encoding an OpenEXR image");
+        goto done;
+    }
+    hsize = header(im, h);
+    /* prev's blocks serve when all of its table is well formed and its
+     * blocks follow one another from the table's end to the file's, as
+     * img_exr_encode lays them out */
+    {
+        size_t next = hsize + 8 * (size_t)x.nblocks;
+        for (int b = 0; prev && b < x.nblocks; b++) {
+            size_t size;
+            if (prev_len < hsize || memcmp(prev, h, hsize) != 0 ||
+                prev_block(im, prev, prev_len, hsize, x.nblocks, b, &from[b], &size) ||
+                from[b] != next)
+                prev = NULL;
+            else
+                next = from[b] + 8 + size;
+        }
+        if (next != prev_len)
+            prev = NULL;
+    }
+    /* the blocks of lines y0..y1 encoded, the others prev's */
+    for (int b = 0; b < x.nblocks; b++) {
+        int first = b * EXR_LINES, last = first + EXR_LINES - 1;
+        if (prev && (y1 < y0 || last < y0 || first > y1))
+            nreused++;
+        else
+            todo[x.ntodo++] = b;
+    }
+    x.todo = todo;
     /* a task per thread, each with its compressor (level 1: about 300 KB) */
-    x.ntasks = par_worth((size_t)im->width * im->height * im->channels) ? par_threads() : 1;
-    if (x.ntasks > x.nblocks)
-        x.ntasks = x.nblocks;
+    x.ntasks = par_worth((size_t)x.ntodo * EXR_LINES * im->width * im->channels) ? par_threads()
+                                                                                  : 1;
+    if (x.ntasks > x.ntodo)
+        x.ntasks = x.ntodo;
     if (x.ntasks > 1)
         par_run(x.ntasks, encode_task, &x);
-    else
+    else if (x.ntodo > 0)
         encode_task(&x, 0);
     if (x.failed) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory encoding an OpenEXR image");
         goto done;
     }
-    hsize = header(im, h);
-    total = hsize + 8 * (size_t)x.nblocks;
-    for (int b = 0; b < x.nblocks; b++)
-        total += 8 + x.blocks[b].size;
-    if (!(file = malloc(total))) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory encoding an OpenEXR image");
-        goto done;
-    }
-    memcpy(file, h, hsize);
-    q = file + hsize + 8 * (size_t)x.nblocks;
-    for (int b = 0; b < x.nblocks; b++) {
-        uint64_t at = (uint64_t)(q - file);
-        memcpy(file + hsize + 8 * (size_t)b, &at, 8);
-        q = put32(q, (uint32_t)(b * EXR_LINES));
-        q = put32(q, (uint32_t)x.blocks[b].size);
-        memcpy(q, x.blocks[b].data, x.blocks[b].size);
-        q += x.blocks[b].size;
-    }
-    *out = file;
-    *len = total;
+    if (!(rc = assemble(&x, prev, from, out, len, err)) && reused)
+        *reused = nreused;
 done:
-    for (int b = 0; b < x.nblocks; b++)
+    for (int b = 0; x.blocks && b < x.nblocks; b++)
         free(x.blocks[b].data);
     free(x.blocks);
+    free(todo);
+    free(from);
     return rc;
+}
+
+int img_exr_encode(const img *im, void **out, size_t *len, glint_err *err)
+{
+    return img_exr_encode_reusing(im, NULL, 0, 0, -1, out, len, NULL, err);
 }

@@ -28,4 +28,18 @@
  * bytes).  GLINT_EINVAL for other channel counts, GLINT_ENOMEM. */
 int img_exr_encode(const img *im, void **out, size_t *len, glint_err *err);
 
+/* img_exr_encode's file of im, made from prev (prev_len bytes) where it
+ * can: prev is the file of an image that differs from im in lines y0..y1
+ * at most (y1 < y0: in none), which a stroke's bounding box gives.  When
+ * prev starts with the header img_exr_encode writes for im and its every
+ * block is where its table says, of the right line and no larger than the
+ * block's raw bytes, the blocks clear of lines y0..y1 are copied from it
+ * and the others encoded; otherwise all are encoded.  When prev is a file
+ * img_exr_encode made, the result is the bytes img_exr_encode(im) gives
+ * (tests/unit/test_img_exr.c).  The caller answers for prev's image:
+ * copied blocks are not decoded.  OUT: *reused (may be NULL), the blocks
+ * copied.  GLINT_EINVAL, GLINT_ENOMEM as img_exr_encode. */
+int img_exr_encode_reusing(const img *im, const void *prev, size_t prev_len, int y0, int y1,
+                           void **out, size_t *len, int *reused, glint_err *err);
+
 #endif

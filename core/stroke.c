@@ -622,12 +622,12 @@ double stroke_list_cost(const stroke *list, int n, int width, int height)
     return cost;
 }
 
-int stroke_apply_list(const stroke *list, int n, img *im, const img *base, long *pixels,
+int stroke_apply_list(const stroke *list, int n, img *im, const img *base, stroke_report *total,
                       glint_err *err)
 {
-    long total = 0;
-    if (pixels)
-        *pixels = 0;
+    stroke_report all = {0, 0, 0, -1, -1};
+    if (total)
+        *total = all;
     if (n < 0 || (n > 0 && !list))
         return glint_err_set(err, GLINT_EINVAL, "stroke_apply_list: %d strokes but no list", n);
     for (int i = 0; i < n; i++) {
@@ -638,9 +638,22 @@ int stroke_apply_list(const stroke *list, int n, img *im, const img *base, long 
                 glint_err_prefix(err, "strokes[%d]", i);
             return rc;
         }
-        total += rep.pixels;
+        if (rep.pixels == 0)
+            continue;
+        if (all.pixels == 0) {
+            all.x0 = rep.x0;
+            all.y0 = rep.y0;
+            all.x1 = rep.x1;
+            all.y1 = rep.y1;
+        } else {
+            all.x0 = rep.x0 < all.x0 ? rep.x0 : all.x0;
+            all.y0 = rep.y0 < all.y0 ? rep.y0 : all.y0;
+            all.x1 = rep.x1 > all.x1 ? rep.x1 : all.x1;
+            all.y1 = rep.y1 > all.y1 ? rep.y1 : all.y1;
+        }
+        all.pixels += rep.pixels;
     }
-    if (pixels)
-        *pixels = total;
+    if (total)
+        *total = all;
     return 0;
 }

@@ -139,9 +139,10 @@ double stroke_cost(const stroke *s, int width, int height);
 double stroke_list_cost(const stroke *list, int n, int width, int height);
 
 /* Apply n strokes in order.  On failure the message names the stroke
- * ("strokes[i]: ...").  OUT: *pixels (may be NULL): pixels changed, summed
- * over the strokes. */
-int stroke_apply_list(const stroke *list, int n, img *im, const img *base, long *pixels,
+ * ("strokes[i]: ...").  OUT: *total (may be NULL): the pixels changed,
+ * summed over the strokes, and the bounding box of all of them (x1 < x0
+ * and y1 < y0 when none). */
+int stroke_apply_list(const stroke *list, int n, img *im, const img *base, stroke_report *total,
                       glint_err *err);
 
 #endif

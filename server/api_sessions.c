@@ -96,9 +96,11 @@ static int session_view(http_req *req, const json_t *sdoc, json_t **scene_doc, i
 }
 
 /* The current image of a view: its painting, or the base render.  OUT:
- * *im (RGB), *version (0 for the base). */
+ * *im (RGB), *version (0 for the base), and when file is not NULL,
+ * *file / *flen: the stored file of that version where it can be read
+ * (else NULL, not an error), for img_write_exr_mem_reusing. */
 static int view_current(app *a, const char *session, const char *scene_id, int k, int ps,
-                        img *im, int64_t *version, glint_err *e)
+                        img *im, int64_t *version, void **file, size_t *flen, glint_err *e)
 {
     void *exr = NULL;
     size_t len = 0;
@@ -109,6 +111,10 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
     int rc;
 
     memset(im, 0, sizeof *im);
+    if (file) {
+        *file = NULL;
+        *flen = 0;
+    }
     /* the memo's decoded copy of the current version, when it has it */
     if (store_paintings_list(a->store, session, &list, NULL) == 0) {
         json_array_foreach(list, i, it) {
@@ -127,6 +133,17 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
         }
         memo_painting_release(fitsvc_memo(a->fits), pin);
         *version = listed;
+        if (!rc && file) { /* the file of that version, if it is still the current one */
+            int64_t v = 0;
+            glint_err fe;
+            if (store_painting_get(a->store, session, k, &exr, &len, &v, &fe) == 0 &&
+                v == listed) {
+                *file = exr;
+                *flen = len;
+            } else {
+                free(exr);
+            }
+        }
         return rc;
     }
     rc = store_painting_get(a->store, session, k, &exr, &len, version, e);
@@ -137,11 +154,16 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
     if (rc)
         return rc;
     rc = img_read_mem(exr, len, im, e);
-    free(exr);
     if (!rc)
         rc = img_to_rgb(im, e);
     if (rc)
         glint_err_prefix(e, "stored painting of view %d", k);
+    if (!rc && file) {
+        *file = exr;
+        *flen = len;
+    } else {
+        free(exr);
+    }
     return rc;
 }
 
@@ -495,8 +517,9 @@ static http_resp strokes_post(http_req *req)
     stroke *list = NULL;
     int n = 0, k, w, h, ps, rc, need_base = 0, locked = 0, attempts = 0;
     img cur = {0}, base = {0};
-    void *exr = NULL;
-    size_t len = 0;
+    void *exr = NULL, *prev = NULL;
+    size_t len = 0, prev_len = 0;
+    stroke_report box;
     int64_t first = 0, last = 0, version = 0;
     long pixels = 0;
     const char *scene_id;
@@ -533,7 +556,8 @@ static http_resp strokes_post(http_req *req)
     locked = 1;
     t0 = srv_timing_step(&req->timing, "lock", t0);
 again:
-    if ((rc = view_current(a, req->param[0], scene_id, k, ps, &cur, &version, &e))) {
+    if ((rc = view_current(a, req->param[0], scene_id, k, ps, &cur, &version, &prev, &prev_len,
+                           &e))) {
         glint_err_prefix(&e, "reading the view's image");
         goto done;
     }
@@ -550,7 +574,7 @@ again:
         glint_err_prefix(&e, "base render");
         goto done;
     }
-    if ((rc = stroke_apply_list(list, n, &cur, need_base ? &base : NULL, &pixels, &e))) {
+    if ((rc = stroke_apply_list(list, n, &cur, need_base ? &base : NULL, &box, &e))) {
         if (rc != GLINT_ENOMEM) {
             char msg[GLINT_ERR_MSG_MAX];
             snprintf(msg, sizeof msg, "%.400s (nothing was applied)", e.msg);
@@ -559,8 +583,12 @@ again:
         }
         goto done;
     }
+    pixels = box.pixels;
     t0 = srv_timing_step(&req->timing, "apply", t0);
-    if ((rc = img_write_mem("exr", &cur, &exr, &len, &e))) {
+    /* the stored file's blocks of 16 lines the strokes missed are used
+     * again: the encode's cost is the lines they changed */
+    if ((rc = img_write_exr_mem_reusing(&cur, prev, prev_len, box.y0, box.y1, &exr, &len, NULL,
+                                        &e))) {
         glint_err_prefix(&e, "storing the strokes");
         goto done;
     }
@@ -578,6 +606,8 @@ again:
             attempts++;
             free(exr);
             exr = NULL;
+            free(prev);
+            prev = NULL;
             img_free(&cur);
             img_free(&base);
             usleep(1000u * (jitter % (span + 1)));
@@ -603,6 +633,7 @@ done:
     if (rc)
         r = api_error(&e);
     free(exr);
+    free(prev);
     img_free(&cur);
     img_free(&base);
     stroke_list_free(list, n);

@@ -1,7 +1,9 @@
 /* bench_img_exr: a painting encoded as OpenEXR (what a stroke stores), by
  * OpenImageIO and OpenEXR (zip at deflate level 1, one thread) and by
  * img_exr_encode (core/img_exr.h: libdeflate at level 1, the blocks on
- * the worker pool), and by img_exr_encode on the calling thread alone.
+ * the worker pool), and by img_exr_encode on the calling thread alone;
+ * then a stroke's file made again whole and from the last one
+ * (img_exr_encode_reusing), for bands of lines painted over.
  * Medians over --reps rounds, alternating; every file is read back and
  * compared with the painting, bit for bit.
  *
@@ -119,6 +121,65 @@ static void bench(const char *name, const img *im, int reps)
         free(t[k]);
 }
 
+/* A stroke's file: lines y0..y1 of im painted over, then the file made
+ * again, whole (img_exr_encode) and from the last one
+ * (img_exr_encode_reusing), alternating; both must be the same bytes. */
+static void bench_reuse(const char *name, const img *orig, int y0, int y1, int reps)
+{
+    double *t[2];
+    img im;
+    glint_err e;
+    void *prev = NULL, *a = NULL, *b = NULL;
+    size_t plen = 0, la = 0, lb = 0;
+    int reused = 0;
+    if (img_alloc(&im, orig->width, orig->height, orig->channels, &e))
+        die("img_alloc", &e);
+    memcpy(im.px, orig->px, (size_t)im.width * im.height * im.channels * sizeof(float));
+    if (img_exr_encode(&im, &prev, &plen, &e))
+        die("encode", &e);
+    for (int y = y0; y <= y1 && y < im.height; y++) /* a band of paint across the image */
+        for (int x = im.width / 4; x < 3 * im.width / 4; x++)
+            for (int c = 0; c < im.channels; c++)
+                im.px[((size_t)y * im.width + x) * im.channels + c] = 0.3f + 0.1f * (float)c;
+    for (int k = 0; k < 2; k++)
+        t[k] = malloc((size_t)reps * sizeof *t[k]);
+    for (int r = 0; r < reps; r++)
+        for (int k = 0; k < 2; k++) {
+            void *data = NULL;
+            size_t len = 0;
+            double t0 = now();
+            int rc = k ? img_exr_encode_reusing(&im, prev, plen, y0, y1, &data, &len, &reused, &e)
+                       : img_exr_encode(&im, &data, &len, &e);
+            t[k][r] = now() - t0;
+            if (rc)
+                die("encode", &e);
+            if (r == 0) {
+                if (k)
+                    b = data, lb = len;
+                else
+                    a = data, la = len;
+            } else {
+                free(data);
+            }
+        }
+    if (la != lb || memcmp(a, b, la)) {
+        fprintf(stderr, "bench_img_exr: %s: the file made from the last one differs\n", name);
+        exit(1);
+    }
+    check(&im, b, lb, "img_exr_encode_reusing");
+    for (int k = 0; k < 2; k++)
+        qsort(t[k], (size_t)reps, sizeof *t[k], cmp);
+    printf("| %s | %d..%d | %d of %d | %.3f ms | %.3f ms | %.2f |\n", name, y0, y1, reused,
+           (im.height + 15) / 16, 1e3 * t[0][reps / 2], 1e3 * t[1][reps / 2],
+           t[0][reps / 2] / t[1][reps / 2]);
+    for (int k = 0; k < 2; k++)
+        free(t[k]);
+    free(prev);
+    free(a);
+    free(b);
+    img_free(&im);
+}
+
 int main(int argc, char **argv)
 {
     int reps = 41;
@@ -135,6 +196,7 @@ int main(int argc, char **argv)
     }
     if (reps < 1)
         reps = 1;
+    glint_err e0;
     printf("threads %d; medians of %d, alternating\n\n", par_threads(), reps);
     printf("| image | size | OpenImageIO + OpenEXR | img_exr_encode | img_exr_encode, one "
            "thread | ratio |\n|---|---|---|---|---|---|\n");
@@ -154,6 +216,27 @@ int main(int argc, char **argv)
             bench(noise ? "painting, noisy low bits" : "painting", &im, reps);
             img_free(&im);
         }
+    }
+    /* a stroke's lines: a dab of diameter 12 within a block and across
+     * two, a stroke 40 lines high, every line */
+    printf("\nA stroke's file, made again whole and from the last file (the blocks of 16 lines "
+           "it missed copied):\n\n| image | lines changed | blocks copied | whole | from the "
+           "last file | ratio |\n|---|---|---|---|---|---|\n");
+    for (int noise = 0; noise < 2; noise++) {
+        static const int band[4][2] = {{98, 109}, {90, 101}, {80, 119}, {0, 255}};
+        img im;
+        if (file) {
+            if (noise)
+                break;
+            if (img_read(file, &im, &e0))
+                die(file, &e0);
+        } else {
+            painting(&im, noise);
+        }
+        for (int k = 0; k < 4; k++)
+            bench_reuse(file ? file : noise ? "painting, noisy low bits" : "painting", &im,
+                        band[k][0] * im.height / 256, band[k][1] * im.height / 256, reps);
+        img_free(&im);
     }
     return 0;
 }

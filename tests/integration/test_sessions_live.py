@@ -13,6 +13,7 @@ import json
 import os
 import queue
 import socket
+import struct
 import sys
 import threading
 import time
@@ -21,6 +22,7 @@ import requests
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import run_tests, validate  # noqa: E402
+import exr_named  # noqa: E402
 from test_sessions import (API, H, JSON, W, brush_apply, detail, exr_encode,  # noqa: E402
                            get_png, max_diff, new_session, png_encode, post_strokes, shared,
                            to_float, tok)
@@ -104,6 +106,49 @@ def test_strokes_apply_like_the_reference_brush(d):
               headers=tok(sess["paint_token"]))
     d.get("%s/sessions/%s/strokes?limit=0" % (API, sess["id"]), status=422,
           headers=tok(sess["paint_token"]))
+
+
+def test_strokes_stored_as_floats_band_by_band(d):
+    """A view's stored file after each of several strokes, each in other
+    lines (the file is kept in blocks of 16 lines, and a stroke's file is
+    made from the last one's where its lines are untouched): read back as
+    OpenEXR by the tests' own reader, the lines a stroke missed keep their
+    floats bit for bit, and every pixel agrees with the Python brush to
+    float precision."""
+    s, _ = shared(d)
+    sess = new_session(d, s["id"])
+    p = "%s/sessions/%s/views/4/painting" % (API, sess["id"])
+    f32 = lambda v: struct.unpack("<f", struct.pack("<f", v))[0]  # noqa: E731
+    start = lambda x, y: (2.0 + x / 64.0, y / 64.0 - 0.25, 0.5 + (x + y) / 128.0)  # noqa: E731
+    d.put(p, status=200, headers=tok(sess["paint_token"]), data=exr_encode(W, H, start))
+    want = [[[f32(v) for v in start(x, y)] for x in range(W)] for y in range(H)]
+    strokes = [  # lines 3..9; 20..26; 38..44; 12..19, 15..16 (across two blocks); 0..47; none
+        {"color": [4.0, 0.5, -0.5], "diameter": 7, "points": [[10, 6]]},
+        {"color": [0.1, 0.2, 0.3], "diameter": 7, "kappa": 0.2, "points": [[30, 23], [40, 23]]},
+        {"mode": "scale", "scale": 0.5, "diameter": 7, "points": [[24, 41]]},
+        {"color": [1, 1, 1], "diameter": 8, "opacity": 0.5, "points": [[5, 16], [44, 16]]},
+        {"color": [0.25, 3, 0.25], "diameter": 2, "points": [[8, 16], [40, 16]]},
+        {"color": [0, 0, 8], "diameter": 3, "points": [[24, 0], [24, 47.9]]},
+        {"color": [1, 0, 0], "diameter": 4, "points": [[-30, 10]]},
+    ]
+    for i, st in enumerate(strokes):
+        before = [[list(px) for px in row] for row in want]
+        post_strokes(d, sess, 4, [st])
+        brush_apply(want, None, st)
+        r = d.get(p + "?format=exr", status=200, headers=tok(sess["view_token"]))
+        chans, ew, eh = exr_named.read(r.content)
+        assert (ew, eh) == (W, H)
+        got = [[[chans[c][y * W + x] for c in "RGB"] for x in range(W)] for y in range(H)]
+        for y in range(H):
+            if all(want[y][x] == before[y][x] for x in range(W)):
+                assert got[y] == before[y], "stroke %d: line %d changed" % (i, y)
+            for x in range(W):
+                for c in range(3):
+                    w = want[y][x][c]
+                    assert abs(got[y][x][c] - w) <= 1e-6 * max(1.0, abs(w)), \
+                        "stroke %d: (%d, %d) channel %d: %r, the brush %r" % (i, x, y, c,
+                                                                              got[y][x][c], w)
+        want = got  # the next stroke starts from the stored floats
 
 
 def test_strokes_numbering_is_session_wide(d):

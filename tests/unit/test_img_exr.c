@@ -125,6 +125,137 @@ TEST(one_thread_or_the_pool_the_same_file)
     img_free(&im);
 }
 
+/* Lines y0..y1 of im (and of no other line) given new values. */
+static void change_lines(img *im, int y0, int y1)
+{
+    for (int y = y0 < 0 ? 0 : y0; y <= y1 && y < im->height; y++)
+        for (int x = 0; x < im->width; x++)
+            for (int c = 0; c < im->channels; c++)
+                im->px[((size_t)y * im->width + x) * im->channels + c] =
+                    value(rnd() % 2 ? SMOOTH : NOISE, x + 7, y, c);
+}
+
+/* A file made from the last one where only lines y0..y1 changed is the
+ * file img_exr_encode makes of the new image, byte for byte, with the
+ * blocks clear of the lines copied: across block edges, at the first and
+ * the last (short) block, no line, every line. */
+TEST(from_the_last_file_the_same_bytes)
+{
+    static const int sizes[][3] = {{256, 256, 3}, {97, 83, 4}, {5, 16, 3}, {300, 1, 3}};
+    static const int spans[][2] = {{40, 60},  {0, 0},   {15, 16}, {16, 31}, {70, 82},
+                                   {82, 82},  {255, 255}, {3, 2},  {0, 300}, {-5, 3},
+                                   {100, 900}, {31, 32}};
+    for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
+        img im;
+        glint_err e;
+        void *prev = NULL;
+        size_t plen = 0;
+        int W = sizes[z][0], H = sizes[z][1], nb = (H + 15) / 16;
+        ASSERT_OK(img_alloc(&im, W, H, sizes[z][2], &e));
+        fill(&im, SMOOTH);
+        ASSERT_OK(img_exr_encode(&im, &prev, &plen, &e));
+        for (size_t t = 0; t < sizeof spans / sizeof spans[0]; t++) {
+            int y0 = spans[t][0], y1 = spans[t][1], reused = -1, want = 0;
+            void *got = NULL, *fresh = NULL;
+            size_t glen = 0, flen = 0;
+            change_lines(&im, y0, y1);
+            for (int b = 0; b < nb; b++)
+                want += y1 < y0 || 16 * b + 15 < y0 || 16 * b > y1;
+            ASSERT_OK(img_exr_encode_reusing(&im, prev, plen, y0, y1, &got, &glen, &reused, &e));
+            ASSERT_OK(img_exr_encode(&im, &fresh, &flen, &e));
+            ASSERT_MSG(glen == flen && memcmp(got, fresh, flen) == 0, "%dx%d lines %d..%d", W, H,
+                       y0, y1);
+            ASSERT_EQ(reused, want);
+            free(prev);
+            free(fresh);
+            prev = got; /* the next change starts from this file */
+            plen = glen;
+        }
+        round_trip(&im, -1);
+        free(prev);
+        img_free(&im);
+    }
+}
+
+/* A previous file that is not the layout img_exr_encode writes for the
+ * image (another size or channel count, OpenImageIO's, cut short, a table
+ * or block header altered) gives nothing: every block is encoded and the
+ * file is img_exr_encode's. */
+TEST(from_a_file_of_another_layout_nothing)
+{
+    img im, other;
+    glint_err e;
+    void *prev = NULL, *fresh = NULL, *oiio = NULL;
+    size_t plen = 0, flen = 0, olen = 0;
+    unsigned char *bad;
+    ASSERT_OK(img_alloc(&im, 64, 50, 3, &e));
+    fill(&im, SMOOTH);
+    ASSERT_OK(img_exr_encode(&im, &prev, &plen, &e));
+    change_lines(&im, 20, 21);
+    ASSERT_OK(img_exr_encode(&im, &fresh, &flen, &e));
+    ASSERT_OK(img_alloc(&other, 64, 49, 3, &e));
+    fill(&other, SMOOTH);
+    ASSERT_OK(img_write_mem("png", &im, &oiio, &olen, &e));
+    bad = malloc(plen);
+    ASSERT(bad != NULL);
+    /* 0: another height; 1: a PNG; 2..: prev cut short, or one byte of
+     * its table or of a block's line or size changed */
+    for (int t = 0; t < 2 + 6 + 64; t++) {
+        const void *p = bad;
+        size_t len = plen;
+        void *got = NULL, *o = NULL;
+        size_t glen = 0, ol = 0;
+        int reused = -1;
+        memcpy(bad, prev, plen);
+        if (t == 0) {
+            ASSERT_OK(img_exr_encode(&other, &o, &ol, &e));
+            p = o;
+            len = ol;
+        } else if (t == 1) {
+            p = oiio;
+            len = olen;
+        } else if (t < 8) {
+            static const size_t cut[5] = {0, 1, 100, 300, 400};
+            len = t == 7 ? plen - 1 : cut[t - 2];
+        } else {
+            /* the table starts after the header; the first block after it */
+            size_t table = 0, at;
+            uint64_t first;
+            for (size_t i = 8; i + 1 < plen; i++) /* the header ends with a 0 after the last attribute */
+                if (memcmp(bad + i, "screenWindowWidth", 17) == 0) {
+                    table = i + 18 + 6 + 4 + 4 + 1; /* name, "float", size, value, end */
+                    break;
+                }
+            ASSERT(table > 0);
+            memcpy(&first, bad + table, 8);
+            ASSERT_EQ(first, table + 8 * 4); /* 4 blocks of 16 lines */
+            at = (t - 8) % 2 ? table + (size_t)((t - 8) / 2) % 32 /* the table */
+                             : (size_t)first + (size_t)((t - 8) / 2) % 8; /* block 0's line, size */
+            bad[at] ^= (unsigned char)(1u << ((t - 8) / 2 % 8));
+        }
+        ASSERT_OK(img_exr_encode_reusing(&im, p, len, 20, 21, &got, &glen, &reused, &e));
+        ASSERT_EQ(reused, 0);
+        ASSERT(glen == flen && memcmp(got, fresh, flen) == 0);
+        free(got);
+        free(o);
+    }
+    /* no previous file */
+    {
+        void *got = NULL;
+        size_t glen = 0;
+        int reused = -1;
+        ASSERT_OK(img_exr_encode_reusing(&im, NULL, 0, 20, 21, &got, &glen, &reused, &e));
+        ASSERT(reused == 0 && glen == flen && memcmp(got, fresh, flen) == 0);
+        free(got);
+    }
+    free(bad);
+    free(prev);
+    free(fresh);
+    free(oiio);
+    img_free(&im);
+    img_free(&other);
+}
+
 TEST(what_it_refuses)
 {
     img im, grey;
@@ -150,6 +281,8 @@ TEST_LIST {
     TEST_ENTRY(images_read_back_the_same_bits),
     TEST_ENTRY(special_values_read_back),
     TEST_ENTRY(one_thread_or_the_pool_the_same_file),
+    TEST_ENTRY(from_the_last_file_the_same_bytes),
+    TEST_ENTRY(from_a_file_of_another_layout_nothing),
     TEST_ENTRY(what_it_refuses),
 };
 TEST_MAIN()

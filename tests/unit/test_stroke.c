@@ -343,6 +343,55 @@ TEST(overflow_is_reported_not_stored)
     img_free(&im);
 }
 
+/* The box stroke_apply_list reports holds every pixel the strokes
+ * changed, and is the box of the changed pixels where each stroke's
+ * colour differs from the image's everywhere it paints. */
+TEST(apply_list_box_holds_every_change)
+{
+    static const char *const lists[] = {
+        "[{\"color\":[1,0,0],\"diameter\":6,\"points\":[[20,10],[40,12]]}]",
+        "[{\"color\":[0,1,0],\"diameter\":3,\"points\":[[5,70]]},"
+        "{\"color\":[0,0,1],\"diameter\":9,\"opacity\":0.5,\"points\":[[90,30],[95,35]]}]",
+        "[{\"mode\":\"scale\",\"scale\":2,\"diameter\":4,\"points\":[[50,50]]},"
+        "{\"mode\":\"erase\",\"diameter\":2,\"points\":[[60,1],[61,2]]}]",
+        "[{\"color\":[1,1,1],\"diameter\":5,\"points\":[[-30,-30]]}]", /* off the image */
+    };
+    for (size_t t = 0; t < sizeof lists / sizeof lists[0]; t++) {
+        json_t *j = parse(lists[t]);
+        stroke_limits lim = {10, 100};
+        stroke *list;
+        int n, x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+        stroke_report all;
+        img im, was, base;
+        glint_err e;
+        ASSERT_OK(stroke_list_from_json(j, &lim, &list, &n, &e));
+        ASSERT_OK(img_fill(&im, 100, 80, 0.25f, 0.25f, 0.25f));
+        ASSERT_OK(img_fill(&was, 100, 80, 0.25f, 0.25f, 0.25f));
+        ASSERT_OK(img_fill(&base, 100, 80, 0.75f, 0.75f, 0.75f));
+        ASSERT_OK(stroke_apply_list(list, n, &im, &base, &all, &e));
+        for (int y = 0; y < 80; y++)
+            for (int x = 0; x < 100; x++)
+                if (memcmp(px(&im, x, y), px(&was, x, y), 3 * sizeof(float))) {
+                    x0 = x < x0 ? x : x0;
+                    y0 = y < y0 ? y : y0;
+                    x1 = x > x1 ? x : x1;
+                    y1 = y > y1 ? y : y1;
+                }
+        if (x1 < 0) { /* nothing changed: an empty box */
+            ASSERT(all.pixels == 0 && all.x1 < all.x0 && all.y1 < all.y0);
+        } else {
+            ASSERT(all.pixels > 0);
+            ASSERT(all.x0 == x0 && all.y0 == y0 && all.x1 == x1 && all.y1 == y1);
+        }
+        ASSERT(t != 3 || x1 < 0);
+        stroke_list_free(list, n);
+        json_decref(j);
+        img_free(&im);
+        img_free(&was);
+        img_free(&base);
+    }
+}
+
 TEST(apply_list_in_order)
 {
     json_t *j = parse("[{\"color\":[1,0,0],\"diameter\":4,\"points\":[[2,2]]},"
@@ -351,17 +400,20 @@ TEST(apply_list_in_order)
     stroke_limits lim = {10, 10};
     stroke *list;
     int n;
-    long pixels;
+    stroke_report all;
     img im, base;
     glint_err e;
     ASSERT_OK(stroke_list_from_json(j, &lim, &list, &n, &e));
     ASSERT_EQ(n, 3);
     ASSERT_OK(img_fill(&im, 4, 4, 0, 0, 0));
     ASSERT_OK(img_fill(&base, 4, 4, 0.5f, 0.5f, 0.5f));
-    ASSERT_OK(stroke_apply_list(list, n, &im, &base, &pixels, &e));
+    ASSERT_OK(stroke_apply_list(list, n, &im, &base, &all, &e));
     ASSERT(px(&im, 1, 1)[0] == 0.5f && px(&im, 1, 1)[1] == 0.5f); /* red, then half green */
     ASSERT(px(&im, 0, 0)[0] == 0.5f && px(&im, 0, 0)[2] == 0.5f); /* erased to the base */
-    ASSERT_EQ(pixels, 12 + 12 + 1); /* the disc of radius 2 at (2,2) misses the 4 corners */
+    ASSERT_EQ(all.pixels, 12 + 12 + 1); /* the disc of radius 2 at (2,2) misses the 4 corners */
+    /* the box of all three: the discs' 4x4 less nothing (their corners are
+     * missed, but the rows and columns are all touched) */
+    ASSERT(all.x0 == 0 && all.y0 == 0 && all.x1 == 3 && all.y1 == 3);
     /* the erase needs the base: the message names the stroke */
     ASSERT(stroke_apply_list(list, n, &im, NULL, NULL, &e) == GLINT_EINVAL);
     ASSERT(strstr(e.msg, "strokes[2]") != NULL);
@@ -569,6 +621,7 @@ TEST_LIST {
     TEST_ENTRY(strokes_partly_or_fully_outside),
     TEST_ENTRY(overflow_is_reported_not_stored),
     TEST_ENTRY(apply_list_in_order),
+    TEST_ENTRY(apply_list_box_holds_every_change),
     TEST_ENTRY(json_round_trip),
     TEST_ENTRY(invalid_strokes_refused),
     TEST_ENTRY(non_finite_refused),
