@@ -218,6 +218,7 @@ int store_open_db(const char *data_dir, const char *database, store **out, glint
     if (!s)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory opening the store");
     pthread_mutex_init(&s->lock, NULL);
+    store_reap_init(s);
     if (snprintf(s->dir, sizeof s->dir, "%s", data_dir) >= (int)sizeof s->dir ||
         snprintf(s->blobs, sizeof s->blobs, "%s/blobs", data_dir) >= (int)sizeof s->blobs ||
         snprintf(dbpath, sizeof dbpath, "%s/glint.db", data_dir) >= (int)sizeof dbpath) {
@@ -251,6 +252,7 @@ fail_db:
     db_close(s->db);
     free(s->conninfo);
 fail_paths:
+    store_reap_stop(s);
     pthread_mutex_destroy(&s->lock);
     free(s);
     return rc;
@@ -266,6 +268,7 @@ void store_close(store *s)
     if (!s)
         return;
     store_listen_stop(s);
+    store_reap_stop(s);
     db_close(s->db);
     free(s->conninfo);
     pthread_mutex_destroy(&s->lock);

@@ -97,6 +97,10 @@ int store_blob_get(store *s, const char *name, void **data, size_t *len, glint_e
 /* Absolute path of a blob (OUT: buf). */
 int store_blob_path(store *s, const char *name, char *buf, size_t len, glint_err *err);
 int store_blob_delete(store *s, const char *name, glint_err *err);
+/* Wait until the files of replaced paintings queued for removal are gone
+ * (a painting's commit removes the version it replaces off its request's
+ * path; store_close waits as well). */
+void store_reap_wait(store *s);
 /* Remove the blob directory tree `name` (best effort: what cannot be
  * removed stays, for the sweep when the store opens). */
 void store_blob_rmtree(store *s, const char *name);

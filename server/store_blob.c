@@ -217,3 +217,94 @@ int store_blob_list(store *s, const char *name, json_t **names, glint_err *err)
     free(list);
     return 0;
 }
+
+/* ---- removals off the request's path (store_int.h) -------------------------- */
+
+static void *reaper_main(void *arg)
+{
+    store *s = arg;
+    pthread_mutex_lock(&s->reap_lock);
+    for (;;) {
+        char *name;
+        while (s->reap_n == 0 && !s->reap_stop)
+            pthread_cond_wait(&s->reap_cond, &s->reap_lock);
+        if (s->reap_n == 0)
+            break; /* stopped, and everything queued done */
+        name = s->reap_q[--s->reap_n];
+        s->reap_busy = 1;
+        pthread_mutex_unlock(&s->reap_lock);
+        store_blob_delete(s, name, NULL);
+        store_pixels_delete(s, name);
+        free(name);
+        pthread_mutex_lock(&s->reap_lock);
+        s->reap_busy = 0;
+        if (s->reap_n == 0)
+            pthread_cond_broadcast(&s->reap_idle);
+    }
+    pthread_cond_broadcast(&s->reap_idle);
+    pthread_mutex_unlock(&s->reap_lock);
+    return NULL;
+}
+
+void store_reap_init(store *s)
+{
+    pthread_mutex_init(&s->reap_lock, NULL);
+    pthread_cond_init(&s->reap_cond, NULL);
+    pthread_cond_init(&s->reap_idle, NULL);
+}
+
+void store_remove_later(store *s, const char *blob)
+{
+    char *name = strdup(blob);
+    int queued = 0;
+    pthread_mutex_lock(&s->reap_lock);
+    if (name && !s->reap_stop) {
+        if (!s->reap_on) /* started at the first removal: most stores never replace */
+            s->reap_on = pthread_create(&s->reaper, NULL, reaper_main, s) == 0;
+        if (s->reap_on && s->reap_n == s->reap_cap) {
+            int cap = s->reap_cap ? 2 * s->reap_cap : 16;
+            char **q = realloc(s->reap_q, (size_t)cap * sizeof *q);
+            if (q) {
+                s->reap_q = q;
+                s->reap_cap = cap;
+            }
+        }
+        if (s->reap_on && s->reap_n < s->reap_cap) {
+            s->reap_q[s->reap_n++] = name;
+            queued = 1;
+            pthread_cond_signal(&s->reap_cond);
+        }
+    }
+    pthread_mutex_unlock(&s->reap_lock);
+    if (!queued) { /* no thread or no memory: here and now */
+        store_blob_delete(s, blob, NULL);
+        store_pixels_delete(s, blob);
+        free(name);
+    }
+}
+
+void store_reap_wait(store *s)
+{
+    pthread_mutex_lock(&s->reap_lock);
+    while (s->reap_on && (s->reap_n > 0 || s->reap_busy))
+        pthread_cond_wait(&s->reap_idle, &s->reap_lock);
+    pthread_mutex_unlock(&s->reap_lock);
+}
+
+void store_reap_stop(store *s)
+{
+    int on;
+    pthread_mutex_lock(&s->reap_lock);
+    s->reap_stop = 1;
+    on = s->reap_on;
+    pthread_cond_signal(&s->reap_cond);
+    pthread_mutex_unlock(&s->reap_lock);
+    if (on)
+        pthread_join(s->reaper, NULL);
+    free(s->reap_q);
+    s->reap_q = NULL;
+    s->reap_n = s->reap_cap = 0;
+    pthread_cond_destroy(&s->reap_cond);
+    pthread_cond_destroy(&s->reap_idle);
+    pthread_mutex_destroy(&s->reap_lock);
+}

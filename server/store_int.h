@@ -27,6 +27,14 @@ struct store {
     pthread_mutex_t lock;            /* one statement sequence at a time */
     char dir[STORE_PATH_MAX];
     char blobs[STORE_PATH_MAX];
+    /* store_remove_later's queue and thread (store_blob.c), under reap_lock */
+    pthread_mutex_t reap_lock;
+    pthread_cond_t reap_cond;        /* work queued, or stop */
+    pthread_cond_t reap_idle;        /* the queue emptied and nothing in hand */
+    char **reap_q;
+    int reap_n, reap_cap;
+    int reap_busy, reap_stop, reap_on;
+    pthread_t reaper;
 };
 
 /* Compact JSON text with every double exact (caller frees). */
@@ -60,6 +68,17 @@ int store_painting_row(store *s, const char *session, int view, int64_t *version
 #define STORE_PIXELS_SUFFIX ".px"
 /* Remove the pixels of a blob, if any (best effort). */
 void store_pixels_delete(store *s, const char *blob);
+
+/* A replaced painting's blob and its pixels removed on the store's
+ * removal thread, off the request's path: a removal waits on the file
+ * system's journal, which other processes' writes may hold for
+ * milliseconds.  Nothing names the blob any more; a crash before its
+ * removal leaves it to store_sweep.  Done at once when the thread cannot
+ * be had.  store_reap_init / store_reap_stop (store_close) set up and end
+ * the thread, doing what is queued first. */
+void store_remove_later(store *s, const char *blob);
+void store_reap_init(store *s);
+void store_reap_stop(store *s);
 
 /* Remove painting files no row names and temporary files of interrupted
  * writes (at open, before anyone writes). */

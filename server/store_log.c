@@ -176,8 +176,9 @@ static int store_log_commit_blob(store *s, const char *session, int view, int64_
  * transaction replace the painting row and append `n` events of `type`
  * (texts[i]; for type "painting", texts is NULL and the event is
  * {"view", "version"}) numbered after the session's last sequence number;
- * then remove the replaced blob (or, on failure, the new one).  A crash
- * between the steps leaves a file no row names: store_sweep removes it.
+ * then remove the replaced blob (store_remove_later, on the store's removal
+ * thread), or on failure the new one.  A crash between the steps leaves a
+ * file no row names: store_sweep removes it.
  * base >= 0: commit only if the view is still at that painting version
  * (GLINT_ECONFLICT otherwise).  OUT: *first_seq, *version (may be NULL). */
 static int store_log_commit(store *s, const char *session, int view, int64_t base,
@@ -233,10 +234,8 @@ out:
         store_blob_delete(s, blob, NULL);
         return rc;
     }
-    if (old[0]) {
-        store_blob_delete(s, old, NULL);
-        store_pixels_delete(s, old);
-    }
+    if (old[0]) /* nothing names it now: removed off this request's path */
+        store_remove_later(s, old);
     if (first_seq)
         *first_seq = last + 1;
     if (version)

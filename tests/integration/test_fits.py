@@ -708,8 +708,13 @@ def test_14_a_restart_reads_paintings_as_pixels_kept_beside_them(d):
     again: the material is the same either way."""
     pixels_idle(d)
     sdir = os.path.join(d.data_dir, "blobs", "sessions", S["session"])
-    names = sorted(os.listdir(sdir))
-    pixels = [n for n in names if n.endswith(".px")]
+    deadline = time.time() + 10  # replaced versions' files go soon after their requests
+    while True:
+        names = sorted(os.listdir(sdir))
+        pixels = [n for n in names if n.endswith(".px")]
+        if len(pixels) == S["nviews"] or time.time() > deadline:
+            break
+        time.sleep(0.01)
     assert len(pixels) == S["nviews"] and all(p[:-3] in names for p in pixels), names
     d.stop()
     d.start()

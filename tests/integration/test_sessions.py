@@ -477,8 +477,14 @@ def test_painting_conditional_replace(d):
     d.put(p, status=400, data=img, headers=dict(h, **{"If-Match": "abc"}))
     d.put(p, status=412, data=img, headers=dict(h, **{"If-Match": '"1"'}))
     # the refused uploads left no blob: the view's one image is all there is
+    # (the replaced versions' files go off the requests' path: soon after)
     top = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
-    names = [f for f in os.listdir(top) if not f.endswith(".px")]
+    deadline = time.time() + 10
+    while True:
+        names = [f for f in os.listdir(top) if not f.endswith(".px")]
+        if len(names) == 1 or time.time() > deadline:
+            break
+        time.sleep(0.01)
     assert len(names) == 1 and names[0].startswith("view1-"), names
 
 

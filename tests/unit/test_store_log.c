@@ -73,7 +73,9 @@ TEST(painting_versions_and_seq)
     free(data);
     ASSERT_EQ(store_painting_get(f.s, f.session, 1, &data, &len, &version, NULL),
               GLINT_ENOTFOUND);
-    /* each version has its own file; the replaced one is gone */
+    /* each version has its own file; the replaced one is gone (removed off
+     * the commit's path: waited for) */
+    store_reap_wait(f.s);
     snprintf(dir, sizeof dir, "sessions/%s", f.session);
     ASSERT_OK(store_blob_list(f.s, dir, &names, NULL));
     ASSERT_EQ(json_array_size(names), 2);
@@ -685,6 +687,7 @@ TEST(a_paintings_pixels_live_and_go_with_its_blob)
     /* a new painting takes the old one's pixels with its blob */
     ASSERT_OK(store_painting_put(f.s, f.session, 0, exr2, sizeof exr2, &version, NULL, NULL));
     ASSERT_EQ(version, 2);
+    store_reap_wait(f.s);
     ASSERT(!path_exists(f.dir, rel));
     ASSERT_EQ(files_in(f.dir, sdir), 1);
     ASSERT_EQ(store_painting_pixels_get(f.s, f.session, 0, 0, &got, &version, &e),
@@ -716,6 +719,51 @@ TEST(a_paintings_pixels_live_and_go_with_its_blob)
     fx_close(&f);
 }
 
+/* A replaced painting's files are removed off the commit's path, by the
+ * store's removal thread: after store_reap_wait only the views' current
+ * blobs (and their pixels) are left; store_close does what is queued
+ * before it returns; a store that never replaces starts no thread. */
+TEST(replaced_paintings_removed_off_the_commits_path)
+{
+    fixture f;
+    img im;
+    int64_t version = 0, first, last;
+    char sdir[128];
+    json_t *strokes = json_pack("[{s:i}]", "a", 1);
+    glint_err e;
+
+    ASSERT_OK(fx_open(&f));
+    ASSERT_OK(img_alloc(&im, 2, 2, 3, &e));
+    memset(im.px, 0, sizeof(float) * 12);
+    snprintf(sdir, sizeof sdir, "blobs/sessions/%s", f.session);
+    store_reap_wait(f.s); /* nothing queued: returns */
+    for (int round = 0; round < 2; round++) {
+        for (int i = 0; i < 40; i++) {
+            int view = i % 3;
+            if (i % 2)
+                ASSERT_OK(store_painting_put(f.s, f.session, view, exr1, sizeof exr1, &version,
+                                             NULL, NULL));
+            else
+                ASSERT_OK(store_strokes_append_at(f.s, f.session, view, -1, strokes, exr2,
+                                                  sizeof exr2, &first, &last, &version, NULL));
+            /* the new version's pixels, which go with its blob when replaced */
+            ASSERT_OK(store_painting_pixels_put(f.s, f.session, view, version, &im, &e));
+        }
+        if (round == 0) {
+            store_reap_wait(f.s);
+        } else { /* closed with removals perhaps still queued: done before it returns */
+            store_close(f.s);
+            f.s = NULL;
+        }
+        ASSERT_EQ(files_in(f.dir, sdir), 3 * 2); /* three views: a blob and its pixels each */
+    }
+    ASSERT_OK(fx_store_open(&f, &f.s, NULL));
+    ASSERT_EQ(files_in(f.dir, sdir), 3 * 2);
+    json_decref(strokes);
+    img_free(&im);
+    fx_close(&f);
+}
+
 TEST_LIST{
     TEST_ENTRY(painting_versions_and_seq),
     TEST_ENTRY(strokes_and_events_share_one_numbering),
@@ -727,6 +775,7 @@ TEST_LIST{
     TEST_ENTRY(concurrent_appends_are_numbered_without_gaps),
     TEST_ENTRY(appends_from_several_stores_on_one_database_share_one_numbering),
     TEST_ENTRY(a_paintings_pixels_live_and_go_with_its_blob),
+    TEST_ENTRY(replaced_paintings_removed_off_the_commits_path),
 };
 
 TEST_MAIN()
