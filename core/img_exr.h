@@ -13,7 +13,10 @@
  * libdeflate's (level 1), the blocks are compressed on the worker pool
  * (par.h).  A stored stroke's 256x256 RGB painting took 5.1 ms through
  * OpenImageIO and OpenEXR, 1.7 ms here (3.3 ms on one thread); the
- * figures and their command are in BENCHMARKS.md (bench_img_exr).
+ * figures and their command are in BENCHMARKS.md (bench_img_exr).  A
+ * stroke touches a few lines: img_exr_encode_reusing copies the blocks it
+ * missed from the file it replaces (a dab of diameter 12 within one block
+ * of a 256x256 painting: 0.17 against 1.5 ms).
  *
  * The caller has checked the image (img_validate, finite values). */
 #ifndef GLINT_IMG_EXR_H
