@@ -283,12 +283,13 @@ int img_exr_encode_reusing(const img *im, const void *prev, size_t prev_len, int
     /* prev's blocks serve when all of its table is well formed and its
      * blocks follow one another from the table's end to the file's, as
      * img_exr_encode lays them out */
+    if (prev && (prev_len < hsize || memcmp(prev, h, hsize) != 0))
+        prev = NULL;
     {
         size_t next = hsize + 8 * (size_t)x.nblocks;
         for (int b = 0; prev && b < x.nblocks; b++) {
             size_t size;
-            if (prev_len < hsize || memcmp(prev, h, hsize) != 0 ||
-                prev_block(im, prev, prev_len, hsize, x.nblocks, b, &from[b], &size) ||
+            if (prev_block(im, prev, prev_len, hsize, x.nblocks, b, &from[b], &size) ||
                 from[b] != next)
                 prev = NULL;
             else
