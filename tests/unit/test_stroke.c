@@ -411,8 +411,8 @@ TEST(apply_list_in_order)
     ASSERT(px(&im, 1, 1)[0] == 0.5f && px(&im, 1, 1)[1] == 0.5f); /* red, then half green */
     ASSERT(px(&im, 0, 0)[0] == 0.5f && px(&im, 0, 0)[2] == 0.5f); /* erased to the base */
     ASSERT_EQ(all.pixels, 12 + 12 + 1); /* the disc of radius 2 at (2,2) misses the 4 corners */
-    /* the box of all three: the discs' 4x4 less nothing (their corners are
-     * missed, but the rows and columns are all touched) */
+    /* the box of all three: the whole 4x4 (the discs miss only its corners,
+     * so every row and column is touched) */
     ASSERT(all.x0 == 0 && all.y0 == 0 && all.x1 == 3 && all.y1 == 3);
     /* the erase needs the base: the message names the stroke */
     ASSERT(stroke_apply_list(list, n, &im, NULL, NULL, &e) == GLINT_EINVAL);
