@@ -372,6 +372,59 @@ typedef struct gather_ctx {
     int *bad; /* per chunk: 3 i + channel of its first non-finite value, or -1 */
 } gather_ctx;
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define GATHER_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define GATHER_CLONES
+#endif
+
+typedef float v4f __attribute__((vector_size(16)));
+typedef double v4d __attribute__((vector_size(32)));
+typedef uint32_t v4u __attribute__((vector_size(16)));
+
+/* The values of n consecutive floats src[] (the channels of a run of
+ * consecutive pixels of a 3-channel painting, one intensity), each
+ * (float)(p * inv), into dst[], four at a time: the same operations as
+ * gather_values' per value, so the same bits.  *bad and the returned bits
+ * as gather_values'. */
+GATHER_CLONES static uint32_t run_values(const float *restrict src, float *restrict dst,
+                                         size_t n, double inv, int cmp, uint32_t *bad)
+{
+    const v4d inv4 = {inv, inv, inv, inv};
+    const v4u expo = {0x7f800000u, 0x7f800000u, 0x7f800000u, 0x7f800000u};
+    v4u diff = {0, 0, 0, 0}, nf = {0, 0, 0, 0};
+    size_t k = 0;
+    uint32_t d = 0;
+    for (; k + 4 <= n; k += 4) {
+        v4f p, x, was;
+        memcpy(&p, src + k, sizeof p);
+        x = __builtin_convertvector(__builtin_convertvector(p, v4d) * inv4, v4f);
+        nf |= (v4u)(((v4u)p & expo) == expo); /* inf or NaN: all ones */
+        if (cmp) {
+            memcpy(&was, dst + k, sizeof was);
+            diff |= (v4u)x ^ (v4u)was;
+        }
+        memcpy(dst + k, &x, sizeof x);
+    }
+    for (int l = 0; l < 4; l++) {
+        d |= diff[l];
+        *bad |= nf[l];
+    }
+    for (; k < n; k++) {
+        float p = src[k], x = (float)(p * inv);
+        uint32_t pb, now, was;
+        memcpy(&pb, &p, sizeof pb);
+        *bad |= (pb & 0x7f800000u) == 0x7f800000u;
+        if (cmp) {
+            memcpy(&now, &x, sizeof now);
+            memcpy(&was, &dst[k], sizeof was);
+            d |= now ^ was;
+        }
+        dst[k] = x;
+    }
+    return d;
+}
+
 /* The values of samples a..b-1 (one view's, within one span) from that
  * view's painting im of nch channels (1: grey, 3, 4), into rgb.  Each
  * value is (float)(p * (1.0 / intensity)), as one sample at a time; the
@@ -381,7 +434,11 @@ typedef struct gather_ctx {
  * the bits that changed against what rgb held are returned (0 unless cmp).
  * Per value the loop had a branch for the check, a division per sample
  * and the compare's; perf put 15.7-17.7% of a bench_hf --warm run's
- * samples in it then (BENCHMARKS.md, thirteenth pass). */
+ * samples in it then (BENCHMARKS.md, thirteenth pass).  A pattern's
+ * samples come in raster order, so a 3-channel painting's values are
+ * mostly runs of consecutive pixels: a run of RUN_MIN samples or more with
+ * one intensity is mapped as one array of floats (run_values). */
+#define RUN_MIN 4
 static inline uint32_t gather_values(const samples *s, const img *im, int nch, int a, int b,
                                      float *restrict rgb, int cmp, int *nonfinite)
 {
@@ -393,25 +450,42 @@ static inline uint32_t gather_values(const samples *s, const img *im, int nch, i
     uint32_t diff = 0, bad = 0;
 
     memcpy(&last, &intensity[a], sizeof last);
-    for (int i = a; i < b; i++) {
-        const float *px = px0 + (size_t)pixel[i] * nch;
+    for (int i = a, e; i < b; i = e) {
         uint64_t ib;
         memcpy(&ib, &intensity[i], sizeof ib);
         if (ib != last) {
             last = ib;
             inv = 1.0 / intensity[i];
         }
-        for (int ch = 0; ch < 3; ch++) {
-            float p = px[nch == 1 ? 0 : ch], x = (float)(p * inv);
-            uint32_t pb, now, was;
-            memcpy(&pb, &p, sizeof pb);
-            bad |= (pb & 0x7f800000u) == 0x7f800000u; /* inf or NaN */
-            if (cmp) {
-                memcpy(&now, &x, sizeof now);
-                memcpy(&was, &rgb[3 * (size_t)i + ch], sizeof was);
-                diff |= now ^ was;
+        e = i + 1;
+        if (nch == 3) { /* the run of consecutive pixels of one intensity from i */
+            for (; e < b && pixel[e] == pixel[e - 1] + 1; e++) {
+                uint64_t eb;
+                memcpy(&eb, &intensity[e], sizeof eb);
+                if (eb != ib)
+                    break;
             }
-            rgb[3 * (size_t)i + ch] = x;
+            if (e - i >= RUN_MIN) {
+                diff |= run_values(px0 + (size_t)pixel[i] * 3, rgb + 3 * (size_t)i,
+                                   (size_t)3 * (e - i), inv, cmp, &bad);
+                continue;
+            }
+            e = i + 1;
+        }
+        {
+            const float *px = px0 + (size_t)pixel[i] * nch;
+            for (int ch = 0; ch < 3; ch++) {
+                float p = px[nch == 1 ? 0 : ch], x = (float)(p * inv);
+                uint32_t pb, now, was;
+                memcpy(&pb, &p, sizeof pb);
+                bad |= (pb & 0x7f800000u) == 0x7f800000u; /* inf or NaN */
+                if (cmp) {
+                    memcpy(&now, &x, sizeof now);
+                    memcpy(&was, &rgb[3 * (size_t)i + ch], sizeof was);
+                    diff |= now ^ was;
+                }
+                rgb[3 * (size_t)i + ch] = x;
+            }
         }
     }
     *nonfinite = bad != 0;

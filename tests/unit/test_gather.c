@@ -2,7 +2,9 @@
  * samples_gather_views in core/samples.h) against one sample at a time,
  * written here as the contract states it: value = (float)(p * (1.0 /
  * intensity)), p the pixel's channel (its grey for one channel).  Samples
- * in runs of views and shuffled, intensities per view and per sample,
+ * in runs of views and shuffled, and in runs of consecutive pixels (the
+ * raster order that takes the gather's path for runs), intensities per
+ * view and per sample,
  * paintings of 1, 3 and 4 channels holding subnormals, -0 and values that
  * overflow a float: the same bits.  Views left out are not written; the
  * spans flagged as changed are those whose bits changed; the first
@@ -55,11 +57,19 @@ typedef struct fixture {
     img im[NV];
 } fixture;
 
-/* n samples over NV views (view v of channels chans[v]); in runs of one
- * view (sorted) or shuffled; intensity per view, or per sample when
- * per_sample. */
-static void make(fixture *f, int n, int sorted, int per_sample)
+/* The layouts of the samples: views shuffled; in runs of one view, the
+ * pixels at random; in runs of one view, the pixels in runs of consecutive
+ * pixels of random lengths (as a pattern's raster order gives them). */
+enum { SHUFFLED, SORTED, RASTER, LAYOUTS };
+
+/* n samples over NV views (view v of channels chans[v]) laid out as
+ * `layout` says; intensity per view, or per sample when per_sample (in
+ * RASTER, changing every few dozen samples on average, so that runs of
+ * consecutive pixels break there too). */
+static void make(fixture *f, int n, int layout, int per_sample)
 {
+    int sorted = layout != SHUFFLED, at = 0;
+    double cur = 1.0;
     static const int chans[NV] = {3, 1, 4, 3, 3};
     static const double inten[NV] = {1.0, 0.37, 3.3, 1e-30, 7.0};
     memset(f, 0, sizeof *f);
@@ -75,8 +85,16 @@ static void make(fixture *f, int n, int sorted, int per_sample)
     for (int i = 0; i < n; i++) {
         int v = sorted ? (int)((long)i * NV / n) : (int)(rnd() % NV);
         f->s.view[i] = v;
-        f->s.pixel[i] = (int)(rnd() % (W * H));
-        f->s.intensity[i] = per_sample ? 0.01 + (double)(rnd() % 1000) / 77.0 : inten[v];
+        if (layout == RASTER) { /* the next pixel, or a jump (a new run) */
+            at = rnd() % 23 == 0 || at + 1 >= W * H ? (int)(rnd() % (W * H)) : at + 1;
+            f->s.pixel[i] = at;
+            if (rnd() % 37 == 0)
+                cur = 0.01 + (double)(rnd() % 1000) / 77.0;
+            f->s.intensity[i] = per_sample ? cur : inten[v];
+        } else {
+            f->s.pixel[i] = (int)(rnd() % (W * H));
+            f->s.intensity[i] = per_sample ? 0.01 + (double)(rnd() % 1000) / 77.0 : inten[v];
+        }
     }
     for (int v = 0; v < NV; v++) {
         glint_err e;
@@ -116,19 +134,19 @@ TEST(the_values_are_one_sample_at_a_time_bit_for_bit)
     /* 3 sizes: within one chunk; several chunks (run on the pool) */
     static const int sizes[] = {1, 999, 70001};
     for (int si = 0; si < 3; si++)
-        for (int sorted = 0; sorted < 2; sorted++)
+        for (int layout = 0; layout < LAYOUTS; layout++)
             for (int per = 0; per < 2; per++) {
                 fixture f;
                 glint_err e;
                 int n = sizes[si];
                 float *got, *want;
-                make(&f, n, sorted, per);
+                make(&f, n, layout, per);
                 got = malloc((size_t)3 * n * sizeof *got);
                 want = malloc((size_t)3 * n * sizeof *want);
                 ASSERT_OK(samples_gather(&f.s, f.im, got, &e));
                 reference(&f, NULL, want);
                 ASSERT_MSG(memcmp(got, want, (size_t)3 * n * sizeof *got) == 0,
-                           "n %d sorted %d per-sample %d: values differ", n, sorted, per);
+                           "n %d layout %d per-sample %d: values differ", n, layout, per);
                 free(got);
                 free(want);
                 drop(&f);
@@ -137,7 +155,7 @@ TEST(the_values_are_one_sample_at_a_time_bit_for_bit)
 
 TEST(views_left_out_are_not_written_and_changed_spans_are_flagged)
 {
-    for (int sorted = 0; sorted < 2; sorted++) {
+    for (int layout = 0; layout < LAYOUTS; layout++) {
         fixture f;
         glint_err e;
         int n = 50000;
@@ -146,7 +164,7 @@ TEST(views_left_out_are_not_written_and_changed_spans_are_flagged)
                       *want_changed = calloc(nspans, 1);
         float *got = malloc((size_t)3 * n * sizeof *got), *want = malloc((size_t)3 * n * sizeof *want);
         int nchanged = 0;
-        make(&f, n, sorted, 0);
+        make(&f, n, layout, 0);
         reference(&f, NULL, got);
         memcpy(want, got, (size_t)3 * n * sizeof *got);
         /* change a few pixels of views read and of a view left out */
@@ -186,13 +204,13 @@ TEST(views_left_out_are_not_written_and_changed_spans_are_flagged)
 TEST(the_first_non_finite_pixel_is_named)
 {
     static const float bad[3] = {NAN, INFINITY, -INFINITY};
-    for (int t = 0; t < 12; t++) {
+    for (int t = 0; t < 18; t++) {
         fixture f;
         glint_err e;
         int n = 40000, first = -1, fch = -1;
         float *got = malloc((size_t)3 * n * sizeof *got);
         char want[160];
-        make(&f, n, t % 2, 0);
+        make(&f, n, t % LAYOUTS, 0);
         for (int k = 0; k < 1 + t % 3; k++) { /* 1 to 3 bad pixels */
             int i = (int)(rnd() % (unsigned)n), ch = (int)(rnd() % 3);
             img *im = &f.im[f.s.view[i]];
