@@ -382,6 +382,24 @@ typedef float v4f __attribute__((vector_size(16)));
 typedef double v4d __attribute__((vector_size(32)));
 typedef uint32_t v4u __attribute__((vector_size(16)));
 
+/* One value: *dst = (float)(p * inv); *bad gets a nonzero bit when p is
+ * inf or NaN; returns the bits that changed against *dst when cmp (else
+ * 0). */
+static inline uint32_t one_value(float p, double inv, float *dst, int cmp, uint32_t *bad)
+{
+    float x = (float)(p * inv);
+    uint32_t pb, now, was, d = 0;
+    memcpy(&pb, &p, sizeof pb);
+    *bad |= (pb & 0x7f800000u) == 0x7f800000u; /* inf or NaN */
+    if (cmp) {
+        memcpy(&now, &x, sizeof now);
+        memcpy(&was, dst, sizeof was);
+        d = now ^ was;
+    }
+    *dst = x;
+    return d;
+}
+
 /* The values of n consecutive floats src[] (the channels of a run of
  * consecutive pixels of a 3-channel painting, one intensity), each
  * (float)(p * inv), into dst[], four at a time: the same operations as
@@ -410,18 +428,8 @@ GATHER_CLONES static uint32_t run_values(const float *restrict src, float *restr
         d |= diff[l];
         *bad |= nf[l];
     }
-    for (; k < n; k++) {
-        float p = src[k], x = (float)(p * inv);
-        uint32_t pb, now, was;
-        memcpy(&pb, &p, sizeof pb);
-        *bad |= (pb & 0x7f800000u) == 0x7f800000u;
-        if (cmp) {
-            memcpy(&now, &x, sizeof now);
-            memcpy(&was, &dst[k], sizeof was);
-            d |= now ^ was;
-        }
-        dst[k] = x;
-    }
+    for (; k < n; k++)
+        d |= one_value(src[k], inv, &dst[k], cmp, bad);
     return d;
 }
 
@@ -474,18 +482,9 @@ static inline uint32_t gather_values(const samples *s, const img *im, int nch, i
         }
         {
             const float *px = px0 + (size_t)pixel[i] * nch;
-            for (int ch = 0; ch < 3; ch++) {
-                float p = px[nch == 1 ? 0 : ch], x = (float)(p * inv);
-                uint32_t pb, now, was;
-                memcpy(&pb, &p, sizeof pb);
-                bad |= (pb & 0x7f800000u) == 0x7f800000u; /* inf or NaN */
-                if (cmp) {
-                    memcpy(&now, &x, sizeof now);
-                    memcpy(&was, &rgb[3 * (size_t)i + ch], sizeof was);
-                    diff |= now ^ was;
-                }
-                rgb[3 * (size_t)i + ch] = x;
-            }
+            for (int ch = 0; ch < 3; ch++)
+                diff |= one_value(px[nch == 1 ? 0 : ch], inv, &rgb[3 * (size_t)i + ch], cmp,
+                                  &bad);
         }
     }
     *nonfinite = bad != 0;
