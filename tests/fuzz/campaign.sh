@@ -5,7 +5,8 @@
 #   tests/fuzz/campaign.sh [-t SECONDS] [-j JOBS] [TARGET...]
 #
 # -t: seconds per target (default 600); -j: targets at once (default 1);
-# targets: json image mesh cache config http_head (default: all).
+# targets: json image mesh cache config http_head stroke_file
+# (default: all).
 # Builds build-fuzz (clang, -Dfuzzing=true, AddressSanitizer and
 # UndefinedBehaviorSanitizer) if it is not there.  Writes, per target,
 # build-fuzz/fuzz-work/NAME.log (libFuzzer's output), NAME-crash-* (inputs
@@ -21,7 +22,7 @@ while getopts "t:j:" o; do
 done
 shift $((OPTIND - 1))
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(json image mesh cache config http_head)
+[ ${#targets[@]} -gt 0 ] || targets=(json image mesh cache config http_head stroke_file)
 B=${GLINT_FUZZ_BUILD:-build-fuzz}
 if [ ! -f "$B/build.ninja" ]; then
   CC=clang CXX=clang++ meson setup "$B" -Dfuzzing=true -Db_sanitize=address,undefined \

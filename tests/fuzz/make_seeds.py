@@ -68,6 +68,8 @@ def image_seeds(glint, tmp):
         first = sorted(glob.glob(os.path.join(out, "*." + fmt)))[0]
         data = open(first, "rb").read()
         put("image", "painting." + fmt, b"\x00" + data)
+        if fmt != "hdr":  # a stored upload, under a stroke on lines 2..3
+            put("stroke_file", "upload." + fmt, bytes([0, 3, 2]) + data)
     # an 8 x 4 lat-long map and a 4 x 3 cross (faces 1 x 1), as Radiance HDR (flat RLE-less)
     def hdr(w, h):
         head = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (h, w)
@@ -76,6 +78,20 @@ def image_seeds(glint, tmp):
     put("image", "env-cross.hdr", b"\x01" + hdr(4, 3))
     # a MERL header (90 x 90 x 180) with too few entries
     put("image", "merl-short", b"\x02" + struct.pack("<3i", 90, 90, 180) + b"\x00" * 64)
+
+
+def stroke_file_seeds():
+    # (the files an upload stored, byte 0 even, come from image_seeds) glint's own files (byte 0 odd): width, height, channels, values; a
+    # stroke within a block, across a block edge, none, every line; then
+    # the same file with one byte of a table entry and of a block flipped
+    put("stroke_file", "glint-1block", bytes([1, 4, 3, 39, 11, 0, 0x5b, 0x01]))
+    put("stroke_file", "glint-edge", bytes([1, 15, 4, 63, 47, 0, 0x2d, 0x00]))
+    put("stroke_file", "glint-none", bytes([1, 0, 0, 20, 70, 0, 0x13, 0x02]))
+    put("stroke_file", "glint-all", bytes([1, 0, 80, 20, 70, 0, 0x13, 0x02]))
+    put("stroke_file", "glint-rgba", bytes([1, 2, 5, 30, 33, 1, 0x7f, 0x00]))
+    put("stroke_file", "glint-flipped",
+        bytes([1, 40, 3, 31, 63, 0, 0x66, 0x01]) + struct.pack("<HB", 0x160, 0x01)
+        + struct.pack("<HB", 0x1a0, 0x80))
 
 
 def mesh_seeds():
@@ -192,6 +208,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         json_seeds()
         image_seeds(glint, tmp)
+        stroke_file_seeds()
         mesh_seeds()
         cache_seeds(build, glint, tmp)
         config_seeds()
