@@ -299,22 +299,30 @@ int fsio_read_all(const char *path, size_t max_len, char **data, size_t *len, gl
 
 int fsio_mkdirs(const char *path, glint_err *err)
 {
-    char buf[4096];
+    char buf[4096], *slash;
     size_t n = strlen(path);
 
     if (n == 0 || n >= sizeof buf)
         return glint_err_set(err, GLINT_EINVAL, "bad directory path '%s'", path);
     memcpy(buf, path, n + 1);
-    for (size_t i = 1; i <= n; i++) {
-        if (buf[i] == '/' || buf[i] == '\0') {
-            char c = buf[i];
-            buf[i] = '\0';
-            if (mkdir(buf, 0755) != 0 && errno != EEXIST) {
-                int e = errno;
-                glint_err_set(err, GLINT_EIO, "cannot create directory %s: %s", buf, strerror(e));
-                return fsio_err_kind(err, e);
-            }
-            buf[i] = c;
+    /* up from the path itself to the first level that is there or made
+     * (one call when the parent is there, as for a new material), each
+     * level cut off at its last '/'... */
+    while (mkdir(buf, 0755) != 0 && errno != EEXIST) {
+        int e = errno;
+        if (e != ENOENT || !(slash = strrchr(buf, '/')) || slash == buf) {
+            glint_err_set(err, GLINT_EIO, "cannot create directory %s: %s", buf, strerror(e));
+            return fsio_err_kind(err, e);
+        }
+        *slash = '\0';
+    }
+    /* ...then down again, each cut '/' put back in turn */
+    for (size_t i = strlen(buf); i < n; i = strlen(buf)) {
+        buf[i] = '/';
+        if (mkdir(buf, 0755) != 0 && errno != EEXIST) {
+            int e = errno;
+            glint_err_set(err, GLINT_EIO, "cannot create directory %s: %s", buf, strerror(e));
+            return fsio_err_kind(err, e);
         }
     }
     return 0;
