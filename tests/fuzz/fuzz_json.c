@@ -9,11 +9,15 @@
  *   2  a scene document (the API's explicit views, the CLI's scene files):
  *      scene_from_json, "mesh_file" removed (a server never passes one: it
  *      would name a file to read); a scene that parses must read back from
- *      scene_to_json with the same content hash. */
+ *      scene_to_json with the same content hash.
+ * Every document that parses is also written back by json_text (indent
+ * 0-3 from the first byte), which must read back as the same tree, and
+ * give json_dumps's text where it holds no real. */
 #include <jansson.h>
 #include <string.h>
 
 #include "fuzz.h"
+#include "json_text.h"
 #include "method.h"
 #include "scene.h"
 #include "stroke.h"
@@ -118,6 +122,45 @@ static void scene_doc(json_t *j)
     free(text);
 }
 
+static int has_real(const json_t *j)
+{
+    const char *k;
+    json_t *v;
+    size_t i;
+    if (json_is_real(j))
+        return 1;
+    if (json_is_object(j))
+        json_object_foreach((json_t *)j, k, v) {
+            if (has_real(v))
+                return 1;
+        }
+    if (json_is_array(j))
+        json_array_foreach(j, i, v) {
+            if (has_real(v))
+                return 1;
+        }
+    return 0;
+}
+
+/* json_text, glint's writer of manifests, records and responses: its text
+ * reads back as the same tree (reals to the bit), and without reals it is
+ * json_dumps's text, byte for byte. */
+static void written_back(const json_t *j, int indent)
+{
+    char *text = json_text(j, indent);
+    json_t *back;
+    FUZZ_CHECK(text != NULL);
+    back = json_loads(text, JSON_REJECT_DUPLICATES, NULL);
+    FUZZ_CHECK(back != NULL && json_equal(back, (json_t *)j));
+    if (!has_real(j)) {
+        char *ref = json_dumps(j, indent ? JSON_INDENT(indent) : JSON_COMPACT);
+        FUZZ_CHECK(ref != NULL && strcmp(ref, text) == 0);
+        free(ref);
+    }
+    json_decref(back);
+    free(text);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     json_t *j;
@@ -129,6 +172,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     j = json_loadb((const char *)data + 2, size - 2, JSON_REJECT_DUPLICATES, NULL);
     if (!j)
         return 0;
+    written_back(j, data[0] / 3 % 4);
     switch (data[0] % 3) {
     case 0: strokes(j); break;
     case 1: params(j, which); break;

@@ -55,6 +55,16 @@ def json_seeds():
                  {"eye": [0, 3.5, 0.1], "target": [0, 0, 0.1], "half_fov": 0.5,
                   "light": [0, 3, 1], "light_intensity": 2.5, "light_deg": 40}]}
     put("json", "scene", b"\x02\x00" + json.dumps(scene).encode())
+    # every control character but NUL (jansson refuses it), in a value and
+    # a key, and reals at the edges, for json_text's escapes and shortest
+    # reals (every document is written back; a first byte of 3 picks
+    # indent 1)
+    ctl = "".join(chr(c) for c in range(1, 32)) + "\"\\/\x7f\u00e9\u2028"
+    put("json", "control-chars", b"\x03\x00" + json.dumps(
+        [{"tag": ctl, ctl: [1, -0.0, 5e-324, 1e-310, 1.7976931348623157e308, 0.1, 1e21,
+                           -9007199254740993, 123456789012345678]}]).encode())
+    put("json", "control-chars-no-reals", b"\x00\x00" + json.dumps(
+        [{"tag": ctl, ctl: [1, -9007199254740993, {"": [[], {}]}]}]).encode())
 
 
 def image_seeds(glint, tmp):
@@ -76,6 +86,15 @@ def image_seeds(glint, tmp):
         return head + bytes([128, 100, 64, 129]) * (w * h)
     put("image", "env-latlong.hdr", b"\x01" + hdr(8, 4))
     put("image", "env-cross.hdr", b"\x01" + hdr(4, 3))
+    # PNGs the target builds (byte 0 of 3: png_build in fuzz_image.c):
+    # width, height, colour type and depth, flags, then scanline bytes
+    rows = bytes((i * 29 + 7) % 256 for i in range(97))
+    for name, head in (("rgb8", [15, 11, 0, 0]), ("rgba8", [20, 5, 1, 0]),
+                       ("rgb8-gamma", [7, 7, 0, 2]), ("rgb8-text-offs", [9, 4, 0, 96]),
+                       ("rgb8-interlaced", [12, 13, 0, 1]), ("rgb8-trns", [6, 6, 0, 8]),
+                       ("palette8", [10, 10, 13, 0]), ("grey16", [5, 9, 8, 0]),
+                       ("rgb16-srgb-chrm", [4, 4, 9, 20])):
+        put("image", "built-" + name, bytes([3] + head) + rows)
     # a MERL header (90 x 90 x 180) with too few entries
     put("image", "merl-short", b"\x02" + struct.pack("<3i", 90, 90, 180) + b"\x00" * 64)
 
