@@ -152,8 +152,10 @@ http_resp http_stream(int status, const char *content_type, MHD_ContentReaderCal
 void http_header(http_resp *r, const char *name, const char *value);
 
 /* A file of the static directory `dir` (NULL: none) for GET `path`
- * ("/" is /index.html; ".." refused), revalidated on every load
- * (Cache-Control: no-cache, Last-Modified / If-Modified-Since `ims`). */
+ * ("/" is /index.html), revalidated on every load (Cache-Control:
+ * no-cache, Last-Modified / If-Modified-Since `ims`).  Only regular files
+ * reached from `dir` without a symbolic link, "." or ".." on the way are
+ * served (404 otherwise), so a link in the tree leads nowhere outside it. */
 http_resp http_static_serve(const char *dir, const char *path, const char *ims);
 
 /* ---- request helpers ------------------------------------------------------------ */
