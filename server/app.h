@@ -50,6 +50,7 @@ typedef struct app_config {
     unsigned min_body_rate;   /* bytes/s a request body must keep up (0: no minimum) */
     char api_key[256];        /* "" = none */
     char allow_origin[1024];  /* other web origins admitted (http.h); "" = none */
+    char allow_host[1024];    /* Host names served besides addresses and localhost (http.h) */
     int quiet;
     app_limits lim;
 } app_config;

@@ -72,6 +72,12 @@ static void usage(FILE *f)
           "  --allow-origin LIST   web origins besides glintd's own whose pages may call the\n"
           "                        API (comma-separated, e.g. https://tools.example.com;\n"
           "                        none by default)\n"
+          "  --allow-host LIST     host names the daemon answers besides IP addresses and\n"
+          "                        localhost (comma-separated, e.g. glint.example.com; \"*\"\n"
+          "                        for any): a request naming another Host is refused\n"
+          "                        (421), so that a web page on a name that resolves to\n"
+          "                        this machine cannot use it; checked without --api-key,\n"
+          "                        and with it when this is given (none by default)\n"
           "  --config FILE         JSON config file (keys as the long options, '-' as '_')\n"
           "  --port-file FILE      write the bound port there once listening\n"
           "  --quiet               no request log\n",
@@ -96,6 +102,7 @@ int main(int argc, char **argv)
         {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
         {"background-priority", required_argument, 0, 1},
         {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
+        {"allow-host", required_argument, 0, 1},
         {"config", required_argument, 0, 2},
         {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
@@ -237,6 +244,8 @@ int main(int argc, char **argv)
     hc.min_body_rate = a.cfg.min_body_rate;
     hc.static_dir = a.cfg.web_dir;
     hc.allow_origin = a.cfg.allow_origin[0] ? a.cfg.allow_origin : NULL;
+    hc.allow_host = a.cfg.allow_host[0] ? a.cfg.allow_host : NULL;
+    hc.check_host = !a.cfg.api_key[0] || a.cfg.allow_host[0];
     hc.quiet = a.cfg.quiet;
     hc.replica = a.cfg.replica_name[0] ? a.cfg.replica_name : NULL;
     a.started = time(NULL);
@@ -247,6 +256,13 @@ int main(int argc, char **argv)
     }
     fprintf(stderr, "glintd: serving http://%s:%d/ (data %s, metadata in %s)\n", a.cfg.address,
             port, a.cfg.data_dir, store_backend(a.store));
+    if (!hc.check_host || strcmp(a.cfg.allow_host, "*") == 0)
+        fprintf(stderr, "glintd: answering any Host name (%s)\n",
+                hc.check_host ? "--allow-host *" : "the API key guards the API");
+    else
+        fprintf(stderr, "glintd: answering the Host names localhost, IP addresses%s%s\n",
+                a.cfg.allow_host[0] ? " and " : " (--allow-host adds others)",
+                a.cfg.allow_host);
     if (port_file) {
         char buf[32];
         int n = snprintf(buf, sizeof buf, "%d\n", port);

@@ -128,6 +128,7 @@ const char *http_status_title(int status)
     case 413: return "Content Too Large";
     case 414: return "URI Too Long";
     case 415: return "Unsupported Media Type";
+    case 421: return "Misdirected Request";
     case 422: return "Unprocessable Content";
     case 429: return "Too Many Requests";
     case 431: return "Request Header Fields Too Large";
@@ -340,6 +341,26 @@ static http_resp check_request(const req_ctx *ctx, struct MHD_Connection *conn)
     return none;
 }
 
+/* The Host rule (http_config.allow_host): resp.r is NULL when the request
+ * names a host this daemon serves, or is a health check. */
+static http_resp check_host(const http_server *s, struct MHD_Connection *conn,
+                            const char *method, const char *url)
+{
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    http_resp none = {0, NULL};
+
+    /* no Host (HTTP/1.0): not a browser, which always sends one */
+    if (!host || http_host_served(host, s->cfg.allow_host))
+        return none;
+    if ((strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0) &&
+        (strcmp(url, "/healthz") == 0 || strcmp(url, "/api/v1/healthz") == 0))
+        return none;
+    return http_problem(421, "host-not-served",
+                        "glintd does not serve the host name in \"Host: %.200s\": it answers "
+                        "IP addresses, localhost and the names given with --allow-host (a page "
+                        "on another name that resolves to this machine is refused)", host);
+}
+
 /* Seconds left before the body falls behind min_body_rate (after its grace
  * of header_timeout_s); <= 0 when it has. */
 static double body_slack(const http_server *s, const req_ctx *ctx, double now)
@@ -399,6 +420,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         ctx->started = 1;
         snprintf(ctx->method, sizeof ctx->method, "%s", method);
         resp = check_request(ctx, conn);
+        if (!resp.r && s->cfg.check_host)
+            resp = check_host(s, conn, method, url);
         if (resp.r) {
             ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
             MHD_destroy_response(resp.r);

@@ -100,6 +100,18 @@ typedef struct http_config {
      * (OPTIONS) are answered.  The daemon's own origin is the request's
      * Host under http or https. */
     const char *allow_origin;
+    /* Host names served besides IP address literals and "localhost"
+     * (comma-separated, a name or name:port; "*": any; NULL: none), and
+     * whether to check (check_host 1).  A request whose Host names
+     * anything else is refused, whatever its method (421,
+     * "host-not-served"), except GET and HEAD of the health checks: a page
+     * on some name that its DNS points at this machine (DNS rebinding) is
+     * then the browser's own origin for that name, and its Origin the
+     * same, so the Origin rule above cannot tell it from the studio; the
+     * Host can.  An address literal is always served: no name was
+     * resolved to reach it, so no page elsewhere can send it. */
+    const char *allow_host;
+    int check_host;
     int quiet;              /* no request log lines */
     /* This process's name among replicas behind one proxy, sent on every
      * response as X-Glint-Replica (NULL: no header). */
