@@ -66,6 +66,12 @@ static void usage(FILE *f)
           "  --header-timeout S    a request head must arrive within S seconds (10)\n"
           "  --min-body-rate B     a request body must keep up B bytes/s after a grace of\n"
           "                        --header-timeout; 0 for no minimum (1024)\n"
+          "  --max-streams-per-session N\n"
+          "                        session event streams open at once on one session;\n"
+          "                        429 beyond (32)\n"
+          "  --max-streams-per-client N\n"
+          "                        ... for one client (IPv4 address, IPv6 /64; behind a\n"
+          "                        proxy, every user) (16)\n"
           "  --max-body-mb N       request body limit (32)\n"
           "  --max-image-dim N     largest upload / raster side (4096)\n"
           "  --max-mesh-tris N     largest uploaded mesh (2000000)\n"
@@ -99,6 +105,8 @@ int main(int argc, char **argv)
         {"max-connections-per-ip", required_argument, 0, 1},
         {"max-waiting-per-ip", required_argument, 0, 1}, {"health-reserve", required_argument, 0, 1},
         {"header-timeout", required_argument, 0, 1}, {"min-body-rate", required_argument, 0, 1},
+        {"max-streams-per-session", required_argument, 0, 1},
+        {"max-streams-per-client", required_argument, 0, 1},
         {"max-body-mb", required_argument, 0, 1}, {"max-image-dim", required_argument, 0, 1},
         {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
         {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
@@ -212,6 +220,7 @@ int main(int argc, char **argv)
             return 1;
         }
     }
+    events_set_limits(a.events, a.cfg.max_streams_per_session, a.cfg.max_streams_per_client);
     /* error details never show where the data lives */
     log_private_path(a.cfg.data_dir);
     {

@@ -209,6 +209,27 @@ const char *http_header_in(const http_req *req, const char *name)
     return MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND, name);
 }
 
+void http_client_key(const http_req *req, char *out, size_t len)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+
+    out[0] = '\0';
+    if (sa && sa->sa_family == AF_INET) {
+        inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)len);
+    } else if (sa && sa->sa_family == AF_INET6) {
+        struct in6_addr a = ((const struct sockaddr_in6 *)sa)->sin6_addr;
+        size_t n;
+        if (IN6_IS_ADDR_V4MAPPED(&a)) {
+            inet_ntop(AF_INET, a.s6_addr + 12, out, (socklen_t)len);
+            return;
+        }
+        memset(a.s6_addr + 8, 0, 8); /* the /64, as the front counts */
+        if (inet_ntop(AF_INET6, &a, out, (socklen_t)len) && (n = strlen(out)) + 4 < len)
+            memcpy(out + n, "/64", 4);
+    }
+}
 
 /* ---- routing ------------------------------------------------------------------------ */
 

@@ -178,6 +178,13 @@ const char *http_query(const http_req *req, const char *name);
 /* Request header or NULL. */
 const char *http_header_in(const http_req *req, const char *name);
 
+/* The client a request came from, as the connection front counts them:
+ * its IPv4 address, or its IPv6 address's /64 ("2001:db8:1:2::/64"),
+ * into out[0..len) (at least HTTP_CLIENT_KEY_MAX bytes); "" when unknown.
+ * Behind a proxy this is the proxy. */
+#define HTTP_CLIENT_KEY_MAX 64
+void http_client_key(const http_req *req, char *out, size_t len);
+
 /* Request counters for /metrics (api_core.c). */
 typedef struct http_stats {
     uint64_t requests;
