@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "api_common.h"
@@ -671,12 +672,28 @@ static http_resp strokes_get(http_req *req)
 
 /* ---- events ----------------------------------------------------------------------------- */
 
+/* events_check_fn of a session's stream (ctx: the app): whether the token
+ * it was opened with still grants reading the session. */
+static int stream_token_check(void *ctx, const char *session, const char *token,
+                              time_t *expires)
+{
+    app *a = ctx;
+    json_t *doc = NULL;
+    int rc = store_session_get(a->store, session, &doc, NULL);
+    if (rc)
+        return rc;
+    rc = auth_token_current(doc, token, time(NULL), expires) ? 0 : GLINT_EDENIED;
+    json_decref(doc);
+    return rc;
+}
+
 static http_resp events_get(http_req *req)
 {
     app *a = req->app;
     json_t *sdoc = NULL;
     const char *since_q = http_query(req, "since");
     const char *last_id = http_header_in(req, "Last-Event-ID");
+    events_access acc = {0};
     long long since = 0;
     glint_err e;
 
@@ -693,7 +710,13 @@ static http_resp events_get(http_req *req)
     if (api_session(req, req->param[0], 0, &sdoc, &e))
         return api_error(&e);
     json_decref(sdoc);
-    return events_stream(a->events, req, req->param[0], since, http_query(req, "name"));
+    /* admitted by a token (not the API key): the stream lasts as long as it */
+    if (!auth_has_key(req)) {
+        acc.token = auth_token_given(req);
+        acc.check = stream_token_check;
+        acc.ctx = a;
+    }
+    return events_stream(a->events, req, req->param[0], since, http_query(req, "name"), &acc);
 }
 
 const http_route api_sessions_routes[] = {

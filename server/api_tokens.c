@@ -9,7 +9,8 @@
  * the scene's owner key (X-Glint-Owner) and the API key: the owner key
  * renews links that have expired.  The answer is the session as its paint
  * token sees it, with the new links; the old tokens are refused from then
- * on and the session's open event streams end. */
+ * on and the session's event streams opened with them end, sending nothing
+ * more (events.h). */
 #include <string.h>
 #include <time.h>
 
@@ -102,12 +103,16 @@ static http_resp tokens_post(http_req *req)
         json_object_set_new(doc, "paint_token", json_string(pt));
     if (!strcmp(what, "both") || !strcmp(what, "view"))
         json_object_set_new(doc, "view_token", json_string(vt));
-    if ((rc = store_session_update(a->store, req->param[0], doc, &e)))
+    /* the session's token streams send nothing while the tokens change,
+     * then check theirs against what was stored */
+    events_revoke_begin(a->events, req->param[0]);
+    rc = store_session_update(a->store, req->param[0], doc, &e);
+    events_revoke_end(a->events, req->param[0]);
+    if (rc)
         goto done;
-    if (strcmp(what, "none") != 0) {
+    {
         glint_err ae;
-        events_revoke(a->events, req->param[0]);
-        /* replicas on the same database end their streams too */
+        /* replicas on the same database check their streams' tokens too */
         if (store_announce(a->store, req->param[0], "revoke", &ae))
             log_line("tokens: streams on other replicas keep going until they reconnect: %s",
                      ae.msg);

@@ -48,8 +48,11 @@ typedef struct app_config {
     unsigned health_reserve;  /* extra connections for health checks */
     unsigned header_timeout_s;       /* the request head must arrive within this */
     unsigned min_body_rate;   /* bytes/s a request body must keep up (0: no minimum) */
+    unsigned max_streams_per_session; /* event streams open on one session (events.h) */
+    unsigned max_streams_per_client;  /* ... for one client */
     char api_key[256];        /* "" = none */
     char allow_origin[1024];  /* other web origins admitted (http.h); "" = none */
+    char allow_host[1024];    /* Host names served besides addresses and localhost (http.h) */
     int quiet;
     app_limits lim;
 } app_config;

@@ -49,14 +49,33 @@ int auth_require_key(http_req *req, glint_err *err)
     return glint_err_kind(err, "api-key-required");
 }
 
-int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err)
+const char *auth_token_given(http_req *req)
 {
     const char *tok = http_header_in(req, "X-Glint-Token");
+    return tok ? tok : http_query(req, "token");
+}
+
+int auth_token_current(const json_t *session_doc, const char *token, time_t now,
+                       time_t *expires)
+{
+    const char *paint = json_string_value(json_object_get(session_doc, "paint_token"));
+    const char *view = json_string_value(json_object_get(session_doc, "view_token"));
+    json_t *ex = json_object_get(session_doc, "expires_unix");
+
+    if (expires)
+        *expires = json_is_integer(ex) ? (time_t)json_integer_value(ex) : 0;
+    if (!token || !paint || !view ||
+        !(glint_secret_equal(token, paint) || glint_secret_equal(token, view)))
+        return 0;
+    return !(json_is_integer(ex) && (json_int_t)now >= json_integer_value(ex));
+}
+
+int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err)
+{
+    const char *tok = auth_token_given(req);
     const char *paint = json_string_value(json_object_get(session_doc, "paint_token"));
     const char *view = json_string_value(json_object_get(session_doc, "view_token"));
 
-    if (!tok)
-        tok = http_query(req, "token");
     if (auth_has_key(req))
         return 0;
     if (!paint || !view)

@@ -19,7 +19,8 @@
  *   both tokens are refused (403, kind "link-expired"); and its tokens may
  *   be revoked and replaced (POST /sessions/{id}/tokens, by the paint
  *   token, the scene's owner key or the API key): the old links are then
- *   refused (403 "wrong-token") and open event streams end.
+ *   refused (403 "wrong-token"), and event streams opened with a token
+ *   end once it no longer grants access (revoked, or expired).
  * Comparisons are constant-time.  Without the right token nothing of a
  * session is readable or writable (404 for unknown ids, 401 without a token,
  * 403 with a token that does not grant the access). */
@@ -27,6 +28,7 @@
 #define GLINTD_AUTH_H
 
 #include <jansson.h>
+#include <time.h>
 
 #include "err.h"
 #include "http.h"
@@ -45,6 +47,16 @@ int auth_has_key(http_req *req);
  * writes.  0 if allowed; else GLINT_EAUTH (kind "token-required") or
  * GLINT_EDENIED (kinds "read-only-token", "wrong-token", "link-expired"). */
 int auth_session(http_req *req, const json_t *session_doc, int need_paint, glint_err *err);
+
+/* The session token the request presents (X-Glint-Token, else ?token=),
+ * or NULL. */
+const char *auth_token_given(http_req *req);
+
+/* Whether `token` is the session's paint or view token (doc from
+ * store_session_get) and its links have not expired at `now`: 1 or 0.
+ * OUT: *expires (may be NULL): when the links expire (0: never). */
+int auth_token_current(const json_t *session_doc, const char *token, time_t now,
+                       time_t *expires);
 
 /* The owner key the request presents (X-Glint-Owner): *key NULL when none
  * is sent; GLINT_EINVAL (kind "invalid-owner-key") when it is malformed. */

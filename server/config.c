@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "config.h"
+#include "events.h"
 #include "fitsvc.h"
 #include "fsio.h"
 
@@ -29,6 +30,8 @@ void config_default(app_config *c)
     c->health_reserve = 4;
     c->header_timeout_s = 10;
     c->min_body_rate = 1024;
+    c->max_streams_per_session = EVENTS_MAX_PER_SESSION_DEFAULT;
+    c->max_streams_per_client = EVENTS_MAX_PER_CLIENT_DEFAULT;
     c->lim.max_body = (size_t)32 << 20;
     c->lim.max_image_dim = 4096;
     c->lim.max_mesh_tris = 2000000;
@@ -71,7 +74,7 @@ static const struct {
     STR_OPT("database", database), STR_OPT("replica-name", replica_name),
     STR_OPT("web-dir", web_dir),   STR_OPT("env-dir", env_dir),
     STR_OPT("measured-dir", measured_dir), STR_OPT("api-key", api_key),
-    STR_OPT("allow-origin", allow_origin),
+    STR_OPT("allow-origin", allow_origin), STR_OPT("allow-host", allow_host),
 };
 
 /* The numeric options: name, range, and where the value goes. */
@@ -96,6 +99,8 @@ static const struct {
     NUM_OPT("health-reserve", 0, 1000, K_UNSIGNED, health_reserve),
     NUM_OPT("header-timeout", 1, 3600, K_UNSIGNED, header_timeout_s),
     NUM_OPT("min-body-rate", 0, 1L << 30, K_UNSIGNED, min_body_rate),
+    NUM_OPT("max-streams-per-session", 1, 100000, K_UNSIGNED, max_streams_per_session),
+    NUM_OPT("max-streams-per-client", 1, 100000, K_UNSIGNED, max_streams_per_client),
     NUM_OPT("max-body-mb", 1, 4096, K_MB, lim.max_body),
     NUM_OPT("max-image-dim", 8, 16384, K_INT, lim.max_image_dim),
     NUM_OPT("max-mesh-tris", 1, 1L << 24, K_INT, lim.max_mesh_tris),

@@ -29,21 +29,33 @@
 #include "log.h"
 #include "store.h"
 
-#define EVENTS_BATCH 64        /* log rows read per wake-up */
+#define EVENTS_TOKEN_MAX 128   /* longest token kept (tokens are 32 hex digits) */
+#define EVENTS_BATCH 64        /* log rows read per wake-up, at most */
 
 typedef struct ev_hub {
     char session[33];
     unsigned long gen;         /* bumped by every publish / notify */
     unsigned long presence;    /* bumped when a listener joins or leaves */
-    unsigned long revoked;     /* bumped when the session's tokens are revoked */
+    unsigned long revoked;     /* bumped when the session's tokens changed */
+    unsigned revoking;         /* changes of the tokens under way (events_revoke_begin) */
+    unsigned nlisteners;
     ev_stream *listeners;
     struct ev_hub *next;
 } ev_hub;
+
+/* A client with streams open (for the per-client limit). */
+typedef struct ev_client {
+    char key[HTTP_CLIENT_KEY_MAX];
+    unsigned streams;
+    struct ev_client *next;
+} ev_client;
 
 struct events {
     pthread_mutex_t lock;
     pthread_cond_t cond;       /* broadcast on every change */
     ev_hub *hubs;
+    ev_client *clients;
+    unsigned max_per_session, max_per_client;
     store *st;
     int stopping;
 };
@@ -56,8 +68,14 @@ struct ev_stream {
     int64_t last;              /* last sequence number sent */
     unsigned long seen_gen;
     unsigned long seen_presence;
-    unsigned long revoked;     /* the hub's count when this stream opened */
+    unsigned long revoked;     /* the hub's count when the token was last checked */
     int started;
+    /* the session token the stream was admitted with ("": none, never checked) */
+    char token[EVENTS_TOKEN_MAX + 1];
+    events_check_fn check;
+    void *check_ctx;
+    time_t expires;            /* the token expires then (0: never) */
+    ev_client *client;         /* counted for this client (NULL: not counted) */
     char id[17];               /* this listener's id in presence */
     char name[EVENTS_NAME_MAX + 1];
     glint_buf buf;             /* pending output */
@@ -73,6 +91,8 @@ int events_open(store *st, events **out)
     if (!ev)
         return GLINT_ENOMEM;
     ev->st = st;
+    ev->max_per_session = EVENTS_MAX_PER_SESSION_DEFAULT;
+    ev->max_per_client = EVENTS_MAX_PER_CLIENT_DEFAULT;
     pthread_mutex_init(&ev->lock, NULL);
     pthread_condattr_init(&ca);
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -80,6 +100,12 @@ int events_open(store *st, events **out)
     pthread_condattr_destroy(&ca);
     *out = ev;
     return 0;
+}
+
+void events_set_limits(events *ev, unsigned max_per_session, unsigned max_per_client)
+{
+    ev->max_per_session = max_per_session ? max_per_session : EVENTS_MAX_PER_SESSION_DEFAULT;
+    ev->max_per_client = max_per_client ? max_per_client : EVENTS_MAX_PER_CLIENT_DEFAULT;
 }
 
 void events_shutdown(events *ev)
@@ -95,12 +121,17 @@ void events_shutdown(events *ev)
 void events_close(events *ev)
 {
     ev_hub *h, *n;
+    ev_client *c, *cn;
     if (!ev)
         return;
     /* glintd stops the HTTP server first, so no stream is left */
     for (h = ev->hubs; h; h = n) {
         n = h->next;
         free(h);
+    }
+    for (c = ev->clients; c; c = cn) {
+        cn = c->next;
+        free(c);
     }
     pthread_cond_destroy(&ev->cond);
     pthread_mutex_destroy(&ev->lock);
@@ -125,11 +156,12 @@ static ev_hub *events_hub(events *ev, const char *session, int create)
     return h;
 }
 
-/* Drop a hub nobody listens to; ev->lock held. */
+/* Drop a hub nobody listens to (and nobody is changing the tokens of);
+ * ev->lock held. */
 static void events_hub_release(events *ev, ev_hub *hub)
 {
     ev_hub **p;
-    if (hub->listeners)
+    if (hub->listeners || hub->revoking)
         return;
     for (p = &ev->hubs; *p; p = &(*p)->next)
         if (*p == hub) {
@@ -139,17 +171,69 @@ static void events_hub_release(events *ev, ev_hub *hub)
         }
 }
 
-void events_revoke(events *ev, const char *session)
+/* The client's entry, made if new (NULL: out of memory); ev->lock held. */
+static ev_client *events_client(events *ev, const char *key)
+{
+    ev_client *c;
+    for (c = ev->clients; c; c = c->next)
+        if (strcmp(c->key, key) == 0)
+            return c;
+    c = calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    snprintf(c->key, sizeof c->key, "%s", key);
+    c->next = ev->clients;
+    ev->clients = c;
+    return c;
+}
+
+/* Drop a client with no stream left; ev->lock held. */
+static void events_client_release(events *ev, ev_client *client)
+{
+    ev_client **p;
+    if (!client || client->streams)
+        return;
+    for (p = &ev->clients; *p; p = &(*p)->next)
+        if (*p == client) {
+            *p = client->next;
+            free(client);
+            return;
+        }
+}
+
+void events_revoke_begin(events *ev, const char *session)
+{
+    ev_hub *h;
+    if (!ev || !session)
+        return;
+    pthread_mutex_lock(&ev->lock);
+    h = events_hub(ev, session, 1);
+    if (h)
+        h->revoking++;
+    pthread_mutex_unlock(&ev->lock);
+}
+
+/* The session's tokens changed: its token streams check theirs again
+ * (ending: this ends an events_revoke_begin of this process). */
+static void events_tokens_changed(events *ev, const char *session, int ending)
 {
     ev_hub *h;
     pthread_mutex_lock(&ev->lock);
-    for (h = ev->hubs; h; h = h->next)
-        if (strcmp(h->session, session) == 0) {
-            h->revoked++;
-            break;
-        }
+    h = events_hub(ev, session, 0);
+    if (h) {
+        h->revoked++;
+        if (ending && h->revoking)
+            h->revoking--;
+        events_hub_release(ev, h);
+    }
     pthread_cond_broadcast(&ev->cond);
     pthread_mutex_unlock(&ev->lock);
+}
+
+void events_revoke_end(events *ev, const char *session)
+{
+    if (ev && session)
+        events_tokens_changed(ev, session, 1);
 }
 
 void events_notify(events *ev, const char *session)
@@ -179,10 +263,16 @@ void events_notify_all(events *ev)
 
 void events_on_store_change(void *ctx, const char *session, const char *what)
 {
-    if (!session)
-        events_notify_all(ctx);
-    else if (!strcmp(what, "revoke"))
-        events_revoke(ctx, session);
+    events *ev = ctx;
+    if (!session) {
+        /* notifications were missed: tokens may have changed too */
+        pthread_mutex_lock(&ev->lock);
+        for (ev_hub *h = ev->hubs; h; h = h->next)
+            h->revoked++;
+        pthread_mutex_unlock(&ev->lock);
+        events_notify_all(ev);
+    } else if (!strcmp(what, "revoke"))
+        events_tokens_changed(ev, session, 0);
     else
         events_notify(ctx, session);
 }
@@ -269,31 +359,115 @@ static int stream_client_gone(const ev_stream *s)
     return 0;
 }
 
-/* Read the log after s->last into the buffer.  Returns the number of rows
- * read (EVENTS_BATCH means: maybe more), or -1 on a store error. */
+/* Whether text can go into an SSE frame as it is: one line, and (quoted)
+ * no character a JSON string would escape. */
+static int frame_safe(const char *text, int quoted)
+{
+    for (const unsigned char *c = (const unsigned char *)text; *c; c++)
+        if (*c == '\n' || *c == '\r' || (quoted && (*c < 0x20 || *c == '"' || *c == '\\')))
+            return 0;
+    return 1;
+}
+
+/* store_event_fn: one event of the log into the stream's buffer, its data
+ * text as stored (compact JSON, one line: what json_text would write
+ * again), so reading costs no JSON tree.  Text that would not frame is
+ * parsed and written again. */
+static int stream_row(void *ctx, const store_event_row *r, glint_err *err)
+{
+    ev_stream *s = ctx;
+    char view[32] = "";
+    int rc;
+
+    if (r->view >= 0)
+        snprintf(view, sizeof view, ",\"view\":%lld", (long long)r->view);
+    if (r->data[0] && frame_safe(r->data, 0) && frame_safe(r->type, 1) &&
+        frame_safe(r->created, 1)) {
+        rc = glint_buf_printf(&s->buf, "id: %lld\nevent: %s\ndata: {\"seq\":%lld,\"type\":\"%s\"%s,"
+                                       "\"data\":",
+                              (long long)r->seq, r->type, (long long)r->seq, r->type, view) ||
+             glint_buf_append(&s->buf, r->data, strlen(r->data)) ||
+             glint_buf_printf(&s->buf, ",\"created\":\"%s\"}\n\n", r->created);
+    } else {
+        json_error_t je;
+        json_t *data = json_loads(r->data, 0, &je), *rec;
+        if (!data)
+            return glint_err_set(err, GLINT_EFORMAT, "event %lld holds malformed JSON: %s",
+                                 (long long)r->seq, je.text);
+        rec = json_pack("{s:I, s:s, s:o, s:s}", "seq", (json_int_t)r->seq, "type", r->type,
+                        "data", data, "created", r->created);
+        if (rec && r->view >= 0)
+            json_object_set_new(rec, "view", json_integer((json_int_t)r->view));
+        rc = !rec || stream_event(s, r->seq, r->type, rec);
+        json_decref(rec);
+    }
+    if (rc)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory writing event %lld",
+                             (long long)r->seq);
+    s->last = r->seq;
+    return 0;
+}
+
+/* Read the log after s->last into the buffer, about EVENTS_STREAM_BUF
+ * bytes of it at most (one event when it is larger).  Returns 1 when more
+ * may be left, 0 when the log was read to its end, -1 on a store error. */
 static int stream_read_log(ev_stream *s, store *st)
 {
-    json_t *arr = NULL, *rec;
     glint_err e;
-    size_t i;
-    int n;
+    int more = 0;
 
-    if (store_events_since(st, s->hub->session, s->last, EVENTS_BATCH, &arr, NULL, &e)) {
+    if (store_events_each(st, s->hub->session, s->last, EVENTS_BATCH, EVENTS_STREAM_BUF,
+                          stream_row, s, &more, &e)) {
         log_line("events of session %s: %s", s->hub->session, e.msg);
         return -1;
     }
-    n = (int)json_array_size(arr);
-    json_array_foreach(arr, i, rec) {
-        long long seq = json_integer_value(json_object_get(rec, "seq"));
-        const char *type = json_string_value(json_object_get(rec, "type"));
-        if (stream_event(s, seq, type ? type : "event", rec)) {
-            json_decref(arr);
-            return -1;
+    return more;
+}
+
+#define TOKEN_OK 0       /* stream_token_state: go on */
+#define TOKEN_REFUSED 1  /* ... end, sending nothing more */
+#define TOKEN_HOLD 2     /* ... a change of the tokens is under way: send nothing yet */
+
+/* Whether the stream may go on sending: checked against the store when
+ * the session's tokens changed since the last check, or the token's
+ * expiry passed.  While a change of the tokens is under way, waits for it
+ * once (up to EVENTS_POLL_MS) and answers TOKEN_HOLD if it goes on. */
+static int stream_token_state(ev_stream *s)
+{
+    events *ev = s->ev;
+    unsigned long revoked;
+    time_t expires = 0;
+    int stopping, hold;
+
+    if (!s->token[0])
+        return TOKEN_OK;
+    pthread_mutex_lock(&ev->lock);
+    if (s->hub->revoking && !ev->stopping) {
+        struct timespec until;
+        clock_gettime(CLOCK_MONOTONIC, &until);
+        until.tv_nsec += (long)EVENTS_POLL_MS * 1000000L;
+        if (until.tv_nsec >= 1000000000L) {
+            until.tv_sec++;
+            until.tv_nsec -= 1000000000L;
         }
-        s->last = seq;
+        pthread_cond_timedwait(&ev->cond, &ev->lock, &until);
     }
-    json_decref(arr);
-    return n;
+    hold = s->hub->revoking != 0;
+    revoked = s->hub->revoked;
+    stopping = ev->stopping;
+    pthread_mutex_unlock(&ev->lock);
+    if (stopping)
+        return TOKEN_OK; /* the caller ends the stream anyway */
+    if (hold)
+        return TOKEN_HOLD;
+    if (revoked == s->revoked && !(s->expires && time(NULL) >= s->expires))
+        return TOKEN_OK;
+    /* the count read before the session: a change after it is seen next time */
+    if (s->check(s->check_ctx, s->hub->session, s->token, &expires))
+        return TOKEN_REFUSED;
+    s->revoked = revoked;
+    s->expires = expires;
+    return TOKEN_OK;
 }
 
 ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
@@ -303,9 +477,22 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
 
     for (;;) {
         unsigned long gen, presence;
-        int stopping, gone;
+        int stopping, recheck, gone;
         store *st;
 
+        switch (stream_token_state(s)) {
+        case TOKEN_REFUSED: /* nothing more goes to a client whose token was refused */
+            s->off = 0;
+            glint_buf_free(&s->buf);
+            return EVENTS_STREAM_END;
+        case TOKEN_HOLD:
+            if (waited)
+                return 0;
+            waited = 1;
+            continue;
+        default:
+            break;
+        }
         if (s->off < s->buf.len) {
             size_t n = s->buf.len - s->off;
             if (n > max)
@@ -314,18 +501,24 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
             s->off += n;
             if (s->off == s->buf.len) {
                 s->off = 0;
-                glint_buf_clear(&s->buf);
+                /* keep a usual buffer, not one a large event grew */
+                if (s->buf.cap > 2 * EVENTS_STREAM_BUF)
+                    glint_buf_free(&s->buf);
+                else
+                    glint_buf_clear(&s->buf);
             }
             clock_gettime(CLOCK_MONOTONIC, &s->last_write);
             return (ssize_t)n;
         }
 
         pthread_mutex_lock(&ev->lock);
-        stopping = ev->stopping || s->hub->revoked != s->revoked;
+        stopping = ev->stopping;
         gen = s->hub->gen;
         presence = s->hub->presence;
         st = ev->st;
-        if (!stopping && s->started && gen == s->seen_gen && presence == s->seen_presence) {
+        recheck = s->token[0] && (s->hub->revoked != s->revoked || s->hub->revoking);
+        if (!stopping && !recheck && s->started && gen == s->seen_gen &&
+            presence == s->seen_presence) {
             struct timespec until;
             if (waited) { /* a whole wait without news: let the caller decide */
                 pthread_mutex_unlock(&ev->lock);
@@ -340,13 +533,16 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
             }
             pthread_cond_timedwait(&ev->cond, &ev->lock, &until);
             waited = 1;
-            stopping = ev->stopping || s->hub->revoked != s->revoked;
+            stopping = ev->stopping;
             gen = s->hub->gen;
             presence = s->hub->presence;
+            recheck = s->token[0] && (s->hub->revoked != s->revoked || s->hub->revoking);
         }
         pthread_mutex_unlock(&ev->lock);
         if (stopping)
             return EVENTS_STREAM_END;
+        if (recheck)
+            continue; /* the token is checked at the top */
 
         if (!s->started) {
             s->started = 1;
@@ -357,11 +553,10 @@ ssize_t events_stream_next(ev_stream *s, char *out, size_t max)
         if (gen != s->seen_gen) {
             /* Note the generation before reading: a publish after this
              * point bumps it again and triggers another read. */
-            int n;
-            n = stream_read_log(s, st);
-            if (n < 0)
+            int more = stream_read_log(s, st);
+            if (more < 0)
                 return EVENTS_STREAM_ERROR;
-            if (n < EVENTS_BATCH)
+            if (!more)
                 s->seen_gen = gen;
         }
         if (presence != s->seen_presence) {
@@ -408,6 +603,11 @@ void events_stream_close(ev_stream *s)
             *p = s->next;
             break;
         }
+    s->hub->nlisteners--;
+    if (s->client) {
+        s->client->streams--;
+        events_client_release(ev, s->client);
+    }
     s->hub->presence++;
     pthread_cond_broadcast(&ev->cond);
     events_hub_release(ev, s->hub);
@@ -436,18 +636,58 @@ static void events_clean_name(const char *in, char *out)
         snprintf(out, EVENTS_NAME_MAX + 1, "anonymous");
 }
 
+/* Count the stream in for its session and client, within the limits;
+ * ev->lock held.  0, GLINT_EBUSY or GLINT_ENOMEM (err says which). */
+static int events_admit(events *ev, ev_stream *s, const char *session, const char *client,
+                        glint_err *err)
+{
+    s->hub = events_hub(ev, session, 1);
+    if (!s->hub)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory opening an event stream");
+    if (s->hub->nlisteners >= ev->max_per_session) {
+        glint_err_set(err, GLINT_EBUSY,
+                      "session %.32s already has %u event streams open, the most one session "
+                      "may have (glintd --max-streams-per-session %u)",
+                      session, s->hub->nlisteners, ev->max_per_session);
+        events_hub_release(ev, s->hub);
+        return glint_err_kind(err, "too-many-streams");
+    }
+    if (client && client[0]) {
+        s->client = events_client(ev, client);
+        if (!s->client) {
+            events_hub_release(ev, s->hub);
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory opening an event stream");
+        }
+        if (s->client->streams >= ev->max_per_client) {
+            glint_err_set(err, GLINT_EBUSY,
+                          "this client (%.64s) already has %u event streams open, the most one "
+                          "client may have (glintd --max-streams-per-client %u)",
+                          client, s->client->streams, ev->max_per_client);
+            events_client_release(ev, s->client);
+            events_hub_release(ev, s->hub);
+            return glint_err_kind(err, "too-many-streams");
+        }
+        s->client->streams++;
+    }
+    s->hub->nlisteners++;
+    return 0;
+}
+
 int events_stream_open(events *ev, const char *session, long long since, const char *name,
-                       int fd, ev_stream **out)
+                       int fd, const events_access *acc, ev_stream **out, glint_err *err)
 {
     ev_stream *s;
     char id[33];
     int rc;
 
     *out = NULL;
+    if (acc && acc->token && (!acc->check || strlen(acc->token) > EVENTS_TOKEN_MAX))
+        return glint_err_set(err, GLINT_EINVAL, "events: a token stream needs a check and a "
+                                                "token of at most %d bytes", EVENTS_TOKEN_MAX);
     s = calloc(1, sizeof *s);
     if (!s)
-        return GLINT_ENOMEM;
-    if ((rc = glint_id_new(id, NULL))) {
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory opening an event stream");
+    if ((rc = glint_id_new(id, err))) {
         free(s);
         return rc;
     }
@@ -458,15 +698,21 @@ int events_stream_open(events *ev, const char *session, long long since, const c
     s->id[16] = '\0';
     events_clean_name(name, s->name);
     clock_gettime(CLOCK_MONOTONIC, &s->last_write);
+    if (acc && acc->token) {
+        snprintf(s->token, sizeof s->token, "%s", acc->token);
+        s->check = acc->check;
+        s->check_ctx = acc->ctx;
+    }
 
     pthread_mutex_lock(&ev->lock);
-    s->hub = events_hub(ev, session, 1);
-    if (!s->hub) {
+    if ((rc = events_admit(ev, s, session, acc ? acc->client : NULL, err))) {
         pthread_mutex_unlock(&ev->lock);
         free(s);
-        return GLINT_ENOMEM;
+        return rc;
     }
-    s->revoked = s->hub->revoked;
+    /* the token was checked before the stream joined: a change of the
+     * tokens in between would go unseen, so check it again first thing */
+    s->revoked = s->hub->revoked - (s->token[0] ? 1 : 0);
     s->next = s->hub->listeners;
     s->hub->listeners = s;
     s->hub->presence++;
@@ -498,18 +744,34 @@ static void stream_free(void *cls)
 }
 
 http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
-                        const char *client_name)
+                        const char *client_name, const events_access *acc)
 {
     const union MHD_ConnectionInfo *ci;
+    events_access who = {0};
+    char client[HTTP_CLIENT_KEY_MAX];
     ev_stream *s;
+    glint_err e;
     http_resp r;
     int fd = -1;
 
     ci = MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CONNECTION_FD);
     if (ci)
         fd = ci->connect_fd;
-    if (events_stream_open(ev, session, since, client_name, fd, &s))
-        return http_problem(500, NULL, "out of memory opening an event stream");
+    if (acc)
+        who = *acc;
+    http_client_key(req, client, sizeof client);
+    who.client = client;
+    if (events_stream_open(ev, session, since, client_name, fd, &who, &s, &e)) {
+        if (e.code == GLINT_EBUSY) {
+            r = http_problem(429, "too-many-streams", "%s", e.msg);
+            http_header(&r, "Retry-After", "5");
+            /* a client that opens streams without end gets no connection to keep */
+            http_header(&r, MHD_HTTP_HEADER_CONNECTION, "close");
+            return r;
+        }
+        log_line("events: %s", e.msg);
+        return http_problem(500, NULL, "cannot open the event stream: %s", e.msg);
+    }
     r = http_stream(200, "text/event-stream", stream_read, s, stream_free);
     if (!r.r) {
         events_stream_close(s);

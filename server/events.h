@@ -22,23 +22,50 @@
  * (data is one line of JSON: proto/schemas/SessionEvent.json;
  * presence: proto/schemas/Presence.json), a "retry: 2000" first, and a
  * ": keep-alive" comment every EVENTS_KEEPALIVE_S seconds of silence.
- * A stream ends when the client goes away or the daemon stops. */
+ * A stream ends when the client goes away or the daemon stops, and a
+ * stream admitted by a session token (events_access.token) when that
+ * token stops granting access: its tokens replaced (events_revoke_end,
+ * or another replica's "revoke"), its links expired.  Such a stream checks
+ * its token again, against the stored session, before it sends anything
+ * more whenever the session's tokens changed or its expiry passed, and
+ * sends nothing once the token is refused: what it had read but not sent
+ * is dropped.
+ *
+ * Memory.  A stream reads the log only when it has sent everything it
+ * read, at most EVENTS_STREAM_BUF bytes of event data at a time (one event
+ * when a single one is larger), so a client that stops reading holds that
+ * much and no more: the rest waits in the store, and libmicrohttpd drops
+ * the connection once it has taken nothing for its idle timeout.  At most
+ * max_per_session streams are open on one session and max_per_client for
+ * one client (events_set_limits): beyond, events_stream answers 429
+ * "too-many-streams". */
 #ifndef GLINTD_EVENTS_H
 #define GLINTD_EVENTS_H
 
 #include <jansson.h>
 #include <sys/types.h>
+#include <time.h>
+
+#include "err.h"
 
 #include "http.h"
 
 #define EVENTS_KEEPALIVE_S 15
+#define EVENTS_STREAM_BUF (64u << 10)          /* event data read at a time */
+#define EVENTS_MAX_PER_SESSION_DEFAULT 32      /* glintd --max-streams-per-session */
+#define EVENTS_MAX_PER_CLIENT_DEFAULT 16       /* glintd --max-streams-per-client */
 
 typedef struct events events;
 struct store;
 
-/* st: the store holding the sessions' event logs (it must outlive ev). */
+/* st: the store holding the sessions' event logs (it must outlive ev).
+ * The limits start at their defaults. */
 int events_open(struct store *st, events **out);
 void events_close(events *ev);
+
+/* Streams open at once on one session and for one client (0: the
+ * default).  Call before streams open. */
+void events_set_limits(events *ev, unsigned max_per_session, unsigned max_per_client);
 
 /* End every stream promptly (call before http_server_stop, so stopping
  * does not wait for the streams' next keep-alive). */
@@ -59,12 +86,19 @@ void events_notify(events *ev, const char *session);
  * could not be heard for a while). */
 void events_notify_all(events *ev);
 /* For store_listen (ctx: the events): another process's change of a
- * session: "log" wakes its streams, "revoke" ends them; session NULL:
- * anything may have changed, every stream reads its log again. */
+ * session: "log" wakes its streams, "revoke" has them check their tokens;
+ * session NULL: anything may have changed, every stream reads its log and
+ * checks its token again. */
 void events_on_store_change(void *ctx, const char *session, const char *what);
-/* The session's tokens were revoked: every stream open now ends (a client
- * still holding a valid token reconnects with it, from its Last-Event-ID). */
-void events_revoke(events *ev, const char *session);
+/* The session's tokens or their expiry are about to change: its streams
+ * admitted by a token send nothing until events_revoke_end (always call
+ * it after, whether the change was stored or not). */
+void events_revoke_begin(events *ev, const char *session);
+/* The change is over (stored, or not): every stream of the session
+ * admitted by a token checks it again and ends if it no longer grants
+ * access (a client that still holds a valid token reconnects with it,
+ * from its Last-Event-ID). */
+void events_revoke_end(events *ev, const char *session);
 
 /* ---- a stream without its transport ------------------------------------------ */
 /* The core of one client's stream, which events_stream() serves over HTTP
@@ -76,16 +110,38 @@ void events_revoke(events *ev, const char *session);
 
 typedef struct ev_stream ev_stream;
 
+/* Whether `token` still grants reading `session` (0), or not (non-zero:
+ * replaced, expired, the session gone, the store unreadable).  OUT:
+ * *expires: when it stops granting it by itself (0: never). */
+typedef int (*events_check_fn)(void *ctx, const char *session, const char *token,
+                               time_t *expires);
+
+/* Who a stream serves (every member may be NULL). */
+typedef struct events_access {
+    /* The session token the stream was admitted with, checked with
+     * check(ctx, ...) as said above; NULL: admitted otherwise (the API
+     * key), never checked. */
+    const char *token;
+    events_check_fn check;
+    void *ctx;
+    /* The client, for the per-client limit (http_client_key); NULL or "":
+     * not counted. */
+    const char *client;
+} events_access;
+
 /* Join the session's listeners (every listener of the session gets a new
  * presence event) and start after sequence number `since` (<= 0: the
  * whole log).  name: shown in presence (may be NULL), cleaned: control
  * characters dropped, at most EVENTS_NAME_MAX bytes of valid UTF-8,
  * "anonymous" when nothing is left.  fd: the client's socket, polled for
- * hang-ups, or -1.  The session is not checked (the caller has).  OUT:
- * *out, released with events_stream_close.  0, GLINT_ENOMEM, or the error
- * of the random id. */
+ * hang-ups, or -1.  acc: who it serves (NULL: no token, no client).  The
+ * session is not checked (the caller has); a token is checked again
+ * before the first byte.  OUT: *out, released with events_stream_close.
+ * 0; GLINT_EBUSY (kind "too-many-streams", the message naming the limit)
+ * when the session or the client has its most streams open; GLINT_ENOMEM;
+ * or the error of the random id. */
 int events_stream_open(events *ev, const char *session, long long since, const char *name,
-                       int fd, ev_stream **out);
+                       int fd, const events_access *acc, ev_stream **out, glint_err *err);
 
 /* The stream's next bytes into out[0..max) (max > 0), in wire format: the
  * "retry:" preamble first, then the log after `since` and the presence
@@ -102,9 +158,11 @@ void events_stream_close(ev_stream *s);
 
 /* An SSE response for a session (used by GET /sessions/{id}/events):
  * replays the log after `since`, then follows it live.  client_name (may
- * be NULL) is shown in presence.  The caller has checked access.  The
- * response streams with events_stream_open / _next / _close above. */
+ * be NULL) is shown in presence.  The caller has checked access; acc says
+ * with what (its client is filled in here).  429 too-many-streams beyond
+ * the limits.  The response streams with events_stream_open / _next /
+ * _close above. */
 http_resp events_stream(events *ev, http_req *req, const char *session, long long since,
-                        const char *client_name);
+                        const char *client_name, const events_access *acc);
 
 #endif

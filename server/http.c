@@ -128,6 +128,7 @@ const char *http_status_title(int status)
     case 413: return "Content Too Large";
     case 414: return "URI Too Long";
     case 415: return "Unsupported Media Type";
+    case 421: return "Misdirected Request";
     case 422: return "Unprocessable Content";
     case 429: return "Too Many Requests";
     case 431: return "Request Header Fields Too Large";
@@ -208,6 +209,27 @@ const char *http_header_in(const http_req *req, const char *name)
     return MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND, name);
 }
 
+void http_client_key(const http_req *req, char *out, size_t len)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+
+    out[0] = '\0';
+    if (sa && sa->sa_family == AF_INET) {
+        inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, out, (socklen_t)len);
+    } else if (sa && sa->sa_family == AF_INET6) {
+        struct in6_addr a = ((const struct sockaddr_in6 *)sa)->sin6_addr;
+        size_t n;
+        if (IN6_IS_ADDR_V4MAPPED(&a)) {
+            inet_ntop(AF_INET, a.s6_addr + 12, out, (socklen_t)len);
+            return;
+        }
+        memset(a.s6_addr + 8, 0, 8); /* the /64, as the front counts */
+        if (inet_ntop(AF_INET6, &a, out, (socklen_t)len) && (n = strlen(out)) + 4 < len)
+            memcpy(out + n, "/64", 4);
+    }
+}
 
 /* ---- routing ------------------------------------------------------------------------ */
 
@@ -340,6 +362,26 @@ static http_resp check_request(const req_ctx *ctx, struct MHD_Connection *conn)
     return none;
 }
 
+/* The Host rule (http_config.allow_host): resp.r is NULL when the request
+ * names a host this daemon serves, or is a health check. */
+static http_resp check_host(const http_server *s, struct MHD_Connection *conn,
+                            const char *method, const char *url)
+{
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    http_resp none = {0, NULL};
+
+    /* no Host (HTTP/1.0): not a browser, which always sends one */
+    if (!host || http_host_served(host, s->cfg.allow_host))
+        return none;
+    if ((strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0) &&
+        (strcmp(url, "/healthz") == 0 || strcmp(url, "/api/v1/healthz") == 0))
+        return none;
+    return http_problem(421, "host-not-served",
+                        "glintd does not serve the host name in \"Host: %.200s\": it answers "
+                        "IP addresses, localhost and the names given with --allow-host (a page "
+                        "on another name that resolves to this machine is refused)", host);
+}
+
 /* Seconds left before the body falls behind min_body_rate (after its grace
  * of header_timeout_s); <= 0 when it has. */
 static double body_slack(const http_server *s, const req_ctx *ctx, double now)
@@ -399,6 +441,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         ctx->started = 1;
         snprintf(ctx->method, sizeof ctx->method, "%s", method);
         resp = check_request(ctx, conn);
+        if (!resp.r && s->cfg.check_host)
+            resp = check_host(s, conn, method, url);
         if (resp.r) {
             ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
             MHD_destroy_response(resp.r);

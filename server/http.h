@@ -100,6 +100,18 @@ typedef struct http_config {
      * (OPTIONS) are answered.  The daemon's own origin is the request's
      * Host under http or https. */
     const char *allow_origin;
+    /* Host names served besides IP address literals and "localhost"
+     * (comma-separated, a name or name:port; "*": any; NULL: none), and
+     * whether to check (check_host 1).  A request whose Host names
+     * anything else is refused, whatever its method (421,
+     * "host-not-served"), except GET and HEAD of the health checks: a page
+     * on some name that its DNS points at this machine (DNS rebinding) is
+     * then the browser's own origin for that name, and its Origin the
+     * same, so the Origin rule above cannot tell it from the studio; the
+     * Host can.  An address literal is always served: no name was
+     * resolved to reach it, so no page elsewhere can send it. */
+    const char *allow_host;
+    int check_host;
     int quiet;              /* no request log lines */
     /* This process's name among replicas behind one proxy, sent on every
      * response as X-Glint-Replica (NULL: no header). */
@@ -152,8 +164,10 @@ http_resp http_stream(int status, const char *content_type, MHD_ContentReaderCal
 void http_header(http_resp *r, const char *name, const char *value);
 
 /* A file of the static directory `dir` (NULL: none) for GET `path`
- * ("/" is /index.html; ".." refused), revalidated on every load
- * (Cache-Control: no-cache, Last-Modified / If-Modified-Since `ims`). */
+ * ("/" is /index.html), revalidated on every load (Cache-Control:
+ * no-cache, Last-Modified / If-Modified-Since `ims`).  Only regular files
+ * reached from `dir` without a symbolic link, "." or ".." on the way are
+ * served (404 otherwise), so a link in the tree leads nowhere outside it. */
 http_resp http_static_serve(const char *dir, const char *path, const char *ims);
 
 /* ---- request helpers ------------------------------------------------------------ */
@@ -163,6 +177,13 @@ const char *http_query(const http_req *req, const char *name);
 
 /* Request header or NULL. */
 const char *http_header_in(const http_req *req, const char *name);
+
+/* The client a request came from, as the connection front counts them:
+ * its IPv4 address, or its IPv6 address's /64 ("2001:db8:1:2::/64"),
+ * into out[0..len) (at least HTTP_CLIENT_KEY_MAX bytes); "" when unknown.
+ * Behind a proxy this is the proxy. */
+#define HTTP_CLIENT_KEY_MAX 64
+void http_client_key(const http_req *req, char *out, size_t len);
 
 /* Request counters for /metrics (api_core.c). */
 typedef struct http_stats {

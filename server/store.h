@@ -221,6 +221,28 @@ int store_event_append(store *s, const char *session, const char *type, int view
  * *last_seq (may be NULL): the session's last sequence number. */
 int store_events_since(store *s, const char *session, int64_t since, int limit,
                        json_t **array, int64_t *last_seq, glint_err *err);
+/* One row of the event log as stored: `data` is the compact JSON text of
+ * the event's data (one line, as json_text writes it). */
+typedef struct store_event_row {
+    int64_t seq;
+    const char *type;
+    int64_t view;           /* -1: none */
+    const char *data;
+    const char *created;    /* ISO time */
+} store_event_row;
+
+/* Called for each row; the strings are valid during the call only.
+ * Non-zero stops the read and is returned. */
+typedef int (*store_event_fn)(void *ctx, const store_event_row *row, glint_err *err);
+
+/* The events after `since` handed to fn in order, as text, without
+ * building a JSON tree (an event stream's read costs the text it keeps):
+ * at most `limit` rows (<= 0: no limit) and, after the first, no more once
+ * the rows' data text reaches max_bytes (0: no limit).  fn runs with the
+ * store locked: it must only copy.  OUT: *more: rows were left for the
+ * next read.  GLINT_ENOTFOUND for an unknown session. */
+int store_events_each(store *s, const char *session, int64_t since, int limit, size_t max_bytes,
+                      store_event_fn fn, void *ctx, int *more, glint_err *err);
 
 /* ---- materials ----------------------------------------------------------------------- */
 /* doc: the API's material object; files (material.json, factors.*, shader

@@ -638,6 +638,68 @@ int store_events_since(store *s, const char *session, int64_t since, int limit,
     return store_log_read(s, session, since, limit, 0, array, NULL, last_seq, err);
 }
 
+int store_events_each(store *s, const char *session, int64_t since, int limit, size_t max_bytes,
+                      store_event_fn fn, void *ctx, int *more, glint_err *err)
+{
+    db_stmt *st = NULL;
+    size_t bytes = 0;
+    int rc = 0, step, count = 0;
+    int64_t last;
+
+    *more = 0;
+    if (!glint_id_valid(session))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no session with id \"%.40s\"",
+                             session ? session : "");
+    pthread_mutex_lock(&s->lock);
+    if ((rc = db_begin_read(s->db, err)))
+        goto out;
+    if ((rc = store_tx_last_seq(s, session, 0, &last, err))) /* ENOTFOUND for unknown ones */
+        goto out;
+    st = store_prep(s, "SELECT seq, type, view, data, created FROM events WHERE session = ?1 "
+                       "AND seq > ?2 ORDER BY seq LIMIT ?3",
+                    err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, session);
+    db_bind_int(st, 2, since);
+    db_bind_int(st, 3, limit > 0 ? (int64_t)limit + 1 : INT64_MAX);
+    while ((step = db_step(st, "reading", err)) == DB_ROW) {
+        store_event_row row;
+        if ((limit > 0 && count == limit) || (max_bytes && count > 0 && bytes >= max_bytes)) {
+            *more = 1;
+            break;
+        }
+        row.seq = db_col_int(st, 0);
+        row.type = db_col_text(st, 1);
+        row.view = db_col_null(st, 2) ? -1 : db_col_int(st, 2);
+        row.data = db_col_text(st, 3);
+        row.created = db_col_text(st, 4);
+        if (!row.type || !row.data || !row.created) {
+            rc = glint_err_set(err, GLINT_EFORMAT, "database: event %lld of session %s lacks a "
+                                                   "column", (long long)row.seq, session);
+            goto out;
+        }
+        bytes += strlen(row.data);
+        if ((rc = fn(ctx, &row, err)))
+            goto out;
+        count++;
+    }
+    if (step < 0)
+        rc = step;
+out:
+    db_finalize(st);
+    if (db_in_tx(s->db)) {
+        if (rc)
+            db_rollback(s->db);
+        else
+            db_commit(s->db, NULL);
+    }
+    pthread_mutex_unlock(&s->lock);
+    return rc;
+}
+
 /* Remove what a crash can leave behind under blobs/sessions: painting
  * files no row names (written, then the commit never happened, or
  * committed and the old file not yet removed) and temporary files of

@@ -2,7 +2,13 @@
 expire (refused after, renewed by the scene's owner key), tokens revoked
 and replaced (the old ones refused, an open event stream of an old token
 ended, the new ones working), who may do it, what is refused, and the
-revocation surviving a restart (it is stored before the answer)."""
+revocation surviving a restart (it is stored before the answer).
+
+Event streams last as long as the token they were opened with: one whose
+links expire ends, one whose token is replaced ends and carries nothing
+posted after, one whose token is kept (the other link replaced) goes on.
+Streams end by themselves: the tests wait for that with generous timeouts
+that only catch a stream that never ends."""
 import os
 import sys
 import threading
@@ -12,6 +18,7 @@ import requests
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import run_tests  # noqa: E402
+from test_sessions_live import SSE  # noqa: E402
 
 API = "/api/v1"
 OWNER = {"X-Glint-Owner": "share-links-owner-0123456789"}
@@ -90,6 +97,68 @@ def test_revoked_tokens_are_refused_and_their_streams_end(d):
     m = tokens(d, n, {"X-Glint-Token": n["paint_token"]}, revoke="view").json()
     assert m["paint_token"] == n["paint_token"] and m["view_token"] != n["view_token"]
     problem(get(d, n, n["view_token"]), 403, "wrong-token")
+
+
+def stream(d, s, token):
+    sse = SSE("%s%s/sessions/%s/events?token=%s" % (d.base, API, s["id"], token))
+    assert sse.status == 200, sse.status
+    sse.until(lambda e: e[1] == "presence")
+    return sse
+
+
+def drain(sse, timeout=30):
+    """The events a stream carries until it ends (None if it did not end
+    within `timeout`, which only a stream that never ends reaches)."""
+    got, end = [], time.time() + timeout
+    while time.time() < end:
+        try:
+            e = sse.next(timeout=max(0.01, end - time.time()))
+        except Exception:
+            break
+        if e is None:
+            return got
+        got.append(e)
+    sse.close()
+    return None
+
+
+def stroke(x):
+    return {"color": [1, 0, 0], "diameter": 3, "points": [[x, 5]], "tag": "after-%d" % x}
+
+
+def test_a_stream_ends_when_its_links_expire(d):
+    s = new_session(d, expires_in=2)
+    sse = stream(d, s, s["view_token"])
+    assert drain(sse) is not None, "the stream of an expired link was still open 30 s later"
+    problem(get(d, s, s["view_token"]), 403, "link-expired")
+    # links renewed by the owner: a stream of the new token goes on
+    n = tokens(d, s, OWNER, expires_in=None).json()
+    sse = stream(d, n, n["view_token"])
+    d.post("%s/sessions/%s/views/0/strokes" % (API, s["id"]), status=200,
+           headers={"X-Glint-Token": n["paint_token"]}, json={"strokes": [stroke(1)]})
+    assert sse.until(lambda e: e[1] == "stroke")[2]["data"]["tag"] == "after-1"
+    sse.close()
+
+
+def test_a_replaced_token_ends_its_streams_and_they_carry_nothing_after(d):
+    s = new_session(d)
+    paint, view = stream(d, s, s["paint_token"]), stream(d, s, s["view_token"])
+    # only the paint link is replaced: the view token's stream goes on
+    n = tokens(d, s, {"X-Glint-Token": s["paint_token"]}, revoke="paint").json()
+    assert n["view_token"] == s["view_token"]
+    d.post("%s/sessions/%s/views/0/strokes" % (API, s["id"]), status=200,
+           headers={"X-Glint-Token": n["paint_token"]}, json={"strokes": [stroke(2)]})
+    after = drain(paint)
+    assert after is not None, "the replaced paint token's stream was still open 30 s later"
+    assert not [e for e in after if e[1] == "stroke"], after
+    assert view.until(lambda e: e[1] == "stroke")[2]["data"]["tag"] == "after-2"
+    # now the view link too: its stream ends, and the stroke after is not on it
+    tokens(d, n, {"X-Glint-Token": n["paint_token"]}, revoke="view")
+    d.post("%s/sessions/%s/views/0/strokes" % (API, s["id"]), status=200,
+           headers={"X-Glint-Token": n["paint_token"]}, json={"strokes": [stroke(3)]})
+    after = drain(view)
+    assert after is not None, "the replaced view token's stream was still open 30 s later"
+    assert not [e for e in after if e[1] == "stroke"], after
 
 
 def test_who_may_and_what_is_refused(d):

@@ -1,8 +1,9 @@
 /* Tests of glintd's session event streams (server/events.h), driven through
  * the transport-free core (events_stream_open / _next / _close) over a real
  * store: replay from a sequence number, live events, presence and its
- * names, what events_publish writes to the log, and the ends of a stream
- * (shutdown, a client that hangs up).  The bytes are parsed as a
+ * names, what events_publish writes to the log, the ends of a stream
+ * (shutdown, a client that hangs up, its token refused) and the limits on
+ * open streams.  The bytes are parsed as a
  * server-sent-events client would. */
 #include <pthread.h>
 #include <stdatomic.h>
@@ -224,7 +225,7 @@ TEST(replay_after_a_sequence_number)
     ASSERT_OK(store_painting_put(f.st, f.session, 1, "exr", 3, NULL, &last, NULL));
     ASSERT_EQ(last, 5);
 
-    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "ann", -1, &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "ann", -1, NULL, &s, NULL));
     reader_init(&r, s);
     for (int seq = 3; seq <= 5; seq++) {
         ASSERT_EQ(next_event(&r, &e, 5.0), 1);
@@ -256,7 +257,7 @@ TEST(replay_after_a_sequence_number)
     events_stream_close(s);
 
     /* from the start, in small pieces; beyond the end: nothing */
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, NULL, &s, NULL));
     reader_init(&r, s);
     r.chunk = 7;
     for (int seq = 1; seq <= 5; seq++) {
@@ -265,7 +266,7 @@ TEST(replay_after_a_sequence_number)
         json_decref(e.data);
     }
     events_stream_close(s);
-    ASSERT_OK(events_stream_open(f.ev, f.session, 99, NULL, -1, &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 99, NULL, -1, NULL, &s, NULL));
     reader_init(&r, s);
     ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
     events_stream_close(s);
@@ -284,7 +285,7 @@ TEST(replay_longer_than_one_batch)
     ASSERT_OK(add_strokes(&f, f.session, 150, &last));
     ASSERT_OK(add_strokes(&f, f.session, 50, &last));
     ASSERT_EQ(last, 200);
-    ASSERT_OK(events_stream_open(f.ev, f.session, 10, NULL, -1, &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 10, NULL, -1, NULL, &s, NULL));
     reader_init(&r, s);
     for (int seq = 11; seq <= 200; seq++) {
         ASSERT_EQ(next_log_event(&r, &e, 5.0), 1);
@@ -348,9 +349,9 @@ TEST(live_events_wake_every_stream_of_the_session)
     int64_t last;
     sse e;
     ASSERT_OK(fx_open(&f));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &a));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "b", -1, &b));
-    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "o", -1, &o));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, NULL, &a, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "b", -1, NULL, &b, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "o", -1, NULL, &o, NULL));
     memset(&la, 0, sizeof la);
     memset(&lb, 0, sizeof lb);
     reader_init(&la.r, a);
@@ -403,8 +404,8 @@ TEST(presence_when_listeners_come_and_go)
     sse e;
     char longname[101], utf8[70], expect[70];
     ASSERT_OK(fx_open(&f));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "Ann\x01\tie\x7f", -1, &a));
-    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "elsewhere", -1, &o));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "Ann\x01\tie\x7f", -1, NULL, &a, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "elsewhere", -1, NULL, &o, NULL));
     reader_init(&ra, a);
     reader_init(&ro, o);
     ASSERT_EQ(until_presence(&ra, 1, &e, 5.0), 1);
@@ -422,10 +423,10 @@ TEST(presence_when_listeners_come_and_go)
     strcpy(utf8 + 63, "\xc3\xa9"); /* 65 bytes: the cut falls inside the last character */
     memcpy(expect, utf8, 63);
     expect[63] = '\0';
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, &b));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, longname, -1, &c));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, utf8, -1, &d));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "\x01\x02\x1b", -1, &x));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, NULL, -1, NULL, &b, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, longname, -1, NULL, &c, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, utf8, -1, NULL, &d, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "\x01\x02\x1b", -1, NULL, &x, NULL));
     ASSERT_EQ(until_presence(&ra, 5, &e, 5.0), 1);
     ASSERT(has_client(e.data, "Annie"));
     ASSERT(has_client(e.data, "anonymous")); /* no name */
@@ -494,7 +495,7 @@ TEST(publish_appends_fit_to_the_log_and_only_wakes_for_strokes)
     char unknown[33];
     ASSERT_OK(fx_open(&f));
     ASSERT_OK(add_strokes(&f, f.session, 2, &last));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "r", -1, &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 2, "r", -1, NULL, &s, NULL));
     reader_init(&r, s);
     ASSERT_EQ(until_presence(&r, 1, &e, 5.0), 1);
     json_decref(e.data);
@@ -568,8 +569,8 @@ TEST(shutdown_ends_streams_promptly)
     double t0;
     char buf[256];
     ASSERT_OK(fx_open(&f));
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &a));
-    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "b", -1, &b));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, NULL, &a, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "b", -1, NULL, &b, NULL));
     reader_init(&xa.r, a);
     reader_init(&xb.r, b);
     ASSERT_EQ(pthread_create(&ta, NULL, ender_main, &xa), 0);
@@ -584,7 +585,7 @@ TEST(shutdown_ends_streams_promptly)
     ASSERT_LT(xa.ended_at - t0, 1.0);
     ASSERT_LT(xb.ended_at - t0, 1.0);
     /* a stream opened afterwards ends at once */
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "late", -1, &late));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "late", -1, NULL, &late, NULL));
     t0 = glint_now();
     ASSERT_EQ(events_stream_next(late, buf, sizeof buf), EVENTS_STREAM_END);
     ASSERT_LT(glint_now() - t0, 1.0);
@@ -604,7 +605,7 @@ TEST(stream_ends_when_the_client_hangs_up)
     double t0;
     ASSERT_OK(fx_open(&f));
     ASSERT_EQ(socketpair(AF_UNIX, SOCK_STREAM, 0, sv), 0);
-    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "gone", sv[0], &s));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "gone", sv[0], NULL, &s, NULL));
     reader_init(&r, s);
     ASSERT_EQ(until_presence(&r, 1, &e, 5.0), 1);
     json_decref(e.data);
@@ -622,6 +623,88 @@ TEST(stream_ends_when_the_client_hangs_up)
     fx_close(&f);
 }
 
+/* ---- streams of a token, and the limits ------------------------------------------------ */
+
+/* events_check_fn: *ctx (an atomic_int) says whether the token is refused. */
+static int check_flag(void *ctx, const char *session, const char *token, time_t *expires)
+{
+    (void)session;
+    *expires = 0;
+    return strcmp(token, "the-token") != 0 || atomic_load((atomic_int *)ctx) ? GLINT_EDENIED : 0;
+}
+
+TEST(a_token_stream_sends_nothing_once_its_token_is_refused)
+{
+    fixture f;
+    ev_stream *s, *key;
+    static atomic_int refused;
+    events_access acc = {"the-token", check_flag, &refused, NULL};
+    reader r, rk;
+    sse e;
+    int64_t last;
+    ASSERT_OK(fx_open(&f));
+    atomic_store(&refused, 0);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "tok", -1, &acc, &s, NULL));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "key", -1, NULL, &key, NULL));
+    reader_init(&r, s);
+    reader_init(&rk, key);
+    ASSERT_EQ(until_presence(&r, 2, &e, 5.0), 1);
+    json_decref(e.data);
+    ASSERT_EQ(until_presence(&rk, 2, &e, 5.0), 1);
+    json_decref(e.data);
+    /* while the tokens change, the token's stream sends nothing, even what
+     * was appended meanwhile; once refused, it ends without it */
+    events_revoke_begin(f.ev, f.session);
+    ASSERT_OK(add_strokes(&f, f.session, 2, &last));
+    events_notify(f.ev, f.session);
+    ASSERT_EQ(next_log_event(&r, &e, 0.3), 0);
+    atomic_store(&refused, 1);
+    events_revoke_end(f.ev, f.session);
+    ASSERT_EQ(next_log_event(&r, &e, 5.0), -1);
+    ASSERT_EQ(r.end, EVENTS_STREAM_END);
+    ASSERT(strstr(r.buf, "event: stroke") == NULL);
+    /* a stream opened without a token goes on, and has the strokes */
+    ASSERT_EQ(next_log_event(&rk, &e, 5.0), 1);
+    ASSERT(strcmp(e.type, "stroke") == 0 && e.id == last - 1);
+    json_decref(e.data);
+    events_stream_close(s);
+    /* a token refused before its stream's first byte: nothing at all */
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "late", -1, &acc, &s, NULL));
+    reader_init(&r, s);
+    ASSERT_EQ(next_event(&r, &e, 5.0), -1);
+    ASSERT_EQ(r.len, 0);
+    events_stream_close(s);
+    events_stream_close(key);
+    fx_close(&f);
+}
+
+TEST(streams_per_session_and_per_client_are_limited)
+{
+    fixture f;
+    ev_stream *a, *b, *c, *x = NULL;
+    events_access ca = {NULL, NULL, NULL, "192.0.2.1"}, cb = ca, cc = ca;
+    glint_err err;
+    cb.client = "192.0.2.2";
+    cc.client = "192.0.2.3";
+    ASSERT_OK(fx_open(&f));
+    events_set_limits(f.ev, 2, 1);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &ca, &a, NULL));
+    ASSERT_EQ(events_stream_open(f.ev, f.other, 0, "a2", -1, &ca, &x, &err), GLINT_EBUSY);
+    ASSERT(x == NULL && strcmp(err.kind, "too-many-streams") == 0);
+    ASSERT(strstr(err.msg, "192.0.2.1") && strstr(err.msg, "--max-streams-per-client 1"));
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "b", -1, &cb, &b, NULL));
+    ASSERT_EQ(events_stream_open(f.ev, f.session, 0, "c", -1, &cc, &x, &err), GLINT_EBUSY);
+    ASSERT(strstr(err.msg, f.session) && strstr(err.msg, "--max-streams-per-session 2"));
+    /* another session has room; a closed stream makes room */
+    ASSERT_OK(events_stream_open(f.ev, f.other, 0, "c", -1, &cc, &c, NULL));
+    events_stream_close(c);
+    events_stream_close(a);
+    ASSERT_OK(events_stream_open(f.ev, f.session, 0, "a", -1, &ca, &a, NULL));
+    events_stream_close(a);
+    events_stream_close(b);
+    fx_close(&f);
+}
+
 TEST_LIST{
     TEST_ENTRY(replay_after_a_sequence_number),
     TEST_ENTRY(replay_longer_than_one_batch),
@@ -630,6 +713,8 @@ TEST_LIST{
     TEST_ENTRY(publish_appends_fit_to_the_log_and_only_wakes_for_strokes),
     TEST_ENTRY(shutdown_ends_streams_promptly),
     TEST_ENTRY(stream_ends_when_the_client_hangs_up),
+    TEST_ENTRY(a_token_stream_sends_nothing_once_its_token_is_refused),
+    TEST_ENTRY(streams_per_session_and_per_client_are_limited),
 };
 
 TEST_MAIN()
