@@ -184,13 +184,13 @@ int env_load(const char *path, env_map *out, glint_err *err)
     return rc;
 }
 
-int env_load_mem(const void *data, size_t len, const char *name, int max_dim, env_map *out,
-                 glint_err *err)
+int env_load_mem(const void *data, size_t len, const char *name, int max_dim,
+                 img_header_check check, void *cls, env_map *out, glint_err *err)
 {
     img im;
     int rc;
     memset(out, 0, sizeof *out);
-    if ((rc = img_read_mem_max(data, len, max_dim, &im, err)))
+    if ((rc = img_read_mem_checked(data, len, max_dim, check, cls, &im, err)))
         return rc;
     rc = from_img(&im, name ? name : "upload", out, err);
     img_free(&im);

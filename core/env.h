@@ -30,6 +30,7 @@
 #include <stddef.h>
 
 #include "err.h"
+#include "img.h"
 
 #define ENV_MAX_DIM 8192      /* of a lat-long map, and 4 x a cube face */
 #define ENV_MAX_LIGHTS 65536
@@ -52,9 +53,11 @@ typedef struct env_map {
  * accepted (an unlit scene).  Other aspect ratios: GLINT_EINVAL naming the
  * layouts accepted. */
 int env_load(const char *path, env_map *out, glint_err *err);
-/* From memory (an upload), the file's sides at most max_dim (img_read_mem_max). */
-int env_load_mem(const void *data, size_t len, const char *name, int max_dim, env_map *out,
-                 glint_err *err);
+/* From memory (an upload), the file's sides at most max_dim, its header
+ * seen by check(cls, header) first when check is not NULL
+ * (img_read_mem_checked). */
+int env_load_mem(const void *data, size_t len, const char *name, int max_dim,
+                 img_header_check check, void *cls, env_map *out, glint_err *err);
 
 /* A built-in procedural map, width x height lat-long (width = 2 height,
  * height 8..ENV_MAX_DIM/2): "sky" (a clear sky with a sun), "studio"

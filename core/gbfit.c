@@ -27,13 +27,15 @@ int gbfit_gbuf_file(const method *m, const char *path, gbuf *g, int *has_uv, int
 }
 
 int gbfit_gbuf_mem(const method *m, const void *data, size_t len, int max_dim,
-                   int max_channels, const char *what, gbuf *g, int *has_uv, int *has_wi, glint_err *err)
+                   int max_channels, img_header_check check, void *cls, const char *what,
+                   gbuf *g, int *has_uv, int *has_wi, glint_err *err)
 {
     img_named im;
     int rc;
 
     memset(g, 0, sizeof *g);
-    if ((rc = img_read_named_mem(data, len, max_dim, max_channels, &im, err))) {
+    if ((rc = img_read_named_mem_checked(data, len, max_dim, max_channels, check, cls, &im,
+                                         err))) {
         glint_err_prefix(err, "%s", what);
         return rc;
     }

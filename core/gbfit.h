@@ -31,13 +31,15 @@ int gbfit_needs_wi(const method *m);
 
 /* One view's G-buffer for method m, from an image file or from memory (an
  * upload; sides at most max_dim and channels at most max_channels, checked
- * before decoding).  m NULL: wi optional (checking an upload before any
- * method is chosen).  `what` names it
+ * before decoding, and the header seen by check(cls, header) first when
+ * check is not NULL: img_read_named_mem_checked).  m NULL: wi optional
+ * (checking an upload before any method is chosen).  `what` names it
  * in messages.  OUT: *g, *has_uv (uv channels were read), *has_wi. */
 int gbfit_gbuf_file(const method *m, const char *path, gbuf *g, int *has_uv, int *has_wi,
                     glint_err *err);
 int gbfit_gbuf_mem(const method *m, const void *data, size_t len, int max_dim,
-                   int max_channels, const char *what, gbuf *g, int *has_uv, int *has_wi, glint_err *err);
+                   int max_channels, img_header_check check, void *cls, const char *what,
+                   gbuf *g, int *has_uv, int *has_wi, glint_err *err);
 
 /* The samples and painted values of n views (1..SCENE_MAX_VIEWS) for method
  * m: g[n] and paintings[n], read where use[v] is set (G-buffers of one

@@ -171,11 +171,115 @@ static int img_unrecognized(const char *what, const unsigned char *b, size_t n,
                          what, n ? hex : "none");
 }
 
-/* Decode a file (path != NULL) or a buffer, then check finiteness.
+/* ---- headers (img_header) ---------------------------------------------- */
+
+/* A read's check of the header: the caller's function, and the header once
+ * a decoder (or png_header) has read it. */
+typedef struct img_gate {
+    img_header_check check;
+    void *cls;
+    int seen;
+    img_header hd;
+} img_gate;
+
+/* The most memory a decode of fmt takes (img_header): nch channels of
+ * w x h, each stored sample sample_bytes, as_float when every channel is
+ * stored as float.  SIZE_MAX beyond IMG_MAX_DIM (no decoder takes it). */
+static size_t img_decode_bound(const char *fmt, int w, int h, int nch, int sample_bytes,
+                               int as_float)
+{
+    size_t n, per;
+    if (w < 1 || h < 1 || nch < 1 || w > IMG_MAX_DIM || h > IMG_MAX_DIM ||
+        nch > IMG_MAX_NAMED_CHANNELS)
+        return SIZE_MAX;
+    n = (size_t)w * (size_t)h * (size_t)nch;
+    if (strcmp(fmt, "png") == 0) /* OpenImageIO's whole image as stored, a copy, floats */
+        per = sample_bytes > 1 ? 8 : 6;
+    else if (strcmp(fmt, "openexr") == 0) /* floats, and the stored samples converted */
+        per = 4 + (as_float ? 0 : (size_t)(sample_bytes < 4 ? sample_bytes : 4));
+    else /* JPEG: a progressive file's coefficients; HDR: its converted lines */
+        per = 8;
+    return n * per + IMG_DECODE_FIXED_BYTES;
+}
+
+static uint32_t be32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+/* A PNG's header from its IHDR and the chunks before IDAT, as OpenImageIO's
+ * reader turns it (a palette into RGB, a tRNS chunk into an alpha, depths
+ * under 8 into 8).  0, or -1 when the bytes do not begin as a PNG's do: the
+ * decoder then says what is wrong. */
+static int png_header(const unsigned char *b, size_t n, img_header *hd)
+{
+    static const int nch_of[7] = {1, 0, 3, 3, 2, 0, 4};
+    uint32_t w, h;
+    int depth, ctype, nch, trns = 0;
+    size_t at;
+
+    if (n < 33 || be32(b + 8) != 13 || memcmp(b + 12, "IHDR", 4) != 0)
+        return -1;
+    w = be32(b + 16);
+    h = be32(b + 20);
+    depth = b[24];
+    ctype = b[25];
+    if (w < 1 || h < 1 || w > INT32_MAX || h > INT32_MAX || ctype > 6 || !nch_of[ctype] ||
+        (depth != 1 && depth != 2 && depth != 4 && depth != 8 && depth != 16))
+        return -1;
+    nch = nch_of[ctype];
+    for (at = 33; n - at >= 12;) { /* length, type, data, CRC */
+        uint32_t clen = be32(b + at);
+        if (memcmp(b + at + 4, "IDAT", 4) == 0 || clen > n - at - 12)
+            break;
+        trns |= memcmp(b + at + 4, "tRNS", 4) == 0;
+        at += 12 + (size_t)clen;
+    }
+    if (trns && (ctype == 0 || ctype == 2 || ctype == 3))
+        nch++;
+    hd->format = "png";
+    hd->width = (int)w;
+    hd->height = (int)h;
+    hd->channels = nch;
+    hd->decode_bytes = img_decode_bound("png", hd->width, hd->height, nch, depth == 16 ? 2 : 1,
+                                        0);
+    return 0;
+}
+
+/* The header as read; the caller's check sees it once. */
+static int gate_seen(img_gate *g, glint_err *err)
+{
+    g->seen = 1;
+    return g->check ? g->check(g->cls, &g->hd, err) : 0;
+}
+
+/* img_oiio_header_fn: the header OpenImageIO read, checked once; when
+ * png_header read it first, what OpenImageIO found must agree. */
+static int gate_oiio(void *cls, int w, int h, int nch, int sample_bytes, int as_float,
+                     glint_err *err)
+{
+    img_gate *g = cls;
+    if (g->seen) {
+        if (w != g->hd.width || h != g->hd.height || nch > g->hd.channels)
+            return glint_err_set(err, GLINT_EFORMAT,
+                                 "the decoder found a %dx%d image of %d channels where the "
+                                 "header says %dx%d, %d channels",
+                                 w, h, nch, g->hd.width, g->hd.height, g->hd.channels);
+        return 0;
+    }
+    g->hd.width = w;
+    g->hd.height = h;
+    g->hd.channels = nch;
+    g->hd.decode_bytes = img_decode_bound(g->hd.format, w, h, nch, sample_bytes, as_float);
+    return gate_seen(g, err);
+}
+
+/* Decode a file (path != NULL) or a buffer, then check finiteness.  gate
+ * (may be NULL): the header's check, before any pixel.
  * (OUT: *pix, zeroed first; freed on failure.) */
 static int img_read_common(const char *path, const void *data, size_t len, int max_dim,
-                           int max_channels, int want_names, img_oiio_pixels *pix,
-                           glint_err *err)
+                           int max_channels, int want_names, img_gate *gate,
+                           img_oiio_pixels *pix, glint_err *err)
 {
     unsigned char head[16];
     size_t nhead;
@@ -224,12 +328,20 @@ static int img_read_common(const char *path, const void *data, size_t len, int m
         goto fail_file;
     }
 
+    /* the header first where the caller checks it: a PNG's here, the
+     * others' as OpenImageIO opens them */
+    if (gate) {
+        gate->hd.format = fmt;
+        if (!fp && strcmp(fmt, "png") == 0 && png_header(data, len, &gate->hd) == 0 &&
+            (rc = gate_seen(gate, err)))
+            goto fail_file;
+    }
     /* the uploads' common PNGs directly, the rest (and every failure)
      * through OpenImageIO (img_png.h) */
     if (fp || want_names || strcmp(fmt, "png") != 0 ||
         img_png_read(data, len, max_dim, max_channels, pix) != 0)
-        rc = img_oiio_read(fmt, fp, data, len, what, max_dim, max_channels, want_names, pix,
-                           err);
+        rc = img_oiio_read(fmt, fp, data, len, what, max_dim, max_channels, want_names,
+                           gate ? gate_oiio : NULL, gate, pix, err);
     else
         rc = 0;
     if (fp)
@@ -237,6 +349,15 @@ static int img_read_common(const char *path, const void *data, size_t len, int m
     fp = NULL;
     if (rc)
         return rc;
+    if (gate && (pix->width != gate->hd.width || pix->height != gate->hd.height ||
+                 pix->channels > gate->hd.channels)) {
+        rc = glint_err_set(err, GLINT_EFORMAT,
+                           "%s: decoded as %dx%d, %d channels, where the header says %dx%d, "
+                           "%d channels",
+                           what, pix->width, pix->height, pix->channels, gate->hd.width,
+                           gate->hd.height, gate->hd.channels);
+        goto fail_pixels;
+    }
 
     rc = img_check_finite_array(pix->px, pix->width, pix->height, pix->channels,
                                 (const char *const *)pix->names, what, err);
@@ -272,7 +393,7 @@ int img_read(const char *path, img *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, NULL, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
@@ -300,19 +421,7 @@ static int mem_read_args(const char *what, const void *data, size_t len, int *ma
 
 int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err)
 {
-    img_oiio_pixels pix;
-    int rc;
-
-    if (!out)
-        return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL output");
-    memset(out, 0, sizeof *out);
-    if ((rc = mem_read_args("img_read_mem", data, len, &max_dim, err)))
-        return rc;
-    rc = img_read_common(NULL, data, len, max_dim, 4, 0, &pix, err);
-    if (rc)
-        return rc;
-    img_take(out, &pix);
-    return 0;
+    return img_read_mem_checked(data, len, max_dim, NULL, NULL, out, err);
 }
 
 int img_read_named(const char *path, img_named *out, glint_err *err)
@@ -325,7 +434,8 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read_named: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, NULL, &pix,
+                         err);
     if (rc)
         return rc;
     out->width = pix.width;
@@ -339,6 +449,33 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
 int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channels,
                        img_named *out, glint_err *err)
 {
+    return img_read_named_mem_checked(data, len, max_dim, max_channels, NULL, NULL, out, err);
+}
+
+int img_read_mem_checked(const void *data, size_t len, int max_dim, img_header_check check,
+                         void *cls, img *out, glint_err *err)
+{
+    img_gate gate = {check, cls, 0, {NULL, 0, 0, 0, 0}};
+    img_oiio_pixels pix;
+    int rc;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "img_read_mem: NULL output");
+    memset(out, 0, sizeof *out);
+    if ((rc = mem_read_args("img_read_mem", data, len, &max_dim, err)))
+        return rc;
+    rc = img_read_common(NULL, data, len, max_dim, 4, 0, check ? &gate : NULL, &pix, err);
+    if (rc)
+        return rc;
+    img_take(out, &pix);
+    return 0;
+}
+
+int img_read_named_mem_checked(const void *data, size_t len, int max_dim, int max_channels,
+                               img_header_check check, void *cls, img_named *out,
+                               glint_err *err)
+{
+    img_gate gate = {check, cls, 0, {NULL, 0, 0, 0, 0}};
     img_oiio_pixels pix;
     int rc;
 
@@ -349,7 +486,8 @@ int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channe
         return rc;
     if (max_channels < 1 || max_channels > IMG_MAX_NAMED_CHANNELS)
         max_channels = IMG_MAX_NAMED_CHANNELS;
-    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, &pix, err);
+    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, check ? &gate : NULL, &pix,
+                         err);
     if (rc)
         return rc;
     out->width = pix.width;

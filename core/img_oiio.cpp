@@ -16,6 +16,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -124,6 +125,7 @@ extern "C" void img_oiio_pixels_free(img_oiio_pixels *p)
 extern "C" int img_oiio_read(const char *format, FILE *fp, const void *mem,
                              size_t len, const char *source, int max_dim,
                              int max_channels, int want_names,
+                             img_oiio_header_fn on_header, void *cls,
                              img_oiio_pixels *out, glint_err *err)
 {
     const char *src = src_name(source);
@@ -191,6 +193,22 @@ extern "C" int img_oiio_read(const char *format, FILE *fp, const void *mem,
             return glint_err_set(err, GLINT_ERANGE,
                                  "%s: %d channels, supported 1..%d", src,
                                  spec.nchannels, max_channels);
+        }
+
+        if (on_header) {
+            size_t sample = spec.format.size();
+            for (const TypeDesc &t : spec.channelformats)
+                sample = std::max(sample, t.size());
+            bool as_float = spec.format == TypeDesc::FLOAT;
+            for (const TypeDesc &t : spec.channelformats)
+                as_float = as_float && t == TypeDesc::FLOAT;
+            int rc = on_header(cls, spec.width, spec.height, spec.nchannels, (int)sample,
+                               as_float ? 1 : 0, err);
+            if (rc) {
+                in->close();
+                (void)oiio_message(in.get());
+                return rc;
+            }
         }
 
         size_t n = (size_t)spec.width * (size_t)spec.height * (size_t)spec.nchannels;

@@ -29,6 +29,16 @@ typedef struct img_oiio_pixels {
     char **names;
 } img_oiio_pixels;
 
+/* Called by img_oiio_read once the header is read and found within
+ * max_dim and max_channels, before any pixel memory is allocated: the
+ * size, the channels, the bytes of one stored sample (the largest of the
+ * channels': 1 for 8-bit data, 2 for half or 16-bit, 4 for float), and
+ * as_float: 1 when every channel is stored as float (read without a
+ * copy).  Returns 0 to decode, or a glint code with err set: img_oiio_read
+ * then returns that code, having decoded nothing. */
+typedef int (*img_oiio_header_fn)(void *cls, int width, int height, int channels,
+                                  int sample_bytes, int as_float, glint_err *err);
+
 /* Decode subimage 0, mip level 0 of an image in OpenImageIO format
  * `format`, from the open stream `fp` (read from its start; the caller
  * keeps and closes it) or, when fp is NULL, from the `len` bytes at `mem`.
@@ -38,10 +48,12 @@ typedef struct img_oiio_pixels {
  * GLINT_EUNSUPPORTED; a file the decoder rejects (truncated, corrupt)
  * GLINT_EFORMAT.  8-bit and 16-bit data are scaled to [0,1] linearly, alpha
  * is returned unassociated (as stored).  Finiteness is NOT checked.
- * want_names != 0 also fills out->names.  (OUT: *out, zeroed first.) */
+ * want_names != 0 also fills out->names.  on_header (may be NULL) sees
+ * the header first, with cls.  (OUT: *out, zeroed first.) */
 int img_oiio_read(const char *format, FILE *fp, const void *mem, size_t len,
                   const char *source, int max_dim, int max_channels,
-                  int want_names, img_oiio_pixels *out, glint_err *err);
+                  int want_names, img_oiio_header_fn on_header, void *cls,
+                  img_oiio_pixels *out, glint_err *err);
 
 void img_oiio_pixels_free(img_oiio_pixels *p);
 

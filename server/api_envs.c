@@ -24,7 +24,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "admit.h"
 #include "api_common.h"
 #include "app.h"
 #include "auth.h"
@@ -33,14 +32,16 @@
 #include "ids.h"
 #include "render.h"
 #include "store.h"
+#include "upload_gate.h"
 
 static char env_dir[PATH_MAX]; /* real path, "" when none */
 static char up_dir[PATH_MAX];  /* the uploads' blob directory, "" before the store opens */
 
-/* An upload's sides: 4096 x 2048 lat-long (or a 4096-wide cross), which
- * decodes in at most ENV_UPLOAD_BYTES (admitted against the work budget). */
+/* An upload's sides: 4096 x 2048 lat-long (or a 4096-wide cross).  Its
+ * decode's bound by its header, and the map made from it (3 floats a
+ * pixel of the file at most), are admitted against the work budget
+ * (upload_gate.h). */
 #define ENV_UPLOAD_MAX_DIM 4096
-#define ENV_UPLOAD_BYTES ((size_t)ENV_UPLOAD_MAX_DIM * ENV_UPLOAD_MAX_DIM * (4 + 3) * sizeof(float))
 
 /* The file of data:NAME inside the directory (OUT: real path), or -1. */
 static int data_file(const char *name, char *real, size_t len)
@@ -293,6 +294,7 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
     const char *label = http_query(req, "name"), *ext;
     const unsigned char *b = (const unsigned char *)req->body;
     char blob[128], now[GLINT_TIME_LEN], *txt;
+    upload_gate gate;
     env_map m;
     int rc;
 
@@ -318,12 +320,20 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
     else
         return api_reject(e, GLINT_EINVAL, "invalid-environment",
                           "the body is neither OpenEXR nor Radiance HDR (by its first bytes)");
-    if ((rc = admit_enter(a->work, ENV_UPLOAD_BYTES, "an environment upload", e)))
-        return rc;
-    rc = env_load_mem(req->body, req->body_len, label ? label : "upload", ENV_UPLOAD_MAX_DIM,
-                      &m, e);
-    admit_leave(a->work, ENV_UPLOAD_BYTES);
-    if (rc == GLINT_ENOMEM)
+    upload_gate_init(&gate, a, "the map");
+    gate.max_dim = ENV_UPLOAD_MAX_DIM;
+    gate.max_dim_name = "an environment's limit";
+    gate.too_large_code = GLINT_EINVAL;
+    gate.too_large_kind = "invalid-environment";
+    gate.invalid_kind = "invalid-environment";
+    snprintf(gate.expect, sizeof gate.expect,
+             "the map cannot be used (sides up to %d, lat-long 2:1 or a cube cross)",
+             ENV_UPLOAD_MAX_DIM);
+    gate.per_pixel = 3 * sizeof(float);
+    rc = env_load_mem(req->body, req->body_len, label ? label : "upload", 0, upload_gate_check,
+                      &gate, &m, e);
+    upload_gate_leave(&gate);
+    if (rc == GLINT_ENOMEM || (rc && gate.refused))
         return rc;
     if (rc)
         return api_reject(e, GLINT_EINVAL, "invalid-environment",

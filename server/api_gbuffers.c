@@ -35,6 +35,7 @@
 #include "ids.h"
 #include "method.h"
 #include "store.h"
+#include "upload_gate.h"
 
 /* Channels of an uploaded G-buffer: glint's own have 17; a renderer's AOV
  * file may carry a few more.  Bounds the decode's memory with its sides. */
@@ -342,21 +343,25 @@ static http_resp gbuffer_put(http_req *req)
     app *a = req->app;
     json_t *rec = NULL, *info = NULL;
     char file[32], ifile[32], *text = NULL;
-    size_t bytes = 0;
+    upload_gate gate;
     gbuf g = {0};
     http_resp r;
     glint_err e;
-    int k, w, h, rc, uv = 0, wi = 0, admitted = 0;
+    int k, w, h, rc, uv = 0, wi = 0;
 
+    upload_gate_init(&gate, a, "the image");
     if ((rc = upload_start(req, "G-buffer", &rec, &k, &w, &h, &e)))
         goto done;
-    bytes = (size_t)w * h * (GB_MAX_CHANNELS * sizeof(float) + 64);
-    if ((rc = admit_enter(a->work, bytes, "decoding a G-buffer", &e)))
-        goto done;
-    admitted = 1;
-    rc = gbfit_gbuf_mem(NULL, req->body, req->body_len, w > h ? w : h, GB_MAX_CHANNELS,
-                        "the G-buffer", &g, &uv, &wi, &e);
-    if (rc == GLINT_ENOMEM)
+    /* the header first: the set's size, and the decode's memory with the
+     * G-buffer it makes (57 bytes a pixel) held in the work budget */
+    upload_gate_size(&gate, w, h);
+    snprintf(gate.expect, sizeof gate.expect, "this set's views are %dx%d", w, h);
+    gate.max_channels = GB_MAX_CHANNELS;
+    gate.invalid_kind = "invalid-gbuffer";
+    gate.per_pixel = 64;
+    rc = gbfit_gbuf_mem(NULL, req->body, req->body_len, 0, GB_MAX_CHANNELS, upload_gate_check,
+                        &gate, "the G-buffer", &g, &uv, &wi, &e);
+    if (rc == GLINT_ENOMEM || (rc && gate.refused))
         goto done;
     if (rc) {
         rc = api_reject(&e, rc == GLINT_ENONFINITE ? rc : GLINT_EINVAL,
@@ -365,12 +370,6 @@ static http_resp gbuffer_put(http_req *req)
                         "wo.Y wo.Z, and wi.X wi.Y wi.Z for point-light methods; mask, P.X P.Y "
                         "P.Z, uv.U uv.V optional; at most %d channels, %dx%d)",
                         e.msg, GB_MAX_CHANNELS, w, h);
-        goto done;
-    }
-    if (g.width != w || g.height != h) {
-        rc = api_reject(&e, GLINT_EINVAL, "wrong-size",
-                        "the G-buffer is %dx%d; this set's views are %dx%d", g.width, g.height,
-                        w, h);
         goto done;
     }
     info = json_pack("{s:b, s:b, s:I, s:I, s:I}", "has_wi", wi, "has_uv", uv, "covered",
@@ -391,8 +390,7 @@ static http_resp gbuffer_put(http_req *req)
 done:
     if (rc)
         r = api_error(&e);
-    if (admitted)
-        admit_leave(a->work, bytes);
+    upload_gate_leave(&gate);
     gbuf_free(&g);
     free(text);
     json_decref(info);
@@ -405,32 +403,25 @@ static http_resp painting_put(http_req *req)
     app *a = req->app;
     json_t *rec = NULL;
     char file[32];
-    size_t bytes = 0;
+    upload_gate gate;
     img im = {0};
     http_resp r;
     glint_err e;
-    int k, w, h, rc, admitted = 0;
+    int k, w, h, rc;
 
+    upload_gate_init(&gate, a, "the painting");
     if ((rc = upload_start(req, "painting", &rec, &k, &w, &h, &e)))
         goto done;
-    bytes = (size_t)w * h * 4 * sizeof(float) * 2;
-    if ((rc = admit_enter(a->work, bytes, "decoding a painting", &e)))
-        goto done;
-    admitted = 1;
-    rc = img_read_mem_max(req->body, req->body_len, w > h ? w : h, &im, &e);
-    if (rc == GLINT_ENOMEM)
+    upload_gate_size(&gate, w, h);
+    snprintf(gate.expect, sizeof gate.expect, "this set's views are %dx%d", w, h);
+    rc = img_read_mem_checked(req->body, req->body_len, 0, upload_gate_check, &gate, &im, &e);
+    if (rc == GLINT_ENOMEM || (rc && gate.refused))
         goto done;
     if (rc) {
         rc = api_reject(&e, rc == GLINT_ENONFINITE ? rc : GLINT_EINVAL,
                         rc == GLINT_ENONFINITE ? "non-finite" : "invalid-image",
                         "the painting: %.400s (PNG, JPEG, OpenEXR or Radiance HDR, %dx%d)",
                         e.msg, w, h);
-        goto done;
-    }
-    if (im.width != w || im.height != h) {
-        rc = api_reject(&e, GLINT_EINVAL, "wrong-size",
-                        "the painting is %dx%d; this set's views are %dx%d", im.width,
-                        im.height, w, h);
         goto done;
     }
     snprintf(file, sizeof file, "painting%d", k);
@@ -441,8 +432,7 @@ static http_resp painting_put(http_req *req)
 done:
     if (rc)
         r = api_error(&e);
-    if (admitted)
-        admit_leave(a->work, bytes);
+    upload_gate_leave(&gate);
     img_free(&im);
     json_decref(rec);
     return r;
@@ -488,8 +478,8 @@ static int gb_samples(app *a, const char *id, const method *m, int n, int w, int
             break;
         }
         snprintf(what, sizeof what, "the G-buffer of view %d", k);
-        if (!rc && (rc = gbfit_gbuf_mem(m, data, len, dim, GB_MAX_CHANNELS, what, &g[k], &uv,
-                                        &wi, e)) &&
+        if (!rc && (rc = gbfit_gbuf_mem(m, data, len, dim, GB_MAX_CHANNELS, NULL, NULL, what,
+                                        &g[k], &uv, &wi, e)) &&
             rc != GLINT_ENOMEM)
             rc = glint_err_kind(e, "invalid-gbuffer");
         free(data);

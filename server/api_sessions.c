@@ -44,6 +44,10 @@
 #define SESSION_STRIPES 64
 #define STROKES_PAGE_DEFAULT 1000
 #define STROKES_PAGE_MAX 10000
+/* A page of GET .../strokes holds at most this many bytes of strokes (or
+ * one stroke, at most max_stroke_points points): what one reader costs the
+ * daemon is a page, however long the history. */
+#define STROKES_PAGE_BYTES ((size_t)1 << 20)
 
 static pthread_mutex_t session_stripes[SESSION_STRIPES];
 static pthread_once_t session_stripes_once = PTHREAD_ONCE_INIT;
@@ -538,6 +542,16 @@ static http_resp strokes_post(http_req *req)
     par_warm(); /* the encode's workers wake while the brush runs */
     for (int i = 0; i < n; i++)
         need_base |= list[i].mode == STROKE_ERASE;
+    for (int i = 0; i < n; i++)
+        if (!stroke_reaches_image(&list[i], w, h)) {
+            /* it would paint nothing and only lengthen the history */
+            rc = api_reject(&e, GLINT_EINVAL, "stroke-outside-image",
+                            "strokes[%d] lies wholly outside the %dx%d image (each point more "
+                            "than its radius %g away): it would paint nothing; nothing was "
+                            "applied",
+                            i, w, h, 0.5 * list[i].diameter);
+            goto done;
+        }
     {
         /* bound the work before taking the session's lock */
         double cost = stroke_list_cost(list, n, w, h);
@@ -664,7 +678,8 @@ static http_resp strokes_get(http_req *req)
     if (api_session(req, req->param[0], 0, &sdoc, &e))
         return api_error(&e);
     json_decref(sdoc);
-    if (store_strokes_page(a->store, req->param[0], since, (int)limit, &arr, &more, &last, &e))
+    if (store_strokes_page(a->store, req->param[0], since, (int)limit, STROKES_PAGE_BYTES, &arr,
+                           &more, &last, &e))
         return api_fail(&e, "strokes");
     return http_json(200, json_pack("{s:o, s:I, s:b}", "strokes", arr, "last_seq",
                                     (json_int_t)last, "more", more));

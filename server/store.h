@@ -204,11 +204,16 @@ int store_strokes_append_at(store *s, const char *session, int view, int64_t bas
  * {"seq", "view", "stroke", "created"}. */
 int store_strokes_since(store *s, const char *session, int64_t since, json_t **array,
                         glint_err *err);
-/* The same, at most `limit` strokes.  OUT: *more = 1 when more follow;
- * *last_seq: what the answer covers, to pass as `since` next time (the
- * session's last sequence number, or the last stroke's when *more). */
-int store_strokes_page(store *s, const char *session, int64_t since, int limit, json_t **array,
-                       int *more, int64_t *last_seq, glint_err *err);
+/* The same, at most `limit` strokes and, when max_bytes > 0, at most
+ * max_bytes of their records as compact JSON (json_dumpb, a comma each):
+ * the first stroke is always taken, so a page is never empty while strokes
+ * follow, and holds at most max_bytes or one stroke.  Only the page is
+ * decoded.  OUT: *more = 1 when more follow; *last_seq: what the answer
+ * covers, to pass as `since` next time (the session's last sequence
+ * number, or the last stroke's when *more). */
+int store_strokes_page(store *s, const char *session, int64_t since, int limit,
+                       size_t max_bytes, json_t **array, int *more, int64_t *last_seq,
+                       glint_err *err);
 
 /* ---- the session's event log ------------------------------------------------------------- */
 /* Append an event of `type` (not "stroke" or "painting", which the calls

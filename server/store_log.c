@@ -520,16 +520,19 @@ out:
 }
 
 /* Rows of the event log after `since` (only strokes when strokes_only),
- * at most `limit` (<= 0: no limit).  as_stroke: records shaped
+ * at most `limit` (<= 0: no limit) and, max_bytes > 0, at most max_bytes of
+ * compact JSON over the records (each with its comma; the first is taken
+ * whatever its size).  as_stroke: records shaped
  * {"seq","view","stroke","created"}, else {"seq","type","view","data","created"}. */
 static int store_log_read(store *s, const char *session, int64_t since, int limit,
-                          int strokes_only, json_t **array, int *more, int64_t *last_seq,
-                          glint_err *err)
+                          size_t max_bytes, int strokes_only, json_t **array, int *more,
+                          int64_t *last_seq, glint_err *err)
 {
     db_stmt *st = NULL;
     json_t *arr = json_array();
     int rc = 0, step, count = 0;
     int64_t last_here;
+    size_t bytes = 0;
 
     *array = NULL;
     if (!last_seq)
@@ -587,6 +590,16 @@ static int store_log_read(store *s, const char *session, int64_t since, int limi
             json_object_set_new(rec, "view", json_integer(db_col_int(st, 2)));
         json_object_set_new(rec, strokes_only ? "stroke" : "data", data);
         json_object_set_new(rec, "created", json_string(db_col_text(st, 4)));
+        if (max_bytes) {
+            size_t size = json_dumpb(rec, NULL, 0, JSON_COMPACT) + 1;
+            if (count > 0 && bytes + size > max_bytes) {
+                json_decref(rec);
+                if (more)
+                    *more = 1;
+                break;
+            }
+            bytes += size;
+        }
         json_array_append_new(arr, rec);
         count++;
     }
@@ -611,15 +624,16 @@ out:
 int store_strokes_since(store *s, const char *session, int64_t since, json_t **array,
                         glint_err *err)
 {
-    return store_log_read(s, session, since, 0, 1, array, NULL, NULL, err);
+    return store_log_read(s, session, since, 0, 0, 1, array, NULL, NULL, err);
 }
 
-int store_strokes_page(store *s, const char *session, int64_t since, int limit, json_t **array,
-                       int *more, int64_t *last_seq, glint_err *err)
+int store_strokes_page(store *s, const char *session, int64_t since, int limit,
+                       size_t max_bytes, json_t **array, int *more, int64_t *last_seq,
+                       glint_err *err)
 {
     int m = 0;
     int64_t last = 0;
-    int rc = store_log_read(s, session, since, limit, 1, array, &m, &last, err);
+    int rc = store_log_read(s, session, since, limit, max_bytes, 1, array, &m, &last, err);
     if (rc)
         return rc;
     if (m)
@@ -635,7 +649,7 @@ int store_strokes_page(store *s, const char *session, int64_t since, int limit, 
 int store_events_since(store *s, const char *session, int64_t since, int limit,
                        json_t **array, int64_t *last_seq, glint_err *err)
 {
-    return store_log_read(s, session, since, limit, 0, array, NULL, last_seq, err);
+    return store_log_read(s, session, since, limit, 0, 0, array, NULL, last_seq, err);
 }
 
 int store_events_each(store *s, const char *session, int64_t since, int limit, size_t max_bytes,

@@ -9,6 +9,7 @@
 #include "api_common.h"
 #include "app.h"
 #include "clock.h"
+#include "upload_gate.h"
 
 /* The image formats a painting may come in: what their bytes begin with and
  * the media types that name them. */
@@ -93,47 +94,46 @@ int upload_precheck(http_req *req, int w, int h, glint_err *e)
     return painting_check_type(req, w, h, e);
 }
 
-/* Decode and check an uploaded painting (upload_precheck passed). */
+/* Decode and check an uploaded painting (upload_precheck passed): its
+ * header through the upload gate, then its pixels. */
 int upload_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err *e)
 {
-    app *a = req->app;
+    upload_gate g;
     double t0;
     int rc;
 
     memset(im, 0, sizeof *im);
+    upload_gate_init(&g, req->app, "the painting");
+    upload_gate_size(&g, w, h);
+    if (ps > 1) {
+        upload_gate_size(&g, w / ps, h / ps);
+        snprintf(g.expect, sizeof g.expect,
+                 "view %d of this scene expects %dx%d (the painting's size: %d times the "
+                 "raster) or %dx%d (the raster's)",
+                 k, w, h, ps, w / ps, h / ps);
+    } else {
+        snprintf(g.expect, sizeof g.expect,
+                 "view %d of this scene expects exactly %dx%d (the scene's raster size)", k, w,
+                 h);
+    }
+    g.per_pixel = 3 * sizeof(float); /* img_to_rgb's copy */
     t0 = glint_now();
-    rc = img_read_mem(req->body, req->body_len, im, e);
+    rc = img_read_mem_checked(req->body, req->body_len, 0, upload_gate_check, &g, im, e);
     t0 = srv_timing_step(&req->timing, "decode", t0);
     if (rc == GLINT_ENONFINITE)
-        return api_reject(e, rc, "non-finite", "the painting has non-finite pixels: %.400s",
-                          e->msg);
-    if (rc == GLINT_ENOMEM)
-        return glint_err_prefix(e, "decoding the painting");
-    if (rc)
-        return api_reject(e, GLINT_EINVAL, "invalid-image",
-                          "the body is not a readable PNG, JPEG or OpenEXR image: %.400s",
-                          e->msg);
-    if (im->width > a->cfg.lim.max_image_dim || im->height > a->cfg.lim.max_image_dim)
-        rc = api_reject(e, GLINT_ETOOBIG, "image-too-large",
-                        "the painting is %dx%d, beyond the limit of %d pixels a side "
-                        "(max_image_dim, glintd --max-image-dim); this view expects %dx%d",
-                        im->width, im->height, a->cfg.lim.max_image_dim, w, h);
-    else if ((im->width != w || im->height != h) &&
-             (im->width != w / ps || im->height != h / ps))
-        rc = ps > 1 ? api_reject(e, GLINT_EINVAL, "wrong-size",
-                                 "the painting is %dx%d; view %d of this scene expects %dx%d "
-                                 "(the painting's size: %d times the raster) or %dx%d (the "
-                                 "raster's)",
-                                 im->width, im->height, k, w, h, ps, w / ps, h / ps)
-                    : api_reject(e, GLINT_EINVAL, "wrong-size",
-                                 "the painting is %dx%d; view %d of this scene expects exactly "
-                                 "%dx%d (the scene's raster size)",
-                                 im->width, im->height, k, w, h);
-    else if ((rc = img_to_rgb(im, e)) || (rc = img_check_finite(im, e)))
+        rc = api_reject(e, rc, "non-finite", "the painting has non-finite pixels: %.400s",
+                        e->msg);
+    else if (rc == GLINT_ENOMEM)
+        glint_err_prefix(e, "decoding the painting");
+    else if (rc && !g.refused)
+        rc = api_reject(e, GLINT_EINVAL, "invalid-image",
+                        "the body is not a readable PNG, JPEG or OpenEXR image: %.400s", e->msg);
+    else if (!rc && ((rc = img_to_rgb(im, e)) || (rc = img_check_finite(im, e))))
         rc = rc == GLINT_ENONFINITE ? api_reject(e, rc, "non-finite",
                                                  "the painting has non-finite pixels: %.400s",
                                                  e->msg)
                                     : rc;
+    upload_gate_leave(&g);
     srv_timing_step(&req->timing, "validate", t0);
     if (rc)
         img_free(im);

@@ -18,8 +18,10 @@ int upload_precheck(http_req *req, int w, int h, glint_err *e);
 
 /* Decode the body and check it as a painting of view k: w x h (the
  * scene's paint scale ps times its raster) or the raster's size, at most
- * max_image_dim a side, RGB, finite.  Times "decode" and "validate" in the
- * request's Server-Timing.  OUT: *im (img_free; zeroed on failure). */
+ * max_image_dim a side, RGB, finite.  The size and the decode's memory are
+ * checked from the header before any pixel (upload_gate.h: 413, 422, 503).
+ * Times "decode" and "validate" in the request's Server-Timing.  OUT: *im
+ * (img_free; zeroed on failure). */
 int upload_decode(http_req *req, int k, int w, int h, int ps, img *im, glint_err *e);
 
 /* The upload's blob (store_painting_blob_put), written on a thread of its

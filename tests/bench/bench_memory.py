@@ -11,11 +11,22 @@ memory bound the daemon held for the request (glintd_work_peak_bytes in
 Cases: material previews at 1024, 2048 and 4096 on the CPU and through EGL
 (skipped where EGL does not work; the context is opened by a small
 preview first), a base render with other settings and a
-G-buffer at 2048 x 2048, a cold fit of 12 painted views.
+G-buffer at 2048 x 2048, a cold fit of 12 painted views, and uploads of a
+2048 x 2048 painting in each format (the decode's bound from the header,
+core/img.h) and of a 2048 x 2048 G-buffer of 32 channels.
+
+A second table replays the memory probes of the project's issue 49, each
+on a fresh daemon with the probe's budgets (--work-mb 256 --cache-mb 64):
+images whose header declares more than their target holds, and readers
+of a long stroke history.  It prints each answer and the daemon's peak
+resident set (VmHWM) against the work budget plus the fixed 160 MB of
+README's Memory paragraph.
 
 usage: tests/bench/bench_memory.py [--build DIR] [--glintd PATH]
+                                   [--strokes N] [--only uploads|probes]
 """
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -29,15 +40,18 @@ import requests
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.dirname(os.path.dirname(HERE))
 API = "/api/v1"
+sys.path.insert(0, os.path.join(SRC, "tests", "integration"))
+import probe_files  # noqa: E402
 
 
 class Daemon:
-    def __init__(self, glintd, *args):
+    def __init__(self, glintd, *args, data_dir=None):
         self.tmp = tempfile.mkdtemp(prefix="glint-bench-mem-")
+        self.data_dir = data_dir or os.path.join(self.tmp, "data")
         port_file = os.path.join(self.tmp, "port")
         self.proc = subprocess.Popen(
             [glintd, "--port", "0", "--port-file", port_file, "--data-dir",
-             os.path.join(self.tmp, "data"), "--quiet", "--web-dir", os.path.join(SRC, "web")] +
+             self.data_dir, "--quiet", "--web-dir", os.path.join(SRC, "web")] +
             list(args), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         for _ in range(1000):
             if os.path.exists(port_file) and open(port_file).read().strip():
@@ -53,8 +67,12 @@ class Daemon:
                     return int(line.split()[1])
         return 0
 
+    def call(self, method, path, **kw):
+        """The answer, whatever its status."""
+        return requests.request(method, self.base + path, timeout=600, **kw)
+
     def req(self, method, path, **kw):
-        r = requests.request(method, self.base + path, timeout=600, **kw)
+        r = self.call(method, path, **kw)
         if r.status_code >= 400:
             raise RuntimeError("%s %s: %d %s" % (method, path, r.status_code, r.text[:300]))
         return r
@@ -65,10 +83,12 @@ class Daemon:
                 return int(line.split()[1])
         return 0
 
-    def stop(self):
+    def stop(self, keep_data=False):
+        """keep_data: leave the directory (its data directory) to the caller."""
         self.proc.terminate()
         self.proc.wait()
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        if not keep_data:
+            shutil.rmtree(self.tmp, ignore_errors=True)
 
 
 def material(d, size=64, views=1):
@@ -129,10 +149,25 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--build", default=os.path.join(SRC, "build"))
     ap.add_argument("--glintd")
+    ap.add_argument("--strokes", type=int, default=1000,
+                    help="strokes of 10,000 points in the history probe (the probe's: 1000)")
+    ap.add_argument("--only", choices=("uploads", "probes"),
+                    help="only the uploads' rows of the first table (and the probes), or only "
+                         "the probes")
     a = ap.parse_args()
     glintd = a.glintd or os.path.join(a.build, "server", "glintd")
-    print("| request | seconds | peak RSS growth (MiB) | bytes per pixel | bound held (MiB) | bound / growth |")
-    print("|---|---|---|---|---|---|")
+    if a.only != "probes":
+        print("| request | seconds | peak RSS growth (MiB) | bytes per pixel | bound held (MiB) "
+              "| bound / growth |")
+        print("|---|---|---|---|---|---|")
+        if a.only != "uploads":
+            renders_and_fits(glintd)
+        uploads(glintd)
+        print()
+    probes(glintd, a.strokes)
+
+
+def renders_and_fits(glintd):
     for eng in ("cpu", "egl"):
         for size in (1024, 2048, 4096):
             def run(d, ctx, size=size, eng=eng):
@@ -181,6 +216,165 @@ def main():
                 "done", "failed"):
             time.sleep(0.05)
     measure(glintd, "cold fit, 12 views of 512^2 (1.57 M samples), res 128", 0, painted, fit)
+
+
+def oiiotool_file(args, ext):
+    """A file oiiotool makes (None when there is no oiiotool)."""
+    fd, path = tempfile.mkstemp(suffix=ext)
+    os.close(fd)
+    try:
+        subprocess.run(["oiiotool"] + args + ["-o", path], check=True, capture_output=True)
+        with open(path, "rb") as f:
+            return f.read()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    finally:
+        os.unlink(path)
+
+
+def uploads(glintd):
+    """A 2048^2 painting in each format, and a 32-channel G-buffer: the
+    decode's bound held (from the header) against the growth measured."""
+    n = 2048
+    files = [
+        ("PNG 8-bit (direct path)", probe_files.png_declaring(n, n)),
+        ("PNG 16-bit (OpenImageIO)", probe_files.png_declaring(n, n, depth=16)),
+        ("JPEG progressive 4:4:4", oiiotool_file(
+            ["--create", "%dx%d" % (n, n), "3", "--attrib", "jpeg:progressive", "1",
+             "--attrib", "jpeg:subsampling", "4:4:4"], ".jpg")),
+        ("OpenEXR half, ZIP", probe_files.exr_declaring(n, n, ["R", "G", "B"], half=True)),
+        ("OpenEXR float, ZIP", probe_files.exr_declaring(n, n, ["R", "G", "B"])),
+    ]
+
+    def view(d):
+        sc = d.req("POST", API + "/scenes", json={"width": n, "height": n}).json()
+        return d.req("POST", API + "/sessions", json={"scene_id": sc["id"]}).json()
+    for name, body in files:
+        if body is None:
+            print("| upload %s %d^2 | skipped: no oiiotool | | | | |" % (name, n))
+            continue
+        measure(glintd, "upload %s %d^2" % (name, n), n * n, view,
+                lambda d, s, body=body: d.req(
+                    "PUT", "%s/sessions/%s/views/0/painting" % (API, s["id"]), data=body,
+                    headers={"X-Glint-Token": s["paint_token"]}))
+
+    def gbuffer_set(d):
+        return d.req("POST", API + "/gbuffer-sets",
+                     json={"views": 1, "width": n, "height": n}).json()
+    names = ["mask", "P.X", "P.Y", "P.Z", "N.X", "N.Y", "N.Z", "wo.X", "wo.Y", "wo.Z", "wi.X",
+             "wi.Y", "wi.Z", "uv.U", "uv.V"]
+    gb = probe_files.exr_declaring(n, n, names + ["extra%02d" % i for i in range(32 - len(names))])
+    measure(glintd, "upload G-buffer of 32 float channels %d^2" % n, n * n, gbuffer_set,
+            lambda d, st: d.req("PUT", "%s/gbuffer-sets/%s/views/0/gbuffer.exr"
+                                % (API, st["id"]), data=gb))
+    hdr = probe_files.hdr_flat(n, n // 2)
+    measure(glintd, "upload environment, Radiance HDR %dx%d" % (n, n // 2), n * n // 2,
+            lambda d: None, lambda d, _: d.req("POST", API + "/environments", data=hdr))
+
+
+PROBE_WORK_MB, PROBE_CACHE_MB, FIXED_MB = 256, 64, 160
+
+
+def probe(glintd, name, run, data_dir=None, keep_data=False):
+    """run(d) on a fresh daemon with the probe's budgets -> its answers, as
+    text; the row: the answers, the peak resident set, the bound."""
+    d = Daemon(glintd, "--work-mb", str(PROBE_WORK_MB), "--cache-mb", str(PROBE_CACHE_MB),
+               data_dir=data_dir)
+    try:
+        answer = run(d)
+        peak = d.kb("VmHWM") / 1024.0
+        bound = PROBE_WORK_MB + FIXED_MB
+        print("| %s | %s | %.0f | %d | %s |" % (name, answer, peak, bound,
+                                              "yes" if peak <= bound else "NO"))
+        sys.stdout.flush()
+        return d.data_dir
+    finally:
+        d.stop(keep_data=keep_data)
+
+
+def answers(rs):
+    """'413 image-too-large' for each answer (x N when the same)."""
+    texts = []
+    for r in rs:
+        kind = ""
+        if r.headers.get("Content-Type", "").startswith("application/problem+json"):
+            kind = " " + r.json()["type"].rsplit("/", 1)[-1]
+        texts.append("%d%s" % (r.status_code, kind))
+    return ", ".join(sorted(set(texts))) + (" (x%d)" % len(rs) if len(rs) > 1 else "")
+
+
+def at_once(n, fn):
+    out = [None] * n
+
+    def one(i):
+        out[i] = fn()
+    ts = [threading.Thread(target=one, args=(i,)) for i in range(n)]
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    return out
+
+
+def probes(glintd, nstrokes):
+    print("| probe (--work-mb %d --cache-mb %d) | answer | peak RSS (MiB) | work budget + fixed "
+          "(MiB) | within |" % (PROBE_WORK_MB, PROBE_CACHE_MB))
+    print("|---|---|---|---|---|")
+
+    def session(d):
+        sc = d.req("POST", API + "/scenes", json={"width": 32, "height": 32}).json()
+        return d.req("POST", API + "/sessions", json={"scene_id": sc["id"]}).json()
+
+    def painting(d, body, n=1):
+        s = session(d)
+        url = "%s/sessions/%s/views/0/painting" % (API, s["id"])
+        return answers(at_once(n, lambda: d.call(
+            "PUT", url, data=body, headers={"X-Glint-Token": s["paint_token"]})))
+    png = probe_files.png_declaring(16384, 16384)
+    probe(glintd, "PNG of %d KB declaring 16384^2, as a 32x32 view's painting" % (len(png) >> 10),
+          lambda d: painting(d, png))
+    probe(glintd, "the same, two at once", lambda d: painting(d, png, 2))
+    exr = probe_files.exr_declaring(16384, 16384, ["R", "G", "B"])
+    probe(glintd, "ZIP OpenEXR of %.1f MB declaring 16384^2, as a painting" % (len(exr) / 1e6),
+          lambda d: painting(d, exr))
+
+    def gbuffer(d):
+        st = d.req("POST", API + "/gbuffer-sets",
+                   json={"views": 1, "width": 4096, "height": 8}).json()
+        body = probe_files.exr_declaring(4096, 4096, ["c%02d" % i for i in range(32)])
+        return answers([d.call("PUT", "%s/gbuffer-sets/%s/views/0/gbuffer.exr"
+                               % (API, st["id"]), data=body)])
+    probe(glintd, "32-channel OpenEXR of 4096^2 into a G-buffer set of 4096x8", gbuffer)
+
+    # the history: written by one daemon, read by a fresh one (its peak is
+    # the readers')
+    ids = {}
+
+    def write(d):
+        s = session(d)
+        ids.update(s)
+        url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
+        per = 150
+        text = json.dumps({"strokes": [probe_files.far_stroke(10000)] * per}).encode()
+        left, rs = nstrokes, []
+        while left > 0:
+            if left < per:
+                text = json.dumps({"strokes": [probe_files.far_stroke(10000)] * left}).encode()
+            rs.append(d.call("POST", url, data=text, headers={
+                "X-Glint-Token": s["paint_token"], "Content-Type": "application/json"}))
+            left -= per
+        return answers(rs)
+    data = probe(glintd, "writing %d strokes of 10,000 points (1 inside the image)" % nstrokes,
+                 write, keep_data=True)
+
+    def read(d, n):
+        url = "%s/sessions/%s/strokes?limit=10000" % (API, ids["id"])
+        rs = at_once(n, lambda: d.call("GET", url, headers={"X-Glint-Token": ids["view_token"]}))
+        return "%s, %.1f MB each" % (answers(rs), len(rs[0].content) / 1e6)
+    probe(glintd, "GET .../strokes?limit=10000 with a view token, one reader",
+          lambda d: read(d, 1), data_dir=data)
+    probe(glintd, "the same, four readers at once", lambda d: read(d, 4), data_dir=data)
+    shutil.rmtree(os.path.dirname(data), ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -1,10 +1,12 @@
 /* fuzz_image.c: image bytes from outside, decoded as glintd decodes an
  * upload.  The first byte picks the reader, the rest is the file:
  *   0  a painting or photo (PUT .../paintings/K, the photo bar):
- *      img_read_mem_max, through the OpenImageIO shim or, for the common
+ *      img_read_mem_checked with a header check as the server's (sides
+ *      up to the limit), through the OpenImageIO shim or, for the common
  *      PNGs, libpng directly (img_png.h), which must then give
- *      OpenImageIO's floats bit for bit; when byte 0 / 3 is odd, the file
- *      is a well-formed PNG built from the rest (png_build);
+ *      OpenImageIO's floats bit for bit; what decodes is the image its
+ *      header declared, seen once before; when byte 0 / 3 is odd, the
+ *      file is a well-formed PNG built from the rest (png_build);
  *   1  an environment map (POST /environments): env_load_mem, lat-long or
  *      cube cross, then its texels must be finite and non-negative;
  *   2  a MERL table (glintd --measured-dir, paint --brdf merl:FILE):
@@ -23,6 +25,23 @@
 #include "merl.h"
 
 #define MAX_DIM 512
+
+/* The header check of case 0: sides up to MAX_DIM, as the server's
+ * upload gate holds them to its limit; it records what it saw. */
+typedef struct header_seen {
+    int calls;
+    img_header hd;
+} header_seen;
+
+static int header_check(void *cls, const img_header *hd, glint_err *err)
+{
+    header_seen *s = cls;
+    s->calls++;
+    s->hd = *hd;
+    if (hd->width > MAX_DIM || hd->height > MAX_DIM)
+        return glint_err_set(err, GLINT_ERANGE, "a header of %dx%d", hd->width, hd->height);
+    return 0;
+}
 
 /* ---- PNGs built from the fuzzer's bytes --------------------------------------------- */
 
@@ -187,8 +206,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
          * OpenImageIO's floats bit for bit */
         if (img_png_read(file, len, MAX_DIM, 4, &direct) == 0) {
             img_oiio_pixels ref = {0};
-            FUZZ_CHECK(img_oiio_read("png", NULL, file, len, "fuzz", MAX_DIM, 4, 0, &ref, &e) ==
-                       0);
+            FUZZ_CHECK(img_oiio_read("png", NULL, file, len, "fuzz", MAX_DIM, 4, 0, NULL, NULL,
+                                     &ref, &e) == 0);
             FUZZ_CHECK(ref.width == direct.width && ref.height == direct.height &&
                        ref.channels == direct.channels);
             FUZZ_CHECK(memcmp(ref.px, direct.px,
@@ -197,13 +216,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             img_oiio_pixels_free(&direct);
             fuzz_note("image", "a PNG decoded directly, as OpenImageIO decodes it");
         }
-        if (img_read_mem_max(file, len, MAX_DIM, &im, &e) == 0) {
+        header_seen seen = {0, {NULL, 0, 0, 0, 0}};
+        if (img_read_mem_checked(file, len, 0, header_check, &seen, &im, &e) == 0) {
             FUZZ_CHECK(im.width >= 1 && im.width <= MAX_DIM && im.height >= 1 &&
                        im.height <= MAX_DIM && im.channels >= 1 && im.channels <= 4);
             FUZZ_CHECK(im.px != NULL);
+            FUZZ_CHECK(seen.calls == 1 && seen.hd.width == im.width &&
+                       seen.hd.height == im.height && seen.hd.channels >= im.channels);
+            FUZZ_CHECK(seen.hd.decode_bytes >= (size_t)im.width * im.height * im.channels * 4);
             img_free(&im);
         } else {
-            FUZZ_CHECK(e.msg[0] != '\0');
+            FUZZ_CHECK(e.msg[0] != '\0' && seen.calls <= 1);
             fuzz_note("image", e.msg);
         }
         free(built);
@@ -211,7 +234,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     case 1: {
         env_map m = {0};
-        if (env_load_mem(data + 1, size - 1, "upload", MAX_DIM, &m, &e) == 0) {
+        if (env_load_mem(data + 1, size - 1, "upload", MAX_DIM, NULL, NULL, &m, &e) == 0) {
             size_t n = (size_t)m.width * m.height * 3;
             FUZZ_CHECK(m.width == 2 * m.height && m.height >= 1);
             for (size_t i = 0; i < n; i++)

@@ -128,7 +128,7 @@ static int op_exr(glint_err *e)
 static int op_env(glint_err *e)
 {
     env_map m;
-    int rc = env_load_mem(hdr_data, hdr_len, "sky.hdr", 64, &m, e);
+    int rc = env_load_mem(hdr_data, hdr_len, "sky.hdr", 64, NULL, NULL, &m, e);
     if (rc == 0)
         env_map_free(&m);
     return rc;

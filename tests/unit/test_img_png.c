@@ -106,7 +106,7 @@ static unsigned char *make_png(int w, int h, int ctype, int depth, int interlace
 static int oiio(const unsigned char *d, size_t len, int max_dim, img_oiio_pixels *out)
 {
     glint_err e;
-    return img_oiio_read("png", NULL, d, len, "test", max_dim, 4, 0, out, &e);
+    return img_oiio_read("png", NULL, d, len, "test", max_dim, 4, 0, NULL, NULL, out, &e);
 }
 
 static int same_pixels(const img *a, const img_oiio_pixels *b)
@@ -254,8 +254,100 @@ TEST(damaged_and_oversized_pngs_answer_as_before)
     free(d);
 }
 
+/* What a header check saw (check_record), and what it answers. */
+typedef struct seen {
+    int calls, answer;
+    img_header hd;
+} seen;
+
+static int check_record(void *cls, const img_header *hd, glint_err *err)
+{
+    seen *s = cls;
+    s->calls++;
+    s->hd = *hd;
+    if (s->answer)
+        return glint_err_set(err, s->answer, "refused by the test");
+    return 0;
+}
+
+/* The header an upload's check sees (img_read_mem_checked) is the image
+ * the decode returns, for every PNG kind (those of the direct path and
+ * OpenImageIO's, tRNS turned into alpha) and OpenImageIO's other formats;
+ * the check sees it once, and a refusal decodes nothing. */
+TEST(the_header_is_checked_once_before_any_pixel)
+{
+    static const struct {
+        int ctype, depth, interlace, extra;
+    } cases[] = {
+        {PNG_COLOR_TYPE_RGB, 8, 0, EXTRA_NONE},      {PNG_COLOR_TYPE_RGB_ALPHA, 8, 0, EXTRA_TEXT},
+        {PNG_COLOR_TYPE_RGB, 16, 0, EXTRA_NONE},     {PNG_COLOR_TYPE_RGB, 8, 1, EXTRA_NONE},
+        {PNG_COLOR_TYPE_GRAY, 8, 0, EXTRA_NONE},     {PNG_COLOR_TYPE_GRAY, 4, 0, EXTRA_NONE},
+        {PNG_COLOR_TYPE_GRAY, 16, 0, EXTRA_TRNS},    {PNG_COLOR_TYPE_GA, 8, 0, EXTRA_NONE},
+        {PNG_COLOR_TYPE_PALETTE, 8, 0, EXTRA_NONE},  {PNG_COLOR_TYPE_RGB, 8, 0, EXTRA_TRNS},
+        {PNG_COLOR_TYPE_RGB, 8, 0, EXTRA_GAMA},      {PNG_COLOR_TYPE_RGB_ALPHA, 16, 1, EXTRA_SRGB},
+    };
+    static const char *const formats[] = {"exr", "jpg", "hdr"};
+    img src;
+    glint_err e;
+    for (unsigned k = 0; k < sizeof cases / sizeof cases[0] + 3; k++) {
+        size_t len;
+        unsigned char *d;
+        seen s = {0, 0, {0}};
+        img a;
+        if (k < sizeof cases / sizeof cases[0]) {
+            d = make_png(33, 17, cases[k].ctype, cases[k].depth, cases[k].interlace,
+                         cases[k].extra, &len);
+        } else {
+            ASSERT_OK(img_alloc(&src, 33, 17, 3, &e));
+            for (size_t i = 0; i < (size_t)33 * 17 * 3; i++)
+                src.px[i] = (float)(i % 7) / 7.0f;
+            ASSERT_OK(img_write_mem(formats[k - sizeof cases / sizeof cases[0]], &src,
+                                    (void **)&d, &len, &e));
+            img_free(&src);
+        }
+        ASSERT_MSG(img_read_mem_checked(d, len, 0, check_record, &s, &a, &e) == 0,
+                   "case %u: %s", k, e.msg);
+        ASSERT_MSG(s.calls == 1, "case %u: %d calls", k, s.calls);
+        ASSERT_MSG(s.hd.width == a.width && s.hd.height == a.height &&
+                       s.hd.channels == a.channels,
+                   "case %u: header %dx%dx%d, decoded %dx%dx%d", k, s.hd.width, s.hd.height,
+                   s.hd.channels, a.width, a.height, a.channels);
+        ASSERT_MSG(s.hd.decode_bytes >= (size_t)a.width * a.height * a.channels * 4 +
+                                            IMG_DECODE_FIXED_BYTES,
+                   "case %u: bound %zu", k, s.hd.decode_bytes);
+        img_free(&a);
+        s.calls = 0;
+        s.answer = GLINT_ETOOBIG;
+        ASSERT_EQ(img_read_mem_checked(d, len, 0, check_record, &s, &a, &e), GLINT_ETOOBIG);
+        ASSERT(s.calls == 1 && a.px == NULL && strcmp(e.msg, "refused by the test") == 0);
+        free(d);
+    }
+}
+
+/* A header that declares 16384 x 16384 in a few bytes: the check sees the
+ * size and the decode's bound (6 bytes a sample: 4.5 GiB) before a row is
+ * read; a file that is not a PNG past its signature never reaches it. */
+TEST(a_huge_header_is_seen_before_its_rows)
+{
+    size_t len;
+    unsigned char *d = make_png(4, 4, PNG_COLOR_TYPE_RGB, 8, 0, EXTRA_NONE, &len);
+    seen s = {0, GLINT_ETOOBIG, {0}};
+    img a;
+    glint_err e;
+    d[16] = d[20] = 0, d[17] = d[21] = 0, d[18] = d[22] = 0x40, d[19] = d[23] = 0;
+    ASSERT_EQ(img_read_mem_checked(d, len, 0, check_record, &s, &a, &e), GLINT_ETOOBIG);
+    ASSERT(s.calls == 1 && s.hd.width == 16384 && s.hd.height == 16384 && s.hd.channels == 3);
+    ASSERT_EQ(s.hd.decode_bytes, (size_t)16384 * 16384 * 3 * 6 + IMG_DECODE_FIXED_BYTES);
+    s.calls = 0;
+    ASSERT(img_read_mem_checked("\x89PNG\r\n\x1a\nnot", 11, 0, check_record, &s, &a, &e) != 0);
+    ASSERT_EQ(s.calls, 0);
+    free(d);
+}
+
 TEST_LIST {
     TEST_ENTRY(the_pngs_it_takes_decode_as_openimageio_does),
+    TEST_ENTRY(the_header_is_checked_once_before_any_pixel),
+    TEST_ENTRY(a_huge_header_is_seen_before_its_rows),
     TEST_ENTRY(the_others_go_to_openimageio),
     TEST_ENTRY(damaged_and_oversized_pngs_answer_as_before),
 };

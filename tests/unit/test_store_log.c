@@ -194,7 +194,7 @@ TEST(strokes_and_events_share_one_numbering)
         ASSERT(arr == NULL);
         ASSERT_EQ(store_events_since(f.s, nobody, 0, 0, &arr, NULL, NULL), GLINT_ENOTFOUND);
         ASSERT_EQ(store_events_since(f.s, nobody, 0, 0, &arr, &nlast, NULL), GLINT_ENOTFOUND);
-        ASSERT_EQ(store_strokes_page(f.s, nobody, 0, 10, &arr, NULL, NULL, NULL),
+        ASSERT_EQ(store_strokes_page(f.s, nobody, 0, 10, 0, &arr, NULL, NULL, NULL),
                   GLINT_ENOTFOUND);
     }
     ASSERT_OK(store_events_since(f.s, f.session, 8, 0, &arr, NULL, NULL));
@@ -254,7 +254,7 @@ TEST(paging_strokes_and_events)
     /* strokes 4 at a time */
     since = 0;
     do {
-        ASSERT_OK(store_strokes_page(f.s, f.session, since, 4, &arr, &more, &last, NULL));
+        ASSERT_OK(store_strokes_page(f.s, f.session, since, 4, 0, &arr, &more, &last, NULL));
         ASSERT_LE(json_array_size(arr), 4);
         for (size_t i = 0; i < json_array_size(arr); i++) {
             long long s = json_integer_value(json_object_get(json_array_get(arr, i), "seq"));
@@ -279,12 +279,12 @@ TEST(paging_strokes_and_events)
     ASSERT_EQ(pages, 3);
     ASSERT_EQ(seen, 12);
     /* exactly a page's worth: no "more" */
-    ASSERT_OK(store_strokes_page(f.s, f.session, 6, 6, &arr, &more, &last, NULL));
+    ASSERT_OK(store_strokes_page(f.s, f.session, 6, 6, 0, &arr, &more, &last, NULL));
     ASSERT_EQ(json_array_size(arr), 5);
     ASSERT_EQ(more, 0);
     ASSERT_EQ(last, 12);
     json_decref(arr);
-    ASSERT_OK(store_strokes_page(f.s, f.session, 12, 4, &arr, &more, &last, NULL));
+    ASSERT_OK(store_strokes_page(f.s, f.session, 12, 4, 0, &arr, &more, &last, NULL));
     ASSERT_EQ(json_array_size(arr), 0);
     ASSERT_EQ(more, 0);
     ASSERT_EQ(last, 12);
@@ -304,6 +304,61 @@ TEST(paging_strokes_and_events)
     fx_close(&f);
 }
 
+/* A page stops at max_bytes of records as compact JSON, never before its
+ * first stroke: a long history comes in pages of bounded size, each
+ * following the last, none empty, none missing a stroke. */
+TEST(pages_are_bounded_by_bytes)
+{
+    fixture f;
+    json_t *one, *arr;
+    int64_t first, last, since = 0;
+    int more;
+    size_t rec;
+    long long seen = 0;
+    ASSERT_OK(fx_open(&f));
+    /* 12 strokes of one size (the tag and i keep their lengths) */
+    for (int i = 0; i < 12; i++) {
+        one = strokes_of(1, i % 10);
+        ASSERT_OK(store_strokes_append(f.s, f.session, 0, one, exr1, 4, &first, &last, NULL,
+                                       NULL));
+        json_decref(one);
+    }
+    ASSERT_OK(store_strokes_page(f.s, f.session, 0, 1, 0, &arr, &more, &last, NULL));
+    rec = json_dumpb(json_array_get(arr, 0), NULL, 0, JSON_COMPACT) + 1;
+    json_decref(arr);
+    /* 2.5 records a page: pages of 2, 6 of them */
+    for (int pages = 0;; pages++) {
+        ASSERT_OK(store_strokes_page(f.s, f.session, since, 100, rec * 5 / 2, &arr, &more,
+                                     &last, NULL));
+        ASSERT_EQ(json_array_size(arr), 2);
+        for (size_t i = 0; i < json_array_size(arr); i++) {
+            long long s = json_integer_value(json_object_get(json_array_get(arr, i), "seq"));
+            ASSERT_EQ(s, seen + 1);
+            seen = s;
+        }
+        json_decref(arr);
+        since = last;
+        if (!more) {
+            ASSERT_EQ(pages, 5);
+            break;
+        }
+    }
+    ASSERT_EQ(seen, 12);
+    /* a limit under one record: one stroke a page all the same */
+    ASSERT_OK(store_strokes_page(f.s, f.session, 3, 100, 1, &arr, &more, &last, NULL));
+    ASSERT_EQ(json_array_size(arr), 1);
+    ASSERT_EQ(more, 1);
+    ASSERT_EQ(last, 4);
+    json_decref(arr);
+    /* the count still bounds it */
+    ASSERT_OK(store_strokes_page(f.s, f.session, 0, 3, (size_t)1 << 20, &arr, &more, &last,
+                                 NULL));
+    ASSERT_EQ(json_array_size(arr), 3);
+    ASSERT_EQ(more, 1);
+    json_decref(arr);
+    fx_close(&f);
+}
+
 TEST(session_that_does_not_exist)
 {
     fixture f;
@@ -320,7 +375,7 @@ TEST(session_that_does_not_exist)
     ASSERT_EQ(seq, -1);
     ASSERT_EQ(store_events_since(f.s, unknown, 0, 10, &arr, &seq, NULL), GLINT_ENOTFOUND);
     ASSERT(arr == NULL);
-    ASSERT_EQ(store_strokes_page(f.s, unknown, 0, 10, &arr, &more, &last, NULL),
+    ASSERT_EQ(store_strokes_page(f.s, unknown, 0, 10, 0, &arr, &more, &last, NULL),
               GLINT_ENOTFOUND);
     ASSERT(arr == NULL);
     ASSERT_EQ(store_events_since(f.s, "../x", 0, 10, &arr, NULL, NULL), GLINT_ENOTFOUND);
@@ -768,6 +823,7 @@ TEST_LIST{
     TEST_ENTRY(painting_versions_and_seq),
     TEST_ENTRY(strokes_and_events_share_one_numbering),
     TEST_ENTRY(paging_strokes_and_events),
+    TEST_ENTRY(pages_are_bounded_by_bytes),
     TEST_ENTRY(session_that_does_not_exist),
     TEST_ENTRY(a_material_and_its_event_commit_together),
     TEST_ENTRY(scene_delete_removes_sessions_logs_and_blobs),

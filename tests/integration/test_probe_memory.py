@@ -1,0 +1,256 @@
+"""Memory outside the work budget: uploads whose header declares more than
+their target holds, and long stroke histories read at once.
+
+Each memory case runs on a daemon of its own, started with --work-mb 256
+--cache-mb 64 as the probe's was, so that its peak resident set (VmHWM in
+/proc/PID/status) is that of the case, and asserts the safe answer and
+
+    VmHWM <= work budget + FIXED_MB
+
+where FIXED_MB is README's fixed part ("Security and limits", Memory:
+about 160 MB of libraries).  The cache budget is left out of the bound:
+these scenes are 32 x 32 and keep next to nothing in it.  Under
+AddressSanitizer (its shadow and quarantine make the fixed part larger)
+the bound is on the growth over the resident set before the requests.
+
+An image's size, channels and the memory of its decode are checked from
+its header before a pixel is decoded (server/upload_gate.h); a page of the
+stroke history holds at most 1 MiB of strokes; a stroke wholly outside the
+image is refused.
+"""
+import concurrent.futures as cf
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(__file__))
+from harness import Daemon, run_tests  # noqa: E402
+from probe_files import exr_declaring, far_stroke, png_declaring  # noqa: E402
+
+API = "/api/v1"
+WORK_MB = 256
+CACHE_MB = 64
+FIXED_MB = 160
+PAGE_BYTES = 1 << 20
+
+
+def problem(r, status, kind):
+    assert r.status_code == status, "status %d, want %d: %s" % (r.status_code, status, r.text[:400])
+    assert r.headers.get("Content-Type", "").startswith("application/problem+json"), r.headers
+    body = r.json()
+    assert body["type"].endswith(kind), "type %s, want %s" % (body["type"], kind)
+    return body
+
+
+def rss_kb(d, field):
+    with open("/proc/%d/status" % d.proc.pid) as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1])
+    raise AssertionError("no %s" % field)
+
+
+def sanitized(d):
+    with open("/proc/%d/maps" % d.proc.pid) as f:
+        return "libasan" in f.read()
+
+
+class Budgeted:
+    """A daemon with the probe's budgets; check_peak() holds its high-water mark
+    to the bound."""
+
+    def __init__(self, data_dir=None):
+        self.d = Daemon("--work-mb", str(WORK_MB), "--cache-mb", str(CACHE_MB), "--quiet",
+                        data_dir=data_dir)
+        self.before_kb = rss_kb(self.d, "VmRSS")
+
+    def check_peak(self, what):
+        peak = rss_kb(self.d, "VmHWM")
+        if sanitized(self.d):
+            grown = peak - self.before_kb
+            assert grown <= (WORK_MB + FIXED_MB) * 1024, \
+                "%s: peak RSS grew by %d MiB, beyond the work budget %d MiB + %d MiB" % (
+                    what, grown >> 10, WORK_MB, FIXED_MB)
+        else:
+            assert peak <= (WORK_MB + FIXED_MB) * 1024, \
+                "%s: peak RSS %d MiB, beyond the work budget %d MiB + %d MiB fixed" % (
+                    what, peak >> 10, WORK_MB, FIXED_MB)
+        print("  %s: peak RSS %d MiB (bound %d MiB)" % (what, peak >> 10, WORK_MB + FIXED_MB))
+
+
+def session(d, size=32):
+    sc = d.post(API + "/scenes", status=201, json={"width": size, "height": size}).json()
+    s = d.post(API + "/sessions", status=201, json={"scene_id": sc["id"]}).json()
+    return sc, s
+
+
+def tok(s, which="paint_token"):
+    return {"X-Glint-Token": s[which]}
+
+
+# ---- item 1: an upload's header against its target, before decoding -------------------
+
+
+def test_a_png_declaring_16384_squared_is_refused_from_its_header(_d):
+    body = png_declaring(16384, 16384)
+    assert len(body) < 1 << 20, len(body)  # under a MiB on the wire: 3 GiB decoded
+    b = Budgeted()
+    try:
+        sc, s = session(b.d)
+        url = "%s/sessions/%s/views/0/painting" % (API, s["id"])
+        # (the timeouts: where a daemon decodes it first, that takes a while)
+        p = problem(b.d.put(url, data=body, headers=tok(s), timeout=300), 413, "image-too-large")
+        b.check_peak("PNG of 16384^2 on a 32x32 view")
+        assert "16384x16384" in p["detail"] and "max-image-dim" in p["detail"], p
+        assert "expects exactly 32x32" in p["detail"], p
+        # two at once, as the probe sent them
+        with cf.ThreadPoolExecutor(2) as ex:
+            rs = list(ex.map(lambda _: b.d.put(url, data=body, headers=tok(s), timeout=300),
+                             range(2)))
+        for r in rs:
+            problem(r, 413, "image-too-large")
+        b.check_peak("PNG of 16384^2 on a 32x32 view, two at once")
+        # one within --max-image-dim but not the view's size: 422 from the header
+        p = problem(b.d.put(url, data=png_declaring(4096, 4096), headers=tok(s)), 422,
+                    "wrong-size")
+        assert "4096x4096" in p["detail"], p
+        b.check_peak("PNG of 4096^2 on a 32x32 view")
+        # nothing was kept; the view's own size still goes in
+        r = b.d.get(url, status=200, headers=tok(s))
+        assert r.headers["X-Glint-Painted"] == "0"
+        problem(b.d.put(url, data=png_declaring(32, 64), headers=tok(s)), 422, "wrong-size")
+        b.d.put(url, data=png_declaring(32, 32), headers=tok(s), status=200)
+    finally:
+        b.d.stop()
+
+
+def test_an_exr_declaring_16384_squared_is_refused_from_its_header(_d):
+    body = exr_declaring(16384, 16384, ["R", "G", "B"])
+    assert len(body) < 8 << 20, len(body)
+    b = Budgeted()
+    try:
+        sc, s = session(b.d)
+        url = "%s/sessions/%s/views/0/painting" % (API, s["id"])
+        p = problem(b.d.put(url, data=body, headers=tok(s), timeout=300), 413, "image-too-large")
+        b.check_peak("ZIP OpenEXR of 16384^2 on a 32x32 view")
+        assert "16384x16384" in p["detail"], p
+        # the same through a G-buffer set's painting
+        st = b.d.post(API + "/gbuffer-sets", status=201,
+                      json={"views": 1, "width": 32, "height": 32}).json()
+        p = problem(b.d.put("%s/gbuffer-sets/%s/views/0/painting" % (API, st["id"]), data=body,
+                            timeout=300), 413, "image-too-large")
+        b.check_peak("ZIP OpenEXR of 16384^2 as a G-buffer set's painting")
+    finally:
+        b.d.stop()
+
+
+def test_a_32_channel_exr_beyond_the_sets_size_is_refused_from_its_header(_d):
+    names = ["c%02d" % i for i in range(32)]
+    body = exr_declaring(4096, 4096, names)
+    b = Budgeted()
+    try:
+        st = b.d.post(API + "/gbuffer-sets", status=201,
+                      json={"views": 1, "width": 4096, "height": 8}).json()
+        url = "%s/gbuffer-sets/%s/views/0/gbuffer.exr" % (API, st["id"])
+        r = b.d.put(url, data=body, headers={"Content-Type": "image/x-exr"}, timeout=300)
+        assert r.status_code == 422, r.status_code
+        b.check_peak("32-channel OpenEXR of 4096^2 into a 4096x8 set")
+        p = problem(r, 422, "wrong-size")
+        assert "4096x4096" in p["detail"] and "4096x8" in p["detail"], p
+        # the set's size with more channels than a G-buffer has: refused too
+        more = exr_declaring(4096, 8, ["c%02d" % i for i in range(40)])
+        p = problem(b.d.put(url, data=more, headers={"Content-Type": "image/x-exr"}), 422,
+                    "invalid-gbuffer")
+        assert "40 channels" in p["detail"], p
+    finally:
+        b.d.stop()
+
+
+def test_a_decode_beyond_the_work_budget_is_refused_before_it_starts(_d):
+    # a 2048 x 2048 view takes a 2048^2 painting; with the budget at 64 MiB
+    # its decode's bound (6 bytes a sample for an 8-bit PNG, 12 a pixel for
+    # the RGB copy, 8 MiB: 128 MiB) can never fit: 413 naming the budget
+    w = Daemon("--work-mb", "64", "--quiet")
+    try:
+        sc = w.post(API + "/scenes", status=201, json={"width": 2048, "height": 2048}).json()
+        s = w.post(API + "/sessions", status=201, json={"scene_id": sc["id"]}).json()
+        url = "%s/sessions/%s/views/0/painting" % (API, s["id"])
+        p = problem(w.put(url, data=png_declaring(2048, 2048), headers=tok(s)), 413,
+                    "over-budget")
+        assert "--work-mb" in p["detail"] and "64 MiB" in p["detail"], p
+        assert "2048x2048" in p["detail"], p
+        assert rss_kb(w, "VmHWM") <= (64 + FIXED_MB) * 1024 or sanitized(w)
+    finally:
+        w.stop()
+
+
+# ---- item 1: long stroke histories --------------------------------------------------------
+
+
+def test_a_long_stroke_history_is_read_in_bounded_pages(_d):
+    # 60 strokes of 10,000 points: a 13 MB history (the probe's was 1,000
+    # strokes; this shows the same and takes seconds to write)
+    strokes = 60
+    b = Budgeted()
+    data_dir = b.d.data_dir
+    try:
+        sc, s = session(b.d)
+        url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
+        text = json.dumps({"strokes": [far_stroke(10000)] * strokes}).encode()
+        b.d.post(url, data=text, headers={**tok(s), "Content-Type": "application/json"},
+                 status=200, timeout=300)
+    finally:
+        b.d.stop()
+    # a fresh daemon on that data: its high-water mark is the readers'
+    b = Budgeted(data_dir=data_dir)
+    try:
+        view = tok(s, "view_token")
+        page = "%s/sessions/%s/strokes?limit=10000" % (API, s["id"])
+        b.d.get(page.replace("10000", "1"), status=200, headers=view, schema="StrokeList.json")
+        r = b.d.get(page, status=200, headers=view)
+        b.check_peak("%d strokes of 10,000 points asked for in one page" % strokes)
+        # four readers at once, each asking for the whole history in one page
+        with cf.ThreadPoolExecutor(4) as ex:
+            rs = list(ex.map(lambda _: b.d.get(page, headers=view), range(4)))
+        b.check_peak("the same by four readers at once")
+        for x in [r] + rs:
+            assert x.status_code == 200 and len(x.content) <= PAGE_BYTES + 4096, (
+                x.status_code, len(x.content))
+        # a page: at most 1 MiB, never empty, and last_seq the cursor to the
+        # next, which follows it without a gap
+        got = r.json()
+        assert got["more"] is True and 1 <= len(got["strokes"]) < strokes, (
+            got["more"], len(got["strokes"]))
+        seen = 0
+        for _ in range(3):
+            for x in got["strokes"]:
+                assert x["seq"] == seen + 1, (x["seq"], seen)
+                seen = x["seq"]
+            assert got["last_seq"] == seen and got["more"] is True
+            got = b.d.get(page + "&since=%d" % got["last_seq"], status=200, headers=view).json()
+        b.check_peak("the history read page after page")
+    finally:
+        b.d.stop()
+
+
+def test_a_stroke_wholly_outside_the_image_is_refused(d):
+    sc, s = session(d)
+    url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
+    far = {"color": [1, 0, 0], "diameter": 4,
+           "points": [[-500000 - i, -700000 - i] for i in range(1000)]}
+    near = {"color": [1, 0, 0], "diameter": 4, "points": [[16, 16]]}
+    p = problem(d.post(url, headers=tok(s), json={"strokes": [near, far]}), 422,
+                "stroke-outside-image")
+    assert "strokes[1]" in p["detail"] and "32x32" in p["detail"], p
+    # nothing of the request was applied
+    assert d.get("%s/sessions/%s/strokes" % (API, s["id"]), status=200,
+                 headers=tok(s)).json()["strokes"] == []
+    # a dab whose radius reaches the image from outside it is taken, as is
+    # a stroke that leaves the image
+    edge = {"color": [1, 0, 0], "diameter": 4, "points": [[-1.5, 16]]}
+    d.post(url, headers=tok(s), json={"strokes": [edge, dict(near, points=[[16, 16], [-900, 16]])]},
+           status=200)
+
+
+if __name__ == "__main__":
+    run_tests(globals(), daemon_args=("--quiet",))
