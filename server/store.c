@@ -448,19 +448,24 @@ out:
 int store_scene_delete(store *s, const char *id, glint_err *err)
 {
     db_stmt *st = NULL;
-    json_t *sessions = json_array();
+    json_t *sessions = json_array(), *materials = json_array();
     int rc = 0, step;
     static const char *const dels[] = {
+        "DELETE FROM materials WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM events WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM paintings WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM sessions WHERE scene_id = ?1",
         "DELETE FROM scenes WHERE id = ?1",
         NULL};
 
-    if (!sessions)
+    if (!sessions || !materials) {
+        json_decref(sessions);
+        json_decref(materials);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory deleting a scene");
+    }
     if (!glint_id_valid(id)) {
         json_decref(sessions);
+        json_decref(materials);
         return glint_err_set(err, GLINT_ENOTFOUND, "no scene with id \"%.40s\"", id ? id : "");
     }
     pthread_mutex_lock(&s->lock);
@@ -493,6 +498,20 @@ int store_scene_delete(store *s, const char *id, glint_err *err)
         rc = step;
         goto out;
     }
+    db_finalize(st);
+    st = store_prep(s, "SELECT id FROM materials WHERE session IN "
+                       "(SELECT id FROM sessions WHERE scene_id = ?1)", err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, id);
+    while ((step = db_step(st, "reading", err)) == DB_ROW)
+        json_array_append_new(materials, json_string(db_col_text(st, 0)));
+    if (step < 0) {
+        rc = step;
+        goto out;
+    }
     for (int i = 0; dels[i]; i++) {
         db_finalize(st);
         st = store_prep(s, dels[i], err);
@@ -520,8 +539,13 @@ out:
             snprintf(name, sizeof name, "sessions/%s", json_string_value(v));
             store_blob_rmtree(s, name);
         }
+        json_array_foreach(materials, i, v) {
+            snprintf(name, sizeof name, "materials/%s", json_string_value(v));
+            store_blob_rmtree(s, name);
+        }
     }
     json_decref(sessions);
+    json_decref(materials);
     return rc;
 }
 

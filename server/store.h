@@ -125,8 +125,9 @@ int store_scene_put(store *s, const char *id, const json_t *doc, glint_err *err)
 int store_scene_get(store *s, const char *id, json_t **doc, glint_err *err);
 /* Every scene's doc, oldest first. */
 int store_scene_list(store *s, json_t **array, glint_err *err);
-/* Deletes the scene, its sessions with their events and paintings, and the
- * blobs under "scenes/<id>/" and "sessions/<session>/" (materials stay). */
+/* Deletes the scene, its sessions with their events and paintings, the
+ * materials fitted in them, and the blobs under "scenes/<id>/",
+ * "sessions/<session>/" and "materials/<material>/". */
 int store_scene_delete(store *s, const char *id, glint_err *err);
 
 /* ---- sessions ------------------------------------------------------------------------- */

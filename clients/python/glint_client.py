@@ -247,8 +247,9 @@ class GlintClient:
         return self._call("GET", "/api/v1/scenes/" + _segment(scene_id))
 
     def delete_scene(self, scene_id, owner_key=None):
-        """DELETE /api/v1/scenes/{id}: deletes the scene with its sessions
-        (materials stay); needs its owner key or the API key. Returns None."""
+        """DELETE /api/v1/scenes/{id}: deletes the scene with its sessions and
+        the materials fitted in them; needs its owner key or the API key.
+        Returns None."""
         self._call("DELETE", "/api/v1/scenes/" + _segment(scene_id), owner_key=owner_key)
 
     def base_render(self, scene_id, view, format="png", brdf=None, scale=None, intensity=None,
