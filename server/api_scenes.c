@@ -586,7 +586,11 @@ static http_resp scene_create_h(http_req *req)
     json_t *pub = NULL;
     char id[33];
     glint_err e;
-    if (scene_create_do(req, &pub, id, &e))
+    int rc;
+    api_envs_use_begin(); /* base.env may name an upload: not deleted meanwhile */
+    rc = scene_create_do(req, &pub, id, &e);
+    api_envs_use_end();
+    if (rc)
         return api_error(&e);
     return api_created(pub, "scenes", id);
 }
