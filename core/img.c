@@ -171,11 +171,11 @@ static int img_unrecognized(const char *what, const unsigned char *b, size_t n,
                          what, n ? hex : "none");
 }
 
-/* Decode a file (path != NULL) or a buffer, then check finiteness.
- * (OUT: *pix, zeroed first; freed on failure.) */
+/* Decode a file (path != NULL) or a buffer, then check finiteness unless
+ * keep_nonfinite.  (OUT: *pix, zeroed first; freed on failure.) */
 static int img_read_common(const char *path, const void *data, size_t len, int max_dim,
-                           int max_channels, int want_names, img_oiio_pixels *pix,
-                           glint_err *err)
+                           int max_channels, int want_names, int keep_nonfinite,
+                           img_oiio_pixels *pix, glint_err *err)
 {
     unsigned char head[16];
     size_t nhead;
@@ -235,7 +235,7 @@ static int img_read_common(const char *path, const void *data, size_t len, int m
     if (fp)
         fclose(fp);
     fp = NULL;
-    if (rc)
+    if (rc || keep_nonfinite)
         return rc;
 
     rc = img_check_finite_array(pix->px, pix->width, pix->height, pix->channels,
@@ -262,7 +262,7 @@ static void img_take(img *out, img_oiio_pixels *pix)
     img_oiio_pixels_free(pix);
 }
 
-int img_read(const char *path, img *out, glint_err *err)
+static int img_read_file(const char *path, int keep_nonfinite, img *out, glint_err *err)
 {
     img_oiio_pixels pix;
     int rc;
@@ -272,11 +272,21 @@ int img_read(const char *path, img *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, keep_nonfinite, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
     return 0;
+}
+
+int img_read(const char *path, img *out, glint_err *err)
+{
+    return img_read_file(path, 0, out, err);
+}
+
+int img_read_keep_nonfinite(const char *path, img *out, glint_err *err)
+{
+    return img_read_file(path, 1, out, err);
 }
 
 int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
@@ -298,7 +308,8 @@ static int mem_read_args(const char *what, const void *data, size_t len, int *ma
     return 0;
 }
 
-int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err)
+static int img_read_mem_common(const void *data, size_t len, int max_dim, int keep_nonfinite,
+                               img *out, glint_err *err)
 {
     img_oiio_pixels pix;
     int rc;
@@ -308,11 +319,22 @@ int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_
     memset(out, 0, sizeof *out);
     if ((rc = mem_read_args("img_read_mem", data, len, &max_dim, err)))
         return rc;
-    rc = img_read_common(NULL, data, len, max_dim, 4, 0, &pix, err);
+    rc = img_read_common(NULL, data, len, max_dim, 4, 0, keep_nonfinite, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
     return 0;
+}
+
+int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err)
+{
+    return img_read_mem_common(data, len, max_dim, 0, out, err);
+}
+
+int img_read_mem_keep_nonfinite(const void *data, size_t len, int max_dim, img *out,
+                                glint_err *err)
+{
+    return img_read_mem_common(data, len, max_dim, 1, out, err);
 }
 
 int img_read_named(const char *path, img_named *out, glint_err *err)
@@ -325,7 +347,8 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read_named: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, 0, &pix,
+                         err);
     if (rc)
         return rc;
     out->width = pix.width;
@@ -349,7 +372,7 @@ int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channe
         return rc;
     if (max_channels < 1 || max_channels > IMG_MAX_NAMED_CHANNELS)
         max_channels = IMG_MAX_NAMED_CHANNELS;
-    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, &pix, err);
+    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, 0, &pix, err);
     if (rc)
         return rc;
     out->width = pix.width;

@@ -12,6 +12,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
+import exr_named  # noqa: E402
 from harness import GLINTD, run_tests  # noqa: E402
 
 CLI = os.environ.get("GLINT_CLI") or os.path.join(
@@ -340,6 +341,27 @@ def test_07b_uploads_belong_to_their_owner(d):
     assert up["spec"] not in listed(mine)
     d.delete("/api/v1/environments/" + made["id"],
              headers={"X-Glint-Owner": made["owner_key"]}, status=204)
+
+
+def test_07c_nonfinite_texels_read_as_zero(d):
+    """An OpenEXR map with NaN and infinite texels is kept, those texels
+    read as 0 and counted, as the API says."""
+    import math
+    w, h = 16, 8
+    chans = {c: [0.5] * (w * h) for c in "RGB"}
+    chans["R"][3], chans["G"][17], chans["B"][40] = math.nan, math.inf, -math.inf
+    oct_ = {"Content-Type": "application/octet-stream", "X-Glint-Owner": OWNER}
+    r = d.post("/api/v1/environments?name=holes", headers=oct_, data=exr_named.write(w, h, chans),
+               status=201, schema="Environment.json")
+    e = r.json()
+    assert e["nonfinite"] == 3 and e["format"] == "exr" and e["width"] == w, e
+    # usable: a base render under it
+    sc = d.post("/api/v1/scenes", headers={"X-Glint-Owner": OWNER},
+                json={"width": 16, "height": 16, "base": {"env": {"spec": e["spec"], "lights": 8}}},
+                status=201).json()
+    d.get("/api/v1/scenes/%s/views/0/base.png" % sc["id"], status=200)
+    d.delete("/api/v1/scenes/" + sc["id"], headers={"X-Glint-Owner": OWNER}, status=204)
+    d.delete("/api/v1/environments/" + e["id"], headers={"X-Glint-Owner": OWNER}, status=204)
 
 
 def undated(exr):
