@@ -47,6 +47,16 @@ static void mref_put(mref *r, char c)
     r->total++;
 }
 
+/* n bytes at s (kept as far as there is room). */
+static void mref_append(mref *r, const char *s, size_t n)
+{
+    size_t room = MREF_KEEP - r->n, k = n < room ? n : room;
+    memcpy(r->s + r->n, s, k);
+    r->n += k;
+    r->s[r->n] = '\0';
+    r->total += n;
+}
+
 /* Leading and trailing whitespace removed (of what was kept). */
 static void mref_trim(mref *r)
 {
@@ -80,30 +90,35 @@ static int hexval(char c)
  * closing quote.  -1 when it does not end before `end`. */
 static int json_str(const char **p, const char *end, mref *r)
 {
-    const char *q = *p;
+    const char *q = *p, *quote = NULL, *bs;
     memset(r, 0, sizeof *r);
-    while (q < end && *q != '"') {
-        char c = *q++;
-        if (c == '\\') {
-            if (q >= end)
+    for (;;) {
+        char c;
+        /* runs without escapes (a data: URI's megabytes) by memchr: the
+         * next quote, found again only once an escape passed it */
+        if ((!quote || quote < q) && !(quote = memchr(q, '"', (size_t)(end - q))))
+            return -1;
+        bs = memchr(q, '\\', (size_t)(quote - q));
+        mref_append(r, q, (size_t)((bs ? bs : quote) - q));
+        q = bs ? bs : quote;
+        if (!bs)
+            break;
+        if (++q >= end) /* past the backslash */
+            return -1;
+        c = *q++;
+        if (c == 'u') {
+            unsigned v = 0;
+            int k;
+            for (k = 0; k < 4 && q < end && isxdigit((unsigned char)*q); k++, q++)
+                v = 16 * v + (unsigned)hexval(*q);
+            if (k < 4)
                 return -1;
-            c = *q++;
-            if (c == 'u') {
-                unsigned v = 0;
-                int k;
-                for (k = 0; k < 4 && q < end && isxdigit((unsigned char)*q); k++, q++)
-                    v = 16 * v + (unsigned)hexval(*q);
-                if (k < 4)
-                    return -1;
-                c = v < 0x80 ? (char)v : '?';
-            } else if (c == 'n' || c == 't' || c == 'r' || c == 'b' || c == 'f') {
-                c = ' ';
-            }
+            c = v < 0x80 ? (char)v : '?';
+        } else if (c == 'n' || c == 't' || c == 'r' || c == 'b' || c == 'f') {
+            c = ' ';
         }
         mref_put(r, c);
     }
-    if (q >= end)
-        return -1;
     *p = q + 1;
     return 0;
 }
@@ -169,9 +184,12 @@ static int xml_name_char(char c)
 static const char *find(const char *p, const char *end, const char *s)
 {
     size_t n = strlen(s);
-    for (; p + n <= end; p++)
-        if (*p == s[0] && memcmp(p, s, n) == 0)
+    for (; p + n <= end; p++) {
+        if (!(p = memchr(p, s[0], (size_t)(end - p))) || p + n > end)
+            return NULL;
+        if (memcmp(p, s, n) == 0)
             return p;
+    }
     return NULL;
 }
 

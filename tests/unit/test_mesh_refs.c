@@ -517,6 +517,9 @@ TEST(refs_upload_text)
          "/etc/passwd"},
         {"gltf", "{\"extensions\":{\"X\":{\"deep\":[{\"uri\":\"file:///etc/passwd\"}]}}}",
          "file:///etc/passwd"},
+        /* escaped quotes in other strings do not end them; escapes in the reference */
+        {"gltf", "{\"name\":\"say \\\"uri\\\": \\\"x\\\"\",\"images\":[{\"uri\":\"dir\\/t.png\"}]}",
+         "dir/t.png"},
         {"obj", "mtllib model.mtl\nv 0 0 0\n", "model.mtl"},
         {"obj", "v 0 0 0\r\n  maplib  maps.mpl  \r\n", "maps.mpl"},
         {"obj", "call other.obj 1 2\n", "other.obj 1 2"},
