@@ -177,7 +177,7 @@ int env_load(const char *path, env_map *out, glint_err *err)
     img im;
     int rc;
     memset(out, 0, sizeof *out);
-    if ((rc = img_read(path, &im, err)))
+    if ((rc = img_read_keep_nonfinite(path, &im, err)))
         return rc;
     rc = from_img(&im, base_name(path), out, err);
     img_free(&im);
@@ -190,7 +190,7 @@ int env_load_mem(const void *data, size_t len, const char *name, int max_dim,
     img im;
     int rc;
     memset(out, 0, sizeof *out);
-    if ((rc = img_read_mem_checked(data, len, max_dim, check, cls, &im, err)))
+    if ((rc = img_read_mem_keep_nonfinite(data, len, max_dim, check, cls, &im, err)))
         return rc;
     rc = from_img(&im, name ? name : "upload", out, err);
     img_free(&im);

@@ -274,12 +274,12 @@ static int gate_oiio(void *cls, int w, int h, int nch, int sample_bytes, int as_
     return gate_seen(g, err);
 }
 
-/* Decode a file (path != NULL) or a buffer, then check finiteness.  gate
- * (may be NULL): the header's check, before any pixel.
+/* Decode a file (path != NULL) or a buffer, then check finiteness unless
+ * keep_nonfinite.  gate (may be NULL): the header's check, before any pixel.
  * (OUT: *pix, zeroed first; freed on failure.) */
 static int img_read_common(const char *path, const void *data, size_t len, int max_dim,
-                           int max_channels, int want_names, img_gate *gate,
-                           img_oiio_pixels *pix, glint_err *err)
+                           int max_channels, int want_names, int keep_nonfinite,
+                           img_gate *gate, img_oiio_pixels *pix, glint_err *err)
 {
     unsigned char head[16];
     size_t nhead;
@@ -358,6 +358,8 @@ static int img_read_common(const char *path, const void *data, size_t len, int m
                            gate->hd.height, gate->hd.channels);
         goto fail_pixels;
     }
+    if (keep_nonfinite)
+        return 0;
 
     rc = img_check_finite_array(pix->px, pix->width, pix->height, pix->channels,
                                 (const char *const *)pix->names, what, err);
@@ -383,7 +385,7 @@ static void img_take(img *out, img_oiio_pixels *pix)
     img_oiio_pixels_free(pix);
 }
 
-int img_read(const char *path, img *out, glint_err *err)
+static int img_read_file(const char *path, int keep_nonfinite, img *out, glint_err *err)
 {
     img_oiio_pixels pix;
     int rc;
@@ -393,11 +395,21 @@ int img_read(const char *path, img *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, NULL, &pix, err);
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, 4, 0, keep_nonfinite, NULL, &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
     return 0;
+}
+
+int img_read(const char *path, img *out, glint_err *err)
+{
+    return img_read_file(path, 0, out, err);
+}
+
+int img_read_keep_nonfinite(const char *path, img *out, glint_err *err)
+{
+    return img_read_file(path, 1, out, err);
 }
 
 int img_read_mem(const void *data, size_t len, img *out, glint_err *err)
@@ -434,7 +446,7 @@ int img_read_named(const char *path, img_named *out, glint_err *err)
     memset(out, 0, sizeof *out);
     if (!path || !*path)
         return glint_err_set(err, GLINT_EINVAL, "img_read_named: empty path");
-    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, NULL, &pix,
+    rc = img_read_common(path, NULL, 0, IMG_MAX_DIM, IMG_MAX_NAMED_CHANNELS, 1, 0, NULL, &pix,
                          err);
     if (rc)
         return rc;
@@ -452,8 +464,8 @@ int img_read_named_mem(const void *data, size_t len, int max_dim, int max_channe
     return img_read_named_mem_checked(data, len, max_dim, max_channels, NULL, NULL, out, err);
 }
 
-int img_read_mem_checked(const void *data, size_t len, int max_dim, img_header_check check,
-                         void *cls, img *out, glint_err *err)
+static int img_read_mem_gated(const void *data, size_t len, int max_dim, img_header_check check,
+                              void *cls, int keep_nonfinite, img *out, glint_err *err)
 {
     img_gate gate = {check, cls, 0, {NULL, 0, 0, 0, 0}};
     img_oiio_pixels pix;
@@ -464,11 +476,24 @@ int img_read_mem_checked(const void *data, size_t len, int max_dim, img_header_c
     memset(out, 0, sizeof *out);
     if ((rc = mem_read_args("img_read_mem", data, len, &max_dim, err)))
         return rc;
-    rc = img_read_common(NULL, data, len, max_dim, 4, 0, check ? &gate : NULL, &pix, err);
+    rc = img_read_common(NULL, data, len, max_dim, 4, 0, keep_nonfinite, check ? &gate : NULL,
+                         &pix, err);
     if (rc)
         return rc;
     img_take(out, &pix);
     return 0;
+}
+
+int img_read_mem_checked(const void *data, size_t len, int max_dim, img_header_check check,
+                         void *cls, img *out, glint_err *err)
+{
+    return img_read_mem_gated(data, len, max_dim, check, cls, 0, out, err);
+}
+
+int img_read_mem_keep_nonfinite(const void *data, size_t len, int max_dim,
+                                img_header_check check, void *cls, img *out, glint_err *err)
+{
+    return img_read_mem_gated(data, len, max_dim, check, cls, 1, out, err);
 }
 
 int img_read_named_mem_checked(const void *data, size_t len, int max_dim, int max_channels,
@@ -486,7 +511,7 @@ int img_read_named_mem_checked(const void *data, size_t len, int max_dim, int ma
         return rc;
     if (max_channels < 1 || max_channels > IMG_MAX_NAMED_CHANNELS)
         max_channels = IMG_MAX_NAMED_CHANNELS;
-    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, check ? &gate : NULL, &pix,
+    rc = img_read_common(NULL, data, len, max_dim, max_channels, 1, 0, check ? &gate : NULL, &pix,
                          err);
     if (rc)
         return rc;

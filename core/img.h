@@ -44,6 +44,11 @@ int img_read_mem(const void *data, size_t len, img *out, glint_err *err);
 /* The same with sides at most max_dim (1..IMG_MAX_DIM), checked from the
  * header before any pixel is decoded: what bounds an upload's memory. */
 int img_read_mem_max(const void *data, size_t len, int max_dim, img *out, glint_err *err);
+/* img_read and img_read_mem_checked (below) without the finiteness check:
+ * NaN and infinite values come back as the file holds them, for a caller
+ * that deals with them itself (env.h reads them as 0 and counts them). */
+int img_read_keep_nonfinite(const char *path, img *out, glint_err *err);
+/* (img_read_mem_keep_nonfinite: below, with img_read_mem_checked.) */
 
 /* Write by file extension: .png (8-bit, clamped), .exr (half or float as
  * chosen: float), .hdr.  GLINT_EUNSUPPORTED for other extensions.
@@ -176,5 +181,7 @@ int img_read_mem_checked(const void *data, size_t len, int max_dim, img_header_c
 int img_read_named_mem_checked(const void *data, size_t len, int max_dim, int max_channels,
                                img_header_check check, void *cls, img_named *out,
                                glint_err *err);
+int img_read_mem_keep_nonfinite(const void *data, size_t len, int max_dim,
+                                img_header_check check, void *cls, img *out, glint_err *err);
 
 #endif

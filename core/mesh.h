@@ -132,6 +132,23 @@ int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err);
 int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
                   mesh_report *report, glint_err *err);
 
+/* The references to other files that an upload's bytes make, found in
+ * their text whether or not anything uses them: glTF "uri" members at any
+ * depth (buffers, images, extensions; also in a .glb's JSON chunk);
+ * COLLADA <init_from> of an image and <ref> text, url= and source=
+ * attributes that do not point into the document ('#'), DOCTYPE or
+ * ENTITY literals after SYSTEM or PUBLIC; OBJ mtllib, maplib, call,
+ * shadow_obj and trace_obj statements; PLY "comment TextureFile NAME".
+ * data: URIs are part of the file.  0 when there is none; else
+ * GLINT_EINVAL naming the first, in mesh_load_mem's words ("external
+ * references are not allowed in uploads").  `fmt` is the upload's format
+ * (ply, obj, off, gltf, glb, dae); glTF and COLLADA are also recognized by
+ * their content.  Reads only `data`, in constant memory; a server calls it
+ * on an upload before mesh_load_mem (which, for files it stored earlier,
+ * still loads the geometry of an upload that names a plain relative file
+ * it never reads). */
+int mesh_refs_check(const void *data, size_t len, const char *fmt, glint_err *err);
+
 /* Import in the calling process instead of a child (on != 0).  Only for a
  * fuzzer, which must see the importer's coverage and wants its crashes, and
  * for a test under memcheck, which must see the import's memory: a malformed

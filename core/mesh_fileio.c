@@ -468,15 +468,27 @@ struct aiFileIO *mio_fs_io(mio_fs *fs)
     return &fs->io;
 }
 
+static int mio_upload_refuse_shown(const char *shown, const char *what, glint_err *err)
+{
+    return glint_err_set(err, GLINT_EINVAL,
+                         "%s: refers to the external file \"%s\": external references are "
+                         "not allowed in uploads (the file must carry all its data itself, "
+                         "e.g. glTF buffers as data: URIs, or one .glb)",
+                         what, shown);
+}
+
+int mio_upload_refuse(const char *ref, const char *what, glint_err *err)
+{
+    char shown[MIO_REF_SHOWN + 4];
+    mio_ref_show(ref, shown);
+    return mio_upload_refuse_shown(shown, what, err);
+}
+
 static int mio_fs_refuse(const mio_fs *fs, int kind, const char *shown, const char *what,
                          glint_err *err)
 {
     if (fs->upload)
-        return glint_err_set(err, GLINT_EINVAL,
-                             "%s: refers to the external file \"%s\": external references are "
-                             "not allowed in uploads (the file must carry all its data itself, "
-                             "e.g. glTF buffers as data: URIs, or one .glb)",
-                             what, shown);
+        return mio_upload_refuse_shown(shown, what, err);
     return glint_err_set(err, GLINT_EINVAL,
                          "%s: refers to \"%s\", %s: a mesh file may refer only to files in its "
                          "own directory or below it",

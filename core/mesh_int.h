@@ -7,6 +7,7 @@
  *   mesh_prescan.c  structural pre-scan of PLY and OFF data
  *   mesh_assimp.c   the assimp import and the merge of its meshes
  *   mesh_fileio.c   the file system assimp reads through (what it may open)
+ *   mesh_refs.c     the references an upload's text makes (mesh_refs_check)
  *   mesh_child.c    the import in a child process, and its pipe protocol */
 #ifndef GLINT_MESH_INT_H
 #define GLINT_MESH_INT_H
@@ -74,6 +75,12 @@ enum {
 /* Classify a reference as a mesh file writes it, relative to the file's
  * directory (mesh_fileio.c).  Purely lexical: touches no file. */
 int mio_ref_check(const char *ref);
+
+/* The refusal of an upload's reference `ref` (GLINT_EINVAL, "external
+ * references are not allowed in uploads", naming it printable and cut to
+ * a few dozen characters; `what` starts the message): the same words
+ * whether the import or mesh_refs_check finds it. */
+int mio_upload_refuse(const char *ref, const char *what, glint_err *err);
 
 /* The file system one import reads through (mesh_fileio.c, where the rules
  * are): from memory (path NULL) only the `len` bytes at `data` exist, under

@@ -218,8 +218,13 @@ int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err)
 
     if ((rc = fitsvc_material_doc(a->fits, mid, doc, err)))
         return rc;
-    if (!doc->session[0]) { /* fitted from a G-buffer set: the API key's */
-        if ((rc = auth_require_key(req, err))) {
+    if (!doc->session[0]) { /* fitted from a G-buffer set: its owner's */
+        json_t *j = json_loadb(doc->text, doc->len, 0, NULL);
+        const char *set = json_string_value(json_object_get(j, "gbuffer_set_id"));
+        rc = set ? api_gbuffer_set_access(req, set, err)
+                 : glint_err_set(err, GLINT_EINTERNAL, "material %s names no G-buffer set", mid);
+        json_decref(j);
+        if (rc) {
             free(doc->text);
             doc->text = NULL;
         }

@@ -37,6 +37,13 @@ int api_reject(glint_err *err, int code, const char *kind, const char *fmt, ...)
 struct render_env;
 struct render_env_info;
 int api_env_query(http_req *req, struct render_env *out, int *has, glint_err *e);
+/* Around a scene creation that may name an uploaded environment, from
+ * resolving it to storing the scene: a deletion of an upload waits for
+ * the creations in progress, and the next ones wait for it, so that it
+ * never misses a scene that names the upload (api_envs.c; within one
+ * glintd process). */
+void api_envs_use_begin(void);
+void api_envs_use_end(void);
 /* X-Glint-Env: what an environment render did. */
 void api_env_header(http_resp *r, const struct render_env_info *info);
 /* A scene's base-render environment, {"spec", "rotation", "intensity",

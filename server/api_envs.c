@@ -1,16 +1,24 @@
 /* api_envs.c: the environments the daemon offers to environment-lit fits
  * (proto/openapi.yaml, "environments").
  *
- *   GET    /api/v1/environments
+ *   GET    /api/v1/environments          built-ins, data: maps, the caller's uploads
  *   POST   /api/v1/environments?name=LABEL   raw OpenEXR or Radiance HDR  (API key)
- *   DELETE /api/v1/environments/{id}                                      (API key)
+ *   DELETE /api/v1/environments/{id}         (the upload's owner key, or the API key)
  *
  * The built-in skies, the HDR maps of the directory given by --env-dir
  * (none without it), named "data:<file>", and uploads, named
  * "upload:<id>": decoded and checked before they are kept (sides at most
  * ENV_UPLOAD_MAX_DIM, a layout env.h reads), stored in the data store as
  * blobs environments/<id>.exr|hdr with a record environments/<id>.json.
- * The resolver registered here (env.h) is the only way a fit's `env`
+ * An upload belongs to the owner key it was made with (X-Glint-Owner, or
+ * one made and answered once, as scenes do: auth.h), kept in its record as
+ * "owner" and never shown: it is listed to that key (every upload to the
+ * API key) and deleted by it or the API key, and never while a scene's
+ * base renders are lit by it (409 environment-in-use: deleting the map
+ * would break the scene and its sessions).  Materials fitted under it do
+ * not hold it: a material is its own BRDF, and reads, renders and exports
+ * without the map.  Built-ins and data: maps are everyone's and are never
+ * deleted.  The resolver registered here (env.h) is the only way a fit's `env`
  * parameter reaches a file: data:NAME of [A-Za-z0-9._-] not starting with
  * '.', a regular file whose real path lies inside the directory (no
  * traversal, no symbolic link out of it); upload:ID of a valid id whose
@@ -19,6 +27,7 @@
 #include <dirent.h>
 #include <math.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,6 +45,21 @@
 
 static char env_dir[PATH_MAX]; /* real path, "" when none */
 static char up_dir[PATH_MAX];  /* the uploads' blob directory, "" before the store opens */
+
+/* Scene creations hold it shared from resolving their base environment to
+ * storing the scene; a deletion holds it exclusively from counting the
+ * scenes that name the upload to removing it (api_common.h). */
+static pthread_rwlock_t env_use_lock = PTHREAD_RWLOCK_INITIALIZER;
+
+void api_envs_use_begin(void)
+{
+    pthread_rwlock_rdlock(&env_use_lock);
+}
+
+void api_envs_use_end(void)
+{
+    pthread_rwlock_unlock(&env_use_lock);
+}
 
 /* An upload's sides: 4096 x 2048 lat-long (or a 4096-wide cross).  Its
  * decode's bound by its header, and the map made from it (3 floats a
@@ -218,11 +242,25 @@ static int cmp_str(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
+/* The public form of an upload's record: everything but its owner. */
+static json_t *env_public(json_t *rec)
+{
+    json_object_del(rec, "owner");
+    return rec;
+}
+
 static http_resp envs_get(http_req *req)
 {
-    json_t *list = json_array();
+    json_t *list;
     char names[] = "studio,sky,sunset,overcast,white", *save = NULL;
-    (void)req;
+    const char *owner = NULL;
+    int all = auth_has_key(req);
+    glint_err e;
+
+    /* uploads are listed to their owner key (all of them to the API key) */
+    if (!all && auth_owner_key(req, &owner, &e))
+        return api_error(&e);
+    list = json_array();
     for (char *t = strtok_r(names, ",", &save); t; t = strtok_r(NULL, ",", &save))
         json_array_append_new(list, json_pack("{s:s, s:s, s:s}", "spec", t, "name", t,
                                               "kind", "builtin"));
@@ -250,7 +288,7 @@ static http_resp envs_get(http_req *req)
             free(found[i]);
         }
     }
-    if (up_dir[0]) {
+    if (up_dir[0] && (all || owner)) {
         app *a = req->app;
         json_t *blobs = NULL, *v;
         size_t i;
@@ -266,8 +304,9 @@ static http_resp envs_get(http_req *req)
                 snprintf(blob, sizeof blob, "environments/%s", nm);
                 if (store_blob_get(a->store, blob, &data, &len, NULL))
                     continue;
-                if ((rec = json_loadb(data, len, 0, NULL)) && json_is_object(rec))
-                    json_array_append_new(list, rec);
+                if ((rec = json_loadb(data, len, 0, NULL)) && json_is_object(rec) &&
+                    (all || auth_owned_by(rec, owner)))
+                    json_array_append_new(list, env_public(rec));
                 else
                     json_decref(rec);
                 free(data);
@@ -291,14 +330,14 @@ static int label_ok(const char *s)
 static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint_err *e)
 {
     app *a = req->app;
-    const char *label = http_query(req, "name"), *ext;
+    const char *label = http_query(req, "name"), *ext, *owner;
     const unsigned char *b = (const unsigned char *)req->body;
-    char blob[128], now[GLINT_TIME_LEN], *txt;
+    char blob[128], now[GLINT_TIME_LEN], made[GLINT_ID_LEN], *txt;
     upload_gate gate;
     env_map m;
     int rc;
 
-    if ((rc = auth_require_key(req, e)))
+    if ((rc = auth_require_key(req, e)) || (rc = auth_owner_new(req, made, &owner, e)))
         return rc;
     if (!up_dir[0])
         return glint_err_set(e, GLINT_EINTERNAL, "no store for uploads");
@@ -348,11 +387,12 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
     {
         char spec[64];
         snprintf(spec, sizeof spec, "upload:%s", id);
-        *rec = json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:s, s:I, s:I, s:I, s:s, s:s}", "id", id,
-                         "spec", spec, "name", label ? label : id, "kind", "upload", "width",
-                         m.width, "height", m.height, "layout", m.layout, "bytes",
+        *rec = json_pack("{s:s, s:s, s:s, s:s, s:i, s:i, s:s, s:I, s:I, s:I, s:s, s:s, s:s}",
+                         "id", id, "spec", spec, "name", label ? label : id, "kind", "upload",
+                         "width", m.width, "height", m.height, "layout", m.layout, "bytes",
                          (json_int_t)req->body_len, "clamped", (json_int_t)m.clamped,
-                         "nonfinite", (json_int_t)m.nonfinite, "format", ext, "created", now);
+                         "nonfinite", (json_int_t)m.nonfinite, "format", ext, "created", now,
+                         "owner", owner);
     }
     env_map_free(&m);
     if (!*rec || !(txt = json_dumps(*rec, JSON_COMPACT))) {
@@ -374,6 +414,8 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
         *rec = NULL;
         return glint_err_prefix(e, "storing the environment");
     }
+    /* the one answer that carries the owner key */
+    json_object_set_new(env_public(*rec), "owner_key", json_string(owner));
     return 0;
 }
 
@@ -387,24 +429,98 @@ static http_resp envs_post(http_req *req)
     return api_created(rec, "environments", id);
 }
 
-static http_resp envs_delete(http_req *req)
+/* The record of upload `id` (OUT: *rec), or GLINT_ENOTFOUND. */
+static int env_record(app *a, const char *id, json_t **rec, glint_err *e)
 {
-    app *a = req->app;
-    const char *id = req->param[0], *ext;
-    char path[PATH_MAX + 64], blob[128];
-    glint_err e;
-    if (auth_require_key(req, &e))
-        return api_error(&e);
-    if (upload_file(id, path, sizeof path, &ext)) {
-        api_reject(&e, GLINT_ENOTFOUND, "not-found", "no uploaded environment \"%.40s\"",
-                   id ? id : "");
-        return api_error(&e);
+    char blob[128];
+    void *data = NULL;
+    size_t len = 0;
+    int rc;
+
+    *rec = NULL;
+    snprintf(blob, sizeof blob, "environments/%s.json", id);
+    if ((rc = store_blob_get(a->store, blob, &data, &len, e)))
+        return rc;
+    *rec = json_loadb(data, len, 0, NULL);
+    free(data);
+    if (!json_is_object(*rec)) {
+        json_decref(*rec);
+        *rec = NULL;
+        return glint_err_set(e, GLINT_EINTERNAL, "environment %s: unreadable record", id);
     }
+    return 0;
+}
+
+/* Is `name` a built-in or a data: map (everyone's, never deleted)? */
+static int env_public_name(const char *name)
+{
+    const char *n = !strncmp(name, "builtin:", 8) ? name + 8 : name;
+    const char *b = env_builtin_names();
+    size_t len = strlen(n);
+    if (!strncmp(name, "data:", 5) || (n != name && len))
+        return 1;
+    for (const char *p = strstr(b, n); len && p; p = strstr(p + 1, n))
+        if ((p == b || p[-1] == ' ') && (p[len] == ',' || p[len] == '\0'))
+            return 1;
+    return 0;
+}
+
+/* Delete upload `id` unless a scene's base renders are lit by it. */
+static int env_delete_locked(app *a, const char *id, const char *ext, glint_err *e)
+{
+    char blob[128];
+    long long n = 0;
+    int rc;
+
+    snprintf(blob, sizeof blob, "\"upload:%s\"", id);
+    if ((rc = store_scene_count_naming(a->store, blob, &n, e)))
+        return glint_err_prefix(e, "looking for the scenes lit by environment %s", id);
+    if (n > 0)
+        return api_reject(e, GLINT_ECONFLICT, "environment-in-use",
+                          "environment upload:%s lights the base renders of %lld scene%s, which "
+                          "would break without it: delete %s first (DELETE /api/v1/scenes/{id}; "
+                          "their sessions and materials go with them)",
+                          id, n, n == 1 ? "" : "s", n == 1 ? "that scene" : "those scenes");
     /* the record first: a map without one is not listed */
     snprintf(blob, sizeof blob, "environments/%s.json", id);
-    store_blob_delete(a->store, blob, NULL);
+    if ((rc = store_blob_delete(a->store, blob, e)))
+        return rc;
     snprintf(blob, sizeof blob, "environments/%s.%s", id, ext);
-    if (store_blob_delete(a->store, blob, &e))
+    return store_blob_delete(a->store, blob, e);
+}
+
+static int env_delete_do(http_req *req, glint_err *e)
+{
+    app *a = req->app;
+    const char *id = req->param[0] ? req->param[0] : "", *ext;
+    char path[PATH_MAX + 64];
+    json_t *rec = NULL;
+    int rc;
+
+    if (env_public_name(id))
+        return api_reject(e, GLINT_EDENIED, "not-deletable",
+                          "\"%.64s\" is a built-in or a map of the daemon's --env-dir: those are "
+                          "everyone's and cannot be deleted (only uploads, by their owner key)",
+                          id);
+    if (upload_file(id, path, sizeof path, &ext) || env_record(a, id, &rec, e) == GLINT_ENOTFOUND)
+        return api_reject(e, GLINT_ENOTFOUND, "not-found", "no uploaded environment \"%.40s\"",
+                          id);
+    if (!rec)
+        return e->code;
+    rc = auth_owner(req, rec, "environment", e);
+    json_decref(rec);
+    if (rc)
+        return rc;
+    pthread_rwlock_wrlock(&env_use_lock);
+    rc = env_delete_locked(a, id, ext, e);
+    pthread_rwlock_unlock(&env_use_lock);
+    return rc;
+}
+
+static http_resp envs_delete(http_req *req)
+{
+    glint_err e;
+    if (env_delete_do(req, &e))
         return api_error(&e);
     return http_bytes(204, NULL, "", 0);
 }

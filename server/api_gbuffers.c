@@ -1,10 +1,13 @@
 /* api_gbuffers.c: G-buffer sets, fits of G-buffers and paintings made
- * elsewhere (proto/openapi.yaml, "G-buffer sets").  Every route needs the
- * API key (when glintd has one).
+ * elsewhere (proto/openapi.yaml, "G-buffer sets").  Creating one needs the
+ * API key (when glintd has one); a set belongs to the owner key it was
+ * created with (X-Glint-Owner, or one made and answered once: auth.h), and
+ * every other route, the set's materials and jobs included, needs that
+ * owner key or the API key.
  *
  *   POST   /api/v1/gbuffer-sets                         {"views", "width", "height"}
  *   GET    /api/v1/gbuffer-sets/{id}                    the set and what each view holds
- *   DELETE /api/v1/gbuffer-sets/{id}                    the set (its materials stay)
+ *   DELETE /api/v1/gbuffer-sets/{id}                    the set and its materials
  *   PUT    /api/v1/gbuffer-sets/{id}/views/{k}/gbuffer.exr  OpenEXR, named channels
  *   PUT    /api/v1/gbuffer-sets/{id}/views/{k}/painting     PNG, JPEG, OpenEXR or HDR, RGB
  *   POST   /api/v1/gbuffer-sets/{id}/fits               {"method", "params"}: 201 material,
@@ -14,7 +17,8 @@
  * A set lives in the store's blobs (durable once answered, like paintings):
  * gbuffer-sets/<id>/set.json (its record, written first and deleted
  * first), gbuffer<k>.exr and gbuffer<k>.json (the upload as it came, and
- * what was found in it), painting<k> (as it came).  Uploads are decoded and
+ * what was found in it), painting<k> (as it came); the record holds the
+ * owner key ("owner", never answered but once).  Uploads are decoded and
  * checked before they are kept (size, the set's raster, channels, finite
  * values); a fit decodes the painted views again (core gbfit.h makes the
  * samples and values, with the method's rule: point-light methods need
@@ -111,18 +115,29 @@ int api_gbuffer_set_exists(app *a, const char *id)
 
 int api_gbuffer_set_access(http_req *req, const char *id, glint_err *err)
 {
-    (void)id;
-    return auth_require_key(req, err);
+    json_t *doc;
+    int rc;
+    if ((rc = gb_record(req->app, id, &doc, err)))
+        return rc;
+    rc = auth_owner(req, doc, "G-buffer set", err);
+    json_decref(doc);
+    return rc;
 }
 
-/* The set `id` if the request may use it.  OUT: *doc, *views, *w, *h. */
+/* The set `id` if the request may use it (its owner key or the API key).
+ * OUT: *doc, *views, *w, *h. */
 static int gb_open(http_req *req, const char *id, json_t **doc, int *views, int *w, int *h,
                    glint_err *e)
 {
     int rc;
     *doc = NULL;
-    if ((rc = auth_require_key(req, e)) || (rc = gb_record(req->app, id, doc, e)))
+    if ((rc = gb_record(req->app, id, doc, e)))
         return rc;
+    if ((rc = auth_owner(req, *doc, "G-buffer set", e))) {
+        json_decref(*doc);
+        *doc = NULL;
+        return rc;
+    }
     *views = (int)json_integer_value(json_object_get(*doc, "views"));
     *w = (int)json_integer_value(json_object_get(*doc, "width"));
     *h = (int)json_integer_value(json_object_get(*doc, "height"));
@@ -145,6 +160,7 @@ static json_t *gb_public(app *a, const char *id, const json_t *rec)
     int n = (int)json_integer_value(json_object_get(rec, "views"));
     char dir[128];
 
+    json_object_del(d, "owner");
     snprintf(dir, sizeof dir, "gbuffer-sets/%s", id);
     if (store_blob_list(a->store, dir, &names, NULL))
         names = json_array();
@@ -203,8 +219,9 @@ static http_resp sets_create(http_req *req)
     app *a = req->app;
     json_t *body = NULL, *rec = NULL;
     const char *k;
-    json_t *v;
-    char id[GLINT_ID_LEN], created[GLINT_TIME_LEN], name[128];
+    json_t *v, *pub;
+    const char *owner;
+    char id[GLINT_ID_LEN], created[GLINT_TIME_LEN], name[128], made[GLINT_ID_LEN];
     int views, w, h, rc, maxv = a->cfg.lim.max_views < SCENE_MAX_VIEWS ? a->cfg.lim.max_views
                                                                          : SCENE_MAX_VIEWS;
     int maxd = a->cfg.lim.max_image_dim < SCENE_MAX_SIZE ? a->cfg.lim.max_image_dim
@@ -213,7 +230,8 @@ static http_resp sets_create(http_req *req)
     http_resp r;
     glint_err e;
 
-    if ((rc = auth_require_key(req, &e)) || (rc = api_body_json(req, &body, &e)))
+    if ((rc = auth_require_key(req, &e)) || (rc = auth_owner_new(req, made, &owner, &e)) ||
+        (rc = api_body_json(req, &body, &e)))
         goto done;
     json_object_foreach(body, k, v) {
         if (strcmp(k, "views") && strcmp(k, "width") && strcmp(k, "height")) {
@@ -232,8 +250,8 @@ static http_resp sets_create(http_req *req)
         (rc = glint_id_new(id, &e)))
         goto done;
     glint_time_iso(time(NULL), created);
-    rec = json_pack("{s:s, s:i, s:i, s:i, s:s}", "id", id, "views", views, "width", w, "height",
-                    h, "created", created);
+    rec = json_pack("{s:s, s:i, s:i, s:i, s:s, s:s}", "id", id, "views", views, "width", w,
+                    "height", h, "created", created, "owner", owner);
     if (!rec || !(text = json_dumps(rec, JSON_COMPACT))) {
         rc = glint_err_set(&e, GLINT_ENOMEM, "out of memory");
         goto done;
@@ -241,7 +259,10 @@ static http_resp sets_create(http_req *req)
     gb_blob(name, sizeof name, id, "set.json");
     if ((rc = store_blob_put(a->store, name, text, strlen(text), &e)))
         goto done;
-    r = api_created(gb_public(a, id, rec), "gbuffer-sets", id);
+    /* the one answer that carries the owner key */
+    if ((pub = gb_public(a, id, rec)))
+        json_object_set_new(pub, "owner_key", json_string(owner));
+    r = api_created(pub, "gbuffer-sets", id);
 done:
     if (rc)
         r = api_error(&e);
@@ -277,8 +298,12 @@ static http_resp sets_delete(http_req *req)
         return api_error(&e);
     json_decref(rec);
     pthread_mutex_lock(gb_lock(id));
-    gb_blob(name, sizeof name, id, "set.json"); /* first: the set is gone from here on */
-    rc = store_blob_delete(a->store, name, &e);
+    /* its materials first (only the set's owner could read them): a crash
+     * after leaves the set without them, never materials without their set */
+    rc = store_materials_delete(a->store, id, &e);
+    gb_blob(name, sizeof name, id, "set.json"); /* then: the set is gone from here on */
+    if (!rc)
+        rc = store_blob_delete(a->store, name, &e);
     snprintf(dir, sizeof dir, "gbuffer-sets/%s", id);
     if (!rc) /* what a crash leaves of it is swept when the store opens */
         store_blob_rmtree(a->store, dir);

@@ -11,9 +11,10 @@
  *
  * Reading a scene or mesh by id needs no key: ids are 128 random bits.
  * Everything numerical is core's: scene_create / scene_from_json build and
- * validate, prep_sample_counts counts samples, mesh_load_mem reads
- * uploads.  Helpers return 0 or a code
- * with a glint_err; handlers answer failures with api_error(). */
+ * validate, prep_sample_counts counts samples, mesh_refs_check and
+ * mesh_load_mem read uploads (one that names any other file is refused).
+ * Helpers return 0 or a code with a glint_err; handlers answer failures
+ * with api_error(). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,6 +95,10 @@ static int mesh_create_do(http_req *req, json_t **info, char id[33], glint_err *
     if (req->body_len == 0)
         return api_reject(e, GLINT_EINVAL, "empty-body", "the body must be the mesh file (%s)",
                           fmt);
+    /* every reference to another file is refused, used by the import or not */
+    if ((rc = mesh_refs_check(req->body, req->body_len, fmt, e)))
+        return api_reject(e, GLINT_EINVAL, "invalid-mesh", "the %s file cannot be used: %.400s",
+                          fmt, e->msg);
     rc = mesh_load_mem(req->body, req->body_len, fmt, &m, &rep, e);
     if (rc == GLINT_ERANGE)
         return api_reject(e, GLINT_ETOOBIG, "mesh-too-large", "mesh file rejected: %.400s",
@@ -581,7 +586,11 @@ static http_resp scene_create_h(http_req *req)
     json_t *pub = NULL;
     char id[33];
     glint_err e;
-    if (scene_create_do(req, &pub, id, &e))
+    int rc;
+    api_envs_use_begin(); /* base.env may name an upload: not deleted meanwhile */
+    rc = scene_create_do(req, &pub, id, &e);
+    api_envs_use_end();
+    if (rc)
         return api_error(&e);
     return api_created(pub, "scenes", id);
 }

@@ -126,7 +126,7 @@ int auth_owner_key(http_req *req, const char **key, glint_err *err)
     if (k[n] || n < AUTH_OWNER_MIN || n > AUTH_OWNER_MAX) {
         glint_err_set(err, GLINT_EINVAL,
                       "X-Glint-Owner must be %d to %d characters of A-Z a-z 0-9 _ - "
-                      "(a secret you keep: it lists and deletes your scenes)",
+                      "(a secret you keep: it lists and deletes your scenes and uploads)",
                       AUTH_OWNER_MIN, AUTH_OWNER_MAX);
         return glint_err_kind(err, "invalid-owner-key");
     }
@@ -134,9 +134,25 @@ int auth_owner_key(http_req *req, const char **key, glint_err *err)
     return 0;
 }
 
-int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err)
+int auth_owner_new(http_req *req, char made[33], const char **key, glint_err *err)
 {
-    const char *owner = json_string_value(json_object_get(scene_doc, "owner"));
+    int rc;
+    if ((rc = auth_owner_key(req, key, err)) || *key)
+        return rc;
+    if ((rc = glint_id_new(made, err)))
+        return rc;
+    *key = made;
+    return 0;
+}
+
+int auth_owned_by(const json_t *doc, const char *key)
+{
+    const char *owner = json_string_value(json_object_get(doc, "owner"));
+    return key && owner && glint_secret_equal(key, owner);
+}
+
+int auth_owner(http_req *req, const json_t *doc, const char *what, glint_err *err)
+{
     const char *k;
     int rc;
 
@@ -146,12 +162,18 @@ int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err)
         return rc;
     if (!k) {
         glint_err_set(err, GLINT_EAUTH,
-                      "%s %s needs the scene's owner key (\"X-Glint-Owner: KEY\", answered when "
-                      "the scene was created) or the daemon's API key", req->method, req->path);
+                      "%s %s needs the %s's owner key (\"X-Glint-Owner: KEY\", answered when "
+                      "the %s was created) or the daemon's API key", req->method, req->path,
+                      what, what);
         return glint_err_kind(err, "owner-key-required");
     }
-    if (owner && glint_secret_equal(k, owner))
+    if (auth_owned_by(doc, k))
         return 0;
-    glint_err_set(err, GLINT_EDENIED, "the owner key does not own this scene");
+    glint_err_set(err, GLINT_EDENIED, "the owner key does not own this %s", what);
     return glint_err_kind(err, "not-owner");
+}
+
+int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err)
+{
+    return auth_owner(req, scene_doc, "scene", err);
 }

@@ -14,7 +14,8 @@
  *   (32 hex digits) and answers it once.  Listing scenes shows the caller's
  *   own (everything with the API key); deleting one needs its owner key or
  *   the API key.  Reading a scene by id needs nothing: ids are 128 random
- *   bits, and only their owners can list them.
+ *   bits, and only their owners can list them.  Uploaded environments and
+ *   G-buffer sets belong to an owner key the same way (auth_owner).
  * - A session's links may expire (created with expires_in): after that
  *   both tokens are refused (403, kind "link-expired"); and its tokens may
  *   be revoked and replaced (POST /sessions/{id}/tokens, by the paint
@@ -62,10 +63,23 @@ int auth_token_current(const json_t *session_doc, const char *token, time_t now,
  * is sent; GLINT_EINVAL (kind "invalid-owner-key") when it is malformed. */
 int auth_owner_key(http_req *req, const char **key, glint_err *err);
 
-/* Whether the request may delete/administer a scene (doc from
- * store_scene_get): the API key, or the scene's owner key.  0 if allowed;
- * else GLINT_EAUTH (kind "owner-key-required") or GLINT_EDENIED (kind
- * "not-owner"). */
+/* The owner key a creation records: the one the request presents, else a
+ * new one (32 hex digits) made in `made`.  OUT: *key (the header's or
+ * `made`).  GLINT_EINVAL (kind "invalid-owner-key") for a malformed one. */
+int auth_owner_new(http_req *req, char made[33], const char **key, glint_err *err);
+
+/* Whether the request may administer the thing whose record is `doc`
+ * ("owner": its owner key; a record without one is the API key's only):
+ * the API key, or that owner key.  `what` names it in messages ("scene",
+ * "environment", "G-buffer set").  0 if allowed; else GLINT_EAUTH (kind
+ * "owner-key-required") or GLINT_EDENIED (kind "not-owner"). */
+int auth_owner(http_req *req, const json_t *doc, const char *what, glint_err *err);
+
+/* Whether a record belongs to the owner key `key` (NULL: none presented,
+ * 0): a constant-time comparison with its "owner". */
+int auth_owned_by(const json_t *doc, const char *key);
+
+/* auth_owner for a scene (doc from store_scene_get). */
 int auth_scene_owner(http_req *req, const json_t *scene_doc, glint_err *err);
 
 #endif

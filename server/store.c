@@ -445,22 +445,58 @@ out:
     return rc;
 }
 
+int store_scene_count_naming(store *s, const char *text, long long *n, glint_err *err)
+{
+    char *pat;
+    db_stmt *st;
+    size_t len = text ? strlen(text) : 0;
+    int rc = 0, step;
+
+    *n = 0;
+    if (!len || strpbrk(text, "%_\\"))
+        return glint_err_set(err, GLINT_EINVAL, "store_scene_count_naming: \"%.40s\" is empty "
+                             "or holds a LIKE wildcard", text ? text : "");
+    if (!(pat = malloc(len + 3)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory counting scenes");
+    snprintf(pat, len + 3, "%%%s%%", text);
+    pthread_mutex_lock(&s->lock);
+    if (!(st = store_prep(s, "SELECT count(*) FROM scenes WHERE doc LIKE ?1", err))) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, pat);
+    if ((step = db_step(st, "counting scenes", err)) == DB_ROW)
+        *n = (long long)db_col_int(st, 0);
+    else
+        rc = step < 0 ? step : glint_err_set(err, GLINT_EIO, "counting scenes: no answer");
+out:
+    db_finalize(st);
+    pthread_mutex_unlock(&s->lock);
+    free(pat);
+    return rc;
+}
+
 int store_scene_delete(store *s, const char *id, glint_err *err)
 {
     db_stmt *st = NULL;
-    json_t *sessions = json_array();
+    json_t *sessions = json_array(), *materials = json_array();
     int rc = 0, step;
     static const char *const dels[] = {
+        "DELETE FROM materials WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM events WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM paintings WHERE session IN (SELECT id FROM sessions WHERE scene_id = ?1)",
         "DELETE FROM sessions WHERE scene_id = ?1",
         "DELETE FROM scenes WHERE id = ?1",
         NULL};
 
-    if (!sessions)
+    if (!sessions || !materials) {
+        json_decref(sessions);
+        json_decref(materials);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory deleting a scene");
+    }
     if (!glint_id_valid(id)) {
         json_decref(sessions);
+        json_decref(materials);
         return glint_err_set(err, GLINT_ENOTFOUND, "no scene with id \"%.40s\"", id ? id : "");
     }
     pthread_mutex_lock(&s->lock);
@@ -493,6 +529,20 @@ int store_scene_delete(store *s, const char *id, glint_err *err)
         rc = step;
         goto out;
     }
+    db_finalize(st);
+    st = store_prep(s, "SELECT id FROM materials WHERE session IN "
+                       "(SELECT id FROM sessions WHERE scene_id = ?1)", err);
+    if (!st) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, id);
+    while ((step = db_step(st, "reading", err)) == DB_ROW)
+        json_array_append_new(materials, json_string(db_col_text(st, 0)));
+    if (step < 0) {
+        rc = step;
+        goto out;
+    }
     for (int i = 0; dels[i]; i++) {
         db_finalize(st);
         st = store_prep(s, dels[i], err);
@@ -520,8 +570,13 @@ out:
             snprintf(name, sizeof name, "sessions/%s", json_string_value(v));
             store_blob_rmtree(s, name);
         }
+        json_array_foreach(materials, i, v) {
+            snprintf(name, sizeof name, "materials/%s", json_string_value(v));
+            store_blob_rmtree(s, name);
+        }
     }
     json_decref(sessions);
+    json_decref(materials);
     return rc;
 }
 
@@ -688,5 +743,57 @@ out:
         json_decref(arr);
     else
         *array = arr;
+    return rc;
+}
+
+int store_materials_delete(store *s, const char *session, glint_err *err)
+{
+    json_t *ids = json_array(), *v;
+    db_stmt *st = NULL;
+    size_t i;
+    int rc = 0, step;
+
+    if (!ids)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory deleting materials");
+    if (!glint_id_valid(session)) {
+        json_decref(ids);
+        return 0; /* no material names it */
+    }
+    pthread_mutex_lock(&s->lock);
+    if ((rc = db_begin(s->db, err)))
+        goto out;
+    if (!(st = store_prep(s, "SELECT id FROM materials WHERE session = ?1", err))) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, session);
+    while ((step = db_step(st, "reading", err)) == DB_ROW)
+        json_array_append_new(ids, json_string(db_col_text(st, 0)));
+    if (step < 0) {
+        rc = step;
+        goto out;
+    }
+    db_finalize(st);
+    if (!(st = store_prep(s, "DELETE FROM materials WHERE session = ?1", err))) {
+        rc = GLINT_EIO;
+        goto out;
+    }
+    db_bind_text(st, 1, session);
+    if (!(rc = store_run(st, "deleting materials", err)))
+        rc = db_commit(s->db, err);
+out:
+    db_finalize(st);
+    if (rc)
+        store_rollback(s);
+    pthread_mutex_unlock(&s->lock);
+    /* the rows first: a crash leaves directories nothing names (swept) */
+    json_array_foreach(ids, i, v) {
+        char name[128];
+        if (rc || !json_is_string(v))
+            break;
+        snprintf(name, sizeof name, "materials/%s", json_string_value(v));
+        store_blob_rmtree(s, name);
+    }
+    json_decref(ids);
     return rc;
 }

@@ -125,8 +125,13 @@ int store_scene_put(store *s, const char *id, const json_t *doc, glint_err *err)
 int store_scene_get(store *s, const char *id, json_t **doc, glint_err *err);
 /* Every scene's doc, oldest first. */
 int store_scene_list(store *s, json_t **array, glint_err *err);
-/* Deletes the scene, its sessions with their events and paintings, and the
- * blobs under "scenes/<id>/" and "sessions/<session>/" (materials stay). */
+/* How many scenes' docs hold `text` (the stored JSON text, e.g.
+ * "\"upload:<id>\"" for the scenes whose base renders an environment
+ * lights); text must hold no '%', '_' or '\\' (GLINT_EINVAL).  OUT: *n. */
+int store_scene_count_naming(store *s, const char *text, long long *n, glint_err *err);
+/* Deletes the scene, its sessions with their events and paintings, the
+ * materials fitted in them, and the blobs under "scenes/<id>/",
+ * "sessions/<session>/" and "materials/<material>/". */
 int store_scene_delete(store *s, const char *id, glint_err *err);
 
 /* ---- sessions ------------------------------------------------------------------------- */
@@ -262,6 +267,11 @@ int store_material_put_event(store *s, const char *id, const char *session, cons
                              const char *type, const json_t *data, int64_t *seq,
                              glint_err *err);
 int store_material_get(store *s, const char *id, json_t **doc, glint_err *err);
+/* Delete the materials of `session` (a session's or G-buffer set's id:
+ * the owner they were stored with), rows and their blobs "materials/<id>/"
+ * (files after the rows: a crash leaves only files the sweep removes).
+ * None: 0. */
+int store_materials_delete(store *s, const char *session, glint_err *err);
 int store_material_list(store *s, const char *session, json_t **array, glint_err *err);
 
 #endif

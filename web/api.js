@@ -3,8 +3,9 @@
 // Every call goes through request(): the session token travels as
 // X-Glint-Token (or ?token= where a URL must stand alone: links, SSE,
 // downloads), the optional daemon API key as Authorization: Bearer, this
-// browser's owner key as X-Glint-Owner on scene calls (it owns the scenes
-// created here: only they are listed, only they may be deleted), and a
+// browser's owner key as X-Glint-Owner on scene and environment calls (it
+// owns the scenes and environment maps uploaded here: only they are listed,
+// only they may be deleted), and a
 // refusal comes back as an ApiError carrying the problem+json body
 // (RFC 9457: type, title, status, detail) so the studio can show it.
 
@@ -49,7 +50,7 @@ export class Api {
 
   async request(method, path, { body, type, query, what, signal, raw, headers } = {}) {
     const h = this.headers(headers);
-    if (path === '/scenes' || path.startsWith('/scenes/')) h['X-Glint-Owner'] = this.owner;
+    if (/^\/(scenes|environments)(\/|$)/.test(path)) h['X-Glint-Owner'] = this.owner;
     let payload = body;
     if (body !== undefined && !(body instanceof Uint8Array) && !(body instanceof Blob) && !(body instanceof ArrayBuffer)) {
       payload = JSON.stringify(body);

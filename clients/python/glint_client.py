@@ -18,7 +18,8 @@ returned as Blob, a bytes object that also carries the response's headers.
 Credentials (openapi.yaml securitySchemes):
   api_key    sent as "Authorization: Bearer KEY" (glintd --api-key);
   token      a session's paint or view token, sent as X-Glint-Token;
-  owner_key  a scene owner's secret, sent as X-Glint-Owner.
+  owner_key  the secret that owns scenes, uploaded environments and G-buffer
+             sets, sent as X-Glint-Owner.
 Each is set on the client and may be overridden per call (token=,
 owner_key=).
 
@@ -49,8 +50,9 @@ class GlintClient:
     api_key: the daemon's API key (glintd --api-key), needed to create
     scenes, sessions, meshes and environments on a daemon that has one;
     token: the default session token (paint or view) for session, job and
-    material calls; owner_key: the default X-Glint-Owner for scene listing,
-    creation and deletion; timeout: seconds per request; busy_retries: how
+    material calls; owner_key: the default X-Glint-Owner for what an owner
+    key owns (scenes, uploaded environments, G-buffer sets: creating,
+    listing, deleting; a set's every call); timeout: seconds per request; busy_retries: how
     many times a 503 answer carrying Retry-After (the work budget is taken
     now; nothing was done) is retried after the time it names (at most
     max_retry_wait seconds each).
@@ -247,8 +249,9 @@ class GlintClient:
         return self._call("GET", "/api/v1/scenes/" + _segment(scene_id))
 
     def delete_scene(self, scene_id, owner_key=None):
-        """DELETE /api/v1/scenes/{id}: deletes the scene with its sessions
-        (materials stay); needs its owner key or the API key. Returns None."""
+        """DELETE /api/v1/scenes/{id}: deletes the scene with its sessions and
+        the materials fitted in them; needs its owner key or the API key.
+        Returns None."""
         self._call("DELETE", "/api/v1/scenes/" + _segment(scene_id), owner_key=owner_key)
 
     def base_render(self, scene_id, view, format="png", brdf=None, scale=None, intensity=None,
@@ -565,10 +568,11 @@ class GlintClient:
                 return m
         raise KeyError(name)
 
-    def list_environments(self):
+    def list_environments(self, owner_key=None):
         """GET /api/v1/environments: {environments: [Environment]}: the
-        built-in skies, the daemon's --env-dir maps and the uploads."""
-        return self._call("GET", "/api/v1/environments")
+        built-in skies, the daemon's --env-dir maps and the uploads of the
+        owner key (every upload with the API key)."""
+        return self._call("GET", "/api/v1/environments", owner_key=owner_key)
 
     def measured(self):
         """GET /api/v1/measured: {materials: [{spec, name, layout}]}: the
@@ -576,35 +580,44 @@ class GlintClient:
         render's brdf (base_render(..., brdf=spec))."""
         return self._call("GET", "/api/v1/measured")
 
-    def upload_environment(self, data, name=None):
+    def upload_environment(self, data, name=None, owner_key=None):
         """POST /api/v1/environments: upload an HDR map (OpenEXR or Radiance
         HDR bytes, or a file path; lat-long or cube cross). Returns
-        Environment; its spec (upload:<id>) is what env= and params.env take."""
+        Environment; its spec (upload:<id>) is what env= and params.env
+        take, and its owner_key (the one sent, else one made; shown only
+        here) lists and deletes it."""
         return self._call("POST", "/api/v1/environments", {"name": name},
-                          data=_read(data, "environment"), content_type="application/octet-stream")
+                          data=_read(data, "environment"), content_type="application/octet-stream",
+                          owner_key=owner_key)
 
-    def delete_environment(self, env_id):
-        """DELETE /api/v1/environments/{id}: delete an uploaded map. Returns None."""
-        self._call("DELETE", "/api/v1/environments/" + _segment(env_id, "env_id"))
+    def delete_environment(self, env_id, owner_key=None):
+        """DELETE /api/v1/environments/{id}: delete an uploaded map; needs
+        its owner key or the API key, and no scene lit by it (409).
+        Returns None."""
+        self._call("DELETE", "/api/v1/environments/" + _segment(env_id, "env_id"),
+                   owner_key=owner_key)
 
     # ---- G-buffer sets: G-buffers and paintings made elsewhere ----------
 
-    def create_gbuffer_set(self, views, width, height):
+    def create_gbuffer_set(self, views, width, height, owner_key=None):
         """POST /api/v1/gbuffer-sets (API key): a set of `views` views of
         width x height, for G-buffers and paintings another renderer made.
-        Returns GbufferSet."""
+        Returns GbufferSet, whose owner_key (the one sent, else one made;
+        shown only here) every other call on the set needs (or the API
+        key)."""
         return self._call("POST", "/api/v1/gbuffer-sets", json_body={
             "views": _index(views, "views"), "width": _index(width, "width"),
-            "height": _index(height, "height")})
+            "height": _index(height, "height")}, owner_key=owner_key)
 
     def get_gbuffer_set(self, set_id):
         """GET /api/v1/gbuffer-sets/{id}: GbufferSet, with each view's state."""
         return self._call("GET", "/api/v1/gbuffer-sets/" + _segment(set_id, "set_id"))
 
-    def delete_gbuffer_set(self, set_id):
-        """DELETE /api/v1/gbuffer-sets/{id}: the set and its uploads (its
-        materials stay). Returns None."""
-        self._call("DELETE", "/api/v1/gbuffer-sets/" + _segment(set_id, "set_id"))
+    def delete_gbuffer_set(self, set_id, owner_key=None):
+        """DELETE /api/v1/gbuffer-sets/{id}: the set, its uploads and the
+        materials fitted from it. Returns None."""
+        self._call("DELETE", "/api/v1/gbuffer-sets/" + _segment(set_id, "set_id"),
+                   owner_key=owner_key)
 
     def put_gbuffer(self, set_id, view, exr):
         """PUT /api/v1/gbuffer-sets/{id}/views/{k}/gbuffer.exr: view k's

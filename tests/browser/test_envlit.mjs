@@ -76,6 +76,11 @@ run({
     });
     assertEq(upl.name, 'my sky.hdr', 'the upload is listed by its file name');
     assert(upl.preview.includes(upl.spec), 'the previews offer the upload: ' + upl.preview);
+    // the upload is this browser's (its owner key): listed to it, not to anyone else
+    const mine = await page.evaluate(async () => (await window.glint.api.environments()).environments.map(e => e.spec));
+    assert(mine.includes(upl.spec), 'listed again to the studio that uploaded it: ' + mine);
+    const anyone = (await (await fetch(t.daemon.base + '/api/v1/environments')).json()).environments.map(e => e.spec);
+    assert(!anyone.includes(upl.spec) && anyone.includes('sky'), 'not listed to a caller without its owner key: ' + anyone);
     // a file that is not a map: a clear error, nothing added
     t.allowConsole(/environments\?name=notes\.hdr/);
     const nEnv = await page.evaluate(() => document.getElementById('param-env').options.length);

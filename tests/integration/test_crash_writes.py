@@ -134,7 +134,7 @@ def write(kind, base, st, rng, acks):
         if r.status_code == 201:
             acks.append(("mesh", r.json()["id"]))
     elif kind == "env":
-        r = http.post(url + "/environments", data=hdr(16, 8), timeout=30)
+        r = http.post(url + "/environments", data=hdr(16, 8), headers=OWNER, timeout=30)
         if r.status_code == 201:
             acks.append(("env", r.json()["id"]))
     elif kind == "delete_env":
@@ -142,7 +142,7 @@ def write(kind, base, st, rng, acks):
         if live:
             eid = rng.choice(live)
             acks.append(("maybe_delete", eid))
-            r = http.delete(url + "/environments/" + eid, timeout=30)
+            r = http.delete(url + "/environments/" + eid, headers=OWNER, timeout=30)
             if r.status_code == 204:
                 acks.append(("delete_env", eid))
 
@@ -199,7 +199,8 @@ def verify(d, st):
         d.get(API + "/materials/%s/factors.png" % mid, status=200, headers=tok(token))
     for m in st.meshes:
         d.get(API + "/meshes/" + m, status=200)
-    envs = {e.get("id") for e in d.get(API + "/environments", status=200).json()["environments"]}
+    envs = {e.get("id") for e in d.get(API + "/environments", headers=OWNER,
+                                       status=200).json()["environments"]}
     for e in st.envs:
         if e in st.maybe_deleted and e not in st.deleted_envs:
             if e not in envs:

@@ -27,7 +27,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(__file__))
 import exr_named  # noqa: E402
-from harness import GLINTD, run_tests  # noqa: E402
+from harness import GLINTD, Daemon, run_tests  # noqa: E402
 
 CLI = os.environ.get("GLINT_CLI") or os.path.join(
     os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
@@ -382,6 +382,58 @@ def test_15_api_uploads_survive_kill9(d):
     m = fitted(d, d.post("/api/v1/gbuffer-sets/%s/fits" % st["id"], headers=key(),
                          json={"method": "hf3", "params": HF3}), key())
     assert m["views_used"] == [0], m
+
+
+def test_17_api_sets_belong_to_their_owner(d):
+    """A set belongs to the owner key it was created with: every request on
+    it, its jobs and its materials needs that key or the API key, and
+    deleting it deletes the materials fitted from it.  On a daemon without
+    an API key the same: no one else reads, writes or deletes it."""
+    mine = {"X-Glint-Owner": "gbuffer-owner-key-0001"}
+    other = {"X-Glint-Owner": "gbuffer-owner-key-0002"}
+    exr = {"Content-Type": "image/x-exr"}
+    st = d.post("/api/v1/gbuffer-sets", headers=key(mine),
+                json={"views": 1, "width": SIZE, "height": SIZE}, status=201,
+                schema="GbufferSet.json").json()
+    assert st["owner_key"] == mine["X-Glint-Owner"], st
+    url = "/api/v1/gbuffer-sets/" + st["id"]
+    d.put(url + "/views/0/gbuffer.exr", headers=dict(exr, **mine), data=S["gb"][0], status=200)
+    with open(os.path.join(TMP, "lit", "view_00.exr"), "rb") as f:
+        d.put(url + "/views/0/painting", headers=dict(exr, **mine), data=f.read(), status=200)
+    got = d.get(url, headers=mine, status=200, schema="GbufferSet.json").json()
+    assert "owner" not in got and "owner_key" not in got, got
+    for h, code, kind in (({}, 401, "owner-key-required"), (other, 403, "not-owner")):
+        for method, path in (("GET", ""), ("GET", "/materials"), ("POST", "/fits"),
+                             ("PUT", "/views/0/gbuffer.exr"), ("DELETE", "")):
+            r = d.request(method, url + path, headers=dict(h, **exr),
+                          data=S["gb"][0] if method == "PUT" else b"{}" if method == "POST"
+                          else None)
+            assert r.status_code == code and kind in r.text, (method, path, r.status_code, r.text)
+    m = fitted(d, d.post(url + "/fits", headers=mine, json={"method": "hf3", "params": HF3}),
+               mine)
+    d.get("/api/v1/materials/" + m["id"], headers=other, status=403)
+    d.get("/api/v1/materials/%s/factors.png" % m["id"], headers=mine, status=200)
+    mdir = os.path.join(d.data_dir, "blobs", "materials", m["id"])
+    assert os.path.isdir(mdir), mdir
+    d.delete(url, headers=mine, status=204)
+    d.get(url, headers=key(), status=404)
+    d.get("/api/v1/materials/" + m["id"], headers=key(), status=404)
+    assert not os.path.exists(mdir), os.listdir(mdir)
+    # a daemon without an API key: a set made without an owner key gets one
+    free = Daemon()
+    try:
+        st = free.post("/api/v1/gbuffer-sets", json={"views": 1, "width": SIZE, "height": SIZE},
+                       status=201, schema="GbufferSet.json").json()
+        made = {"X-Glint-Owner": st["owner_key"]}
+        url = "/api/v1/gbuffer-sets/" + st["id"]
+        free.get(url, status=401)
+        free.delete(url, status=401)
+        free.delete(url, headers=other, status=403)
+        free.put(url + "/views/0/gbuffer.exr", headers=exr, data=S["gb"][0], status=401)
+        free.get(url, headers=made, status=200, schema="GbufferSet.json")
+        free.delete(url, headers=made, status=204)
+    finally:
+        free.stop()
 
 
 if __name__ == "__main__":

@@ -7,8 +7,10 @@ answered differently from a present one.  Here the same requests go to the
 real daemon: each must be refused with a 4xx problem+json answer
 (Problem.json is checked by the harness), carry no bytes of the file it
 names, and read the same, status and detail, whether that file exists or
-not.  The same for glTF images, OBJ material libraries and COLLADA images.
-A glTF that carries its data in data: URIs still uploads.
+not.  The same for glTF images, OBJ material libraries and COLLADA images,
+whether or not anything uses them, and for relative names as well: an
+upload is the whole mesh (422 invalid-mesh, naming the reference).  A glTF
+that carries its data in data: URIs, and a .glb, still upload.
 """
 import base64
 import json
@@ -90,6 +92,26 @@ def dae(image):
 """ % image).encode()
 
 
+def dae_unused(image):
+    """The COLLADA document with an image that no effect uses."""
+    return dae(image).replace(b'<texture texture="img" texcoord="uv0"/>',
+                              b"<color>0.8 0.8 0.8 1</color>")
+
+
+def glb(image_uri=None):
+    """The triangle as a .glb (JSON chunk, then the 36-byte binary chunk),
+    with an image by `image_uri` that nothing uses when given."""
+    doc = json.loads(gltf("unused"))
+    del doc["buffers"][0]["uri"]
+    if image_uri is not None:
+        doc["images"] = [{"uri": image_uri}]
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    chunks = (struct.pack("<I", len(text)) + b"JSON" + text +
+              struct.pack("<I", len(TRIANGLE)) + b"BIN\0" + TRIANGLE)
+    return b"glTF" + struct.pack("<II", 2, 12 + len(chunks)) + chunks
+
+
 def target_path(ref):
     """The server file a reference would reach (the daemon's working
     directory is below / at most 8 levels deep)."""
@@ -131,8 +153,8 @@ def refused(d, fmt, body, ref):
     assert "report" not in p and "id" not in p
     detail = p["detail"]
     assert "external references are not allowed in uploads" in detail, detail
-    # assimp's COLLADA reader strips file:// from image paths before glint sees them
-    shown = ref[len("file://"):] if fmt == "dae" and ref.startswith("file://") else ref
+    # the reference as the file writes it
+    shown = ref
     assert shown[:40] in detail, "%s: the detail does not name the reference: %s" % (ref, detail)
     # (the reference itself is in the detail: look at everything else)
     assert_no_bytes_of(r.content.replace(shown.encode(), b""), file_bytes(target_path(ref)),
@@ -178,6 +200,42 @@ def test_probe_buffer_and_image_alike(d):
     a = refused(d, "gltf", gltf("/etc/passwd"), "/etc/passwd")
     b = refused(d, "gltf", gltf(data_uri(TRIANGLE), "/etc/passwd"), "/etc/passwd")
     assert a == b, (a, b)
+
+
+def test_probe_unused_and_relative_references(d):
+    """A reference nothing uses, or a relative one, is still a reference to
+    a file the upload does not carry: refused with 422 invalid-mesh naming
+    it (a glTF image no material samples, relative glTF images, an OBJ
+    material library beside the file, a COLLADA image no effect uses, the
+    JSON of a .glb); the same files without it upload."""
+    inline = data_uri(TRIANGLE)
+    unused = json.loads(gltf(inline))
+    unused["images"] = [{"uri": "/etc/passwd"}]
+    cases = [("gltf", json.dumps(unused).encode(), "/etc/passwd"),
+             ("gltf", gltf(inline, "tex.png"), "tex.png"),
+             ("gltf", gltf(inline, "textures/tex.png"), "textures/tex.png"),
+             ("obj", obj("model.mtl"), "model.mtl"),
+             ("dae", dae_unused("file:///etc/passwd"), "file:///etc/passwd"),
+             ("dae", dae_unused("../textures/wood.png"), "../textures/wood.png"),
+             ("dae", dae("tex.png"), "tex.png"),
+             ("glb", glb("tex.png"), "tex.png")]
+    for fmt, body, ref in cases:
+        r = d.post(API + "/meshes?format=" + fmt, data=body)
+        assert r.status_code == 422, "%s %s: %d %s" % (fmt, ref, r.status_code, r.text[:300])
+        p = r.json()
+        assert p["type"] == "/problems/invalid-mesh", p
+        assert "external references are not allowed in uploads" in p["detail"], p["detail"]
+        assert '"%s"' % ref in p["detail"], "%s: not named: %s" % (ref, p["detail"])
+        assert_no_bytes_of(r.content.replace(ref.encode(), b""),
+                           file_bytes(target_path(ref)) if ref.startswith(("/", "file:"))
+                           else b"", "%s %s" % (fmt, ref))
+    # without the reference the same documents upload
+    for fmt, body in (("gltf", gltf(inline)), ("glb", glb()), ("obj", OBJ),
+                      ("dae", dae_unused("x").replace(
+                          b'<library_images><image id="img"><init_from>x</init_from></image>'
+                          b'</library_images>', b""))):
+        r = d.post(API + "/meshes?format=" + fmt, data=body, schema="Mesh.json")
+        assert r.status_code == 201, "%s: %d %s" % (fmt, r.status_code, r.text[:300])
 
 
 if __name__ == "__main__":

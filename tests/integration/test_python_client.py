@@ -354,6 +354,12 @@ def test_08_environment_upload(d):
     validate(e, "Environment.json")
     assert (e["kind"], e["name"], e["width"], e["height"]) == ("upload", "flat grey", 32, 16)
     assert e["spec"] in [x["spec"] for x in c.list_environments()["environments"]]
+    # listed to its owner key (made for it here), deleted only by it or the API key
+    mine = GlintClient(d.base, owner_key=e["owner_key"])
+    assert e["spec"] in [x["spec"] for x in mine.list_environments()["environments"]]
+    assert e["spec"] not in [x["spec"] for x in GlintClient(d.base).list_environments(
+        owner_key=OWNER)["environments"]]
+    raises(lambda: GlintClient(d.base).delete_environment(e["id"]), 401, "owner-key-required")
     s = S["session"]
     img = GlintClient(d.base, token=s["view_token"]).preview(
         S["material"]["id"], view=3, env=e["spec"], lights=8, background=False)
@@ -447,7 +453,12 @@ def test_11_gbuffer_sets(d):
     assert m["id"] in [x["id"] for x in c.list_gbuffer_materials(st["id"])["materials"]]
     assert c.factors(m["id"]).startswith(PNG_SIG)
     raises(lambda: c.gltf(m["id"]), 422, "no-scene")
-    raises(lambda: GlintClient(d.base).get_gbuffer_set(st["id"]), 401, "api-key-required")
+    # the set is its owner key's (made for it here) and the API key's
+    raises(lambda: GlintClient(d.base).get_gbuffer_set(st["id"]), 401, "owner-key-required")
+    raises(lambda: GlintClient(d.base, owner_key=OWNER).get_gbuffer_set(st["id"]), 403,
+           "not-owner")
+    assert GlintClient(d.base, owner_key=st["owner_key"]).get_gbuffer_set(st["id"])["id"] == \
+        st["id"]
     raises(lambda: c.put_gbuffer(st["id"], 2, c.gbuffer(sc, 0)), 404)
     raises(lambda: c.put_gbuffer(st["id"], 0, b"not an exr"), 422, "invalid-gbuffer")
     assert c.delete_gbuffer_set(st["id"]) is None

@@ -274,6 +274,50 @@ def test_scene_get_delete_unknown(d):
     d.delete(API + "/scenes/" + s["id"], status=404)
 
 
+def test_scene_delete_takes_its_materials(d):
+    """Deleting a scene deletes the materials fitted in its sessions, their
+    records and files, as the API says: none is left on disk that nobody,
+    not even the API key, can read."""
+    k = Daemon("--api-key", "s3cret-key", "--quiet")
+    key = {"X-Api-Key": "s3cret-key"}
+    try:
+        s = k.post(API + "/scenes", status=201, json={"width": 16, "height": 16},
+                   headers=key).json()
+        sess = k.post(API + "/sessions", status=201, json={"scene_id": s["id"]},
+                      headers=key).json()
+        h = tok(sess["paint_token"])
+        for view in (0, 1):
+            post_strokes(k, sess, view, [{"color": [0.8, 0.2, 0.1], "diameter": 6,
+                                          "points": [[8, 8]]}])
+        f = k.post("%s/sessions/%s/fits" % (API, sess["id"]), json={"params": {"res": 16}},
+                   headers=h)
+        assert f.status_code in (201, 202), f.text
+        mid = f.json()["id"] if f.status_code == 201 else None
+        if mid is None:
+            job = f.json()["job"]["links"]["self"]
+            for _ in range(1200):
+                j = k.get(job, status=200, headers=h).json()["job"]
+                if j["state"] in ("done", "failed"):
+                    break
+                time.sleep(0.05)
+            assert j["state"] == "done", j
+            mid = j["material_id"]
+        k.get(API + "/materials/" + mid, status=200, headers=h, schema="Material.json")
+        k.get(API + "/materials/%s/package" % mid, status=200, headers=key)
+        mdir = os.path.join(k.data_dir, "blobs", "materials", mid)
+        assert os.path.exists(os.path.join(mdir, "material.json")), mdir
+        k.delete(API + "/scenes/" + s["id"], status=204, headers={"X-Glint-Owner": s["owner_key"]})
+        for hd in (key, h):
+            k.get(API + "/materials/" + mid, status=404, headers=hd)
+        assert not os.path.exists(mdir), os.listdir(mdir)
+        k.stop()
+        k.start()  # nothing comes back
+        k.get(API + "/materials/" + mid, status=404, headers=key)
+        assert not os.path.exists(mdir)
+    finally:
+        k.stop()
+
+
 def test_scene_images(d):
     s, _ = shared(d)
     base = "%s/scenes/%s/views/" % (API, s["id"])

@@ -12,12 +12,14 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
+import exr_named  # noqa: E402
 from harness import GLINTD, run_tests  # noqa: E402
 
 CLI = os.environ.get("GLINT_CLI") or os.path.join(
     os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
 SIZE = 48
 S = {}
+OWNER = "srbf-test-owner-key-0001"
 PARAMS = {"env": "sky", "lights": 64, "basis_res": 5, "static": "smith"}
 
 
@@ -209,21 +211,26 @@ def test_07_uploaded_environments(d):
     be used, deleted."""
     with open(os.path.join(ENV_DIR, "bright.hdr"), "rb") as f:
         hdr = f.read()
-    oct_ = {"Content-Type": "application/octet-stream"}
+    oct_ = {"Content-Type": "application/octet-stream", "X-Glint-Owner": OWNER}
     r = d.post("/api/v1/environments?name=bright%20upload", headers=oct_, data=hdr, status=201,
                schema="Environment.json")
     up = r.json()
+    assert up.pop("owner_key") == OWNER, up
     assert up["spec"] == "upload:" + up["id"] and up["kind"] == "upload", up
     assert (up["width"], up["height"], up["layout"], up["format"]) == (64, 32, "latlong", "hdr")
     assert up["name"] == "bright upload" and up["bytes"] == len(hdr)
     assert r.headers["Location"] == "/api/v1/environments/" + up["id"]
-    listed = d.get("/api/v1/environments", status=200).json()["environments"]
+    listed = d.get("/api/v1/environments", headers={"X-Glint-Owner": OWNER},
+                   status=200).json()["environments"]
     assert [e for e in listed if e["spec"] == up["spec"]] == [up], listed
     # a fit and a preview under it
     kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env=up["spec"])})
     if kind == "job":
         j = wait_job(d, job["id"])
         assert j["state"] == "done", j
+        lit = j["material_id"]
+    else:
+        lit = job["id"]
     mid, h = S["material"]["id"], tok(S["view"])
     p = d.get("/api/v1/materials/%s/preview.exr?view=0&lights=32&env=%s" % (mid, up["spec"]),
               headers=h, status=200)
@@ -238,7 +245,8 @@ def test_07_uploaded_environments(d):
         if r.status_code == 201:
             e = r.json()
             assert e["format"] == "exr" and e["width"] == 2 * e["height"], e
-            d.delete("/api/v1/environments/" + e["id"], status=204)
+            d.delete("/api/v1/environments/" + e["id"], headers={"X-Glint-Owner": OWNER},
+                     status=204)
     # refused, each with its reason
     flat = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n"
     cases = [
@@ -258,14 +266,102 @@ def test_07_uploaded_environments(d):
     for bad in ("upload:" + "0" * 32, "upload:../bright.hdr", "upload:" + up["id"] + ".hdr"):
         r = d.get("/api/v1/materials/%s/preview.exr?view=0&env=%s" % (mid, bad), headers=h)
         assert r.status_code == 404, (bad, r.status_code, r.text)
-    # deleted: no longer listed or read; a second delete is 404
-    d.delete("/api/v1/environments/" + up["id"], status=204)
-    listed = d.get("/api/v1/environments", status=200).json()["environments"]
+    # deleted by its owner: no longer listed or read; a second delete is 404
+    d.delete("/api/v1/environments/" + up["id"], headers={"X-Glint-Owner": OWNER}, status=204)
+    listed = d.get("/api/v1/environments", headers={"X-Glint-Owner": OWNER},
+                   status=200).json()["environments"]
     assert up["spec"] not in [e["spec"] for e in listed]
     d.get("/api/v1/materials/%s/preview.exr?view=0&env=%s" % (mid, up["spec"]), headers=h,
           status=404)
-    d.delete("/api/v1/environments/" + up["id"], status=404)
+    d.delete("/api/v1/environments/" + up["id"], headers={"X-Glint-Owner": OWNER}, status=404)
     d.delete("/api/v1/environments/nosuch", status=404)
+    # the material fitted under it is its own BRDF: it still reads, renders and exports
+    m = d.get("/api/v1/materials/" + lit, headers=h, status=200, schema="Material.json").json()
+    assert m["params"]["env"] == up["spec"], m["params"]
+    assert d.get("/api/v1/materials/%s/preview.exr?view=0" % lit, headers=h,
+                 status=200).content[:4] == b"\x76\x2f\x31\x01"
+    assert d.get("/api/v1/materials/%s/preview.exr?view=0&env=sky&lights=32" % lit, headers=h,
+                 status=200).content[:4] == b"\x76\x2f\x31\x01"
+    assert len(d.get("/api/v1/materials/%s/package" % lit, headers=h, status=200).content) > 1000
+    d.get("/api/v1/materials/%s/shader" % lit, headers=h, status=200, schema="Shader.json")
+
+
+def test_07b_uploads_belong_to_their_owner(d):
+    """An uploaded environment is listed to the owner key it was made with
+    and deleted by it (or the API key); the built-ins and data: maps are
+    everyone's and never deleted; a scene whose base renders it lights
+    keeps it until the scene is deleted."""
+    with open(os.path.join(ENV_DIR, "bright.hdr"), "rb") as f:
+        hdr = f.read()
+    oct_ = {"Content-Type": "application/octet-stream"}
+    mine, other = {"X-Glint-Owner": OWNER}, {"X-Glint-Owner": "another-owner-key-0000"}
+    up = d.post("/api/v1/environments?name=mine", headers=dict(oct_, **mine), data=hdr,
+                status=201, schema="Environment.json").json()
+    url = "/api/v1/environments/" + up["id"]
+    # what a caller without credentials sees and may do: not listed, not deleted
+    envs = d.get("/api/v1/environments", status=200).json()["environments"]
+    assert up["spec"] not in [e["spec"] for e in envs], envs
+    r = d.delete(url, status=401)
+    assert r.json()["type"].endswith("/owner-key-required"), r.text
+    assert up["owner_key"] == OWNER
+    # no owner key sent: the daemon makes one, answered this once
+    made = d.post("/api/v1/environments", headers=oct_, data=hdr, status=201,
+                  schema="Environment.json").json()
+    assert len(made["owner_key"]) == 32 and made["owner_key"] != OWNER, made
+    d.post("/api/v1/environments", headers=dict(oct_, **{"X-Glint-Owner": "short"}), data=hdr,
+           status=422)
+
+    def listed(headers):
+        envs = d.get("/api/v1/environments", headers=headers, status=200).json()["environments"]
+        for e in envs:
+            assert "owner" not in e and "owner_key" not in e, e
+        return [e["spec"] for e in envs]
+    anyone, others = listed({}), listed(other)
+    for specs in (anyone, others):
+        assert "sky" in specs and "data:bright.hdr" in specs, specs
+        assert up["spec"] not in specs and made["spec"] not in specs, specs
+    assert up["spec"] in listed(mine) and made["spec"] not in listed(mine)
+    assert made["spec"] in listed({"X-Glint-Owner": made["owner_key"]})
+    # deleting: 403 with another owner key, never a built-in or data: map
+    r = d.delete(url, headers=other, status=403)
+    assert r.json()["type"].endswith("/not-owner"), r.text
+    for name in ("sky", "builtin:studio", "data:bright.hdr"):
+        r = d.delete("/api/v1/environments/" + name, headers=mine, status=403)
+        assert r.json()["type"].endswith("/not-deletable"), r.text
+    assert "sky" in listed({}) and "data:bright.hdr" in listed({})
+    # a scene lit by it: the upload stays while the scene does
+    body = {"width": 32, "height": 32, "base": {"env": {"spec": up["spec"], "lights": 16}}}
+    sc = d.post("/api/v1/scenes", json=body, headers=other, status=201,
+                schema="Scene.json").json()
+    r = d.delete(url, headers=mine, status=409)
+    assert r.json()["type"].endswith("/environment-in-use") and "1 scene" in r.text, r.text
+    d.get("/api/v1/scenes/%s/views/1/base.png" % sc["id"], status=200)
+    d.delete("/api/v1/scenes/" + sc["id"], headers=other, status=204)
+    d.delete(url, headers=mine, status=204)
+    assert up["spec"] not in listed(mine)
+    d.delete("/api/v1/environments/" + made["id"],
+             headers={"X-Glint-Owner": made["owner_key"]}, status=204)
+
+
+def test_07c_nonfinite_texels_read_as_zero(d):
+    """An OpenEXR map with NaN and infinite texels is kept, those texels
+    read as 0 and counted, as the API says."""
+    import math
+    w, h = 16, 8
+    chans = {c: [0.5] * (w * h) for c in "RGB"}
+    chans["R"][3], chans["G"][17], chans["B"][40] = math.nan, math.inf, -math.inf
+    oct_ = {"Content-Type": "application/octet-stream", "X-Glint-Owner": OWNER}
+    r = d.post("/api/v1/environments?name=holes", headers=oct_, data=exr_named.write(w, h, chans),
+               status=201, schema="Environment.json")
+    e = r.json()
+    assert e["nonfinite"] == 3 and e["format"] == "exr" and e["width"] == w, e
+    # usable: a base render under it
+    sc = d.post("/api/v1/scenes", headers={"X-Glint-Owner": OWNER},
+                json={"width": 16, "height": 16, "base": {"env": {"spec": e["spec"], "lights": 8}}},
+                status=201).json()
+    d.get("/api/v1/scenes/%s/views/0/base.png" % sc["id"], status=200)
+    d.delete("/api/v1/scenes/" + sc["id"], headers={"X-Glint-Owner": OWNER}, status=204)
+    d.delete("/api/v1/environments/" + e["id"], headers={"X-Glint-Owner": OWNER}, status=204)
 
 
 def undated(exr):

@@ -503,6 +503,119 @@ TEST(refs_upload_obj_dae)
     }
 }
 
+/* What an upload's text names, used or not, is found before any import:
+ * every reference but data: URIs is refused in mesh_load_mem's words,
+ * naming it; files without references, data: URIs, COLLADA ids inside
+ * the document ('#', a <surface>'s <init_from>) and metadata pass. */
+TEST(refs_upload_text)
+{
+    static const char *const refused[][3] = {
+        /* format, text, the reference the message names */
+        {"gltf", "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"tex.png\"}]}",
+         "tex.png"},
+        {"gltf", "{\"images\": [ {\"name\":\"x\", \"\\u0075ri\" : \"/etc/passwd\"} ]}",
+         "/etc/passwd"},
+        {"gltf", "{\"extensions\":{\"X\":{\"deep\":[{\"uri\":\"file:///etc/passwd\"}]}}}",
+         "file:///etc/passwd"},
+        /* escaped quotes in other strings do not end them; escapes in the reference */
+        {"gltf", "{\"name\":\"say \\\"uri\\\": \\\"x\\\"\",\"images\":[{\"uri\":\"dir\\/t.png\"}]}",
+         "dir/t.png"},
+        {"obj", "mtllib model.mtl\nv 0 0 0\n", "model.mtl"},
+        {"obj", "v 0 0 0\r\n  maplib  maps.mpl  \r\n", "maps.mpl"},
+        {"obj", "call other.obj 1 2\n", "other.obj 1 2"},
+        {"dae", "<COLLADA><library_images><image id=\"i\"><init_from>file:///etc/passwd"
+                "</init_from></image></library_images></COLLADA>", "file:///etc/passwd"},
+        {"dae", "<COLLADA><image><init_from>\n  <![CDATA[../../etc/passwd]]>\n</init_from>"
+                "</image></COLLADA>", "../../etc/passwd"},
+        {"dae", "<COLLADA><image><init_from><ref>tex.png</ref></init_from></image></COLLADA>",
+         "tex.png"},
+        {"dae", "<COLLADA><image><init_from><!-- a note -->t.png</init_from></image></COLLADA>",
+         "t.png"},
+        {"dae", "<COLLADA><node><instance_geometry url='other.dae#geo'/></node></COLLADA>",
+         "other.dae#geo"},
+        {"dae", "<?xml version=\"1.0\"?><!DOCTYPE c [<!ENTITY x SYSTEM \"/etc/passwd\">]>"
+                "<COLLADA/>", "/etc/passwd"},
+        {"ply", "ply\nformat ascii 1.0\ncomment TextureFile skin.png\nelement vertex 0\n"
+                "end_header\n", "skin.png"},
+        /* named as another format: scanned for what it is */
+        {"obj", "{\"buffers\":[{\"uri\":\"tet.bin\"}]}", "tet.bin"},
+        {"ply", "<COLLADA><image><init_from>t.png</init_from></image></COLLADA>", "t.png"},
+    };
+    static const char *const passed[][2] = {
+        {"gltf", "{\"buffers\":[{\"uri\":\"data:application/octet-stream;base64,AAAA\"}],"
+                 "\"images\":[{\"uri\":\"DATA:image/png;base64,AA\"}],\"name\":\"uri\"}"},
+        {"obj", "# mtllib commented.mtl\nv 0 0 0\nusemtl red\n"},
+        {"dae", "<COLLADA><asset><contributor><source_data>file:///C:/work/model.max"
+                "</source_data></contributor></asset><!-- <init_from>/etc/passwd</init_from> -->"
+                "<newparam sid=\"s\"><surface type=\"2D\"><init_from>img_id</init_from>"
+                "</surface></newparam><input semantic=\"V\" source=\"#v\"/>"
+                "<instance_effect url=\"#fx\"/></COLLADA>"},
+        {"ply", "ply\nformat ascii 1.0\ncomment made by hand\nend_header\n"
+                "comment TextureFile after.png\n"},
+        {"off", "OFF\n0 0 0\n"},
+    };
+    char shape0[GLINT_ERR_MSG_MAX] = "", shape[GLINT_ERR_MSG_MAX];
+    glint_err e;
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++) {
+        const char *fmt = refused[i][0], *text = refused[i][1], *ref = refused[i][2];
+        char what[64];
+        memset(&e, 0, sizeof e);
+        ASSERT_MSG(mesh_refs_check(text, strlen(text), fmt, &e) == GLINT_EINVAL,
+                   "case %zu (%s) not refused", i, ref);
+        ASSERT_MSG(strstr(e.msg, ref) && strstr(e.msg, "external references are not allowed "
+                                                       "in uploads"),
+                   "case %zu: %s", i, e.msg);
+        /* the same words for every reference and format */
+        msg_shape(e.msg, ref, shape, sizeof shape);
+        snprintf(what, sizeof what, "%s data", fmt);
+        msg_shape(shape, what, shape, sizeof shape);
+        if (!shape0[0])
+            snprintf(shape0, sizeof shape0, "%s", shape);
+        ASSERT_MSG(strcmp(shape, shape0) == 0, "case %zu: %s / %s", i, shape, shape0);
+    }
+    for (size_t i = 0; i < sizeof passed / sizeof passed[0]; i++) {
+        const char *text = passed[i][1];
+        ASSERT_MSG(mesh_refs_check(text, strlen(text), passed[i][0], &e) == 0, "case %zu: %s",
+                   i, e.msg);
+    }
+    /* the fixtures' own files: what earlier tests load */
+    {
+        char *g = tet_gltf_refs(NULL, NULL), *d = tet_dae_image("tex.png");
+        ASSERT_OK(mesh_refs_check(g, strlen(g), "gltf", &e));
+        ASSERT_OK(mesh_refs_check(box_obj, strlen(box_obj), "obj", &e));
+        ASSERT_EQ(mesh_refs_check(d, strlen(d), "dae", &e), GLINT_EINVAL);
+        ASSERT(strstr(e.msg, "\"tex.png\""));
+        free(g);
+        free(d);
+    }
+    /* a .glb: its JSON chunk is read, its binary chunk is part of the file */
+    {
+        static const char json[] = "{\"images\":[{\"uri\":\"t.png\"}]} ";
+        unsigned char glb[12 + 8 + sizeof json - 1];
+        uint32_t n = sizeof glb, c = sizeof json - 1, t = 0x4E4F534Au, v = 2;
+        memcpy(glb, "glTF", 4);
+        memcpy(glb + 4, &v, 4); /* the tests run little-endian, as glTF is */
+        memcpy(glb + 8, &n, 4);
+        memcpy(glb + 12, &c, 4);
+        memcpy(glb + 16, &t, 4);
+        memcpy(glb + 20, json, c);
+        ASSERT_EQ(mesh_refs_check(glb, sizeof glb, "glb", &e), GLINT_EINVAL);
+        ASSERT(strstr(e.msg, "t.png"));
+        c = 1000; /* a chunk longer than the file: read to its end */
+        memcpy(glb + 12, &c, 4);
+        ASSERT_EQ(mesh_refs_check(glb, sizeof glb, "glb", &e), GLINT_EINVAL);
+        ASSERT_OK(mesh_refs_check(glb, 19, "glb", &e));
+    }
+    /* truncated text ends the scan without reading past the end */
+    {
+        static const char cut[] = "{\"images\":[{\"uri\":\"/etc/pass";
+        ASSERT_OK(mesh_refs_check(cut, strlen(cut), "gltf", &e));
+        ASSERT_OK(mesh_refs_check("<COLLADA><image><init_from", 26, "dae", &e));
+        ASSERT_OK(mesh_refs_check("", 0, "obj", &e));
+        ASSERT_EQ(mesh_refs_check(NULL, 3, "obj", &e), GLINT_EINVAL);
+    }
+}
+
 /* From disk, a file may refer to files in its directory and below it; an
  * absolute path, a '..' that leaves the directory or a URI scheme is
  * refused, even when the file it names exists. */
@@ -654,6 +767,18 @@ TEST(fuzz_mutations)
                                         : (unsigned char)(rand() & 255);
                 }
             memset(&e, 0, sizeof e);
+            /* the reference scan reads only the bytes given (a copy exactly
+             * n long: a read past it is the sanitizers' and valgrind's to see) */
+            {
+                unsigned char *exact = malloc(n);
+                ASSERT(exact != NULL);
+                memcpy(exact, mut, n);
+                rc = mesh_refs_check(exact, n, exts[f], &e);
+                free(exact);
+            }
+            ASSERT_MSG(rc == 0 || (rc == GLINT_EINVAL && strstr(e.msg, "external references")),
+                       "%s trial %d: %d %s", exts[f], trial, rc, e.msg);
+            memset(&e, 0, sizeof e);
             rc = mesh_load_mem(mut, n, exts[f], &m, NULL, &e);
             if (rc == 0) {
                 char why[256];
@@ -684,6 +809,7 @@ TEST_LIST {
     TEST_ENTRY(argument_errors),
     TEST_ENTRY(refs_upload_gltf),
     TEST_ENTRY(refs_upload_obj_dae),
+    TEST_ENTRY(refs_upload_text),
     TEST_ENTRY(refs_disk),
     TEST_ENTRY(fuzz_mutations),
 };

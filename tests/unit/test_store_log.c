@@ -441,7 +441,8 @@ TEST(a_material_and_its_event_commit_together)
 TEST(scene_delete_removes_sessions_logs_and_blobs)
 {
     fixture f;
-    char s2[33], keep_scene[33], keep_session[33], mat[33], name[128], unknown[33];
+    char s2[33], keep_scene[33], keep_session[33], mat[33], keep_mat[33], name[128],
+        unknown[33];
     json_t *strokes = strokes_of(2, 0), *data = json_pack("{s:i}", "k", 1), *doc, *arr;
     int64_t first, last;
     void *bytes;
@@ -461,10 +462,19 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     ASSERT_OK(store_blob_put(f.s, name, "png", 3, NULL));
     snprintf(name, sizeof name, "scenes/%s/base.png", keep_scene);
     ASSERT_OK(store_blob_put(f.s, name, "png", 3, NULL));
+    /* a material of each scene, with its files */
     ASSERT_OK(glint_id_new(mat, NULL));
     doc = json_pack("{s:s}", "id", mat);
     ASSERT_OK(store_material_put(f.s, mat, f.session, doc, NULL));
     json_decref(doc);
+    snprintf(name, sizeof name, "materials/%s/material.json", mat);
+    ASSERT_OK(store_blob_put(f.s, name, "{}", 2, NULL));
+    ASSERT_OK(glint_id_new(keep_mat, NULL));
+    doc = json_pack("{s:s}", "id", keep_mat);
+    ASSERT_OK(store_material_put(f.s, keep_mat, keep_session, doc, NULL));
+    json_decref(doc);
+    snprintf(name, sizeof name, "materials/%s/material.json", keep_mat);
+    ASSERT_OK(store_blob_put(f.s, name, "{}", 2, NULL));
     ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 6);
 
     ASSERT_OK(store_scene_delete(f.s, f.scene, NULL));
@@ -489,7 +499,11 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     ASSERT(!path_exists(f.dir, name));
     snprintf(name, sizeof name, "blobs/scenes/%s", f.scene);
     ASSERT(!path_exists(f.dir, name));
-    /* the other scene, its session and the material are untouched */
+    /* the scene's materials went with it, row and files */
+    ASSERT_EQ(store_material_get(f.s, mat, &doc, NULL), GLINT_ENOTFOUND);
+    snprintf(name, sizeof name, "blobs/materials/%s", mat);
+    ASSERT(!path_exists(f.dir, name));
+    /* the other scene, its session and its material are untouched */
     ASSERT_OK(store_scene_get(f.s, keep_scene, &doc, NULL));
     json_decref(doc);
     ASSERT_OK(store_painting_get(f.s, keep_session, 0, &bytes, &len, NULL, NULL));
@@ -501,8 +515,10 @@ TEST(scene_delete_removes_sessions_logs_and_blobs)
     json_decref(arr);
     snprintf(name, sizeof name, "blobs/scenes/%s/base.png", keep_scene);
     ASSERT(path_exists(f.dir, name));
-    ASSERT_OK(store_material_get(f.s, mat, &doc, NULL));
+    ASSERT_OK(store_material_get(f.s, keep_mat, &doc, NULL));
     json_decref(doc);
+    snprintf(name, sizeof name, "blobs/materials/%s/material.json", keep_mat);
+    ASSERT(path_exists(f.dir, name));
     ASSERT_EQ(db_int(&f, "SELECT count(*) FROM events"), 2);
     /* twice, or unknown */
     ASSERT_EQ(store_scene_delete(f.s, f.scene, NULL), GLINT_ENOTFOUND);
