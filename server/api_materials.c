@@ -552,8 +552,8 @@ static http_resp preview(http_req *req, const char *format)
     if ((rc = api_material_load(a, mid, &m, &e)))
         goto done;
     if ((rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im,
-                                            &info, &used, &e)
-                      : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used,
+                                            &info, &used, NULL, &e)
+                      : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used, NULL,
                                         &e))) {
         if (rc == GLINT_EUNSUPPORTED && eng == RENDER_EGL)
             glint_err_kind(&e, "egl-unavailable");

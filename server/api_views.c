@@ -105,9 +105,9 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
     if (!rc && !(rc = admit_enter(a->work, bytes, "the base render", e))) {
         /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
         if ((rc = has_env ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
-                                            &view, W, H, im, NULL, NULL, e)
+                                            &view, W, H, im, NULL, NULL, NULL, e)
                           : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, W, H, spec,
-                                        scale, im, NULL, e)))
+                                        scale, im, NULL, NULL, e)))
             glint_err_prefix(e, "rendering");
         admit_leave(a->work, bytes);
     }

@@ -533,7 +533,7 @@ static int fit_job(job *j, void *arg, json_t **result, glint_err *err)
 
 static int fit_job_run(job *j, fit_task *t, json_t **result, glint_err *err)
 {
-    prep_request rq = {t->m, t->params, t->scene, t->use};
+    prep_request rq = {t->m, t->params, t->scene, t->use, NULL};
     prep *p = NULL;
     json_t *doc = NULL;
     int rc;
@@ -605,7 +605,7 @@ static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene
     if ((rc = task_bytes(t, err)))
         goto out;
     t0 = srv_timing_step(tm, "bound", t0);
-    rq = (prep_request){m, t->params, t->scene, t->use};
+    rq = (prep_request){m, t->params, t->scene, t->use, NULL};
     if (prep_try(f->cache, &rq, &p, NULL) == 0) { /* in memory: fit now */
         srv_timing_step(tm, "prepared", t0);
         t->tm = tm;

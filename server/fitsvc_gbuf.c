@@ -143,7 +143,7 @@ static int gb_job(job *j, void *arg, json_t **result, glint_err *err)
     if (t->f->work &&
         (rc = admit_wait(t->f->work, t->bytes, "the fit", fitsvc_job_cancelled, j, err)))
         return rc;
-    if (!(rc = prep_acquire_samples(t->f->cache, t->m, t->params, &t->s, fitsvc_job_progress, j,
+    if (!(rc = prep_acquire_samples(t->f->cache, t->m, t->params, &t->s, fitsvc_job_progress, j, NULL,
                                     &p, err))) {
         rc = gb_execute(t, p, j, &doc, err);
         prep_release(t->f->cache, p);

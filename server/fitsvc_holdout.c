@@ -161,7 +161,7 @@ static void *holdout_thread(void *arg)
      * measurement no one waits for */
     par_background(1);
     x->rc = prep_holdout(h->m, h->params, cache_data(h->pattern), h->paintings, holdout_gate,
-                         holdout_progress, x, &x->r, &x->err);
+                         holdout_progress, x, NULL, &x->r, &x->err);
     par_background(0);
     return NULL;
 }

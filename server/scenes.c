@@ -140,9 +140,9 @@ int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err
         goto done;
     /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
     rc = jenv ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, bscale, &env,
-                                &sc->views[view], W, H, out, NULL, NULL, err)
+                                &sc->views[view], W, H, out, NULL, NULL, NULL, err)
               : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], W, H, spec,
-                            bscale, out, NULL, err);
+                            bscale, out, NULL, NULL, err);
     admit_leave(a->work, bytes);
     if (rc)
         goto done;

@@ -50,7 +50,7 @@ TEST(an_occluder_blocks_what_is_behind_it)
         dirs[3 * k + 2] = c;
     }
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 1, &rays, &e));
+    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 1, &rays, NULL, &e));
     ASSERT_EQ(rays, 130);
     ASSERT_EQ(bit(bits, 2, 0, 0), 0); /* under the roof: up is blocked */
     ASSERT_EQ(bit(bits, 2, 1, 0), 1); /* far away: up is open */
@@ -59,7 +59,7 @@ TEST(an_occluder_blocks_what_is_behind_it)
         ASSERT_EQ(bit(bits, 2, 0, k), 1);
     /* a direction below the surface is never seen */
     dirs[2] = -1;
-    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 2, NULL, &e));
+    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 2, NULL, NULL, &e));
     ASSERT_EQ(bit(bits, 2, 1, 0), 0);
     vis_close(v);
     mesh_free(&m);
@@ -89,8 +89,8 @@ TEST(a_sphere_never_shadows_itself_and_threads_agree)
         dirs[3 * k + 2] = z;
     }
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b1, 1, NULL, &e));
-    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b2, 2, NULL, &e));
+    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b1, 1, NULL, NULL, &e));
+    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b2, 2, NULL, NULL, &e));
     ASSERT(memcmp(b1, b2, NP * VIS_WORDS(K) * sizeof(uint64_t)) == 0);
     for (int i = 0; i < NP; i++)
         for (int k = 0; k < K; k++) {
@@ -159,7 +159,7 @@ TEST(the_bunny_when_present)
     printf("  bunny: %d triangles, built in %.1f ms\n", m.ntris, 1e3 * (glint_now() - t0));
     bits = malloc((size_t)m.nverts * VIS_WORDS(K) * sizeof *bits);
     t0 = glint_now();
-    ASSERT_OK(vis_compute(v, m.nverts, m.pos, m.nrm, K, dirs, bits, 0, &rays, &e));
+    ASSERT_OK(vis_compute(v, m.nverts, m.pos, m.nrm, K, dirs, bits, 0, &rays, NULL, &e));
     t0 = glint_now() - t0;
     printf("  %ld rays from %d vertices in %.3f s (%.1f M rays/s)\n", rays, m.nverts, t0,
            rays / t0 / 1e6);
@@ -188,8 +188,8 @@ TEST(bad_input)
     ASSERT_EQ(vis_open(&m, &v, &e), GLINT_EINVAL);
     floor_and_roof(&m);
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_EQ(vis_compute(v, 1, p, n, 1, d, &b, 1, NULL, &e), GLINT_EINVAL);
-    ASSERT_EQ(vis_compute(v, 1, n, n, 0, d, &b, 1, NULL, &e), GLINT_EINVAL);
+    ASSERT_EQ(vis_compute(v, 1, p, n, 1, d, &b, 1, NULL, NULL, &e), GLINT_EINVAL);
+    ASSERT_EQ(vis_compute(v, 1, n, n, 0, d, &b, 1, NULL, NULL, &e), GLINT_EINVAL);
     vis_close(v);
     mesh_free(&m);
 }
