@@ -50,6 +50,7 @@ static const struct {
     {"unsupported-media-type", 415},
     {"storage-full", 507},      /* the data directory's disk (fsio_err_kind) */
     {"storage-read-only", 503},
+    {"owner-queue-full", 429},  /* one owner's jobs (jobs.h) */
 };
 
 int api_status(const glint_err *e)

@@ -624,7 +624,7 @@ static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene
         if (t->bytes > st.budget && (rc = admit_enter(f->work, t->bytes, "the fit", err)))
             goto out;
     }
-    rc = jobs_submit(f->jobs, "fit", session_id, fit_job, t, task_free, job_id, err);
+    rc = jobs_submit(f->jobs, "fit", session_id, m->name, fit_job, t, task_free, job_id, err);
     return rc; /* the job owns the task (freed even on failure) */
 out:
     task_free(t);

@@ -210,5 +210,5 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
     pthread_mutex_lock(&f->lock);
     f->misses++;
     pthread_mutex_unlock(&f->lock);
-    return jobs_submit(f->jobs, "fit", set_id, gb_job, t, gb_task_free, job_id, err);
+    return jobs_submit(f->jobs, "fit", set_id, m->name, gb_job, t, gb_task_free, job_id, err);
 }

@@ -257,7 +257,7 @@ void fitsvc_holdout_schedule(fit_task *t, prep *p, const char *material_id, cons
                (size_t)s->width * s->height * s->channels * sizeof(float));
     }
     h->pattern = cache_ref(t->f->cache, prep_pattern(p));
-    if (jobs_submit(t->f->jobs, "holdout", "", holdout_job, h, holdout_free, id, &e))
+    if (jobs_submit(t->f->jobs, "holdout", "", NULL, holdout_job, h, holdout_free, id, &e))
         log_line("held-out evaluation not scheduled: %s", e.msg);
 }
 
