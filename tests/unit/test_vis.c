@@ -176,6 +176,47 @@ TEST(the_bunny_when_present)
     mesh_free(&m);
 }
 
+static int stop_now(void *cls)
+{
+    __atomic_add_fetch((int *)cls, 1, __ATOMIC_RELAXED);
+    return 1;
+}
+
+/* Told to stop, every thread stops at its first question: the rays of
+ * those that asked are not cast. */
+TEST(a_cancelled_computation_stops)
+{
+    mesh m;
+    vis_scene *v;
+    glint_err e;
+    enum { NP = 4096, K = 64 };
+    static float pos[3 * NP], nrm[3 * NP];
+    static uint64_t bits[NP];
+    double dirs[3 * K];
+    long rays = -1;
+    int asked = 0;
+    glint_cancel c = {stop_now, &asked};
+    floor_and_roof(&m);
+    ASSERT_OK(vis_open(&m, &v, &e));
+    for (int i = 0; i < NP; i++) {
+        pos[3 * i] = (float)(i % 64) / 64.0f - 0.5f;
+        pos[3 * i + 1] = (float)(i / 64) / 64.0f - 0.5f;
+        nrm[3 * i + 2] = 1.0f;
+    }
+    for (int k = 0; k < K; k++) { /* upwards, unit */
+        double x = 0.1 * (k % 8 - 4), y = 0.1 * (k / 8 - 4), l = sqrt(x * x + y * y + 1.0);
+        dirs[3 * k] = x / l;
+        dirs[3 * k + 1] = y / l;
+        dirs[3 * k + 2] = 1.0 / l;
+    }
+    ASSERT_EQ(vis_compute(v, NP, pos, nrm, K, dirs, bits, 2, &rays, &c, &e), GLINT_ECANCELLED);
+    ASSERT(strstr(e.msg, "cancelled") != NULL);
+    ASSERT(asked >= 1 && asked <= 2);
+    ASSERT_EQ(rays, 0);
+    vis_close(v);
+    mesh_free(&m);
+}
+
 TEST(bad_input)
 {
     mesh m;
@@ -199,6 +240,7 @@ TEST_LIST{
     TEST_ENTRY(a_sphere_never_shadows_itself_and_threads_agree),
     TEST_ENTRY(convexity_of_the_built_ins),
     TEST_ENTRY(the_bunny_when_present),
+    TEST_ENTRY(a_cancelled_computation_stops),
     TEST_ENTRY(bad_input),
 };
 
