@@ -58,7 +58,7 @@ void envlit_vis_free(envlit_vis *v)
 }
 
 int envlit_vis_vertices(const mesh *m, const env_lights *l, int shadows, envlit_vis *out,
-                        glint_err *err)
+                        const glint_cancel *cancel, glint_err *err)
 {
     vis_scene *vs = NULL;
     double t0 = now_s();
@@ -82,7 +82,7 @@ int envlit_vis_vertices(const mesh *m, const env_lights *l, int shadows, envlit_
                              m->nverts);
     if ((rc = vis_open(m, &vs, err)) ||
         (rc = vis_compute(vs, m->nverts, m->pos, m->nrm, l->k, l->dir, out->bits, 0, &out->rays,
-                          err))) {
+                          cancel, err))) {
         vis_close(vs);
         envlit_vis_free(out);
         return rc;
@@ -121,13 +121,24 @@ typedef struct vjob {
     double eye[3], scale;
     float *rgb;
     int lo, hi;
+    const glint_cancel *cancel;
+    int *stopped;              /* shared: set once a thread was told to stop */
 } vjob;
 
 static void *vertex_range(void *arg)
 {
     const vjob *j = arg;
+    long every = glint_cancel_every(j->l->k);
     for (int i = j->lo; i < j->hi; i++) {
         const float *p = j->m->pos + 3 * (size_t)i, *q = j->m->nrm + 3 * (size_t)i;
+        if (j->cancel && (i - j->lo) % every == 0) {
+            if (__atomic_load_n(j->stopped, __ATOMIC_RELAXED))
+                break;
+            if (glint_cancelled(j->cancel)) {
+                __atomic_store_n(j->stopped, 1, __ATOMIC_RELAXED);
+                break;
+            }
+        }
         if (j->need && !j->need[i]) {
             memset(j->rgb + 3 * (size_t)i, 0, 3 * sizeof *j->rgb);
             continue;
@@ -175,12 +186,12 @@ static void *vertex_range(void *arg)
 
 int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, envlit_fn fn,
                     const void *ctx, const double eye[3], double scale, int nthreads,
-                    float *rgb, glint_err *err)
+                    float *rgb, const glint_cancel *cancel, glint_err *err)
 {
     vjob jobs[ENVLIT_MAX_THREADS];
     pthread_t th[ENVLIT_MAX_THREADS];
     uint8_t *need;
-    int nt, started = 0, rc;
+    int nt, started = 0, rc, stopped = 0;
 
     if ((rc = lights_ok(l, err)))
         return rc;
@@ -235,6 +246,8 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
         j->rgb = rgb;
         j->lo = (int)((long)m->nverts * t / nt);
         j->hi = (int)((long)m->nverts * (t + 1) / nt);
+        j->cancel = cancel;
+        j->stopped = &stopped;
     }
     for (int t = 1; t < nt; t++) {
         if (pthread_create(&th[t], NULL, vertex_range, &jobs[t]))
@@ -247,13 +260,16 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
     for (int t = 1; t <= started; t++)
         pthread_join(th[t], NULL);
     free(need);
+    if (stopped)
+        return glint_cancel_err(err, "shading the vertices");
     return 0;
 }
 
 int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
-                const void *ctx, double scale, img *out, glint_err *err)
+                const void *ctx, double scale, img *out, const glint_cancel *cancel,
+                glint_err *err)
 {
-    size_t np = (size_t)g->width * g->height, n = 0;
+    size_t np = (size_t)g->width * g->height, n = 0, every;
     int *pix = NULL, words = l ? VIS_WORDS(l->k) : 1, rc;
     uint64_t *bits = NULL;
     float *pos = NULL, *nrm = NULL;
@@ -286,11 +302,16 @@ int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, 
             memcpy(nrm + 3 * i, g->nrm + 3 * (size_t)pix[i], 3 * sizeof *nrm);
         }
         if ((rc = vis_open(m, &vs, err)) ||
-            (rc = vis_compute(vs, (int)n, pos, nrm, l->k, l->dir, bits, 0, NULL, err)))
+            (rc = vis_compute(vs, (int)n, pos, nrm, l->k, l->dir, bits, 0, NULL, cancel, err)))
             goto done;
     }
+    every = (size_t)glint_cancel_every(l->k);
     for (size_t i = 0; i < n; i++) {
         size_t p = (size_t)pix[i];
+        if (i % every == 0 && glint_cancelled(cancel)) {
+            rc = glint_cancel_err(err, "shading the pixels");
+            goto done;
+        }
         double nn[3], wo[3], acc[3], uv[2] = {0.0, 0.0};
         for (int e = 0; e < 3; e++) {
             nn[e] = g->nrm[3 * p + e];

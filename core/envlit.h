@@ -26,6 +26,7 @@
 
 #include <stdint.h>
 
+#include "cancel.h"
 #include "env.h"
 #include "err.h"
 #include "gbuf.h"
@@ -65,22 +66,26 @@ typedef struct envlit_vis {
 } envlit_vis;
 
 /* Cast the shadow rays of every vertex (shadows = 0, or a convex mesh:
- * no rays, bits NULL).  OUT: *out (envlit_vis_free). */
+ * no rays, bits NULL).  OUT: *out (envlit_vis_free).  cancel: as below. */
 int envlit_vis_vertices(const mesh *m, const env_lights *l, int shadows, envlit_vis *out,
-                        glint_err *err);
+                        const glint_cancel *cancel, glint_err *err);
 void envlit_vis_free(envlit_vis *v);
 
 /* B at every vertex for the eye (OUT: rgb, 3 floats per vertex).  vis
- * must come from the same mesh and lights. */
+ * must come from the same mesh and lights.  cancel (may be NULL) is asked
+ * about every GLINT_CANCEL_WORK light evaluations (cancel.h):
+ * GLINT_ECANCELLED once it says to stop. */
 int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, envlit_fn fn,
                     const void *ctx, const double eye[3], double scale, int nthreads,
-                    float *rgb, glint_err *err);
+                    float *rgb, const glint_cancel *cancel, glint_err *err);
 
 /* B at every covered pixel of a G-buffer of mesh m, shadow rays cast per
  * pixel when `shadows` is set (and the mesh is not convex); 0 elsewhere.
- * OUT: *out (RGB, allocated here). */
+ * OUT: *out (RGB, allocated here; freed when cancelled, as on any error).
+ * cancel: as envlit_vertices'. */
 int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
-                const void *ctx, double scale, img *out, glint_err *err);
+                const void *ctx, double scale, img *out, const glint_cancel *cancel,
+                glint_err *err);
 
 /* Fill the pixels of `out` where mask is 0 (all when mask is NULL) with
  * the map's radiance along the camera ray of view v (scene.h's pixel

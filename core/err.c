@@ -70,6 +70,7 @@ const char *glint_strerror(int code)
     case GLINT_ECONFLICT: return "conflict";
     case GLINT_EBUSY: return "busy";
     case GLINT_ETOOBIG: return "too large";
+    case GLINT_ECANCELLED: return "cancelled";
     default: return "unknown error";
     }
 }

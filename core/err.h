@@ -26,7 +26,8 @@ enum {
     GLINT_EDENIED = -12,  /* credentials recognized, access not granted */
     GLINT_ECONFLICT = -13,/* the request conflicts with the current state */
     GLINT_EBUSY = -14,    /* over capacity right now: try again later */
-    GLINT_ETOOBIG = -15   /* larger than a configured limit */
+    GLINT_ETOOBIG = -15,  /* larger than a configured limit */
+    GLINT_ECANCELLED = -16/* stopped because its caller asked (cancel.h) */
 };
 
 #define GLINT_ERR_MSG_MAX 512

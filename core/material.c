@@ -137,7 +137,7 @@ int material_shade(const material *m, const gbuf *g, double intensity, float bac
 }
 
 int material_render(const material *m, const mesh *msh, const scene_view *v, int width,
-                    int height, img *out, glint_err *err)
+                    int height, img *out, const glint_cancel *cancel, glint_err *err)
 {
     int rc, band;
 
@@ -163,9 +163,20 @@ int material_render(const material *m, const mesh *msh, const scene_view *v, int
             img_free(out);
             return rc;
         }
-        shade_pixels(m, &g, 0, (size_t)width * nrows, v->light_intensity, 0.0f,
-                     out->px + (size_t)3 * width * row0);
+        /* shaded in pieces of GLINT_CANCEL_WORK pixels, asking cancel between */
+        for (size_t p0 = 0, np = (size_t)width * nrows; p0 < np && !rc; p0 += GLINT_CANCEL_WORK) {
+            size_t p1 = np - p0 < (size_t)GLINT_CANCEL_WORK ? np : p0 + GLINT_CANCEL_WORK;
+            if (glint_cancelled(cancel))
+                rc = glint_cancel_err(err, "the render");
+            else
+                shade_pixels(m, &g, p0, p1, v->light_intensity, 0.0f,
+                             out->px + (size_t)3 * width * row0 + 3 * p0);
+        }
         gbuf_free(&g);
+        if (rc) {
+            img_free(out);
+            return rc;
+        }
     }
     return 0;
 }

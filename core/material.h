@@ -26,6 +26,7 @@
 
 #include <jansson.h>
 
+#include "cancel.h"
 #include "err.h"
 #include "gbuf.h"
 #include "img.h"
@@ -82,10 +83,13 @@ int material_shade(const material *m, const gbuf *g, double intensity,
 
 /* CPU reference render of mesh `msh` from view `v` at width x height
  * (rasterized and shaded in bands of rows, so memory beyond the image is
- * bounded by MATERIAL_RENDER_BAND_PIXELS G-buffer pixels).  OUT: *out. */
+ * bounded by MATERIAL_RENDER_BAND_PIXELS G-buffer pixels).  OUT: *out.
+ * cancel (may be NULL) is asked about every GLINT_CANCEL_WORK pixels
+ * (cancel.h): GLINT_ECANCELLED, *out freed, once it says to stop. */
 #define MATERIAL_RENDER_BAND_PIXELS (1 << 18)
 int material_render(const material *m, const mesh *msh, const scene_view *v,
-                    int width, int height, img *out, glint_err *err);
+                    int width, int height, img *out, const glint_cancel *cancel,
+                    glint_err *err);
 
 /* Error of a material against reference images on the sample pixels
  * (mask, n.wi > 0, n.wo > 0) of nviews G-buffers: RMS and max |difference|

@@ -549,6 +549,20 @@ void material_gpu_free(material_gpu *g)
     memset(g, 0, sizeof *g);
 }
 
+double method_fit_seconds(const method *m, const void *params, long nsamples)
+{
+    if (nsamples < 0)
+        nsamples = 0;
+    if (m->fit_seconds)
+        return m->fit_seconds(params, nsamples);
+    return (double)nsamples * METHOD_SECONDS_PER_SAMPLE;
+}
+
+double method_dense_seconds(double n)
+{
+    return n * n * n * METHOD_SECONDS_PER_FLOP;
+}
+
 size_t method_fit_bytes(const method *m, const void *params, long nsamples)
 {
     if (nsamples < 0)

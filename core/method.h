@@ -32,6 +32,7 @@
 #include <stdint.h>
 
 #include "cache.h"
+#include "cancel.h"
 #include "err.h"
 #include "samples.h"
 
@@ -84,6 +85,9 @@ typedef struct method_build_in {
     /* progress of the whole preparation (stage name, fraction); may be NULL */
     void (*progress)(void *cls, const char *stage, double fraction);
     void *progress_cls;
+    /* asked by long builds in their loops (cancel.h; NULL: never): a build
+     * told to stop returns GLINT_ECANCELLED and leaves nothing behind */
+    const glint_cancel *cancel;
 } method_build_in;
 
 typedef struct method_level {
@@ -271,6 +275,13 @@ typedef struct method {
      * a service admits a cold fit by (NULL: METHOD_FIT_BYTES_PER_SAMPLE per
      * sample). */
     size_t (*fit_bytes)(const void *params, long nsamples);
+    /* An estimate of the time a cold fit with these parameters takes for
+     * nsamples samples, every level built (pattern included), in seconds of
+     * one core at the rates below: what a service refuses a fit by before
+     * it starts (NULL: METHOD_SECONDS_PER_SAMPLE per sample).  An estimate
+     * from the parameters, not a bound: it is right within a small factor
+     * (the method's comment says how it was checked). */
+    double (*fit_seconds)(const void *params, long nsamples);
 } method;
 
 /* The default of method.fit_bytes, per sample. */
@@ -278,6 +289,24 @@ typedef struct method {
 
 /* m->fit_bytes, or the default. */
 size_t method_fit_bytes(const method *m, const void *params, long nsamples);
+
+/* Rates of the fit estimates, in seconds of one core, measured through
+ * glintd on the 2-vCPU development machine (cold fits of a 128 x 128 torus,
+ * 3 views, 18,476 samples; the levels' build_seconds):
+ *   METHOD_SECONDS_PER_SAMPLE  the passes over the samples: rasterizing the
+ *                              pattern (5.4 us a sample), designs, gathers;
+ *   METHOD_SECONDS_PER_FLOP    a dense factorization of n unknowns counted as
+ *                              n^3 (hf3 res 512, 1536 unknowns: decomposition
+ *                              and operator 6.7 s, 1.8 ns per n^3). */
+#define METHOD_SECONDS_PER_SAMPLE 1e-5
+#define METHOD_SECONDS_PER_FLOP 2e-9
+
+/* m->fit_seconds, or the default. */
+double method_fit_seconds(const method *m, const void *params, long nsamples);
+
+/* The estimate of factorizing n unknowns densely (n^3 at
+ * METHOD_SECONDS_PER_FLOP), for methods' fit_seconds. */
+double method_dense_seconds(double n);
 
 /* ---- the registry ------------------------------------------------------------------------ */
 

@@ -621,6 +621,18 @@ static size_t auto_fit_bytes(const void *params, long nsamples)
     return b;
 }
 
+/* Every candidate is fitted. */
+static double auto_fit_seconds(const void *params, long nsamples)
+{
+    cands cs;
+    candidates(params, &cs);
+    return method_fit_seconds(&method_hf3, &cs.fp, nsamples) +
+           method_fit_seconds(&method_hf2d, &cs.dp, nsamples) +
+           method_fit_seconds(&method_hf4, &cs.hp, nsamples) +
+           method_fit_seconds(&method_maps, &cs.mp, nsamples) +
+           method_fit_seconds(&method_hybrid, &cs.yp, nsamples);
+}
+
 static int auto_holdout_ok(const void *params)
 {
     return ((const auto_params *)params)->sres <= 32 &&
@@ -653,4 +665,5 @@ const method method_auto = {
     .mat = NULL,
     .holdout_ok = auto_holdout_ok,
     .fit_bytes = auto_fit_bytes,
+    .fit_seconds = auto_fit_seconds,
 };

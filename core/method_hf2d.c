@@ -260,6 +260,17 @@ static size_t hf2d_fit_bytes(const void *params, long nsamples)
     return b >= (double)SIZE_MAX ? SIZE_MAX : (size_t)b;
 }
 
+/* A cold fit: passes over the samples, then the decomposition of its
+ * unknowns (as hf3's). */
+static double hf2d_fit_seconds(const void *params, long nsamples)
+{
+    const hf2d_params_t *p = params;
+    hf2d_shape sh = hf2d_shape_of(p);
+    int off[4];
+    return (double)nsamples * METHOD_SECONDS_PER_SAMPLE +
+           2.0 * method_dense_seconds(hf2d_offsets(&sh, off));
+}
+
 /* A held-out measurement decomposes once per painted view: affordable up
  * to about 2,000 unknowns (a second each here). */
 static int hf2d_holdout_ok(const void *params)
@@ -298,4 +309,5 @@ const method method_hf2d = {
     .mat = &hf2d_material_ops,
     .holdout_ok = hf2d_holdout_ok,
     .fit_bytes = hf2d_fit_bytes,
+    .fit_seconds = hf2d_fit_seconds,
 };

@@ -56,5 +56,6 @@ extern const method_level hf3_levels[HF3_NLEVELS];
 extern const material_ops hf3_material_ops;
 int hf3_holdout_ok(const void *params);
 size_t hf3_fit_bytes(const void *params, long nsamples);
+double hf3_fit_seconds(const void *params, long nsamples);
 
 #endif

@@ -211,6 +211,15 @@ size_t hf4_fit_bytes(const void *params, long nsamples)
     return b >= (double)SIZE_MAX ? SIZE_MAX : (size_t)b;
 }
 
+/* A cold fit: passes over the samples, then the decomposition of 3 res +
+ * s_res^2 unknowns (as hf3's). */
+double hf4_fit_seconds(const void *params, long nsamples)
+{
+    const hf4_params_t *p = params;
+    return (double)nsamples * METHOD_SECONDS_PER_SAMPLE +
+           2.0 * method_dense_seconds(3.0 * p->res + (double)p->sres * p->sres);
+}
+
 int hf4_holdout_ok(const void *params)
 {
     return ((const hf4_params_t *)params)->sres <= 32;
@@ -242,4 +251,5 @@ const method method_hf4 = {
     .mat = &hf4_material_ops,
     .holdout_ok = hf4_holdout_ok,
     .fit_bytes = hf4_fit_bytes,
+    .fit_seconds = hf4_fit_seconds,
 };

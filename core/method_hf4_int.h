@@ -48,5 +48,6 @@ extern const method_level hf4_levels[HF4_NLEVELS];
 extern const material_ops hf4_material_ops;
 int hf4_holdout_ok(const void *params);
 size_t hf4_fit_bytes(const void *params, long nsamples);
+double hf4_fit_seconds(const void *params, long nsamples);
 
 #endif

@@ -52,6 +52,14 @@ static int hybrid_fit(const method_fit_in *in, material *out, glint_err *err)
     return maps_fit_with(in, &method_hybrid, &method_hf4, &q, out, err);
 }
 
+/* hf4's fit, then the maps' rounds over the samples, per component. */
+static double hybrid_fit_seconds(const void *params, long nsamples)
+{
+    const hybrid_params *hp = params;
+    return hf4_fit_seconds(&hp->h, nsamples) +
+           (double)(hp->components + 1) * nsamples * METHOD_SECONDS_PER_SAMPLE;
+}
+
 static size_t hybrid_fit_bytes(const void *params, long nsamples)
 {
     const hybrid_params *hp = params;
@@ -92,4 +100,5 @@ const method method_hybrid = {
     .mat = &maps_material_ops,
     .holdout_ok = hybrid_holdout_ok,
     .fit_bytes = hybrid_fit_bytes,
+    .fit_seconds = hybrid_fit_seconds,
 };

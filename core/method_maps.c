@@ -208,6 +208,14 @@ static size_t maps_fit_bytes(const void *params, long nsamples)
     return hf3_fit_bytes(&mp->hf, nsamples) + maps_extra_bytes(&q, nsamples);
 }
 
+/* hf3's fit, then the maps' rounds over the samples, per component. */
+static double maps_fit_seconds(const void *params, long nsamples)
+{
+    const maps_params *mp = params;
+    return hf3_fit_seconds(&mp->hf, nsamples) +
+           (double)(mp->components + 1) * nsamples * METHOD_SECONDS_PER_SAMPLE;
+}
+
 static int maps_holdout_ok(const void *params)
 {
     return hf3_holdout_ok(&((const maps_params *)params)->hf);
@@ -241,4 +249,5 @@ const method method_maps = {
     .mat = &maps_material_ops,
     .holdout_ok = maps_holdout_ok,
     .fit_bytes = maps_fit_bytes,
+    .fit_seconds = maps_fit_seconds,
 };

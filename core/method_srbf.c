@@ -438,7 +438,7 @@ static int energy_build(const method_build_in *in, cache_value *out, glint_err *
         goto fail;
     }
     srbf_energy_dirs(p->grazing, x->wo);
-    if ((rc = srbf_energy_rows(&x->b, &x->st, x->nl, x->wo, 0, x->g, 0, err)))
+    if ((rc = srbf_energy_rows(&x->b, &x->st, x->nl, x->wo, 0, x->g, 0, in->cancel, err)))
         goto fail;
     x->seconds = glint_now() - t0;
     energy_value(energy_shared_put(p, sx), out);
@@ -618,7 +618,8 @@ int srbf_cast_shadows(const method_build_in *in, const srbf_visdata *vd, const e
         memcpy(nrm + 3 * i, s->nrm + 3 * (size_t)vd->rows[i], 3 * sizeof *nrm);
     }
     if (!(rc = vis_open(&in->sc->mesh, &vs, err)))
-        rc = vis_compute(vs, vd->nrows, pos, nrm, l->k, l->dir, *bits, 0, rays, err);
+        rc = vis_compute(vs, vd->nrows, pos, nrm, l->k, l->dir, *bits, 0, rays, in->cancel,
+                         err);
 done:
     vis_close(vs);
     free(pos);
@@ -669,6 +670,35 @@ static size_t srbf_fit_bytes(const void *params, long nsamples)
     return b >= (double)SIZE_MAX ? SIZE_MAX : (size_t)b;
 }
 
+/* A cold fit at the rates measured through glintd (seconds of one core,
+ * 2-vCPU development machine; 2 views of a sphere under the built-in sky:
+ * basis_res 5 and 64 lights at 48 x 48, energy 38 s on 2 threads,
+ * estimated 78 core seconds; basis_res 8, 256 lights, raster full at
+ * 128 x 128 (about 21,000 rows), with other work on the machine: transfer
+ * 39 s on 2 threads and Gram 7.4 s, estimated 52 and 7 s):
+ *   energy    its rows (192 + 512 + 64 grazing) x 27,648 quadrature nodes x J
+ *             lobes, 45 ns each (shared by every scene and kept on disk, but
+ *             counted: the estimate is of a cold fit);
+ *   visibility half the lights per row, 2 us a shadow ray (Embree; unless
+ *             visibility is off: auto may find the mesh convex and cast none);
+ *   transfer  rows x lights x J, 50 ns;
+ *   Gram      3 channels x rows x J^2 / 2, 6 ns;
+ *   solve     3 channels x 10 dense steps of J unknowns.
+ * Rows as srbf_fit_bytes counts them. */
+static double srbf_fit_seconds(const void *params, long nsamples)
+{
+    const srbf_params *p = params;
+    double J = 3.0 * p->basis_res * p->basis_res, n = (double)nsamples, rows = n;
+    double nl = srbf_energy_dirs(p->grazing, NULL), L = p->lights, s;
+    if (p->raster.w > 0 && rows > 12.0 * p->raster.w * p->raster.h)
+        rows = 12.0 * p->raster.w * p->raster.h;
+    s = n * METHOD_SECONDS_PER_SAMPLE + nl * 27648.0 * J * 45e-9 + rows * L * J * 50e-9 +
+        3.0 * rows * J * J / 2.0 * 6e-9 + 3.0 * 10.0 * method_dense_seconds(J);
+    if (p->visibility != SRBF_VIS_OFF)
+        s += rows * L / 2.0 * 2e-6;
+    return s;
+}
+
 const method method_srbf = {
     .name = "srbf",
     .title = "Spherical-Gaussian distribution BRDF under environment light",
@@ -702,4 +732,5 @@ const method method_srbf = {
     .mat = &srbf_material_ops,
     .holdout_ok = srbf_holdout_ok,
     .fit_bytes = srbf_fit_bytes,
+    .fit_seconds = srbf_fit_seconds,
 };

@@ -383,10 +383,12 @@ int srbf_painted_tb(srbf_transfer_data *x, int ch, const double *b, double *q)
     return read;
 }
 
-/* H = T'T, T'E and E'E per channel, in double, from the float T. */
-static int transfer_gram(srbf_transfer_data *x, glint_err *err)
+/* H = T'T, T'E and E'E per channel, in double, from the float T (cancel
+ * asked between rows, cancel.h). */
+static int transfer_gram(srbf_transfer_data *x, const glint_cancel *cancel, glint_err *err)
 {
     int J = x->J, n = x->nrows;
+    long every = glint_cancel_every((long)J * (J + 1) / 2);
     double *row = malloc((size_t)J * sizeof *row);
     if (!row)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -398,6 +400,10 @@ static int transfer_gram(srbf_transfer_data *x, glint_err *err)
             const float *t = x->T + ((size_t)ch * n + i) * J;
             double e = x->E[3 * (size_t)i + ch];
             int nz = 0;
+            if (i % every == 0 && glint_cancelled(cancel)) {
+                free(row);
+                return glint_cancel_err(err, "the Gram matrices");
+            }
             for (int j = 0; j < J; j++) {
                 row[j] = t[j];
                 nz |= t[j] != 0.0f;
@@ -470,12 +476,12 @@ int srbf_transfer_build(const method_build_in *in, cache_value *out, glint_err *
         memcpy(wo + 3 * i, s->wo + 3 * (size_t)vd->rows[i], 3 * sizeof *wo);
     }
     if ((rc = srbf_transfer(&en->b, &en->st, x->nrows, nrm, wo, &ls->l, bits, x->T, x->E,
-                            x->reach, 0, &x->terms, err)))
+                            x->reach, 0, &x->terms, in->cancel, err)))
         goto done;
     x->seconds = glint_now() - t0;
     progress(in, "gram", 0.9);
     t0 = glint_now();
-    if ((rc = transfer_gram(x, err)))
+    if ((rc = transfer_gram(x, in->cancel, err)))
         goto done;
     rc = srbf_transfer_reach(x, en, err);
     x->gram_seconds = glint_now() - t0;

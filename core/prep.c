@@ -289,10 +289,28 @@ void prep_release(cache *c, prep *p)
     free(p);
 }
 
+/* cache_acquire for a caller whose own cancel did not say to stop: a
+ * build it joined that its builder's cancel stopped (GLINT_ECANCELLED) is
+ * asked for again (now built by this caller, or joined anew).  A caller
+ * told to stop gets GLINT_ECANCELLED before anything is built. */
+#define PREP_REJOINS 8
+static int acquire_uncancelled(cache *c, const cache_level *lv, const char *key, void *ctx,
+                               cache_entry *parent, cache_entry **out, cache_how *how,
+                               double *seconds, const glint_cancel *cancel, glint_err *err)
+{
+    int rc = GLINT_ECANCELLED;
+    for (int k = 0; k < PREP_REJOINS && rc == GLINT_ECANCELLED; k++) {
+        if (glint_cancelled(cancel))
+            return glint_cancel_err(err, "the precomputation");
+        rc = cache_acquire(c, lv, key, ctx, parent, out, how, seconds, err);
+    }
+    return rc;
+}
+
 /* The method's levels after the pattern (p->pattern set); sc: the scene
  * the pattern came from, or NULL. */
 static int acquire_levels(cache *c, prep *p, const scene *sc, prep_progress_fn cb, void *cls,
-                          glint_err *err)
+                          const glint_cancel *cancel, glint_err *err)
 {
     const samples *s = cache_data(p->pattern);
     const void *prev[METHOD_MAX_LEVELS];
@@ -313,13 +331,14 @@ static int acquire_levels(cache *c, prep *p, const scene *sc, prep_progress_fn c
         x.in.level = i;
         x.in.progress = cb;
         x.in.progress_cls = cls;
+        x.in.cancel = cancel;
         if (ml->load && ml->save) {
             cl.load = level_load;
             cl.save = level_save;
         }
         ml->key(p->params, s, prev_key, key, sizeof key);
-        rc = cache_acquire(c, &cl, key, &x, i ? p->lv[i - 1] : p->pattern, &p->lv[i], &p->how[i],
-                           &p->spent[i], err);
+        rc = acquire_uncancelled(c, &cl, key, &x, i ? p->lv[i - 1] : p->pattern, &p->lv[i],
+                                 &p->how[i], &p->spent[i], cancel, err);
         if (rc)
             return rc;
         prev[i] = cache_data(p->lv[i]);
@@ -346,17 +365,17 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
     if (!(p = prep_new(rq->m, rq->params, err)))
         return GLINT_ENOMEM;
     prep_pattern_key(ps, rq->use, rq->m->pattern_rule, key);
-    rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
-                       &p->pattern_spent, err);
+    rc = acquire_uncancelled(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
+                             &p->pattern_spent, rq->cancel, err);
     if (!rc && samples_torn(cache_data(p->pattern))) { /* cut short under another fit */
         cache_forget(c, p->pattern);
         cache_release(c, p->pattern);
         p->pattern = NULL;
-        rc = cache_acquire(c, &pattern_level, key, &px, NULL, &p->pattern, &p->pattern_how,
-                           &p->pattern_spent, err);
+        rc = acquire_uncancelled(c, &pattern_level, key, &px, NULL, &p->pattern,
+                                 &p->pattern_how, &p->pattern_spent, rq->cancel, err);
     }
     if (!rc)
-        rc = acquire_levels(c, p, ps->sc, cb, cls, err);
+        rc = acquire_levels(c, p, ps->sc, cb, cls, rq->cancel, err);
     if (rc) {
         prep_release(c, p);
         return rc;
@@ -366,7 +385,8 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
 }
 
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
-                         prep_progress_fn cb, void *cls, prep **out, glint_err *err)
+                         prep_progress_fn cb, void *cls, const glint_cancel *cancel,
+                         prep **out, glint_err *err)
 {
     /* samples of the caller's are not a scene's: memory only */
     static const cache_level pattern_level = {.name = "pattern", .starting = pattern_starting,
@@ -384,7 +404,7 @@ int prep_acquire_samples(cache *c, const method *m, const void *params, samples 
                        &p->pattern_spent, err);
     samples_free(s); /* when the cache had them already, or the build failed */
     if (!rc)
-        rc = acquire_levels(c, p, NULL, cb, cls, err);
+        rc = acquire_levels(c, p, NULL, cb, cls, cancel, err);
     if (rc) {
         prep_release(c, p);
         return rc;

@@ -26,6 +26,7 @@
 #include <jansson.h>
 
 #include "cache.h"
+#include "cancel.h"
 #include "err.h"
 #include "gbuf.h"
 #include "img.h"
@@ -69,6 +70,10 @@ typedef struct prep_request {
     const void *params;          /* the method's params struct (copied) */
     cache_entry *scene;          /* a scene entry the caller holds */
     const unsigned char *use;    /* one flag per scene view: the views that take part */
+    /* Asked before each level and by the builds' loops (cancel.h; NULL:
+     * never).  A build this caller waits for (joined) that another caller
+     * cancelled is built again by this one. */
+    const glint_cancel *cancel;
 } prep_request;
 
 /* Patterns are rasterized a view per thread at a time in bands of rows of
@@ -94,9 +99,10 @@ int prep_acquire(cache *c, const prep_request *rq, prep_progress_fn cb, void *cl
 
 /* The same from samples the caller made (e.g. imported from a file): they
  * form the pattern level, keyed "samples:<their hash>", in memory only (*s
- * is moved in, zeroed). */
+ * is moved in, zeroed).  cancel: as prep_request's. */
 int prep_acquire_samples(cache *c, const method *m, const void *params, samples *s,
-                         prep_progress_fn cb, void *cls, prep **out, glint_err *err);
+                         prep_progress_fn cb, void *cls, const glint_cancel *cancel,
+                         prep **out, glint_err *err);
 /* prep_try for such samples (they are only read: keyed by s->hash). */
 int prep_try_samples(cache *c, const method *m, const void *params, const samples *s,
                      prep **out, glint_err *err);
@@ -159,12 +165,14 @@ int prep_sample_counts(const scene *sc, long *per_view, long *total, glint_err *
  * those views alone make; a precomputation of its own in a private cache,
  * nothing kept) and measure the RMS error on view k's samples against its
  * painting; the pooled RMS over all held-out pixels is the result.  Needs
- * 2 used views or more.  `cancelled` (may be NULL) is asked between views;
+ * 2 used views or more.  `cancelled` (may be NULL) is asked between views
+ * (it may wait there, e.g. for a quiet moment), `cancel` (may be NULL) by
+ * the views' builds (cancel.h); either stops it with GLINT_ECANCELLED;
  * progress as ("holdout", fraction).  OUT: *result {"method":
  * "leave-one-view-out", "rms", "max_abs", "pixels", "views", "per_view":
  * [{"view", "rms", "pixels"}], "seconds"}. */
 int prep_holdout(const method *m, const void *params, const samples *all,
                  const img *paintings, int (*cancelled)(void *cls), prep_progress_fn cb,
-                 void *cls, json_t **result, glint_err *err);
+                 void *cls, const glint_cancel *cancel, json_t **result, glint_err *err);
 
 #endif

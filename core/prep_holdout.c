@@ -47,7 +47,8 @@ void prep_point_lit(const samples *s, const material *m, int k, float *rgb)
  * made in c; samples it gives no value (NaN) are not counted. */
 static int error_on_view(const method *mt, const void *params, cache *c, const material *m,
                          const samples *all, int k, const img *painting, double *rms,
-                         double *max_abs, long *count, glint_err *err)
+                         double *max_abs, long *count, const glint_cancel *cancel,
+                         glint_err *err)
 {
     unsigned char use[SCENE_MAX_VIEWS];
     samples one;
@@ -66,7 +67,7 @@ static int error_on_view(const method *mt, const void *params, cache *c, const m
         for (int v = 0; v < SCENE_MAX_VIEWS; v++)
             use[v] = v == k;
         if ((rc = samples_subset(all, use, NULL, &one, err)) ||
-            (rc = prep_acquire_samples(c, mt, params, &one, NULL, NULL, &p, err)))
+            (rc = prep_acquire_samples(c, mt, params, &one, NULL, NULL, cancel, &p, err)))
             return rc;
         s = prep_samples(p);
     }
@@ -105,7 +106,7 @@ out:
 
 int prep_holdout(const method *m, const void *params, const samples *all,
                  const img *paintings, int (*cancelled)(void *cls), prep_progress_fn cb,
-                 void *cls, json_t **result, glint_err *err)
+                 void *cls, const glint_cancel *cancel, json_t **result, glint_err *err)
 {
     unsigned char use[SCENE_MAX_VIEWS];
     cache *c = NULL;
@@ -135,8 +136,8 @@ int prep_holdout(const method *m, const void *params, const samples *all,
         long cnt = 0;
         if (!all->used[k])
             continue;
-        if (cancelled && cancelled(cls)) {
-            rc = glint_err_set(err, GLINT_EUNSUPPORTED, "cancelled");
+        if ((cancelled && cancelled(cls)) || glint_cancelled(cancel)) {
+            rc = glint_cancel_err(err, "the held-out measurement");
             goto out;
         }
         if (cb)
@@ -145,13 +146,14 @@ int prep_holdout(const method *m, const void *params, const samples *all,
             use[v] = all->used[v] && v != k;
         /* the other views' samples: the pattern those views alone make */
         rc = samples_subset(all, use, NULL, &fold, err);
-        if (rc == 0 && (rc = prep_acquire_samples(c, m, params, &fold, NULL, NULL, &p, err)) == 0) {
+        if (rc == 0 &&
+            (rc = prep_acquire_samples(c, m, params, &fold, NULL, NULL, cancel, &p, err)) == 0) {
             rc = prep_fit(p, paintings, NULL, &mat, err);
             prep_release(c, p);
         }
         if (rc == 0) {
             rc = error_on_view(m, params, c, &mat, all, k, &paintings[k], &rms, &mabs, &cnt,
-                               err);
+                               cancel, err);
             material_free(&mat);
         }
         if (rc) {

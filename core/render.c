@@ -127,6 +127,7 @@ typedef struct draw {
     double scale;
     const material *mat;    /* a preview, or */
     const merl_table *merl; /* a base render of a measured material (the CPU only) */
+    const glint_cancel *cancel;
 } draw;
 
 static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
@@ -140,6 +141,10 @@ static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
         return glint_err_set(err, GLINT_EUNSUPPORTED,
                              "measured materials (merl:) render on the CPU");
     pthread_mutex_lock(&r->lock);
+    if (glint_cancelled(d->cancel)) { /* after waiting for the context */
+        pthread_mutex_unlock(&r->lock);
+        return glint_cancel_err(err, "the render");
+    }
     if (!render_gl_get(r, err)) {
         pthread_mutex_unlock(&r->lock);
         return GLINT_EUNSUPPORTED;
@@ -161,12 +166,20 @@ static int draw_cpu(const mesh *m, const draw *d, const scene_view *v, int w, in
 {
     int rc;
     if (d->mat) {
-        rc = material_render(d->mat, m, v, w, h, out, err);
+        rc = material_render(d->mat, m, v, w, h, out, d->cancel, err);
     } else {
+        /* a base render shades a few tens of ns a pixel (render_cost_seconds):
+         * asked before and after rasterizing */
         gbuf g;
+        if (glint_cancelled(d->cancel))
+            return glint_cancel_err(err, "the render");
         if ((rc = raster_view(m, v, w, h, &g, err)))
             return rc;
-        rc = d->merl ? paint_views_fn(merl_truth, d->merl, &g, v, 1, d->scale, out, NULL, err)
+        if (glint_cancelled(d->cancel))
+            rc = glint_cancel_err(err, "the render");
+        else
+            rc = d->merl
+                     ? paint_views_fn(merl_truth, d->merl, &g, v, 1, d->scale, out, NULL, err)
                      : paint_views(d->b, &g, v, 1, d->scale, out, NULL, err);
         gbuf_free(&g);
     }
@@ -186,7 +199,7 @@ static int draw_any(render *r, render_engine eng, const char *key, const mesh *m
                                                  "EGL rendering needs a renderer")
                                  : draw_cpu(m, d, v, w, h, out, used, err);
     rc = draw_gl(r, key, m, d, v, w, h, out, used, err);
-    if (rc == 0 || eng == RENDER_EGL)
+    if (rc == 0 || eng == RENDER_EGL || rc == GLINT_ECANCELLED)
         return rc;
     if (rc != GLINT_EUNSUPPORTED && !r->quiet)
         fprintf(stderr, "glint: EGL rendering failed, using the CPU: %s\n",
@@ -220,10 +233,11 @@ int render_brdf_check(const char *brdf_spec, glint_err *err)
 
 int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                 const scene_view *v, int width, int height, const char *brdf_spec,
-                double scale, img *out, render_used *used, glint_err *err)
+                double scale, img *out, render_used *used, const glint_cancel *cancel,
+                glint_err *err)
 {
     brdf b;
-    draw d = {&b, scale, NULL, NULL};
+    draw d = {&b, scale, NULL, NULL, cancel};
     int rc;
     memset(out, 0, sizeof *out);
     if (!(scale > 0.0) || !isfinite(scale))
@@ -242,9 +256,9 @@ int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *
 
 int render_material(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                     const material *mat, const scene_view *v, int width, int height, img *out,
-                    render_used *used, glint_err *err)
+                    render_used *used, const glint_cancel *cancel, glint_err *err)
 {
-    draw d = {NULL, 0.0, mat, NULL};
+    draw d = {NULL, 0.0, mat, NULL, cancel};
     return draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
 }
 

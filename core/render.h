@@ -27,6 +27,7 @@
 
 #include <stddef.h>
 
+#include "cancel.h"
 #include "err.h"
 #include "img.h"
 #include "material.h"
@@ -60,6 +61,60 @@ size_t render_gbuffer_peak_bytes(int width, int height);
 /* The part of the bounds above that does not grow with the size. */
 #define RENDER_FIXED_BYTES ((size_t)16 << 20)
 
+/* ---- cost --------------------------------------------------------------------------
+ * An estimate of the time one render takes, in seconds of one core, from
+ * its parameters: what a service refuses a render by before it starts
+ * (glintd --work-max-seconds).  Its terms:
+ *   eval   one evaluation of the material (material_eval_at; its preview
+ *          evaluation for EGL's vertex shading) or of the base render's
+ *          BRDF, timed here and now on a few direction pairs (the least of
+ *          three rounds: about a millisecond for the slowest materials,
+ *          srbf at basis_res 16);
+ *   RENDER_COST_PIXEL_S  a pixel's rasterizing, G-buffer and encoding;
+ *   RENDER_COST_RAY_S    a shadow ray (Embree).
+ * Every pixel is counted (the object covers a part of them the estimate
+ * does not know), and under an environment half the lights (those facing
+ * a point):
+ *   point light            pixels x (PIXEL + eval), EGL too (llvmpipe
+ *                          shades fragments no faster than the CPU:
+ *                          measured 16 s and 13 s for an srbf material at
+ *                          1024 x 1024);
+ *   environment, CPU       pixels x (PIXEL + lights/2 x (eval + RAY if
+ *                          shadows));
+ *   environment, EGL       pixels x PIXEL + vertices x lights/2 x
+ *                          (preview eval + RAY if shadows and the
+ *                          vertices' visibility is not cached).
+ * RENDER_AUTO is estimated as EGL when the renderer's context works (it is
+ * opened by the estimate when not tried yet, as the render would), else
+ * as the CPU.  Measured on the 2-vCPU development machine through glintd
+ * (a 128 x 128 torus, 3 views): an hf3 preview at 1024 x 1024 on the CPU
+ * 0.72 s (estimated 1.0 s); under a sky of 256 lights at 128 x 128 on the
+ * CPU, 1.97 s with shadows and 0.59 s without (estimated 5.8 and 1.5 s:
+ * about 40% of the pixels are covered); an srbf material (basis_res 10)
+ * there 15.2 s (estimated 17.6 s). */
+#define RENDER_COST_PIXEL_S 3e-7
+#define RENDER_COST_RAY_S 2e-6
+
+struct render_env;
+
+/* The estimate from the evaluations' seconds (eval_preview_s: EGL's vertex
+ * shading), for a render of anything; the two below time them. */
+double render_cost_seconds(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                           const struct render_env *env, double eval_s, double eval_preview_s,
+                           int width, int height);
+
+/* The estimate of render_material (env NULL) or render_material_env, in
+ * seconds. */
+double render_material_cost(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                            const material *mat, const struct render_env *env, int width,
+                            int height);
+
+/* The estimate of render_base (env NULL) or render_base_env (OUT:
+ * *seconds); errors as render_brdf_check's. */
+int render_base_cost(render *r, render_engine eng, const char *mesh_key, const mesh *m,
+                     const char *brdf_spec, const struct render_env *env, int width, int height,
+                     double *seconds, glint_err *err);
+
 /* EGL render targets above this many pixels are released after each draw,
  * so what the context keeps between draws stays at 1024 x 1024 buffers. */
 #define RENDER_GL_KEEP_PIXELS (1L << 20)
@@ -85,7 +140,8 @@ typedef struct render_used {
  * (RGB), *used (may be NULL). */
 int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                 const scene_view *v, int width, int height, const char *brdf_spec,
-                double scale, img *out, render_used *used, glint_err *err);
+                double scale, img *out, render_used *used, const glint_cancel *cancel,
+                glint_err *err);
 
 /* Check a BRDF spec for render_base (0, or GLINT_EINVAL saying why). */
 int render_brdf_check(const char *brdf_spec, glint_err *err);
@@ -94,7 +150,7 @@ int render_brdf_check(const char *brdf_spec, glint_err *err);
  * background pixels. */
 int render_material(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                     const material *mat, const scene_view *v, int width, int height, img *out,
-                    render_used *used, glint_err *err);
+                    render_used *used, const glint_cancel *cancel, glint_err *err);
 
 /* ---- under an environment ---------------------------------------------------------
  * Previews and base renders lit by an environment map compressed to
@@ -147,7 +203,7 @@ typedef struct render_env_info {
 int render_material_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                         const material *mat, const render_env *env, const scene_view *v,
                         int width, int height, img *out, render_env_info *info,
-                        render_used *used, glint_err *err);
+                        render_used *used, const glint_cancel *cancel, glint_err *err);
 
 /* The material ball: a unit sphere (RENDER_BALL_LAT rings x RENDER_BALL_LON
  * segments, with the built-in sphere's uv) that previews show a material
@@ -165,7 +221,8 @@ int render_ball(const mesh **out, glint_err *err);
 int render_base_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                     const char *brdf_spec, double scale, const render_env *env,
                     const scene_view *v, int width, int height, img *out,
-                    render_env_info *info, render_used *used, glint_err *err);
+                    render_env_info *info, render_used *used, const glint_cancel *cancel,
+                    glint_err *err);
 
 /* The CPU G-buffer of view v as OpenEXR bytes with named channels (mask,
  * P, N, uv, wi, wo, cos_i, cos_o: gbuf.h).  OUT: *data (malloc'ed), *len. */

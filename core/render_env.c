@@ -81,22 +81,44 @@ void render_env_drop_all(render *r)
     }
 }
 
+/* The entry's key of (mesh_key, env) (OUT: key[256]); 0 when it fits. */
+static int entry_key(const char *mesh_key, const render_env *e, char key[256])
+{
+    int n = snprintf(key, 256, "%s|%s|%.17g|%.17g|%d|%d", mesh_key ? mesh_key : "", e->spec,
+                     e->rotation_deg, e->intensity, e->lights, e->shadows);
+    return n > 0 && n < 256 ? 0 : -1;
+}
+
+int render_env_vis_cached(render *r, const char *mesh_key, const render_env *e)
+{
+    char key[256];
+    int found = 0;
+    if (!r || !mesh_key || entry_key(mesh_key, e, key))
+        return 0;
+    pthread_mutex_lock(&r->env_lock);
+    for (lru_node *p = r->envs.head; p && !found; p = p->next) {
+        env_entry *y = lru_entry(p, env_entry, lru);
+        found = strcmp(y->key, key) == 0 && y->has_vis;
+    }
+    pthread_mutex_unlock(&r->env_lock);
+    return found;
+}
+
 /* The entry of (mesh_key, env) with its lights and, for `need_vis`, the
  * visibility of m's vertices (r->env_lock held).  Uncached entries (no
  * key, or r NULL) are returned in *tmp for the caller to free. */
 static int entry_get(render *r, const char *mesh_key, const mesh *m, const render_env *e,
                      int need_vis, env_entry **out, env_entry **tmp, render_env_info *info,
-                     glint_err *err)
+                     const glint_cancel *cancel, glint_err *err)
 {
     char key[256];
     env_entry *x = NULL;
     double t0 = now_s();
-    int rc, n;
+    int rc, keyed;
 
     *tmp = NULL;
-    n = snprintf(key, sizeof key, "%s|%s|%.17g|%.17g|%d|%d", mesh_key ? mesh_key : "", e->spec,
-                 e->rotation_deg, e->intensity, e->lights, e->shadows);
-    if (r && mesh_key && n > 0 && (size_t)n < sizeof key)
+    keyed = entry_key(mesh_key, e, key) == 0;
+    if (r && mesh_key && keyed)
         for (lru_node *p = r->envs.head; p; p = p->next) {
             env_entry *y = lru_entry(p, env_entry, lru);
             if (strcmp(y->key, key) == 0) {
@@ -111,6 +133,8 @@ static int entry_get(render *r, const char *mesh_key, const mesh *m, const rende
         *out = x;
         return 0;
     }
+    if (glint_cancelled(cancel))
+        return glint_cancel_err(err, "the render");
     if (!x) {
         if (!(x = calloc(1, sizeof *x)))
             return glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -121,7 +145,7 @@ static int entry_get(render *r, const char *mesh_key, const mesh *m, const rende
             entry_free(x);
             return rc;
         }
-        if (r && mesh_key && n > 0 && (size_t)n < sizeof key) {
+        if (r && mesh_key && keyed) {
             lru_push(&r->envs, &x->lru);
             while ((int)r->envs.n > RENDER_ENV_CACHE) {
                 env_entry *old = lru_entry(lru_oldest(&r->envs), env_entry, lru);
@@ -133,7 +157,7 @@ static int entry_get(render *r, const char *mesh_key, const mesh *m, const rende
         }
     }
     if (need_vis && !x->has_vis) {
-        if ((rc = envlit_vis_vertices(m, &x->lights, e->shadows, &x->vis, err)))
+        if ((rc = envlit_vis_vertices(m, &x->lights, e->shadows, &x->vis, cancel, err)))
             return rc; /* the entry stays, without visibility */
         x->has_vis = 1;
         info->rays = x->vis.rays;
@@ -149,6 +173,7 @@ typedef struct shader {
     envlit_fn fn_vertex;   /* at vertices: the method's preview evaluation */
     const void *ctx;
     double scale;
+    const glint_cancel *cancel;
 } shader;
 
 static int env_draw_gl(render *r, const char *key, const mesh *m, const shader *s,
@@ -167,7 +192,8 @@ static int env_draw_gl(render *r, const char *key, const mesh *m, const shader *
         free(mask);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for vertex colours");
     }
-    rc = envlit_vertices(m, &x->lights, &x->vis, s->fn_vertex, s->ctx, v->eye, s->scale, 0, rgb, err);
+    rc = envlit_vertices(m, &x->lights, &x->vis, s->fn_vertex, s->ctx, v->eye, s->scale, 0, rgb,
+                         s->cancel, err);
     info->shade_s = now_s() - t0;
     if (!rc) {
         t0 = now_s();
@@ -203,7 +229,8 @@ static int env_draw_cpu(const mesh *m, const shader *s, const env_entry *x, cons
     if ((rc = raster_view(m, v, w, h, &g, err)))
         return rc;
     info->convex = e->shadows && vis_mesh_convex(m, ENVLIT_CONVEX_TOL);
-    rc = envlit_gbuf(&g, m, &x->lights, e->shadows, s->fn, s->ctx, s->scale, out, err);
+    rc = envlit_gbuf(&g, m, &x->lights, e->shadows, s->fn, s->ctx, s->scale, out, s->cancel,
+                     err);
     if (!rc && e->background)
         envlit_background(&x->map, e->rotation_deg * M_PI / 180.0, e->intensity, v, g.mask, out);
     gbuf_free(&g);
@@ -234,13 +261,13 @@ static int env_any(render *r, render_engine eng, const char *key, const mesh *m,
                              SCENE_MAX_SIZE);
     if (r)
         pthread_mutex_lock(&r->env_lock);
-    rc = entry_get(r, key, m, e, gl, &x, &tmp, info, err);
+    rc = entry_get(r, key, m, e, gl, &x, &tmp, info, s->cancel, err);
     if (!rc) {
         info->lights = x->lights.k;
         snprintf(info->env, sizeof info->env, "%s", x->map.name);
         if (gl) {
             rc = env_draw_gl(r, key, m, s, x, e, v, w, h, out, info, used, err);
-            if (rc && eng == RENDER_AUTO) {
+            if (rc && rc != GLINT_ECANCELLED && eng == RENDER_AUTO) {
                 if (rc != GLINT_EUNSUPPORTED && !r->quiet)
                     fprintf(stderr, "glint: EGL rendering failed, using the CPU: %s\n",
                             err ? err->msg : glint_strerror(rc));
@@ -262,9 +289,9 @@ static int env_any(render *r, render_engine eng, const char *key, const mesh *m,
 int render_material_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                         const material *mat, const render_env *env, const scene_view *v,
                         int width, int height, img *out, render_env_info *info,
-                        render_used *used, glint_err *err)
+                        render_used *used, const glint_cancel *cancel, glint_err *err)
 {
-    shader s = {envlit_material, envlit_material_preview, mat, 1.0};
+    shader s = {envlit_material, envlit_material_preview, mat, 1.0, cancel};
     if (!mat || !mat->method) {
         memset(out, 0, sizeof *out);
         return glint_err_set(err, GLINT_EINVAL, "no material to render");
@@ -275,10 +302,11 @@ int render_material_env(render *r, render_engine eng, const char *mesh_key, cons
 int render_base_env(render *r, render_engine eng, const char *mesh_key, const mesh *m,
                     const char *brdf_spec, double scale, const render_env *env,
                     const scene_view *v, int width, int height, img *out,
-                    render_env_info *info, render_used *used, glint_err *err)
+                    render_env_info *info, render_used *used, const glint_cancel *cancel,
+                    glint_err *err)
 {
     brdf b;
-    shader s = {envlit_brdf, envlit_brdf, &b, scale};
+    shader s = {envlit_brdf, envlit_brdf, &b, scale, cancel};
     int rc;
     memset(out, 0, sizeof *out);
     if (!(scale > 0.0) || !isfinite(scale))

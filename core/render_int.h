@@ -39,4 +39,8 @@ int render_gl_mesh_get(render *r, const char *key, const mesh *m, glr_mesh **out
 /* Drop every cached environment (render_close). */
 void render_env_drop_all(render *r);
 
+/* Whether the environment cache holds the visibility of mesh_key's
+ * vertices under e (a render of it casts no rays); 0 for a NULL r or key. */
+int render_env_vis_cached(render *r, const char *mesh_key, const render_env *e);
+
 #endif

@@ -341,13 +341,24 @@ typedef struct erows_job {
     const double *wo;
     double *g;
     int l0, l1;
+    const glint_cancel *cancel;
+    int *stopped;  /* shared: set once a thread was told to stop */
 } erows_job;
 
 static void *erows_run(void *arg)
 {
     erows_job *j = arg;
-    for (int l = j->l0; l < j->l1; l++)
+    for (int l = j->l0; l < j->l1; l++) {
+        if (j->cancel) { /* a row is q->n x J terms: asked every row */
+            if (__atomic_load_n(j->stopped, __ATOMIC_RELAXED))
+                break;
+            if (glint_cancelled(j->cancel)) {
+                __atomic_store_n(j->stopped, 1, __ATOMIC_RELAXED);
+                break;
+            }
+        }
         energy_row(j->b, j->s, j->q, j->wo + 3 * l, j->g + (size_t)l * j->b->J);
+    }
     return NULL;
 }
 
@@ -358,10 +369,11 @@ static int cores(int nthreads)
 }
 
 int srbf_energy_rows(const srbf_basis *b, const srbf_static *s, int nl, const double *wo,
-                     int nq, double *g, int nthreads, glint_err *err)
+                     int nq, double *g, int nthreads, const glint_cancel *cancel,
+                     glint_err *err)
 {
     quad q;
-    int nt = cores(nthreads);
+    int nt = cores(nthreads), stopped = 0;
     pthread_t th[64];
     erows_job jobs[64];
     if (nq <= 0)
@@ -374,7 +386,7 @@ int srbf_energy_rows(const srbf_basis *b, const srbf_static *s, int nl, const do
         nt = nl;
     for (int t = 0; t < nt; t++) {
         jobs[t] = (erows_job){b, s, &q, wo, g, (int)((long)nl * t / nt),
-                              (int)((long)nl * (t + 1) / nt)};
+                              (int)((long)nl * (t + 1) / nt), cancel, &stopped};
         if (t && pthread_create(&th[t], NULL, erows_run, &jobs[t]))
             erows_run(&jobs[t]), th[t] = 0;
     }
@@ -384,6 +396,8 @@ int srbf_energy_rows(const srbf_basis *b, const srbf_static *s, int nl, const do
             pthread_join(th[t], NULL);
     free(q.d);
     free(q.w);
+    if (stopped)
+        return glint_cancel_err(err, "the energy rows");
     return 0;
 }
 

@@ -41,6 +41,7 @@
 
 #include <stdint.h>
 
+#include "cancel.h"
 #include "env.h"
 #include "err.h"
 
@@ -104,9 +105,11 @@ int srbf_energy_dirs(int grazing, double *wo);
  * wi passes the mirror direction, which no grid in wi resolves.  Against
  * 288 nodes (tests/unit/test_srbf.c, sigma = pi/40): 1e-7 of the largest
  * entry above 5.7 degrees elevation, 2e-4 below; narrower lobes need more
- * nodes. */
+ * nodes.  cancel (may be NULL) is asked between rows (cancel.h):
+ * GLINT_ECANCELLED once it says to stop. */
 int srbf_energy_rows(const srbf_basis *b, const srbf_static *s, int nl, const double *wo,
-                     int nq, double *g, int nthreads, glint_err *err);
+                     int nq, double *g, int nthreads, const glint_cancel *cancel,
+                     glint_err *err);
 
 /* Directional albedo of a fitted p at one local outgoing direction:
  * int f_spec (wi.n) dwi by the same quadrature (OUT: rgb, without rho_d). */
@@ -119,9 +122,11 @@ void srbf_albedo(const srbf_basis *b, const srbf_static *s, const double *c, con
  * with n.d > 0 seen).  OUT: T[3 * npix * J] (channel, pixel, lobe),
  * E[npix * 3]; reach[J] (may be NULL): 1 where some pixel's T column is
  * above 1e-6 of the largest.  Counts of terms evaluated in *terms (may be
- * NULL). */
+ * NULL).  cancel (may be NULL) is asked about every GLINT_CANCEL_WORK
+ * light-lobe pairs (cancel.h): GLINT_ECANCELLED once it says to stop. */
 int srbf_transfer(const srbf_basis *b, const srbf_static *s, int npix, const float *nrm,
                   const float *wo, const env_lights *l, const uint64_t *vis, float *T,
-                  double *E, unsigned char *reach, int nthreads, long *terms, glint_err *err);
+                  double *E, unsigned char *reach, int nthreads, long *terms,
+                  const glint_cancel *cancel, glint_err *err);
 
 #endif

@@ -29,6 +29,8 @@ typedef struct tjob {
     int npix, i0, i1;
     long terms;
     double *acc;   /* 3J scratch */
+    const glint_cancel *cancel;
+    int *stopped;  /* shared: set once a thread was told to stop */
 } tjob;
 
 static void *tjob_run(void *arg)
@@ -37,9 +39,18 @@ static void *tjob_run(void *arg)
     const srbf_basis *b = j->b;
     int J = b->J, K = j->l->k, words = VIS_WORDS(K);
     double cut = 1.0 - 30.0 / b->lambda, lam = b->lambda;
+    long every = glint_cancel_every((long)K * J);
     for (int i = j->i0; i < j->i1; i++) {
         double n[3], wow[3], t[3], bt[3], lo[3], e[3] = {0, 0, 0};
         double *acc = j->acc;
+        if (j->cancel && (i - j->i0) % every == 0) {
+            if (__atomic_load_n(j->stopped, __ATOMIC_RELAXED))
+                break;
+            if (glint_cancelled(j->cancel)) {
+                __atomic_store_n(j->stopped, 1, __ATOMIC_RELAXED);
+                break;
+            }
+        }
         for (int k = 0; k < 3; k++) {
             n[k] = j->nrm[3 * (size_t)i + k];
             wow[k] = j->wo[3 * (size_t)i + k];
@@ -105,10 +116,11 @@ static void *tjob_run(void *arg)
 
 int srbf_transfer(const srbf_basis *b, const srbf_static *s, int npix, const float *nrm,
                   const float *wo, const env_lights *l, const uint64_t *vis, float *T,
-                  double *E, unsigned char *reach, int nthreads, long *terms, glint_err *err)
+                  double *E, unsigned char *reach, int nthreads, long *terms,
+                  const glint_cancel *cancel, glint_err *err)
 {
     long nc = nthreads > 0 ? nthreads : sysconf(_SC_NPROCESSORS_ONLN);
-    int nt = nc < 1 ? 1 : nc > 64 ? 64 : (int)nc, rc = 0;
+    int nt = nc < 1 ? 1 : nc > 64 ? 64 : (int)nc, rc = 0, stopped = 0;
     pthread_t th[64];
     tjob jobs[64];
     long total = 0;
@@ -120,7 +132,7 @@ int srbf_transfer(const srbf_basis *b, const srbf_static *s, int npix, const flo
     for (int t = 0; t < nt; t++) {
         jobs[t] = (tjob){b, s, nrm, wo, l, vis, T, E, npix, (int)((long)npix * t / nt),
                          (int)((long)npix * (t + 1) / nt), 0,
-                         malloc((size_t)3 * b->J * sizeof(double))};
+                         malloc((size_t)3 * b->J * sizeof(double)), cancel, &stopped};
         if (!jobs[t].acc)
             rc = GLINT_ENOMEM;
     }
@@ -144,6 +156,8 @@ int srbf_transfer(const srbf_basis *b, const srbf_static *s, int npix, const flo
     }
     if (terms)
         *terms = total;
+    if (stopped)
+        return glint_cancel_err(err, "the transfer matrices");
     if (reach) {
         float mx = 0.0f;
         size_t all = (size_t)3 * npix * b->J;

@@ -111,6 +111,8 @@ typedef struct vjob {
     int k, i0, i1;
     uint64_t *bits;
     long rays;
+    const glint_cancel *cancel;
+    int *stopped;             /* shared by the threads: set once one was told to stop */
 } vjob;
 
 static void *vjob_run(void *arg)
@@ -118,10 +120,19 @@ static void *vjob_run(void *arg)
     vjob *j = arg;
     int words = VIS_WORDS(j->k);
     struct RTCIntersectContext ctx;
+    long every = glint_cancel_every(j->k);
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     for (int i = j->i0; i < j->i1; i++) {
         const float *p = j->pos + 3 * (size_t)i, *n = j->nrm + 3 * (size_t)i;
+        if (j->cancel && (i - j->i0) % every == 0) {
+            if (__atomic_load_n(j->stopped, __ATOMIC_RELAXED))
+                break;
+            if (glint_cancelled(j->cancel)) {
+                __atomic_store_n(j->stopped, 1, __ATOMIC_RELAXED);
+                break;
+            }
+        }
         uint64_t *b = j->bits + (size_t)i * words;
         double o[3];
         memset(b, 0, (size_t)words * sizeof *b);
@@ -152,10 +163,11 @@ static void *vjob_run(void *arg)
 }
 
 int vis_compute(const vis_scene *v, int npoints, const float *pos, const float *nrm, int k,
-                const double *dirs, uint64_t *bits, int nthreads, long *rays, glint_err *err)
+                const double *dirs, uint64_t *bits, int nthreads, long *rays,
+                const glint_cancel *cancel, glint_err *err)
 {
     long nc = nthreads > 0 ? nthreads : sysconf(_SC_NPROCESSORS_ONLN);
-    int nt = nc < 1 ? 1 : nc > 64 ? 64 : (int)nc;
+    int nt = nc < 1 ? 1 : nc > 64 ? 64 : (int)nc, stopped = 0;
     pthread_t th[64];
     vjob jobs[64];
     long total = 0;
@@ -170,7 +182,7 @@ int vis_compute(const vis_scene *v, int npoints, const float *pos, const float *
         nt = npoints > 0 ? npoints : 1;
     for (int t = 0; t < nt; t++)
         jobs[t] = (vjob){v, pos, nrm, dirs, k, (int)((long)npoints * t / nt),
-                         (int)((long)npoints * (t + 1) / nt), bits, 0};
+                         (int)((long)npoints * (t + 1) / nt), bits, 0, cancel, &stopped};
     for (int t = 1; t < nt; t++)
         if (pthread_create(&th[t], NULL, vjob_run, &jobs[t])) {
             vjob_run(&jobs[t]);
@@ -184,6 +196,8 @@ int vis_compute(const vis_scene *v, int npoints, const float *pos, const float *
         total += jobs[t].rays;
     if (rays)
         *rays = total;
+    if (stopped)
+        return glint_cancel_err(err, "casting shadow rays");
     return 0;
 }
 

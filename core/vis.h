@@ -15,6 +15,7 @@
 
 #include <stdint.h>
 
+#include "cancel.h"
 #include "err.h"
 #include "mesh.h"
 
@@ -31,9 +32,12 @@ void vis_close(vis_scene *v);  /* accepts NULL */
 
 /* OUT: bits[npoints * VIS_WORDS(k)].  pos and nrm: 3 floats per point;
  * dirs: 3 doubles per direction (unit).  nthreads <= 0: the machine's
- * cores.  Also counts the rays cast (OUT: *rays, may be NULL). */
+ * cores.  Also counts the rays cast (OUT: *rays, may be NULL).  cancel
+ * (may be NULL) is asked by each thread about every GLINT_CANCEL_WORK rays:
+ * GLINT_ECANCELLED once it says to stop (bits then undefined). */
 int vis_compute(const vis_scene *v, int npoints, const float *pos, const float *nrm, int k,
-                const double *dirs, uint64_t *bits, int nthreads, long *rays, glint_err *err);
+                const double *dirs, uint64_t *bits, int nthreads, long *rays,
+                const glint_cancel *cancel, glint_err *err);
 
 /* 1 when the mesh is closed, consistently oriented and convex (no point of
  * it can shadow another: every edge's dihedral angle is convex within

@@ -9,6 +9,7 @@ struct admit {
     pthread_mutex_t lock;
     pthread_cond_t room;
     double wait_s; /* how long a request may wait for room */
+    int stopping;  /* admit_stop */
     admit_stats st;
 };
 
@@ -91,6 +92,13 @@ static void take(admit *a, size_t bytes)
         a->st.peak = a->st.held;
 }
 
+/* The refusal once admit_stop was called. */
+static int stopping(const char *what, glint_err *err)
+{
+    glint_err_set(err, GLINT_EBUSY, "the daemon is stopping: %s is not started", what);
+    return glint_err_kind(err, "stopping");
+}
+
 int admit_enter(admit *a, size_t bytes, const char *what, glint_err *err)
 {
     int rc = 0;
@@ -102,13 +110,15 @@ int admit_enter(admit *a, size_t bytes, const char *what, glint_err *err)
         pthread_mutex_unlock(&a->lock);
         return rc;
     }
-    if (!fits_now(a, bytes) && a->wait_s > 0.0) {
+    if (!fits_now(a, bytes) && a->wait_s > 0.0 && !a->stopping) {
         struct timespec until = mono_after(a->wait_s);
         a->st.waited++;
-        while (!fits_now(a, bytes) && !mono_passed(&until))
+        while (!fits_now(a, bytes) && !mono_passed(&until) && !a->stopping)
             pthread_cond_timedwait(&a->room, &a->lock, &until);
     }
-    if (!fits_now(a, bytes)) {
+    if (a->stopping) {
+        rc = stopping(what, err);
+    } else if (!fits_now(a, bytes)) {
         a->st.refused_busy++;
         glint_err_set(err, GLINT_EBUSY,
                       "%s needs up to %.0f MiB and this daemon's budget for expensive work is "
@@ -136,8 +146,12 @@ int admit_wait(admit *a, size_t bytes, const char *what, int (*cancelled)(void *
         pthread_mutex_unlock(&a->lock);
         return rc;
     }
-    while (!fits_now(a, bytes)) {
+    while (!fits_now(a, bytes) || a->stopping) {
         struct timespec ts = mono_after(0.1);
+        if (a->stopping) {
+            rc = stopping(what, err);
+            break;
+        }
         if (cancelled && cancelled(cls)) {
             glint_err_set(err, GLINT_EBUSY, "cancelled while waiting for room for %s", what);
             glint_err_kind(err, "cancelled");
@@ -163,6 +177,53 @@ void admit_leave(admit *a, size_t bytes)
     a->st.held = bytes <= a->st.held ? a->st.held - bytes : 0;
     if (a->st.running > 0)
         a->st.running--;
+    pthread_cond_broadcast(&a->room);
+    pthread_mutex_unlock(&a->lock);
+}
+
+void admit_limit_seconds(admit *a, double seconds)
+{
+    if (!a)
+        return;
+    pthread_mutex_lock(&a->lock);
+    a->st.max_seconds = seconds > 0.0 ? seconds : 0.0;
+    pthread_mutex_unlock(&a->lock);
+}
+
+int admit_cost(admit *a, double seconds, const char *what, glint_err *err)
+{
+    int rc = 0;
+    if (!a)
+        return 0;
+    pthread_mutex_lock(&a->lock);
+    if (a->st.max_seconds > 0.0 && !(seconds <= a->st.max_seconds)) {
+        a->st.refused_cost++;
+        glint_err_set(err, GLINT_ETOOBIG,
+                      "%s is estimated at %.0f s of work (one core), beyond the %.0f s this "
+                      "daemon gives one piece of work (glintd --work-max-seconds): ask for less "
+                      "(a smaller size, fewer lights or views, a lower res)",
+                      what, seconds, a->st.max_seconds);
+        rc = glint_err_kind(err, "too-expensive");
+    }
+    pthread_mutex_unlock(&a->lock);
+    return rc;
+}
+
+void admit_cancelled(admit *a)
+{
+    if (!a)
+        return;
+    pthread_mutex_lock(&a->lock);
+    a->st.cancelled++;
+    pthread_mutex_unlock(&a->lock);
+}
+
+void admit_stop(admit *a)
+{
+    if (!a)
+        return;
+    pthread_mutex_lock(&a->lock);
+    a->stopping = 1;
     pthread_cond_broadcast(&a->room);
     pthread_mutex_unlock(&a->lock);
 }
@@ -196,8 +257,14 @@ void admit_metrics(admit *a, FILE *o)
                "# TYPE glintd_work_total counter\n"
                "glintd_work_total{outcome=\"admitted\"} %lld\n"
                "glintd_work_total{outcome=\"busy\"} %lld\n"
-               "glintd_work_total{outcome=\"over_budget\"} %lld\n",
-            s.admitted, s.refused_busy, s.refused_size);
+               "glintd_work_total{outcome=\"over_budget\"} %lld\n"
+               "glintd_work_total{outcome=\"too_expensive\"} %lld\n"
+               "glintd_work_total{outcome=\"cancelled\"} %lld\n",
+            s.admitted, s.refused_busy, s.refused_size, s.refused_cost, s.cancelled);
+    fprintf(o, "# HELP glintd_work_max_seconds Largest estimate of one piece of work admitted, "
+               "seconds of one core (--work-max-seconds; 0: none).\n"
+               "# TYPE glintd_work_max_seconds gauge\nglintd_work_max_seconds %g\n",
+            s.max_seconds);
     fprintf(o, "# HELP glintd_work_waited_total Expensive work that had to wait for room "
                "(then admitted or busy).\n# TYPE glintd_work_waited_total counter\n"
                "glintd_work_waited_total %lld\n",

@@ -10,6 +10,15 @@
  * refused as too large (413), naming the budget.  So the memory of the work
  * in flight stays under the budget, whatever the clients send.
  *
+ * Time.  Each piece of work also states an estimate of its time
+ * (render_material_cost, method_fit_seconds, ...: seconds of one core at
+ * measured rates); admit_cost refuses one whose estimate exceeds the
+ * limit (glintd --work-max-seconds) before it starts (413, kind
+ * "too-expensive", naming the estimate and the limit).  Work that runs is
+ * cancelled when its client goes away or the daemon stops (cancel.h), and
+ * says so (admit_cancelled: counted in /metrics).  admit_stop refuses
+ * everything from then on and ends the waits at once.
+ *
  * A NULL admit admits everything (enter, wait, leave and metrics accept it).
  * Thread-safety: every function may be called from any thread. */
 #ifndef GLINTD_ADMIT_H
@@ -43,10 +52,29 @@ int admit_wait(admit *a, size_t bytes, const char *what, int (*cancelled)(void *
 
 void admit_leave(admit *a, size_t bytes);
 
+/* The largest estimate (seconds) of one piece of work admit_cost admits;
+ * 0: no limit (the default). */
+void admit_limit_seconds(admit *a, double seconds);
+
+/* 0 when an estimate of `seconds` is within the limit; else GLINT_ETOOBIG
+ * with kind "too-expensive" and a message naming `what`, the estimate and
+ * the limit.  Holds nothing.  A NULL admit admits. */
+int admit_cost(admit *a, double seconds, const char *what, glint_err *err);
+
+/* A piece of admitted work stopped because it was cancelled (its client
+ * went away, the daemon stopped): counted for /metrics.  Call it as well
+ * as admit_leave. */
+void admit_cancelled(admit *a);
+
+/* The daemon stops: admit_enter and admit_wait refuse from now on
+ * (GLINT_EBUSY, kind "stopping"), and those waiting return at once. */
+void admit_stop(admit *a);
+
 typedef struct admit_stats {
     size_t budget, held, peak;   /* bytes */
     int slots, running;
-    long long admitted, refused_busy, refused_size, waited;
+    double max_seconds;          /* admit_limit_seconds (0: none) */
+    long long admitted, refused_busy, refused_size, refused_cost, waited, cancelled;
 } admit_stats;
 
 void admit_get_stats(admit *a, admit_stats *out);

@@ -9,8 +9,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "admit.h"
 #include "app.h"
 #include "auth.h"
+#include "cancel.h"
 #include "fitsvc.h"
 #include "log.h"
 #include "store.h"
@@ -31,6 +33,7 @@ static const struct {
     {GLINT_ECONFLICT, 409, "conflict"},
     {GLINT_EBUSY, 503, "busy"},
     {GLINT_ETOOBIG, 413, "too-large"},
+    {GLINT_ECANCELLED, 503, "cancelled"},
     {GLINT_ENOMEM, 503, "out-of-memory"},
 };
 
@@ -50,6 +53,7 @@ static const struct {
     {"unsupported-media-type", 415},
     {"storage-full", 507},      /* the data directory's disk (fsio_err_kind) */
     {"storage-read-only", 503},
+    {"owner-queue-full", 429},  /* one owner's jobs (jobs.h) */
 };
 
 int api_status(const glint_err *e)
@@ -109,6 +113,36 @@ http_resp api_fail(const glint_err *e, const char *context)
     if (e->code == GLINT_EBUSY)
         http_header(&r, "Retry-After", "2");
     return r;
+}
+
+static int request_stop(void *cls)
+{
+    http_req *req = cls;
+    app *a = req->app;
+    return __atomic_load_n(&a->stopping, __ATOMIC_RELAXED) || http_req_gone(req);
+}
+
+static int app_stop(void *cls)
+{
+    return __atomic_load_n(&((app *)cls)->stopping, __ATOMIC_RELAXED);
+}
+
+void api_stop_cancel_init(app *a, glint_cancel *c)
+{
+    c->stop = app_stop;
+    c->cls = a;
+}
+
+void api_cancel_init(http_req *req, glint_cancel *c)
+{
+    c->stop = request_stop;
+    c->cls = req;
+}
+
+void api_work_ended(http_req *req, int rc)
+{
+    if (rc == GLINT_ECANCELLED)
+        admit_cancelled(((app *)req->app)->work);
 }
 
 http_resp api_created(json_t *body, const char *what, const char *id)

@@ -56,6 +56,21 @@ json_t *api_env_json(const struct render_env *env);
 /* The same with context: detail "<context>: <message>". */
 http_resp api_fail(const glint_err *e, const char *context);
 
+/* The cancel (cancel.h) of a request's work: it says to stop once the
+ * client has gone (http_req_gone) or the daemon stops (app.stopping).
+ * OUT: *c, valid while req is. */
+struct glint_cancel;
+void api_cancel_init(http_req *req, struct glint_cancel *c);
+
+/* The cancel of work no one client waits for (a scene's base render, kept
+ * for every session): it says to stop once the daemon stops. */
+struct app;
+void api_stop_cancel_init(struct app *a, struct glint_cancel *c);
+
+/* After admitted work (admit.h) ended with rc: a cancelled one is counted
+ * (admit_cancelled). */
+void api_work_ended(http_req *req, int rc);
+
 /* The request body as a JSON object: Content-Type application/json (or
  * none), not empty, nesting within API_JSON_MAX_DEPTH (counted before
  * parsing), no duplicate keys.  OUT: *out (decref).  Errors: kinds

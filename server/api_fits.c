@@ -7,6 +7,7 @@
  *   GET  /api/v1/sessions/{id}/materials   the session's materials
  *   GET  /api/v1/jobs/{id}                 poll a job
  *   GET  /api/v1/jobs/{id}/events          the job's progress as server-sent events
+ *   DELETE /api/v1/jobs/{id}               cancel the job (paint rights on its session)
  *
  * The body names a method of the registry (method.h; default: the first)
  * and its params, checked against the method's parameter table; fitsvc
@@ -149,9 +150,10 @@ static http_resp session_materials(http_req *req)
 
 /* ---- jobs ------------------------------------------------------------------------------- */
 
-/* The job `id` if the request may read its session (or its G-buffer set,
- * whose fits it runs: api_gbuffers.c).  OUT: *jdoc. */
-static int job_access(http_req *req, const char *id, json_t **jdoc, glint_err *e)
+/* The job `id` if the request may read its session (need_paint: paint in
+ * it) or use its G-buffer set, whose fits it runs (api_gbuffers.c).  OUT:
+ * *jdoc. */
+static int job_access(http_req *req, const char *id, int need_paint, json_t **jdoc, glint_err *e)
 {
     app *a = req->app;
     char owner[33];
@@ -166,7 +168,7 @@ static int job_access(http_req *req, const char *id, json_t **jdoc, glint_err *e
         return api_reject(e, GLINT_ENOTFOUND, "not-found",
                           "no job %.40s (unknown, or finished over an hour ago)", id);
     }
-    rc = api_session(req, owner, 0, &sdoc, e);
+    rc = api_session(req, owner, need_paint, &sdoc, e);
     if (rc == GLINT_ENOTFOUND && api_gbuffer_set_exists(req->app, owner))
         rc = api_gbuffer_set_access(req, owner, e);
     else
@@ -183,9 +185,26 @@ static http_resp job_get(http_req *req)
 {
     json_t *jdoc;
     glint_err e;
-    if (job_access(req, req->param[0], &jdoc, &e))
+    if (job_access(req, req->param[0], 0, &jdoc, &e))
         return api_error(&e);
     return http_json(200, json_pack("{s:o}", "job", job_with_links(jdoc)));
+}
+
+/* DELETE: a queued job fails now (200), a running one is told and stops at
+ * its next question (202: poll it for "failed"); 409 once finished. */
+static http_resp job_delete(http_req *req)
+{
+    app *a = req->app;
+    json_t *jdoc;
+    glint_err e;
+    int running;
+    if (job_access(req, req->param[0], 1, &jdoc, &e))
+        return api_error(&e);
+    json_decref(jdoc);
+    if (jobs_cancel(fitsvc_jobs(a->fits), req->param[0], &jdoc, &e))
+        return api_error(&e);
+    running = strcmp(json_string_value(json_object_get(jdoc, "state")), "running") == 0;
+    return http_json(running ? 202 : 200, json_pack("{s:o}", "job", job_with_links(jdoc)));
 }
 
 /* SSE stream of a job: "progress" events, then one "done" or "failed". */
@@ -266,7 +285,7 @@ static http_resp job_events(http_req *req)
     json_t *jdoc;
     glint_err e;
 
-    if (job_access(req, req->param[0], &jdoc, &e))
+    if (job_access(req, req->param[0], 0, &jdoc, &e))
         return api_error(&e);
     json_decref(jdoc);
     if (!(s = calloc(1, sizeof *s)))
@@ -290,6 +309,7 @@ const http_route api_fits_routes[] = {
     {"POST", "/api/v1/sessions/{id}/fits", fits_create},
     {"GET", "/api/v1/sessions/{id}/materials", session_materials},
     {"GET", "/api/v1/jobs/{id}", job_get},
+    {"DELETE", "/api/v1/jobs/{id}", job_delete},
     {"GET", "/api/v1/jobs/{id}/events", job_events},
 };
 const int api_fits_nroutes = sizeof api_fits_routes / sizeof api_fits_routes[0];

@@ -20,7 +20,10 @@
  * first read (files_ensure), durable before they are answered.
  * The shader export (shader/, render_export_shader) is a pure function of the
  * material and is written on first use (GET shader, shader files,
- * package).  Reading needs the token of the material's session. */
+ * package).  Reading needs the token of the material's session.  A preview's
+ * time is estimated before it starts (render_material_cost, refused beyond
+ * glintd --work-max-seconds) and it stops when its client goes away
+ * (api_cancel_init). */
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -34,6 +37,7 @@
 #include "api_common.h"
 #include "app.h"
 #include "buf.h"
+#include "cancel.h"
 #include "fitsvc.h"
 #include "material.h"
 #include "readable.h"
@@ -515,7 +519,9 @@ static http_resp preview(http_req *req, const char *format)
     int w = 0, h = 0, rc, admitted = 0;
     size_t bytes = 0;
     char what[64];
+    glint_cancel cancel;
 
+    api_cancel_init(req, &cancel);
     if ((rc = api_material(req, mid, &doc, &e)))
         goto done;
     if ((rc = fitsvc_scene(a->fits, doc.scene, &se, &e))) {
@@ -546,15 +552,22 @@ static http_resp preview(http_req *req, const char *format)
                           (size_t)w * h * 8 * (size_t)((env.lights + 63) / 64)
                     : render_peak_bytes(eng, 0, w, h);
     snprintf(what, sizeof what, "a %dx%d preview", w, h);
-    if ((rc = admit_enter(a->work, bytes, what, &e)))
+    /* its time is estimated before it takes a slot: refused up front when
+     * beyond the limit, and cancelled when the client leaves */
+    if ((rc = api_material_load(a, mid, &m, &e)) ||
+        (rc = admit_cost(a->work,
+                         render_material_cost(a->render, eng, mkey, msh, &m, has_env ? &env : NULL,
+                                              w, h),
+                         what, &e)) ||
+        (rc = admit_enter(a->work, bytes, what, &e)))
         goto done;
     admitted = 1;
-    if ((rc = api_material_load(a, mid, &m, &e)))
-        goto done;
-    if ((rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im,
-                                            &info, &used, &e)
-                      : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used,
-                                        &e))) {
+    rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im, &info,
+                                       &used, &cancel, &e)
+                 : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used, &cancel,
+                                   &e);
+    api_work_ended(req, rc);
+    if (rc) {
         if (rc == GLINT_EUNSUPPORTED && eng == RENDER_EGL)
             glint_err_kind(&e, "egl-unavailable");
         goto done;

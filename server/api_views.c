@@ -14,6 +14,7 @@
 #include "admit.h"
 #include "api_common.h"
 #include "app.h"
+#include "cancel.h"
 #include "fitsvc.h"
 #include "img.h"
 #include "prep.h"
@@ -79,7 +80,10 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
     render_env env;
     size_t bytes;
     int rc, has_env, W, H;
+    double cost = 0.0;
+    glint_cancel cancel;
 
+    api_cancel_init(req, &cancel);
     if ((rc = api_env_query(req, &env, &has_env, e)))
         return rc;
     if (!spec)
@@ -102,13 +106,17 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
     H = sc->height * ps;
     bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
             (has_env ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
-    if (!rc && !(rc = admit_enter(a->work, bytes, "the base render", e))) {
+    if (!rc && !(rc = render_base_cost(NULL, RENDER_CPU, NULL, &sc->mesh, spec,
+                                       has_env ? &env : NULL, W, H, &cost, e)) &&
+        !(rc = admit_cost(a->work, cost, "the base render", e)) &&
+        !(rc = admit_enter(a->work, bytes, "the base render", e))) {
         /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
         if ((rc = has_env ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
-                                            &view, W, H, im, NULL, NULL, e)
+                                            &view, W, H, im, NULL, NULL, &cancel, e)
                           : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &view, W, H, spec,
-                                        scale, im, NULL, e)))
+                                        scale, im, NULL, &cancel, e)))
             glint_err_prefix(e, "rendering");
+        api_work_ended(req, rc);
         admit_leave(a->work, bytes);
     }
     cache_release(fitsvc_cache(a->fits), se);

@@ -39,6 +39,7 @@ typedef struct app_config {
     size_t work_bytes;        /* memory budget of expensive work in flight (admit.h) */
     int work_slots;           /* ... pieces of it at once */
     int work_wait_s;          /* how long a request waits for room (admit.h) */
+    int work_max_seconds;     /* largest estimate of one piece of work, seconds (0: none) */
     int worker_threads;       /* background jobs */
     int background_priority;  /* fitsvc.h FITSVC_BG_*: measurements no one waits for */
     unsigned timeout_s;       /* idle timeout of a kept-alive connection */
@@ -66,6 +67,7 @@ struct admit;
 typedef struct app {
     app_config cfg;
     time_t started;
+    int stopping;             /* SIGTERM or SIGINT came (read and set atomically): work stops */
     http_server *http;
     struct store *store;      /* store.h: SQLite + blobs */
     struct events *events;    /* events.h: per-session SSE streams */

@@ -358,6 +358,7 @@ static int task_bytes(fit_task *t, glint_err *err)
 
     if ((rc = task_samples(t, &n, err)))
         return rc;
+    t->nsamples = n;
     t->bytes = method_fit_bytes(t->m, t->params, n) +
                (size_t)t->nused * (size_t)sc->width * (size_t)sc->height * 3 * sizeof(float);
     return 0;
@@ -370,6 +371,14 @@ static json_t *views_json(const unsigned char *use, int nviews)
         if (use[v])
             json_array_append_new(a, json_integer(v));
     return a;
+}
+
+int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamples,
+                      glint_err *err)
+{
+    char what[96];
+    snprintf(what, sizeof what, "a cold %s fit of %ld samples", m->name, nsamples);
+    return admit_cost(f->work, method_fit_seconds(m, params, nsamples), what, err);
 }
 
 int fitsvc_job_cancelled(void *cls)
@@ -533,7 +542,8 @@ static int fit_job(job *j, void *arg, json_t **result, glint_err *err)
 
 static int fit_job_run(job *j, fit_task *t, json_t **result, glint_err *err)
 {
-    prep_request rq = {t->m, t->params, t->scene, t->use};
+    glint_cancel cancel = {fitsvc_job_cancelled, j};
+    prep_request rq = {t->m, t->params, t->scene, t->use, &cancel};
     prep *p = NULL;
     json_t *doc = NULL;
     int rc;
@@ -605,7 +615,7 @@ static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene
     if ((rc = task_bytes(t, err)))
         goto out;
     t0 = srv_timing_step(tm, "bound", t0);
-    rq = (prep_request){m, t->params, t->scene, t->use};
+    rq = (prep_request){m, t->params, t->scene, t->use, NULL};
     if (prep_try(f->cache, &rq, &p, NULL) == 0) { /* in memory: fit now */
         srv_timing_step(tm, "prepared", t0);
         t->tm = tm;
@@ -624,7 +634,9 @@ static int fit_now_or_queue(fitsvc *f, const char *session_id, const char *scene
         if (t->bytes > st.budget && (rc = admit_enter(f->work, t->bytes, "the fit", err)))
             goto out;
     }
-    rc = jobs_submit(f->jobs, "fit", session_id, fit_job, t, task_free, job_id, err);
+    if ((rc = fitsvc_cost_check(f, m, t->params, t->nsamples, err)))
+        goto out;
+    rc = jobs_submit(f->jobs, "fit", session_id, m->name, fit_job, t, task_free, job_id, err);
     return rc; /* the job owns the task (freed even on failure) */
 out:
     task_free(t);
@@ -688,6 +700,12 @@ void fitsvc_shutdown(fitsvc *f)
 {
     if (f)
         jobs_shutdown(f->jobs);
+}
+
+void fitsvc_stop(fitsvc *f)
+{
+    if (f)
+        jobs_stop(f->jobs);
 }
 
 void fitsvc_close(fitsvc *f)

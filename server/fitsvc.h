@@ -67,6 +67,10 @@ int fitsvc_open(const fitsvc_config *cfg, struct store *st, struct events *ev, f
                 glint_err *err);
 /* End the job streams promptly (before the HTTP server stops). */
 void fitsvc_shutdown(fitsvc *f);
+/* The daemon stops: queued jobs fail, running ones are cancelled (their
+ * builds stop within moments, cancel.h), no job starts (jobs_stop).
+ * Returns at once; fitsvc_close joins them. */
+void fitsvc_stop(fitsvc *f);
 /* Stop the jobs, write the record, free everything.  Accepts NULL. */
 void fitsvc_close(fitsvc *f);
 
@@ -92,6 +96,10 @@ int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *
 int fitsvc_fit(fitsvc *f, const char *session_id, const char *scene_id, const method *m,
                const void *params, json_t **doc, char job_id[33], srv_timing *tm,
                glint_err *err);
+/* (A fit queued as a job: of owner session_id, target the method's name,
+ * so it supersedes the session's queued fits of the same method (jobs.h);
+ * refused before it is queued, with GLINT_ETOOBIG kind "too-expensive",
+ * when method_fit_seconds exceeds the daemon's limit (admit_cost).) */
 
 /* Fit the samples and painted values of a G-buffer set (core gbfit.h)
  * with method m and params (copied): as fitsvc_fit, 0 with *doc (fitted

@@ -136,6 +136,7 @@ done:
 static int gb_job(job *j, void *arg, json_t **result, glint_err *err)
 {
     gb_task *t = arg;
+    glint_cancel cancel = {fitsvc_job_cancelled, j};
     prep *p = NULL;
     json_t *doc = NULL;
     int rc;
@@ -144,7 +145,7 @@ static int gb_job(job *j, void *arg, json_t **result, glint_err *err)
         (rc = admit_wait(t->f->work, t->bytes, "the fit", fitsvc_job_cancelled, j, err)))
         return rc;
     if (!(rc = prep_acquire_samples(t->f->cache, t->m, t->params, &t->s, fitsvc_job_progress, j,
-                                    &p, err))) {
+                                    &cancel, &p, err))) {
         rc = gb_execute(t, p, j, &doc, err);
         prep_release(t->f->cache, p);
     }
@@ -207,8 +208,12 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
             return rc;
         }
     }
+    if ((rc = fitsvc_cost_check(f, m, t->params, t->s.n, err))) {
+        gb_task_free(t);
+        return rc;
+    }
     pthread_mutex_lock(&f->lock);
     f->misses++;
     pthread_mutex_unlock(&f->lock);
-    return jobs_submit(f->jobs, "fit", set_id, gb_job, t, gb_task_free, job_id, err);
+    return jobs_submit(f->jobs, "fit", set_id, m->name, gb_job, t, gb_task_free, job_id, err);
 }

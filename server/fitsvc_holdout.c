@@ -125,6 +125,14 @@ static int holdout_gate(void *cls)
     }
 }
 
+/* The views' builds stop as soon as the job is cancelled (the daemon
+ * stops), without the gate's wait. */
+static int holdout_stop(void *cls)
+{
+    holdout_run *x = cls;
+    return job_cancelled(x->j);
+}
+
 static void holdout_progress(void *cls, const char *stage, double p)
 {
     holdout_run *x = cls;
@@ -152,6 +160,7 @@ static void *holdout_thread(void *arg)
 {
     holdout_run *x = arg;
     holdout_task *h = x->h;
+    glint_cancel cancel = {holdout_stop, x};
 #ifdef __linux__
     (void)pthread_setname_np(pthread_self(), "glintd-holdout"); /* seen in top, ps -L */
 #endif
@@ -161,7 +170,7 @@ static void *holdout_thread(void *arg)
      * measurement no one waits for */
     par_background(1);
     x->rc = prep_holdout(h->m, h->params, cache_data(h->pattern), h->paintings, holdout_gate,
-                         holdout_progress, x, &x->r, &x->err);
+                         holdout_progress, x, &cancel, &x->r, &x->err);
     par_background(0);
     return NULL;
 }
@@ -257,7 +266,7 @@ void fitsvc_holdout_schedule(fit_task *t, prep *p, const char *material_id, cons
                (size_t)s->width * s->height * s->channels * sizeof(float));
     }
     h->pattern = cache_ref(t->f->cache, prep_pattern(p));
-    if (jobs_submit(t->f->jobs, "holdout", "", holdout_job, h, holdout_free, id, &e))
+    if (jobs_submit(t->f->jobs, "holdout", "", NULL, holdout_job, h, holdout_free, id, &e))
         log_line("held-out evaluation not scheduled: %s", e.msg);
 }
 

@@ -72,6 +72,7 @@ typedef struct fit_task {
     unsigned char *use;      /* nviews: painted */
     long long *versions;     /* nviews: painting versions used */
     size_t bytes;            /* the fit's memory bound (admit.h) */
+    long nsamples;           /* samples of the painted views (task_bytes) */
     srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
 } fit_task;
 
@@ -97,7 +98,14 @@ void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_mem
 void fitsvc_memo_close(fitsvc *f);
 void fitsvc_memo_metrics(fitsvc *f, FILE *o);
 
-/* Job callbacks for the precomputation (cls: the job). */
+/* A cold fit's estimate against the limit (admit_cost), before its job is
+ * queued: 0, or GLINT_ETOOBIG naming the method, the samples, the estimate
+ * and the limit. */
+int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamples,
+                      glint_err *err);
+
+/* Job callbacks for the precomputation (cls: the job); the first is a
+ * glint_cancel's stop (the job was cancelled or the daemon stops). */
 int fitsvc_job_cancelled(void *cls);
 void fitsvc_job_progress(void *cls, const char *stage, double p);
 

@@ -3,7 +3,8 @@
  *
  * Options override the config file (--config FILE, JSON with the same keys
  * as the long options, e.g. {"port": 8080, "data_dir": "/var/lib/glint"}).
- * SIGTERM or SIGINT: stop accepting, let in-flight requests finish, exit 0. */
+ * SIGTERM or SIGINT: stop accepting, cancel the work in flight (renders and
+ * jobs stop within moments, cancel.h), let the requests answer, exit 0. */
 #include <errno.h>
 #include <getopt.h>
 #include <jansson.h>
@@ -56,6 +57,9 @@ static void usage(FILE *f)
           "                        piece that can never fit (2048)\n"
           "  --work-slots N        ... pieces of such work at once (4)\n"
           "  --work-wait S         how long a request waits for room before 503 (10)\n"
+          "  --work-max-seconds S  the largest estimate of one piece of such work, in\n"
+          "                        seconds of one core (a preview, a base render, a cold\n"
+          "                        fit); beyond it 413 before it starts; 0 for no limit (600)\n"
           "  --timeout S           idle timeout of a kept-alive connection, seconds (30)\n"
           "  --max-connections N   connections served at once, health checks aside (256)\n"
           "  --max-connections-per-ip N\n"
@@ -111,6 +115,7 @@ int main(int argc, char **argv)
         {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
         {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
         {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
+        {"work-max-seconds", required_argument, 0, 1},
         {"background-priority", required_argument, 0, 1},
         {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
         {"allow-host", required_argument, 0, 1},
@@ -208,6 +213,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
         }
+        admit_limit_seconds(a.work, a.cfg.work_max_seconds);
         fc.work = a.work;
         if (store_open_db(a.cfg.data_dir, a.cfg.database, &a.store, &ge) ||
             api_envs_store(a.store, &ge) ||
@@ -294,8 +300,13 @@ int main(int argc, char **argv)
             fprintf(stderr, "glintd: %s\n", ge.msg);
     }
     if (sigwait(&set, &sig) == 0)
-        fprintf(stderr, "glintd: %s: finishing in-flight requests\n",
+        fprintf(stderr, "glintd: %s: cancelling the work in flight, finishing requests\n",
                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    /* the renders in flight ask a.stopping and stop; nothing new is
+     * admitted; the jobs stop (their builds ask) and no new one starts */
+    __atomic_store_n(&a.stopping, 1, __ATOMIC_RELAXED);
+    admit_stop(a.work);
+    fitsvc_stop(a.fits);
     events_shutdown(a.events); /* end the event streams, then the connections */
     fitsvc_shutdown(a.fits);   /* and the job streams */
     http_server_stop(a.http);

@@ -199,6 +199,26 @@ void http_header(http_resp *r, const char *name, const char *value)
 
 /* ---- request helpers --------------------------------------------------------------- */
 
+int http_req_gone(http_req *req)
+{
+    const union MHD_ConnectionInfo *ci;
+    char c;
+    ssize_t n;
+    if (__atomic_load_n(&req->gone, __ATOMIC_RELAXED))
+        return 1;
+    ci = req->conn ? MHD_get_connection_info(req->conn, MHD_CONNECTION_INFO_CONNECTION_FD) : NULL;
+    if (!ci || ci->connect_fd < 0)
+        return 0;
+    /* the body has been read: what is left is the next pipelined request,
+     * the end of the stream (0) or an error (a reset) */
+    n = recv(ci->connect_fd, &c, 1, MSG_PEEK | MSG_DONTWAIT);
+    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+        __atomic_store_n(&req->gone, 1, __ATOMIC_RELAXED);
+        return 1;
+    }
+    return 0;
+}
+
 const char *http_query(const http_req *req, const char *name)
 {
     return MHD_lookup_connection_value(req->conn, MHD_GET_ARGUMENT_KIND, name);

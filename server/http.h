@@ -60,6 +60,7 @@ typedef struct http_req {
     int body_too_large;     /* the body exceeded the limit (handler answers 413) */
     void *app;              /* the application (http_server_start's `app`) */
     srv_timing timing;      /* steps the handler timed: sent as Server-Timing (timing.h) */
+    int gone;               /* http_req_gone said so (read and set atomically) */
 } http_req;
 
 typedef struct http_resp {
@@ -184,6 +185,14 @@ const char *http_header_in(const http_req *req, const char *name);
  * Behind a proxy this is the proxy. */
 #define HTTP_CLIENT_KEY_MAX 64
 void http_client_key(const http_req *req, char *out, size_t len);
+/* 1 once the request's client has gone: it closed or reset its connection
+ * (or shut down its sending side, which an HTTP/1.1 client waiting for an
+ * answer does not do).  With a thread per connection, libmicrohttpd learns
+ * of a close only after the handler returns, so a long handler (a render)
+ * asks this between pieces of its work and gives up.  A non-blocking peek
+ * at the socket (a few microseconds); safe from any thread while the
+ * handler runs; once 1, always 1. */
+int http_req_gone(http_req *req);
 
 /* Request counters for /metrics (api_core.c). */
 typedef struct http_stats {

@@ -8,6 +8,7 @@
 
 #include "admit.h"
 #include "api_common.h"
+#include "cancel.h"
 #include "fitsvc.h"
 #include "ids.h"
 #include "mesh.h"
@@ -91,8 +92,9 @@ int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err
     cache_entry *se = NULL;
     const scene *sc;
     const char *spec;
-    double bscale;
+    double bscale, cost = 0.0;
     render_env env;
+    glint_cancel cancel;
     int rc, W, H;
 
     memset(out, 0, sizeof *out);
@@ -136,13 +138,20 @@ int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err
     H = sc->height * scale;
     bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
             (jenv ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
-    if ((rc = admit_enter(a->work, bytes, "the base render", err)))
+    if ((rc = render_base_cost(NULL, RENDER_CPU, NULL, &sc->mesh, spec, jenv ? &env : NULL, W, H,
+                               &cost, err)) ||
+        (rc = admit_cost(a->work, cost, "the scene's base render", err)) ||
+        (rc = admit_enter(a->work, bytes, "the base render", err)))
         goto done;
-    /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
+    /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at;
+     * kept for every session, so it stops only when the daemon does */
+    api_stop_cancel_init(a, &cancel);
     rc = jenv ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, bscale, &env,
-                                &sc->views[view], W, H, out, NULL, NULL, err)
+                                &sc->views[view], W, H, out, NULL, NULL, &cancel, err)
               : render_base(NULL, RENDER_CPU, NULL, &sc->mesh, &sc->views[view], W, H, spec,
-                            bscale, out, NULL, err);
+                            bscale, out, NULL, &cancel, err);
+    if (rc == GLINT_ECANCELLED)
+        admit_cancelled(a->work);
     admit_leave(a->work, bytes);
     if (rc)
         goto done;

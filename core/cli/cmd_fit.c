@@ -46,7 +46,7 @@ int cli_fit_scene(const fit_opts *o, const scene *sc, const unsigned char *use, 
         (rc = prep_scene_acquire(c, "cli", &src, &se, &e)))
         goto done;
     {
-        prep_request rq = {o->m, o->params, se, use};
+        prep_request rq = {o->m, o->params, se, use, NULL};
         if ((rc = prep_acquire(c, &rq, NULL, NULL, &p, &e)) ||
             (rc = prep_fit(p, imgs, NULL, m, &e)))
             goto done;
@@ -287,7 +287,7 @@ int cmd_fit_samples(int argc, char **argv)
         goto done;
     }
     if (cache_open(o.cache_dir, 0, &cc, &e) ||
-        prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, &p, &e) ||
+        prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, NULL, &p, &e) ||
         prep_fit(p, NULL, vals, &m, &e)) {
         rc = fail_err(&e);
         goto done;
@@ -401,7 +401,7 @@ int cmd_fit_gbuffers(int argc, char **argv)
     }
     if (gbfit_samples(o.m, g, imgs, use, n, has_uv, &s, &vals, &e) ||
         cache_open(o.cache_dir, 0, &cc, &e) ||
-        prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, &p, &e) ||
+        prep_acquire_samples(cc, o.m, o.params, &s, NULL, NULL, NULL, &p, &e) ||
         prep_fit(p, NULL, vals, &m, &e)) {
         rc = fail_err(&e);
         goto done;

@@ -127,9 +127,9 @@ int cmd_render(int argc, char **argv)
         h = sc.height;
     }
     if ((has_env ? render_material_env(cli_render(), engine, NULL, &sc.mesh, &m, &env, &v, w, h,
-                                       &im, &info, NULL, &e)
+                                       &im, &info, NULL, NULL, &e)
                  : render_material(cli_render(), engine, NULL, &sc.mesh, &m, &v, w, h, &im, NULL,
-                                   &e)) ||
+                                   NULL, &e)) ||
         img_write(out, &im, &e)) {
         rc = fail_err(&e);
         goto done;

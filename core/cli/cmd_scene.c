@@ -384,7 +384,7 @@ int cmd_base_render(int argc, char **argv)
         char path[4096];
         snprintf(path, sizeof path, "%s/view_%02d.%s", out, v, fmt);
         if (render_base(cli_render(), engine, "scene", &sc.mesh, &sc.views[v], sc.width,
-                        sc.height, spec, scale, &im, NULL, &e) ||
+                        sc.height, spec, scale, &im, NULL, NULL, &e) ||
             img_write(path, &im, &e)) {
             img_free(&im);
             rc = fail_err(&e);

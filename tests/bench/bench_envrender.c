@@ -134,7 +134,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     v = sc.views[0];
     t0 = now();
     if (render_material_env(r, RENDER_EGL, key, msh, mat, &e, &v, size, size, &gl, &info,
-                            NULL, &err)) {
+                            NULL, NULL, &err)) {
         printf("| %s | %s | EGL failed: %s |\n", mesh_file, env, err.msg);
         scene_free(&sc);
         return;
@@ -145,7 +145,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
         v = sc.views[(i + 1) % sc.nviews];
         t0 = now();
         render_material_env(r, RENDER_EGL, key, msh, mat, &e, &v, size, size, &gl, &info,
-                            NULL, &err);
+                            NULL, NULL, &err);
         warm[i] = now() - t0;
         shade[i] = info.shade_s;
         draw[i] = info.draw_s;
@@ -155,7 +155,7 @@ static void row(render *r, const material *mat, const char *mesh_file, const cha
     /* the last warm view against the CPU reference */
     t0 = now();
     if (render_material_env(r, RENDER_CPU, key, msh, mat, &e, &v, size, size, &cpu, NULL,
-                            NULL, &err) == 0) {
+                            NULL, NULL, &err) == 0) {
         tcpu = now() - t0;
         err_rel = rel_rms(&gl, &cpu, NULL);
         img_free(&cpu);

@@ -160,7 +160,7 @@ int main(int argc, char **argv)
     mp.map_res = map_res;
     t0 = glint_now();
     {
-        prep_request rq = {&method_hf3, &fp, NULL, all};
+        prep_request rq = {&method_hf3, &fp, NULL, all, NULL};
         if (cache_open(NULL, (size_t)2 << 30, &c, &e) ||
             prep_scene_acquire(c, "s", &src, &se, &e))
             goto fail;
@@ -195,7 +195,7 @@ int main(int argc, char **argv)
     p = NULL;
     {
         hf4_params_t hp;
-        prep_request rq = {&method_hf4, &hp, se, all};
+        prep_request rq = {&method_hf4, &hp, se, all, NULL};
         material m;
         char name[64];
         method_hf4.params_default(&hp);
@@ -215,7 +215,7 @@ int main(int argc, char **argv)
     }
     for (int stage = 0; stage < 2; stage++)
         for (int k = 1; k <= 5; k++) {
-            prep_request rq = {&method_maps, &mp, se, all};
+            prep_request rq = {&method_maps, &mp, se, all, NULL};
             material m;
             char name[96];
             mp.components = k;
@@ -236,7 +236,7 @@ int main(int argc, char **argv)
         }
     for (int k = 1; k <= 5; k++) {
         hybrid_params yp;
-        prep_request rq = {&method_hybrid, &yp, se, all};
+        prep_request rq = {&method_hybrid, &yp, se, all, NULL};
         material m;
         char name[96];
         method_hybrid.params_default(&yp);

@@ -80,7 +80,7 @@ int main(int argc, char **argv)
     if (cache_open(NULL, (size_t)1 << 30, &c, &e) || prep_scene_acquire(c, "s", &src, &se, &e))
         goto fail;
     {
-        prep_request rq = {&method_hf3, &fp, se, use};
+        prep_request rq = {&method_hf3, &fp, se, use, NULL};
         t0 = glint_now();
         if (prep_acquire(c, &rq, NULL, NULL, &p, &e))
             goto fail;

@@ -172,7 +172,7 @@ int main(int argc, char **argv)
         cache *c;
         cache_entry *se;
         prep *p;
-        prep_request rq = {&M, &param, NULL, use};
+        prep_request rq = {&M, &param, NULL, use, NULL};
         double t0;
         if (cache_open(dir, (size_t)1 << 30, &c, &e) || prep_scene_acquire(c, "s", &src, &se, &e))
             die("cache", &e);

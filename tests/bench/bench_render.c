@@ -236,7 +236,7 @@ int main(int argc, char **argv)
             r->gbuf_ms = 1e3 * median(t, frames);
             for (int f = 0; f < ncpu; f++) {
                 t0 = now();
-                if (material_render(&mat, &meshes[k], &v, S, S, &out, &e)) {
+                if (material_render(&mat, &meshes[k], &v, S, S, &out, NULL, &e)) {
                     fprintf(stderr, "%s cpu %d: %s\n", names[k], S, e.msg);
                     rc = 1;
                     break;

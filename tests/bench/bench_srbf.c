@@ -201,7 +201,7 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int reps)
     cache_open(NULL, (size_t)4 << 30, &c, &e);
     prep_scene_acquire(c, mesh_file, &src, &se, &e);
     {
-        prep_request rq = {&method_srbf, &par, se, use};
+        prep_request rq = {&method_srbf, &par, se, use, NULL};
         t0 = glint_now();
         if (prep_acquire(c, &rq, NULL, NULL, &p, &e)) {
             printf("| %s | %s | %s | failed: %s |\n", mesh_file, env, vis ? "on" : "off", e.msg);
@@ -264,7 +264,7 @@ static int table1_row(const char *mesh_file, const char *env, int vis, int reps)
         double tw[2 * 10 + 2];
         int nw = 0, wits = 0;
         pw.start = mode ? SRBF_START_WARM : SRBF_START_COLD;
-        prep_request rq = {&method_srbf, &pw, se, use};
+        prep_request rq = {&method_srbf, &pw, se, use, NULL};
         memcpy(rgb2, rgb, (size_t)3 * s->n * sizeof *rgb2);
         for (long i = s->n / 3; i < s->n / 3 + s->n / 10; i++)
             for (int k = 0; k < 3; k++)
@@ -325,7 +325,8 @@ static void accuracy_row(scene *sc, const char *env, const srbf_params *par, con
     cache_open(NULL, (size_t)4 << 30, &c, &e);
     prep_scene_acquire(c, "s", &src, &se, &e);
     {
-        prep_request rq = {&method_srbf, par, se, use}, rn = {&method_srbf, par, se, usen};
+        prep_request rq = {&method_srbf, par, se, use, NULL},
+                     rn = {&method_srbf, par, se, usen, NULL};
         t0 = glint_now();
         if (prep_acquire(c, &rq, NULL, NULL, &p, &e) || prep_acquire(c, &rn, NULL, NULL, &pn, &e)) {
             printf("| %s | failed: %s |\n", label, e.msg);

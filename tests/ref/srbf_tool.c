@@ -97,7 +97,7 @@ int main(int argc, char **argv)
 
     /* energy rows at the reference's directions, its quadrature (128 nodes) */
     gg = malloc((size_t)NL * J * sizeof *gg);
-    if (srbf_energy_rows(&b, &st, NL, wo_l, 128, gg, 0, &e)) {
+    if (srbf_energy_rows(&b, &st, NL, wo_l, 128, gg, 0, NULL, &e)) {
         fprintf(stderr, "energy: %s\n", e.msg);
         return 2;
     }
@@ -119,7 +119,7 @@ int main(int argc, char **argv)
         nf[i] = (float)n[i];
         wf[i] = (float)wo[i];
     }
-    if (srbf_transfer(&b, &st, N, nf, wf, &l, NULL, Tg, Eg, NULL, 0, NULL, &e)) {
+    if (srbf_transfer(&b, &st, N, nf, wf, &l, NULL, Tg, Eg, NULL, 0, NULL, NULL, &e)) {
         fprintf(stderr, "transfer: %s\n", e.msg);
         return 2;
     }

@@ -46,7 +46,7 @@ static inline void gpu_check_agrees(const material *m, const scene *sc, int v0, 
     for (int v = v0; v < nviews; v += step) {
         img ref, out;
         double d = 0.0, mx = 0.0;
-        int bad = material_render(m, &sph, &sc->views[v], size, size, &ref, &e) != 0;
+        int bad = material_render(m, &sph, &sc->views[v], size, size, &ref, NULL, &e) != 0;
         if (!bad && glr_preview(g, gm, m, &sc->views[v], size, size, 0.0f, &out, &e) != 0) {
             img_free(&ref);
             bad = 1;

@@ -120,6 +120,7 @@ static inline int view_samples(int view, srbf_params *p, prep **out)
     rq.params = p;
     rq.scene = SE;
     rq.use = use;
+    rq.cancel = NULL;
     if (prep_acquire(C, &rq, NULL, NULL, out, &e)) {
         fprintf(stderr, "  prep: %s\n", e.msg);
         return -1;
@@ -176,7 +177,7 @@ static inline int known_material(double budget, srbf_material *sm)
     wo = malloc((size_t)3 * nl * sizeof *wo);
     g = malloc((size_t)nl * J * sizeof *g);
     srbf_energy_dirs(0, wo);
-    if (srbf_energy_rows(&sm->b, &sm->st, nl, wo, 0, g, 0, &e)) {
+    if (srbf_energy_rows(&sm->b, &sm->st, nl, wo, 0, g, 0, NULL, &e)) {
         free(wo);
         free(g);
         return -1;

@@ -82,7 +82,7 @@ static inline int sv_fit(const method *meth, const void *params, const char *spe
                          material *out)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {meth, params, se, all};
+    prep_request rq = {meth, params, se, all, NULL};
     prep *pp = NULL;
     img im[SCENE_MAX_VIEWS];
     glint_err e;

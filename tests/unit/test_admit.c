@@ -1,8 +1,9 @@
 /* Tests of glintd's admission of expensive work (server/admit.h): the budget
  * and the slots are never exceeded, what can never fit is told apart from
  * what cannot fit now, waiting work enters as soon as room is made and gives
- * up when cancelled, and many threads entering and leaving at once keep the
- * books exact. */
+ * up when cancelled, many threads entering and leaving at once keep the
+ * books exact, estimates beyond the time limit are refused with both
+ * numbers, and a stop ends every wait. */
 #include <pthread.h>
 #include <stdatomic.h>
 #include <string.h>
@@ -196,6 +197,51 @@ TEST(a_cancelled_waiter_gives_up)
     admit_close(w.a);
 }
 
+TEST(an_estimate_beyond_the_limit_is_refused_with_both_numbers)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    ASSERT_OK(admit_open(100 * MB, 1, 0, &a, NULL));
+    ASSERT_OK(admit_cost(a, 1e9, "anything", &e)); /* no limit by default */
+    admit_limit_seconds(a, 600);
+    ASSERT_OK(admit_cost(a, 600.0, "a 512x512 preview", &e));
+    ASSERT_EQ(admit_cost(a, 1234.4, "a 2048x2048 preview", &e), GLINT_ETOOBIG);
+    ASSERT(strcmp(e.kind, "too-expensive") == 0);
+    ASSERT_MSG(strstr(e.msg, "a 2048x2048 preview") && strstr(e.msg, "1234 s") &&
+                   strstr(e.msg, "600 s") && strstr(e.msg, "--work-max-seconds"),
+               "%s", e.msg);
+    ASSERT_EQ(admit_cost(a, 0.0 / 0.0, "nan", &e), GLINT_ETOOBIG);
+    admit_cancelled(a);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.refused_cost, 2);
+    ASSERT_EQ(st.cancelled, 1);
+    ASSERT_EQ(st.running, 0); /* an estimate holds nothing */
+    ASSERT(st.max_seconds == 600.0);
+    ASSERT_OK(admit_cost(NULL, 1e30, "x", &e));
+    admit_close(a);
+}
+
+TEST(stop_ends_the_waits_and_refuses_new_work)
+{
+    waiter w = {0};
+    pthread_t t;
+    glint_err e;
+    ASSERT_OK(admit_open(100 * MB, 1, 3600, &w.a, NULL));
+    w.bytes = 10 * MB;
+    ASSERT_OK(admit_enter(w.a, 1 * MB, "render", NULL)); /* the only slot */
+    ASSERT_OK(pthread_create(&t, NULL, wait_main, &w));
+    sleep_s(0.2);
+    admit_stop(w.a);
+    pthread_join(t, NULL); /* returns (it would wait for ever): the test's timeout catches a hang */
+    ASSERT_EQ(atomic_load(&w.entered), 0);
+    ASSERT_EQ(atomic_load(&w.rc), GLINT_EBUSY);
+    ASSERT_EQ(admit_enter(w.a, 0, "a preview", &e), GLINT_EBUSY); /* would wait an hour */
+    ASSERT(strcmp(e.kind, "stopping") == 0);
+    admit_leave(w.a, 1 * MB);
+    admit_close(w.a);
+}
+
 /* Many threads entering (or waiting) and leaving: the held bytes never pass
  * the budget and the books end at zero. */
 typedef struct churn {
@@ -267,5 +313,7 @@ TEST_LIST{
     TEST_ENTRY(a_cancelled_waiter_gives_up),
     TEST_ENTRY(concurrent_books_stay_exact),
     TEST_ENTRY(null_admits_everything),
+    TEST_ENTRY(an_estimate_beyond_the_limit_is_refused_with_both_numbers),
+    TEST_ENTRY(stop_ends_the_waits_and_refuses_new_work),
 };
 TEST_MAIN()

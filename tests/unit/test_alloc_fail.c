@@ -205,7 +205,7 @@ static int op_method(glint_err *e)
 {
     unsigned char all[SCENE_MAX_VIEWS];
     prep_scene_source src = {lend_scene, NULL, &fit_scene};
-    prep_request rq = {cur_method, cur_params, NULL, all};
+    prep_request rq = {cur_method, cur_params, NULL, all, NULL};
     cache *c = NULL;
     cache_entry *se = NULL;
     prep *pp = NULL;

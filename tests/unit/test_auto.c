@@ -37,7 +37,7 @@ static const char *choose(const char *spec, const unsigned char *use, material *
 {
     unsigned char all[SCENE_MAX_VIEWS];
     auto_params ap;
-    prep_request rq = {&method_auto, &ap, NULL, use ? use : all};
+    prep_request rq = {&method_auto, &ap, NULL, use ? use : all, NULL};
     prep *p = NULL;
     img im[SCENE_MAX_VIEWS];
     glint_err e;

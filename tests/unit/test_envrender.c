@@ -61,7 +61,7 @@ static int have_egl(void)
         mesh_sphere(&m, 8, 16, NULL);
         view_of(&v, 0, 0, 1);
         egl_ok = render_base_env(R, RENDER_EGL, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 8, 8,
-                                 &out, NULL, NULL, &err) == 0;
+                                 &out, NULL, NULL, NULL, &err) == 0;
         if (!egl_ok)
             printf("  (EGL unavailable: %s; EGL checks skipped)\n", err.msg);
         img_free(&out);
@@ -88,7 +88,7 @@ TEST(furnace_on_the_sphere_both_engines)
     e.background = 0;
     view_of(&v, 0.3, 0.4, 1.0);
     ASSERT_OK(render_base_env(R, RENDER_CPU, "sphere", &m, "lambert:kd=0.5", 1.0, &e, &v, 96,
-                              96, &cpu, &info, NULL, &err));
+                              96, &cpu, &info, NULL, NULL, &err));
     ASSERT_EQ(info.lights, 256);
     ASSERT_EQ(info.convex, 1); /* shadows asked, none cast on a sphere */
     ASSERT_EQ(info.rays, 0);
@@ -105,7 +105,7 @@ TEST(furnace_on_the_sphere_both_engines)
     ASSERT_LT(mx, 0.05);
     if (have_egl()) {
         ASSERT_OK(render_base_env(R, RENDER_EGL, "sphere", &m, "lambert:kd=0.5", 1.0, &e, &v,
-                                  96, 96, &gl, &info, NULL, &err));
+                                  96, 96, &gl, &info, NULL, NULL, &err));
         ASSERT_LT(rel_rms(&gl, &cpu, &n), 0.02);
         img_free(&gl);
     }
@@ -132,9 +132,9 @@ TEST(vertex_shading_agrees_with_the_pixel_reference)
     e.background = 0;
     view_of(&v, 0.2, -1.0, 0.5);
     ASSERT_OK(render_base_env(R, RENDER_CPU, NULL, &m, "blinn:kd=0.4,ks=0.3,e=20", 1.0, &e, &v,
-                              128, 128, &cpu, NULL, NULL, &err));
+                              128, 128, &cpu, NULL, NULL, NULL, &err));
     ASSERT_OK(render_base_env(R, RENDER_EGL, NULL, &m, "blinn:kd=0.4,ks=0.3,e=20", 1.0, &e, &v,
-                              128, 128, &gl, NULL, NULL, &err));
+                              128, 128, &gl, NULL, NULL, NULL, &err));
     r = rel_rms(&gl, &cpu, &n);
     printf("  sphere 128x256, blinn e=20 under sky: vertex vs pixel shading rel RMS %.4f over "
            "%ld px\n", r, n);
@@ -160,8 +160,8 @@ TEST(shadows_darken_what_is_covered)
     render_env_init(&e);
     ASSERT_OK(env_builtin("sky", 128, 64, &map, &err));
     ASSERT_OK(env_compress(&map, ENV_CUT_MEDIAN, 64, 0.0, 1.0, &l, &err));
-    ASSERT_OK(envlit_vis_vertices(&m, &l, 1, &on, &err));
-    ASSERT_OK(envlit_vis_vertices(&m, &l, 0, &off, &err));
+    ASSERT_OK(envlit_vis_vertices(&m, &l, 1, &on, NULL, &err));
+    ASSERT_OK(envlit_vis_vertices(&m, &l, 0, &off, NULL, &err));
     ASSERT_EQ(on.convex, 0);
     ASSERT_LT((long)m.nverts * 16, on.rays); /* one per light above a vertex's horizon */
     ASSERT_LE(on.rays, (long)m.nverts * 64);
@@ -172,8 +172,8 @@ TEST(shadows_darken_what_is_covered)
         brdf br;
         long darker = 0, brighter = 0;
         ASSERT_OK(brdf_parse("lambert:kd=0.5", &br, &err));
-        ASSERT_OK(envlit_vertices(&m, &l, &on, envlit_brdf, &br, eye, 1.0, 2, a, &err));
-        ASSERT_OK(envlit_vertices(&m, &l, &off, envlit_brdf, &br, eye, 1.0, 1, b, &err));
+        ASSERT_OK(envlit_vertices(&m, &l, &on, envlit_brdf, &br, eye, 1.0, 2, a, NULL, &err));
+        ASSERT_OK(envlit_vertices(&m, &l, &off, envlit_brdf, &br, eye, 1.0, 1, b, NULL, &err));
         for (int i = 0; i < m.nverts; i++) {
             darker += a[3 * i] < b[3 * i] - 1e-6f;
             brighter += a[3 * i] > b[3 * i] + 1e-6f;
@@ -209,9 +209,9 @@ TEST(cache_and_rotation)
     snprintf(e.spec, sizeof e.spec, "sky");
     view_of(&v, 0.0, -1.0, 0.6);
     ASSERT_OK(render_base_env(R, RENDER_EGL, "torus", &m, "lambert:kd=0.5", 1.0, &e, &v, 64, 64,
-                              &a, &i1, NULL, &err));
+                              &a, &i1, NULL, NULL, &err));
     ASSERT_OK(render_base_env(R, RENDER_EGL, "torus", &m, "lambert:kd=0.5", 1.0, &e, &v, 64, 64,
-                              &b, &i2, NULL, &err));
+                              &b, &i2, NULL, NULL, &err));
     ASSERT_EQ(i1.cached, 0);
     ASSERT_LT(0, i1.rays);
     ASSERT_EQ(i2.cached, 1);
@@ -220,11 +220,11 @@ TEST(cache_and_rotation)
     img_free(&b);
     e.rotation_deg = 360.0;
     ASSERT_OK(render_base_env(R, RENDER_EGL, "torus", &m, "lambert:kd=0.5", 1.0, &e, &v, 64, 64,
-                              &b, NULL, NULL, &err));
+                              &b, NULL, NULL, NULL, &err));
     ASSERT_LT(rel_rms(&b, &a, &n), 1e-3);
     e.rotation_deg = 90.0;
     ASSERT_OK(render_base_env(R, RENDER_EGL, "torus", &m, "lambert:kd=0.5", 1.0, &e, &v, 64, 64,
-                              &c, NULL, NULL, &err));
+                              &c, NULL, NULL, NULL, &err));
     ASSERT_LT(0.05, rel_rms(&c, &a, &n));
     img_free(&a);
     img_free(&b);
@@ -249,7 +249,7 @@ TEST(background_is_the_environment)
     e.intensity = 2.0;
     view_of(&v, 1.0, 0.0, 0.0);
     ASSERT_OK(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 32, 32,
-                              &out, NULL, NULL, &err));
+                              &out, NULL, NULL, NULL, &err));
     ASSERT_OK(env_resolve("sunset", &map, &err));
     scene_view_frame(&v, fwd, right, up);
     { /* pixel (0, 0): the top-left corner's ray */
@@ -299,15 +299,93 @@ TEST(a_fitted_srbf_material_under_the_environment)
     e.background = 0;
     view_of(&v, 0.5, 0.2, 1.0);
     ASSERT_OK(render_material_env(R, RENDER_CPU, NULL, &m, &mat, &e, &v, 96, 96, &cpu, NULL, NULL,
-                                  &err));
+                                  NULL, &err));
     if (have_egl()) {
         ASSERT_OK(render_material_env(R, RENDER_EGL, NULL, &m, &mat, &e, &v, 96, 96, &gl, NULL,
-                                      NULL, &err));
+                                      NULL, NULL, &err));
         ASSERT_LT(rel_rms(&gl, &cpu, &n), 0.03);
         ASSERT_LT(3000, n);
         img_free(&gl);
     }
     img_free(&cpu);
+    material_free(&mat);
+    mesh_free(&m);
+}
+
+/* A cancel that says to stop from its `after`-th question on. */
+typedef struct stop_after {
+    int after, asked;
+} stop_after;
+
+static int stop_after_fn(void *cls)
+{
+    stop_after *s = cls;
+    return __atomic_add_fetch(&s->asked, 1, __ATOMIC_RELAXED) >= s->after;
+}
+
+/* Renders ask their cancel in their loops and stop (GLINT_ECANCELLED,
+ * nothing left behind); the estimate of a render grows with its pixels and
+ * lights. */
+TEST(renders_stop_when_cancelled_and_are_estimated)
+{
+    mesh m;
+    scene_view v;
+    img out;
+    render_env e;
+    material mat;
+    srbf_material sm;
+    glint_err err;
+    stop_after s = {2, 0};
+    glint_cancel c = {stop_after_fn, &s};
+    double c1, c2, c3;
+    memset(&sm, 0, sizeof sm);
+    ASSERT_OK(srbf_basis_make(3, M_PI / 20, &sm.b, &err));
+    sm.st.kind = SRBF_STATIC_PAPER;
+    sm.c = calloc(3 * (size_t)sm.b.J, sizeof *sm.c);
+    ASSERT_OK(srbf_material_init(&mat, &sm, NULL, NULL));
+    ASSERT_OK(mesh_sphere(&m, 96, 192, &err));
+    render_env_init(&e);
+    e.lights = 64;
+    view_of(&v, 0.5, 0.2, 1.0);
+    /* the first question is before the work: stopping at the second shows a loop asks */
+    ASSERT_EQ(render_material_env(R, RENDER_CPU, NULL, &m, &mat, &e, &v, 96, 96, &out, NULL, NULL,
+                                  &c, &err), GLINT_ECANCELLED);
+    ASSERT(out.px == NULL);
+    ASSERT(strstr(err.msg, "cancelled") != NULL);
+    ASSERT(s.asked >= 2);
+    s.asked = 0;
+    s.after = 1;
+    ASSERT_EQ(render_material(R, RENDER_CPU, NULL, &m, &mat, &v, 96, 96, &out, NULL, &c, &err),
+              GLINT_ECANCELLED);
+    ASSERT(out.px == NULL);
+    if (have_egl()) {
+        s.asked = 0;
+        s.after = 1;
+        ASSERT_EQ(render_material_env(R, RENDER_EGL, "cancel-sphere", &m, &mat, &e, &v, 96, 96,
+                                      &out, NULL, NULL, &c, &err), GLINT_ECANCELLED);
+        ASSERT(out.px == NULL);
+    }
+    /* not cancelled: the same renders run */
+    s.asked = 0;
+    s.after = 1 << 30;
+    ASSERT_OK(render_material_env(R, RENDER_CPU, NULL, &m, &mat, &e, &v, 32, 32, &out, NULL, NULL,
+                                  &c, &err));
+    img_free(&out);
+    /* the estimate: its terms (render.h), then timed evaluations */
+    c1 = render_cost_seconds(NULL, RENDER_CPU, NULL, &m, &e, 1e-6, 1e-6, 64, 64);
+    ASSERT_NEAR(c1, 64.0 * 64.0 * (RENDER_COST_PIXEL_S + 32.0 * (1e-6 + RENDER_COST_RAY_S)),
+                1e-12);
+    c2 = render_cost_seconds(NULL, RENDER_CPU, NULL, &m, &e, 1e-6, 1e-6, 128, 128);
+    ASSERT_NEAR(c2 / c1, 4.0, 1e-9);
+    e.shadows = 0;
+    c3 = render_cost_seconds(NULL, RENDER_CPU, NULL, &m, &e, 1e-6, 1e-6, 128, 128);
+    ASSERT_NEAR(c3, 128.0 * 128.0 * (RENDER_COST_PIXEL_S + 32.0 * 1e-6), 1e-12);
+    c3 = render_cost_seconds(NULL, RENDER_EGL, NULL, &m, &e, 1e-6, 5e-7, 128, 128);
+    ASSERT_NEAR(c3, 128.0 * 128.0 * RENDER_COST_PIXEL_S + m.nverts * 32.0 * 5e-7, 1e-12);
+    ASSERT_NEAR(render_cost_seconds(NULL, RENDER_CPU, NULL, &m, NULL, 1e-6, 1e-6, 10, 10),
+                100.0 * (RENDER_COST_PIXEL_S + 1e-6), 1e-15);
+    c1 = render_material_cost(NULL, RENDER_CPU, NULL, &m, &mat, &e, 64, 64);
+    ASSERT(c1 > 64.0 * 64.0 * RENDER_COST_PIXEL_S && c1 < 1e3);
     material_free(&mat);
     mesh_free(&m);
 }
@@ -376,34 +454,34 @@ TEST(bad_requests)
     render_env_init(&e);
     e.lights = 0;
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_EINVAL);
+                              &out, NULL, NULL, NULL, &err), GLINT_EINVAL);
     ASSERT(strstr(err.msg, "lights") != NULL);
     e.lights = RENDER_ENV_MAX_LIGHTS + 1;
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_EINVAL);
+                              &out, NULL, NULL, NULL, &err), GLINT_EINVAL);
     render_env_init(&e);
     e.rotation_deg = 400.0;
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_EINVAL);
+                              &out, NULL, NULL, NULL, &err), GLINT_EINVAL);
     e.rotation_deg = NAN;
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_EINVAL);
+                              &out, NULL, NULL, NULL, &err), GLINT_EINVAL);
     render_env_init(&e);
     e.intensity = 0.0;
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_EINVAL);
+                              &out, NULL, NULL, NULL, &err), GLINT_EINVAL);
     render_env_init(&e);
     snprintf(e.spec, sizeof e.spec, "../etc/passwd");
     ASSERT(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16, &out,
-                           NULL, NULL, &err) != 0);
+                           NULL, NULL, NULL, &err) != 0);
     snprintf(e.spec, sizeof e.spec, "nosuchsky");
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 16, 16,
-                              &out, NULL, NULL, &err), GLINT_ENOTFOUND);
+                              &out, NULL, NULL, NULL, &err), GLINT_ENOTFOUND);
     render_env_init(&e);
     ASSERT_EQ(render_base_env(R, RENDER_CPU, NULL, &m, "lambert:kd=0.5", 1.0, &e, &v, 0, 16,
-                              &out, NULL, NULL, &err), GLINT_ERANGE);
+                              &out, NULL, NULL, NULL, &err), GLINT_ERANGE);
     ASSERT_EQ(render_material_env(R, RENDER_CPU, NULL, &m, NULL, &e, &v, 16, 16, &out, NULL, NULL,
-                                  &err), GLINT_EINVAL);
+                                  NULL, &err), GLINT_EINVAL);
     mesh_free(&m);
 }
 
@@ -463,6 +541,7 @@ TEST_LIST{
     TEST_ENTRY(background_is_the_environment),
     TEST_ENTRY(a_fitted_srbf_material_under_the_environment),
     TEST_ENTRY(srbf_preview_table_error),
+    TEST_ENTRY(renders_stop_when_cancelled_and_are_estimated),
     TEST_ENTRY(bad_requests),
     TEST_ENTRY(vertex_colours_are_checked),
 };

@@ -46,7 +46,7 @@ static void preview_check(const char *name, const mesh *m, int *failed)
     for (int k = 0; k < 3; k++) {
         img ref, out;
         double d, mx = 0.0;
-        if (material_render(mat, m, &v[k], SIZE, SIZE, &ref, &e) ||
+        if (material_render(mat, m, &v[k], SIZE, SIZE, &ref, NULL, &e) ||
             glr_preview(g, gm, mat, &v[k], SIZE, SIZE, 0.0f, &out, &e)) {
             fprintf(stderr, "  %s\n", e.msg);
             glr_mesh_free(g, gm);
@@ -116,7 +116,7 @@ TEST(preview_other_mappings)
         fac.model = kind == 3 ? HF_MODEL_BRDF : HF_MODEL_RADIANCE;
         for (int c = 0; c < 3; c++)
             fac.a_used[c] = kind == 2 ? 1.5 : hf3_factors(mat)->a_used[c];
-        ASSERT_OK(material_render(&alt, m, &v[1], 128, 128, &ref, &e));
+        ASSERT_OK(material_render(&alt, m, &v[1], 128, 128, &ref, NULL, &e));
         ASSERT_OK(glr_preview(g, gm, &alt, &v[1], 128, 128, 0.0f, &out, &e));
         d = mad(&ref, &out);
         printf("  mapping %d%s: mean |gl - cpu| = %.2e\n", kind, kind == 3 ? " (brdf)" : "", d);
@@ -460,7 +460,7 @@ TEST(brdf_explorer_export_renders_as_the_material)
                  " u_light_intensity, 1.0);\n"
                  "}\n",
                  (int)(b - a), a);
-        ASSERT_OK(material_render(&alt, m, &v[1], 128, 128, &ref, &e));
+        ASSERT_OK(material_render(&alt, m, &v[1], 128, 128, &ref, NULL, &e));
         ASSERT_MSG(glr_render_fragment(g, gm, frag, &v[1], 128, 128, &out, &e) == 0, "%s", e.msg);
         d = mad(&ref, &out);
         for (size_t i = 0; i < (size_t)128 * 128 * 3; i++)

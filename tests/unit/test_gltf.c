@@ -490,7 +490,7 @@ static int compare(const material *m, int bake_res, const char *truth, double di
     for (int k = 0; k < 4; k++) {
         const scene_view *v = &SC.views[(k * SC.nviews) / 4];
         img a, b[4], tr = {0};
-        if (material_render(m, &SC.mesh, v, 96, 96, &a, &e))
+        if (material_render(m, &SC.mesh, v, 96, 96, &a, NULL, &e))
             return -1;
         for (int w = 0; w < 4; w++)
             if (side_render(&g, &gm, v, 96, 96, expo[w], flip[w], &b[w]))

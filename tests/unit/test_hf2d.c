@@ -474,7 +474,7 @@ TEST(dense_form_unreached_nodes_and_bad_shapes)
 static int fit_spec(const hf2d_params_t *p, const char *spec, material *out)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {&method_hf2d, p, SE, all};
+    prep_request rq = {&method_hf2d, p, SE, all, NULL};
     prep *pp = NULL;
     img im[SCENE_MAX_VIEWS];
     glint_err e;
@@ -570,7 +570,7 @@ static void disk_rounds(const scene *sc, const gbuf *g, const hf2d_params_t *hp,
         cache *c;
         cache_entry *se;
         unsigned char all[SCENE_MAX_VIEWS];
-        prep_request rq = {&method_hf2d, hp, NULL, all};
+        prep_request rq = {&method_hf2d, hp, NULL, all, NULL};
         prep *pp = NULL;
         img im[SCENE_MAX_VIEWS];
         json_t *rep;

@@ -419,7 +419,7 @@ static int fit_spec(cache *c, cache_entry *se, const method *m, const void *p, c
                     material *out)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {m, p, se, all};
+    prep_request rq = {m, p, se, all, NULL};
     prep *pp = NULL;
     img im[SCENE_MAX_VIEWS];
     glint_err e;
@@ -548,7 +548,7 @@ TEST(decomposition_on_disk)
         cache *c;
         cache_entry *se;
         unsigned char all[SCENE_MAX_VIEWS];
-        prep_request rq = {&method_hf4, &hp, NULL, all};
+        prep_request rq = {&method_hf4, &hp, NULL, all, NULL};
         prep *pp = NULL;
         img im[SCENE_MAX_VIEWS];
         json_t *rep;

@@ -69,7 +69,7 @@ static float *drifting(const prep *p)
 static int fit(const method *m, const void *params, material *out, char *key, size_t keylen)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {m, params, NULL, all};
+    prep_request rq = {m, params, NULL, all, NULL};
     prep *p = NULL;
     float *rgb;
     glint_err e;
@@ -277,7 +277,7 @@ TEST(a_view_with_no_valid_pixels)
     ap.res = 16, ap.sres = 8, ap.components = 2;
     for (int k = 0; k < 4; k++) {
         unsigned char use[SCENE_MAX_VIEWS] = {0};
-        prep_request rq = {ms[k], ps[k], se, use};
+        prep_request rq = {ms[k], ps[k], se, use, NULL};
         prep *p = NULL;
         material m;
         float *rgb;

@@ -1,8 +1,10 @@
 /* Tests of glintd's background jobs (server/jobs.h): results and failures,
  * the progress log and waiting for it, scheduling (fits before queued
- * holdouts, one holdout at a time), the queue limit, closing, the idle
- * callback, and that every job's argument is freed exactly once.  Jobs run
- * on the module's real worker threads and block on gates the test opens. */
+ * holdouts, one holdout at a time, owners in turn), the queue limits (all
+ * owners, one owner, background apart), superseding, cancelling, stopping
+ * and closing, the idle callback, and that every job's argument is freed
+ * exactly once.  Jobs run on the module's real worker threads and block on
+ * gates the test opens. */
 #include <pthread.h>
 #include <stdatomic.h>
 #include <time.h>
@@ -154,10 +156,18 @@ static int run(job *j, void *arg, json_t **result, glint_err *err)
     return 0;
 }
 
+#define OWNER "0123456789abcdef0123456789abcdef"
+
 static int submit(jobs *js, const char *kind, targ *a, char id[33])
 {
-    return jobs_submit(js, kind, "0123456789abcdef0123456789abcdef", run, a, targ_free, id,
-                       NULL);
+    return jobs_submit(js, kind, OWNER, NULL, run, a, targ_free, id, NULL);
+}
+
+/* A job of `owner` for `target` (NULL: none). */
+static int submit_as(jobs *js, const char *owner, const char *target, targ *a, char id[33],
+                     glint_err *e)
+{
+    return jobs_submit(js, "fit", owner, target, run, a, targ_free, id, e);
 }
 
 /* Wait for the job's last event (OUT: *log, every event; NULL on timeout). */
@@ -637,37 +647,246 @@ TEST(one_holdout_at_a_time)
 
 /* ---- limits and closing ----------------------------------------------------------- */
 
-TEST(submit_is_busy_beyond_max_queued)
+/* An owner id for owner number k (32 hex digits). */
+static void owner_id(int k, char out[33])
+{
+    snprintf(out, 33, "%032x", k + 1);
+}
+
+TEST(people_and_background_queues_have_limits_of_their_own)
 {
     jobs *js;
     gate g;
-    static targ a[JOBS_MAX_QUEUED + 2];
-    char id[33];
+    static targ a[JOBS_MAX_QUEUED + 2], h[2];
+    char id[33], own[33];
     glint_err e;
     jobs_stats st;
     journal_reset();
     gate_init(&g);
     memset(a, 0, sizeof a);
+    memset(h, 0, sizeof h);
     a[0].gate = &g;
     ASSERT_OK(jobs_open(1, NULL, NULL, 0, &js, NULL));
     ASSERT_OK(submit(js, "fit", &a[0], id));
     ASSERT_OK(journal_wait_started(1));
-    for (int i = 1; i <= JOBS_MAX_QUEUED; i++)
-        ASSERT_OK(submit(js, i % 2 ? "fit" : "holdout", &a[i], id));
+    /* the people's queue fills up from many owners, a few jobs each */
+    for (int i = 1; i <= JOBS_MAX_QUEUED; i++) {
+        owner_id(i % 64, own);
+        ASSERT_OK(submit_as(js, own, NULL, &a[i], id, NULL));
+    }
     jobs_stats_get(js, &st);
     ASSERT_EQ(st.queued, JOBS_MAX_QUEUED);
+    ASSERT_EQ(st.queued_fits, JOBS_MAX_QUEUED);
+    ASSERT_EQ(st.owners, 64);
     ASSERT_EQ(st.running, 1);
-    ASSERT_EQ(jobs_submit(js, "fit", "", run, &a[JOBS_MAX_QUEUED + 1], targ_free, id, &e),
-              GLINT_EBUSY);
+    owner_id(999, own);
+    ASSERT_EQ(submit_as(js, own, NULL, &a[JOBS_MAX_QUEUED + 1], id, &e), GLINT_EBUSY);
     ASSERT(strstr(e.msg, "256") != NULL);
+    ASSERT(strcmp(e.kind, "owner-queue-full") != 0);
     ASSERT_EQ(atomic_load(&a[JOBS_MAX_QUEUED + 1].freed), 1); /* at once */
     ASSERT_EQ(atomic_load(&a[JOBS_MAX_QUEUED + 1].ran), 0);
+    /* background measurements wait apart: a full people's queue takes none of their room */
+    ASSERT_OK(submit(js, "holdout", &h[0], id));
+    ASSERT_OK(submit(js, "holdout", &h[1], id));
+    jobs_stats_get(js, &st);
+    ASSERT_EQ(st.queued_background, 2);
+    ASSERT_EQ(st.queued, JOBS_MAX_QUEUED + 2);
     gate_open(&g);
     jobs_close(js);
     gate_destroy(&g);
     for (int i = 0; i < JOBS_MAX_QUEUED + 2; i++)
         ASSERT_MSG(atomic_load(&a[i].freed) == 1, "argument %d freed %d times", i,
                    atomic_load(&a[i].freed));
+    ASSERT(atomic_load(&h[0].freed) == 1 && atomic_load(&h[1].freed) == 1);
+}
+
+TEST(one_owner_cannot_fill_the_queue)
+{
+    jobs *js;
+    gate g;
+    static targ a[JOBS_MAX_QUEUED_PER_OWNER + 3];
+    char id[33], other[33], tg[16];
+    glint_err e;
+    journal_reset();
+    gate_init(&g);
+    memset(a, 0, sizeof a);
+    a[0].gate = &g;
+    owner_id(7, other);
+    ASSERT_OK(jobs_open(1, NULL, NULL, 0, &js, NULL));
+    ASSERT_OK(submit(js, "fit", &a[0], id));
+    ASSERT_OK(journal_wait_started(1));
+    for (int i = 1; i <= JOBS_MAX_QUEUED_PER_OWNER; i++) { /* distinct targets: none replaced */
+        snprintf(tg, sizeof tg, "m%d", i);
+        ASSERT_OK(submit_as(js, OWNER, tg, &a[i], id, NULL));
+    }
+    ASSERT_EQ(submit_as(js, OWNER, "another", &a[JOBS_MAX_QUEUED_PER_OWNER + 1], id, &e),
+              GLINT_EBUSY);
+    ASSERT(strcmp(e.kind, "owner-queue-full") == 0);
+    ASSERT_MSG(strstr(e.msg, "8 jobs of owner " OWNER) != NULL, "%s", e.msg);
+    ASSERT_EQ(atomic_load(&a[JOBS_MAX_QUEUED_PER_OWNER + 1].freed), 1);
+    /* another owner is not refused */
+    ASSERT_OK(submit_as(js, other, "m1", &a[JOBS_MAX_QUEUED_PER_OWNER + 2], id, NULL));
+    gate_open(&g);
+    jobs_close(js);
+    gate_destroy(&g);
+    for (int i = 0; i < JOBS_MAX_QUEUED_PER_OWNER + 3; i++)
+        ASSERT_EQ(atomic_load(&a[i].freed), 1);
+}
+
+TEST(owners_take_turns)
+{
+    jobs *js;
+    gate g;
+    targ a0 = {.label = '0'}, a1 = {.label = 'a'}, a2 = {.label = 'b'}, a3 = {.label = 'c'},
+         b1 = {.label = 'B'}, c1 = {.label = 'C'};
+    char id[6][33], ob[33], oc[33];
+    json_t *log;
+    journal_reset();
+    gate_init(&g);
+    a0.gate = &g;
+    owner_id(1, ob);
+    owner_id(2, oc);
+    ASSERT_OK(jobs_open(1, NULL, NULL, 0, &js, NULL));
+    ASSERT_OK(submit_as(js, OWNER, NULL, &a0, id[0], NULL));
+    ASSERT_OK(journal_wait_started(1));
+    /* one owner floods the queue before the others come */
+    ASSERT_OK(submit_as(js, OWNER, NULL, &a1, id[1], NULL));
+    ASSERT_OK(submit_as(js, OWNER, NULL, &a2, id[2], NULL));
+    ASSERT_OK(submit_as(js, OWNER, NULL, &a3, id[3], NULL));
+    ASSERT_OK(submit_as(js, ob, NULL, &b1, id[4], NULL));
+    ASSERT_OK(submit_as(js, oc, NULL, &c1, id[5], NULL));
+    gate_open(&g);
+    for (int i = 0; i < 6; i++) {
+        ASSERT_OK(wait_final(js, id[i], &log));
+        json_decref(log);
+    }
+    pthread_mutex_lock(&J.mu);
+    ASSERT_MSG(strcmp(J.order, "0BCabc") == 0, "start order %s", J.order);
+    pthread_mutex_unlock(&J.mu);
+    jobs_close(js);
+    gate_destroy(&g);
+}
+
+TEST(a_newer_job_supersedes_the_queued_ones_of_its_owner_and_target)
+{
+    jobs *js;
+    gate g;
+    targ r = {.label = 'r'}, q1 = {.label = '1'}, q2 = {.label = '2'}, q3 = {.label = '3'},
+         q4 = {.label = '4'};
+    char idr[33], id1[33], id2[33], id3[33], id4[33], ob[33];
+    json_t *o, *log;
+    journal_reset();
+    gate_init(&g);
+    r.gate = &g;
+    owner_id(1, ob);
+    ASSERT_OK(jobs_open(1, NULL, NULL, 0, &js, NULL));
+    ASSERT_OK(submit_as(js, OWNER, "hf3", &r, idr, NULL)); /* running: not superseded */
+    ASSERT_OK(journal_wait_started(1));
+    ASSERT_OK(submit_as(js, OWNER, "hf3", &q1, id1, NULL));
+    ASSERT_OK(submit_as(js, OWNER, "srbf", &q3, id3, NULL)); /* another target */
+    ASSERT_OK(submit_as(js, ob, "hf3", &q4, id4, NULL));     /* another owner */
+    ASSERT_OK(submit_as(js, OWNER, "hf3", &q2, id2, NULL));  /* replaces q1 */
+    ASSERT_OK(jobs_get(js, id1, &o, NULL, NULL));
+    ASSERT(strcmp(str(o, "state"), "failed") == 0);
+    ASSERT(strcmp(str(o, "cancelled"), "superseded") == 0);
+    ASSERT(strcmp(str(o, "stage"), "superseded") == 0);
+    ASSERT_MSG(strstr(str(o, "error"), id2) != NULL, "%s", str(o, "error"));
+    json_decref(o);
+    ASSERT_EQ(atomic_load(&q1.freed), 1); /* at once */
+    {
+        jobs_stats st;
+        jobs_stats_get(js, &st);
+        ASSERT_EQ(st.queued, 3);
+        ASSERT_EQ(st.cancelled, 1);
+    }
+    gate_open(&g);
+    ASSERT_OK(wait_final(js, idr, &log));
+    ASSERT(strcmp(str(ev_job(log, json_array_size(log) - 1), "state"), "done") == 0);
+    json_decref(log);
+    ASSERT_OK(wait_final(js, id2, &log));
+    json_decref(log);
+    ASSERT_OK(wait_final(js, id3, &log));
+    json_decref(log);
+    ASSERT_OK(wait_final(js, id4, &log));
+    json_decref(log);
+    ASSERT_EQ(atomic_load(&q1.ran), 0);
+    ASSERT(atomic_load(&q2.ran) == 1 && atomic_load(&q3.ran) == 1 && atomic_load(&q4.ran) == 1);
+    jobs_close(js);
+    gate_destroy(&g);
+    ASSERT_EQ(atomic_load(&q1.freed), 1);
+}
+
+/* Runs until told to stop (or WAIT_S), then fails as a stopped job does. */
+static void until_cancelled_body(job *j, targ *a)
+{
+    double end = glint_now() + WAIT_S;
+    while (!job_cancelled(j) && glint_now() < end)
+        usleep(2000);
+    a->saw_cancel = job_cancelled(j);
+    a->fail = a->saw_cancel ? GLINT_ECANCELLED : 0;
+}
+
+TEST(jobs_are_cancelled_queued_or_running)
+{
+    jobs *js;
+    targ r = {.label = 'r', .body = until_cancelled_body}, q = {.label = 'q'};
+    char idr[33], idq[33];
+    json_t *o, *log;
+    glint_err e;
+    journal_reset();
+    ASSERT_OK(jobs_open(1, NULL, NULL, 0, &js, NULL));
+    ASSERT_OK(submit(js, "fit", &r, idr));
+    ASSERT_OK(journal_wait_started(1));
+    ASSERT_OK(submit(js, "fit", &q, idq));
+    /* queued: it fails now and never runs */
+    ASSERT_OK(jobs_cancel(js, idq, &o, &e));
+    ASSERT(strcmp(str(o, "state"), "failed") == 0);
+    ASSERT(strcmp(str(o, "cancelled"), "deleted") == 0);
+    json_decref(o);
+    ASSERT_EQ(atomic_load(&q.freed), 1);
+    /* running: told, and it fails once it stops */
+    ASSERT_OK(jobs_cancel(js, idr, &o, &e));
+    ASSERT(strcmp(str(o, "state"), "running") == 0);
+    ASSERT(strcmp(str(o, "cancelled"), "deleted") == 0);
+    json_decref(o);
+    ASSERT_OK(wait_final(js, idr, &log));
+    o = ev_job(log, json_array_size(log) - 1);
+    ASSERT(strcmp(str(o, "state"), "failed") == 0);
+    ASSERT(strcmp(str(o, "cancelled"), "deleted") == 0);
+    ASSERT_MSG(strstr(str(o, "error"), "cancelled") != NULL, "%s", str(o, "error"));
+    json_decref(log);
+    ASSERT_EQ(r.saw_cancel, 1);
+    /* finished, unknown */
+    ASSERT_EQ(jobs_cancel(js, idr, &o, &e), GLINT_ECONFLICT);
+    ASSERT(o == NULL);
+    ASSERT_EQ(jobs_cancel(js, "ffffffffffffffffffffffffffffffff", &o, &e), GLINT_ENOTFOUND);
+    ASSERT_EQ(atomic_load(&q.ran), 0);
+    jobs_close(js);
+    ASSERT_EQ(atomic_load(&r.freed), 1);
+}
+
+TEST(stop_tells_running_jobs_and_returns_at_once)
+{
+    jobs *js;
+    targ r = {.label = 'r', .body = until_cancelled_body};
+    char id[33];
+    json_t *o, *log;
+    journal_reset();
+    ASSERT_OK(jobs_open(2, NULL, NULL, 0, &js, NULL));
+    ASSERT_OK(submit(js, "fit", &r, id));
+    ASSERT_OK(journal_wait_started(1));
+    jobs_stop(js);
+    ASSERT_OK(wait_final(js, id, &log));
+    o = ev_job(log, json_array_size(log) - 1);
+    ASSERT(strcmp(str(o, "state"), "failed") == 0);
+    ASSERT(strcmp(str(o, "cancelled"), "stopping") == 0);
+    ASSERT_MSG(strstr(str(o, "error"), "stopped while the job ran") != NULL, "%s",
+               str(o, "error"));
+    json_decref(log);
+    ASSERT_EQ(submit(js, "fit", &(targ){.label = 'z'}, id), GLINT_EBUSY);
+    jobs_close(js);
+    ASSERT_EQ(r.saw_cancel, 1);
+    ASSERT_EQ(atomic_load(&r.freed), 1);
 }
 
 static void close_body(job *j, targ *a)
@@ -794,7 +1013,12 @@ TEST_LIST{
     TEST_ENTRY(shutdown_ends_event_waits_and_jobs_go_on),
     TEST_ENTRY(fits_run_before_queued_holdouts),
     TEST_ENTRY(one_holdout_at_a_time),
-    TEST_ENTRY(submit_is_busy_beyond_max_queued),
+    TEST_ENTRY(people_and_background_queues_have_limits_of_their_own),
+    TEST_ENTRY(one_owner_cannot_fill_the_queue),
+    TEST_ENTRY(owners_take_turns),
+    TEST_ENTRY(a_newer_job_supersedes_the_queued_ones_of_its_owner_and_target),
+    TEST_ENTRY(jobs_are_cancelled_queued_or_running),
+    TEST_ENTRY(stop_tells_running_jobs_and_returns_at_once),
     TEST_ENTRY(close_fails_queued_jobs_and_lets_running_ones_finish),
     TEST_ENTRY(idle_callback_runs_when_nothing_runs),
     TEST_ENTRY(open_checks_thread_count),

@@ -47,7 +47,7 @@ static void small(maps_params *mp)
 static prep *prepare(const method *m, const void *p)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {m, p, SE, all};
+    prep_request rq = {m, p, SE, all, NULL};
     prep *out = NULL;
     glint_err e;
     memset(all, 1, sizeof all);
@@ -283,7 +283,7 @@ TEST(extremes)
 {
     maps_params mp;
     unsigned char one[SCENE_MAX_VIEWS];
-    prep_request rq = {&method_maps, &mp, NULL, one};
+    prep_request rq = {&method_maps, &mp, NULL, one, NULL};
     prep *p = NULL;
     material m;
     float *rgb;

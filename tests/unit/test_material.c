@@ -234,7 +234,7 @@ TEST(render_reproduces_the_fit_on_its_own_views)
     long cnt;
     glint_err e;
     ASSERT_OK(setup());
-    ASSERT_OK(material_render(&M, &sc.mesh, &sc.views[5], 40, 40, &out, &e));
+    ASSERT_OK(material_render(&M, &sc.mesh, &sc.views[5], 40, 40, &out, NULL, &e));
     /* the material's own render is a perfect "truth" for itself */
     for (int v = 0; v < 12; v++)
         ASSERT_OK(material_shade(&M, &G[v], 1.0, 0.0f, &truth[v], &e));

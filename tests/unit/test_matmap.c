@@ -38,9 +38,9 @@ static int setup(void)
     if (sv_setup(64, &SC, &G, &C, &SE))
         return -1;
     {
-        prep_request rq = {&method_hf3, &fp, SE, use};
+        prep_request rq = {&method_hf3, &fp, SE, use, NULL};
         unsigned char all[SCENE_MAX_VIEWS];
-        prep_request ra = {&method_hf3, &fp, SE, all};
+        prep_request ra = {&method_hf3, &fp, SE, all, NULL};
         memset(all, 1, sizeof all);
         if (prep_acquire(C, &rq, NULL, NULL, &P, &e) ||
             prep_acquire(C, &ra, NULL, NULL, &PA, &e)) {

@@ -82,7 +82,7 @@ static int run_case(const method *meth, const void *params, const img *im, const
                     int must_fail)
 {
     unsigned char all[SCENE_MAX_VIEWS];
-    prep_request rq = {meth, params, se, all};
+    prep_request rq = {meth, params, se, all, NULL};
     prep *pp = NULL;
     material m;
     glint_err e;
@@ -342,7 +342,7 @@ TEST(deferred_files_are_a_full_saves)
         const method *meth = method_find(method_small[i][0]);
         void *params = method_params_new(meth);
         unsigned char all[SCENE_MAX_VIEWS];
-        prep_request rq = {meth, params, se, all};
+        prep_request rq = {meth, params, se, all, NULL};
         const char *const *derived;
         prep *pp = NULL;
         material m;

@@ -259,7 +259,7 @@ static void file_of(const fixture *f, int k, const method *m, const unsigned cha
 static int acquire(fixture *f, int k, const method *m, const unsigned char *use,
                    const samples *want, cache_disk *disk)
 {
-    prep_request rq = {m, &(int){0}, f->se[k], use};
+    prep_request rq = {m, &(int){0}, f->se[k], use, NULL};
     prep *p = NULL;
     glint_err e;
     int rc = prep_acquire(f->c, &rq, NULL, NULL, &p, &e);
@@ -349,7 +349,7 @@ TEST(a_pattern_saved_through_the_cache_loads_back_equal)
         prep *p;
         char name[64], spath[600];
         ASSERT_OK(raster(&SC, HASH, USE, SAMPLES_LIT, 2, 40, NULL, &mine, &e));
-        ASSERT_OK(prep_acquire_samples(f.c, &M_LIT, &(int){0}, &mine, NULL, NULL, &p, &e));
+        ASSERT_OK(prep_acquire_samples(f.c, &M_LIT, &(int){0}, &mine, NULL, NULL, NULL, &p, &e));
         ASSERT_EQ(cache_disk_of(prep_pattern(p)), CACHE_DISK_OFF);
         ASSERT(strncmp(cache_key(prep_pattern(p)), "samples:", 8) == 0);
         pattern_file_name(cache_key(prep_pattern(p)), name, sizeof name);
@@ -411,7 +411,7 @@ TEST(a_pattern_file_cut_short_under_its_mapping_fails_the_fit_not_the_process)
     ASSERT_OK(cache_open(f.dir, (size_t)1 << 30, &c, &e));
     ASSERT_OK(prep_scene_acquire(c, "a", &src, &se, &e));
     {
-        prep_request rq = {&M_TOUCH, &(int){0}, se, USE};
+        prep_request rq = {&M_TOUCH, &(int){0}, se, USE, NULL};
         ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
         ASSERT_EQ(cache_disk_of(prep_pattern(p)), CACHE_DISK_LOADED);
         ASSERT(prep_samples(p)->map != NULL); /* used where it lies */

@@ -249,7 +249,7 @@ TEST(a_fit_through_the_cache_equals_the_direct_path)
     ASSERT_OK(cache_open(NULL, 1 << 30, &c, &e));
     ASSERT_OK(prep_scene_acquire(c, "s", &src, &se, &e));
     {
-        prep_request rq = {&method_hf3, &fp, se, use};
+        prep_request rq = {&method_hf3, &fp, se, use, NULL};
         ASSERT_EQ(prep_try(c, &rq, &q, &e), GLINT_ENOTFOUND);
         ASSERT_OK(prep_acquire(c, &rq, NULL, NULL, &p, &e));
         ASSERT_OK(prep_fit(p, P, NULL, &b, &e));
@@ -356,7 +356,7 @@ static int memo_case_open(memo_case *mc)
         prep_scene_acquire(mc->c, "s", &mc->src, &mc->se, &e))
         return -1;
     {
-        prep_request rq = {&method_hf3, &mc->fp, mc->se, mc->use};
+        prep_request rq = {&method_hf3, &mc->fp, mc->se, mc->use, NULL};
         if (prep_acquire(mc->c, &rq, NULL, NULL, &mc->p, &e))
             return -1;
     }
@@ -508,7 +508,7 @@ TEST(rendering_in_bands_equals_shading_the_whole_view)
     ASSERT_OK(fit_prepare(&direct, &SC, G, NULL, &fp, NULL, &e));
     ASSERT_OK(fit_run(&direct, P, NULL, &m, &e));
     ASSERT_OK(material_shade(&m, &G[3], SC.views[3].light_intensity, 0.0f, &a, &e));
-    ASSERT_OK(material_render(&m, &SC.mesh, &SC.views[3], SC.width, SC.height, &b, &e));
+    ASSERT_OK(material_render(&m, &SC.mesh, &SC.views[3], SC.width, SC.height, &b, NULL, &e));
     ASSERT(memcmp(a.px, b.px, (size_t)SC.width * SC.height * 3 * sizeof(float)) == 0);
     img_free(&a);
     img_free(&b);
@@ -533,7 +533,7 @@ TEST(held_out_error_on_samples_equals_the_error_on_the_view)
     memset(use, 0, sizeof use);
     use[0] = use[5] = use[9] = 1;
     ASSERT_OK(fit_prepare(&all, &SC, G, use, &fp, NULL, &e));
-    ASSERT_OK(prep_holdout(&method_hf3, &fp, &all.s, P, NULL, NULL, NULL, &r, &e));
+    ASSERT_OK(prep_holdout(&method_hf3, &fp, &all.s, P, NULL, NULL, NULL, NULL, &r, &e));
     ASSERT_EQ(json_integer_value(json_object_get(r, "views")), 3);
     pv = json_array_get(json_object_get(r, "per_view"), 1); /* view 5 held out */
     ASSERT_EQ(json_integer_value(json_object_get(pv, "view")), 5);
@@ -554,7 +554,7 @@ TEST(held_out_error_on_samples_equals_the_error_on_the_view)
         memset(use, 0, sizeof use);
         use[2] = 1;
         ASSERT_OK(fit_prepare(&one, &SC, G, use, &fp, NULL, &e));
-        ASSERT_EQ(prep_holdout(&method_hf3, &fp, &one.s, P, NULL, NULL, NULL, &r, &e),
+        ASSERT_EQ(prep_holdout(&method_hf3, &fp, &one.s, P, NULL, NULL, NULL, NULL, &r, &e),
                   GLINT_EINVAL);
         fit_prep_free(&one);
     }

@@ -34,7 +34,7 @@ static int fit(const char *spec, material *out)
 {
     unsigned char all[SCENE_MAX_VIEWS];
     fit_params fp;
-    prep_request rq = {&method_hf3, &fp, SE, all};
+    prep_request rq = {&method_hf3, &fp, SE, all, NULL};
     prep *pp = NULL;
     img im[SCENE_MAX_VIEWS];
     glint_err e;

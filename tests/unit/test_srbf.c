@@ -98,9 +98,10 @@ TEST(energy_rows_converge)
     int idx[8] = {0, 50, 100, 191, 300, 700, 192 + SRBF_ENERGY_FIB, nl - 1};
     for (int i = 0; i < 8; i++)
         memcpy(pick + 3 * i, wo + 3 * idx[i], 3 * sizeof(double));
-    ASSERT_OK(srbf_energy_rows(&b, &st, 8, pick, getenv("NQ") ? atoi(getenv("NQ")) : 0, g1, 0, &e));
+    ASSERT_OK(srbf_energy_rows(&b, &st, 8, pick, getenv("NQ") ? atoi(getenv("NQ")) : 0, g1, 0,
+                               NULL, &e));
 
-    ASSERT_OK(srbf_energy_rows(&b, &st, 8, pick, 288, g2, 0, &e));
+    ASSERT_OK(srbf_energy_rows(&b, &st, 8, pick, 288, g2, 0, NULL, &e));
     for (int i = 0; i < 8 * b.J; i++) {
         mx = fmax(mx, g2[i]);
         d = fmax(d, fabs(g1[i] - g2[i]));
@@ -156,7 +157,7 @@ TEST(transfer_matches_a_plain_loop_and_visibility_masks)
         }
     }
     ASSERT_OK(srbf_basis_make(7, M_PI / 40, &b, &e));
-    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, NULL, T, E, reach, 2, NULL, &e));
+    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, NULL, T, E, reach, 2, NULL, NULL, &e));
     for (int i = 0; i < NP; i++) {
         double n[3], w[3], t[3], bt[3], lo[3], acc[3] = {0, 0, 0}, tc[3] = {0, 0, 0};
         for (int k = 0; k < 3; k++) {
@@ -197,11 +198,11 @@ TEST(transfer_matches_a_plain_loop_and_visibility_masks)
     /* visibility: only even lights seen -> the same as dropping odd lights */
     for (int i = 0; i < NP * VIS_WORDS(K); i++)
         bits[i] = 0x5555555555555555ULL;
-    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, bits, T2, E2, NULL, 1, NULL, &e));
+    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, bits, T2, E2, NULL, 1, NULL, NULL, &e));
     for (int k = 1; k < K; k += 2)
         for (int ch = 0; ch < 3; ch++)
             pow_[3 * k + ch] = 0;
-    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, NULL, T, E, NULL, 1, NULL, &e));
+    ASSERT_OK(srbf_transfer(&b, &st, NP, nrm, wo, &l, NULL, T, E, NULL, 1, NULL, NULL, &e));
     for (int i = 0; i < 3 * NP * 147; i++)
         ASSERT_NEAR(T[i], T2[i], 1e-6 * (1 + fabs(T[i])));
     for (int i = 0; i < 3 * NP; i++)

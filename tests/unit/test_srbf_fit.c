@@ -310,7 +310,7 @@ TEST(the_precomputation_survives_a_restart_on_disk)
         cache *c;
         cache_entry *se;
         prep *pp;
-        prep_request rq = {&method_srbf, &p, NULL, use};
+        prep_request rq = {&method_srbf, &p, NULL, use, NULL};
         const char *disk;
         ASSERT_OK(cache_open(dir, (size_t)1 << 30, &c, &e));
         ASSERT_OK(prep_scene_acquire(c, "sphere", &src, &se, &e));

@@ -253,7 +253,7 @@ TEST(held_out_views_are_rendered_under_the_environment)
     params_default(&p);
     p.lights = 52; /* levels of its own */
     use[0] = use[5] = 1;
-    rq = (prep_request){&method_srbf, &p, SE, use};
+    rq = (prep_request){&method_srbf, &p, SE, use, NULL};
     ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &pp, &e));
     s = prep_samples(pp);
     ASSERT_OK(known_material(0.8, &truth));
@@ -293,7 +293,7 @@ TEST(held_out_views_are_rendered_under_the_environment)
         for (int c = 0; c < 3; c++)
             paint[s->view[i]].px[(size_t)s->pixel[i] * 3 + c] = rgb[3 * i + c];
     }
-    ASSERT_OK(prep_holdout(&method_srbf, &p, s, paint, NULL, NULL, NULL, &res, &e));
+    ASSERT_OK(prep_holdout(&method_srbf, &p, s, paint, NULL, NULL, NULL, NULL, &res, &e));
     {
         double rms = json_real_value(json_object_get(res, "rms"));
         double ref = sqrt(sp / s->n); /* RMS of the red channel painted */

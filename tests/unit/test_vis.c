@@ -50,7 +50,7 @@ TEST(an_occluder_blocks_what_is_behind_it)
         dirs[3 * k + 2] = c;
     }
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 1, &rays, &e));
+    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 1, &rays, NULL, &e));
     ASSERT_EQ(rays, 130);
     ASSERT_EQ(bit(bits, 2, 0, 0), 0); /* under the roof: up is blocked */
     ASSERT_EQ(bit(bits, 2, 1, 0), 1); /* far away: up is open */
@@ -59,7 +59,7 @@ TEST(an_occluder_blocks_what_is_behind_it)
         ASSERT_EQ(bit(bits, 2, 0, k), 1);
     /* a direction below the surface is never seen */
     dirs[2] = -1;
-    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 2, NULL, &e));
+    ASSERT_OK(vis_compute(v, 2, pos, nrm, 65, dirs, bits, 2, NULL, NULL, &e));
     ASSERT_EQ(bit(bits, 2, 1, 0), 0);
     vis_close(v);
     mesh_free(&m);
@@ -89,8 +89,8 @@ TEST(a_sphere_never_shadows_itself_and_threads_agree)
         dirs[3 * k + 2] = z;
     }
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b1, 1, NULL, &e));
-    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b2, 2, NULL, &e));
+    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b1, 1, NULL, NULL, &e));
+    ASSERT_OK(vis_compute(v, NP, pos, nrm, K, dirs, b2, 2, NULL, NULL, &e));
     ASSERT(memcmp(b1, b2, NP * VIS_WORDS(K) * sizeof(uint64_t)) == 0);
     for (int i = 0; i < NP; i++)
         for (int k = 0; k < K; k++) {
@@ -159,7 +159,7 @@ TEST(the_bunny_when_present)
     printf("  bunny: %d triangles, built in %.1f ms\n", m.ntris, 1e3 * (glint_now() - t0));
     bits = malloc((size_t)m.nverts * VIS_WORDS(K) * sizeof *bits);
     t0 = glint_now();
-    ASSERT_OK(vis_compute(v, m.nverts, m.pos, m.nrm, K, dirs, bits, 0, &rays, &e));
+    ASSERT_OK(vis_compute(v, m.nverts, m.pos, m.nrm, K, dirs, bits, 0, &rays, NULL, &e));
     t0 = glint_now() - t0;
     printf("  %ld rays from %d vertices in %.3f s (%.1f M rays/s)\n", rays, m.nverts, t0,
            rays / t0 / 1e6);
@@ -176,6 +176,47 @@ TEST(the_bunny_when_present)
     mesh_free(&m);
 }
 
+static int stop_now(void *cls)
+{
+    __atomic_add_fetch((int *)cls, 1, __ATOMIC_RELAXED);
+    return 1;
+}
+
+/* Told to stop, every thread stops at its first question: the rays of
+ * those that asked are not cast. */
+TEST(a_cancelled_computation_stops)
+{
+    mesh m;
+    vis_scene *v;
+    glint_err e;
+    enum { NP = 4096, K = 64 };
+    static float pos[3 * NP], nrm[3 * NP];
+    static uint64_t bits[NP];
+    double dirs[3 * K];
+    long rays = -1;
+    int asked = 0;
+    glint_cancel c = {stop_now, &asked};
+    floor_and_roof(&m);
+    ASSERT_OK(vis_open(&m, &v, &e));
+    for (int i = 0; i < NP; i++) {
+        pos[3 * i] = (float)(i % 64) / 64.0f - 0.5f;
+        pos[3 * i + 1] = (float)(i / 64) / 64.0f - 0.5f;
+        nrm[3 * i + 2] = 1.0f;
+    }
+    for (int k = 0; k < K; k++) { /* upwards, unit */
+        double x = 0.1 * (k % 8 - 4), y = 0.1 * (k / 8 - 4), l = sqrt(x * x + y * y + 1.0);
+        dirs[3 * k] = x / l;
+        dirs[3 * k + 1] = y / l;
+        dirs[3 * k + 2] = 1.0 / l;
+    }
+    ASSERT_EQ(vis_compute(v, NP, pos, nrm, K, dirs, bits, 2, &rays, &c, &e), GLINT_ECANCELLED);
+    ASSERT(strstr(e.msg, "cancelled") != NULL);
+    ASSERT(asked >= 1 && asked <= 2);
+    ASSERT_EQ(rays, 0);
+    vis_close(v);
+    mesh_free(&m);
+}
+
 TEST(bad_input)
 {
     mesh m;
@@ -188,8 +229,8 @@ TEST(bad_input)
     ASSERT_EQ(vis_open(&m, &v, &e), GLINT_EINVAL);
     floor_and_roof(&m);
     ASSERT_OK(vis_open(&m, &v, &e));
-    ASSERT_EQ(vis_compute(v, 1, p, n, 1, d, &b, 1, NULL, &e), GLINT_EINVAL);
-    ASSERT_EQ(vis_compute(v, 1, n, n, 0, d, &b, 1, NULL, &e), GLINT_EINVAL);
+    ASSERT_EQ(vis_compute(v, 1, p, n, 1, d, &b, 1, NULL, NULL, &e), GLINT_EINVAL);
+    ASSERT_EQ(vis_compute(v, 1, n, n, 0, d, &b, 1, NULL, NULL, &e), GLINT_EINVAL);
     vis_close(v);
     mesh_free(&m);
 }
@@ -199,6 +240,7 @@ TEST_LIST{
     TEST_ENTRY(a_sphere_never_shadows_itself_and_threads_agree),
     TEST_ENTRY(convexity_of_the_built_ins),
     TEST_ENTRY(the_bunny_when_present),
+    TEST_ENTRY(a_cancelled_computation_stops),
     TEST_ENTRY(bad_input),
 };
 
