@@ -80,8 +80,10 @@ static void usage(FILE *f)
           "  --max-image-dim N     largest upload / raster side (4096)\n"
           "  --max-mesh-tris N     largest uploaded mesh (2000000)\n"
           "  --max-strokes N       strokes per request (1000)\n"
-          "  --max-stroke-work N   millions of brush evaluations per stroke request (50)\n"
-          "  --api-key KEY         require this key for creation and scripting\n"
+          "  --max-stroke-work N   millions of brush evaluations per stroke request (50)\n",
+          f);
+    /* in two pieces: C99 promises string literals of 4095 characters */
+    fputs("  --api-key KEY         require this key for creation and scripting\n"
           "  --allow-origin LIST   web origins besides glintd's own whose pages may call the\n"
           "                        API (comma-separated, e.g. https://tools.example.com;\n"
           "                        none by default)\n"
