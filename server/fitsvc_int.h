@@ -97,6 +97,12 @@ void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_mem
 void fitsvc_memo_close(fitsvc *f);
 void fitsvc_memo_metrics(fitsvc *f, FILE *o);
 
+/* What every stored material's record holds (proto/schemas/Material.json):
+ * the fit's error statistics.  A fit whose statistics could not be written
+ * (not finite) is refused with GLINT_ENUMERIC, kind "numerical-failure",
+ * rather than stored without them. */
+int fitsvc_material_check(const material *m, glint_err *err);
+
 /* Job callbacks for the precomputation (cls: the job). */
 int fitsvc_job_cancelled(void *cls);
 void fitsvc_job_progress(void *cls, const char *stage, double p);
