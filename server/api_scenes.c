@@ -243,6 +243,31 @@ static int scene_paint_scale(app *a, const json_t *body, int w, int h, int *s, g
     return 0;
 }
 
+/* The base render at the paint size (what every session paints over, and
+ * every view shows) within the work budget: a scene whose base renders
+ * could never be admitted is refused when it is made (413, over-budget),
+ * not left to answer 413 for every view. */
+static int scene_within_budget(app *a, const scene *sc, int ps, const json_t *base_env,
+                               glint_err *e)
+{
+    int lights = base_env ? (int)json_integer_value(json_object_get(base_env, "lights")) : 0;
+    size_t bytes = scenes_base_bytes(sc->width, sc->height, ps, lights);
+    admit_stats st;
+
+    if (!a->work)
+        return 0;
+    admit_get_stats(a->work, &st);
+    if (bytes <= st.budget)
+        return 0;
+    return api_reject(e, GLINT_ETOOBIG, "over-budget",
+                      "paint_scale %d makes %dx%d base renders (what every view shows and "
+                      "sessions paint over), which need up to %.0f MiB, beyond the %.0f MiB "
+                      "this daemon gives expensive work (glintd --work-mb): ask for a smaller "
+                      "width, height or paint_scale",
+                      ps, ps * sc->width, ps * sc->height, (double)bytes / 1048576.0,
+                      (double)st.budget / 1048576.0);
+}
+
 /* The mesh of a creation request: a built-in name or an uploaded mesh id
  * (checked to exist).  OUT: *builtin, *mesh_id (borrowed from body). */
 static int scene_mesh(app *a, const json_t *body, const char **builtin, const char **mesh_id,
@@ -533,7 +558,8 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
         return rc;
     if ((rc = scene_base_settings(body, &base_spec, &base_scale, &base_env, e)) ||
         (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)) ||
-        (rc = scene_paint_scale(a, body, sc.width, sc.height, &ps, e)))
+        (rc = scene_paint_scale(a, body, sc.width, sc.height, &ps, e)) ||
+        (rc = scene_within_budget(a, &sc, ps, base_env, e)))
         goto done;
     /* samples per view: what a fit of this scene will see */
     if (!(counts = calloc((size_t)sc.nviews, sizeof *counts))) {
