@@ -94,10 +94,12 @@ static int mesh_create_do(http_req *req, json_t **info, char id[33], glint_err *
     if (req->body_len == 0)
         return api_reject(e, GLINT_EINVAL, "empty-body", "the body must be the mesh file (%s)",
                           fmt);
-    rc = mesh_load_mem(req->body, req->body_len, fmt, &m, &rep, e);
+    /* counts over the limit are refused before the import (mesh_prescan.c) */
+    rc = mesh_load_mem_max(req->body, req->body_len, fmt, a->cfg.lim.max_mesh_tris, &m, &rep, e);
     if (rc == GLINT_ERANGE)
-        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large", "mesh file rejected: %.400s",
-                          e->msg);
+        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large",
+                          "mesh file rejected: %.400s (max_mesh_tris, glintd --max-mesh-tris "
+                          "%d)", e->msg, a->cfg.lim.max_mesh_tris);
     if (rc == GLINT_ENOMEM || rc == GLINT_EIO || rc == GLINT_EINTERNAL)
         return glint_err_prefix(e, "loading the mesh");
     if (rc)
