@@ -336,6 +336,27 @@ int env_spec_check(const char *spec, glint_err *err)
     return 0;
 }
 
+int env_spec_lookup(const char *spec, glint_err *err)
+{
+    char path[4096];
+    const char *name = spec;
+    int rc;
+    if ((rc = env_spec_check(spec, err)))
+        return rc;
+    if (!strncmp(spec, "builtin:", 8))
+        name = spec + 8;
+    for (int i = 0; builtins[i]; i++)
+        if (!strcmp(name, builtins[i]))
+            return 0;
+    if (name != spec)
+        return glint_err_set(err, GLINT_ENOTFOUND, "no built-in environment '%s' (built-ins: %s)",
+                             name, env_builtin_names());
+    if (!resolver)
+        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment '%s' (built-ins: %s)",
+                             spec, env_builtin_names());
+    return resolver(spec, path, sizeof path, err);
+}
+
 int env_resolve(const char *spec, env_map *out, glint_err *err)
 {
     char path[4096];

@@ -76,6 +76,11 @@ const char *env_builtin_names(void);
 typedef int (*env_resolver)(const char *spec, char *path, size_t len, glint_err *err);
 void env_set_resolver(env_resolver fn);
 int env_resolve(const char *spec, env_map *out, glint_err *err);
+/* Whether env_resolve would find spec, without loading anything: 0 for a
+ * built-in or a spec the resolver maps to a file (whether the file holds a
+ * usable map is found when it is read); otherwise env_resolve's error
+ * (GLINT_EINVAL for the syntax, GLINT_ENOTFOUND naming what is offered). */
+int env_spec_lookup(const char *spec, glint_err *err);
 /* A spec's syntax check without loading (0, or GLINT_EINVAL saying why):
  * at most ENV_NAME_MAX - 1 bytes of [A-Za-z0-9._:/-] (what a spec names
  * beyond that is the resolver's to check). */

@@ -135,7 +135,7 @@ typedef struct job {
     const source *m;
     double *f;
     int i0, i1, azimuths;
-    long below, nonfinite;
+    long below, nonfinite, negative;
     double max_f;
 } job;
 
@@ -161,6 +161,11 @@ static void *tabulate_rows(void *arg)
                 if (bad) {
                     jb->nonfinite++;
                     acc[0] = acc[1] = acc[2] = 0.0;
+                }
+                if (acc[0] < 0.0 || acc[1] < 0.0 || acc[2] < 0.0) {
+                    jb->negative++;
+                    for (int c = 0; c < 3; c++)
+                        acc[c] = acc[c] < 0.0 ? 0.0 : acc[c];
                 }
                 for (int c = 0; c < 3; c++) {
                     jb->f[(size_t)c * MERL_N + idx] = acc[c];
@@ -238,7 +243,7 @@ int merl_tabulate(merl_fn fn, const void *ctx, int nthreads, merl_table *out, me
     nt = nt < 1 ? 1 : nt > MERL_MAX_THREADS ? MERL_MAX_THREADS : nt > MERL_TH ? MERL_TH : nt;
     for (int t = 0; t < nt; t++) {
         jobs[t] = (job){m, out->f, MERL_TH * t / nt, MERL_TH * (t + 1) / nt, st->azimuths, 0, 0,
-                        0.0};
+                        0, 0.0};
         if (t > 0)
             started[t] = pthread_create(&th[t], NULL, tabulate_rows, &jobs[t]) == 0;
     }
@@ -252,6 +257,7 @@ int merl_tabulate(merl_fn fn, const void *ctx, int nthreads, merl_table *out, me
     for (int t = 0; t < nt; t++) {
         st->below_horizon += jobs[t].below;
         st->nonfinite += jobs[t].nonfinite;
+        st->negative += jobs[t].negative;
         if (jobs[t].max_f > st->max_f)
             st->max_f = jobs[t].max_f;
     }

@@ -64,6 +64,8 @@ typedef struct merl_stats {
     int spatial;         /* the material varies over the surface: its average was taken */
     long below_horizon;  /* bins whose centre has wi or wo under the horizon (written 0) */
     long nonfinite;      /* bins where the material gave a non-finite value (written 0) */
+    long negative;       /* bins where its value was negative (written 0: a table reads
+                            < 0 as no data; an unconstrained fit can be negative in places) */
     double max_f;        /* largest f written */
     double seconds;
 } merl_stats;

@@ -148,6 +148,13 @@ int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
  * still loads the geometry of an upload that names a plain relative file
  * it never reads). */
 int mesh_refs_check(const void *data, size_t len, const char *fmt, glint_err *err);
+/* mesh_load_mem with the host's triangle limit (max_tris, at most
+ * MESH_MAX_TRIS): what the data's counts say before it is imported (PLY and
+ * OFF headers, OBJ face lines; mesh_prescan.c) is held to it, GLINT_ERANGE
+ * naming the count and the limit.  Formats without a count to read first
+ * (glTF, COLLADA) are imported, and the caller checks the mesh it gets. */
+int mesh_load_mem_max(const void *data, size_t len, const char *hint, long max_tris, mesh *out,
+                      mesh_report *report, glint_err *err);
 
 /* Import in the calling process instead of a child (on != 0).  Only for a
  * fuzzer, which must see the importer's coverage and wants its crashes, and

@@ -54,13 +54,15 @@ int mio_check_mesh(const mesh *m, const char *who, glint_err *err);
 #endif
 #endif
 
-/* Structural pre-scan of PLY or OFF data in buf[0..len) (mesh_prescan.c):
- * dispatches on content (PLY magic, OFF header) or on `fmt` ("off" also
- * recognizes a headerless OFF); other data passes.  Returns 0, or
- * GLINT_ERANGE (a count over MESH_MAX_VERTS / MESH_MAX_TRIS) or
- * GLINT_EFORMAT (truncated data, a missing end_header, an overlong OFF
- * line), the message starting with `what`. */
-int mio_prescan(const char *buf, size_t len, const char *fmt, const char *what,
+/* Structural pre-scan of PLY, OFF or OBJ data in buf[0..len)
+ * (mesh_prescan.c): dispatches on content (PLY magic, OFF header) or on
+ * `fmt` ("off" also recognizes a headerless OFF, "obj" counts face lines);
+ * other data passes.  Returns 0, or GLINT_ERANGE (a count over
+ * MESH_MAX_VERTS, triangles over max_tris (<= 0 or above MESH_MAX_TRIS:
+ * MESH_MAX_TRIS), a PLY element of too many properties) or GLINT_EFORMAT
+ * (truncated data, a missing end_header, an overlong OFF line), the message
+ * starting with `what`. */
+int mio_prescan(const char *buf, size_t len, const char *fmt, const char *what, long max_tris,
                 glint_err *err);
 
 /* What a reference to another file is (mio_ref_check). */

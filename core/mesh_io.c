@@ -252,24 +252,27 @@ static void mio_format_name(const char *name, int is_hint, char out[16])
 /* Everything after the bytes are known to be there: pre-scan, import,
  * merge, clean, normals, normalization, uvs. */
 static int mio_load_locked(const char *path, const void *data, size_t len, const char *fmt,
-                           const char *what, mesh *out, mesh_report *report, glint_err *err);
+                           const char *what, long max_tris, mesh *out, mesh_report *report,
+                           glint_err *err);
 
 static int mio_load(const char *path, const void *data, size_t len, const char *fmt,
-                    const char *what, mesh *out, mesh_report *report, glint_err *err)
+                    const char *what, long max_tris, mesh *out, mesh_report *report,
+                    glint_err *err)
 {
 #ifdef MIO_SANITIZED
     int rc;
     pthread_mutex_lock(&mio_sanitizer_lock);
-    rc = mio_load_locked(path, data, len, fmt, what, out, report, err);
+    rc = mio_load_locked(path, data, len, fmt, what, max_tris, out, report, err);
     pthread_mutex_unlock(&mio_sanitizer_lock);
     return rc;
 #else
-    return mio_load_locked(path, data, len, fmt, what, out, report, err);
+    return mio_load_locked(path, data, len, fmt, what, max_tris, out, report, err);
 #endif
 }
 
 static int mio_load_locked(const char *path, const void *data, size_t len, const char *fmt,
-                           const char *what, mesh *out, mesh_report *report, glint_err *err)
+                           const char *what, long max_tris, mesh *out, mesh_report *report,
+                           glint_err *err)
 {
     mesh_report rep;
     mesh m;
@@ -279,7 +282,7 @@ static int mio_load_locked(const char *path, const void *data, size_t len, const
     memset(&rep, 0, sizeof rep);
     snprintf(rep.format, sizeof rep.format, "%s", *fmt ? fmt : "unknown");
     if (data) {
-        rc = mio_prescan(data, len, fmt, what, err);
+        rc = mio_prescan(data, len, fmt, what, max_tris, err);
         if (rc)
             return rc;
     }
@@ -382,7 +385,7 @@ int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err)
                                    strerror(errno));
                 goto done;
             }
-            rc = mio_prescan(map, len, fmt, path, err);
+            rc = mio_prescan(map, len, fmt, path, MESH_MAX_TRIS, err);
             munmap(map, len);
             if (rc)
                 goto done;
@@ -390,7 +393,7 @@ int mesh_load(const char *path, mesh *out, mesh_report *report, glint_err *err)
     }
     close(fd);
     fd = -1;
-    rc = mio_load(path, NULL, len, fmt, path, out, report, err);
+    rc = mio_load(path, NULL, len, fmt, path, MESH_MAX_TRIS, out, report, err);
 done:
     if (fd >= 0)
         close(fd);
@@ -399,6 +402,12 @@ done:
 
 int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
                   mesh_report *report, glint_err *err)
+{
+    return mesh_load_mem_max(data, len, hint, MESH_MAX_TRIS, out, report, err);
+}
+
+int mesh_load_mem_max(const void *data, size_t len, const char *hint, long max_tris, mesh *out,
+                      mesh_report *report, glint_err *err)
 {
     char fmt[16], what[48];
 
@@ -420,5 +429,5 @@ int mesh_load_mem(const void *data, size_t len, const char *hint, mesh *out,
     if (len > MESH_MAX_FILE_BYTES)
         return glint_err_set(err, GLINT_ERANGE, "%s: %zu bytes, more than the limit of %zu",
                              what, len, (size_t)MESH_MAX_FILE_BYTES);
-    return mio_load(NULL, data, len, fmt, what, out, report, err);
+    return mio_load(NULL, data, len, fmt, what, max_tris, out, report, err);
 }

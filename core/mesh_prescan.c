@@ -1,15 +1,23 @@
-/* mesh_prescan.c: structural pre-scan of PLY and OFF data, before assimp
- * sees it (step 2 of loading, see mesh_io.c).
+/* mesh_prescan.c: structural pre-scan of PLY, OFF and OBJ data, before
+ * assimp sees it (step 2 of loading, see mesh_io.c).
  *
  * PLY and OFF are the two formats whose headers declare element counts.  A
- * count over the limits is GLINT_ERANGE before assimp allocates for it, and
- * data that ends before the declared elements is GLINT_EFORMAT: assimp 5.2
- * silently repeats the last face of a truncated ASCII PLY, zero-fills a
- * truncated OFF and loops forever on a PLY header without end_header.  OFF
- * lines of MIO_OFF_MAX_LINE bytes or more are refused (assimp 5.2's OFF
- * reader copies lines into a 4096-byte stack buffer and writes one byte past
- * it).  Headers the scan does not understand are left to assimp, which
- * reports them. */
+ * count over the limits (the caller's triangle limit for faces) is
+ * GLINT_ERANGE before assimp allocates for it, and data that ends before
+ * the declared elements is GLINT_EFORMAT: assimp 5.2 silently repeats the
+ * last face of a truncated ASCII PLY, zero-fills a truncated OFF and loops
+ * forever on a PLY header without end_header.  A PLY element of more than
+ * MIO_PLY_MAX_PROPS properties, and a header of more than
+ * MIO_PLY_MAX_HEADER_LINES lines, are GLINT_ERANGE (assimp 5.2 took 17 s
+ * over 100,000 properties, 57 s over 100,000 comment lines).  OFF lines of
+ * MIO_OFF_MAX_LINE bytes or more are refused (assimp 5.2's OFF reader copies
+ * lines into a 4096-byte stack buffer and writes one byte past it).  OBJ
+ * declares nothing: its face
+ * lines are counted, each of k corners making k - 2 triangles (assimp's
+ * triangulation), and a file over the triangle limit is GLINT_ERANGE
+ * before assimp reads it (2.1 million triangles took assimp and the steps
+ * after it minutes and a gigabyte).  Headers the scan does not understand
+ * are left to assimp, which reports them. */
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,6 +83,10 @@ static int mio_tok_is(const char *tok, size_t len, const char *word)
 
 #define MIO_PLY_MAX_ELEMS 64
 #define MIO_PLY_MAX_PROPS 64
+/* Lines of a PLY header, end_header included: assimp 5.2 reads a header in
+ * time growing with the square of its lines (1 s for 10,000 comment lines,
+ * 57 s for 100,000); the declarations allowed take at most 4,161. */
+#define MIO_PLY_MAX_HEADER_LINES 4096
 
 typedef struct mio_ply_prop {
     int list;
@@ -118,11 +130,22 @@ static int mio_ply_truncated(const char *what, const mio_ply_elem *e, unsigned l
 /* PLY: header counts against the limits, then a walk over the data that
  * checks every declared element is present.  Headers this scan does not
  * understand are left to assimp. */
-static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_err *err)
+static int mio_ply_too_many(const char *what, unsigned long long n, unsigned long long max,
+                            glint_err *err)
+{
+    return glint_err_set(err, GLINT_ERANGE,
+                         "%s: PLY data makes %llu or more triangles, more than the limit of "
+                         "%llu", what, n, max);
+}
+
+static int mio_prescan_ply(const char *buf, size_t len, const char *what, long max_tris,
+                           glint_err *err)
 {
     mio_ply_elem *el = NULL;
     int nel = 0, fmt = -1, understood = 1, rc = 0; /* fmt: 0 ascii, 1 LE, 2 BE */
     const char *p = buf, *end = buf + len, *data = NULL;
+    unsigned long long tris = 0;
+    long lines = 0;
 
     el = calloc(MIO_PLY_MAX_ELEMS, sizeof *el);
     if (!el)
@@ -133,6 +156,12 @@ static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_
         size_t tl;
         if (!eol)
             eol = end;
+        if (++lines > MIO_PLY_MAX_HEADER_LINES) {
+            rc = glint_err_set(err, GLINT_ERANGE,
+                               "%s: PLY header has more than %d lines (the limit)", what,
+                               MIO_PLY_MAX_HEADER_LINES);
+            goto done;
+        }
         if (mio_token(&q, eol, &tok, &tl)) {
             if (mio_tok_is(tok, tl, "end_header")) {
                 data = eol < end ? eol + 1 : end;
@@ -163,20 +192,27 @@ static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_
                     break;
                 }
                 snprintf(e->name, sizeof e->name, "%.*s", (int)(nl < 31 ? nl : 31), name);
+                /* a face is one triangle at least */
                 if (e->count > (unsigned long long)MESH_MAX_VERTS ||
-                    (strcmp(e->name, "face") == 0 && e->count > (unsigned long long)MESH_MAX_TRIS)) {
+                    (strcmp(e->name, "face") == 0 && e->count > (unsigned long long)max_tris)) {
                     rc = glint_err_set(err, GLINT_ERANGE,
                                        "%s: PLY header declares %llu \"%s\" elements, more than "
-                                       "the limit of %d", what, e->count, e->name,
-                                       strcmp(e->name, "face") == 0 ? MESH_MAX_TRIS
-                                                                    : MESH_MAX_VERTS);
+                                       "the limit of %ld", what, e->count, e->name,
+                                       strcmp(e->name, "face") == 0 ? max_tris
+                                                                    : (long)MESH_MAX_VERTS);
                     goto done;
                 }
             } else if (mio_tok_is(tok, tl, "property")) {
                 mio_ply_elem *e = nel ? &el[nel - 1] : NULL;
                 mio_ply_prop *pr;
                 int sgn = 0;
-                if (!e || e->nprops == MIO_PLY_MAX_PROPS || !mio_token(&q, eol, &tok, &tl)) {
+                if (e && e->nprops == MIO_PLY_MAX_PROPS) {
+                    rc = glint_err_set(err, GLINT_ERANGE,
+                                       "%s: PLY element \"%s\" declares more than %d properties "
+                                       "(the limit)", what, e->name, MIO_PLY_MAX_PROPS);
+                    goto done;
+                }
+                if (!e || !mio_token(&q, eol, &tok, &tl)) {
                     understood = 0;
                     break;
                 }
@@ -228,11 +264,13 @@ static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_
     p = data;
     for (int k = 0; k < nel; k++) {
         const mio_ply_elem *e = &el[k];
-        int all_scalar = 1;
+        int all_scalar = 1, corners = -1; /* the face's first list: its corners */
         size_t rec = 0;
         for (int j = 0; j < e->nprops; j++) {
             all_scalar &= !e->props[j].list;
             rec += (size_t)e->props[j].size;
+            if (e->props[j].list && corners < 0 && strcmp(e->name, "face") == 0)
+                corners = j;
         }
         if (fmt != 0 && all_scalar) {
             size_t left = (size_t)(end - p);
@@ -261,6 +299,11 @@ static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_
                                            "%s: PLY element \"%s\" %llu: list length \"%.*s\" is "
                                            "not a count in 0..%d", what, e->name, i,
                                            (int)(tl < 32 ? tl : 32), tok, MIO_PLY_MAX_LIST);
+                        goto done;
+                    }
+                    if (j == corners && n >= 3 &&
+                        (tris += n - 2) > (unsigned long long)max_tris) {
+                        rc = mio_ply_too_many(what, tris, (unsigned long long)max_tris, err);
                         goto done;
                     }
                     for (unsigned long long t = 0; t < n; t++)
@@ -302,6 +345,11 @@ static int mio_prescan_ply(const char *buf, size_t len, const char *what, glint_
                                            MIO_PLY_MAX_LIST);
                         goto done;
                     }
+                    if (j == corners && n >= 3 &&
+                        (tris += (unsigned long long)n - 2) > (unsigned long long)max_tris) {
+                        rc = mio_ply_too_many(what, tris, (unsigned long long)max_tris, err);
+                        goto done;
+                    }
                     if ((size_t)(end - p) / (size_t)pr->size < (size_t)n) {
                         rc = mio_ply_truncated(what, e, i, err);
                         goto done;
@@ -325,7 +373,7 @@ static int mio_line_end(char c)
  * present, no line that overflows assimp's buffer.  `named_off`: the file
  * is called .off (a headerless OFF is then recognized too). */
 static int mio_prescan_off(const char *buf, size_t len, int named_off, const char *what,
-                           glint_err *err)
+                           long max_tris, glint_err *err)
 {
     const char *p = buf, *end, *tok;
     size_t tl;
@@ -379,11 +427,10 @@ static int mio_prescan_off(const char *buf, size_t len, int named_off, const cha
     if (!mio_token(&p, end, &tok, &tl) || !mio_count(tok, tl, &nv) ||
         !mio_token(&p, end, &tok, &tl) || !mio_count(tok, tl, &nf))
         return 0; /* malformed: assimp will say so */
-    if (nv > (unsigned long long)MESH_MAX_VERTS || nf > (unsigned long long)MESH_MAX_TRIS)
+    if (nv > (unsigned long long)MESH_MAX_VERTS || nf > (unsigned long long)max_tris)
         return glint_err_set(err, GLINT_ERANGE,
                              "%s: OFF header declares %llu vertices and %llu faces, more than "
-                             "the limits of %d and %d", what, nv, nf, MESH_MAX_VERTS,
-                             MESH_MAX_TRIS);
+                             "the limits of %d and %ld", what, nv, nf, MESH_MAX_VERTS, max_tris);
     (void)mio_token(&p, end, &tok, &tl); /* edge count, unused */
     /* then lines, as assimp reads them: blank lines and comment lines
      * between the counts and the first vertex are skipped, later ones not */
@@ -418,15 +465,59 @@ static int mio_prescan_off(const char *buf, size_t len, int named_off, const cha
     return 0;
 }
 
+/* OBJ: the triangles of its face lines ("f" and "fo", assimp's
+ * ObjFileParser; k corners make k - 2 triangles) and its vertex lines,
+ * against the limits.  A line's first byte and token decide, as for assimp
+ * (which skips a line that begins with whitespace). */
+static int mio_prescan_obj(const char *buf, size_t len, const char *what, long max_tris,
+                           glint_err *err)
+{
+    const char *p = buf, *end = buf + len;
+    unsigned long long tris = 0, verts = 0;
+
+    while (p < end) {
+        const char *eol = memchr(p, '\n', (size_t)(end - p)), *q = p, *tok;
+        size_t tl;
+        if (!eol)
+            eol = end;
+        if ((*p == 'f' || *p == 'v') && mio_token(&q, eol, &tok, &tl)) {
+            if (mio_tok_is(tok, tl, "f") || mio_tok_is(tok, tl, "fo")) {
+                unsigned long long k = 0;
+                while (mio_token(&q, eol, &tok, &tl))
+                    k++;
+                if (k >= 3)
+                    tris += k - 2;
+            } else if (mio_tok_is(tok, tl, "v")) {
+                verts++;
+            }
+        }
+        p = eol < end ? eol + 1 : end;
+    }
+    if (tris > (unsigned long long)max_tris)
+        return glint_err_set(err, GLINT_ERANGE,
+                             "%s: its faces make %llu triangles, more than the limit of %ld",
+                             what, tris, max_tris);
+    if (verts > (unsigned long long)MESH_MAX_VERTS)
+        return glint_err_set(err, GLINT_ERANGE,
+                             "%s: it declares %llu vertices, more than the limit of %d", what,
+                             verts, MESH_MAX_VERTS);
+    return 0;
+}
+
 /* Dispatch on content (PLY magic, OFF header) or name. */
-int mio_prescan(const char *buf, size_t len, const char *fmt, const char *what,
+int mio_prescan(const char *buf, size_t len, const char *fmt, const char *what, long max_tris,
                 glint_err *err)
 {
+    int rc;
+    if (max_tris <= 0 || max_tris > MESH_MAX_TRIS)
+        max_tris = MESH_MAX_TRIS;
     /* named .ply, whatever it holds: assimp's PLY reader takes "ply" in any
      * case followed by anything, and loops without end_header (found by
      * tests/fuzz: "plY", "ply)", "ply3ds" ...) */
     if (strcmp(fmt, "ply") == 0 ||
         (len >= 4 && strncasecmp(buf, "ply", 3) == 0 && mio_space(buf[3])))
-        return mio_prescan_ply(buf, len, what, err);
-    return mio_prescan_off(buf, len, strcmp(fmt, "off") == 0, what, err);
+        return mio_prescan_ply(buf, len, what, max_tris, err);
+    if ((rc = mio_prescan_off(buf, len, strcmp(fmt, "off") == 0, what, max_tris, err)))
+        return rc;
+    return strcmp(fmt, "obj") == 0 ? mio_prescan_obj(buf, len, what, max_tris, err) : 0;
 }

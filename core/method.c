@@ -336,6 +336,16 @@ int method_params_from_json(const method *m, void *params, const json_t *obj, gl
     return m->params_check ? m->params_check(params, err) : 0;
 }
 
+int method_params_usable(const method *m, const void *params, const method_source *src,
+                         glint_err *err)
+{
+    const char *param = NULL;
+    glint_err e = {0};
+    if (!m->params_usable || !m->params_usable(params, src, &param, &e))
+        return 0;
+    return glint_err_set(err, GLINT_EINVAL, "params.%s: %s", param ? param : "?", e.msg);
+}
+
 int method_param_set_text(const method *m, void *params, const char *name, const char *text,
                           glint_err *err)
 {

@@ -237,6 +237,13 @@ typedef struct material_ops {
 
 /* ---- the method ------------------------------------------------------------------------- */
 
+/* Where a fit's samples come from, for the checks of its parameters made
+ * before any work (method_params_usable). */
+typedef struct method_source {
+    int has_mesh;                 /* a scene's mesh and the samples' positions are there (not
+                                     so for samples made elsewhere: a G-buffer set) */
+} method_source;
+
 typedef struct method {
     const char *name;             /* "hf3": [a-z0-9_-], at most 15 bytes */
     const char *title;
@@ -252,6 +259,13 @@ typedef struct method {
     void (*params_default)(void *params);
     /* Checks across parameters after they were set (may be NULL). */
     int (*params_check)(const void *params, glint_err *err);
+    /* Checks of the parameters against what lies outside them, cheap and
+     * made before a fit is queued (may be NULL): what they name exists (an
+     * environment the host resolves) and the samples' source offers what
+     * they need (a mesh to cast shadows with).  0, or a code with a message
+     * that names the problem, not the parameter: OUT *param names that. */
+    int (*params_usable)(const void *params, const method_source *src, const char **param,
+                         glint_err *err);
     /* Which pixels are samples (samples.h: SAMPLES_LIT, the default 0, or
      * SAMPLES_SEEN for methods lit by an environment). */
     int pattern_rule;
@@ -337,6 +351,11 @@ int method_param_set_json(const method *m, void *params, const char *name, const
 /* Set every member of a JSON object, then run the cross checks.  A non-object
  * gives GLINT_EINVAL ("params must be an object"). */
 int method_params_from_json(const method *m, void *params, const json_t *obj, glint_err *err);
+
+/* m->params_usable (0 when the method has none): GLINT_EINVAL with a
+ * message naming the parameter "params.<name>", as the API spells it. */
+int method_params_usable(const method *m, const void *params, const method_source *src,
+                         glint_err *err);
 
 /* Set one parameter from text (the command line: messages name it
  * "--<name> '<text>'"). */

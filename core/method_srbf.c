@@ -129,26 +129,26 @@ static const char *const constraint_values[] = {"energy", "nonneg", "none", NULL
 static const char *const vis_values[] = {"auto", "on", "off", NULL};
 static const char *const start_values[] = {"warm", "cold", NULL}; /* SRBF_START_* */
 static const char *const env_examples[] = {"studio", "sky", "sunset", "builtin:white",
-                                           "file:courtyard.exr", NULL};
+                                           "data:courtyard.exr", NULL};
 static const char *const raster_examples[] = {"160x120", "320x240", "full", NULL};
 static const char *const diffuse_examples[] = {"fit", "0.3", "0.35,0.25,0.15", NULL};
 
 static const method_param srbf_params_table[] = {
     {.name = "env", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "the environment lighting the painted views: a built-in (studio, sky, "
-                    "sunset, overcast, white); on the command line file:PATH (an HDR "
-                    "lat-long map or cube cross); in glintd data:FILE of its --env-dir or "
-                    "upload:ID of POST /api/v1/environments",
+                    "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID "
+                    "of POST /api/v1/environments (HDR lat-long maps or cube crosses); the "
+                    "command line reads a map by its path instead (file:PATH)",
      .offset = offsetof(srbf_params, env),
-     .syntax = "NAME | builtin:NAME | file:PATH | data:FILE | upload:ID",
+     .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
      .examples = env_examples, .parse = env_parse, .format = env_format},
     {.name = "env_rotation", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "rotation of the environment about the up (+z) axis, degrees",
      .offset = offsetof(srbf_params, env_rotation), .min = -360.0, .max = 360.0},
     {.name = "env_intensity", .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "scale of the environment's radiance (the painting is divided by it)",
-     .offset = offsetof(srbf_params, env_intensity), .min = 0.0, .max = 1e6,
-     .min_exclusive = 1},
+     .offset = offsetof(srbf_params, env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
+     .max = SRBF_MAX_ENV_INTENSITY},
     {.name = "lights", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "lights the environment is compressed into (median cut): the speed-accuracy "
                     "knob; transfer time grows linearly with it",
@@ -231,6 +231,26 @@ static void srbf_params_default(void *pv)
     p->smooth = 1e-4;
     p->grazing = 2;
     p->start = SRBF_START_COLD;
+}
+
+/* What a fit with these parameters needs outside them: the environment
+ * (resolved by the host, not read), and for visibility on the scene's mesh. */
+static int srbf_params_usable(const void *pv, const method_source *src, const char **param,
+                              glint_err *err)
+{
+    const srbf_params *p = pv;
+    int rc;
+    if ((rc = env_spec_lookup(p->env, err))) {
+        *param = "env";
+        return rc;
+    }
+    if (p->visibility == SRBF_VIS_ON && !src->has_mesh) {
+        *param = "visibility";
+        return glint_err_set(err, GLINT_EINVAL,
+                             "on casts shadows with the scene's mesh, and these samples have "
+                             "none (made elsewhere: a G-buffer set): set visibility auto or off");
+    }
+    return 0;
 }
 
 /* ---- keys ------------------------------------------------------------------------------ */
@@ -724,6 +744,7 @@ const method method_srbf = {
     .presets = srbf_presets,
     .npresets = (int)(sizeof srbf_presets / sizeof srbf_presets[0]),
     .params_default = srbf_params_default,
+    .params_usable = srbf_params_usable,
     .pattern_rule = SAMPLES_SEEN,
     .levels = srbf_levels,
     .nlevels = (int)(sizeof srbf_levels / sizeof srbf_levels[0]),

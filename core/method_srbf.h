@@ -73,6 +73,16 @@ typedef struct srbf_params {
 } srbf_params;
 
 enum { SRBF_VIS_AUTO = 0, SRBF_VIS_ON = 1, SRBF_VIS_OFF = 2 };
+
+/* env_intensity: the painting is divided by it, so its range bounds what
+ * the fit's values are scaled by (1e-300 made weights of 1e300, whose
+ * squares overflow) */
+#define SRBF_MIN_ENV_INTENSITY 1e-6
+#define SRBF_MAX_ENV_INTENSITY 1e6
+/* The largest weight or diffuse albedo a material holds (in either sign:
+ * constraints none lets them go negative).  A fit beyond it is refused
+ * (GLINT_ENUMERIC); a material file beyond it is malformed. */
+#define SRBF_MAX_WEIGHT 1e30
 enum { SRBF_START_WARM = 0, SRBF_START_COLD = 1 };
 
 /* The energy rows hold the albedo to 1 - SRBF_ENERGY_MARGIN: between rows

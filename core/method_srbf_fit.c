@@ -300,6 +300,18 @@ int srbf_fit(const method_fit_in *in, material *out, glint_err *err)
         for (int b = 0; b < NPROF; b++)
             prof[b][ch] = j->prof[b];
     }
+    /* what a material holds and reads back (method_srbf_material.c) */
+    for (int k = 0; k < 3 * J + 3; k++) {
+        double x = k < 3 * J ? sm.c[k] : sm.rho[k - 3 * J];
+        if (!isfinite(x) || fabs(x) > SRBF_MAX_WEIGHT) {
+            rc = glint_err_set(err, GLINT_ENUMERIC,
+                               "the fitted %s is %g, beyond the %g a material holds: the "
+                               "painting over env_intensity (%g) is out of scale",
+                               k < 3 * J ? "lobe weight" : "diffuse albedo", x, SRBF_MAX_WEIGHT,
+                               p->env_intensity);
+            goto done;
+        }
+    }
     if ((rc = srbf_basis_make(en->b.res, en->b.sigma, &sm.b, err)))
         goto done;
     sm.st = en->st;

@@ -184,10 +184,12 @@ static int srbf_from_json(const json_t *root, const char *file, void **data, gli
         rc = glint_err_set(err, GLINT_EFORMAT, "%s: diffuse must be [r, g, b]", file);
         goto fail;
     }
+    /* either sign: constraints none fits negative values (method_srbf.h) */
     for (int c = 0; c < 3; c++)
-        if (num(json_array_get(diff, c), 0.0, 1e6, &sm->rho[c])) {
-            rc = glint_err_set(err, GLINT_EFORMAT, "%s: diffuse[%d] must be a finite number >= 0",
-                               file, c);
+        if (num(json_array_get(diff, c), -SRBF_MAX_WEIGHT, SRBF_MAX_WEIGHT, &sm->rho[c])) {
+            rc = glint_err_set(err, GLINT_EFORMAT,
+                               "%s: diffuse[%d] must be a finite number within +-%g", file, c,
+                               SRBF_MAX_WEIGHT);
             goto fail;
         }
     if (!json_is_array(lobes) || (int)json_array_size(lobes) != sm->b.J) {
@@ -203,9 +205,11 @@ static int srbf_from_json(const json_t *root, const char *file, void **data, gli
         const json_t *e = json_array_get(lobes, j);
         for (int c = 0; c < 3; c++)
             if (!json_is_array(e) || json_array_size(e) != 3 ||
-                num(json_array_get(e, c), -1e30, 1e30, &sm->c[(size_t)c * sm->b.J + j])) {
+                num(json_array_get(e, c), -SRBF_MAX_WEIGHT, SRBF_MAX_WEIGHT,
+                    &sm->c[(size_t)c * sm->b.J + j])) {
                 rc = glint_err_set(err, GLINT_EFORMAT,
-                                   "%s: lobes[%d] must be three finite numbers", file, j);
+                                   "%s: lobes[%d] must be three finite numbers within +-%g",
+                                   file, j, SRBF_MAX_WEIGHT);
                 goto fail;
             }
     }
@@ -264,15 +268,21 @@ static int srbf_gpu(const void *data, material_gpu *out, glint_err *err)
     return 0;
 }
 
+/* weights_negative and a negative diffuse say what constraints none made:
+ * a BRDF that is negative in places (the exports clamp it to 0 there and
+ * say so, merl.h). */
 static json_t *srbf_summary(const void *data)
 {
     const srbf_material *sm = data;
-    int used = 0;
-    for (int j = 0; j < 3 * sm->b.J; j++)
+    int used = 0, negative = 0;
+    for (int j = 0; j < 3 * sm->b.J; j++) {
         used += sm->c[j] > 0.0;
-    return json_pack("{s:i, s:f, s:[f,f,f], s:s, s:i}", "lobes", sm->b.J, "sigma", sm->b.sigma,
-                     "diffuse", sm->rho[0], sm->rho[1], sm->rho[2], "static",
-                     static_name(sm->st.kind), "weights_nonzero", used);
+        negative += sm->c[j] < 0.0;
+    }
+    return json_pack("{s:i, s:f, s:[f,f,f], s:s, s:i, s:i}", "lobes", sm->b.J, "sigma",
+                     sm->b.sigma, "diffuse", sm->rho[0], sm->rho[1], sm->rho[2], "static",
+                     static_name(sm->st.kind), "weights_nonzero", used, "weights_negative",
+                     negative);
 }
 
 const material_ops srbf_material_ops = {

@@ -115,11 +115,16 @@ int api_material_read(http_req *req, const char *mid, struct material *m, glint_
 #define API_BASE_BRDF "lambert:kd=0.6"
 #define API_BASE_SCALE 3.14159265358979323846
 
-/* The method and parameters of a fit request's body {"method", "params"}
- * (the method's table checks every parameter; kind "invalid-parameter").
- * OUT: *m, *params (malloc'ed: free).  api_fits.c. */
+/* The method and parameters of a fit request's body {"method", "params"},
+ * checked once, before anything is read or queued, for sessions and
+ * G-buffer sets alike: every parameter by the method's table, then what
+ * they name and need (method_params_usable: an environment the daemon
+ * resolves; has_mesh 0, samples from a G-buffer set, refuses what needs a
+ * scene's mesh).  Kind "invalid-parameter" (422).  OUT: *m, *params
+ * (malloc'ed: free).  api_fits.c. */
 struct method;
-int api_fit_body(const json_t *body, const struct method **m, void **params, glint_err *e);
+int api_fit_body(const json_t *body, int has_mesh, const struct method **m, void **params,
+                 glint_err *e);
 
 /* The answer to a fit request: 201 with the material `doc` (fitted now;
  * the reference is taken) and its Location, else 202 with job `job_id`

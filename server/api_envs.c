@@ -346,6 +346,9 @@ static int env_post_do(http_req *req, json_t **rec, char id[GLINT_ID_LEN], glint
                           "the map exceeds the request body limit of %zu bytes (max_body, "
                           "glintd --max-body-mb %zu)",
                           a->cfg.lim.max_body, a->cfg.lim.max_body >> 20);
+    if (label && !http_utf8_valid(label))
+        return api_reject(e, GLINT_EINVAL, "invalid-parameter",
+                          "name must be UTF-8 text (it holds bytes that are not)");
     if (label && !label_ok(label))
         return api_reject(e, GLINT_EINVAL, "invalid-parameter",
                           "name must be 1 to 60 printable characters without quotes");

@@ -56,9 +56,9 @@ static http_resp merl_get(http_req *req)
     r = http_bytes_owned(200, "application/octet-stream", data, len);
     snprintf(info, sizeof info,
              "anisotropic=%d; azimuths=%d; spatial_average=%d; below_horizon=%ld; nonfinite=%ld; "
-             "max_f=%.6g; ms=%.1f",
-             st.anisotropic, st.azimuths, st.spatial, st.below_horizon, st.nonfinite, st.max_f,
-             1e3 * st.seconds);
+             "negative=%ld; max_f=%.6g; ms=%.1f",
+             st.anisotropic, st.azimuths, st.spatial, st.below_horizon, st.nonfinite,
+             st.negative, st.max_f, 1e3 * st.seconds);
     http_header(&r, "X-Glint-Merl", info);
     http_header(&r, "Content-Disposition", "attachment; filename=\"material.binary\"");
 done:

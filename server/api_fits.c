@@ -28,8 +28,10 @@
 #define SSE_KEEPALIVE_S 15.0
 
 /* The method and parameters of a fit request (api_common.h). */
-int api_fit_body(const json_t *body, const method **m, void **params, glint_err *e)
+int api_fit_body(const json_t *body, int has_mesh, const method **m, void **params,
+                 glint_err *e)
 {
+    const method_source src = {has_mesh};
     const char *k;
     json_t *v;
     char names[256];
@@ -54,8 +56,9 @@ int api_fit_body(const json_t *body, const method **m, void **params, glint_err 
     }
     if (!(*params = method_params_new(*m)))
         return glint_err_set(e, GLINT_ENOMEM, "out of memory");
-    if ((v = json_object_get(body, "params")) &&
-        (rc = method_params_from_json(*m, *params, v, e))) {
+    if (((v = json_object_get(body, "params")) &&
+         (rc = method_params_from_json(*m, *params, v, e))) ||
+        (rc = method_params_usable(*m, *params, &src, e))) {
         free(*params);
         *params = NULL;
         return glint_err_kind(e, "invalid-parameter");
@@ -117,7 +120,7 @@ static http_resp fits_create(http_req *req)
     int rc;
 
     if ((rc = api_session(req, sid, 1, &sdoc, &e)) || (rc = api_body_json(req, &body, &e)) ||
-        (rc = api_fit_body(body, &m, &params, &e)))
+        (rc = api_fit_body(body, 1, &m, &params, &e)))
         goto done;
     if (!(scid = json_string_value(json_object_get(sdoc, "scene_id")))) {
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);

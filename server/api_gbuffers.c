@@ -547,7 +547,7 @@ static http_resp sets_fit(http_req *req)
 
     memset(&s, 0, sizeof s);
     if ((rc = gb_open(req, id, &rec, &n, &w, &h, &e)) ||
-        (rc = api_body_json(req, &body, &e)) || (rc = api_fit_body(body, &m, &params, &e)))
+        (rc = api_body_json(req, &body, &e)) || (rc = api_fit_body(body, 0, &m, &params, &e)))
         goto done;
     bytes = (size_t)n * w * h * GB_FIT_PIXEL_BYTES + (size_t)w * h * GB_MAX_CHANNELS * 4;
     if ((rc = admit_enter(a->work, bytes, "decoding a G-buffer set", &e)))

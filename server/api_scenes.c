@@ -99,10 +99,12 @@ static int mesh_create_do(http_req *req, json_t **info, char id[33], glint_err *
     if ((rc = mesh_refs_check(req->body, req->body_len, fmt, e)))
         return api_reject(e, GLINT_EINVAL, "invalid-mesh", "the %s file cannot be used: %.400s",
                           fmt, e->msg);
-    rc = mesh_load_mem(req->body, req->body_len, fmt, &m, &rep, e);
+    /* counts over the limit are refused before the import (mesh_prescan.c) */
+    rc = mesh_load_mem_max(req->body, req->body_len, fmt, a->cfg.lim.max_mesh_tris, &m, &rep, e);
     if (rc == GLINT_ERANGE)
-        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large", "mesh file rejected: %.400s",
-                          e->msg);
+        return api_reject(e, GLINT_ETOOBIG, "mesh-too-large",
+                          "mesh file rejected: %.400s (max_mesh_tris, glintd --max-mesh-tris "
+                          "%d)", e->msg, a->cfg.lim.max_mesh_tris);
     if (rc == GLINT_ENOMEM || rc == GLINT_EIO || rc == GLINT_EINTERNAL)
         return glint_err_prefix(e, "loading the mesh");
     if (rc)
@@ -246,6 +248,31 @@ static int scene_paint_scale(app *a, const json_t *body, int w, int h, int *s, g
                           v, v * w, v * h, a->cfg.lim.max_image_dim);
     *s = (int)v;
     return 0;
+}
+
+/* The base render at the paint size (what every session paints over, and
+ * every view shows) within the work budget: a scene whose base renders
+ * could never be admitted is refused when it is made (413, over-budget),
+ * not left to answer 413 for every view. */
+static int scene_within_budget(app *a, const scene *sc, int ps, const json_t *base_env,
+                               glint_err *e)
+{
+    int lights = base_env ? (int)json_integer_value(json_object_get(base_env, "lights")) : 0;
+    size_t bytes = scenes_base_bytes(sc->width, sc->height, ps, lights);
+    admit_stats st;
+
+    if (!a->work)
+        return 0;
+    admit_get_stats(a->work, &st);
+    if (bytes <= st.budget)
+        return 0;
+    return api_reject(e, GLINT_ETOOBIG, "over-budget",
+                      "paint_scale %d makes %dx%d base renders (what every view shows and "
+                      "sessions paint over), which need up to %.0f MiB, beyond the %.0f MiB "
+                      "this daemon gives expensive work (glintd --work-mb): ask for a smaller "
+                      "width, height or paint_scale",
+                      ps, ps * sc->width, ps * sc->height, (double)bytes / 1048576.0,
+                      (double)st.budget / 1048576.0);
 }
 
 /* The mesh of a creation request: a built-in name or an uploaded mesh id
@@ -538,7 +565,8 @@ static int scene_create_do(http_req *req, json_t **pub, char id[33], glint_err *
         return rc;
     if ((rc = scene_base_settings(body, &base_spec, &base_scale, &base_env, e)) ||
         (rc = scene_build(a, body, &sc, label, sizeof label, &view_set, e)) ||
-        (rc = scene_paint_scale(a, body, sc.width, sc.height, &ps, e)))
+        (rc = scene_paint_scale(a, body, sc.width, sc.height, &ps, e)) ||
+        (rc = scene_within_budget(a, &sc, ps, base_env, e)))
         goto done;
     /* samples per view: what a fit of this scene will see */
     if (!(counts = calloc((size_t)sc.nviews, sizeof *counts))) {

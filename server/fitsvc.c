@@ -381,6 +381,17 @@ int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamp
     return admit_cost(f->work, method_fit_seconds(m, params, nsamples), what, err);
 }
 
+int fitsvc_material_check(const material *m, glint_err *err)
+{
+    if (json_is_object(json_object_get(m->info, "errors")))
+        return 0;
+    glint_err_set(err, GLINT_ENUMERIC,
+                  "the %s fit gave no finite error statistics (values out of scale), so no "
+                  "material was kept: check the parameters that scale the painting",
+                  m->method ? m->method->name : "");
+    return glint_err_kind(err, "numerical-failure");
+}
+
 int fitsvc_job_cancelled(void *cls)
 {
     return job_cancelled(cls);
@@ -420,6 +431,8 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
             tags[v] = t->use[v] ? (uint64_t)t->versions[v] : 0;
         rc = prep_fit_reusing(p, t->paintings, NULL, tags, tags ? &mm : NULL, &m, err);
         free(tags);
+        if (!rc && (rc = fitsvc_material_check(&m, err)))
+            material_free(&m);
         if (rc) { /* what the memo holds stays true of its tags */
             fitsvc_memo_put(f, t->session_id, key, &mm, 0, 0);
             return rc;

@@ -87,6 +87,10 @@ static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *
         job_progress(j, "fit", 0.9);
     if ((rc = prep_fit(p, NULL, t->rgb, &m, err)))
         return rc;
+    if ((rc = fitsvc_material_check(&m, err))) {
+        material_free(&m);
+        return rc;
+    }
     t0 = srv_timing_step(t->tm, "fit", t0);
     if ((rc = glint_id_new_near(t->set_id, mid, err)))
         goto done;

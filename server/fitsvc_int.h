@@ -104,6 +104,12 @@ void fitsvc_memo_metrics(fitsvc *f, FILE *o);
 int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamples,
                       glint_err *err);
 
+/* What every stored material's record holds (proto/schemas/Material.json):
+ * the fit's error statistics.  A fit whose statistics could not be written
+ * (not finite) is refused with GLINT_ENUMERIC, kind "numerical-failure",
+ * rather than stored without them. */
+int fitsvc_material_check(const material *m, glint_err *err);
+
 /* Job callbacks for the precomputation (cls: the job); the first is a
  * glint_cancel's stop (the job was cancelled or the daemon stops). */
 int fitsvc_job_cancelled(void *cls);

@@ -139,6 +139,61 @@ const char *http_status_title(int status)
     }
 }
 
+size_t http_utf8_seq(const unsigned char *s, size_t n)
+{
+    size_t len;
+    unsigned lo = 0x80, hi = 0xbf;
+    if (n == 0)
+        return 0;
+    if (s[0] < 0x80)
+        return 1;
+    if (s[0] >= 0xc2 && s[0] <= 0xdf)
+        len = 2;
+    else if (s[0] >= 0xe0 && s[0] <= 0xef)
+        len = 3;
+    else if (s[0] >= 0xf0 && s[0] <= 0xf4)
+        len = 4;
+    else
+        return 0;
+    if (s[0] == 0xe0)
+        lo = 0xa0; /* overlong */
+    else if (s[0] == 0xed)
+        hi = 0x9f; /* surrogates */
+    else if (s[0] == 0xf0)
+        lo = 0x90; /* overlong */
+    else if (s[0] == 0xf4)
+        hi = 0x8f; /* above U+10FFFF */
+    if (n < len || s[1] < lo || s[1] > hi)
+        return 0;
+    for (size_t i = 2; i < len; i++)
+        if (s[i] < 0x80 || s[i] > 0xbf)
+            return 0;
+    return len;
+}
+
+int http_utf8_valid(const char *s)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t n = strlen(s), k;
+    for (size_t i = 0; i < n; i += k)
+        if (!(k = http_utf8_seq(p + i, n - i)))
+            return 0;
+    return 1;
+}
+
+/* Bytes of s that are not valid UTF-8 become '?' (a message may quote what
+ * a request sent, or be cut inside a character). */
+static void utf8_scrub(char *s)
+{
+    unsigned char *p = (unsigned char *)s;
+    size_t n = strlen(s), k;
+    for (size_t i = 0; i < n; i += k)
+        if (!(k = http_utf8_seq(p + i, n - i))) {
+            p[i] = '?';
+            k = 1;
+        }
+}
+
 static char *problem_vjson(int status, const char *slug, const char *fmt, va_list ap)
 {
     char detail[1024], type[128];
@@ -146,6 +201,7 @@ static char *problem_vjson(int status, const char *slug, const char *fmt, va_lis
     char *text;
 
     vsnprintf(detail, sizeof detail, fmt, ap);
+    utf8_scrub(detail);
     if (slug)
         snprintf(type, sizeof type, "/problems/%s", slug);
     else
@@ -360,7 +416,8 @@ static http_front_lease *conn_lease(struct MHD_Connection *conn)
 /* What the front refuses in a head, refused again for the requests that
  * reach libmicrohttpd without it (the later ones of a kept-alive
  * connection).  resp.r is NULL when the request is acceptable. */
-static http_resp check_request(const req_ctx *ctx, struct MHD_Connection *conn)
+static http_resp check_request(const http_server *s, const req_ctx *ctx,
+                               struct MHD_Connection *conn)
 {
     const char *te = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                                  MHD_HTTP_HEADER_TRANSFER_ENCODING);
@@ -379,6 +436,17 @@ static http_resp check_request(const req_ctx *ctx, struct MHD_Connection *conn)
         return http_problem(411, "length-required",
                             "request bodies must come with a Content-Length (Transfer-Encoding, "
                             "e.g. chunked, is not accepted)");
+    if (cl) { /* digits only: libmicrohttpd refused anything else */
+        char *end;
+        unsigned long long n;
+        errno = 0;
+        n = strtoull(cl, &end, 10);
+        if (errno == ERANGE || n > s->cfg.max_body)
+            return http_problem(413, "body-too-large",
+                                "Content-Length %.32s exceeds the request body limit of %zu bytes "
+                                "(max_body, glintd --max-body-mb %zu)",
+                                cl, s->cfg.max_body, s->cfg.max_body >> 20);
+    }
     return none;
 }
 
@@ -460,7 +528,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         const char *cl;
         ctx->started = 1;
         snprintf(ctx->method, sizeof ctx->method, "%s", method);
-        resp = check_request(ctx, conn);
+        resp = check_request(s, ctx, conn);
         if (!resp.r && s->cfg.check_host)
             resp = check_host(s, conn, method, url);
         if (resp.r) {

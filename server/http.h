@@ -147,6 +147,14 @@ const char *http_status_title(int status);
 char *http_problem_json(int status, const char *slug, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
+/* The length of the valid UTF-8 sequence at s[0..n) (RFC 3629: no
+ * overlong forms, no surrogates, nothing above U+10FFFF), 0 if none is.
+ * http_utf8_valid: whether all of s is valid UTF-8.  What a request sends
+ * (a query value, a path) is bytes: check it before it goes into JSON,
+ * which only holds UTF-8 (jansson refuses the rest). */
+size_t http_utf8_seq(const unsigned char *s, size_t n);
+int http_utf8_valid(const char *s);
+
 /* Bytes copied into the response. */
 http_resp http_bytes(int status, const char *content_type, const void *data, size_t len);
 

@@ -41,7 +41,7 @@ struct front_conn {
     int fd;
     int lingering;
     double t0, deadline;
-    size_t drained;
+    size_t drained, drain_max;     /* read and discarded while lingering, and the most */
     struct sockaddr_storage addr;
     socklen_t addrlen;
     front_ip *ip;
@@ -246,14 +246,14 @@ static void send_problem(int fd, int status, const char *slug, const char *detai
 }
 
 /* Read and discard what the client sends while lingering; close at its end,
- * on an error or past FRONT_LINGER_BYTES. */
+ * on an error or past c->drain_max bytes. */
 static void linger_drain(http_front *f, front_conn *c)
 {
     for (;;) {
         ssize_t k = recv(c->fd, f->buf, f->cfg.head.max_head, MSG_DONTWAIT);
         if (k > 0) {
             c->drained += (size_t)k;
-            if (c->drained > FRONT_LINGER_BYTES)
+            if (c->drained > c->drain_max)
                 break;
             continue;
         }
@@ -286,6 +286,14 @@ static void conn_answer(http_front *f, front_conn *c, const http_head *h, int st
     int head_only = m && h->method_len == 4 && memcmp(m, "HEAD", 4) == 0;
 
     send_problem(c->fd, status, slug, detail, head_only, retry_after);
+    /* a body refused with its head (413) may be on its way, up to the limit:
+     * read it too, so that the client's stack does not reset the connection
+     * before the answer is read */
+    c->drain_max = FRONT_LINGER_BYTES;
+    if (status == 413 && h && h->len && h->content_length > 0)
+        c->drain_max += h->len + ((uint64_t)h->content_length < f->cfg.head.max_body
+                                      ? (size_t)h->content_length
+                                      : (size_t)f->cfg.head.max_body);
     if (f->cfg.answered)
         f->cfg.answered(f->cfg.cls, m, m ? h->method_len : 0, t, t ? h->target_len : 0, status,
                         now - c->t0);

@@ -11,8 +11,10 @@
  *     global one is reached (429, 503): the front answers with an RFC 9457
  *     application/problem+json body and "Connection: close", shuts its side
  *     down and reads and discards what the client still sends for up to
- *     2 s (so the client's stack does not reset the connection before the
- *     answer is read), then closes;
+ *     2 s and 1 MiB (after a 413 for a Content-Length over max_body, 1 MiB
+ *     more than the body it declared, up to max_body: so the client's stack
+ *     does not reset the connection before the answer is read), then
+ *     closes;
  *   - or it is admitted: the untouched socket and a lease are handed on
  *     (cfg.deliver, i.e. MHD_add_connection) and libmicrohttpd reads the
  *     same head again.
@@ -44,7 +46,8 @@
  * What the front does not cover: later requests on a kept-alive connection
  * go to libmicrohttpd directly.  http.c applies the target and framing
  * checks to those too (400 for %00 and for Content-Length with
- * Transfer-Encoding, 411 for Transfer-Encoding), but their heads have only
+ * Transfer-Encoding, 411 for Transfer-Encoding, 413 for a Content-Length
+ * over max_body, before the body is read), but their heads have only
  * libmicrohttpd's idle timeout (--timeout) and its own limits and HTML
  * error pages (431, 414, 400, 505).  http.c closes kept-alive connections
  * after each answer when http_front_busy() says the limits are nearly

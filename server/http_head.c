@@ -256,11 +256,14 @@ int http_head_parse(const char *buf, size_t n, const http_head_limits *lim, http
         return refuse(err, 411, "length-required",
                       "request bodies must come with a Content-Length (Transfer-Encoding, "
                       "e.g. chunked, is not accepted)");
-    if (out->expect_continue && out->content_length >= 0 &&
-        (uint64_t)out->content_length > lim->max_body)
+    /* with or without "Expect: 100-continue": a client that sends its body
+     * at once is answered while it sends, not after it (the front lingers) */
+    if (out->content_length >= 0 && (uint64_t)out->content_length > lim->max_body)
         return refuse(err, 413, "body-too-large",
-                      "Content-Length %lld exceeds the request body limit of %llu bytes",
-                      (long long)out->content_length, (unsigned long long)lim->max_body);
+                      "Content-Length %lld exceeds the request body limit of %llu bytes "
+                      "(max_body, glintd --max-body-mb %llu)",
+                      (long long)out->content_length, (unsigned long long)lim->max_body,
+                      (unsigned long long)(lim->max_body >> 20));
     return HTTP_HEAD_OK;
 }
 

@@ -30,8 +30,9 @@
  *                  Content-Length is 400 (RFC 9112 6.3: the classic request
  *                  smuggling ambiguity); Transfer-Encoding alone is 411
  *                  (glintd takes request bodies with a Content-Length only);
- *                  "Expect: 100-continue" with a Content-Length over max_body
- *                  is 413, before the client sends the body.
+ *                  a Content-Length over max_body is 413 as soon as the head
+ *                  is read, whether the client waits for 100 Continue or
+ *                  sends its body at once.
  *
  * Errors are found as early as the bytes allow: a request line that does not
  * begin with a method token is refused at its first wrong byte. */
@@ -45,7 +46,7 @@ typedef struct http_head_limits {
     size_t max_head;      /* bytes of the head, leading empty lines and the blank line included */
     size_t max_target;    /* bytes of the request target */
     unsigned max_fields;  /* header fields */
-    uint64_t max_body;    /* Content-Length refused at once when the client expects 100-continue */
+    uint64_t max_body;    /* a larger Content-Length is refused with the head */
 } http_head_limits;
 
 typedef struct http_head {

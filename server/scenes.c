@@ -83,6 +83,13 @@ int scenes_paint_scale(const json_t *doc)
     return s >= 1 && s <= 16 ? (int)s : 1;
 }
 
+size_t scenes_base_bytes(int width, int height, int scale, int env_lights)
+{
+    int W = width * scale, H = height * scale;
+    return render_peak_bytes(RENDER_CPU, 1, W, H) +
+           (env_lights > 0 ? (size_t)W * H * 8 * (size_t)((env_lights + 63) / 64) : 0);
+}
+
 int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err *err)
 {
     char name[128];
@@ -136,8 +143,7 @@ int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err
         goto done;
     W = sc->width * scale;
     H = sc->height * scale;
-    bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
-            (jenv ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
+    bytes = scenes_base_bytes(sc->width, sc->height, scale, jenv ? env.lights : 0);
     if ((rc = render_base_cost(NULL, RENDER_CPU, NULL, &sc->mesh, spec, jenv ? &env : NULL, W, H,
                                &cost, err)) ||
         (rc = admit_cost(a->work, cost, "the scene's base render", err)) ||

@@ -27,6 +27,12 @@ void scenes_unload(const scene *sc);
  * (img_free). */
 int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err *err);
 
+/* The memory bound of a base render (what scenes_base admits against the
+ * work budget): width x height at `scale` times a side, lit by the view's
+ * light (env_lights 0) or by an environment compressed into env_lights
+ * lights (the scene's base.env). */
+size_t scenes_base_bytes(int width, int height, int scale, int env_lights);
+
 /* The painting's scale of a scene document: its "paint_scale" (scenes made
  * before it existed: 1). */
 int scenes_paint_scale(const json_t *doc);

@@ -303,10 +303,11 @@ int cmd_export_merl(int argc, char **argv)
     else
         printf("{\"file\": \"%s\", \"layout\": \"MERL 90x90x180\", \"anisotropic\": %s, "
                "\"azimuths_averaged\": %d, \"spatial_average\": %s, \"bins_below_horizon\": %ld, "
-               "\"bins_nonfinite\": %ld, \"max_f\": %.6g, \"seconds\": %.3f}\n",
+               "\"bins_nonfinite\": %ld, \"bins_negative\": %ld, \"max_f\": %.6g, "
+               "\"seconds\": %.3f}\n",
                argv[argc - 1], st.anisotropic ? "true" : "false", st.azimuths,
-               st.spatial ? "true" : "false", st.below_horizon, st.nonfinite, st.max_f,
-               st.seconds);
+               st.spatial ? "true" : "false", st.below_horizon, st.nonfinite, st.negative,
+               st.max_f, st.seconds);
     merl_free(&t);
     material_free(&m);
     return rc;

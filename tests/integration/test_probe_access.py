@@ -239,14 +239,18 @@ def test_gbuffer_and_base_renders_are_admitted(d):
     w = Daemon("--work-mb", "64", "--quiet")
     try:
         one = [{"eye": [0, -3, 1], "light": [2, -2, 2]}]
-        big = scene(w, width=1024, height=1024, views=one)
-        # G-buffer bound: 16 MiB + 224 B x 1024^2 = 240 MiB
+        # (a scene whose own base render, 16 MiB + 72 B x 1024^2 = 88 MiB, could
+        # never be admitted is refused when it is made: test_probe_errors.py)
+        big = scene(w, width=640, height=640, views=one)
+        # G-buffer bound: 16 MiB + 224 B x 640^2 = 104 MiB
         p = problem(w.get("%s/scenes/%s/views/0/gbuffer.exr" % (API, big["id"])), 413,
                     "over-budget")
         assert "G-buffer" in p["detail"] and "64 MiB" in p["detail"]
-        # a base render with other settings: 16 MiB + 72 B x 1024^2 = 88 MiB
-        problem(w.get("%s/scenes/%s/views/0/base.png?brdf=lambert:kd=0.5" % (API, big["id"])),
-                413, "over-budget")
+        # a base render with other settings: 16 MiB + 72 B x 640^2 = 44 MiB, and
+        # 8 B x 16 groups of lights x 640^2 = 50 MiB more under an environment
+        w.get("%s/scenes/%s/views/0/base.png" % (API, big["id"]), status=200)
+        problem(w.get("%s/scenes/%s/views/0/base.png?brdf=lambert:kd=0.5&env=sky&lights=1024"
+                      % (API, big["id"])), 413, "over-budget")
         small = scene(w, width=64, height=64)
         w.get("%s/scenes/%s/views/0/gbuffer.exr" % (API, small["id"]), status=200)
         w.get("%s/scenes/%s/views/0/base.png?brdf=lambert:kd=0.5" % (API, small["id"]), status=200)

@@ -11,6 +11,13 @@ not.  The same for glTF images, OBJ material libraries and COLLADA images,
 whether or not anything uses them, and for relative names as well: an
 upload is the whole mesh (422 invalid-mesh, naming the reference).  A glTF
 that carries its data in data: URIs, and a .glb, still upload.
+
+Counts are checked before any work: an OBJ of 2.1 million copies of one
+triangle (16 MB, over the default --max-mesh-tris of 2,000,000; the import
+took minutes and a gigabyte) and PLY headers of 100,000 properties or
+comment lines are refused from what the bytes say, before the importer runs: 413 naming the
+count and the limit, and the daemon's peak memory grows by little more than
+the request body.
 """
 import base64
 import json
@@ -236,6 +243,47 @@ def test_probe_unused_and_relative_references(d):
                           b'</library_images>', b""))):
         r = d.post(API + "/meshes?format=" + fmt, data=body, schema="Mesh.json")
         assert r.status_code == 201, "%s: %d %s" % (fmt, r.status_code, r.text[:300])
+
+
+def peak_kb(d):
+    with open("/proc/%d/status" % d.proc.pid) as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    raise AssertionError("no VmHWM")
+
+
+def test_counts_are_checked_before_the_import(d):
+    many = b"v 0 0 0\nv 1 0 0\nv 0 1 0\n" + b"f 1 2 3\n" * 2100000
+    before = peak_kb(d)
+    r = d.post(API + "/meshes?format=obj", data=many, timeout=600)
+    assert r.status_code == 413, (r.status_code, r.text[:300])
+    p = r.json()
+    assert p["type"].endswith("/mesh-too-large"), p
+    assert "2100000 triangles" in p["detail"] and "limit of 2000000" in p["detail"], p
+    assert "--max-mesh-tris" in p["detail"], p
+    # the body (16.8 MB, in a buffer of up to twice that while it arrives)
+    # and little else: no import, no cleaning of 2.1 million triangles
+    grown = peak_kb(d) - before
+    assert grown < 64 * 1024, "peak memory grew by %d kB" % grown
+    ply = (b"ply\nformat ascii 1.0\nelement vertex 3\n" + b"property float x\n" * 100000 +
+           b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+           b"0\n1\n2\n3 0 1 2\n")
+    r = d.post(API + "/meshes?format=ply", data=ply, timeout=600)
+    assert r.status_code == 413, (r.status_code, r.text[:300])
+    p = r.json()
+    assert "more than 64 properties" in p["detail"], p
+    ply = (b"ply\nformat ascii 1.0\n" + b"comment hello\n" * 100000 +
+           b"element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+           b"end_header\n0 0 0\n1 0 0\n0 1 0\n")
+    r = d.post(API + "/meshes?format=ply", data=ply, timeout=600)
+    assert r.status_code == 413 and "more than 4096 lines" in r.text, (r.status_code, r.text)
+    # within the limits, the same kinds of file upload
+    d.post(API + "/meshes?format=obj", data=OBJ, status=201, schema="Mesh.json")
+    ok = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+          b"property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+          b"end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 3 1\n")
+    d.post(API + "/meshes?format=ply", data=ok, status=201, schema="Mesh.json")
 
 
 if __name__ == "__main__":

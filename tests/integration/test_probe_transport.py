@@ -8,7 +8,8 @@ time; the request log (escaped control characters, no ids, tokens or
 query values); malformed and hostile heads, each answered at once with an
 RFC 9457 problem+json body: garbage request line, chunked bodies (even
 with a chunk size of ffffffffffffffff), Content-Length with
-Transfer-Encoding, Expect: 100-continue with a 10 GB Content-Length,
+Transfer-Encoding, a 10 GB Content-Length (with Expect: 100-continue,
+without it, and on a kept-alive connection),
 over-long target, over-large head, HTTP/2.0 and HTTP/9.9, %00 in the
 target; keep-alive; a request body that stalls.
 
@@ -406,6 +407,36 @@ def test_expect_continue_too_large(d):
         s.close()
     assert st != 100, "100 Continue for a 10 GB body"
     assert_problem(st, hd, body, 413, dt)
+
+
+def test_content_length_too_large_without_expect(d):
+    """A Content-Length over --max-body-mb is refused (413) as soon as the
+    head is read, without Expect: the answer comes while the client still
+    holds its body back (the read's timeout only catches a hang); and the
+    same on a kept-alive connection, whose later requests libmicrohttpd
+    reads without the front."""
+    head = (b"PUT /api/v1/sessions/%s/views/0/painting HTTP/1.1\r\nHost: probe\r\n"
+            b"Content-Type: image/png\r\nContent-Length: 10000000000\r\n\r\n"
+            % secrets.token_hex(16).encode())
+    s = connect(d)
+    try:
+        s.sendall(head)
+        st, hd, body, _ = read_response(s, 60.0)
+    finally:
+        s.close()
+    p = assert_problem(st, hd, body, 413)
+    assert "10000000000" in p["detail"] and "--max-body-mb" in p["detail"], p
+    s = connect(d)
+    try:
+        s.sendall(b"GET /healthz HTTP/1.1\r\nHost: probe\r\n\r\n")
+        st, hd, body, _ = read_response(s, 60.0)
+        assert st == 200 and hd.get("connection", "").lower() != "close", (st, hd)
+        s.sendall(head)
+        st, hd, body, _ = read_response(s, 60.0)
+    finally:
+        s.close()
+    p = assert_problem(st, hd, body, 413)
+    assert "--max-body-mb" in p["detail"], p
 
 
 def test_content_length_with_chunked(d):

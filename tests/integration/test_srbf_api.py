@@ -2,8 +2,9 @@
 made under a built-in sky by the CLI, uploaded to a session, fitted as a
 job with method srbf, then the warm fit, the material's manifest (lobes,
 diffuse, energy report), its evaluation, shader and previews, and the
-parameter checks of the method's table (an unknown environment, an
-impossible diffuse albedo, a spec with characters the table refuses)."""
+parameter checks of the method's table (an unknown environment, refused
+before the fit is queued, an impossible diffuse albedo, a spec with
+characters the table refuses)."""
 import json
 import os
 import subprocess
@@ -142,12 +143,12 @@ def test_05_environments_of_the_env_dir(d):
     if kind == "job":
         j = wait_job(d, job["id"])
         assert j["state"] == "done", j
+    # refused before anything is queued, naming the parameter
     for bad in ("data:evil.hdr", "data:.hidden.hdr", "data:../bright.hdr", "data:nosuch.hdr"):
-        kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env=bad)},
-                        expect=(202, 404, 422))
-        if kind == "job":
-            j = wait_job(d, job["id"])
-            assert j["state"] == "failed" and "no environment" in json.dumps(j), (bad, j)
+        r = d.post("/api/v1/sessions/%s/fits" % S["session"], headers=tok(S["paint"]),
+                   json={"method": "srbf", "params": dict(PARAMS, env=bad)}, status=422)
+        assert "params.env" in r.json()["detail"] and "no environment" in r.json()["detail"], \
+            (bad, r.text)
 
 
 def test_06_previews_under_an_environment(d):
@@ -410,12 +411,11 @@ def test_04_parameters_are_checked_by_the_table(d):
     r = d.post(url, headers=h, data=json.dumps({"method": "srbf",
                                                 "params": {"lights": 0}}), status=422)
     assert "params.lights" in r.json()["detail"]
-    # a spec the daemon cannot resolve (it reads no file a request names)
-    kind, job = fit(d, {"method": "srbf", "params": dict(PARAMS, env="file:/etc/passwd")},
-                    expect=(201, 202, 404, 422))
-    if kind == "job":
-        j = wait_job(d, job["id"])
-        assert j["state"] == "failed" and "built-in" in json.dumps(j), j
+    # a spec the daemon cannot resolve (it reads no file a request names):
+    # refused at once, not by the job
+    r = d.post(url, headers=h, data=json.dumps({"method": "srbf", "params": dict(
+        PARAMS, env="file:/etc/passwd")}), status=422)
+    assert "params.env" in r.json()["detail"] and "built-in" in r.json()["detail"], r.text
 
 
 def test_09_held_out_error_under_the_environment(d):

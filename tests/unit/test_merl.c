@@ -319,6 +319,41 @@ TEST(a_measured_table_paints_as_the_truth_it_holds)
     merl_free(&t);
 }
 
+/* A BRDF negative where the half vector is near the normal (what an srbf
+ * fit with constraints none can make), positive elsewhere. */
+static void negative_near_normal(const void *ctx, const double n[3], const double wi[3],
+                                 const double wo[3], double f[3])
+{
+    double h[3], hl, c;
+    (void)ctx;
+    for (int e = 0; e < 3; e++)
+        h[e] = wi[e] + wo[e];
+    hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    c = (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / hl;
+    for (int e = 0; e < 3; e++)
+        f[e] = c > 0.9 ? -0.5 : 0.25;
+}
+
+TEST(negative_values_are_written_as_zero_and_counted)
+{
+    merl_table t;
+    merl_stats st;
+    glint_err e;
+    long zero = 0, neg = 0;
+    ASSERT_OK(merl_tabulate(negative_near_normal, NULL, 2, &t, &st, &e));
+    for (size_t i = 0; i < (size_t)3 * MERL_N; i++) {
+        neg += t.f[i] < 0.0;
+        zero += t.f[i] == 0.0;
+    }
+    printf("  %ld bins negative (written 0), %ld below the horizon\n", st.negative,
+           st.below_horizon);
+    /* a table's readers take entries below 0 for "no data" */
+    ASSERT_EQ(neg, 0);
+    ASSERT(st.negative > 1000 && st.negative < MERL_N);
+    ASSERT(zero >= 3 * st.negative);
+    merl_free(&t);
+}
+
 TEST(bad_files_are_refused_with_a_reason)
 {
     merl_table t;
@@ -356,6 +391,7 @@ TEST_LIST{
     TEST_ENTRY(an_hf3_material_round_trips_through_the_file),
     TEST_ENTRY(an_anisotropic_material_is_averaged_over_azimuths),
     TEST_ENTRY(a_measured_table_paints_as_the_truth_it_holds),
+    TEST_ENTRY(negative_values_are_written_as_zero_and_counted),
     TEST_ENTRY(bad_files_are_refused_with_a_reason),
 };
 

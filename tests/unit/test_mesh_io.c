@@ -450,6 +450,61 @@ TEST(concurrent_loads)
 
 static void test_cleanup(void) { tmp_cleanup(); }
 
+/* The host's triangle limit holds before the import: what OBJ face lines
+ * (fan-triangulated) and PLY/OFF headers say is counted first. */
+TEST(triangle_limit_before_the_import)
+{
+    static const char quads[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+                                "f 1 2 3 4\nf 1 2 5\n  f 2 3 5\n# f 1 2 3\nl 1 2\n";
+    static const char ply[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                              "property float y\nproperty float z\nelement face 2\n"
+                              "property list uchar int vertex_indices\nend_header\n"
+                              "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n3 0 1 3\n";
+    static const char off[] = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+    mesh m;
+    glint_err e;
+
+    /* 2 + 1 triangles: assimp skips the indented line, and so does the count */
+    ASSERT_EQ(mesh_load_mem_max(quads, strlen(quads), "obj", 2, &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_MSG(strstr(e.msg, "3 triangles") && strstr(e.msg, "limit of 2"), "%s", e.msg);
+    ASSERT_OK(mesh_load_mem_max(quads, strlen(quads), "obj", 3, &m, NULL, &e));
+    ASSERT_EQ(m.ntris, 3);
+    mesh_free(&m);
+    /* a quad and a triangle: within 2 faces, over 2 triangles */
+    ASSERT_EQ(mesh_load_mem_max(ply, strlen(ply), "ply", 2, &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_MSG(strstr(e.msg, "limit of 2"), "%s", e.msg);
+    ASSERT_EQ(mesh_load_mem_max(ply, strlen(ply), "ply", 1, &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_MSG(strstr(e.msg, "declares 2 \"face\""), "%s", e.msg);
+    ASSERT_OK(mesh_load_mem_max(ply, strlen(ply), "ply", 3, &m, NULL, &e));
+    mesh_free(&m);
+    ASSERT_EQ(mesh_load_mem_max(off, strlen(off), "off", 1, &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_OK(mesh_load_mem_max(off, strlen(off), "off", 2, &m, NULL, &e));
+    mesh_free(&m);
+}
+
+/* PLY headers assimp reads slowly: too many properties, too many lines. */
+TEST(ply_headers_beyond_the_limits)
+{
+    size_t cap = 1 << 20, n;
+    char *b = malloc(cap);
+    mesh m;
+    glint_err e;
+    ASSERT(b != NULL);
+    n = (size_t)snprintf(b, cap, "ply\nformat ascii 1.0\nelement vertex 3\n");
+    for (int i = 0; i < 65; i++)
+        n += (size_t)snprintf(b + n, cap - n, "property float p%d\n", i);
+    n += (size_t)snprintf(b + n, cap - n, "end_header\n");
+    ASSERT_EQ(mesh_load_mem(b, n, "ply", &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_MSG(strstr(e.msg, "more than 64 properties"), "%s", e.msg);
+    n = (size_t)snprintf(b, cap, "ply\nformat ascii 1.0\n");
+    for (int i = 0; i < 5000; i++)
+        n += (size_t)snprintf(b + n, cap - n, "comment %d\n", i);
+    n += (size_t)snprintf(b + n, cap - n, "element vertex 0\nend_header\n");
+    ASSERT_EQ(mesh_load_mem(b, n, "ply", &m, NULL, &e), GLINT_ERANGE);
+    ASSERT_MSG(strstr(e.msg, "more than 4096 lines"), "%s", e.msg);
+    free(b);
+}
+
 TEST(zz_cleanup) { test_cleanup(); }
 
 TEST_LIST {
@@ -461,6 +516,8 @@ TEST_LIST {
     TEST_ENTRY(shared_meshes),
     TEST_ENTRY(shared_meshes_raster),
     TEST_ENTRY(concurrent_loads),
+    TEST_ENTRY(triangle_limit_before_the_import),
+    TEST_ENTRY(ply_headers_beyond_the_limits),
     TEST_ENTRY(zz_cleanup),
 };
 
