@@ -2,6 +2,7 @@
 #include "api_common.h"
 
 #include <limits.h>
+#include <malloc.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -171,9 +172,12 @@ http_resp api_body_too_large(http_req *req, const char *what)
 
 /* Nesting depth of JSON text, counted before parsing (so a hostile document
  * cannot make the parser recurse deeply). */
-static int text_depth(const char *s, size_t n)
+/* The nesting depth of JSON text and (OUT) an upper bound of the values
+ * its tree holds: one per opening bracket, comma and colon, plus one. */
+static int text_shape(const char *s, size_t n, size_t *values)
 {
     int depth = 0, best = 0, in_str = 0;
+    size_t count = 1;
     for (size_t i = 0; i < n; i++) {
         char c = s[i];
         if (in_str) {
@@ -184,13 +188,29 @@ static int text_depth(const char *s, size_t n)
         } else if (c == '"') {
             in_str = 1;
         } else if (c == '{' || c == '[') {
+            count++;
             if (++depth > best)
                 best = depth;
         } else if (c == '}' || c == ']') {
             depth--;
+        } else if (c == ',' || c == ':') {
+            count++;
         }
     }
+    *values = count;
     return best;
+}
+
+/* http_req's release hook: what api_body_json held of the work budget.
+ * The tree is freed by then; its pages go back to the system (malloc_trim),
+ * or the arena its thread used would keep them, and the next large body,
+ * on another thread's arena, would add its own. */
+static void body_release(http_req *req)
+{
+    app *a = req->app;
+    malloc_trim(0);
+    admit_leave(a->work, req->held);
+    req->held = 0;
 }
 
 int api_body_json(http_req *req, json_t **out, glint_err *err)
@@ -198,6 +218,8 @@ int api_body_json(http_req *req, json_t **out, glint_err *err)
     const char *ct = http_header_in(req, "Content-Type");
     json_error_t je;
     json_t *j;
+    size_t values, tree;
+    int rc;
 
     *out = NULL;
     if (req->body_too_large)
@@ -208,9 +230,20 @@ int api_body_json(http_req *req, json_t **out, glint_err *err)
     if (req->body_len == 0)
         return api_reject(err, GLINT_EINVAL, "invalid-json",
                           "empty body: a JSON object is required");
-    if (text_depth(req->body, req->body_len) > API_JSON_MAX_DEPTH)
+    if (text_shape(req->body, req->body_len, &values) > API_JSON_MAX_DEPTH)
         return api_reject(err, GLINT_ETOOBIG, "json-too-deep",
                           "JSON nesting deeper than the limit of %d", API_JSON_MAX_DEPTH);
+    tree = values * API_JSON_VALUE_BYTES;
+    if (tree > API_JSON_FREE_BYTES && !req->held) {
+        app *a = req->app;
+        char what[96];
+        snprintf(what, sizeof what, "parsing a JSON body of %zu values (%.1f MB)", values,
+                 (double)req->body_len / 1e6);
+        if ((rc = admit_enter(a->work, tree, what, err)))
+            return rc;
+        req->held = tree;
+        req->release = body_release;
+    }
     j = json_loadb(req->body, req->body_len, JSON_REJECT_DUPLICATES, &je);
     if (!j)
         return api_reject(err, GLINT_EINVAL, "invalid-json",

@@ -500,6 +500,10 @@ static int strokes_parse(http_req *req, stroke **list, int *n, json_t **canon, g
             glint_err_kind(e, rc == GLINT_ENONFINITE ? "non-finite" : "invalid-stroke");
         goto done;
     }
+    /* the parsed body goes before its canonical copy is made: one tree of
+     * the request at a time (what api_body_json admitted) */
+    json_decref(body);
+    body = NULL;
     *canon = json_array();
     for (int i = 0; i < *n && !rc; i++) {
         json_t *j = stroke_to_json(&(*list)[i]);

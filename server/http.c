@@ -621,6 +621,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         if (strcmp(s->routes[i].method, method) != 0)
             continue;
         resp = s->routes[i].fn(&req);
+        if (req.release)
+            req.release(&req);
         break;
     }
     if (!resp.r) {

@@ -61,6 +61,11 @@ typedef struct http_req {
     void *app;              /* the application (http_server_start's `app`) */
     srv_timing timing;      /* steps the handler timed: sent as Server-Timing (timing.h) */
     int gone;               /* http_req_gone said so (read and set atomically) */
+    /* What the handler holds until it returns (e.g. of a work budget), and
+     * how to give it back: the layer calls release(req), when set, right
+     * after the handler, whatever it answered. */
+    size_t held;
+    void (*release)(struct http_req *req);
 } http_req;
 
 typedef struct http_resp {

@@ -266,7 +266,8 @@ def uploads(glintd):
     gb = probe_files.exr_declaring(n, n, names + ["extra%02d" % i for i in range(32 - len(names))])
     measure(glintd, "upload G-buffer of 32 float channels %d^2" % n, n * n, gbuffer_set,
             lambda d, st: d.req("PUT", "%s/gbuffer-sets/%s/views/0/gbuffer.exr"
-                                % (API, st["id"]), data=gb))
+                                % (API, st["id"]), data=gb,
+                                headers={"X-Glint-Owner": st["owner_key"]}))
     hdr = probe_files.hdr_flat(n, n // 2)
     measure(glintd, "upload environment, Radiance HDR %dx%d" % (n, n // 2), n * n // 2,
             lambda d: None, lambda d, _: d.req("POST", API + "/environments", data=hdr))
@@ -343,7 +344,8 @@ def probes(glintd, nstrokes):
                    json={"views": 1, "width": 4096, "height": 8}).json()
         body = probe_files.exr_declaring(4096, 4096, ["c%02d" % i for i in range(32)])
         return answers([d.call("PUT", "%s/gbuffer-sets/%s/views/0/gbuffer.exr"
-                               % (API, st["id"]), data=body)])
+                               % (API, st["id"]), data=body,
+                               headers={"X-Glint-Owner": st["owner_key"]})])
     probe(glintd, "32-channel OpenEXR of 4096^2 into a G-buffer set of 4096x8", gbuffer)
 
     # the history: written by one daemon, read by a fresh one (its peak is
@@ -354,7 +356,8 @@ def probes(glintd, nstrokes):
         s = session(d)
         ids.update(s)
         url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
-        per = 150
+        # 60 strokes a request: a tree of about 170 MiB, within the budget
+        per = 60
         text = json.dumps({"strokes": [probe_files.far_stroke(10000)] * per}).encode()
         left, rs = nstrokes, []
         while left > 0:
@@ -364,6 +367,14 @@ def probes(glintd, nstrokes):
                 "X-Glint-Token": s["paint_token"], "Content-Type": "application/json"}))
             left -= per
         return answers(rs)
+    def write_at_once(d):
+        s = session(d)
+        url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
+        text = json.dumps({"strokes": [probe_files.far_stroke(10000)] * 150}).encode()
+        return answers([d.call("POST", url, data=text, headers={
+            "X-Glint-Token": s["paint_token"], "Content-Type": "application/json"})])
+    probe(glintd, "one request of 150 strokes of 10,000 points (a tree of twice the budget)",
+          write_at_once)
     data = probe(glintd, "writing %d strokes of 10,000 points (1 inside the image)" % nstrokes,
                  write, keep_data=True)
 

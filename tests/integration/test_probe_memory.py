@@ -138,6 +138,7 @@ def test_an_exr_declaring_16384_squared_is_refused_from_its_header(_d):
         st = b.d.post(API + "/gbuffer-sets", status=201,
                       json={"views": 1, "width": 32, "height": 32}).json()
         p = problem(b.d.put("%s/gbuffer-sets/%s/views/0/painting" % (API, st["id"]), data=body,
+                            headers={"X-Glint-Owner": st["owner_key"]},
                             timeout=300), 413, "image-too-large")
         b.check_peak("ZIP OpenEXR of 16384^2 as a G-buffer set's painting")
     finally:
@@ -152,14 +153,15 @@ def test_a_32_channel_exr_beyond_the_sets_size_is_refused_from_its_header(_d):
         st = b.d.post(API + "/gbuffer-sets", status=201,
                       json={"views": 1, "width": 4096, "height": 8}).json()
         url = "%s/gbuffer-sets/%s/views/0/gbuffer.exr" % (API, st["id"])
-        r = b.d.put(url, data=body, headers={"Content-Type": "image/x-exr"}, timeout=300)
+        owner = {"X-Glint-Owner": st["owner_key"], "Content-Type": "image/x-exr"}
+        r = b.d.put(url, data=body, headers=owner, timeout=300)
         assert r.status_code == 422, r.status_code
         b.check_peak("32-channel OpenEXR of 4096^2 into a 4096x8 set")
         p = problem(r, 422, "wrong-size")
         assert "4096x4096" in p["detail"] and "4096x8" in p["detail"], p
         # the set's size with more channels than a G-buffer has: refused too
         more = exr_declaring(4096, 8, ["c%02d" % i for i in range(40)])
-        p = problem(b.d.put(url, data=more, headers={"Content-Type": "image/x-exr"}), 422,
+        p = problem(b.d.put(url, data=more, headers=owner), 422,
                     "invalid-gbuffer")
         assert "40 channels" in p["detail"], p
     finally:
@@ -167,16 +169,18 @@ def test_a_32_channel_exr_beyond_the_sets_size_is_refused_from_its_header(_d):
 
 
 def test_a_decode_beyond_the_work_budget_is_refused_before_it_starts(_d):
-    # a 2048 x 2048 view takes a 2048^2 painting; with the budget at 64 MiB
-    # its decode's bound (6 bytes a sample for an 8-bit PNG, 12 a pixel for
-    # the RGB copy, 8 MiB: 128 MiB) can never fit: 413 naming the budget
+    # a 2048 x 2048 G-buffer set takes 2048^2 paintings; with the budget at
+    # 64 MiB a painting's decode bound (6 bytes a sample for an 8-bit PNG, 12
+    # a pixel for the RGB copy, 8 MiB: 128 MiB) can never fit: 413 naming
+    # the budget.  (A session's scene that large is refused at creation:
+    # its base renders need more than its paintings.)
     w = Daemon("--work-mb", "64", "--quiet")
     try:
-        sc = w.post(API + "/scenes", status=201, json={"width": 2048, "height": 2048}).json()
-        s = w.post(API + "/sessions", status=201, json={"scene_id": sc["id"]}).json()
-        url = "%s/sessions/%s/views/0/painting" % (API, s["id"])
-        p = problem(w.put(url, data=png_declaring(2048, 2048), headers=tok(s)), 413,
-                    "over-budget")
+        st = w.post(API + "/gbuffer-sets", status=201,
+                    json={"views": 1, "width": 2048, "height": 2048}).json()
+        url = "%s/gbuffer-sets/%s/views/0/painting" % (API, st["id"])
+        p = problem(w.put(url, data=png_declaring(2048, 2048),
+                          headers={"X-Glint-Owner": st["owner_key"]}), 413, "over-budget")
         assert "--work-mb" in p["detail"] and "64 MiB" in p["detail"], p
         assert "2048x2048" in p["detail"], p
         assert rss_kb(w, "VmHWM") <= (64 + FIXED_MB) * 1024 or sanitized(w)
@@ -229,6 +233,27 @@ def test_a_long_stroke_history_is_read_in_bounded_pages(_d):
             assert got["last_seq"] == seen and got["more"] is True
             got = b.d.get(page + "&since=%d" % got["last_seq"], status=200, headers=view).json()
         b.check_peak("the history read page after page")
+    finally:
+        b.d.stop()
+
+
+def test_a_stroke_request_holds_its_parsed_size_against_the_budget(_d):
+    # a JSON body of small numbers grows about 30 times when parsed: 150
+    # strokes of 10,000 points (about 33 MB of text, 4.5 million values)
+    # would take the budget's double; refused before parsing, naming it.
+    # Half of it (a tree of about 200 MiB) fits and is written.
+    b = Budgeted()
+    try:
+        sc, s = session(b.d)
+        url = "%s/sessions/%s/views/0/strokes" % (API, s["id"])
+        hdr = {**tok(s), "Content-Type": "application/json"}
+        big = json.dumps({"strokes": [far_stroke(10000)] * 150}).encode()
+        p = problem(b.d.post(url, data=big, headers=hdr, timeout=300), 413, "over-budget")
+        assert "parsing a JSON body" in p["detail"] and "--work-mb" in p["detail"], p
+        b.check_peak("a stroke request of %.0f MB whose tree passes the budget" % (len(big) / 1e6))
+        half = json.dumps({"strokes": [far_stroke(10000)] * 70}).encode()
+        b.d.post(url, data=half, headers=hdr, status=200, timeout=300)
+        b.check_peak("a stroke request of %.0f MB within the budget" % (len(half) / 1e6))
     finally:
         b.d.stop()
 
