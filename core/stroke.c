@@ -614,19 +614,6 @@ double stroke_cost(const stroke *s, int width, int height)
     return cost;
 }
 
-int stroke_reaches_image(const stroke *s, int width, int height)
-{
-    double r = 0.5 * s->diameter;
-    int nseg = stroke_nseg(s);
-    for (int i = 0; i < nseg; i++) {
-        const double *a = s->pts + 2 * i, *b = stroke_seg_b(s, i);
-        if (fmax(a[0], b[0]) + r >= 0.0 && fmin(a[0], b[0]) - r <= (double)width &&
-            fmax(a[1], b[1]) + r >= 0.0 && fmin(a[1], b[1]) - r <= (double)height)
-            return 1;
-    }
-    return 0;
-}
-
 double stroke_list_cost(const stroke *list, int n, int width, int height)
 {
     double cost = 0.0;

@@ -138,15 +138,6 @@ int stroke_apply(const stroke *s, img *im, const img *base, stroke_report *rep, 
 double stroke_cost(const stroke *s, int width, int height);
 double stroke_list_cost(const stroke *list, int n, int width, int height);
 
-/* 0 when s certainly changes no pixel of a width x height image: each of
- * its segments (its one point for a dab), grown by the radius D / 2, lies
- * wholly outside [0, width] x [0, height]; else 1 (it may reach one).  Such
- * a stroke costs no brush work (stroke_cost gives 0) but is stored like any
- * other, so a server refuses it rather than keep it in the history for
- * nothing.  The studio's brush (web/brush.js) finds no pixel to change for
- * every stroke this refuses. */
-int stroke_reaches_image(const stroke *s, int width, int height);
-
 /* Apply n strokes in order.  On failure the message names the stroke
  * ("strokes[i]: ...").  OUT: *total (may be NULL): the pixels changed,
  * summed over the strokes, and the bounding box of all of them (x1 < x0

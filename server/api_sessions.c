@@ -546,16 +546,6 @@ static http_resp strokes_post(http_req *req)
     par_warm(); /* the encode's workers wake while the brush runs */
     for (int i = 0; i < n; i++)
         need_base |= list[i].mode == STROKE_ERASE;
-    for (int i = 0; i < n; i++)
-        if (!stroke_reaches_image(&list[i], w, h)) {
-            /* it would paint nothing and only lengthen the history */
-            rc = api_reject(&e, GLINT_EINVAL, "stroke-outside-image",
-                            "strokes[%d] lies wholly outside the %dx%d image (each point more "
-                            "than its radius %g away): it would paint nothing; nothing was "
-                            "applied",
-                            i, w, h, 0.5 * list[i].diameter);
-            goto done;
-        }
     {
         /* bound the work before taking the session's lock */
         double cost = stroke_list_cost(list, n, w, h);

@@ -187,9 +187,7 @@ export class Painter extends EventTarget {
     const live = this.live;
     this.live = null;
     this.session.liveHook = null;
-    // a stroke that reached no pixel is not sent: it would paint nothing
-    // (the server refuses one wholly outside the image)
-    if (!live || !live.s.points.length || !live.box) return;
+    if (!live || !live.s.points.length) return;
     this.session.commitStroke(live.k, live.s).catch(err => this.emit('error', err));
   }
 

@@ -325,41 +325,6 @@ TEST(strokes_partly_or_fully_outside)
     img_free(&im);
 }
 
-/* stroke_reaches_image says 0 only for strokes that change no pixel:
- * checked against stroke_apply on an 8 x 8 image for dabs and lines
- * around it, near and far, and for strokes that leave it. */
-TEST(a_stroke_that_cannot_reach_the_image_is_told)
-{
-    static const char *const cases[] = {
-        "{\"color\":[1,1,1],\"diameter\":4,\"points\":[[-10,-10],[-3,20]]}",
-        "{\"color\":[1,1,1],\"diameter\":4,\"points\":[[-1.5,4]]}",
-        "{\"color\":[1,1,1],\"diameter\":4,\"points\":[[-2.5,4]]}",
-        "{\"color\":[1,1,1],\"diameter\":1,\"points\":[[4,4],[-500000,-700000]]}",
-        "{\"color\":[1,1,1],\"diameter\":1,\"points\":[[-500000,-700000],[-500001,-700001]]}",
-        "{\"color\":[1,1,1],\"diameter\":3,\"points\":[[9.4,-1],[9.4,9]]}",
-        "{\"color\":[1,1,1],\"diameter\":2,\"points\":[[-100,4],[100,4]]}",
-        "{\"color\":[1,1,1],\"diameter\":65536,\"points\":[[1000000,4],[-1000000,4]]}",
-        "{\"color\":[1,1,1],\"diameter\":65536,\"points\":[[1000000,1000000]]}",
-    };
-    static const int reaches[] = {0, 1, 0, 1, 0, 1, 1, 1, 0};
-    for (unsigned k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        stroke st;
-        img im;
-        stroke_report rep;
-        glint_err e;
-        ASSERT_OK(stroke_parse(cases[k], &st, &e));
-        ASSERT_OK(img_fill(&im, 8, 8, 0, 0, 0));
-        ASSERT_OK(stroke_apply(&st, &im, NULL, &rep, &e));
-        ASSERT_MSG(stroke_reaches_image(&st, 8, 8) == reaches[k], "case %u", k);
-        if (!reaches[k]) {
-            ASSERT_MSG(rep.pixels == 0, "case %u: %ld pixels", k, rep.pixels);
-            ASSERT_EQ(stroke_cost(&st, 8, 8), 0);
-        }
-        stroke_free(&st);
-        img_free(&im);
-    }
-}
-
 TEST(overflow_is_reported_not_stored)
 {
     stroke s;
@@ -654,7 +619,6 @@ TEST_LIST {
     TEST_ENTRY(scale_mode),
     TEST_ENTRY(erase_brings_back_the_base),
     TEST_ENTRY(strokes_partly_or_fully_outside),
-    TEST_ENTRY(a_stroke_that_cannot_reach_the_image_is_told),
     TEST_ENTRY(overflow_is_reported_not_stored),
     TEST_ENTRY(apply_list_in_order),
     TEST_ENTRY(apply_list_box_holds_every_change),
