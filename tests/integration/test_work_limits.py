@@ -117,7 +117,7 @@ def start_abandoned_preview(d, mid, token):
     render holds its work slot."""
     before = metric(d, "glintd_work_total", '{outcome="admitted"}')
     c = socket.create_connection(("127.0.0.1", d.port))
-    c.sendall(("GET /api/v1/materials/%s/preview.png?%s HTTP/1.1\r\nHost: test\r\n"
+    c.sendall(("GET /api/v1/materials/%s/preview.png?%s HTTP/1.1\r\nHost: localhost\r\n"
                "X-Glint-Token: %s\r\n\r\n" % (mid, SLOW, token)).encode())
     wait_for("the slow preview taking its slot",
              lambda: metric(d, "glintd_work_total", '{outcome="admitted"}') > before and
