@@ -454,7 +454,7 @@ def test_streams_that_never_read_are_bounded(d):
         grown = (vm_hwm_kb(w.proc.pid) - hwm0) / 1024.0
         print("  peak resident memory grew by %.0f MB; %d streams open, %d refused" % (
             grown, status.count(b"200"), status.count(b"429")))
-        assert grown < 128, "peak resident memory grew by %.0f MB" % grown
+        assert grown < 128 or w.sanitized(), "peak resident memory grew by %.0f MB" % grown
         assert status.count(b"200") == 32 and status.count(b"429") == 208, status
         details = []
         for text in refusals:
