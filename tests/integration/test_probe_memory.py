@@ -1,5 +1,6 @@
 """Memory outside the work budget: uploads whose header declares more than
-their target holds, and long stroke histories read at once.
+their target holds, long stroke histories read at once, and event streams
+that never read.
 
 Each memory case runs on a daemon of its own, started with --work-mb 256
 --cache-mb 64 as the probe's was, so that its peak resident set (VmHWM in
@@ -21,11 +22,13 @@ held against the work budget.
 import concurrent.futures as cf
 import json
 import os
+import socket
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Daemon, run_tests  # noqa: E402
+from harness import Daemon, run_tests, validate  # noqa: E402
 from probe_files import exr_declaring, far_stroke, png_declaring  # noqa: E402
+from test_sessions import H, W, new_session, post_strokes  # noqa: E402
 
 API = "/api/v1"
 WORK_MB = 256
@@ -249,6 +252,87 @@ def test_a_stroke_request_holds_its_parsed_size_against_the_budget(_d):
         b.check_peak("a stroke request of %.0f MB within the budget" % (len(half) / 1e6))
     finally:
         b.d.stop()
+
+
+def vm_hwm_kb(pid):
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    raise AssertionError("no VmHWM")
+
+
+# ---- item 1: event streams that never read --------------------------------------------
+
+
+def open_stream_raw(d, sess, source):
+    """A stream requested from loopback address `source` by a client that
+    reads its answer's first line and nothing more."""
+    so = socket.socket()
+    so.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    so.bind((source, 0))
+    so.connect(("127.0.0.1", d.port))
+    so.sendall(b"GET %s/sessions/%s/events?token=%s HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
+               % (API.encode(), sess["id"].encode(), sess["view_token"].encode()))
+    return so
+
+
+def test_streams_that_never_read_are_bounded(d):
+    """240 event streams requested on one session by clients that never
+    read (12 loopback addresses, 20 each), then 16 stroke requests of
+    320 KB whose events those streams would carry: the daemon's peak
+    resident memory grows by less than 128 MB, at most 32 streams are open
+    on the session and 16 per client, and the others are refused at once
+    (429 too-many-streams, naming the limit, the connection closed)."""
+    w = Daemon("--quiet")
+    socks = []
+    try:
+        sc = w.post(API + "/scenes", status=201, json={"width": W, "height": H}).json()
+        sess = new_session(w, sc["id"])
+        hwm0 = vm_hwm_kb(w.proc.pid)
+        status, refusals = [], []
+        for i in range(240):  # one after the other: which limit refuses is known
+            so = open_stream_raw(w, sess, "127.0.0.%d" % (2 + i // 20))
+            socks.append(so)
+            so.settimeout(30)
+            head = b""
+            while b"\r\n" not in head:
+                chunk = so.recv(1024)
+                if not chunk:
+                    break
+                head += chunk
+            status.append(head.split(b" ")[1] if head.startswith(b"HTTP/1.1 ") else head[:40])
+            if status[-1] == b"429":
+                while True:                           # the refusal closes the connection
+                    chunk = so.recv(65536)
+                    if not chunk:
+                        break
+                    head += chunk
+                refusals.append(head.decode("utf-8", "replace"))
+        pts = [[0.5 + (k % 30), 0.5 + (k // 30) % 30] for k in range(8000)]
+        for _ in range(16):
+            post_strokes(w, sess, 0, [{"color": [1, 0, 0], "diameter": 1, "points": pts}] * 3)
+        grown = (vm_hwm_kb(w.proc.pid) - hwm0) / 1024.0
+        print("  peak resident memory grew by %.0f MB; %d streams open, %d refused" % (
+            grown, status.count(b"200"), status.count(b"429")))
+        assert grown < 128 or w.sanitized(), "peak resident memory grew by %.0f MB" % grown
+        assert status.count(b"200") == 32 and status.count(b"429") == 208, status
+        details = []
+        for text in refusals:
+            body = json.loads(text.split("\r\n\r\n", 1)[1])
+            validate(body, "Problem.json")
+            assert body["type"].endswith("too-many-streams"), body
+            assert "connection: close" in text.lower().split("\r\n\r\n")[0]
+            details.append(body["detail"])
+        # the first address: 16 streams, then its own limit; the second
+        # fills the session's; every later one meets the session's
+        assert all("--max-streams-per-client 16" in x for x in details[:4]), details[:5]
+        assert all("--max-streams-per-session 32" in x for x in details[4:]), details[4:6]
+        print("  %s\n  %s" % (details[0], details[-1]))
+    finally:
+        for so in socks:
+            so.close()
+        w.stop()
 
 
 if __name__ == "__main__":
