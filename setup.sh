@@ -153,27 +153,31 @@ case "$mode" in
       build build
     stage "" build build-asan -Db_sanitize=address,undefined -Db_lundef=false \
       -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
-    # Each test runs once, in the build that checks the most.  The plain
-    # build: the command line, the cross-checks with the numpy references,
-    # glint-mpi, the studio in Chromium, allocation failure (it replaces
-    # malloc, which the sanitizers own) and the integration tests of suite
-    # 'plain' (resident-memory bounds, the importer's address-space limit).
-    stage "plain build: CLI, reference cross-checks, MPI, Chromium, allocation failure, memory bounds" \
+    # Each test runs once, in the build that checks the most for what it
+    # costs.  The plain build: the command line, the cross-checks with the
+    # numpy references, glint-mpi, the studio in Chromium, allocation
+    # failure (it replaces malloc, which the sanitizers own), the numerical
+    # programs of suite 'valgrind-slow' (two to three times slower under the
+    # sanitizers; `test deep` runs them there) and the integration tests of
+    # suite 'plain' (resident-memory bounds, the importer's address-space
+    # limit).
+    stage "plain build: CLI, reference cross-checks, MPI, Chromium, allocation failure, the numerical programs, memory bounds" \
       meson test -C build --suite plain --suite cli --suite ref --suite mpi --suite browser \
-        --print-errorlogs || failed=$((failed + 1))
-    stage "unit tests under valgrind (memcheck; those that finish within minutes there)" \
+        --suite valgrind-slow --print-errorlogs || failed=$((failed + 1))
+    stage "unit tests under valgrind (memcheck; the programs that take about a minute there)" \
       meson test -C build --setup valgrind --suite valgrind --print-errorlogs \
         || failed=$((failed + 1))
-    # Every unit program, the fuzz corpora and glintd over real HTTP (with
-    # PostgreSQL, the replicas behind nginx) under AddressSanitizer +
+    # The other unit programs, the fuzz corpora and glintd over real HTTP
+    # (with PostgreSQL, the replicas behind nginx) under AddressSanitizer +
     # UndefinedBehaviorSanitizer: a sanitizer report fails the test (the
-    # daemon's log is read by tests/integration/harness.py).  They run the
-    # numerical programs two to three times slower: timeouts three times.
+    # daemon's log is read by tests/integration/harness.py).  Timeouts are
+    # three times the plain build's.
     export ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1
     export LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0"
     export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
     stage "sanitizers: unit tests and the fuzz corpora" \
-      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs --timeout-multiplier 3 \
+      meson test -C build-asan --suite unit --suite fuzz --no-suite valgrind-slow --print-errorlogs \
+        --timeout-multiplier 3 \
         || failed=$((failed + 1))
     # the daemon's previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung
     # under ASan)
@@ -184,16 +188,22 @@ case "$mode" in
           build-asan/meson-logs/testlog.json build-asan/meson-logs/testlog-integration.json)
     if [ "$depth" = deep ]; then
       # Before a release (docs/testing.md): what is too slow for every
-      # change.  The numerical programs under memcheck, every unit program
-      # on the plain build, and allocation failure at every allocation.
+      # change.  The numerical programs under the sanitizers and under
+      # memcheck, every unit program on the plain build, and allocation
+      # failure at every allocation.
+      stage "deep: the numerical programs under the sanitizers" \
+        meson test -C build-asan --suite valgrind-slow --print-errorlogs --timeout-multiplier 3 \
+          --logbase testlog-deep || failed=$((failed + 1))
       unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS
       stage "deep: every unit program on the plain build, allocation failure at every allocation" \
         env GLINT_ALLOC_FAIL_STRIDE=1 meson test -C build --suite unit --print-errorlogs \
           --timeout-multiplier 20 --logbase testlog-deep || failed=$((failed + 1))
-      stage "deep: the numerical programs under valgrind" \
-        meson test -C build --setup valgrind --suite valgrind-slow --print-errorlogs \
+      stage "deep: the programs that take minutes to hours under valgrind" \
+        meson test -C build --setup valgrind --suite valgrind-deep --suite valgrind-slow \
+          --print-errorlogs \
           --timeout-multiplier 12 --logbase testlog-valgrind-slow || failed=$((failed + 1))
-      logs+=(build/meson-logs/testlog-deep.json build/meson-logs/testlog-valgrind-slow.json)
+      logs+=(build-asan/meson-logs/testlog-deep.json build/meson-logs/testlog-deep.json
+             build/meson-logs/testlog-valgrind-slow.json)
     fi
     echo "== the test command took $((SECONDS / 60)) min $((SECONDS % 60)) s"
     python3 tests/summary.py "${logs[@]}"
