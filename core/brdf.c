@@ -425,3 +425,13 @@ void brdf_format(const brdf *b, char *buf, int len)
     }
     snprintf(buf, (size_t)len, "%s", tmp);
 }
+
+void brdf_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3])
+{
+    (void)uv;
+    double c = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    brdf_eval(ctx, n, wi, wo, rgb);
+    for (int e = 0; e < 3; e++)
+        rgb[e] *= c > 0.0 ? c : 0.0;
+}

@@ -57,4 +57,9 @@ void brdf_format(const brdf *b, char *buf, int len);
 void brdf_eval(const brdf *b, const double n[3], const double wi[3],
                const double wo[3], double rgb[3]);
 
+/* Radiance per unit light under an environment's light (envlit.h's
+ * envlit_fn; ctx: a const brdf *; uv unused): brdf_eval() x n.wi. */
+void brdf_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3]);
+
 #endif

@@ -291,3 +291,13 @@ done:
     material_gpu_free(&g);
     return rc;
 }
+
+int brdfx_material(const material *m, char **text, glint_err *err)
+{
+    *text = NULL;
+    if (!m || !m->method)
+        return glint_err_set(err, GLINT_EINVAL, "no material");
+    if (!m->method->mat->brdf_explorer)
+        return brdfx_from_gpu(m, text, err);
+    return m->method->mat->brdf_explorer(m->data, text, err);
+}

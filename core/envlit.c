@@ -8,32 +8,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "brdf.h"
-#include "material.h"
 #include "scene.h"
 #include "vis.h"
-
-void envlit_brdf(const void *ctx, const double uv[2], const double n[3], const double wi[3],
-                 const double wo[3], double rgb[3])
-{
-    (void)uv;
-    double c = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
-    brdf_eval(ctx, n, wi, wo, rgb);
-    for (int e = 0; e < 3; e++)
-        rgb[e] *= c > 0.0 ? c : 0.0;
-}
-
-void envlit_material(const void *ctx, const double uv[2], const double n[3],
-                     const double wi[3], const double wo[3], double rgb[3])
-{
-    material_eval_at(ctx, uv, n, wi, wo, rgb);
-}
-
-void envlit_material_preview(const void *ctx, const double uv[2], const double n[3],
-                             const double wi[3], const double wo[3], double rgb[3])
-{
-    material_eval_preview_at(ctx, uv, n, wi, wo, rgb);
-}
 
 static double now_s(void)
 {

@@ -10,7 +10,7 @@
  *
  * where R is radiance per unit light, f(d_k, wo) max(0, n.d_k)
  * (material_eval(); for an analytic BRDF brdf_eval() x n.d_k, see
- * envlit_brdf), and V_k(x) is 1 when the light is seen from x (vis.h;
+ * brdf_envlit), and V_k(x) is 1 when the light is seen from x (vis.h;
  * taken as 1 everywhere when shadows are off or the mesh is convex).
  *
  * At vertices, wo points from the vertex to the eye.  Where a vertex faces
@@ -46,15 +46,9 @@
 typedef void (*envlit_fn)(const void *ctx, const double uv[2], const double n[3],
                           const double wi[3], const double wo[3], double rgb[3]);
 
-/* R for an analytic BRDF (ctx: a const brdf *; uv unused). */
-void envlit_brdf(const void *ctx, const double uv[2], const double n[3], const double wi[3],
-                 const double wo[3], double rgb[3]);
-/* R for a material (ctx: a const material *): material_eval, and
- * material_eval_preview (the method's faster approximation, if any). */
-void envlit_material(const void *ctx, const double uv[2], const double n[3],
-                     const double wi[3], const double wo[3], double rgb[3]);
-void envlit_material_preview(const void *ctx, const double uv[2], const double n[3],
-                             const double wi[3], const double wo[3], double rgb[3]);
+/* envlit_fn adapters live with what they shade: brdf_envlit (brdf.h),
+ * merl_envlit (merl.h), material_envlit and material_envlit_preview
+ * (material.h). */
 
 /* Visibility of every light from every vertex of a mesh. */
 typedef struct envlit_vis {

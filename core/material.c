@@ -8,7 +8,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "brdfx.h"
 #include "fsio.h"
 #include "json_text.h"
 #include "raster.h"
@@ -435,12 +434,14 @@ fail:
     return rc;
 }
 
-int material_brdf_explorer(const material *m, char **text, glint_err *err)
+void material_envlit(const void *ctx, const double uv[2], const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3])
 {
-    *text = NULL;
-    if (!m || !m->method)
-        return glint_err_set(err, GLINT_EINVAL, "no material");
-    if (!m->method->mat->brdf_explorer)
-        return brdfx_from_gpu(m, text, err);
-    return m->method->mat->brdf_explorer(m->data, text, err);
+    material_eval_at(ctx, uv, n, wi, wo, rgb);
+}
+
+void material_envlit_preview(const void *ctx, const double uv[2], const double n[3],
+                             const double wi[3], const double wo[3], double rgb[3])
+{
+    material_eval_preview_at(ctx, uv, n, wi, wo, rgb);
 }

@@ -64,12 +64,13 @@ void material_eval_preview(const material *m, const double n[3], const double wi
 void material_eval_preview_at(const material *m, const double uv[2], const double n[3],
                               const double wi[3], const double wo[3], double rgb[3]);
 
-/* The material as BRDF Explorer's analytic .brdf file (OUT: *text,
- * free()): the method's own (material_ops.brdf_explorer), else the one
- * written from its GPU evaluation (brdfx.h); GLINT_EUNSUPPORTED naming the
- * alternative (the MERL table, merl.h, which BRDF Explorer reads too) when
- * neither can be made. */
-int material_brdf_explorer(const material *m, char **text, glint_err *err);
+/* Radiance per unit light under an environment's light (envlit.h's
+ * envlit_fn; ctx: a const material *): material_eval_at, and
+ * material_eval_preview_at (the method's faster approximation, if any). */
+void material_envlit(const void *ctx, const double uv[2], const double n[3],
+                     const double wi[3], const double wo[3], double rgb[3]);
+void material_envlit_preview(const void *ctx, const double uv[2], const double n[3],
+                             const double wi[3], const double wo[3], double rgb[3]);
 
 /* 1 when the material varies over the surface (its value depends on the
  * texture coordinates), 0 when one BRDF holds everywhere. */

@@ -24,7 +24,7 @@
  * Lookups are nearest-bin, exactly as BRDFRead.cpp does them, so a table
  * reads the same here as in the tools that share that reader.
  *
- * Tabulating a material (merl_from_material) evaluates it at each bin's
+ * Tabulating a material (merl_from_material, merl_material.h) evaluates it at each bin's
  * centre, theta_h = ((i + 1/2) / 90)^2 pi/2, theta_d = (j + 1/2) pi/180,
  * phi_d = (k + 1/2) pi/180: f = the material's value per unit light
  * divided by n.wi (readable.h's convention), 0 where wi or wo falls under
@@ -34,15 +34,14 @@
  * varies over the surface is taken at its average over the surface
  * (material_eval with no uv); merl_stats says which happened.
  *
- * Thread-safety: tables are read-only once made; merl_from_material uses
- * its own threads and reads the material only. */
+ * Thread-safety: tables are read-only once made; merl_tabulate uses its
+ * own threads and reads its source only. */
 #ifndef GLINT_MERL_H
 #define GLINT_MERL_H
 
 #include <stddef.h>
 
 #include "err.h"
-#include "material.h"
 
 #define MERL_TH 90
 #define MERL_TD 90
@@ -70,10 +69,6 @@ typedef struct merl_stats {
     double seconds;
 } merl_stats;
 
-/* Tabulate m (OUT: *out, merl_free; *st may be NULL).  nthreads <= 0: one
- * per processor. */
-int merl_from_material(const material *m, int nthreads, merl_table *out, merl_stats *st,
-                       glint_err *err);
 
 /* Tabulate any BRDF given as a function: f at unit (n, wi, wo), per
  * steradian, no cosine (brdf_eval's and merl_truth's shape; paint.h's

@@ -93,8 +93,8 @@ double render_material_cost(render *r, render_engine eng, const char *mesh_key, 
     double e, ep;
     if (!mat || !mat->method)
         return 0.0;
-    e = eval_seconds(envlit_material, mat);
-    ep = env ? eval_seconds(envlit_material_preview, mat) : e;
+    e = eval_seconds(material_envlit, mat);
+    ep = env ? eval_seconds(material_envlit_preview, mat) : e;
     return cost(r, eng, mesh_key, m, env, e, ep, 0, width, height);
 }
 
@@ -117,7 +117,7 @@ int render_base_cost(render *r, render_engine eng, const char *mesh_key, const m
     }
     if ((rc = brdf_parse(brdf_spec, &b, err)))
         return rc;
-    e = eval_seconds(envlit_brdf, &b);
+    e = eval_seconds(brdf_envlit, &b);
     *seconds = cost(r, eng, mesh_key, m, env, e, e, 0, width, height);
     return 0;
 }

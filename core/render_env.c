@@ -291,7 +291,7 @@ int render_material_env(render *r, render_engine eng, const char *mesh_key, cons
                         int width, int height, img *out, render_env_info *info,
                         render_used *used, const glint_cancel *cancel, glint_err *err)
 {
-    shader s = {envlit_material, envlit_material_preview, mat, 1.0, cancel};
+    shader s = {material_envlit, material_envlit_preview, mat, 1.0, cancel};
     if (!mat || !mat->method) {
         memset(out, 0, sizeof *out);
         return glint_err_set(err, GLINT_EINVAL, "no material to render");
@@ -306,7 +306,7 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
                     glint_err *err)
 {
     brdf b;
-    shader s = {envlit_brdf, envlit_brdf, &b, scale, cancel};
+    shader s = {brdf_envlit, brdf_envlit, &b, scale, cancel};
     int rc;
     memset(out, 0, sizeof *out);
     if (!(scale > 0.0) || !isfinite(scale))

@@ -9,12 +9,14 @@
 #include <string.h>
 
 #include "brdf.h"
+#include "brdfx.h"
 #include "cli.h"
 #include "env.h"
 #include "fsio.h"
 #include "glr.h"
 #include "gltf.h"
 #include "merl.h"
+#include "merl_material.h"
 #include "readable.h"
 #include "samples.h"
 #include "raster.h"
@@ -314,7 +316,7 @@ int cmd_export_merl(int argc, char **argv)
 }
 
 /* glint export-brdf MATDIR -o FILE.brdf: the material as BRDF Explorer's
- * analytic .brdf file (material_brdf_explorer). */
+ * analytic .brdf file (brdfx_material). */
 int cmd_export_brdf(int argc, char **argv)
 {
     material m;
@@ -325,7 +327,7 @@ int cmd_export_brdf(int argc, char **argv)
         return fail(1, "usage: glint export-brdf MATDIR -o FILE.brdf");
     if (material_load(argv[1], &m, &e))
         return fail_err(&e);
-    if (material_brdf_explorer(&m, &text, &e) ||
+    if (brdfx_material(&m, &text, &e) ||
         fsio_write_atomic(argv[3], text, strlen(text), &e))
         rc = fail_err(&e);
     else
