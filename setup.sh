@@ -3,6 +3,8 @@
 #
 #   ./setup.sh run    install what is missing, build, run the main job
 #   ./setup.sh test   install what is missing, build, run every test
+#   ./setup.sh test deep   the same, and what is too slow for every change
+#                          (before a release: tests/README.md)
 #
 # Both are idempotent: packages already present are not reinstalled, the
 # build directories are reused.
@@ -10,6 +12,7 @@ set -euo pipefail
 
 cd "$(dirname "$0")"
 mode=${1:-}
+depth=${2:-}
 
 # Build and runtime dependencies (Debian 12 package names).
 BUILD_PKGS=(
@@ -23,11 +26,12 @@ BUILD_PKGS=(
 # PostgreSQL server and nginx that the store's and the replicas' tests start
 # (tests/with_postgres.sh; nothing is left running), and Open MPI with
 # ScaLAPACK, with which the build adds glint-mpi (distributed
-# decompositions, tests/mpi).
+# decompositions, tests/mpi); ccache, through which meson compiles the two
+# trees the tests build.
 TEST_PKGS=(
   python3 python3-numpy python3-scipy python3-requests python3-jsonschema python3-yaml python3-cvxopt python3-openimageio python3-matplotlib
   openimageio-tools gnuplot-nox wrk chromium jq valgrind postgresql nginx
-  openmpi-bin libopenmpi-dev libscalapack-openmpi-dev
+  openmpi-bin libopenmpi-dev libscalapack-openmpi-dev ccache
 )
 
 missing_packages() {
@@ -71,6 +75,16 @@ build() {
     meson setup "$dir" "$@"
   fi
   ninja -C "$dir"
+}
+
+# stage TITLE CMD...: run CMD, then print how long it took (a blank TITLE
+# continues the previous stage)
+stage() {
+  local title=$1 t0=$SECONDS rc=0; shift
+  [ -n "$title" ] && echo "== $title"
+  "$@" || rc=$?
+  echo "-- $((SECONDS - t0)) s (at $((SECONDS / 60)) min $((SECONDS % 60)) s)"
+  return $rc
 }
 
 # The main job: glintd serving the studio on localhost, with a demo scene
@@ -128,35 +142,65 @@ case "$mode" in
     if [ -f build/build.ninja ] && ! grep -q glint-mpi build/build.ninja; then
       meson setup --reconfigure build
     fi
-    build build
-    echo "== unit, CLI and integration tests"
-    meson test -C build --print-errorlogs
-    echo "== unit tests under valgrind (memcheck; those that finish within minutes there)"
-    meson test -C build --setup valgrind --suite valgrind --print-errorlogs
-    echo "== unit tests and the fuzz corpora under AddressSanitizer + UndefinedBehaviorSanitizer"
-    # the sanitizers run the numerical programs two to three times slower:
-    # their timeouts are three times the plain build's (srbf_fit takes
-    # 226-246 s plain here and ran past its 600 s under them once)
-    build build-asan -Db_sanitize=address,undefined -Db_lundef=false -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
-    ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
-    LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
-    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs --timeout-multiplier 3
-    # the daemon under the sanitizers, driven by the integration tests (a
-    # sanitizer report in its log fails the test: tests/integration/harness.py);
-    # its previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung under ASan)
-    echo "== integration tests: glintd under AddressSanitizer + UndefinedBehaviorSanitizer"
-    GLINT_EGL=off ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1 \
-    LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
-    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-      meson test -C build-asan --suite integration --no-suite unsanitized --print-errorlogs \
-        --logbase testlog-integration
-    python3 tests/summary.py build/meson-logs/testlog.json build/meson-logs/testlog-valgrind.json \
-      build-asan/meson-logs/testlog.json \
-      build-asan/meson-logs/testlog-integration.json
+    # meson compiles through ccache when it is installed; paths relative to
+    # the checkout let a fresh clone elsewhere reuse what an earlier one built
+    export CCACHE_BASEDIR=$PWD CCACHE_NOHASHDIR=true
+    # tests run two at a time (one per core): each one's BLAS on one thread
+    export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
+    SECONDS=0
+    failed=0   # every tier runs; the command fails at the end if one did
+    stage "building the plain tree and the sanitizers' tree" \
+      build build
+    stage "" build build-asan -Db_sanitize=address,undefined -Db_lundef=false \
+      -Dbuildtype=debugoptimized -Dc_args=-fno-omit-frame-pointer
+    # Each test runs once, in the build that checks the most.  The plain
+    # build: the command line, the cross-checks with the numpy references,
+    # glint-mpi, the studio in Chromium, allocation failure (it replaces
+    # malloc, which the sanitizers own) and the integration tests of suite
+    # 'plain' (resident-memory bounds, the importer's address-space limit).
+    stage "plain build: CLI, reference cross-checks, MPI, Chromium, allocation failure, memory bounds" \
+      meson test -C build --suite plain --suite cli --suite ref --suite mpi --suite browser \
+        --print-errorlogs || failed=$((failed + 1))
+    stage "unit tests under valgrind (memcheck; those that finish within minutes there)" \
+      meson test -C build --setup valgrind --suite valgrind --print-errorlogs \
+        || failed=$((failed + 1))
+    # Every unit program, the fuzz corpora and glintd over real HTTP (with
+    # PostgreSQL, the replicas behind nginx) under AddressSanitizer +
+    # UndefinedBehaviorSanitizer: a sanitizer report fails the test (the
+    # daemon's log is read by tests/integration/harness.py).  They run the
+    # numerical programs two to three times slower: timeouts three times.
+    export ASAN_OPTIONS=fast_unwind_on_malloc=0:detect_leaks=1
+    export LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0"
+    export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+    stage "sanitizers: unit tests and the fuzz corpora" \
+      meson test -C build-asan --suite unit --suite fuzz --print-errorlogs --timeout-multiplier 3 \
+        || failed=$((failed + 1))
+    # the daemon's previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung
+    # under ASan)
+    GLINT_EGL=off stage "sanitizers: glintd driven by the integration tests" \
+      meson test -C build-asan --suite integration --no-suite plain --print-errorlogs \
+        --logbase testlog-integration || failed=$((failed + 1))
+    logs=(build/meson-logs/testlog.json build/meson-logs/testlog-valgrind.json
+          build-asan/meson-logs/testlog.json build-asan/meson-logs/testlog-integration.json)
+    if [ "$depth" = deep ]; then
+      # Before a release (tests/README.md): what is too slow for every
+      # change.  The numerical programs under memcheck, every unit program
+      # on the plain build, and allocation failure at every allocation.
+      unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS
+      stage "deep: every unit program on the plain build, allocation failure at every allocation" \
+        env GLINT_ALLOC_FAIL_STRIDE=1 meson test -C build --suite unit --print-errorlogs \
+          --timeout-multiplier 20 --logbase testlog-deep || failed=$((failed + 1))
+      stage "deep: the numerical programs under valgrind" \
+        meson test -C build --setup valgrind --suite valgrind-slow --print-errorlogs \
+          --timeout-multiplier 12 --logbase testlog-valgrind-slow || failed=$((failed + 1))
+      logs+=(build/meson-logs/testlog-deep.json build/meson-logs/testlog-valgrind-slow.json)
+    fi
+    echo "== the test command took $((SECONDS / 60)) min $((SECONDS % 60)) s"
+    python3 tests/summary.py "${logs[@]}"
+    [ "$failed" -eq 0 ]
     ;;
   *)
-    echo "usage: ./setup.sh run | ./setup.sh test" >&2
+    echo "usage: ./setup.sh run | ./setup.sh test [deep]" >&2
     exit 1
     ;;
 esac

@@ -309,23 +309,33 @@ int store_painting_row(store *s, const char *session, int view, int64_t *version
 int store_painting_get(store *s, const char *session, int view, void **exr, size_t *len,
                        int64_t *version, glint_err *err)
 {
-    char blob[STORE_BLOB_NAME_MAX];
+    char blob[STORE_BLOB_NAME_MAX], again[STORE_BLOB_NAME_MAX];
     int64_t v = 0;
     int rc;
 
     *exr = NULL;
-    /* under the lock, so a concurrent put cannot remove the file between
-     * reading its name and reading it */
+    /* under the lock, so a concurrent put of this process cannot remove the
+     * file between reading its name and reading it */
     pthread_mutex_lock(&s->lock);
     rc = store_painting_row(s, session, view, &v, blob, sizeof blob, err);
-    if (rc == 0) {
-        if (version)
-            *version = v;
+    /* Another replica on the same database can: it replaces the row and
+     * removes the blob it replaced, which this one may just have read the
+     * name of.  Then the row names a newer blob: read that one.  A row
+     * still naming a file that is not there is never acceptable. */
+    for (int tries = 0; rc == 0; tries++) {
         rc = store_blob_get(s, blob, exr, len, err);
-        if (rc == GLINT_ENOTFOUND) /* a row without its file: never acceptable */
+        if (rc != GLINT_ENOTFOUND)
+            break;
+        rc = store_painting_row(s, session, view, &v, again, sizeof again, err);
+        if (rc == 0 && (strcmp(again, blob) == 0 || tries >= 16)) {
             rc = glint_err_set(err, GLINT_EIO, "painting of session %s view %d: file missing",
                                session, view);
+            break;
+        }
+        memcpy(blob, again, sizeof blob);
     }
+    if (rc == 0 && version)
+        *version = v;
     pthread_mutex_unlock(&s->lock);
     return rc;
 }

@@ -27,6 +27,12 @@ const PW = path.join(HERE, 'node_modules', 'playwright-core', 'index.mjs');
 
 export const sleep = ms => new Promise(r => setTimeout(r, ms));
 
+// The longest wait for something that must happen (the tests' explicit
+// waits use the same): it only catches a hang, since what comes ends the
+// wait at once, so it is generous enough for a machine busy with other
+// tests.
+export const MUST_MS = 60000;
+
 // ---- the daemon -----------------------------------------------------------------------------
 
 export class Daemon {
@@ -38,9 +44,25 @@ export class Daemon {
     this.logPath = path.join(this.tmp, 'glintd.log');
   }
 
-  // Start glintd; `port` 0 picks an ephemeral one (a restart reuses it).
+  // Start glintd; `port` 0 picks an ephemeral one (a restart reuses it: the
+  // pages keep their origin).  Beside other tests, a port just given up can
+  // be taken for a moment by another program's connection: then glintd
+  // cannot listen on it, and starting is tried again until it can.
   async start(port) {
+    for (let attempt = 1; ; attempt++) {
+      try {
+        return await this.startOnce(port);
+      } catch (e) {
+        const taken = port && /Address already in use/.test(this.log().slice(this.logStart));
+        if (!taken || attempt >= 150) throw e;
+        await sleep(200);
+      }
+    }
+  }
+
+  async startOnce(port) {
     const portFile = path.join(this.tmp, 'port');
+    this.logStart = this.log().length;
     fs.rmSync(portFile, { force: true });
     const log = fs.openSync(this.logPath, 'a');
     this.proc = spawn(GLINTD, ['--port', String(port || 0), '--port-file', portFile, '--data-dir', this.dataDir,
@@ -49,7 +71,7 @@ export class Daemon {
     let exited = null;
     this.proc.on('exit', c => { exited = c; });
     const t0 = Date.now();
-    while (Date.now() - t0 < 20000) {
+    while (Date.now() - t0 < MUST_MS) {
       if (exited !== null) throw new Error(`glintd exited with ${exited}; log: ${this.logPath}`);
       try {
         const txt = fs.readFileSync(portFile, 'utf8').trim();
@@ -109,7 +131,7 @@ export function assertEq(a, b, msg) { if (a !== b) throw new Error(`assertion fa
 export async function waitFor(fn, ms, what) {
   const t0 = Date.now();
   let last;
-  while (Date.now() - t0 < (ms || 5000)) {
+  while (Date.now() - t0 < (ms || MUST_MS)) {
     try { last = await fn(); if (last) return last; } catch (e) { last = e; }
     await sleep(25);
   }
@@ -121,8 +143,27 @@ export async function waitFor(fn, ms, what) {
 // Open a session link and wait until the first view can be painted.
 export async function openStudio(page, url) {
   await page.goto(url);
-  await page.waitForSelector('body[data-ready="1"]', { timeout: 15000 });
+  await page.waitForSelector('body[data-ready="1"]', { timeout: MUST_MS });
   return page.evaluate(() => window.glint.paintableMs);
+}
+
+// Every toast the page shows from now on, kept after the toast itself has
+// gone (after 4 s, an error's after 12: a busy machine may pass that before
+// a test looks): returns a function that gives [{title, detail, error}].
+export async function recordToasts(page) {
+  await page.evaluate(() => {
+    window.__toasts = [];
+    new MutationObserver(ms => {
+      for (const m of ms) {
+        for (const n of m.addedNodes) {
+          if (n.classList && n.classList.contains('toast')) {
+            window.__toasts.push({ title: n.querySelector('.t').textContent, detail: n.querySelector('.d').textContent, error: n.classList.contains('error') });
+          }
+        }
+      }
+    }).observe(document.getElementById('toasts'), { childList: true });
+  });
+  return () => page.evaluate(() => window.__toasts.slice());
 }
 
 // Image coordinates of the view -> page coordinates of the paint canvas.
@@ -150,26 +191,44 @@ export async function settled(page, k) {
   await page.waitForFunction(k => {
     const S = window.glint.state.session, v = S && S.views[k];
     return v && v.state === 'ready' && v.pending.length === 0 && S.puts.size === 0;
-  }, k, { timeout: 10000 });
+  }, k, { timeout: MUST_MS });
+}
+
+// What fn(arg) returns in the page, a typed array (Uint8ClampedArray,
+// Float32Array, ...), as the same typed array here.  Its bytes come as one
+// base64 string: page.evaluate would send an array number by number (a
+// 512x512 RGBA canvas took 20-60 s that way on a busy machine).  fn is
+// sent as its source text (no closures, as for page.evaluate); arg as JSON.
+export async function pageArray(page, fn, arg) {
+  const [type, b64] = await page.evaluate(`(async () => {
+    const a = await (${fn.toString()})(${JSON.stringify(arg === undefined ? null : arg)});
+    const u = new Uint8Array(a.buffer, a.byteOffset, a.byteLength);
+    let s = '';
+    for (let i = 0; i < u.length; i += 0x8000) s += String.fromCharCode.apply(null, u.subarray(i, i + 0x8000));
+    return [a.constructor.name, btoa(s)];
+  })()`);
+  const T = { Uint8ClampedArray, Uint8Array, Int16Array, Float32Array, Float64Array }[type];
+  if (!T) throw new Error('pageArray: not a typed array of a known type: ' + type);
+  return new T(new Uint8Array(Buffer.from(b64, 'base64')).buffer);  // (a copy: aligned)
 }
 
 // The paint canvas's RGBA bytes.
 export function canvasPixels(page, id) {
-  return page.evaluate(id => {
+  return pageArray(page, id => {
     const c = document.getElementById(id || 'paint');
-    return Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data);
+    return c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
   }, id);
 }
 
 // The server's painting of view k as 8-bit RGBA (GET ...?format=png), read in the page.
 export function serverPixels(page, k) {
-  return page.evaluate(async k => {
+  return pageArray(page, async k => {
     const S = window.glint.state.session;
     const r = await fetch(`/api/v1/sessions/${S.id}/views/${k}/painting?format=png`, { headers: { 'X-Glint-Token': S.token } });
     const bmp = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
     const c = new OffscreenCanvas(bmp.width, bmp.height), g = c.getContext('2d');
     g.drawImage(bmp, 0, 0);
-    return Array.from(g.getImageData(0, 0, bmp.width, bmp.height).data);
+    return g.getImageData(0, 0, bmp.width, bmp.height).data;
   }, k);
 }
 
@@ -226,6 +285,7 @@ export async function run(tests, opts) {
       allowConsole(re) { allowed.push(re); },
       async context(o) {
         const c = await b.newContext(Object.assign({ viewport: { width: 1280, height: 800 }, acceptDownloads: true }, o || {}));
+        c.setDefaultTimeout(MUST_MS);
         contexts.push(c);
         c.on('page', p => watch(p));
         return c;

@@ -4,7 +4,7 @@
 // error per view against a render under the environment, and the point
 // light still available for any material.
 import {
-  run, openStudio, drawStroke, settled, assert, assertLE, assertEq, waitFor,
+  run, openStudio, drawStroke, settled, assert, assertLE, assertEq, waitFor, pageArray,
 } from './harness.mjs';
 
 async function setValue(page, id, v, ev) {
@@ -14,14 +14,14 @@ async function setValue(page, id, v, ev) {
 }
 
 function previewBytes(page) {
-  return page.evaluate(() => Array.from(document.getElementById('preview').getContext('2d').getImageData(0, 0, 256, 256).data));
+  return pageArray(page, () => document.getElementById('preview').getContext('2d').getImageData(0, 0, 256, 256).data);
 }
 
 run({
   async 'a scene painted under an environment: chosen on the start page, fitted under it'(t) {
     const page = await t.page();
     await page.goto(t.daemon.base + '/#/');
-    await page.waitForFunction(() => [...document.getElementById('base-light-sel').options].some(o => o.value === 'sky'), null, { timeout: 15000 });
+    await page.waitForFunction(() => [...document.getElementById('base-light-sel').options].some(o => o.value === 'sky'), null, { timeout: 60000 });
     const { scene, url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64, base: { env: { spec: 'sky', rotation: 30, lights: 32 } } });
     assertEq(scene.base.env.spec, 'sky', 'the scene keeps its environment');
     await openStudio(page, url);
@@ -68,7 +68,7 @@ run({
     for (let i = 0; i < w * h; i++) px.set(i < w * 4 ? [128, 128, 128, 130] : [128, 128, 160, 128], 4 * i);
     const hdr = Buffer.concat([Buffer.from(`#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y ${h} +X ${w}\n`), px]);
     await page.setInputFiles('#env-file', { name: 'my sky.hdr', mimeType: 'application/octet-stream', buffer: hdr });
-    await page.waitForFunction(() => /^upload:[0-9a-f]{32}$/.test(document.getElementById('param-env').value), null, { timeout: 30000 });
+    await page.waitForFunction(() => /^upload:[0-9a-f]{32}$/.test(document.getElementById('param-env').value), null, { timeout: 60000 });
     const upl = await page.evaluate(() => {
       const sel = document.getElementById('param-env');
       return { spec: sel.value, name: sel.selectedOptions[0].textContent,
@@ -85,7 +85,7 @@ run({
     t.allowConsole(/environments\?name=notes\.hdr/);
     const nEnv = await page.evaluate(() => document.getElementById('param-env').options.length);
     await page.setInputFiles('#env-file', { name: 'notes.hdr', mimeType: 'text/plain', buffer: Buffer.from('not a map') });
-    await waitFor(() => page.evaluate(() => /OpenEXR nor Radiance/.test(document.body.textContent)), 15000, 'the upload error is shown');
+    await waitFor(() => page.evaluate(() => /OpenEXR nor Radiance/.test(document.body.textContent)), 60000, 'the upload error is shown');
     assertEq(await page.evaluate(() => document.getElementById('param-env').options.length), nEnv, 'nothing added');
     await setValue(page, 'param-env', 'sky', 'change');
     await page.click('#quality .q[data-preset="draft"] input');
@@ -101,14 +101,14 @@ run({
     assertEq(mat.params.env, 'sky', 'fitted under the chosen environment');
     // the preview is lit by the fit's environment
     assertEq(await page.inputValue('#preview-light'), 'sky', 'the preview uses the fit environment');
-    await page.waitForFunction(() => window.glint.state.judge.frames > 0 && /lights=64/.test(window.glint.state.judge.lastEnv || ''), null, { timeout: 30000 });
+    await page.waitForFunction(() => window.glint.state.judge.frames > 0 && /lights=64/.test(window.glint.state.judge.lastEnv || ''), null, { timeout: 60000 });
     const env = await page.evaluate(() => window.glint.state.judge.lastEnv);
     t.log('preview: ' + env);
     const a = await previewBytes(page);
     // turning the environment renders again, differently
     const n0 = await page.evaluate(() => window.glint.state.judge.frames);
     await setValue(page, 'env-rot', 90);
-    await page.waitForFunction(n => window.glint.state.judge.frames > n, n0, { timeout: 30000 });
+    await page.waitForFunction(n => window.glint.state.judge.frames > n, n0, { timeout: 60000 });
     const b = await previewBytes(page);
     let diff = 0;
     for (let i = 0; i < a.length; i++) diff += Math.abs(a[i] - b[i]);
@@ -132,14 +132,14 @@ run({
     await waitFor(() => page.evaluate(() => {
       const td = document.querySelector('#err-table tbody tr td:nth-child(2)');
       return td && /\d/.test(td.textContent);
-    }), 30000, 'per-view errors');
+    }), 60000, 'per-view errors');
     const rms = await page.evaluate(() => parseFloat(document.querySelector('#err-table tbody tr td:nth-child(2)').textContent));
     t.log(`view 0 RMS against the render under the environment: ${rms}`);
     assert(isFinite(rms) && rms < 0.5, 'a finite per-view error');
     // the point light is still there, for any material
     const n1 = await page.evaluate(() => window.glint.state.judge.frames);
     await setValue(page, 'preview-light', '', 'change');
-    await page.waitForFunction(n => window.glint.state.judge.frames > n, n1, { timeout: 30000 });
+    await page.waitForFunction(n => window.glint.state.judge.frames > n, n1, { timeout: 60000 });
     assertEq(await page.evaluate(() => window.glint.state.judge.lastEnv), '', 'point-light preview');
     assert(await page.isHidden('#env-rot-l'), 'no turn slider for the point light');
     await t.shot(page, 'envlit.png');

@@ -1,12 +1,12 @@
 // Fitting and judging in the studio: a cold fit with job progress, a cached
-// refit within a moment, the preview changing where the painting changed,
+// refit answered at once (no job), the preview changing where the painting changed,
 // the preview following the mouse, the error per view with its difference
 // image, the factor curves, the quality control's measured figures, and
 // the package download.
 import fs from 'node:fs';
 import path from 'node:path';
 import {
-  run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq, waitFor, ARTIFACTS,
+  run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq, waitFor, pageArray, ARTIFACTS,
 } from './harness.mjs';
 
 async function setRange(page, id, v) {
@@ -38,6 +38,7 @@ async function framesShown(page) { return page.evaluate(() => window.glint.state
 
 run({
   async 'fit: progress while precomputing, cached refit at once, the preview changes where painted'(t) {
+    // (how long a fit takes from the click to the preview: tests/bench/bench_studio.mjs)
     const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 128, height: 128 });
     const page = await t.page();
     await openStudio(page, url);
@@ -68,10 +69,11 @@ run({
     await drawStroke(page, [[62, 41], [82, 41]]);
     await settled(page, 0);
     const n0 = await framesShown(page);
+    const jobRequests = [];
+    page.on('request', r => { if (/\/api\/v1\/jobs\//.test(r.url())) jobRequests.push(r.url()); });
     const f2 = await fit(page);
-    t.log(`cached refit: result on screen ${f2.ms.toFixed(0)} ms after the click`);
     assertEq(f2.cached, true, 'the refit finds its precomputation cached');
-    assertLE(f2.ms, 1000, 'cached fit within a moment (ms)');
+    assertEq(jobRequests.length, 0, 'requests about a job for the cached refit (answered in the request)');
     await page.waitForFunction(n => window.glint.state.judge.frames > n, n0);
     const m2 = await previewMean(page, region, 128);
     const mOut = [await previewMean(page, [100, 90, 120, 110], 128)];
@@ -89,7 +91,7 @@ run({
     await settled(page, 0);
     await fit(page);
     await page.waitForFunction(() => window.glint.state.judge.frames > 0);
-    const img = () => page.evaluate(() => Array.from(document.getElementById('preview').getContext('2d').getImageData(0, 0, 256, 256).data));
+    const img = () => pageArray(page, () => document.getElementById('preview').getContext('2d').getImageData(0, 0, 256, 256).data);
     const a = await img();
     const g = await page.locator('#preview-gizmo').boundingBox();
     const light0 = await page.evaluate(() => window.glint.state.judge.cam.light.slice());
@@ -98,7 +100,7 @@ run({
     await page.mouse.down();
     for (let i = 1; i <= 12; i++) await page.mouse.move(g.x + 128 + 8 * i, g.y + 128 - 3 * i);
     await page.mouse.up();
-    await page.waitForFunction(() => { const j = window.glint.state.judge; return !j.inflight && j.shown === j.want; }, null, { timeout: 15000 });
+    await page.waitForFunction(() => { const j = window.glint.state.judge; return !j.inflight && j.shown === j.want; }, null, { timeout: 60000 });
     const light1 = await page.evaluate(() => window.glint.state.judge.cam.light.slice());
     const f1 = await framesShown(page);
     const b = await img();
@@ -134,7 +136,7 @@ run({
     await drawStroke(page, [[40, 70], [70, 60]]);
     await settled(page, 2);
     const f = await fit(page);
-    await page.waitForFunction(() => window.glint.state.judge.rows && window.glint.state.judge.rows.size === 2, null, { timeout: 20000 });
+    await page.waitForFunction(() => window.glint.state.judge.rows && window.glint.state.judge.rows.size === 2, null, { timeout: 60000 });
     const rows = await page.evaluate(() => [...window.glint.state.judge.rows].map(([k, r]) => ({ k, rms: r.rms, n: r.n })));
     const mat = await t.daemon.api('GET', `/materials/${f.id}`, undefined, { 'X-Glint-Token': session.paint_token });
     // pooled over the views, the client's per-view errors give the server's RMS
@@ -166,7 +168,7 @@ run({
     await t.shot(page, '13-factors.png');
     // the material in numbers: the server's summary, shown as words and a polar plot
     await page.click('.tabs button[data-tab="summary"]');
-    await page.waitForFunction(() => window.glint.state.judge.summary, null, { timeout: 10000 });
+    await page.waitForFunction(() => window.glint.state.judge.summary, null, { timeout: 60000 });
     const sm = await t.daemon.api('GET', `/materials/${f.id}/summary`, undefined, { 'X-Glint-Token': session.paint_token });
     const words = await page.textContent('#tab-summary');
     t.log('in numbers: ' + words.replace(/\s+/g, ' ').trim());

@@ -11,7 +11,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import {
-  run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq,
+  run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq, pageArray,
 } from './harness.mjs';
 
 // a measured material for the server to offer: a MERL table of a
@@ -34,15 +34,18 @@ async function fit(page) {
   return page.evaluate(() => window.glint.lastFit);
 }
 
-// RGBA statistics of a canvas: mean brightness in a centred box of half side r (pixels).
-function canvasStats(page, id, r) {
-  return page.evaluate(([id, r]) => {
+// RGBA statistics of a canvas: mean brightness in a centred box of half side r (pixels),
+// and every pixel.
+async function canvasStats(page, id, r) {
+  const centre = await page.evaluate(([id, r]) => {
     const c = document.getElementById(id), g = c.getContext('2d');
     const box = g.getImageData(c.width / 2 - r, c.height / 2 - r, 2 * r, 2 * r).data;
     let m = 0;
     for (let i = 0; i < box.length; i += 4) m += (box[i] + box[i + 1] + box[i + 2]) / 3;
-    return { centre: m / (box.length / 4), all: Array.from(g.getImageData(0, 0, c.width, c.height).data) };
+    return m / (box.length / 4);
   }, [id, r]);
+  const all = await pageArray(page, id => { const c = document.getElementById(id); return c.getContext('2d').getImageData(0, 0, c.width, c.height).data; }, id);
+  return { centre, all };
 }
 
 run({
@@ -59,7 +62,7 @@ run({
     await page.selectOption('#preset-sel', 'plastic');
     await page.click('#preset-apply');
     await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 30000 });
+                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
     await settled(page, 0);
     await setRange(page, 'diameter', 26);
     await page.keyboard.press('4');
@@ -68,7 +71,7 @@ run({
     await settled(page, 3);
     const f = await fit(page);
     // the material ball: a sphere under the studio light, a frame per material
-    await page.waitForFunction(() => window.glint.state.judge.ball.frames > 0, null, { timeout: 20000 });
+    await page.waitForFunction(() => window.glint.state.judge.ball.frames > 0, null, { timeout: 60000 });
     const b1 = await page.evaluate(() => window.glint.state.judge.ball.last);
     t.log(`material ball: ${Math.round(b1.ms)} ms in the page, ${b1.renderer.split(';')[0]}; ${b1.env}`);
     assertEq(b1.query.object, 'ball', 'the ball is asked for');
@@ -84,7 +87,7 @@ run({
     await page.waitForFunction(() => {
       const b = window.glint.state.judge.ball, l = b.last;
       return l && !b.inflight && l.query.env_rotation !== '0' && l.query.env_rotation === document.getElementById('ball-rot').value;
-    }, null, { timeout: 20000 });
+    }, null, { timeout: 60000 });
     const b2 = await page.evaluate(() => window.glint.state.judge.ball.last);
     const s2 = await canvasStats(page, 'ball', 30);
     let moved = 0;
@@ -93,7 +96,7 @@ run({
     assertGE(moved, 200, 'the turned light moves over the ball');
     // the large comparison in view 3: split
     await page.selectOption('#compare-mode', 'split');
-    await page.waitForFunction(() => { const l = window.glint.state.compare.last; return l && l.mode === 'split' && l.k === 3; }, null, { timeout: 20000 });
+    await page.waitForFunction(() => { const l = window.glint.state.compare.last; return l && l.mode === 'split' && l.k === 3; }, null, { timeout: 60000 });
     const split = await page.evaluate(() => {
       const c = document.getElementById('overlay-fit'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       let left = 0, right = 0;
@@ -108,7 +111,7 @@ run({
     await t.shot(page, '40-compare-split-1440x900.png');
     // the signed difference, its scale against an independent computation
     await page.selectOption('#compare-mode', 'diff');
-    await page.waitForFunction(() => { const l = window.glint.state.compare.last; return l && l.mode === 'diff' && l.k === 3; }, null, { timeout: 20000 });
+    await page.waitForFunction(() => { const l = window.glint.state.compare.last; return l && l.mode === 'diff' && l.k === 3; }, null, { timeout: 60000 });
     const mine = await page.evaluate(() => window.glint.state.compare.last);
     const ref = await page.evaluate(async ([mid, sid, tok, n]) => {
       const { decodeImage } = await import('/image.js');
@@ -174,7 +177,7 @@ run({
     await page.click('#guide-ok');
     assert(!(await page.isVisible('#guide')), 'Got it hides the guide');
     await page.reload();
-    await page.waitForSelector('body[data-ready="1"]', { timeout: 15000 });
+    await page.waitForSelector('body[data-ready="1"]', { timeout: 60000 });
     assert(!(await page.isVisible('#guide')), 'not shown again in this browser');
     await page.click('#help-btn');
     await page.click('#guide-show');
@@ -219,7 +222,7 @@ run({
     await page.click('#shape-seg button[data-mesh="torus"]');
     await page.selectOption('#size-sel', '128');
     await page.click('#create-btn');
-    await page.waitForSelector('body[data-ready="1"]', { timeout: 20000 });
+    await page.waitForSelector('body[data-ready="1"]', { timeout: 60000 });
     const r = await page.evaluate(() => {
       const S = window.glint.state.session, k = window.glint.state.k;
       return { k, n: S.scene.views.map(v => v.samples), eye: S.scene.views[k].eye };

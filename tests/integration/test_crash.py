@@ -1,6 +1,6 @@
 """Crash test: strokes are posted continuously while the daemon is killed
-with SIGKILL at random moments and restarted, several rounds (about 30 s in
-all).  After every restart:
+with SIGKILL at random moments and restarted, six rounds.  After every
+restart:
   - every stroke whose POST was answered 200 is stored, with the number it
     was given and the same content;
   - the numbering has no gaps (1..last_seq), and anything stored beyond the
@@ -29,12 +29,13 @@ from test_sessions import (API, brush_apply, get_png, max_diff, to_float,  # noq
 
 SIZE = 40
 ROUNDS = 6
-BUDGET_S = 30.0
 VIEWS = (0, 7)
 
 
 def random_stroke(rng, n):
-    pts = [[rng.uniform(-3, SIZE + 3), rng.uniform(-3, SIZE + 3)]]
+    # the first point in the image (a stroke wholly outside it is refused,
+    # 422 stroke-outside-image); the others may leave it
+    pts = [[rng.uniform(0, SIZE), rng.uniform(0, SIZE)]]
     for _ in range(rng.randint(0, 3)):
         pts.append([pts[-1][0] + rng.uniform(-6, 6), pts[-1][1] + rng.uniform(-6, 6)])
     s = {"diameter": rng.uniform(1.5, 8), "kappa": rng.uniform(0, 0.3),
@@ -175,7 +176,7 @@ def test_crash_rounds(d):
     acked, sent = {}, {}
     t0 = time.time()
     rounds = 0
-    while rounds < ROUNDS and time.time() - t0 < BUDGET_S:
+    while rounds < ROUNDS:
         stop, errors = threading.Event(), []
         th = threading.Thread(target=poster, args=(d, sess, random.Random(rng.random()), stop,
                                                    acked, sent, errors))
@@ -190,7 +191,7 @@ def test_crash_rounds(d):
         nstored, nextra = verify(d, scene, sess, acked, sent, bases)
         print("round %d: %d strokes acknowledged, %d stored (%d committed but unanswered), "
               "all acknowledged present" % (rounds, len(acked), nstored, nextra))
-    assert rounds >= 3 and len(acked) > 0
+    assert len(acked) > 0
     if PG:
         # past the sweep's grace every orphan goes, as on SQLite at once
         d.stop()

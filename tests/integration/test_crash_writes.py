@@ -1,8 +1,14 @@
-"""Crash test over every kind of write: 100 rounds, each starting one write
+"""Crash test over every kind of write: rounds, each starting one write
 (a scene made or deleted, a session, a painting uploaded, strokes, a fit and
 its material, a mesh, an environment uploaded or deleted) and killing glintd
-with SIGKILL at a random moment, before, during or after it.  After every
-restart:
+with SIGKILL at a random moment, before, during or after it.  The rounds
+cover every kind of write with a kill in each of three windows (0-30 ms,
+30-300 ms, 0.3-1.5 s after it starts: before it got far, in the middle of
+a longer one, after a short one), in an order drawn at random: 27 rounds
+(GLINT_CRASH_ROUNDS=N: N rounds, the same cover repeated, each repetition
+in an order of its own; 100 or more for a long run).  The writes have what
+they need from the start (a painted session, spare scenes and environments
+to delete), so no round is spent on nothing.  After every restart:
   - every write answered 2xx is there, as answered: scenes, sessions, meshes,
     environments and materials readable (a material's files too), paintings
     at least at the acknowledged version, strokes at least to the
@@ -29,7 +35,12 @@ sys.path.insert(0, os.path.dirname(__file__))
 from harness import PG, pg_query, run_tests  # noqa: E402
 from test_sessions import API, png_encode, tok  # noqa: E402
 
-ROUNDS = int(os.environ.get("GLINT_CRASH_ROUNDS", "100"))
+KINDS = ["scene", "delete_scene", "session", "painting", "strokes", "fit", "mesh", "env",
+         "delete_env"]
+# when the kill lands after the write started (seconds): a write takes from a
+# millisecond (a stroke) to a second (a cold fit)
+WINDOWS = [(0, 0.03), (0.03, 0.3), (0.3, 1.5)]
+ROUNDS = int(os.environ.get("GLINT_CRASH_ROUNDS", str(len(KINDS) * len(WINDOWS))))
 SIZE = 32
 OWNER = {"X-Glint-Owner": "crash-test-owner-key"}
 OBJ = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
@@ -253,8 +264,15 @@ def orphans(data):
     return bad
 
 
-KINDS = ["scene", "scene", "delete_scene", "session", "painting", "painting", "strokes",
-         "strokes", "fit", "fit", "mesh", "env", "delete_env"]
+def schedule(rng, rounds):
+    """`rounds` (kind, kill window) pairs: every pair once in each cycle, each
+    cycle in an order of its own."""
+    out = []
+    while len(out) < rounds:
+        cycle = [(k, w) for k in KINDS for w in WINDOWS]
+        rng.shuffle(cycle)
+        out += cycle
+    return out[:rounds]
 
 
 def describe(data, name):
@@ -293,21 +311,26 @@ def test_kill_during_every_kind_of_write(d):
     rng = random.Random(seed)
     print("seed %d" % seed)
     st = State()
-    # something to write to from the first round on
+    # something for every kind of write from the first round on: a session
+    # with a painting (strokes, fits), a spare scene and an environment for
+    # each deletion round (deletions pick among the spare ones)
     apply(st, [("scene", d.post(API + "/scenes", status=201, headers=OWNER,
                                 json={"width": SIZE, "height": SIZE}).json()["id"])])
     s = d.post(API + "/sessions", status=201, json={"scene_id": st.scenes[0]}).json()
     apply(st, [("session", s)])
+    cycles = -(-ROUNDS // (len(KINDS) * len(WINDOWS)))
+    # (two spare scenes a deletion: a session round may take one for its own)
+    for kind in ["painting"] + ["scene", "scene", "env"] * len(WINDOWS) * cycles:
+        acks = []
+        write(kind, d.base, st, rng, acks)
+        assert acks, "the set-up's %s write was not acknowledged" % kind
+        apply(st, acks)
     counts, killed_in_flight, t0 = {}, 0, time.time()
-    for rnd in range(ROUNDS):
-        kind = rng.choice(KINDS)
+    for rnd, (kind, (lo, hi)) in enumerate(schedule(rng, ROUNDS)):
         acks = []
         th = threading.Thread(target=lambda: _safe(write, kind, d.base, st, rng, acks))
         th.start()
-        # the kill lands before, during or after the write: a write takes from
-        # a millisecond (a stroke) to a second (a cold fit)
-        time.sleep(rng.choice([rng.uniform(0, 0.03), rng.uniform(0.03, 0.3),
-                               rng.uniform(0.3, 1.5)]))
+        time.sleep(rng.uniform(lo, hi))
         alive = th.is_alive()
         d.kill9()
         th.join(60)

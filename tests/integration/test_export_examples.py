@@ -35,7 +35,7 @@ METHODS = [
     ("hf2d", {"res": 16, "res_2d": 8}, CT),
     ("hf4", {"res": 16, "s_res": 8}, STRIPES),
     ("maps", {"res": 16, "components": 2, "map_res": 32}, STRIPES),
-    ("srbf", {"env": "sky", "lights": 64, "basis_res": 5}, CT),
+    ("srbf", {"env": "sky", "lights": 64, "basis_res": 3}, CT),
 ]
 OUT = os.environ.get("GLINT_EXAMPLES_DIR") or os.path.join(
     os.path.dirname(os.path.dirname(os.path.abspath(os.environ.get("GLINTD",

@@ -16,9 +16,16 @@ CLI = os.environ.get("GLINT_CLI") or os.path.join(
 SCHEMAS = os.path.join(SRC, "proto", "schemas")
 
 
+_cli_out = {}
+
+
 def cli_json(*args):
-    out = subprocess.run([CLI] + list(args), check=True, capture_output=True, text=True).stdout
-    return json.loads(out)
+    """The CLI's JSON answer to args (each asked once: the answers depend on
+    the binary alone, and each run costs the CLI's start)."""
+    if args not in _cli_out:
+        _cli_out[args] = subprocess.run([CLI] + list(args), check=True, capture_output=True,
+                                        text=True).stdout
+    return json.loads(_cli_out[args])
 
 
 def table():

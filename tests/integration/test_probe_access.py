@@ -69,6 +69,16 @@ def rss_kb(d, field="VmRSS"):
     raise AssertionError("no %s" % field)
 
 
+def work_counts(d):
+    """glintd's admission counters (/metrics): admitted, over_budget, busy
+    (pieces of work) and peak (bytes held at most)."""
+    m = d.get("/metrics", status=200).text
+    out = {k: int(re.search(r'glintd_work_total\{outcome="%s"\} (\d+)' % k, m).group(1))
+           for k in ("admitted", "over_budget", "busy")}
+    out["peak"] = int(re.search(r"glintd_work_peak_bytes (\d+)", m).group(1))
+    return out
+
+
 def png_bytes(w, h):
     raw = b"".join(b"\x00" + b"\x80\x40\x20" * w for _ in range(h))
 
@@ -181,7 +191,7 @@ def test_previews_beyond_the_budget_get_503_and_memory_stays_bounded(d):
         sc, s, mid = fitted_material(w)
         url = "%s/materials/%s/preview.png?view=0&size=%d&renderer=cpu"
         # one piece that can never fit: 413 at once, naming the budget
-        t0 = time.time()
+        m0 = work_counts(w)
         problem(w.get(url % (API, mid, 4608), headers=tok(s)), 422)  # size beyond the max
         # (an EGL preview is bounded by 40 B/pixel: 640 MiB at 4096^2, admitted
         # or refused before any rendering, so whether EGL works here or not)
@@ -189,7 +199,10 @@ def test_previews_beyond_the_budget_get_503_and_memory_stays_bounded(d):
                   headers=tok(s))
         p = problem(r, 413, "over-budget")
         assert "--work-mb" in p["detail"] and "400 MiB" in p["detail"], p
-        assert time.time() - t0 < 5
+        # at once: refused before any work was admitted or memory held
+        m1 = work_counts(w)
+        assert m1["over_budget"] == m0["over_budget"] + 1, (m0, m1)
+        assert (m1["admitted"], m1["peak"]) == (m0["admitted"], m0["peak"]), (m0, m1)
         base = rss_kb(w)
         # the probe's request: four 4096^2 previews at once (335 MB bound each on
         # the CPU): one runs, the others are refused with Retry-After

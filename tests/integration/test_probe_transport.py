@@ -3,9 +3,12 @@
 Floods (connections that drip their head, idle connections, kept-alive
 connections) from another client address (127.0.0.2: Linux accepts any
 127.x as a source) and from the health checker's own (127.0.0.1), while
-GET /healthz is sampled every 0.1 s and must answer 200 within 1 s each
-time; the request log (escaped control characters, no ids, tokens or
-query values); malformed and hostile heads, each answered at once with an
+GET /healthz is sampled every 0.1 s and must answer 200 each time, and
+answers several times while the flood holds the daemon (before the header
+deadline cuts it); the request log (escaped control characters, no ids,
+tokens or query values); malformed and hostile heads, each answered on
+its head (the answer's status says so: a daemon that waited would cut the
+connection at the header deadline, 408) with an
 RFC 9457 problem+json body: garbage request line, chunked bodies (even
 with a chunk size of ffffffffffffffff), Content-Length with
 Transfer-Encoding, a 10 GB Content-Length (with Expect: 100-continue,
@@ -14,6 +17,7 @@ over-long target, over-large head, HTTP/2.0 and HTTP/9.9, %00 in the
 target; keep-alive; a request body that stalls.
 
 The daemon runs with --header-timeout 3 so that deadlines pass quickly.
+Reads wait up to MUST_S for what must come: that only catches a hang.
 """
 import json
 import os
@@ -29,6 +33,7 @@ from harness import run_tests, validate  # noqa: E402
 
 API = "/api/v1"
 HEADER_TIMEOUT = 3
+MUST_S = 60.0  # the longest wait for an answer that must come
 OTHER = "127.0.0.2"  # a second client address on loopback
 SELF = "127.0.0.1"   # the health checker's address
 
@@ -37,7 +42,7 @@ SELF = "127.0.0.1"   # the health checker's address
 # ---------------------------------------------------------------------------
 
 
-def connect(d, src=SELF, timeout=2.0):
+def connect(d, src=SELF, timeout=MUST_S):
     s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     s.settimeout(timeout)
     s.bind((src, 0))
@@ -60,7 +65,7 @@ def split_response(data):
     return int(parts[1]), headers, data[end + 4:]
 
 
-def read_response(s, timeout=2.0):
+def read_response(s, timeout=MUST_S):
     """Read one response (head and Content-Length body); returns
     (status, headers, body, seconds), status None if nothing came."""
     t0 = time.time()
@@ -86,7 +91,7 @@ def read_response(s, timeout=2.0):
     return None, {}, data, time.time() - t0
 
 
-def exchange(d, raw, timeout=2.0, src=SELF):
+def exchange(d, raw, timeout=MUST_S, src=SELF):
     s = connect(d, src)
     try:
         s.sendall(raw)
@@ -95,15 +100,13 @@ def exchange(d, raw, timeout=2.0, src=SELF):
         s.close()
 
 
-def assert_problem(status, headers, body, want, seconds=None, within=1.0):
-    """An RFC 9457 answer with status `want`, arrived within `within` s."""
+def assert_problem(status, headers, body, want):
+    """An RFC 9457 answer with status `want`."""
     assert status == want, "status %r, want %d: %r" % (status, want, body[:300])
     assert headers.get("content-type", "").startswith("application/problem+json"), headers
     p = json.loads(body)
     validate(p, "Problem.json")
     assert p["status"] == want and p["title"] and p["detail"] and p["type"], p
-    if seconds is not None:
-        assert seconds < within, "answered after %.2f s" % seconds
     return p
 
 
@@ -124,42 +127,78 @@ def log_text(d):
         return f.read().decode("utf-8", "replace")
 
 
+def log_text_with(d, line):
+    """The log once `line` is in it (glintd writes it after answering)."""
+    deadline = time.time() + MUST_S
+    while True:
+        text = log_text(d)
+        if line in text or time.time() > deadline:
+            return text
+        time.sleep(0.02)
+
+
 # ---------------------------------------------------------------------------
 # health sampling
 # ---------------------------------------------------------------------------
 
 
 class HealthSampler:
-    """GET /healthz from 127.0.0.1 every 0.1 s, each on a fresh connection;
-    every sample must be a 200 within 1 s."""
+    """GET /healthz from 127.0.0.1 every 0.1 s, each on a fresh connection:
+    every sample must be a 200.  A flood says while it holds the daemon
+    (hold() ... release()); the samples answered meanwhile are counted:
+    health checks must get through the flood, not only after it."""
+
+    MIN_DURING = 3
 
     def __init__(self, d):
         self.d, self.samples, self.stop = d, [], threading.Event()
+        self.holding, self.during = threading.Event(), 0
+        self.cond = threading.Condition()
         self.t = threading.Thread(target=self._run, daemon=True)
         self.t.start()
 
     def _run(self):
         while not self.stop.is_set():
-            t0 = time.time()
+            held = self.holding.is_set()
             try:
                 st, _, _, _ = exchange(self.d, b"GET /healthz HTTP/1.1\r\nHost: probe\r\n"
-                                       b"Connection: close\r\n\r\n", timeout=1.0)
+                                       b"Connection: close\r\n\r\n")
             except OSError as e:
                 st = repr(e)
-            self.samples.append((st, time.time() - t0))
+            with self.cond:
+                self.samples.append(st)
+                # asked and answered while the flood held the daemon
+                self.during += held and self.holding.is_set() and st == 200
+                self.cond.notify_all()
             self.stop.wait(0.1)
 
-    def finish(self, min_samples):
+    def hold(self):
+        self.holding.set()
+
+    def release(self):
+        self.holding.clear()
+
+    def wait_during(self, n=MIN_DURING):
+        """Until n samples were answered during the flood, or the flood
+        let go (then finish() reports it)."""
+        with self.cond:
+            self.cond.wait_for(lambda: self.during >= n or not self.holding.is_set(), MUST_S)
+
+    def finish(self):
+        self.release()
         self.stop.set()
         self.t.join()
-        bad = [(st, round(dt, 3)) for st, dt in self.samples if st != 200 or dt >= 1.0]
-        assert not bad, "%d of %d health checks failed or took 1 s or more: %s" % (
+        bad = [st for st in self.samples if st != 200]
+        assert not bad, "%d of %d health checks failed: %s" % (
             len(bad), len(self.samples), bad[:10])
-        assert len(self.samples) >= min_samples, "only %d samples" % len(self.samples)
+        assert self.during >= self.MIN_DURING, (
+            "%d health checks answered while the flood held the daemon (of %d)"
+            % (self.during, len(self.samples)))
 
 
 def settle(d):
-    """Wait until the front has let go of the last flood (lingering ends)."""
+    """Wait until the front has let go of the last flood (lingering ends:
+    FRONT_LINGER_S, 2 s, which nothing outside the daemon can see end)."""
     time.sleep(2.5)
     st, _, _, _ = exchange(d, b"GET /healthz HTTP/1.1\r\nHost: probe\r\n\r\n")
     assert st == 200
@@ -170,13 +209,17 @@ def settle(d):
 # ---------------------------------------------------------------------------
 
 
-def drip_flood(d, src, n=260, seconds=HEADER_TIMEOUT + 2.5):
+def drip_flood(d, src, n=260, health=None):
     """n connections that send a request line and then one header line a
-    second (never the blank line).  Returns [(answer bytes, seconds from
-    the start of the flood to the answer's first byte)], one per
-    connection that got bytes."""
+    second (never the blank line), until each was answered and closed (or
+    a hang: MUST_S more than the header deadline).  The flood holds the
+    daemon until its first 408 (health.hold / release).  Returns [(answer
+    bytes, seconds from the start of the flood to the answer's first
+    byte)], one per connection that got bytes."""
+    if health:
+        health.hold()
+    t0 = time.monotonic()  # before the first connection: no deadline starts earlier
     socks = [connect(d, src) for _ in range(n)]
-    t0 = time.time()
     for s in socks:
         s.setblocking(False)
         s.sendall(b"GET /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n")
@@ -184,7 +227,7 @@ def drip_flood(d, src, n=260, seconds=HEADER_TIMEOUT + 2.5):
     first = {}
     done = set()
     line = 0
-    while time.time() - t0 < seconds:
+    while len(done) < n and time.monotonic() - t0 < HEADER_TIMEOUT + MUST_S:
         r, _, _ = select.select([s for s in socks if s not in done], [], [], 0.1)
         for s in r:
             try:
@@ -192,11 +235,13 @@ def drip_flood(d, src, n=260, seconds=HEADER_TIMEOUT + 2.5):
             except OSError:
                 chunk = b""
             if chunk and s not in first:
-                first[s] = time.time() - t0
+                first[s] = time.monotonic() - t0
             got[s] += chunk
+            if health and got[s].startswith(b"HTTP/1.1 408"):
+                health.release()  # the header deadline: the flood is being cut
             if not chunk:
                 done.add(s)
-        if time.time() - t0 >= line + 1:
+        if time.monotonic() - t0 >= line + 1:
             line += 1
             for s in socks:
                 if s not in done and not got[s]:
@@ -210,15 +255,16 @@ def drip_flood(d, src, n=260, seconds=HEADER_TIMEOUT + 2.5):
 
 
 def check_drip_answers(answers, min_408):
-    """Each answer is a problem+json 408, sent after the header deadline, or
-    a 503 for a connection dropped to make room."""
+    """Each answer is a problem+json 408, sent once the header deadline
+    passed (not before it: a lower bound, which a busy machine only makes
+    easier), or a 503 for a connection dropped to make room."""
     statuses = []
     for data, at in answers:
         st, hd, body = split_response(data)
         assert_problem(st, hd, body, st)
         statuses.append(st)
         if st == 408:
-            assert HEADER_TIMEOUT - 0.2 <= at <= HEADER_TIMEOUT + 1.5, "408 after %.2f s" % at
+            assert at >= HEADER_TIMEOUT - 0.2, "408 after %.2f s" % at
     assert set(statuses) <= {408, 503}, set(statuses)
     assert statuses.count(408) >= min_408, statuses.count(408)
 
@@ -230,9 +276,8 @@ def test_drip_flood_other_client(d):
     at most --max-waiting-per-ip (256) connections waiting, the oldest
     gives way to a new one)."""
     h = HealthSampler(d)
-    time.sleep(0.2)
-    answers = drip_flood(d, OTHER)
-    h.finish(min_samples=30)
+    answers = drip_flood(d, OTHER, health=h)
+    h.finish()
     check_drip_answers(answers, min_408=256)
     settle(d)
 
@@ -242,9 +287,8 @@ def test_drip_flood_same_client(d):
     check makes room for itself by dropping the client's oldest waiting
     connection (503), so /healthz still gets in."""
     h = HealthSampler(d)
-    time.sleep(0.2)
-    answers = drip_flood(d, SELF)
-    h.finish(min_samples=30)
+    answers = drip_flood(d, SELF, health=h)
+    h.finish()
     check_drip_answers(answers, min_408=200)
     settle(d)
 
@@ -252,16 +296,17 @@ def test_drip_flood_same_client(d):
 def idle_flood(d, src, n=1000):
     socks = []
     h = HealthSampler(d)
-    time.sleep(0.2)
+    # health checks while the idle ones come and are there: the client's
+    # --max-waiting-per-ip (256) stay (the oldest give way to newer ones, or
+    # to a health check) until the header deadline closes them, which ends
+    # that (most of them gone)
+    h.hold()
     for _ in range(n):
         socks.append(connect(d, src))
-    time.sleep(2.0)  # within the header deadline: the idle ones are still there
-    h.finish(min_samples=15)
-    # idle connections are closed (silently: they asked nothing) by the deadline
-    deadline = time.time() + HEADER_TIMEOUT + 2
     open_ = list(socks)
-    while open_ and time.time() < deadline:
-        r, _, _ = select.select(open_, [], [], 0.2)
+
+    def closed(wait):
+        r, _, _ = select.select(open_, [], [], wait)
         for s in r:
             try:
                 data = s.recv(1024)
@@ -269,6 +314,17 @@ def idle_flood(d, src, n=1000):
                 data = b""
             assert data == b"", "an idle connection got %r" % data[:100]
             open_.remove(s)
+        if len(open_) < 128:
+            h.release()
+        return r
+    while h.holding.is_set() and h.during < h.MIN_DURING:
+        closed(0.05)
+    h.finish()
+    # idle connections are closed (silently: they asked nothing) by the
+    # deadline (the wait only catches a hang)
+    deadline = time.monotonic() + HEADER_TIMEOUT + MUST_S
+    while open_ and time.monotonic() < deadline:
+        closed(0.2)
     for s in socks:
         s.close()
     assert not open_, "%d idle connections still open after the header deadline" % len(open_)
@@ -292,16 +348,16 @@ def test_keepalive_flood_same_client(d):
     /healthz answers throughout."""
     socks, kept, statuses = [], 0, []
     h = HealthSampler(d)
-    time.sleep(0.2)
     for _ in range(300):
         s = connect(d, SELF)
         s.sendall(b"GET /metrics HTTP/1.1\r\nHost: probe\r\n\r\n")
-        st, hd, _, _ = read_response(s, 2.0)
+        st, hd, _, _ = read_response(s)
         statuses.append(st)
         kept += st == 200 and hd.get("connection", "").lower() != "close"
         socks.append(s)
-    time.sleep(1.0)
-    h.finish(min_samples=10)
+    h.hold()  # the kept-alive connections are all there
+    h.wait_during()
+    h.finish()
     for s in socks:
         s.close()
     assert set(statuses) <= {200, 429}, set(statuses)
@@ -316,7 +372,6 @@ def test_stream_flood_same_client(d):
     sess = session(d)
     socks, statuses = [], []
     h = HealthSampler(d)
-    time.sleep(0.2)
     for _ in range(300):
         s = connect(d, SELF)
         s.sendall(b"GET %s/sessions/%s/events?token=%s HTTP/1.1\r\nHost: probe\r\n\r\n" % (
@@ -333,8 +388,9 @@ def test_stream_flood_same_client(d):
         r = split_response(data)
         statuses.append(r[0] if r else None)
         socks.append(s)
-    time.sleep(1.0)
-    h.finish(min_samples=10)
+    h.hold()  # the streams are all open
+    h.wait_during()
+    h.finish()
     for s in socks:
         s.close()
     assert set(statuses) <= {200, 429}, set(statuses)
@@ -352,11 +408,11 @@ def test_log_escapes_control_characters(d):
     st, _, _, _ = exchange(d, b"GET /api/v1/x%0aGET%20/forged%20200%201.0ms%0d HTTP/1.1\r\n"
                            b"Host: probe\r\n\r\n")
     assert st == 404
-    time.sleep(0.1)
-    text = log_text(d)
+    line = "/api/v1/x\\x0aGET\\x20/forged\\x20200\\x201.0ms\\x0d "
+    text = log_text_with(d, line)
     assert not any(line.startswith("GET /forged") for line in text.splitlines()), \
         "a forged log line"
-    assert "/api/v1/x\\x0aGET\\x20/forged\\x20200\\x201.0ms\\x0d " in text, text[-2000:]
+    assert line in text, text[-2000:]
 
 
 def test_log_redacts_ids_and_tokens(d):
@@ -367,8 +423,8 @@ def test_log_redacts_ids_and_tokens(d):
                    "/api/v1/materials/%%%02x%s/factors.png" % (ord(sid[0]), sid[1:])):
         st, _, _, _ = exchange(d, b"GET %s HTTP/1.1\r\nHost: probe\r\n\r\n" % target.encode())
         assert st in (401, 403, 404), st
-    time.sleep(0.1)
-    text = log_text(d)
+    # (the last request's line: "GET /api/v1/materials/{id}/factors.png 4..")
+    text = log_text_with(d, "GET /api/v1/materials/{id}/factors.png 4")
     for secret in (sid[1:], sid.upper(), token, view):
         assert secret not in text, "%s... is in the log" % secret[:8]
     assert "since=7" not in text and "name=ann" not in text
@@ -381,19 +437,19 @@ def test_log_redacts_ids_and_tokens(d):
 
 
 def test_garbage_request_line(d):
-    st, hd, body, dt = exchange(d, b"GARBAGE\r\n\r\n")
-    assert_problem(st, hd, body, 400, dt)
+    st, hd, body, _ = exchange(d, b"GARBAGE\r\n\r\n")
+    assert_problem(st, hd, body, 400)
     # a TLS ClientHello's first bytes, no line end at all
-    st, hd, body, dt = exchange(d, b"\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03")
-    assert_problem(st, hd, body, 400, dt)
+    st, hd, body, _ = exchange(d, b"\x16\x03\x01\x02\x00\x01\x00\x01\xfc\x03\x03")
+    assert_problem(st, hd, body, 400)
 
 
 def test_chunked_body_huge_chunk(d):
-    st, hd, body, dt = exchange(d, b"POST /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n"
+    st, hd, body, _ = exchange(d, b"POST /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n"
                                 b"Content-Type: application/json\r\n"
                                 b"Transfer-Encoding: chunked\r\n\r\nffffffffffffffff\r\n")
     assert st in (400, 411), st
-    assert_problem(st, hd, body, st, dt)
+    assert_problem(st, hd, body, st)
 
 
 def test_expect_continue_too_large(d):
@@ -402,11 +458,11 @@ def test_expect_continue_too_large(d):
         s.sendall(b"PUT /api/v1/sessions/%s/views/0/painting HTTP/1.1\r\nHost: probe\r\n"
                   b"Content-Type: image/png\r\nContent-Length: 10000000000\r\n"
                   b"Expect: 100-continue\r\n\r\n" % secrets.token_hex(16).encode())
-        st, hd, body, dt = read_response(s, 2.0)
+        st, hd, body, _ = read_response(s)
     finally:
         s.close()
     assert st != 100, "100 Continue for a 10 GB body"
-    assert_problem(st, hd, body, 413, dt)
+    assert_problem(st, hd, body, 413)
 
 
 def test_content_length_too_large_without_expect(d):
@@ -440,15 +496,15 @@ def test_content_length_too_large_without_expect(d):
 
 
 def test_content_length_with_chunked(d):
-    st, hd, body, dt = exchange(d, b"POST /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n"
+    st, hd, body, _ = exchange(d, b"POST /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n"
                                 b"Content-Type: application/json\r\nContent-Length: 4\r\n"
                                 b"Transfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n\r\n")
-    assert_problem(st, hd, body, 400, dt)
+    assert_problem(st, hd, body, 400)
 
 
 def test_long_target(d):
-    st, hd, body, dt = exchange(d, b"GET /%s HTTP/1.1\r\nHost: probe\r\n\r\n" % (b"a" * 10000))
-    assert_problem(st, hd, body, 414, dt)
+    st, hd, body, _ = exchange(d, b"GET /%s HTTP/1.1\r\nHost: probe\r\n\r\n" % (b"a" * 10000))
+    assert_problem(st, hd, body, 414)
 
 
 def test_large_head(d):
@@ -456,28 +512,28 @@ def test_large_head(d):
     st, _, _, _ = exchange(d, b"GET /healthz HTTP/1.1\r\nHost: probe\r\n%s\r\n" %
                            b"".join(b"X-Pad-%d: %s\r\n" % (i, b"p" * 1000) for i in range(15)))
     assert st == 200, st
-    st, hd, body, dt = exchange(d, b"GET /healthz HTTP/1.1\r\nHost: probe\r\n%s\r\n" %
+    st, hd, body, _ = exchange(d, b"GET /healthz HTTP/1.1\r\nHost: probe\r\n%s\r\n" %
                                 b"".join(b"X-Pad-%d: %s\r\n" % (i, b"p" * 1000)
                                          for i in range(40)))
-    assert_problem(st, hd, body, 431, dt)
+    assert_problem(st, hd, body, 431)
 
 
 def test_http_versions(d):
     for v in (b"HTTP/2.0", b"HTTP/9.9"):
-        st, hd, body, dt = exchange(d, b"GET /healthz %s\r\nHost: probe\r\n\r\n" % v)
-        assert_problem(st, hd, body, 505, dt)
+        st, hd, body, _ = exchange(d, b"GET /healthz %s\r\nHost: probe\r\n\r\n" % v)
+        assert_problem(st, hd, body, 505)
 
 
 def test_nul_in_target(d):
     sess = session(d)
     path = "%s/sessions/%s" % (API, sess["id"])
     d.get(path + "?token=" + sess["view_token"], status=200)
-    st, hd, body, dt = exchange(d, b"GET %s?token=%s%%00junk HTTP/1.1\r\nHost: probe\r\n\r\n"
+    st, hd, body, _ = exchange(d, b"GET %s?token=%s%%00junk HTTP/1.1\r\nHost: probe\r\n\r\n"
                                 % (path.encode(), sess["view_token"].encode()))
-    assert_problem(st, hd, body, 400, dt)
-    st, hd, body, dt = exchange(d, b"GET %s%%00/strokes HTTP/1.1\r\nHost: probe\r\n\r\n"
+    assert_problem(st, hd, body, 400)
+    st, hd, body, _ = exchange(d, b"GET %s%%00/strokes HTTP/1.1\r\nHost: probe\r\n\r\n"
                                 % path.encode())
-    assert_problem(st, hd, body, 400, dt)
+    assert_problem(st, hd, body, 400)
 
 
 def test_keepalive_later_requests_checked(d):
@@ -493,8 +549,8 @@ def test_keepalive_later_requests_checked(d):
                 st, hd, body, _ = read_response(s)
                 assert st == 200 and hd.get("connection", "").lower() != "close", (st, hd)
             s.sendall(bad)
-            st, hd, body, dt = read_response(s)
-            assert_problem(st, hd, body, 400, dt)
+            st, hd, body, _ = read_response(s)
+            assert_problem(st, hd, body, 400)
         finally:
             s.close()
 
@@ -506,19 +562,16 @@ def test_stalled_body_is_cut(d):
     try:
         s.sendall(b"POST /api/v1/scenes HTTP/1.1\r\nHost: probe\r\n"
                   b"Content-Type: application/json\r\nContent-Length: 100000\r\n\r\n{\"width\":")
-        t0 = time.time()
-        s.settimeout(HEADER_TIMEOUT + 5)
+        s.settimeout(HEADER_TIMEOUT + MUST_S)  # (only a connection never cut waits it out)
         try:
             outcome = "eof" if s.recv(65536) == b"" else "data"
         except ConnectionResetError:
             outcome = "reset"
         except socket.timeout:
             outcome = "still open"
-        dt = time.time() - t0
     finally:
         s.close()
-    assert outcome in ("eof", "reset") and dt < HEADER_TIMEOUT + 2.5, \
-        "%s after %.1f s" % (outcome, dt)
+    assert outcome in ("eof", "reset"), outcome
 
 
 if __name__ == "__main__":

@@ -176,7 +176,7 @@ def test_painters_on_different_replicas_see_each_other_live(c):
     got, ready, stop = [], threading.Event(), threading.Event()
     th = threading.Thread(target=stream_events, args=(a, sess, got, ready, stop), daemon=True)
     th.start()
-    assert ready.wait(10)
+    assert ready.wait(60)
     sent = {}
     for i, d in enumerate((b, z, b, z)):
         t = time.time()
@@ -185,7 +185,7 @@ def test_painters_on_different_replicas_see_each_other_live(c):
                                       "points": [[5 + 8 * i, 20]]}]},
                    headers=tok(sess["paint_token"])).json()
         sent[r["first_seq"]] = t
-    deadline = time.time() + 10
+    deadline = time.time() + 60  # (only catches a hang: they come at once)
     while len(got) < len(sent) and time.time() < deadline:
         time.sleep(0.02)
     stop.set()
@@ -218,7 +218,7 @@ def test_revoking_on_one_replica_ends_streams_on_another(c):
     t0 = time.time()
     new = b.post("%s/sessions/%s/tokens" % (API, sess["id"]), status=200,
                  json={"revoke": "both"}, headers=tok(sess["paint_token"])).json()
-    assert ended.wait(5), "the stream on replica 0 outlived the revocation on replica 1"
+    assert ended.wait(60), "the stream on replica 0 outlived the revocation on replica 1"
     print("tokens revoked on replica 1: the stream on replica 0 ended after %.0f ms"
           % (1000 * (time.time() - t0)))
     r.close()

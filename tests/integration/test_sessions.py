@@ -523,7 +523,7 @@ def test_painting_conditional_replace(d):
     # the refused uploads left no blob: the view's one image is all there is
     # (the replaced versions' files go off the requests' path: soon after)
     top = os.path.join(d.data_dir, "blobs", "sessions", sess["id"])
-    deadline = time.time() + 10
+    deadline = time.time() + 60
     while True:
         names = [f for f in os.listdir(top) if not f.endswith(".px")]
         if len(names) == 1 or time.time() > deadline:

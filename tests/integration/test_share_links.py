@@ -47,11 +47,14 @@ def tokens(d, s, headers, status=200, **body):
 
 
 def test_links_expire_and_the_owner_renews_them(d):
-    s = new_session(d, expires_in=2)
+    s = new_session(d, expires_in=3)
     assert "expires" in s, s
     get(d, s, s["paint_token"]).raise_for_status()
     get(d, s, s["view_token"]).raise_for_status()
-    time.sleep(2.2)
+    # until the link has expired (the wait only catches one that never does)
+    deadline = time.time() + 60
+    while get(d, s, s["view_token"]).status_code == 200 and time.time() < deadline:
+        time.sleep(0.1)
     for t in (s["paint_token"], s["view_token"]):
         p = problem(get(d, s, t), 403, "link-expired")
     print("  expired: %s" % p["detail"])
@@ -83,11 +86,8 @@ def test_revoked_tokens_are_refused_and_their_streams_end(d):
     threading.Thread(target=read, daemon=True).start()
     time.sleep(0.3)
     assert not ended.is_set()
-    t0 = time.time()
     n = tokens(d, s, {"X-Glint-Token": s["paint_token"]}).json()
-    assert ended.wait(5), "the old token's event stream did not end"
-    print("  stream of the revoked view token ended %.2f s after the revocation"
-          % (time.time() - t0))
+    assert ended.wait(60), "the old token's event stream did not end"
     for t in (s["paint_token"], s["view_token"]):
         problem(get(d, s, t), 403, "wrong-token")
     assert get(d, n, n["paint_token"]).json()["access"] == "paint"

@@ -4,8 +4,10 @@
  *
  *   srbf_tool EXPORT_DIR ENVMAP_FILE
  *
- * Compared: the basis (lambda, centres), the environment's 64x32 lat-long
- * compression (directions and powers, from ENVMAP_FILE read by glint), the
+ * Compared: the basis (lambda, centres), the environment's lat-long
+ * compression at the reference's resolution (K lights, as many as
+ * light_dirs.f64 holds: directions and powers, from ENVMAP_FILE read by
+ * glint), the
  * energy rows g at the reference's outgoing directions, the transfer
  * matrices T and irradiance E of the reference's G-buffer under the
  * reference's lights, and the constrained fit per channel (lsq.h on the
@@ -15,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "env.h"
 #include "lsq.h"
@@ -38,6 +41,17 @@ static double *load(const char *dir, const char *name, size_t n)
     return a;
 }
 
+/* The number of 3-vectors in dir/name.f64, or -1. */
+static long count3(const char *dir, const char *name)
+{
+    char path[2048];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%s.f64", dir, name);
+    if (stat(path, &st) || st.st_size % (3 * sizeof(double)))
+        return -1;
+    return (long)(st.st_size / (3 * sizeof(double)));
+}
+
 static double maxabs(const double *a, size_t n)
 {
     double m = 0;
@@ -48,7 +62,9 @@ static double maxabs(const double *a, size_t n)
 
 int main(int argc, char **argv)
 {
-    enum { J = 147, NL = 192, K = 2048, N = 2644 };
+    enum { J = 147, NL = 192, N = 2644 };
+    long nk;
+    int K;
     const char *dir;
     srbf_basis b;
     srbf_static st = {SRBF_STATIC_PAPER, 0.25, 0.3};
@@ -65,6 +81,11 @@ int main(int argc, char **argv)
         return 2;
     }
     dir = argv[1];
+    if ((nk = count3(dir, "light_dirs")) < 1 || nk > 65536) {
+        fprintf(stderr, "%s/light_dirs.f64: not a list of directions\n", dir);
+        return 2;
+    }
+    K = (int)nk;
     if (srbf_basis_make(7, M_PI / 40.0, &b, &e) || b.J != J) {
         fprintf(stderr, "basis: %s\n", e.msg);
         return 2;

@@ -12,12 +12,21 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "err.h"
 
-#define SWEEP_DENSE 400
-#define SWEEP_RUNS 400
+/* An operation with at most SWEEP_ALL allocations is swept at every one;
+ * a longer one at about SWEEP_RUNS of them: every k-th from an offset
+ * (k = ceil(total / SWEEP_RUNS)), the offset drawn anew for each run of the
+ * program so that successive runs cover the whole path.  Each sweep prints
+ * its k and offset; GLINT_ALLOC_FAIL_OFFSET=O and GLINT_ALLOC_FAIL_STRIDE=K
+ * replay it (the offset is taken modulo k; K applies to the longer
+ * operations only, and GLINT_ALLOC_FAIL_STRIDE=1 sweeps every allocation of
+ * every operation). */
+#define SWEEP_ALL 400
+#define SWEEP_RUNS 200
 
 /* ---- the replacement allocator -------------------------------------------------------- */
 
@@ -133,15 +142,38 @@ static int run_once(op_fn op, long n, long *count, char *msg, size_t msg_len)
     return WEXITSTATUS(status);
 }
 
-static int sweep_dense = SWEEP_DENSE, sweep_runs = SWEEP_RUNS;
+static int sweep_all = SWEEP_ALL, sweep_runs = SWEEP_RUNS;
+
+/* The offset of the strided sweeps: $GLINT_ALLOC_FAIL_OFFSET, else drawn
+ * from the time and the process id (printed once). */
+static long sweep_offset(void)
+{
+    static long off = -1;
+    const char *env;
+    if (off >= 0)
+        return off;
+    env = getenv("GLINT_ALLOC_FAIL_OFFSET");
+    if (env && *env)
+        off = atol(env) < 0 ? 0 : atol(env);
+    else {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        off = (long)(((unsigned long)ts.tv_sec * 1000003u ^ (unsigned long)ts.tv_nsec ^
+                      (unsigned long)getpid() * 7919u) % 1000000007u);
+    }
+    printf("  strided sweeps from offset %ld (GLINT_ALLOC_FAIL_OFFSET=%ld replays them)\n", off,
+           off);
+    return off;
+}
 
 /* Sweep op; returns the number of bad runs (printed). */
 static int sweep(const char *name, op_fn op)
 {
-    long total, n, step, runs = 0, count;
+    long total, n, stride = 1, first = 0, runs = 0, count;
     char msg[GLINT_ERR_MSG_MAX];
     int bad = 0, r;
     const char *at = getenv("GLINT_ALLOC_FAIL_AT"); /* N: one run, in this process (a debugger) */
+    const char *k = getenv("GLINT_ALLOC_FAIL_STRIDE");
     if (at) {
         glint_err e;
         fi_countdown = atol(at) - 1;
@@ -155,18 +187,28 @@ static int sweep(const char *name, op_fn op)
         fprintf(stderr, "  %s: the operation fails without any fault (%d): %s\n", name, r, msg);
         return 1;
     }
-    step = total <= sweep_dense ? 1 : (total - sweep_dense) / sweep_runs + 1;
-    for (n = 0; n < total; n += n < sweep_dense ? 1 : step) {
+    if (total > sweep_all)
+        stride = k && *k ? (atol(k) < 1 ? 1 : atol(k)) : (total + sweep_runs - 1) / sweep_runs;
+    if (stride > 1)
+        first = sweep_offset() % stride;
+    for (n = first; n < total; n += stride) {
         r = run_once(op, n, &count, msg, sizeof msg);
         runs++;
         if (r == RUN_FAILED_OK || r == RUN_CLEAN)
             continue;
         bad++;
         if (bad <= 8)
-            fprintf(stderr, "  %s: allocation %ld of %ld failing: %s %s\n", name, n + 1, total,
-                    r >= 100 ? "killed by signal" : "error without a fault", r >= 100 ? strsignal(r - 100) : msg);
+            fprintf(stderr, "  %s: allocation %ld of %ld failing (GLINT_ALLOC_FAIL_AT=%ld): %s %s\n",
+                    name, n + 1, total, n + 1, r >= 100 ? "killed by signal" : "error without a fault",
+                    r >= 100 ? strsignal(r - 100) : msg);
     }
-    printf("  %s: %ld allocations, %ld runs with one failing, %d bad\n", name, total, runs, bad);
+    if (stride > 1)
+        printf("  %s: %ld allocations, one in %ld from allocation %ld (GLINT_ALLOC_FAIL_STRIDE=%ld "
+               "GLINT_ALLOC_FAIL_OFFSET=%ld), %ld runs with one failing, %d bad\n",
+               name, total, stride, first + 1, stride, first, runs, bad);
+    else
+        printf("  %s: %ld allocations, every one failing in turn, %ld runs, %d bad\n", name,
+               total, runs, bad);
     return bad;
 }
 

@@ -1,9 +1,11 @@
 /* srbf_fit_fixture.h: the scene, cache and truths of the srbf fit tests
- * (test_srbf_fit.c, test_srbf_repaint.c): a 160x120 sphere scene, one
- * cache for the binary, truths rendered by a plain loop over the samples
- * and the environment's lights (sum_k power_k f(d_k, wo) max(0, n.d_k)),
- * with the same lights the method uses, so the errors are the model's and
- * the fit's, not the compression's.  The sphere is convex: no visibility. */
+ * (test_srbf_fit.c, test_srbf_repaint.c): an 80x60 sphere scene (every
+ * pixel a row: a quarter of the paper's 160x120, with the same lights and
+ * basis), one cache for the binary, truths rendered by a plain loop over
+ * the samples and the environment's lights (sum_k power_k f(d_k, wo)
+ * max(0, n.d_k)), with the same lights the method uses, so the errors are
+ * the model's and the fit's, not the compression's.  The sphere is convex:
+ * no visibility. */
 #ifndef GLINT_SRBF_FIT_FIXTURE_H
 #define GLINT_SRBF_FIT_FIXTURE_H
 
@@ -49,8 +51,8 @@ static inline int setup(void)
     if (C)
         return 0;
     scene_params_default(&p);
-    p.width = 160;
-    p.height = 120;
+    p.width = 80;
+    p.height = 60;
     if (scene_create(&p, &SC, &e) || cache_open(NULL, (size_t)4 << 30, &C, &e) ||
         prep_scene_acquire(C, "sphere", &src, &SE, &e)) {
         fprintf(stderr, "setup: %s\n", e.msg);
@@ -141,19 +143,48 @@ static inline int lights_for(const srbf_params *p, double rot_deg, env_lights *l
     return rc;
 }
 
-/* The reference's known coefficients: lobes near the normal and a tilted
+/* The energy rows at srbf_energy_dirs(0) of the basis of hemicube
+ * resolution res, sigma pi/40 and the paper's static term (f0 0.25, alpha
+ * 0.3): made once per resolution for the binary (OUT: *nl). */
+static inline const double *known_rows(int res, int *nl)
+{
+    static double *rows[SRBF_MAX_RES + 1];
+    static srbf_basis basis[SRBF_MAX_RES + 1];
+    srbf_static st = {SRBF_STATIC_PAPER, 0.25, 0.3};
+    glint_err e;
+    double *wo;
+    *nl = srbf_energy_dirs(0, NULL);
+    if (res < SRBF_MIN_RES || res > SRBF_MAX_RES)
+        return NULL;
+    if (rows[res])
+        return rows[res];
+    if (srbf_basis_make(res, M_PI / 40.0, &basis[res], &e))
+        return NULL;
+    wo = malloc((size_t)3 * *nl * sizeof *wo);
+    rows[res] = malloc((size_t)*nl * basis[res].J * sizeof *rows[res]);
+    srbf_energy_dirs(0, wo);
+    if (srbf_energy_rows(&basis[res], &st, *nl, wo, 0, rows[res], 0, NULL, &e)) {
+        free(rows[res]);
+        rows[res] = NULL;
+    }
+    free(wo);
+    return rows[res];
+}
+
+/* The reference's known coefficients on the basis of hemicube resolution
+ * res (7: the reference's 147 lobes): lobes near the normal and a tilted
  * one, small weights cut, scaled so that the brightest energy row holds
  * `budget` of 1 - rho. */
-static inline int known_material(double budget, srbf_material *sm)
+static inline int known_material(double budget, int res, srbf_material *sm)
 {
     static const double rho[3] = {0.35, 0.25, 0.15};
     double tilt[3] = {0.45, 0.15, 1.0}, tl, mx = 0.0;
     glint_err e;
     int J, nl;
-    double *wo, *g;
+    const double *g;
 
     memset(sm, 0, sizeof *sm);
-    if (srbf_basis_make(7, M_PI / 40.0, &sm->b, &e))
+    if (srbf_basis_make(res, M_PI / 40.0, &sm->b, &e) || !(g = known_rows(res, &nl)))
         return -1;
     J = sm->b.J;
     sm->st.kind = SRBF_STATIC_PAPER;
@@ -173,15 +204,6 @@ static inline int known_material(double budget, srbf_material *sm)
     }
     for (int j = 0; j < J; j++)
         sm->c[j] = sm->c[j] < 0.03 * mx ? 0.0 : sm->c[j];
-    nl = srbf_energy_dirs(0, NULL);
-    wo = malloc((size_t)3 * nl * sizeof *wo);
-    g = malloc((size_t)nl * J * sizeof *g);
-    srbf_energy_dirs(0, wo);
-    if (srbf_energy_rows(&sm->b, &sm->st, nl, wo, 0, g, 0, NULL, &e)) {
-        free(wo);
-        free(g);
-        return -1;
-    }
     {
         double gm = 0.0;
         for (int l = 0; l < nl; l++) {
@@ -195,8 +217,6 @@ static inline int known_material(double budget, srbf_material *sm)
             for (int j = 0; j < J; j++)
                 sm->c[(size_t)ch * J + j] = sm->c[j] * budget * (1.0 - rho[ch]) / gm;
     }
-    free(wo);
-    free(g);
     return 0;
 }
 

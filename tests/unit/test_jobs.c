@@ -14,7 +14,10 @@
 #include "clock.h"
 #include "jobs.h"
 
-#define WAIT_S 10.0 /* longest wait for something that must happen */
+#define WAIT_S 30.0 /* longest wait for something that must happen (only catches a hang) */
+/* A wait for events that only a wake-up can end (longer than the test's
+ * timeout): were the wake-up missing, the test would hang there. */
+#define FOREVER_S 3600.0
 
 /* ---- gates and a journal of what ran ---------------------------------------- */
 
@@ -419,7 +422,7 @@ TEST(events_wait_and_return_only_new_ones)
     json_t *ev;
     int final = -1;
     long long since;
-    double t0, dt;
+    double t0;
     journal_reset();
     gate_init(&G1);
     gate_init(&G2);
@@ -444,21 +447,18 @@ TEST(events_wait_and_return_only_new_ones)
         json_decref(ev);
     }
     ASSERT_EQ(since, 3); /* queued, started, first */
-    /* nothing new: waits the whole timeout, answers an empty array */
+    /* nothing new: waits the whole timeout (a lower bound: a busy machine
+     * only makes it longer), answers an empty array */
     t0 = glint_now();
     ASSERT_OK(jobs_events(js, id, since, 0.3, &ev, &final, NULL));
-    dt = glint_now() - t0;
+    ASSERT_LE(0.25, glint_now() - t0);
     ASSERT_EQ(json_array_size(ev), 0);
     ASSERT_EQ(final, 0);
-    ASSERT_LE(0.25, dt);
-    ASSERT_LT(dt, 5.0);
     json_decref(ev);
-    /* something new while waiting: wakes at once, only what is new */
+    /* something new while waiting: woken (nothing else ends this wait),
+     * only what is new */
     gate_open(&G1);
-    t0 = glint_now();
-    ASSERT_OK(jobs_events(js, id, since, WAIT_S, &ev, &final, NULL));
-    dt = glint_now() - t0;
-    ASSERT_LT(dt, 5.0);
+    ASSERT_OK(jobs_events(js, id, since, FOREVER_S, &ev, &final, NULL));
     ASSERT_EQ(json_array_size(ev), 1);
     ASSERT_EQ(json_integer_value(json_object_get(json_array_get(ev, 0), "seq")), since + 1);
     ASSERT(strcmp(str(ev_job(ev, 0), "stage"), "second") == 0);
@@ -477,9 +477,8 @@ TEST(events_wait_and_return_only_new_ones)
     ASSERT(strcmp(ev_type(ev, json_array_size(ev) - 1), "done") == 0);
     since = last_seq(ev);
     json_decref(ev);
-    t0 = glint_now();
-    ASSERT_OK(jobs_events(js, id, since, WAIT_S, &ev, &final, NULL));
-    ASSERT_LT(glint_now() - t0, 1.0);
+    /* (a wait here would last FOREVER_S: the test's timeout reports it) */
+    ASSERT_OK(jobs_events(js, id, since, FOREVER_S, &ev, &final, NULL));
     ASSERT_EQ(json_array_size(ev), 0);
     ASSERT_EQ(final, 1);
     json_decref(ev);
@@ -493,17 +492,15 @@ typedef struct waiter {
     jobs *js;
     const char *id;
     int rc;
-    double seconds;
 } waiter;
 
+/* Waits for an event that never comes: only jobs_shutdown ends it. */
 static void *waiter_main(void *arg)
 {
     waiter *w = arg;
     json_t *ev = NULL;
     int final;
-    double t0 = glint_now();
-    w->rc = jobs_events(w->js, w->id, 100, WAIT_S, &ev, &final, NULL);
-    w->seconds = glint_now() - t0;
+    w->rc = jobs_events(w->js, w->id, 100, FOREVER_S, &ev, &final, NULL);
     json_decref(ev);
     return NULL;
 }
@@ -527,11 +524,10 @@ TEST(shutdown_ends_event_waits_and_jobs_go_on)
     w.rc = 1;
     ASSERT_EQ(pthread_create(&t, NULL, waiter_main, &w), 0);
     ASSERT_OK(journal_wait_started(1));
-    usleep(100 * 1000); /* let the waiter block */
+    usleep(100 * 1000); /* let the waiter block (if not yet, it is refused at once) */
     jobs_shutdown(js);
-    pthread_join(t, NULL);
+    pthread_join(t, NULL); /* woken: nothing else ends its wait */
     ASSERT_EQ(w.rc, GLINT_EUNSUPPORTED);
-    ASSERT_LT(w.seconds, 2.0);
     {
         json_t *ev;
         int final;
@@ -965,7 +961,7 @@ static void on_idle(void *cls)
 
 static int wait_idle_calls_above(int n)
 {
-    for (double end = glint_now() + 5.0; glint_now() < end; usleep(10 * 1000))
+    for (double end = glint_now() + WAIT_S; glint_now() < end; usleep(10 * 1000))
         if (atomic_load(&idle_calls) > n)
             return 0;
     return -1;

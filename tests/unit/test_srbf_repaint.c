@@ -3,6 +3,11 @@
  * view (prep_predict) that held-out errors compare. */
 #include "srbf_fit_fixture.h"
 
+/* The basis of these fits (27 lobes): what they test (the kept factor,
+ * T'b, warm starts, predictions) holds on any basis, and the energy rows of
+ * the default 147 take most of a fit's precomputation. */
+#define REPAINT_RES 3
+
 /* A repaint with the same parameters starts from the factor of H that the
  * first fit made and the level keeps: from zero (start cold, the default),
  * the same material to the bit; other parameters (the smoothness weight) make their
@@ -19,6 +24,7 @@ TEST(a_repaint_starts_from_the_kept_factor)
     ASSERT_OK(setup());
     params_default(&p);
     p.lights = 40; /* levels of its own: no earlier test has fitted on them */
+    p.basis_res = REPAINT_RES;
     ASSERT_OK(view_samples(0, &p, &pp));
     n = prep_samples(pp)->n;
     rgb = malloc((size_t)3 * n * sizeof *rgb);
@@ -157,6 +163,7 @@ TEST(a_warm_repaint_reaches_the_cold_optimum)
     ASSERT_OK(setup());
     params_default(&pw);
     pw.lights = 44; /* levels of its own */
+    pw.basis_res = REPAINT_RES;
     pw.start = SRBF_START_WARM;
     pc = pw;
     pc.start = SRBF_START_COLD;
@@ -252,11 +259,12 @@ TEST(held_out_views_are_rendered_under_the_environment)
     ASSERT_OK(setup());
     params_default(&p);
     p.lights = 52; /* levels of its own */
+    p.basis_res = REPAINT_RES;
     use[0] = use[5] = 1;
     rq = (prep_request){&method_srbf, &p, SE, use, NULL};
     ASSERT_OK(prep_acquire(C, &rq, NULL, NULL, &pp, &e));
     s = prep_samples(pp);
-    ASSERT_OK(known_material(0.8, &truth));
+    ASSERT_OK(known_material(0.8, REPAINT_RES, &truth));
     memset(&l, 0, sizeof l);
     ASSERT_OK(lights_for(&p, p.env_rotation, &l));
     rgb = malloc((size_t)3 * s->n * sizeof *rgb);
