@@ -11,6 +11,7 @@
 #include "brdf.h"
 #include "glr.h"
 #include "lru.h"
+#include "measured.h"
 #include "merl.h"
 #include "paint.h"
 #include "raster.h"
@@ -126,7 +127,10 @@ typedef struct draw {
     const brdf *b;          /* base render, or */
     double scale;
     const material *mat;    /* a preview, or */
-    const merl_table *merl; /* a base render of a measured material (the CPU only) */
+    /* a base render of a measured material (the CPU only): a MERL table or
+     * a published fit (measured.h) as a truth function and its context */
+    paint_fn fn;
+    const void *fn_ctx;
     const glint_cancel *cancel;
 } draw;
 
@@ -137,9 +141,9 @@ static int draw_gl(render *r, const char *key, const mesh *m, const draw *d,
     glr_mesh *gm = NULL, *tmp = NULL;
     int rc;
 
-    if (d->merl) /* a table of 1458000 bins per channel: the CPU shades it */
+    if (d->fn) /* a table of 1458000 bins per channel, or a fit: the CPU shades it */
         return glint_err_set(err, GLINT_EUNSUPPORTED,
-                             "measured materials (merl:) render on the CPU");
+                             "measured materials (merl:, sgd:, abc:) render on the CPU");
     pthread_mutex_lock(&r->lock);
     if (glint_cancelled(d->cancel)) { /* after waiting for the context */
         pthread_mutex_unlock(&r->lock);
@@ -178,8 +182,8 @@ static int draw_cpu(const mesh *m, const draw *d, const scene_view *v, int w, in
         if (glint_cancelled(d->cancel))
             rc = glint_cancel_err(err, "the render");
         else
-            rc = d->merl
-                     ? paint_views_fn(merl_truth, d->merl, &g, v, 1, d->scale, out, NULL, err)
+            rc = d->fn
+                     ? paint_views_fn(d->fn, d->fn_ctx, &g, v, 1, d->scale, out, NULL, err)
                      : paint_views(d->b, &g, v, 1, d->scale, out, NULL, err);
         gbuf_free(&g);
     }
@@ -226,8 +230,11 @@ int render_brdf_check(const char *brdf_spec, glint_err *err)
 {
     brdf b;
     char path[4096];
+    measured_truth t;
     if (brdf_spec && !strncmp(brdf_spec, "merl:", 5))
         return merl_resolve(brdf_spec + 5, path, sizeof path, err);
+    if (measured_spec_is(brdf_spec))
+        return measured_truth_parse(brdf_spec, &t, err);
     return brdf_parse(brdf_spec, &b, err);
 }
 
@@ -237,17 +244,28 @@ int render_base(render *r, render_engine eng, const char *mesh_key, const mesh *
                 glint_err *err)
 {
     brdf b;
-    draw d = {&b, scale, NULL, NULL, cancel};
+    draw d = {&b, scale, NULL, NULL, NULL, cancel};
+    measured_truth t;
+    const merl_table *mt;
     int rc;
     memset(out, 0, sizeof *out);
     if (!(scale > 0.0) || !isfinite(scale))
         return glint_err_set(err, GLINT_EINVAL, "base render scale %g must be > 0", scale);
     if (brdf_spec && !strncmp(brdf_spec, "merl:", 5)) {
-        if ((rc = merl_acquire(brdf_spec + 5, &d.merl, err)))
+        if ((rc = merl_acquire(brdf_spec + 5, &mt, err)))
             return rc;
+        d.fn = merl_truth;
+        d.fn_ctx = mt;
         rc = draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
-        merl_release(d.merl);
+        merl_release(mt);
         return rc;
+    }
+    if (measured_spec_is(brdf_spec)) {
+        if ((rc = measured_truth_parse(brdf_spec, &t, err)))
+            return rc;
+        d.fn = measured_truth_fn;
+        d.fn_ctx = &t;
+        return draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
     }
     if ((rc = brdf_parse(brdf_spec, &b, err)))
         return rc;
@@ -258,7 +276,7 @@ int render_material(render *r, render_engine eng, const char *mesh_key, const me
                     const material *mat, const scene_view *v, int width, int height, img *out,
                     render_used *used, const glint_cancel *cancel, glint_err *err)
 {
-    draw d = {NULL, 0.0, mat, NULL, cancel};
+    draw d = {NULL, 0.0, mat, NULL, NULL, cancel};
     return draw_any(r, eng, mesh_key, m, &d, v, width, height, out, used, err);
 }
 

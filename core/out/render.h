@@ -133,8 +133,9 @@ typedef struct render_used {
 
 /* The base render of view v: scale * I * f * max(0, n.wi) with the
  * analytic BRDF `brdf_spec` (brdf.h's syntax, e.g. "lambert:kd=0.6", or
- * "merl:NAME", a measured material merl.h's resolver finds: shaded on the
- * CPU, RENDER_EGL refuses it), 0 on
+ * "merl:NAME", a measured material merl.h's resolver finds, or "sgd:NAME"
+ * / "abc:NAME", a published fit of one (measured.h): shaded on the CPU,
+ * RENDER_EGL refuses them), 0 on
  * background and unlit pixels.  r may be NULL for RENDER_CPU.  mesh_key
  * names the mesh for the EGL mesh cache (NULL: not cached).  OUT: *out
  * (RGB), *used (may be NULL). */

@@ -7,6 +7,7 @@
 
 #include "brdf.h"
 #include "envlit.h"
+#include "measured.h"
 #include "merl.h"
 #include "internal/render_int.h"
 
@@ -112,6 +113,14 @@ int render_base_cost(render *r, render_engine eng, const char *mesh_key, const m
             return rc;
         e = eval_seconds(merl_envlit, t);
         merl_release(t);
+        *seconds = cost(r, eng, mesh_key, m, env, e, e, 1, width, height);
+        return 0;
+    }
+    if (measured_spec_is(brdf_spec)) { /* the CPU shades a published fit too */
+        measured_truth t;
+        if ((rc = measured_truth_parse(brdf_spec, &t, err)))
+            return rc;
+        e = eval_seconds(measured_envlit, &t);
         *seconds = cost(r, eng, mesh_key, m, env, e, e, 1, width, height);
         return 0;
     }

@@ -11,6 +11,7 @@
 #include "brdf.h"
 #include "env.h"
 #include "envlit.h"
+#include "measured.h"
 #include "merl.h"
 #include "raster.h"
 #include "internal/render_int.h"
@@ -320,6 +321,14 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
         rc = env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
         merl_release(t);
         return rc;
+    }
+    if (measured_spec_is(brdf_spec)) { /* a published fit of a measured material */
+        measured_truth t;
+        if ((rc = measured_truth_parse(brdf_spec, &t, err)))
+            return rc;
+        s.fn = s.fn_vertex = measured_envlit;
+        s.ctx = &t;
+        return env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
     }
     if ((rc = brdf_parse(brdf_spec, &b, err)))
         return rc;
