@@ -4,7 +4,7 @@
 #   ./setup.sh run    install what is missing, build, run the main job
 #   ./setup.sh test   install what is missing, build, run every test
 #   ./setup.sh test deep   the same, and what is too slow for every change
-#                          (before a release: tests/README.md)
+#                          (before a release: docs/testing.md)
 #
 # Both are idempotent: packages already present are not reinstalled, the
 # build directories are reused.
@@ -118,7 +118,7 @@ run_daemon() {
   fi
   echo
   echo "== glint studio: open $base/#/session/$sid?token=$tok"
-  echo "   (the REST API is under $base/api/v1, see README.md; Ctrl-C stops glintd)"
+  echo "   (the REST API is under $base/api/v1, see docs/api.md; Ctrl-C stops glintd)"
   wait $pid
 }
 
@@ -183,7 +183,7 @@ case "$mode" in
     logs=(build/meson-logs/testlog.json build/meson-logs/testlog-valgrind.json
           build-asan/meson-logs/testlog.json build-asan/meson-logs/testlog-integration.json)
     if [ "$depth" = deep ]; then
-      # Before a release (tests/README.md): what is too slow for every
+      # Before a release (docs/testing.md): what is too slow for every
       # change.  The numerical programs under memcheck, every unit program
       # on the plain build, and allocation failure at every allocation.
       unset ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS

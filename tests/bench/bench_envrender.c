@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "test_paths.h"
 #include "env.h"
 #include "material.h"
 #include "method_srbf.h"
@@ -29,7 +30,7 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static char DATA[1024] = GLINT_SOURCE_DIR "/../shared/data";
+static char DATA[1024]; /* the shared data: ../shared/data beside the source tree, or --data */
 
 static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
 {
@@ -185,6 +186,7 @@ int main(int argc, char **argv)
     material mat;
     glint_err err;
 
+    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;

@@ -20,7 +20,7 @@ on a fresh daemon with the probe's budgets (--work-mb 256 --cache-mb 64):
 images whose header declares more than their target holds, and readers
 of a long stroke history.  It prints each answer and the daemon's peak
 resident set (VmHWM) against the work budget plus the fixed 160 MB of
-README's Memory paragraph.
+docs/security.md's Memory paragraph.
 
 usage: tests/bench/bench_memory.py [--build DIR] [--glintd PATH]
                                    [--strokes N] [--only uploads|probes]

@@ -36,6 +36,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "test_paths.h"
 #include "brdf.h"
 #include "cache.h"
 #include "clock.h"
@@ -50,7 +51,7 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static char DATA[1024] = GLINT_SOURCE_DIR "/../shared/data";
+static char DATA[1024]; /* the shared data: ../shared/data beside the source tree, or --data */
 
 static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
 {
@@ -383,6 +384,7 @@ int main(int argc, char **argv)
     struct stat st;
     char probe[1200];
 
+    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;

@@ -158,7 +158,7 @@ def test_01_every_method_in_every_format(d):
             assert struct.unpack("<iii", merl[:12]) == (90, 90, 180)
             write(os.path.join(method, "material.binary"), merl)
     lines = ["Examples of glint's exports, written by tests/integration/test_export_examples.py",
-             "(each method fitted to a painting of the default sphere; see README.md,",
+             "(each method fitted to a painting of the default sphere; see docs/exports.md,",
              "'Using a glint material elsewhere').", "",
              "  METHOD/package/        material.json, factor textures (EXR, PNG), shader/ (GLSL",
              "                         ES 3.00 and 3.30 core, shader.json: the bindings)",

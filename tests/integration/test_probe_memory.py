@@ -8,7 +8,7 @@ Each memory case runs on a daemon of its own, started with --work-mb 256
 
     VmHWM <= work budget + FIXED_MB
 
-where FIXED_MB is README's fixed part ("Security and limits", Memory:
+where FIXED_MB is docs/security.md's fixed part ("Security and limits", Memory:
 about 160 MB of libraries).  The cache budget is left out of the bound:
 these scenes are 32 x 32 and keep next to nothing in it.  Under
 AddressSanitizer (its shadow and quarantine hold memory glintd freed) the

@@ -1,6 +1,6 @@
 """The README's curl example (tests/integration/readme_example.sh) runs
-verbatim against a fresh daemon and leaves valid files behind.  When README.md
-holds the script (a ```sh block right after the line
+verbatim against a fresh daemon and leaves valid files behind.  When
+docs/api.md holds the script (a ```sh block right after the line
 "<!-- tests/integration/readme_example.sh -->"), the block must equal the file,
 so the two never drift apart."""
 import json
@@ -22,7 +22,7 @@ MARKER = "<!-- tests/integration/readme_example.sh -->"
 
 
 def test_readme_matches_the_script(d):
-    readme = os.path.join(SRC, "README.md")
+    readme = os.path.join(SRC, "docs", "api.md")
     text = open(readme).read() if os.path.exists(readme) else ""
     if MARKER not in text:
         print("     (README.md has no %s block yet: nothing to compare)" % MARKER)

@@ -9,6 +9,7 @@
 #ifndef GLINT_CHECK_H
 #define GLINT_CHECK_H
 
+#include "test_paths.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,17 +80,15 @@ typedef struct check_case { const char *name; void (*fn)(void); } check_case;
 
 /* Directory of the shared test data (meshes, environment maps), or NULL
  * when it is absent: $GLINT_DATA_DIR, else ../shared/data relative to the
- * source tree (passed by meson as GLINT_SOURCE_DIR). */
+ * source tree (test_paths.h). */
 static inline const char *check_data_dir(void)
 {
     static char buf[4096];
     const char *env = getenv("GLINT_DATA_DIR");
     if (env && *env) return env;
-#ifdef GLINT_SOURCE_DIR
-    snprintf(buf, sizeof buf, "%s/../shared/data", GLINT_SOURCE_DIR);
+    snprintf(buf, sizeof buf, "%s/../shared/data", glint_test_source_dir);
     FILE *f = fopen(buf, "r");
     if (f) { fclose(f); return buf; }
-#endif
     return NULL;
 }
 

@@ -230,7 +230,8 @@ TEST(the_cc0_courtyard_when_present)
     env_lights l;
     glint_err e;
     double tot[3];
-    const char *path = GLINT_SOURCE_DIR "/../shared/data/envmaps/courtyard.exr";
+    char path[4096];
+    snprintf(path, sizeof path, "%s/../shared/data/envmaps/courtyard.exr", glint_test_source_dir);
     if (access(path, R_OK)) {
         printf("  SKIP: %s absent\n", path);
         return;

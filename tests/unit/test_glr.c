@@ -616,7 +616,7 @@ TEST(contact_sheet_bunny)
     if (env && *env)
         snprintf(dir, sizeof dir, "%s", env);
     else
-        snprintf(dir, sizeof dir, "%s/artifacts", GLINT_BUILD_DIR);
+        snprintf(dir, sizeof dir, "%s/artifacts", glint_test_build_dir);
     ASSERT_MSG(fsio_mkdirs(dir, &e) == 0, "%s", e.msg);
     ASSERT_OK(glr_mesh_upload(g, m, &gm, &e));
     ASSERT_OK(img_alloc(&sheet, 4 * C, 3 * C, 3, &e));

@@ -137,7 +137,8 @@ TEST(the_bunny_when_present)
     mesh m;
     glint_err e;
     vis_scene *v;
-    const char *path = GLINT_SOURCE_DIR "/../shared/data/meshes/bunny.ply";
+    char path[4096];
+    snprintf(path, sizeof path, "%s/../shared/data/meshes/bunny.ply", glint_test_source_dir);
     enum { K = 256 };
     double dirs[3 * K], t0;
     uint64_t *bits;
