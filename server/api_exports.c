@@ -20,8 +20,10 @@
 #include "app.h"
 #include "fitsvc.h"
 #include "gltf.h"
+#include "brdfx.h"
 #include "material.h"
 #include "merl.h"
+#include "merl_material.h"
 #include "prep.h"
 #include "scene.h"
 
@@ -83,7 +85,7 @@ static http_resp brdf_get(http_req *req)
 
     if ((rc = api_material_read(req, req->param[0], &m, &e)))
         return api_error(&e);
-    rc = material_brdf_explorer(&m, &text, &e);
+    rc = brdfx_material(&m, &text, &e);
     material_free(&m);
     if (rc)
         return rc == GLINT_EUNSUPPORTED ? http_problem(422, "unsupported", "%s", e.msg)

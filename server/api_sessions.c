@@ -11,7 +11,7 @@
  *
  * A view that was never painted reads as the scene's base render (header
  * X-Glint-Painted: 0); strokes apply to the current image (the painting, or
- * the base render), in order, with core/stroke.h's brush; erase strokes
+ * the base render), in order, with core/truth/stroke.h's brush; erase strokes
  * bring back the base render.  Strokes and the painting they produce are
  * stored in one transaction before the answer (store.h), and each stroke
  * takes the session's next sequence number.  Writes to one session are

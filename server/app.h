@@ -34,7 +34,8 @@ typedef struct app_config {
     char replica_name[65];    /* X-Glint-Replica on every response ("" = none) */
     char web_dir[4096];
     char env_dir[4096];       /* HDR maps offered as data:<file> ("" = none) */
-    char measured_dir[4096];  /* MERL tables offered as merl:<file> ("" = none) */
+    char measured_dir[4096];  /* MERL tables offered as merl:<file>, its fits file's
+                                 materials as sgd:<name> and abc:<name> ("" = none) */
     size_t cache_bytes;       /* in-memory budget for precomputations */
     size_t work_bytes;        /* memory budget of expensive work in flight (admit.h) */
     int work_slots;           /* ... pieces of it at once */

@@ -1,5 +1,5 @@
 // brush.js: the brush of seed 004 (section 4.3, eq. 23), exactly as
-// core/stroke.c applies it, so that what the canvas shows is what the
+// core/truth/stroke.c applies it, so that what the canvas shows is what the
 // server will fit (they agree within 1/255; in practice to the float).
 //
 // An image is {w, h, data: Float32Array(w*h*3)} of linear RGB, the same

@@ -4,7 +4,8 @@
 // the scene's point lights, or its environment when it has one), each view
 // one undo step, for the artist to edit.  The colour replaces the diffuse
 // albedo (kd) of the finishes that have one.  Measured materials the server
-// offers (GET /measured: MERL tables, brdf=merl:<file>) are finishes too.
+// offers (GET /measured: MERL tables, brdf=merl:<file>, and published fits
+// of measured materials, brdf=sgd:<name> or abc:<name>) are finishes too.
 
 import { decodeImage } from './image.js';
 
@@ -89,7 +90,8 @@ export function bindPresets(ctx) {
   presetChosen();
   api.measured().then(r => {
     for (const m of r.materials || []) {
-      const p = { name: 'measured: ' + m.name, title: `Measured (${m.layout}): ${m.name}, as the server's table holds it; the colour is not used`, spec: () => m.spec, fixed: true };
+      const fit = m.spec.startsWith('merl:') ? '' : ' ' + m.spec.slice(0, 3);
+      const p = { name: 'measured: ' + m.name + fit, title: `Measured (${m.layout}): ${m.name}, as the server holds it; the colour is not used`, spec: () => m.spec, fixed: true };
       PRESETS.push(p);
       const o = document.createElement('option');
       o.value = o.textContent = p.name;

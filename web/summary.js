@@ -1,5 +1,5 @@
 // summary.js: the material in numbers an artist reads (GET
-// /materials/{id}/summary, core/readable.h): its base colour, how strong
+// /materials/{id}/summary, core/out/readable.h): its base colour, how strong
 // and how wide its highlight is, how much light it reflects at a few
 // angles, and BRDF Explorer's polar plot (f in the plane of incidence for
 // lights at 15, 45 and 75 degrees).

@@ -9,12 +9,15 @@
 #include <string.h>
 
 #include "brdf.h"
+#include "brdfx.h"
 #include "cli.h"
 #include "env.h"
 #include "fsio.h"
 #include "glr.h"
 #include "gltf.h"
+#include "measured.h"
 #include "merl.h"
+#include "merl_material.h"
 #include "readable.h"
 #include "samples.h"
 #include "raster.h"
@@ -290,13 +293,18 @@ int cmd_export_merl(int argc, char **argv)
     glint_err e;
     int rc = 0;
     brdf b;
+    measured_truth mf;
     int truth = argc == 5 && strcmp(argv[1], "--brdf") == 0;
+    int fit = truth && measured_spec_is(argv[2]);
     if (!(argc == 4 || truth) || strcmp(argv[argc - 2], "-o") != 0)
         return fail(1, "usage: glint export-merl (MATDIR | --brdf SPEC) -o FILE.binary");
     memset(&m, 0, sizeof m);
-    if (truth ? brdf_parse(argv[2], &b, &e) : material_load(argv[1], &m, &e))
+    if (fit ? measured_truth_parse(argv[2], &mf, &e)
+        : truth ? brdf_parse(argv[2], &b, &e)
+                : material_load(argv[1], &m, &e))
         return fail_err(&e);
-    if ((truth ? merl_tabulate(merl_brdf, &b, 0, &t, &st, &e)
+    if ((fit ? merl_tabulate(measured_truth_fn, &mf, 0, &t, &st, &e)
+         : truth ? merl_tabulate(merl_brdf, &b, 0, &t, &st, &e)
                : merl_from_material(&m, 0, &t, &st, &e)) ||
         merl_write(&t, argv[argc - 1], &e))
         rc = fail_err(&e);
@@ -314,7 +322,7 @@ int cmd_export_merl(int argc, char **argv)
 }
 
 /* glint export-brdf MATDIR -o FILE.brdf: the material as BRDF Explorer's
- * analytic .brdf file (material_brdf_explorer). */
+ * analytic .brdf file (brdfx_material). */
 int cmd_export_brdf(int argc, char **argv)
 {
     material m;
@@ -325,7 +333,7 @@ int cmd_export_brdf(int argc, char **argv)
         return fail(1, "usage: glint export-brdf MATDIR -o FILE.brdf");
     if (material_load(argv[1], &m, &e))
         return fail_err(&e);
-    if (material_brdf_explorer(&m, &text, &e) ||
+    if (brdfx_material(&m, &text, &e) ||
         fsio_write_atomic(argv[3], text, strlen(text), &e))
         rc = fail_err(&e);
     else

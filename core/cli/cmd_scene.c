@@ -12,6 +12,7 @@
 #include "env.h"
 #include "vis.h"
 #include "fsio.h"
+#include "measured.h"
 #include "merl.h"
 #include "paint.h"
 #include "raster.h"
@@ -210,9 +211,12 @@ int cmd_paint(int argc, char **argv)
         {0, 0, 0, 0}};
     const char *out = NULL, *fmt = "exr", *spec = NULL, *env = NULL, *shadows = "auto";
     double scale = 0.0, used = 0.0, rot = 0.0, kl = 256;
-    int c, rc, is_sv, is_merl;
+    int c, rc, is_sv, is_merl, is_fit;
     paint_sv sv;
     merl_table mt = {0};
+    measured_truth mf;
+    paint_fn fn = NULL;
+    const void *fn_ctx = NULL;
     scene sc;
     gbuf *g = NULL;
     img *imgs = NULL;
@@ -257,9 +261,17 @@ int cmd_paint(int argc, char **argv)
     is_sv = strchr(spec, '|') != NULL;
     /* merl:FILE: a measured material, a table in the MERL layout (merl.h) */
     is_merl = !is_sv && strncmp(spec, "merl:", 5) == 0;
+    /* sgd:NAME, abc:NAME: a published fit of a measured material (measured.h) */
+    is_fit = !is_sv && measured_spec_is(spec);
     if (is_merl ? merl_read(spec + 5, &mt, &e)
-                : is_sv ? paint_sv_parse(spec, &sv, &e) : brdf_parse(spec, &b, &e))
+        : is_fit ? measured_truth_parse(spec, &mf, &e)
+        : is_sv  ? paint_sv_parse(spec, &sv, &e)
+                 : brdf_parse(spec, &b, &e))
         return fail_err(&e);
+    if (is_merl || is_fit) {
+        fn = is_merl ? merl_truth : measured_truth_fn;
+        fn_ctx = is_merl ? (const void *)&mt : (const void *)&mf;
+    }
     if (is_sv && env)
         return fail(1, "--brdf: a spatially varying truth paints under the views' lights "
                        "(leave out --env)");
@@ -288,16 +300,14 @@ int cmd_paint(int argc, char **argv)
         }
         env_map_free(&em);
         used = scale > 0.0 ? scale : 1.0;
-        rc = is_merl ? paint_views_env_fn(merl_truth, &mt, g, sc.nviews, &sc.mesh, &el, sh, used,
-                                          imgs, &e)
-                     : paint_views_env(&b, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e);
+        rc = fn ? paint_views_env_fn(fn, fn_ctx, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e)
+                : paint_views_env(&b, g, sc.nviews, &sc.mesh, &el, sh, used, imgs, &e);
         env_lights_free(&el);
         if (rc) {
             rc = fail_err(&e);
             goto done;
         }
-    } else if (is_merl ? paint_views_fn(merl_truth, &mt, g, sc.views, sc.nviews, scale, imgs,
-                                        &used, &e)
+    } else if (fn ? paint_views_fn(fn, fn_ctx, g, sc.views, sc.nviews, scale, imgs, &used, &e)
                : is_sv ? paint_views_sv(&sv, g, sc.views, sc.nviews, scale, imgs, &used, &e)
                        : paint_views(&b, g, sc.views, sc.nviews, scale, imgs, &used, &e)) {
         rc = fail_err(&e);
@@ -318,7 +328,7 @@ int cmd_paint(int argc, char **argv)
     {
         char path[4096], bs[256];
         json_t *j;
-        if (is_sv || is_merl)
+        if (is_sv || fn)
             snprintf(bs, sizeof bs, "%s", spec);
         else
             brdf_format(&b, bs, sizeof bs);

@@ -8,10 +8,12 @@
  * See `glint help` for the list.  main.c dispatches; each command group
  * has its file (cli.h lists them). */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 #include "env.h"
+#include "measured.h"
 #include "merl.h"
 
 #define GLINT_VERSION "0.1.0"
@@ -33,7 +35,10 @@ static void usage(FILE *f)
           "                                      'ward:rough=0.1,rough_y=0.35'), or two\n"
           "                                      blended over the texture coordinates:\n"
           "                                      'stripes:freq=8,duty=0.3|BRDF|BRDF'\n"
-          "                                      (or checker; soft=W blends the edges)\n"
+          "                                      (or checker; soft=W blends the edges),\n"
+          "                                      or a measured material: merl:FILE, or\n"
+          "                                      sgd:NAME / abc:NAME, a published fit in\n"
+          "                                      $GLINT_MEASURED_DIR/" MEASURED_FITS_FILE "\n"
           "  fit scene.json (--paintings DIR | FILE...) -o MATDIR [fit options]\n"
           "  base-render scene.json -o DIR [--brdf SPEC] [--scale S] [--engine E]\n"
           "                                      the images an artist paints over\n"
@@ -88,6 +93,19 @@ static int cli_merl_resolver(const char *name, char *path, size_t len, glint_err
     return 0;
 }
 
+/* sgd:NAME and abc:NAME: the fits file of $GLINT_MEASURED_DIR */
+static void set_measured_fits(void)
+{
+    static char path[4096];
+    const char *dir = getenv("GLINT_MEASURED_DIR");
+    if (dir && dir[0] &&
+        (size_t)snprintf(path, sizeof path, "%s/%s", dir, MEASURED_FITS_FILE) < sizeof path)
+        measured_set_file(path, NULL);
+    else
+        measured_set_file(NULL, "set GLINT_MEASURED_DIR to a directory holding "
+                                MEASURED_FITS_FILE);
+}
+
 int main(int argc, char **argv)
 {
     static const struct { const char *name; int (*fn)(int, char **); } cmds[] = {
@@ -103,6 +121,7 @@ int main(int argc, char **argv)
 
     env_set_resolver(cli_env_resolver);
     merl_set_resolver(cli_merl_resolver);
+    set_measured_fits();
 
     if (argc < 2 || strcmp(argv[1], "help") == 0 || strcmp(argv[1], "--help") == 0 ||
         strcmp(argv[1], "-h") == 0) {

@@ -1,6 +1,6 @@
 /* bench_img_exr: a painting encoded as OpenEXR (what a stroke stores), by
  * OpenImageIO and OpenEXR (zip at deflate level 1, one thread) and by
- * img_exr_encode (core/img_exr.h: libdeflate at level 1, the blocks on
+ * img_exr_encode (core/img/img_exr.h: libdeflate at level 1, the blocks on
  * the worker pool), and by img_exr_encode on the calling thread alone;
  * then a stroke's file made again whole and from the last one
  * (img_exr_encode_reusing), for bands of lines painted over.

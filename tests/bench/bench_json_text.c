@@ -1,5 +1,5 @@
 /* bench_json_text: a material's manifest as text, by jansson's json_dumps
- * (every real with "%.17g") and by json_text (core/json_text.h: the
+ * (every real with "%.17g") and by json_text (core/base/json_text.h: the
  * shortest text of each real), indented as material.json is and compact
  * as glintd's records and responses are.  Medians over --reps rounds,
  * alternating; each text is read back and compared with the tree.

@@ -1,4 +1,4 @@
-/* bench_matmap: material maps (core/matmap.c) beside seed 000, Table 3.
+/* bench_matmap: material maps (core/methods/maps/matmap.c) beside seed 000, Table 3.
  *
  *   bench_matmap [--reps N]
  *

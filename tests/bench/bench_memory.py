@@ -13,7 +13,7 @@ Cases: material previews at 1024, 2048 and 4096 on the CPU and through EGL
 preview first), a base render with other settings and a
 G-buffer at 2048 x 2048, a cold fit of 12 painted views, and uploads of a
 2048 x 2048 painting in each format (the decode's bound from the header,
-core/img.h) and of a 2048 x 2048 G-buffer of 32 channels.
+core/img/img.h) and of a 2048 x 2048 G-buffer of 32 channels.
 
 A second table replays the memory probes of the project's issue 49, each
 on a fresh daemon with the probe's budgets (--work-mb 256 --cache-mb 64):

@@ -7,7 +7,9 @@ pairs; an anisotropic material reported and averaged; access and errors;
 measured materials offered by --measured-dir painting as the truth their
 table holds (point lights and a sky), the resolver refusing what is not
 theirs (hidden, short, a link out, traversal), and a fit of such paintings
-reading the truth's colour; the glTF file of a material that varies over
+reading the truth's colour; the published fits of the directory's
+merl56_fits.json offered as sgd:<name> and abc:<name> (here one material whose
+fits are Lambertian, painting as the analytic Lambert does); the glTF file of a material that varies over
 the surface (maps of gold stripes on red plastic) with its two PNG textures,
 parsed here (the GLB's chunks, the PNGs decoded with zlib)."""
 import json
@@ -44,6 +46,15 @@ subprocess.run([CLI, "export-merl", "--brdf", CT, "-o", os.path.join(MDIR, "ct.b
 shutil.copy(os.path.join(MDIR, "ct.binary"), os.path.join(MDIR, ".hidden.binary"))
 with open(os.path.join(MDIR, "short.binary"), "wb") as f:
     f.write(b"\x5a\0\0\0" * 100)
+# a fits file of one material whose two fits have no highlight: abc's kD/pi
+# and sgd's rhoD/pi are Lambert's kd/pi
+LAMBERT_FIT = {"name": "matte-test",
+               "abc": {"kD": [0.4, 0.3, 0.2], "A": [0, 0, 0], "B": 100, "C": 1, "ior": 1.5},
+               "sgd": dict({k: [0.1, 0.1, 0.1] for k in ("alpha", "p", "f0", "kap", "lambda")},
+                           rhoD=[0.4, 0.3, 0.2], rhoS=[0, 0, 0], f1=[0, 0, 0], c=[1e-7] * 3,
+                           k=[30, 30, 30], theta0=[0.1] * 3)}
+with open(os.path.join(MDIR, "merl56_fits.json"), "w") as f:
+    json.dump({"materials": [LAMBERT_FIT]}, f)
 OUTSIDE = tempfile.mkdtemp(prefix="glint-outside-")
 shutil.copy(os.path.join(MDIR, "ct.binary"), os.path.join(OUTSIDE, "far.binary"))
 os.symlink(os.path.join(OUTSIDE, "far.binary"), os.path.join(MDIR, "evil.binary"))
@@ -223,7 +234,7 @@ def exr(content):
 
 def test_04_measured_materials_paint_as_their_truth(d):
     lst = d.get("/api/v1/measured", status=200, schema="MeasuredList.json").json()["materials"]
-    assert [m["spec"] for m in lst] == ["merl:ct.binary"], lst
+    assert [m["spec"] for m in lst] == ["merl:ct.binary", "sgd:matte-test", "abc:matte-test"], lst
     sc = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE}, status=201).json()
     url = "/api/v1/scenes/%s/views/%%d/base.png?format=exr&scale=1&brdf=%%s" % sc["id"]
     for q in ("", "&env=sky&lights=32"):
@@ -235,8 +246,16 @@ def test_04_measured_materials_paint_as_their_truth(d):
             print("base render from the measured table against its truth%s: %.4f relative RMS"
                   % (" under the sky" if q else "", rel))
             assert rel < 0.02, rel
+    for fit in ("sgd:matte-test", "abc:matte-test"):
+        a = d.get(url % (2, fit), status=200)
+        b = d.get(url % (2, "lambert:kd=0.4/0.3/0.2"), status=200)
+        if np is not None:
+            x, y = exr(a.content), exr(b.content)
+            rel = float(np.sqrt(((x - y) ** 2).sum() / (y ** 2).sum()))
+            assert rel < 1e-6, (fit, rel)
     for bad in ("merl:.hidden.binary", "merl:short.binary", "merl:evil.binary",
-                "merl:../ct.binary", "merl:nosuch.binary", "merl:"):
+                "merl:../ct.binary", "merl:nosuch.binary", "merl:", "sgd:nosuch", "abc:",
+                "sgd:../merl56_fits.json"):
         r = d.get(url % (0, bad), status=422)
         assert "no measured material" in r.text or "needs a name" in r.text, (bad, r.text)
     # a session painted from the measured material, fitted: the truth's colour

@@ -1,4 +1,4 @@
-"""The methods' parameter tables drive proto/ and the API (core/method.h):
+"""The methods' parameter tables drive proto/ and the API (core/pipeline/method.h):
 the JSON Schema of each method's parameters in proto/schemas is exactly
 what `glint methods --schema NAME` generates from the table, FitRequest.json
 lists exactly the registered methods, and GET /api/v1/methods describes
@@ -30,27 +30,6 @@ def cli_json(*args):
 
 def table():
     return cli_json("methods", "--json")["methods"]
-
-
-def test_server_includes_no_numerical_header(d):
-    """The daemon reaches numerics only through core's method, pipeline,
-    material and render interfaces: no file under server/ includes a header
-    of a numerical stage."""
-    numeric = {"raster.h", "samples.h", "paint.h", "brdf.h", "gbuf.h", "hf.h", "pcache.h",
-               "fit.h", "method_hf3.h", "glr.h", "method_srbf.h", "srbf.h", "lsq.h", "vis.h"}
-    sdir = os.path.join(SRC, "server")
-    found = []
-    for name in sorted(os.listdir(sdir)):
-        if not name.endswith((".c", ".h")):
-            continue
-        with open(os.path.join(sdir, name)) as f:
-            for line in f:
-                line = line.strip()
-                if line.startswith("#include"):
-                    inc = line.split()[1].strip('"<>')
-                    if inc in numeric or inc.startswith("hf_"):
-                        found.append("%s: %s" % (name, line))
-    assert not found, found
 
 
 def test_schema_files_are_generated_from_the_tables(d):

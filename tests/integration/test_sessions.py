@@ -8,7 +8,7 @@ including errors: malformed JSON, wrong types, unknown ids, oversize
 uploads, numbers JSON cannot carry (1e999), strings for numbers.  Strokes
 and the event stream are in test_sessions_live.py, which uses the helpers
 below, among them an independent Python implementation of the brush of
-core/stroke.h (test_crash.py uses it too).
+core/truth/stroke.h (test_crash.py uses it too).
 Pure Python (no numpy): small PNG and OpenEXR codecs are below.
 """
 import json
@@ -72,7 +72,7 @@ def exr_encode(w, h, pixel):
 
 
 # ---------------------------------------------------------------------------
-# The brush of core/stroke.h, reimplemented independently (used by
+# The brush of core/truth/stroke.h, reimplemented independently (used by
 # test_sessions_live.py and test_crash.py)
 # ---------------------------------------------------------------------------
 
@@ -487,7 +487,7 @@ def test_painting_upload_and_read(d):
     assert r.json()["version"] == 2
     r = d.get(p + "?format=exr", status=200, headers=h)
     assert r.headers["Content-Type"] == "image/x-exr" and r.content[:4] == b"\x76\x2f\x31\x01"
-    # glint's own OpenEXR writer (core/img_exr.h), read by this independent
+    # glint's own OpenEXR writer (core/img/img_exr.h), read by this independent
     # reader: the floats uploaded, bit for bit
     chans, ew, eh = exr_named.read(r.content)
     f32 = lambda v: struct.unpack("<f", struct.pack("<f", v))[0]  # noqa: E731

@@ -1,7 +1,7 @@
 """Strokes and the live event stream of a session over real HTTP.
 
 Strokes apply in order to a view's image and agree with the independent
-Python brush of test_sessions.py (core/stroke.h) within 1/255 (what the
+Python brush of test_sessions.py (core/truth/stroke.h) within 1/255 (what the
 browser studio must also meet); their numbering is session-wide and every
 malformed batch is refused whole.  The server-sent event stream replays,
 sends live, tracks presence, resumes from Last-Event-ID and carries fit

@@ -1,5 +1,5 @@
 """Work that is too expensive, abandoned or unfair, through the real daemon
-(server/admit.h, server/jobs.h, core/cancel.h):
+(server/admit.h, server/jobs.h, core/base/cancel.h):
 
 - an estimate beyond glintd --work-max-seconds is refused before it starts
   (413, kind too-expensive, naming the estimate and the limit): a CPU

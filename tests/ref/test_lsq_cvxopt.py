@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Cross-check glint's constrained least-squares solver (core/lsq.c) against
+"""Cross-check glint's constrained least-squares solver (core/methods/srbf/lsq.c) against
 an independent one, cvxopt's QP (Debian's python3-cvxopt), on random and on
 realistic instances: spherical-Gaussian transfer columns like the srbf
 method's (147 lobes on the hemicube layout, lambda 81), energy rows with a
@@ -34,7 +34,7 @@ TOOL = sys.argv[1]
 
 
 def hemicube(r):
-    """The lobe centres of core/srbf.h (the same formula, written again)."""
+    """The lobe centres of core/methods/srbf/srbf.h (the same formula, written again)."""
     out = []
     u = [-1 + (2 * a + 1) / r for a in range(r)]
     for b in range(r):

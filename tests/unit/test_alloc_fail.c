@@ -108,7 +108,7 @@ static int op_image(glint_err *e)
     return rc;
 }
 
-/* A painting as a stroke stores it: OpenEXR (core/img_exr.h), read back. */
+/* A painting as a stroke stores it: OpenEXR (core/img/img_exr.h), read back. */
 static int op_exr(glint_err *e)
 {
     img im, back;

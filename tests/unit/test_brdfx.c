@@ -1,4 +1,4 @@
-/* BRDF Explorer .brdf files for every method (material_brdf_explorer; the
+/* BRDF Explorer .brdf files for every method (brdfx_material; the
  * methods without a hand-written one through brdfx.c).
  *
  * Each method fits a painting of the default scene (a spatially varying
@@ -172,7 +172,7 @@ TEST(every_method_renders_as_the_material)
                          &sc, gb, cc, se, &m));
         free(params);
         for (int path = 0; path < 2; path++) {
-            /* path 0: material_brdf_explorer (the method's own where it has
+            /* path 0: brdfx_material (the method's own where it has
              * one); path 1: the file written from the GPU form, for hf3 */
             static const double uv0[2] = {0.3, 0.62}, uv1[2] = {0.71, 0.4};
             char *text = NULL;
@@ -182,7 +182,7 @@ TEST(every_method_renders_as_the_material)
             if (path == 1 && !m.method->mat->brdf_explorer)
                 break;
             ASSERT_MSG((path ? brdfx_from_gpu(&m, &text, &e)
-                             : material_brdf_explorer(&m, &text, &e)) == 0,
+                             : brdfx_material(&m, &text, &e)) == 0,
                        "%s: %s", meth->name, e.msg);
             ASSERT(!strncmp(text, "analytic\n", 9));
             ASSERT(strstr(text, "vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"));
@@ -225,7 +225,7 @@ TEST(refusals_name_the_merl_table)
     material m;
     char *text = (char *)"x";
     memset(&m, 0, sizeof m);
-    ASSERT_EQ(material_brdf_explorer(&m, &text, &e), GLINT_EINVAL);
+    ASSERT_EQ(brdfx_material(&m, &text, &e), GLINT_EINVAL);
     ASSERT(text == NULL);
     /* a maps material with more texels than a .brdf embeds */
     {
@@ -238,7 +238,7 @@ TEST(refusals_name_the_merl_table)
                                    &e));
         ASSERT_OK(sv_fit(meth, params, STRIPES, &sc, gb, cc, se, &m));
         free(params);
-        ASSERT_EQ(material_brdf_explorer(&m, &text, &e), GLINT_EUNSUPPORTED);
+        ASSERT_EQ(brdfx_material(&m, &text, &e), GLINT_EUNSUPPORTED);
         printf("  refused: %s\n", e.msg);
         ASSERT(strstr(e.msg, "merl.binary") && strstr(e.msg, "map_res"));
         material_free(&m);

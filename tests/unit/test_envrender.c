@@ -172,8 +172,8 @@ TEST(shadows_darken_what_is_covered)
         brdf br;
         long darker = 0, brighter = 0;
         ASSERT_OK(brdf_parse("lambert:kd=0.5", &br, &err));
-        ASSERT_OK(envlit_vertices(&m, &l, &on, envlit_brdf, &br, eye, 1.0, 2, a, NULL, &err));
-        ASSERT_OK(envlit_vertices(&m, &l, &off, envlit_brdf, &br, eye, 1.0, 1, b, NULL, &err));
+        ASSERT_OK(envlit_vertices(&m, &l, &on, brdf_envlit, &br, eye, 1.0, 2, a, NULL, &err));
+        ASSERT_OK(envlit_vertices(&m, &l, &off, brdf_envlit, &br, eye, 1.0, 1, b, NULL, &err));
         for (int i = 0; i < m.nverts; i++) {
             darker += a[3 * i] < b[3 * i] - 1e-6f;
             brighter += a[3 * i] > b[3 * i] + 1e-6f;

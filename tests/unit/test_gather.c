@@ -1,5 +1,5 @@
 /* Tests of the samples' values read from the paintings (samples_gather,
- * samples_gather_views in core/samples.h) against one sample at a time,
+ * samples_gather_views in core/pipeline/samples.h) against one sample at a time,
  * written here as the contract states it: value = (float)(p * (1.0 /
  * intensity)), p the pixel's channel (its grey for one channel).  Samples
  * in runs of views and shuffled, and in runs of consecutive pixels (the

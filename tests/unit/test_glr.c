@@ -15,6 +15,7 @@
 #include "check.h"
 #include "fit.h"
 #include "fsio.h"
+#include "brdfx.h"
 #include "glr.h"
 #include "glr_fixture.h"
 #include "glsl_parts.h"
@@ -411,7 +412,7 @@ static float half_to_float(uint16_t h)
     return (float)(s ? -v : v);
 }
 
-/* The BRDF Explorer export (material_brdf_explorer): its shader section,
+/* The BRDF Explorer export (brdfx_material): its shader section,
  * compiled as GLSL ES 3.00 and run by the renderer as a preview's fragment
  * stage (radiance = BRDF(L, V, N, X, Y) n.L I, X and Y any tangents),
  * against the CPU's render of the material, for every mapping and both
@@ -442,7 +443,7 @@ TEST(brdf_explorer_export_renders_as_the_material)
         fac.model = kind == 3 ? HF_MODEL_BRDF : HF_MODEL_RADIANCE;
         for (int c = 0; c < 3; c++)
             fac.a_used[c] = kind == 2 ? 1.5 : hf3_factors(mat)->a_used[c];
-        ASSERT_MSG(material_brdf_explorer(&alt, &text, &e) == 0, "%s", e.msg);
+        ASSERT_MSG(brdfx_material(&alt, &text, &e) == 0, "%s", e.msg);
         ASSERT(!strncmp(text, "analytic\n", 9));
         a = strstr(text, "::begin shader\n");
         b = strstr(text, "::end shader");

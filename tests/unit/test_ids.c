@@ -1,9 +1,9 @@
-/* Tests of ids and secrets (core/ids.h): ids are 32 lowercase hex digits and
+/* Tests of ids and secrets (core/base/ids.h): ids are 32 lowercase hex digits and
  * new ones differ; glint_secret_equal, which every token and key comparison
  * of glintd uses (server/auth.c), is exact at every edge (a difference in
  * the first or the last byte, a prefix, an empty secret, bytes >= 0x80).
  * That its time does not depend on where a guess goes wrong rests on its
- * loop, which has no early exit (core/ids.c); no time is measured here. */
+ * loop, which has no early exit (core/base/ids.c); no time is measured here. */
 #include <string.h>
 
 #include "check.h"

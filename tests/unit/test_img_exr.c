@@ -1,4 +1,4 @@
-/* Tests of the OpenEXR encoder (core/img_exr.h), read back by OpenImageIO
+/* Tests of the OpenEXR encoder (core/img/img_exr.h), read back by OpenImageIO
  * (img_read_mem): RGB and RGBA images of many sizes (one pixel, heights
  * that are not a multiple of a block's 16 lines, wide and narrow) holding
  * smooth values, noise that deflate cannot shrink (blocks stored as they

@@ -1,4 +1,4 @@
-/* test_img_png.c: the direct PNG decoder (core/img_png.h) against
+/* test_img_png.c: the direct PNG decoder (core/img/internal/img_png.h) against
  * OpenImageIO's, on PNGs made here with libpng: the ones it takes give the
  * same floats bit for bit (every 8-bit level among them), the others and
  * every damaged file go to OpenImageIO and come back as they did before

@@ -1,4 +1,4 @@
-/* test_json_text.c: json_text (core/json_text.h) against jansson's own
+/* test_json_text.c: json_text (core/base/json_text.h) against jansson's own
  * json_dumps: the same bytes for trees without reals (compact and
  * indented), the same tree when read back for trees with them, every real
  * back as the same double (sign of zero included, as a real), and the

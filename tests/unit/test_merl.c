@@ -22,6 +22,7 @@
 #include "check.h"
 #include "env.h"
 #include "merl.h"
+#include "merl_material.h"
 #include "paint.h"
 #include "method_hf2d.h"
 #include "method_hf3.h"

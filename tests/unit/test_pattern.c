@@ -1,5 +1,5 @@
 /* Tests of the sampling pattern's parallel rasterization and of its cache
- * file (core/pattern.h): a pattern made by several threads is the serial
+ * file (core/pipeline/pattern.h): a pattern made by several threads is the serial
  * one bit for bit (rules LIT and SEEN, views left out, bands of rows), an
  * error on any thread is reported, a pattern saved through the cache loads
  * back equal, and files that are short, damaged, another scene's or not a

@@ -1,4 +1,4 @@
-/* test_stroke.c: the brush of seed 004 (core/stroke.h): exact weights at
+/* test_stroke.c: the brush of seed 004 (core/truth/stroke.h): exact weights at
  * known distances, polylines against dabs, HDR and negative colors, scale
  * and erase modes, strokes partly or fully outside the image, the JSON
  * round trip, and invalid strokes refused with messages. */

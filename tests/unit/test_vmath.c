@@ -1,6 +1,6 @@
-/* test_vmath: the vectorized log and exp (core/vmath.c) against libm, over
+/* test_vmath: the vectorized log and exp (core/base/vmath.c) against libm, over
  * the whole double range and at the special values, and the worker pool
- * (core/par.c) and the streamed passes of a fit, whose results must not
+ * (core/base/par.c) and the streamed passes of a fit, whose results must not
  * depend on the number of threads. */
 #include <cblas.h>
 #include <dirent.h>

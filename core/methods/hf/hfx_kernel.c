@@ -1,0 +1,392 @@
+/* hfx_kernel.c: the kernel form of hfx.h's decomposition (few samples,
+ * many unknowns, smoothing on every factor): the operator through an
+ * N x N Cholesky instead of an n x n eigendecomposition.  The algebra is
+ * in hfx.h. */
+#include <cblas.h>
+#include <lapacke.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal/hfx_int.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* Null eigenvalues of K: at or below this fraction of the largest.  The
+ * smallest non-zero ones of the smoothing glint builds are far above it:
+ * (pi / 512)^4 / 16 = 9e-11 for second differences over 512 texels,
+ * (pi / 64)^4 / 64 = 9e-8 for the graph Laplacian of a 64 x 64 grid; the
+ * rounding of the zero ones is about n eps = 1e-13. */
+#define NULL_REL 1e-12
+/* The kernel form is taken only while K's null space is this small (the
+ * elimination of a is a dense SVD of N x k). */
+#define KERNEL_NULL_MAX 64
+
+typedef struct block {
+    int b0, n;           /* reduced unknowns b0 .. b0 + n - 1 */
+    double *K;           /* n x n */
+    double *Q, *e;       /* eigenvectors (n x n) and eigenvalues, ascending */
+    int same_as;         /* an earlier block with the same K, or -1 */
+} block;
+
+/* The eigenvectors of an S x S grid's smoothing block K = w^2 L^2 (L the
+ * graph Laplacian of hfx_smooth_2d; w from K's corner, where (L^2)_ii =
+ * deg^2 + deg = 6): products of the path graph's DCT-II vectors
+ * c_k(i) = sqrt((k ? 2 : 1) / S) cos(pi k (i + 1/2) / S), eigenvalues
+ * w^2 (mu_a + mu_b)^2 with mu_k = 2 - 2 cos(pi k / S).  Checked against
+ * K on a few vectors; 1 when K is not such a block (the caller then
+ * eigendecomposes it), -1 out of memory. */
+static int grid_eigen(block *b, int S)
+{
+    int n = b->n;
+    double w2, worst = 0.0, *c = NULL, *v = NULL;
+    if (S < 2 || n != S * S || !(b->K[0] > 0.0))
+        return 1;
+    w2 = b->K[0] / 6.0;
+    b->Q = malloc((size_t)n * n * sizeof *b->Q);
+    b->e = malloc((size_t)n * sizeof *b->e);
+    c = malloc((size_t)S * S * sizeof *c);
+    v = malloc((size_t)n * sizeof *v);
+    if (!b->Q || !b->e || !c || !v) {
+        free(c);
+        free(v);
+        return -1;
+    }
+    for (int k = 0; k < S; k++)
+        for (int i = 0; i < S; i++)
+            c[k * S + i] = sqrt((k ? 2.0 : 1.0) / S) * cos(M_PI * k * (i + 0.5) / S);
+    for (int kb = 0; kb < S; kb++)
+        for (int ka = 0; ka < S; ka++) {
+            int col = kb * S + ka;
+            double mu = 4.0 - 2.0 * cos(M_PI * ka / S) - 2.0 * cos(M_PI * kb / S);
+            double *q = b->Q + (size_t)n * col;
+            b->e[col] = w2 * mu * mu;
+            for (int jb = 0; jb < S; jb++)
+                for (int ja = 0; ja < S; ja++)
+                    q[jb * S + ja] = c[ka * S + ja] * c[kb * S + jb];
+        }
+    /* K q = e q on a spread of vectors (the highest, the lowest non-zero, a middle one) */
+    for (int t = 0; t < 4; t++) {
+        int col = t == 0 ? 1 : t == 1 ? n - 1 : t == 2 ? n / 2 : S + 1;
+        const double *q = b->Q + (size_t)n * col;
+        cblas_dgemv(CblasColMajor, CblasNoTrans, n, n, 1.0, b->K, n, q, 1, 0.0, v, 1);
+        for (int i = 0; i < n; i++)
+            worst = fmax(worst, fabs(v[i] - b->e[col] * q[i]));
+    }
+    free(c);
+    free(v);
+    if (!(worst <= 1e-9 * (w2 * 64.0))) { /* 64 w^2: the largest eigenvalue's bound */
+        free(b->Q);
+        free(b->e);
+        b->Q = b->e = NULL;
+        return 1;
+    }
+    return 0;
+}
+
+static void blocks_free(block *bl, int nb)
+{
+    for (int j = 0; j < nb; j++) {
+        free(bl[j].K);
+        if (bl[j].same_as < 0) {
+            free(bl[j].Q);
+            free(bl[j].e);
+        }
+    }
+    free(bl);
+}
+
+int hfx_kernel_build(const hfx_rows *x, const int *idx, int nr, double rcond, hfx_decomp *dc,
+                     glint_err *err)
+{
+    int N = x->nsamples, nb = x->nfactors, col[HFX_ROW_MAX], k = 0, m = 0, r = 0, rc = 1;
+    int *cls = NULL, *where = NULL;
+    double w[HFX_ROW_MAX], emax = 0.0, emin_pos = INFINITY;
+    double *W = NULL, *W0 = NULL, *W1 = NULL, *U = NULL, *sv = NULL, *VT = NULL, *C = NULL,
+           *X = NULL, *Y = NULL, *T = NULL, *Mr = NULL, *eig = NULL;
+    block *bl;
+
+    if (nb < 1 || !x->off || x->nsmooth == 0)
+        return 1;
+    if (!(bl = calloc((size_t)nb, sizeof *bl)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    /* the blocks in the reduced unknowns (idx is monotone) */
+    for (int j = 0, t0 = 0; j < nb; j++) {
+        bl[j].b0 = t0;
+        for (int t = x->off[j]; t < x->off[j + 1]; t++)
+            bl[j].n += idx[t] >= 0;
+        t0 += bl[j].n;
+        bl[j].same_as = -1;
+        if (bl[j].n && !(bl[j].K = calloc((size_t)bl[j].n * bl[j].n, sizeof *bl[j].K))) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+    }
+    if (!(where = malloc((size_t)nr * sizeof *where))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        goto done;
+    }
+    for (int j = 0; j < nb; j++)
+        for (int t = 0; t < bl[j].n; t++)
+            where[bl[j].b0 + t] = j;
+    /* K per block, from the smoothing rows; a row across blocks: no kernel form */
+    for (int rr = N; rr < N + x->nsmooth; rr++) {
+        int mm = x->row(x->ctx, rr, col, w), j = -1;
+        for (int a = 0; a < mm; a++) {
+            if (w[a] == 0.0)
+                continue;
+            if (j < 0)
+                j = where[idx[col[a]]];
+            else if (where[idx[col[a]]] != j)
+                goto done; /* rc 1 */
+        }
+        for (int a = 0; a < mm; a++)
+            for (int b = 0; b < mm; b++)
+                if (w[a] != 0.0 && w[b] != 0.0)
+                    bl[j].K[(idx[col[a]] - bl[j].b0) + (size_t)bl[j].n * (idx[col[b]] - bl[j].b0)] +=
+                        w[a] * w[b];
+    }
+    /* the distinct blocks, and whether the form pays: its flops (the blocks'
+     * eigendecompositions, the N x N Cholesky and solves, the products with
+     * W1 and Q) against the normal form's eigendecomposition of nr x nr
+     * (about 4 nr^3 with the back-transformation) */
+    {
+        double ck = (double)N * N * N + 6.0 * nr * (double)N * N, cn = 4.0 * (double)nr * nr * nr;
+        for (int j = 0; j < nb; j++) {
+            int n = bl[j].n;
+            for (int i = 0; i < j && bl[j].same_as < 0 && n; i++)
+                if (bl[i].n == n && bl[i].same_as < 0 &&
+                    memcmp(bl[i].K, bl[j].K, (size_t)n * n * sizeof *bl[j].K) == 0)
+                    bl[j].same_as = i;
+            ck += 2.0 * n * (double)n * N +
+                  (bl[j].same_as < 0 && !(x->grid && x->grid[j] > 0) ? 4.0 * n * (double)n * n
+                                                                      : 0.0);
+        }
+        if (ck >= cn)
+            goto done; /* rc 1 */
+    }
+    /* eigendecompose each distinct block once */
+    for (int j = 0; j < nb; j++) {
+        int n = bl[j].n;
+        if (!n)
+            continue;
+        if (bl[j].same_as >= 0) {
+            bl[j].Q = bl[bl[j].same_as].Q;
+            bl[j].e = bl[bl[j].same_as].e;
+            continue;
+        }
+        if (x->grid && x->grid[j] > 0) {
+            int g = grid_eigen(&bl[j], x->grid[j]);
+            if (g < 0) {
+                rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+                goto done;
+            }
+            if (g == 0) {
+                dc->grid_blocks++;
+                continue;
+            }
+        }
+        bl[j].Q = malloc((size_t)n * n * sizeof *bl[j].Q);
+        bl[j].e = malloc((size_t)n * sizeof *bl[j].e);
+        if (!bl[j].Q || !bl[j].e) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+        memcpy(bl[j].Q, bl[j].K, (size_t)n * n * sizeof *bl[j].Q);
+        if (LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', n, bl[j].Q, n, bl[j].e) != 0) {
+            rc = glint_err_set(err, GLINT_ENUMERIC, "eigendecomposition of the smoothing failed");
+            goto done;
+        }
+    }
+    for (int j = 0; j < nb; j++)
+        if (bl[j].n)
+            emax = bl[j].e[bl[j].n - 1] > emax ? bl[j].e[bl[j].n - 1] : emax;
+    /* the columns of Q = blockdiag(Q_j): null (cls 0) or kept (cls 1) */
+    if (!(cls = malloc((size_t)nr * sizeof *cls)) || !(eig = malloc((size_t)nr * sizeof *eig))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        goto done;
+    }
+    for (int j = 0; j < nb; j++)
+        for (int t = 0; t < bl[j].n; t++) {
+            double e = bl[j].e[t];
+            eig[bl[j].b0 + t] = e;
+            cls[bl[j].b0 + t] = e > NULL_REL * emax;
+            k += !cls[bl[j].b0 + t];
+            if (cls[bl[j].b0 + t] && e < emin_pos)
+                emin_pos = e;
+        }
+    m = nr - k;
+    if (!(emax > 0.0) || k > KERNEL_NULL_MAX || k < 1 || m < 1)
+        goto done; /* rc 1 */
+    /* W = A Q (N x nr): a data row of A touches a few rows of Q; W0, W1 its
+     * null and kept columns */
+    W = calloc((size_t)N * nr, sizeof *W);
+    W0 = malloc((size_t)N * k * sizeof *W0);
+    W1 = malloc((size_t)N * m * sizeof *W1);
+    if (!W || !W0 || !W1) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for %dx%d", N, nr);
+        goto done;
+    }
+    for (int i = 0; i < N; i++) {
+        int mm = x->row(x->ctx, i, col, w);
+        for (int a = 0; a < mm; a++) {
+            int t, j, l;
+            if (w[a] == 0.0)
+                continue;
+            t = idx[col[a]];
+            j = where[t];
+            l = t - bl[j].b0;
+            for (int c = 0; c < bl[j].n; c++)
+                W[i + (size_t)N * (bl[j].b0 + c)] += w[a] * bl[j].Q[l + (size_t)bl[j].n * c];
+        }
+    }
+    for (int t = 0, a = 0, b = 0; t < nr; t++)
+        memcpy(cls[t] ? W1 + (size_t)N * b++ : W0 + (size_t)N * a++, W + (size_t)N * t,
+               (size_t)N * sizeof *W);
+    /* W0 = U S V^T; its range (rank r at rcond) is eliminated */
+    {
+        int kk = N < k ? N : k;
+        U = malloc((size_t)N * kk * sizeof *U);
+        sv = malloc((size_t)kk * sizeof *sv);
+        VT = malloc((size_t)kk * k * sizeof *VT);
+        if (!U || !sv || !VT) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+        memcpy(W, W0, (size_t)N * k * sizeof *W); /* W: scratch from here */
+        if (LAPACKE_dgesdd(LAPACK_COL_MAJOR, 'S', N, k, W, N, sv, U, N, VT, kk) != 0) {
+            rc = glint_err_set(err, GLINT_ENUMERIC, "SVD of the smoothing's null space failed");
+            goto done;
+        }
+        while (r < kk && sv[r] > rcond * sv[0] && sv[r] > 0.0)
+            r++;
+    }
+    C = malloc((size_t)N * N * sizeof *C);
+    X = malloc((size_t)N * N * sizeof *X);
+    T = malloc((size_t)N * N * sizeof *T);
+    Y = malloc((size_t)nr * N * sizeof *Y);
+    Mr = malloc((size_t)N * m * sizeof *Mr);  /* P W1 */
+    if (!C || !X || !T || !Y || !Mr) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for %dx%d", N, N);
+        goto done;
+    }
+    /* Mr = P W1 = W1 - U_r (U_r^T W1) */
+    memcpy(Mr, W1, (size_t)N * m * sizeof *Mr);
+    if (r) {
+        double *UtW = malloc((size_t)r * m * sizeof *UtW);
+        if (!UtW) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
+            goto done;
+        }
+        cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, r, m, N, 1.0, U, N, W1, N, 0.0,
+                    UtW, r);
+        cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, N, m, r, -1.0, U, N, UtW, r,
+                    1.0, Mr, N);
+        free(UtW);
+    }
+    /* C = I + S S^T with S = P W1 diag(e1^-1/2) (into W), then its Cholesky */
+    for (int t = 0, b = 0; t < nr; t++)
+        if (cls[t]) {
+            double sc = 1.0 / sqrt(eig[t]);
+            for (int i = 0; i < N; i++)
+                W[i + (size_t)N * b] = Mr[i + (size_t)N * b] * sc;
+            b++;
+        }
+    memset(C, 0, (size_t)N * N * sizeof *C);
+    for (int i = 0; i < N; i++)
+        C[i + (size_t)N * i] = 1.0;
+    cblas_dsyrk(CblasColMajor, CblasUpper, CblasNoTrans, N, m, 1.0, W, N, 1.0, C, N);
+    if (LAPACKE_dpotrf(LAPACK_COL_MAJOR, 'U', N, C, N) != 0) {
+        rc = glint_err_set(err, GLINT_ENUMERIC, "Cholesky of the kernel matrix failed");
+        goto done;
+    }
+    /* X = C^-1 P, P = I - U_r U_r^T */
+    memset(X, 0, (size_t)N * N * sizeof *X);
+    for (int i = 0; i < N; i++)
+        X[i + (size_t)N * i] = 1.0;
+    if (r)
+        cblas_dgemm(CblasColMajor, CblasNoTrans, CblasTrans, N, N, r, -1.0, U, N, U, N, 1.0, X,
+                    N);
+    if (LAPACKE_dpotrs(LAPACK_COL_MAJOR, 'U', N, N, C, N, X, N) != 0) {
+        rc = glint_err_set(err, GLINT_ENUMERIC, "kernel solve failed");
+        goto done;
+    }
+    /* Mb = diag(1/e1) (P W1)^T X (m x N, into W), its rows into Y's kept rows */
+    cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, m, N, N, 1.0, Mr, N, X, N, 0.0, W, m);
+    for (int t = 0, b = 0; t < nr; t++)
+        if (cls[t]) {
+            for (int i = 0; i < N; i++)
+                W[b + (size_t)m * i] /= eig[t];
+            for (int i = 0; i < N; i++)
+                Y[t + (size_t)nr * i] = W[b + (size_t)m * i];
+            b++;
+        }
+    /* T = I - W1 Mb; Ma = V_r S_r^-1 U_r^T T (k x N), into Y's null rows */
+    memset(T, 0, (size_t)N * N * sizeof *T);
+    for (int i = 0; i < N; i++)
+        T[i + (size_t)N * i] = 1.0;
+    cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, N, N, m, -1.0, W1, N, W, m, 1.0, T,
+                N);
+    {
+        int kk = N < k ? N : k;
+        /* X <- S_r^-1 U_r^T T (r x N), then Ma = V_r X */
+        if (r)
+            cblas_dgemm(CblasColMajor, CblasTrans, CblasNoTrans, r, N, N, 1.0, U, N, T, N, 0.0,
+                        X, r);
+        for (int i = 0; i < N; i++)
+            for (int q = 0; q < r; q++)
+                X[q + (size_t)r * i] /= sv[q];
+        for (int t = 0, a = 0; t < nr; t++)
+            if (!cls[t]) {
+                for (int i = 0; i < N; i++) {
+                    double acc = 0.0;
+                    for (int q = 0; q < r; q++)
+                        acc += VT[q + (size_t)kk * a] * X[q + (size_t)r * i];
+                    Y[t + (size_t)nr * i] = acc;
+                }
+                a++;
+            }
+    }
+    /* M = Q Y block by block, its rows back to every unknown */
+    if (!(dc->M = calloc((size_t)x->n * N, sizeof *dc->M))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for the operator");
+        goto done;
+    }
+    for (int j = 0; j < nb; j++) {
+        int n = bl[j].n;
+        if (!n)
+            continue;
+        cblas_dgemm(CblasColMajor, CblasNoTrans, CblasNoTrans, n, N, n, 1.0, bl[j].Q, n,
+                    Y + bl[j].b0, nr, 0.0, W, n);
+        for (int i = 0; i < N; i++)
+            for (int t = x->off[j]; t < x->off[j + 1]; t++)
+                if (idx[t] >= 0)
+                    dc->M[t + (size_t)x->n * i] = W[(idx[t] - bl[j].b0) + (size_t)n * i];
+    }
+    dc->form = "kernel";
+    dc->rank = m + r;
+    dc->s_max = sqrt(emax);
+    dc->s_min_kept = sqrt(emin_pos);
+    rc = 0;
+done:
+    if (rc == 1)
+        dc->grid_blocks = 0;
+    free(Mr);
+    free(W);
+    free(W0);
+    free(W1);
+    free(U);
+    free(sv);
+    free(VT);
+    free(C);
+    free(X);
+    free(T);
+    free(Y);
+    free(cls);
+    free(eig);
+    free(where);
+    blocks_free(bl, nb);
+    return rc;
+}

@@ -1,0 +1,437 @@
+/* brdf.c: the analytic BRDFs of brdf.h, their spec parser and formatter.
+ * brdf_eval follows ../shared/reference/hf_ref.py brdf_eval term by term
+ * (lambert, phong, blinn, ct with ggx_alpha="rough"). */
+#include "brdf.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "vec3.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* ---- evaluation ------------------------------------------------------- */
+
+void brdf_eval(const brdf *b, const double n[3], const double wi[3],
+               const double wo[3], double rgb[3])
+{
+    v3 N = v3_load(n), I = v3_load(wi), O = v3_load(wo);
+    double ci = v3_dot(N, I), co = v3_dot(N, O);
+    double spec[3] = {0.0, 0.0, 0.0};
+
+    rgb[0] = rgb[1] = rgb[2] = 0.0;
+    if (!(ci > 0.0 && co > 0.0))
+        return;
+
+    switch (b->kind) {
+    case BRDF_LAMBERT:
+        break;
+    case BRDF_PHONG: {
+        v3 r = v3_sub(v3_scale(N, 2.0 * ci), I);
+        double rv = v3_dot(r, O);
+        double lobe = (b->exponent + 2.0) / (2.0 * M_PI) *
+                      pow(rv > 0.0 ? rv : 0.0, b->exponent);
+        for (int c = 0; c < 3; c++)
+            spec[c] = b->ks[c] * lobe;
+        break;
+    }
+    case BRDF_BLINN: {
+        v3 h = v3_normalize(v3_add(I, O));
+        double nh = v3_dot(N, h);
+        double lobe = (b->exponent + 8.0) / (8.0 * M_PI) *
+                      pow(nh > 0.0 ? nh : 0.0, b->exponent);
+        for (int c = 0; c < 3; c++)
+            spec[c] = b->ks[c] * lobe;
+        break;
+    }
+    case BRDF_CT: {
+        double a = b->roughness, a2 = a * a;
+        v3 h = v3_normalize(v3_add(I, O));
+        double ch = v3_dot(N, h), hi = v3_dot(h, I);
+        ch = ch < 0.0 ? 0.0 : (ch > 1.0 ? 1.0 : ch);
+        hi = hi < 0.0 ? 0.0 : (hi > 1.0 ? 1.0 : hi);
+        double t = ch * ch * (a2 - 1.0) + 1.0;
+        double D = a2 / (M_PI * t * t);
+        /* the reference clamps the cosines at 1e-12 before dividing */
+        double cip = ci > 1e-12 ? ci : 1e-12, cop = co > 1e-12 ? co : 1e-12;
+        double g1i = 2.0 * cip / (cip + sqrt(a2 + (1.0 - a2) * cip * cip));
+        double g1o = 2.0 * cop / (cop + sqrt(a2 + (1.0 - a2) * cop * cop));
+        double common = D * g1i * g1o / (4.0 * cip * cop);
+        double s5 = pow(1.0 - hi, 5.0);
+        for (int c = 0; c < 3; c++)
+            spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
+        break;
+    }
+    case BRDF_WARD: {
+        double a2 = b->roughness * b->roughness;
+        v3 h = v3_normalize(v3_add(I, O));
+        double ch = v3_dot(N, h);
+        if (ch > 0.0 && b->roughness_y > 0.0 && b->roughness_y != b->roughness) {
+            /* anisotropic: alpha_x = rough along t, alpha_y = rough_y along b */
+            v3 t, bt;
+            double ax = b->roughness, ay = b->roughness_y, ht, hb, e, lobe;
+            v3_frame(N, &t, &bt);
+            ht = v3_dot(h, t) / ax;
+            hb = v3_dot(h, bt) / ay;
+            e = (ht * ht + hb * hb) / (ch * ch);
+            lobe = exp(-e) / (4.0 * M_PI * ax * ay * sqrt(ci * co));
+            for (int c = 0; c < 3; c++)
+                spec[c] = b->ks[c] * lobe;
+        } else if (ch > 0.0) {
+            double c2 = ch > 1.0 ? 1.0 : ch * ch;
+            double tan2 = (1.0 - c2) / c2;
+            double lobe = exp(-tan2 / a2) / (4.0 * M_PI * a2 * sqrt(ci * co));
+            for (int c = 0; c < 3; c++)
+                spec[c] = b->ks[c] * lobe;
+        }
+        break;
+    }
+    default:
+        return; /* not a model: zero, as documented for invalid input */
+    }
+    for (int c = 0; c < 3; c++)
+        rgb[c] = b->kd[c] / M_PI + spec[c];
+}
+
+/* ---- parsing ---------------------------------------------------------- */
+
+#define BRDF_SPEC_MAX 512
+
+enum { K_KD = 1, K_KS = 2, K_F0 = 4, K_E = 8, K_ROUGH = 16, K_ROUGH_Y = 32 };
+
+typedef struct brdf_model {
+    const char *name;
+    brdf_kind kind;
+    int keys; /* keys that apply to this model */
+} brdf_model;
+
+static const brdf_model brdf_models[] = {
+    {"lambert", BRDF_LAMBERT, K_KD},
+    {"phong", BRDF_PHONG, K_KD | K_KS | K_E},
+    {"blinn", BRDF_BLINN, K_KD | K_KS | K_E},
+    {"ct", BRDF_CT, K_KD | K_F0 | K_ROUGH},
+    {"ward", BRDF_WARD, K_KD | K_KS | K_ROUGH | K_ROUGH_Y},
+};
+
+static const brdf_model *brdf_model_of(brdf_kind k)
+{
+    for (size_t i = 0; i < sizeof brdf_models / sizeof brdf_models[0]; i++)
+        if (brdf_models[i].kind == k)
+            return &brdf_models[i];
+    return NULL;
+}
+
+static void brdf_set3(double v[3], double x) { v[0] = v[1] = v[2] = x; }
+
+/* Defaults of a model (the reference truths). */
+static void brdf_defaults(brdf_kind k, brdf *b)
+{
+    memset(b, 0, sizeof *b);
+    b->kind = k;
+    switch (k) {
+    case BRDF_LAMBERT:
+        brdf_set3(b->kd, 0.8);
+        break;
+    case BRDF_PHONG:
+        brdf_set3(b->kd, 0.7);
+        brdf_set3(b->ks, 0.3);
+        b->exponent = 32.0;
+        break;
+    case BRDF_BLINN:
+        brdf_set3(b->kd, 0.7);
+        brdf_set3(b->ks, 0.3);
+        b->exponent = 20.0;
+        break;
+    case BRDF_CT:
+        brdf_set3(b->kd, 0.5);
+        brdf_set3(b->f0, 0.3);
+        b->roughness = 0.2;
+        break;
+    case BRDF_WARD:
+        brdf_set3(b->kd, 0.5);
+        brdf_set3(b->ks, 0.3);
+        b->roughness = 0.2;
+        break;
+    }
+}
+
+/* Resolve a model or preset name (OUT: *b with its values). */
+static int brdf_name(const char *name, brdf *b)
+{
+    for (size_t i = 0; i < sizeof brdf_models / sizeof brdf_models[0]; i++) {
+        if (strcmp(name, brdf_models[i].name) == 0) {
+            brdf_defaults(brdf_models[i].kind, b);
+            return 1;
+        }
+    }
+    if (strcmp(name, "phong32") == 0) {
+        brdf_defaults(BRDF_PHONG, b);
+    } else if (strcmp(name, "blinn20") == 0) {
+        brdf_defaults(BRDF_BLINN, b);
+    } else if (strcmp(name, "blinn100") == 0) {
+        brdf_defaults(BRDF_BLINN, b);
+        b->exponent = 100.0;
+    } else if (strcmp(name, "ct0.2") == 0) {
+        brdf_defaults(BRDF_CT, b);
+    } else if (strcmp(name, "ct0.5") == 0) {
+        brdf_defaults(BRDF_CT, b);
+        b->roughness = 0.5;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+static char *brdf_trim(char *s)
+{
+    char *e;
+    while (*s == ' ' || *s == '\t')
+        s++;
+    e = s + strlen(s);
+    while (e > s && (e[-1] == ' ' || e[-1] == '\t'))
+        *--e = '\0';
+    return s;
+}
+
+/* One finite number filling the whole of `s`. */
+static int brdf_number(const char *s, double *x)
+{
+    char *end;
+    if (!*s)
+        return 0;
+    errno = 0;
+    *x = strtod(s, &end);
+    return end != s && *end == '\0' && errno != ERANGE && isfinite(*x);
+}
+
+/* Value of key `key`: one number, or (rgb != 0) "r/g/b". (OUT: v[3]) */
+static int brdf_value(const char *key, char *val, int rgb, double v[3],
+                      glint_err *err)
+{
+    char *parts[3];
+    int np = 0;
+    char *p = val;
+
+    for (;;) {
+        char *slash = strchr(p, '/');
+        if (np == 3)
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "brdf key '%s': too many components in '%s' "
+                                 "(one number or r/g/b)",
+                                 key, val);
+        parts[np++] = p;
+        if (!slash)
+            break;
+        *slash = '\0';
+        p = slash + 1;
+    }
+    if (np == 2 || (np == 3 && !rgb))
+        return glint_err_set(err, GLINT_EINVAL, "brdf key '%s' takes %s, got %d components",
+                             key, rgb ? "one number or r/g/b" : "one number", np);
+    for (int i = 0; i < np; i++) {
+        char *t = brdf_trim(parts[i]);
+        if (!brdf_number(t, &v[i]))
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "brdf key '%s': '%s' is not a finite number", key, t);
+    }
+    if (np == 1)
+        v[1] = v[2] = v[0];
+    return 0;
+}
+
+static int brdf_range3(const char *key, const double v[3], glint_err *err)
+{
+    for (int c = 0; c < 3; c++)
+        if (!(v[c] >= 0.0 && v[c] <= 1.0))
+            return glint_err_set(err, GLINT_ERANGE,
+                                 "brdf key '%s': component %d = %g outside [0, 1]", key, c,
+                                 v[c]);
+    return 0;
+}
+
+int brdf_parse(const char *spec, brdf *out, glint_err *err)
+{
+    char buf[BRDF_SPEC_MAX];
+    char *name, *rest, *item;
+    const brdf_model *m;
+    brdf b;
+    int seen = 0;
+
+    if (!out)
+        return glint_err_set(err, GLINT_EINVAL, "brdf_parse: NULL output");
+    if (!spec)
+        return glint_err_set(err, GLINT_EINVAL, "brdf spec is NULL");
+    if (strlen(spec) >= sizeof buf)
+        return glint_err_set(err, GLINT_EINVAL, "brdf spec longer than %d characters",
+                             (int)sizeof buf - 1);
+    strcpy(buf, spec);
+
+    rest = strchr(buf, ':');
+    if (rest)
+        *rest++ = '\0';
+    name = brdf_trim(buf);
+    if (!*name)
+        return glint_err_set(err, GLINT_EINVAL, "brdf spec '%s' has no model name", spec);
+    if (!brdf_name(name, &b))
+        return glint_err_set(err, GLINT_ENOTFOUND,
+                             "unknown brdf '%s' (models lambert, phong, blinn, ct, ward; "
+                             "presets phong32, blinn20, blinn100, ct0.2, ct0.5)",
+                             name);
+    m = brdf_model_of(b.kind);
+
+    for (item = rest; item;) {
+        char *next = strchr(item, ',');
+        char *eq, *key, *val;
+        double v[3];
+        int bit;
+        int rc;
+
+        if (next)
+            *next++ = '\0';
+        eq = strchr(item, '=');
+        if (!eq) {
+            char *t = brdf_trim(item);
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "brdf spec item '%s' is not key=value", t);
+        }
+        *eq = '\0';
+        key = brdf_trim(item);
+        val = brdf_trim(eq + 1);
+
+        if (strcmp(key, "kd") == 0)
+            bit = K_KD;
+        else if (strcmp(key, "ks") == 0)
+            bit = K_KS;
+        else if (strcmp(key, "f0") == 0)
+            bit = K_F0;
+        else if (strcmp(key, "e") == 0)
+            bit = K_E;
+        else if (strcmp(key, "rough") == 0)
+            bit = K_ROUGH;
+        else if (strcmp(key, "rough_y") == 0)
+            bit = K_ROUGH_Y;
+        else
+            return glint_err_set(err, GLINT_EINVAL,
+                                 "unknown brdf key '%s' (kd, ks, f0, e, rough, rough_y)", key);
+        if (!(m->keys & bit))
+            return glint_err_set(err, GLINT_EINVAL, "brdf key '%s' does not apply to %s",
+                                 key, m->name);
+        if (seen & bit)
+            return glint_err_set(err, GLINT_EINVAL, "brdf key '%s' given twice", key);
+        seen |= bit;
+
+        rc = brdf_value(key, val, bit == K_KD || bit == K_KS || bit == K_F0, v, err);
+        if (rc)
+            return rc;
+        switch (bit) {
+        case K_KD:
+        case K_KS:
+        case K_F0:
+            rc = brdf_range3(key, v, err);
+            if (rc)
+                return rc;
+            memcpy(bit == K_KD ? b.kd : bit == K_KS ? b.ks : b.f0, v, sizeof v);
+            break;
+        case K_E:
+            if (!(v[0] > 0.0 && v[0] <= 10000.0))
+                return glint_err_set(err, GLINT_ERANGE,
+                                     "brdf key 'e' = %g outside (0, 10000]", v[0]);
+            b.exponent = v[0];
+            break;
+        case K_ROUGH:
+            if (!(v[0] >= 0.01 && v[0] <= 1.0))
+                return glint_err_set(err, GLINT_ERANGE,
+                                     "brdf key 'rough' = %g outside [0.01, 1]", v[0]);
+            b.roughness = v[0];
+            break;
+        case K_ROUGH_Y:
+            if (!(v[0] >= 0.01 && v[0] <= 1.0))
+                return glint_err_set(err, GLINT_ERANGE,
+                                     "brdf key 'rough_y' = %g outside [0.01, 1]", v[0]);
+            b.roughness_y = v[0];
+            break;
+        }
+        item = next;
+    }
+    *out = b;
+    return 0;
+}
+
+/* ---- formatting ------------------------------------------------------- */
+
+/* Shortest %g text that reads back to exactly x. */
+static void brdf_fmt_num(char *s, size_t n, double x)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(s, n, "%.*g", prec, x);
+        if (strtod(s, NULL) == x)
+            return;
+    }
+}
+
+static size_t brdf_fmt_rgb(char *s, size_t n, const double v[3])
+{
+    char a[32], b[32], c[32];
+    brdf_fmt_num(a, sizeof a, v[0]);
+    if (v[0] == v[1] && v[1] == v[2])
+        return (size_t)snprintf(s, n, "%s", a);
+    brdf_fmt_num(b, sizeof b, v[1]);
+    brdf_fmt_num(c, sizeof c, v[2]);
+    return (size_t)snprintf(s, n, "%s/%s/%s", a, b, c);
+}
+
+void brdf_format(const brdf *b, char *buf, int len)
+{
+    char tmp[512], num[96];
+    const brdf_model *m;
+    size_t pos;
+
+    if (!buf || len <= 0)
+        return;
+    m = b ? brdf_model_of(b->kind) : NULL;
+    if (!m) {
+        snprintf(buf, (size_t)len, "invalid");
+        return;
+    }
+    pos = (size_t)snprintf(tmp, sizeof tmp, "%s", m->name);
+    if (m->keys & K_KD) {
+        brdf_fmt_rgb(num, sizeof num, b->kd);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ":kd=%s", num);
+    }
+    if (m->keys & K_KS) {
+        brdf_fmt_rgb(num, sizeof num, b->ks);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ",ks=%s", num);
+    }
+    if (m->keys & K_F0) {
+        brdf_fmt_rgb(num, sizeof num, b->f0);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ",f0=%s", num);
+    }
+    if (m->keys & K_E) {
+        brdf_fmt_num(num, sizeof num, b->exponent);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ",e=%s", num);
+    }
+    if (m->keys & K_ROUGH) {
+        brdf_fmt_num(num, sizeof num, b->roughness);
+        pos += (size_t)snprintf(tmp + pos, sizeof tmp - pos, ",rough=%s", num);
+    }
+    if ((m->keys & K_ROUGH_Y) && b->roughness_y > 0.0 && b->roughness_y != b->roughness) {
+        brdf_fmt_num(num, sizeof num, b->roughness_y);
+        snprintf(tmp + pos, sizeof tmp - pos, ",rough_y=%s", num);
+    }
+    snprintf(buf, (size_t)len, "%s", tmp);
+}
+
+void brdf_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
+                 const double wo[3], double rgb[3])
+{
+    (void)uv;
+    double c = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
+    brdf_eval(ctx, n, wi, wo, rgb);
+    for (int e = 0; e < 3; e++)
+        rgb[e] *= c > 0.0 ? c : 0.0;
+}
