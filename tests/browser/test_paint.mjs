@@ -253,6 +253,17 @@ run({
     let loaded = [];
     const fromCache = new Set();
     cdp.on('Network.requestServedFromCache', e => fromCache.add(e.requestId));
+    // the studio's files still on their way: a module imported after the
+    // page is ready (summary.js, ball.js) must be in the cache before a
+    // reload can find it there
+    const pending = new Set();
+    cdp.on('Network.requestWillBeSent', e => {
+      const u = new URL(e.request.url);
+      if (u.origin === t.daemon.base && !u.pathname.startsWith('/api/')) pending.add(e.requestId);
+    });
+    cdp.on('Network.loadingFinished', e => pending.delete(e.requestId));
+    cdp.on('Network.loadingFailed', e => pending.delete(e.requestId));
+    const filesLoaded = () => waitFor(() => pending.size === 0, MUST_MS, 'the studio\'s files loaded');
     cdp.on('Network.responseReceived', e => {
       const u = new URL(e.response.url);
       if (u.origin === t.daemon.base && !u.pathname.startsWith('/api/')) loaded.push({ id: e.requestId, path: u.pathname });
@@ -272,6 +283,7 @@ run({
     let from = t.daemon.log().length;
     await openStudio(page, url);
     const cold = await answers(from);
+    await filesLoaded();
     assert(cold.asked.length >= 10 && cold.asked.every(f => f[1] === 200), 'a cold load downloads the files: ' + JSON.stringify(cold));
     for (let i = 0; i < 2; i++) {
       loaded = [];
@@ -279,6 +291,7 @@ run({
       await page.reload();
       await page.waitForSelector('body[data-ready="1"]');
       const warm = await answers(from);
+      await filesLoaded();
       assert(warm.cached + warm.asked.length >= 10, 'the files before the first paintable view: ' + JSON.stringify(warm));
       const again = warm.asked.filter(f => f[1] !== 304);
       assertEq(again.length, 0, 'files sent again on a warm reload (not 304, not from the cache): ' + JSON.stringify(again));
