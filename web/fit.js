@@ -124,6 +124,7 @@ export class FitPanel extends EventTarget {
     sel.title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
     $('method-note').textContent = [this.method.summary || this.method.title, this.method.when].filter(Boolean).join(' ');
     this.inputs = {};
+    this.preset = null;                  // a method without presets: its own parameters
     this.buildParams();
     const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
     const d0 = this.defaults();
