@@ -10,6 +10,7 @@ import { blit } from './image.js';
 import { bindPhoto, cancelPhoto, onSurface, renderPhoto, stagePhoto } from './photo.js';
 import { bindPresets } from './presets.js';
 import { bindGuide } from './guide.js';
+import { sizeText } from './methods.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -561,16 +562,6 @@ async function loadFitAndMaterials(S) {
   else { const o = document.createElement('option'); o.value = ''; o.textContent = 'no fit yet'; $('mat-sel').appendChild(o); }
 }
 
-// A material's size in words: texels per factor, or lobes and environment.
-function matSize(m) {
-  if (m.method === 'maps') return `${m.components} materials · ${m.res} texels`;
-  if (m.method === 'hf4') return `${m.res} texels · ${m.s_res}² spatial`;
-  if (m.method === 'hf2d') return `${m.res} texels · ${m.res_2d}² 2D (${(m.dims || []).map((d, j) => d === 2 ? 'pqr'[j] : '').join('') || 'none'})`;
-  if (m.res != null) return `${m.res} texels`;
-  if (m.method === 'srbf') return `${m.lobes} lobes · ${(m.params && m.params.env) || ''}`;
-  return m.method || '';
-}
-
 function addMaterialOption(m, select) {
   const sel = $('mat-sel');
   for (const o of [...sel.options]) if (!o.value) o.remove();
@@ -578,7 +569,7 @@ function addMaterialOption(m, select) {
     const o = document.createElement('option');
     o.value = m.id;
     const t = (m.created || '').slice(11, 19);
-    o.textContent = `${t} · ${matSize(m)} · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
+    o.textContent = `${t} · ${sizeText(m)} · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
     sel.appendChild(o);
   }
   if (select) sel.value = m.id;
@@ -601,7 +592,7 @@ async function onFitEvent(ev) {
     const m = await api.material(id);
     addMaterialOption(m, $('follow').checked);
     if ($('follow').checked) showMaterial(m);
-    toast('New fit', `${matSize(m)} · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
+    toast('New fit', `${sizeText(m)} · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
     if (state.fit) state.fit.refresh();
   } catch (e) { showError(e); }
 }

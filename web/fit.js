@@ -6,6 +6,7 @@
 
 import { API, ApiError } from './api.js';
 import { EventStream } from './sse.js';
+import { methods, setMethods, startMethod } from './methods.js';
 
 const $ = id => document.getElementById(id);
 
@@ -29,17 +30,6 @@ function explain(e) {
   }
   return e;
 }
-
-// What each method can and cannot represent, in plain words.
-const METHOD_NOTES = {
-  hf3: 'One material for the whole object, fitted to views lit by their point light. Patterns (a logo, wood grain) need material maps.',
-  hf4: 'One material whose colour and brightness vary over the surface (a faded print, dirt, a painted pattern on one finish): the point-light material times a texture. Different highlights in different places need material maps.',
-  hf2d: 'One material whose highlight depends on direction around the surface (brushed metal, satin, hair-like sheen): the point-light material with factors that are 2D maps of the light, half and view directions. Directions are measured around the vertical axis of the object.',
-  auto: 'Lets glint choose: one material, one brushed (anisotropic) material, one material with varying colour, or several materials, whichever predicts views you painted but it did not fit best, keeping the simplest unless a richer one is clearly better. The result says what it chose and why.',
-  maps: 'Several materials on one object (a logo on plastic, stripes, veins): a few point-light materials blended over the surface by textures. Paint each region the way it should look; the fit finds the materials and where each one is.',
-  hybrid: 'Several materials on one object, each free to change colour and brightness within its region (worn gold on red plastic): material maps whose materials each carry their own texture. The richest and slowest point-light model.',
-  srbf: 'One material seen under an environment: paint how the object should look under the chosen environment; the highlight is built from many small lobes, kept within energy conservation.',
-};
 
 // The size of a configuration in words (texels per factor, or lobes).
 export function sizeLabel(params) {
@@ -90,7 +80,8 @@ export class FitPanel extends EventTarget {
 
   async load() {
     const m = await this.api.methods(this.session.id);
-    this.methods = m.methods;
+    setMethods(m.methods);
+    this.methods = methods();
     this.points = (m.scene && m.scene.points) || [];
     try { this.envs = (await this.api.environments()).environments; } catch (_) { this.envs = null; }
     const sel = $('fit-method');
@@ -98,15 +89,31 @@ export class FitPanel extends EventTarget {
     for (const x of this.methods) {
       const o = document.createElement('option');
       o.value = x.name;
-      o.textContent = x.name === 'hf3' ? 'point light (hf3)' : x.name === 'srbf' ? 'environment (srbf)' : x.name === 'maps' ? 'several materials (maps)' : x.name === 'hf4' ? 'one material, varying colour (hf4)' : x.name === 'hf2d' ? 'brushed / anisotropic (hf2d)' : x.name === 'auto' ? 'choose for me (auto)' : x.name === 'hybrid' ? 'several materials, varying colour (hybrid)' : x.name;
-      o.title = x.title;
+      o.textContent = x.label || x.name;
+      o.title = `${x.summary || x.title} (${x.name})`;
       sel.appendChild(o);
     }
     sel.onchange = () => this.setMethod(sel.value);
+    this.guide();
     // a scene painted under an environment is fitted under it by default;
-    // else glint chooses the model the painting needs (auto), when offered
-    const env = this.sceneEnv(), has = n => this.methods.some(x => x.name === n);
-    this.setMethod(env && has('srbf') ? 'srbf' : has('auto') ? 'auto' : this.methods[0].name);
+    // else the method that chooses the model the painting needs, when offered
+    this.setMethod(startMethod(!!this.sceneEnv()).name);
+  }
+
+  // The first-visit guide's line on the methods: their labels, as offered.
+  guide() {
+    const el = $('guide-methods');
+    if (!el || !this.methods.length) return;
+    el.textContent = '';
+    const lower = t => t.charAt(0).toLowerCase() + t.slice(1);
+    this.methods.forEach((x, i) => {
+      if (i) el.append(i === this.methods.length - 1 ? ' or ' : ', ');
+      const it = document.createElement('i');
+      it.textContent = lower(x.label || x.name);
+      it.title = x.summary || '';
+      el.appendChild(it);
+    });
+    el.append('.');
   }
 
   // Switch the method: its parameters, presets and measured points.
@@ -115,8 +122,9 @@ export class FitPanel extends EventTarget {
     const sel = $('fit-method');
     sel.value = this.method.name;
     sel.title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
-    $('method-note').textContent = METHOD_NOTES[this.method.name] || this.method.title;
+    $('method-note').textContent = [this.method.summary || this.method.title, this.method.when].filter(Boolean).join(' ');
     this.inputs = {};
+    this.preset = null;                  // a method without presets: its own parameters
     this.buildParams();
     const def = this.method.presets.find(p => p.name === 'default') || this.method.presets[0];
     const d0 = this.defaults();
@@ -158,13 +166,22 @@ export class FitPanel extends EventTarget {
     return d;
   }
 
+  // The parameters by their plain names, the basic ones first, then those
+  // most people leave alone under a heading of their own.
   buildParams() {
     const box = $('params');
     box.textContent = '';
-    for (const p of this.method.params) {
+    const basic = this.method.params.filter(p => p.group !== 'advanced');
+    const advanced = this.method.params.filter(p => p.group === 'advanced');
+    for (const p of [...basic, ...advanced]) {
+      if (p === advanced[0]) {
+        const h = document.createElement('div'); h.className = 'group';
+        h.textContent = 'advanced';
+        box.appendChild(h);
+      }
       const lab = document.createElement('label');
-      lab.textContent = p.name;
-      lab.title = p.description;
+      lab.textContent = p.label || p.name;
+      lab.title = `${p.name}: ${p.description}`;
       let inp, extra = null;
       if (p.name === 'env' && this.envs) {           // the environments glintd offers
         inp = document.createElement('select');

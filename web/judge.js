@@ -8,6 +8,7 @@
 import { decodeImage, resizeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
+import { methodNamed, shows, sizeText, underEnv } from './methods.js';
 import { SurfacePanel } from './surface.js';
 import { loadSummary, renderSummary } from './summary.js';
 import { Ball } from './ball.js';
@@ -84,7 +85,7 @@ export class Judge extends EventTarget {
   // A material fitted under an environment is previewed under it.
   envDefault(m) {
     const sel = $('preview-light');
-    if (m.method === 'srbf' && m.params && [...sel.options].some(o => o.value === m.params.env)) {
+    if (underEnv(m) && [...sel.options].some(o => o.value === m.params.env)) {
       sel.value = m.params.env;
       $('env-rot').value = String(Math.round(m.params.env_rotation || 0));
     }
@@ -94,7 +95,7 @@ export class Judge extends EventTarget {
   envQuery() {
     const spec = this.envSpec();
     if (!spec) return {};
-    const m = this.mat, lights = m && m.method === 'srbf' && m.params ? m.params.lights : 256;
+    const m = this.mat, lights = m && underEnv(m) ? m.params.lights : 256;
     return { env: spec, env_rotation: $('env-rot').value, lights: String(Math.min(1024, lights || 256)) };
   }
 
@@ -105,7 +106,7 @@ export class Judge extends EventTarget {
       b.onclick = () => {
         for (const o of document.querySelectorAll('.tabs button')) o.classList.toggle('on', o === b);
         for (const t of ['errors', 'factors', 'summary', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
-        if (b.dataset.tab === 'factors') { if (this.mat && this.mat.method === 'srbf') this.drawLobe(); else this.drawFactors(); }
+        if (b.dataset.tab === 'factors' && this.mat) { const w = shows(this.mat); if (w === 'lobes') this.drawLobe(); else if (w === 'factors') this.drawFactors(); }
       };
     }
   }
@@ -115,11 +116,12 @@ export class Judge extends EventTarget {
   async setMaterial(m, k) {
     this.mat = m;
     this.envDefault(m);
-    const lobe = m.method === 'srbf';
-    $('factors-wrap').classList.toggle('hidden', lobe);
+    const what = shows(m), lobe = what === 'lobes', factors = what === 'factors';
+    $('factors-wrap').classList.toggle('hidden', !factors);
     $('lobe-wrap').classList.toggle('hidden', !lobe);
+    $('factors-none').classList.toggle('hidden', what !== 'none');
     $('factors-tab-btn').textContent = lobe ? 'Lobe' : 'Factors';
-    $('dl-factors').classList.toggle('hidden', lobe);
+    $('dl-factors').classList.toggle('hidden', !factors);
     $('preview-empty').textContent = 'rendering…';
     $('preview-empty').classList.toggle('hidden', this.frames > 0);
     this.resetCamera(k);
@@ -133,7 +135,7 @@ export class Judge extends EventTarget {
     this.factors = null;
     this.manifest = null;
     if (lobe) this.loadManifest().catch(e => this.emit('error', e));
-    else this.loadFactors().catch(e => this.emit('error', e));
+    else if (factors) this.loadFactors().catch(e => this.emit('error', e));
     this.surface.set(m, k != null ? k : (m.views_used || [])[0]).catch(e => this.emit('error', e));
     this.summary = null;
     loadSummary(this.api, m).then(sm => { if (m === this.mat) { this.summary = sm; renderSummary(sm); } })
@@ -298,7 +300,7 @@ export class Judge extends EventTarget {
     g.clearRect(0, 0, c.width, c.height);
     const im = this.factors;
     if (!im) return;
-    if (this.mat && this.mat.method === 'hf2d' && Array.isArray(this.mat.dims)) return this.drawFactors2d(g, c, im);
+    if (this.mat && Array.isArray(this.mat.dims)) return this.drawFactors2d(g, c, im);
     const log = $('factors-log').checked;
     const names = [['p(π_p)', 'light: |wi| on the tangent plane'], ['q(π_q)', 'half vector'], ['r(π_r)', 'view: |wo| on the tangent plane']];
     const H = c.height / 3, L = 34, Rm = 6, W = c.width - L - Rm;
@@ -337,7 +339,7 @@ export class Judge extends EventTarget {
     }
   }
 
-  // Method hf2d: a 2D factor drawn as its parabolic map (the disc is the
+  // A material with 2D factors (its dims): a 2D factor drawn as its parabolic map (the disc is the
   // hemisphere, the normal at its centre, t to the right, b up), a 1D one
   // as a curve; each panel scaled to its own range.
   drawFactors2d(g, c, im) {
@@ -400,17 +402,17 @@ export class Judge extends EventTarget {
     const tb = $('err-table').querySelector('tbody');
     tb.textContent = '';
     const e = mat.errors || {};
-    const lobe = mat.method === 'srbf';
+    const env = underEnv(mat);
     $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>` + (e.max_abs_painted != null ? `, max ${fmtErr(e.max_abs_painted)}` : '') +
       (e.diagnostic_samples != null && mat.precomputation && e.diagnostic_samples < mat.precomputation.samples
         ? ` <span title="estimated on an evenly spaced subsample${e.diagnostic_runs > 1 ? `: ${e.diagnostic_runs} runs of ${Math.round(e.diagnostic_samples / e.diagnostic_runs)} consecutive samples` : ''}">over ${e.diagnostic_samples} of ${mat.precomputation.samples} samples</span>`
         : ` over ${mat.precomputation ? mat.precomputation.samples : '?'} samples`) +
-      ` · ${lobe ? mat.lobes + ' lobes under ' + mat.params.env : mat.res + ' texels'} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
-      (lobe && e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');
+      ` · ${sizeText(mat)} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
+      (e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');
     if (mat.choice && mat.choice.candidates) {
       // what the automatic choice weighed: each model's error on what it did not fit
       const c = mat.choice;
-      $('err-summary').innerHTML += `<div id="auto-choice" class="small">chose <b>${c.chosen}</b>: error on the ${c.held_out === 'views' ? 'views' : 'pixels'} held out, ` +
+      $('err-summary').innerHTML += `<div id="auto-choice" class="small">chose <b>${(methodNamed(c.chosen) || { label: c.chosen }).label}</b> (${c.chosen}): error on the ${c.held_out === 'views' ? 'views' : 'pixels'} held out, ` +
         c.candidates.map(x => `${x.method} ${fmtErr(x.held_out_rms)}`).join(' · ') +
         ` <span class="muted" title="${c.rule || ''}">(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)</span></div>`;
     }
@@ -438,7 +440,7 @@ export class Judge extends EventTarget {
       let s2 = 0, n = 0, mx = 0;
       const diff = new Float32Array(painted.w * painted.h);
       for (let i = 0; i < painted.w * painted.h; i++) {
-        const lit = lobe ? fitted.data[3 * i] > 0 || fitted.data[3 * i + 1] > 0 || fitted.data[3 * i + 2] > 0
+        const lit = env ? fitted.data[3 * i] > 0 || fitted.data[3 * i + 1] > 0 || fitted.data[3 * i + 2] > 0
                          : base.data[3 * i] > 0 || base.data[3 * i + 1] > 0 || base.data[3 * i + 2] > 0;
         if (!lit) { diff[i] = -1; continue; }
         let dm = 0;
@@ -469,12 +471,13 @@ export class Judge extends EventTarget {
   }
 
   // The material rendered for view k as the fit saw it: the CPU renderer at
-  // the painting's size, under the fit's environment for srbf (linear RGB).
+  // the painting's size, under the fit's environment for a material fitted
+  // under one (linear RGB).
   async fittedFor(k, mat = this.mat) {
     const sc = this.session.scene;
     const q = { view: String(k), renderer: 'cpu', size: String(sc.paint_width || sc.width) };
-    if (mat.method === 'srbf') Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
-                                                  lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
+    if (underEnv(mat)) Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
+                                          lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
     const r = await this.api.materialFile(mat.id, 'preview.exr', q);
     return decodeImage(await r.arrayBuffer());
   }
@@ -488,7 +491,7 @@ export class Judge extends EventTarget {
     $('diff-wrap').classList.remove('hidden');
     const { painted, fitted, diff } = row;
     let gain = +$('diff-gain').value;
-    if ($('diff-gain').value === 'auto') {     // white = the 99th percentile of |difference|
+    if ($('diff-gain').value === 'p99') {     // white = the 99th percentile of |difference|
       const m = [...diff].filter(x => x >= 0).sort((a, b) => a - b);
       const p99 = m.length ? m[Math.min(m.length - 1, Math.floor(0.99 * m.length))] : 0;
       gain = 1 / Math.max(1e-4, p99);

@@ -1,4 +1,4 @@
-// lobe.js: what an environment-lit (srbf) material is made of, drawn from
+// lobe.js: what an environment-lit material of lobes is made of, drawn from
 // its manifest (GET /materials/{id}: basis, lobes, centres, diffuse,
 // errors.energy_profile): the distribution p(h) of half vectors over the
 // hemisphere, a cut through it, and how close the fit came to the energy
@@ -21,7 +21,7 @@ export function lobeValue(m, h) {
 
 // m: a manifest (GET /materials/{id}/material.json) with its lobes.
 export function isLobeMaterial(m) {
-  return !!(m && m.method === 'srbf' && m.basis && Array.isArray(m.lobes) && Array.isArray(m.centres));
+  return !!(m && m.basis && Array.isArray(m.lobes) && Array.isArray(m.centres));
 }
 
 // The hemisphere of h seen from above (orthographic: the centre is the

@@ -17,7 +17,7 @@ export const PRESETS = [
   { name: 'plastic', title: 'Plastic: a diffuse colour under a white, fairly sharp highlight', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.25` },
   { name: 'glossy', title: 'Glossy paint: a sharp white highlight', spec: kd => `ct:kd=${kd},f0=0.05,rough=0.1` },
   { name: 'metal', title: 'Metal: no diffuse; the colour is in the highlight (gold when the colour is)', spec: kd => `ct:kd=0,f0=${kd},rough=0.2` },
-  { name: 'satin', title: 'Satin / brushed: a highlight stretched around the vertical axis (fit it with hf2d)', spec: kd => `ward:kd=${kd},ks=0.4,rough=0.08,rough_y=0.3` },
+  { name: 'satin', title: 'Satin / brushed: a highlight stretched around the vertical axis (fit it as a brushed material)', spec: kd => `ward:kd=${kd},ks=0.4,rough=0.08,rough_y=0.3` },
   { name: 'rough', title: 'Rough: a wide, dim highlight (rubber, unglazed ceramic)', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.6` },
   // the analytic truths glint paints with (brdf.h's defaults; the colour is not used)
   { name: 'truth: phong32', title: 'Phong, exponent 32 (the reference truth)', spec: () => 'phong32', fixed: true },

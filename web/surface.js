@@ -1,21 +1,25 @@
 // surface.js: what a material that varies over the surface holds, shown
 // in the Factors tab: per product (material) its coefficient texture
-// (where it is: coefficients.exr, methods maps and hybrid) and its spatial
-// factor (how its colour varies: spatial.exr, methods hf4 and hybrid), as
-// textures over (u, v) and laid over the object in a painted view through
-// that view's G-buffer (GET /scenes/{id}/views/{k}/gbuffer.exr: each
-// pixel's texture coordinates), read as the renderer reads them: the
+// (where it is: coefficients.exr) and its spatial factor (how its colour
+// varies: spatial.exr), those its method's description in GET /methods
+// lists (`surface`), as textures over (u, v) and laid over the object in a
+// painted view through that view's G-buffer (GET /scenes/{id}/views/{k}/
+// gbuffer.exr: each pixel's texture coordinates), read as the renderer
+// reads them: the
 // coefficients bilinear between texel centres, the spatial factor bilinear
 // between nodes at (i, j) / (s_res - 1).
 
 import { decodeEXR } from './exr.js';
+import { surfaceTextures } from './methods.js';
 
 const $ = id => document.getElementById(id);
 
-// The model a material is (an auto material is its chosen method's).
+// The textures over the surface a material holds (a chosen material's are
+// its chosen method's): { coef, spatial }, or null when it holds none.
 export function surfaceKind(m) {
-  const k = m && (m.method === 'auto' && m.choice ? m.choice.chosen : m.method);
-  return k === 'maps' || k === 'hybrid' || k === 'hf4' ? k : null;
+  const t = surfaceTextures(m);
+  const k = { coef: t.includes('coefficients'), spatial: t.includes('spatial') };
+  return k.coef || k.spatial ? k : null;
 }
 
 // Bilinear between texel centres of an n x n texture t (row 0 at v = 0),
@@ -65,30 +69,30 @@ export class SurfacePanel {
     const kind = surfaceKind(mat);
     $('surface-wrap').classList.toggle('hidden', !kind);
     if (!kind) return;
-    const K = kind === 'hf4' ? 1 : mat.components || 1;
+    const K = kind.coef ? mat.components || 1 : 1;
     const sel = $('surface-product');
     sel.textContent = '';
     for (let k = 0; k < K; k++) {
       const o = document.createElement('option');
       o.value = String(k);
-      o.textContent = kind === 'hf4' ? 'the material' : `material ${k + 1} of ${K}`;
+      o.textContent = kind.coef ? `material ${k + 1} of ${K}` : 'the material';
       sel.appendChild(o);
     }
     sel.disabled = K < 2;
     const show = $('surface-show');
     show.textContent = '';
     const opts = [];
-    if (kind !== 'hf4') opts.push(['coef', 'where it is (coefficient)']);
-    if (kind !== 'maps') opts.push(['spatial', 'its colour (spatial factor)']);
+    if (kind.coef) opts.push(['coef', 'where it is (coefficient)']);
+    if (kind.spatial) opts.push(['spatial', 'its colour (spatial factor)']);
     for (const [v, t] of opts) { const o = document.createElement('option'); o.value = v; o.textContent = t; show.appendChild(o); }
-    $('surface-note').textContent = kind === 'hf4'
+    $('surface-note').textContent = !kind.coef
       ? 'One material; its colour and brightness vary over the surface by the spatial factor s(u, v).'
-      : kind === 'maps'
+      : !kind.spatial
         ? `${K} materials, each weighted over the surface by its coefficient texture (white: this material, black: none of it).`
         : `${K} materials, each weighted by its coefficient texture and tinted by its own spatial factor.`;
     const get = async f => decodeEXR(await (await this.api.materialFile(mat.id, f)).arrayBuffer());
-    const [coef, spatial] = await Promise.all([kind !== 'hf4' ? get('coefficients.exr') : null,
-                                               kind !== 'maps' ? get('spatial.exr') : null]);
+    const [coef, spatial] = await Promise.all([kind.coef ? get('coefficients.exr') : null,
+                                               kind.spatial ? get('spatial.exr') : null]);
     if (mat !== this.mat) return;
     // coefficients: K blocks of map_res rows, one channel; spatial: s_res rows per product
     if (coef) { this.coef = { n: coef.w, k: coef.h / coef.w, t: new Float32Array(coef.w * coef.h) }; for (let i = 0; i < coef.w * coef.h; i++) this.coef.t[i] = coef.data[3 * i]; }

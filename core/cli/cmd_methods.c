@@ -48,6 +48,9 @@ int cmd_methods(int argc, char **argv)
         const method *m = method_at(i);
         void *def = method_params_new(m);
         printf("%s: %s%s\n", m->name, m->title, i == 0 ? " (the default)" : "");
+        if (m->label)
+            printf("  %s (%s lighting): %s\n", m->label,
+                   m->lighting == METHOD_LIGHT_ENV ? "environment" : "point", m->summary);
         for (int k = 0; def && k < m->nparams; k++) {
             const method_param *p = &m->params[k];
             char v[256];

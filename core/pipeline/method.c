@@ -457,6 +457,9 @@ json_t *method_describe(const method *m)
         const method_param *p = &m->params[i];
         json_t *d = json_object();
         json_object_set_new(d, "name", json_string(p->name));
+        json_object_set_new(d, "label", json_string(p->label ? p->label : p->name));
+        json_object_set_new(d, "group",
+                            json_string(p->group == METHOD_GROUP_ADVANCED ? "advanced" : "basic"));
         json_object_set_new(d, "type", json_string(type_name(p)));
         json_object_set_new(d, "default", param_value_json(p, def));
         if (p->type == METHOD_PARAM_INT || p->type == METHOD_PARAM_NUMBER) {
@@ -486,6 +489,18 @@ json_t *method_describe(const method *m)
     }
     free(def);
     o = json_pack("{s:s, s:s}", "name", m->name, "title", m->title);
+    json_object_set_new(o, "label", json_string(m->label ? m->label : m->title));
+    json_object_set_new(o, "summary", json_string(m->summary ? m->summary : m->description));
+    if (m->when)
+        json_object_set_new(o, "when", json_string(m->when));
+    json_object_set_new(o, "lighting",
+                        json_string(m->lighting == METHOD_LIGHT_ENV ? "environment" : "point"));
+    json_object_set_new(o, "varies", json_boolean(m->mat && m->mat->spatial));
+    json_object_set_new(o, "surface", strings_json(m->surface));
+    json_object_set_new(o, "shows", json_string(m->shows == METHOD_SHOWS_LOBES     ? "lobes"
+                                                : m->shows == METHOD_SHOWS_FACTORS ? "factors"
+                                                                                   : "none"));
+    json_object_set_new(o, "chooses", json_boolean(m->chooses));
     if (m->reference)
         json_object_set_new(o, "reference", json_string(m->reference));
     json_object_set_new(o, "description", json_string(m->description));

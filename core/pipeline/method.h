@@ -47,8 +47,14 @@ typedef enum {
     METHOD_PARAM_TEXT    /* a string with a syntax, parsed into the field by `parse` */
 } method_param_type;
 
+/* Where a parameter is offered to people: with the method (basic), or among
+ * the ones most people leave alone (advanced). */
+typedef enum { METHOD_GROUP_BASIC, METHOD_GROUP_ADVANCED } method_param_group;
+
 typedef struct method_param {
     const char *name;
+    const char *label;            /* its plain name for people ("texels per factor") */
+    method_param_group group;
     const char *option;           /* command-line spelling when not --<name> ("reg"), or NULL */
     method_param_type type;
     const char *affects;          /* "precomputation", "operator" or "fit": what a change costs */
@@ -244,9 +250,35 @@ typedef struct method_source {
                                      so for samples made elsewhere: a G-buffer set) */
 } method_source;
 
+/* The light the painted views are seen under, as a fit reads them. */
+typedef enum {
+    METHOD_LIGHT_POINT,           /* each view's point light */
+    METHOD_LIGHT_ENV              /* an environment (the `env` parameter) */
+} method_lighting;
+
+/* What the studio's Factors tab can draw of a material, besides its files. */
+typedef enum {
+    METHOD_SHOWS_NONE,            /* nothing beyond the renders */
+    METHOD_SHOWS_FACTORS,         /* factors.png: three rows (p, q, r) per product */
+    METHOD_SHOWS_LOBES            /* the manifest's lobes over the half vector */
+} method_shows;
+
 typedef struct method {
     const char *name;             /* "hf3": [a-z0-9_-], at most 15 bytes */
     const char *title;
+    /* For people who do not know the methods' names: */
+    const char *label;            /* a plain-language name ("one material, point light") */
+    const char *summary;          /* one line: what it models */
+    const char *when;             /* one line: when to use it */
+    method_lighting lighting;     /* what the painted views must be lit by */
+    method_shows shows;           /* what of a material can be drawn */
+    /* The textures over the surface a material holds (NULL-terminated;
+     * NULL: none): "coefficients" (where each of several materials is,
+     * coefficients.exr) and "spatial" (how a material's colour varies,
+     * spatial.exr). */
+    const char *const *surface;
+    int chooses;                  /* 1: fits other methods and keeps the one the painting
+                                     needs (the studio starts on it) */
     const char *reference;        /* the paper, or NULL */
     const char *description;
     const char *held_out;         /* how the held-out error is measured, for people */
@@ -368,9 +400,10 @@ json_t *method_params_to_json(const method *m, const void *params);
 /* The canonical text of one parameter (OUT: buf). */
 void method_param_format(const method_param *p, const void *params, char *buf, size_t len);
 
-/* The method described for GET /methods: name, title, reference,
- * description, params (with defaults and ranges), presets, held_out (a
- * new object). */
+/* The method described for GET /methods: name, title, label, summary,
+ * when, lighting ("point" or "environment"), varies (over the surface),
+ * surface, shows, chooses, reference, description, params (with plain
+ * names, groups, defaults and ranges), presets, held_out (a new object). */
 json_t *method_describe(const method *m);
 
 /* A JSON Schema (draft 2020-12) of the method's params object, as proto/

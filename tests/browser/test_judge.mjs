@@ -56,6 +56,8 @@ run({
     await openStudio(page, url);
     // the guide is there on a first visit, and strokes go through it to the painting
     assert(await page.isVisible('#guide'), 'the first-visit guide shows');
+    // its line on the methods comes from GET /methods (their labels)
+    await page.waitForFunction(() => document.getElementById('guide-methods').textContent.length > 0);
     const guideText = await page.textContent('#guide');
     assert(/one material for the whole object/.test(guideText) && /several materials/.test(guideText), 'the guide says what the methods can represent');
     // start from the plastic finish on every view, then paint a highlight on view 3

@@ -58,6 +58,13 @@ def test_00_methods_lists_the_added_method(d):
     assert [x["name"] for x in m] == names + ["lambert-test"], [x["name"] for x in m]
     lam = m[-1]
     assert [p["name"] for p in lam["params"]] == ["albedo_max"]
+    # what a person reads of it, from its table alone
+    assert lam["label"] == "Flat colour (test build)", lam
+    assert lam["lighting"] == "point" and lam["shows"] == "none" and lam["surface"] == [], lam
+    assert lam["varies"] is False and lam["chooses"] is False, lam
+    assert "Lambert" in lam["summary"] and lam["when"], lam
+    assert lam["params"][0]["label"] == "brightest colour allowed", lam["params"]
+    assert lam["params"][0]["group"] == "basic", lam["params"]
     assert lam["params"][0]["default"] == 1.0
 
 

@@ -84,4 +84,31 @@ def test_methods_endpoint_is_the_table(d):
                 assert v in s["enum"], p
 
 
+def test_methods_say_what_they_are_for(d):
+    """What a person and the studio read of every method: a label, a
+    one-line summary, when to use it, its lighting and capabilities, and
+    each parameter's plain name and group; the studio names no method."""
+    api = d.get("/api/v1/methods", status=200, schema="Methods.json").json()["methods"]
+    labels = [m["label"] for m in api]
+    assert len(set(labels)) == len(labels), labels
+    for m in api:
+        assert m["label"] != m["name"] and m["summary"] and m["when"], m["name"]
+        assert "\n" not in m["summary"] and "\n" not in m["when"], m["name"]
+        names = [p["name"] for p in m["params"]]
+        # a method lit by an environment names it; a point-light one has no env
+        assert (m["lighting"] == "environment") == ("env" in names), m["name"]
+        # materials that vary over the surface hold a texture over it
+        assert not m["varies"] or m["surface"], m["name"]
+        assert any(p["group"] == "basic" for p in m["params"]), m["name"]
+        for p in m["params"]:
+            assert p["label"] and p["label"] != p["name"], (m["name"], p["name"])
+    by = {m["name"]: m for m in api}
+    assert [m["name"] for m in api if m["chooses"]] == ["auto"]
+    assert by["srbf"]["lighting"] == "environment" and by["srbf"]["shows"] == "lobes"
+    assert by["hf3"]["lighting"] == "point" and by["hf3"]["shows"] == "factors"
+    assert by["maps"]["surface"] == ["coefficients"] and by["hf4"]["surface"] == ["spatial"]
+    assert by["hybrid"]["surface"] == ["coefficients", "spatial"]
+    assert by["hf3"]["surface"] == [] and not by["hf3"]["varies"]
+
+
 run_tests(globals())

@@ -28,7 +28,8 @@ typedef struct lambert_gram {
 } lambert_gram;
 
 static const method_param params[] = {
-    {.name = "albedo_max", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+    {.name = "albedo_max", .label = "brightest colour allowed", .type = METHOD_PARAM_NUMBER,
+     .affects = "fit",
      .description = "largest albedo allowed per channel (energy conservation is 1)",
      .offset = offsetof(lambert_params, albedo_max), .min = 0.0, .max = 10.0,
      .min_exclusive = 1},
@@ -192,6 +193,13 @@ static const material_ops ops = {
 
 const method method_lambert_test = {
     .name = "lambert-test",
+    .label = "Flat colour (test build)",
+    .summary = "One diffuse colour for the whole object, without a highlight: a "
+        "Lambert surface.",
+    .when = "Use it to check that a method reaches the studio from its table alone; "
+        "test builds only.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_NONE,
     .title = "Constant-colour Lambert (test build only)",
     .description = "One albedo for the whole object, least squares over the painted samples.",
     .params_size = sizeof(lambert_params),

@@ -16,29 +16,29 @@
 #include "scene.h"
 
 static const method_param auto_params_table[] = {
-    {.name = "res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res", .label = "detail (texels per factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor of every candidate",
      .offset = offsetof(auto_params, res), .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "s_res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "s_res", .label = "colour texture size", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of the spatial factor of the four-factor candidates "
                     "(hf4, hybrid)",
      .offset = offsetof(auto_params, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
-    {.name = "res_2d", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res_2d", .label = "detail of a 2D factor", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of the 2D q of the anisotropic candidate (hf2d)",
      .offset = offsetof(auto_params, res_2d), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
-    {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",
+    {.name = "components", .label = "materials, at most", .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "at most this many products in the material-maps candidates (maps, "
                     "hybrid)",
      .offset = offsetof(auto_params, components), .min = 1, .max = MATMAP_MAX},
-    {.name = "threshold", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+    {.name = "threshold", .label = "how much better a richer model must be", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "a richer model is taken only when it lowers the held-out RMS by more "
                     "than this fraction of the current choice's",
      .offset = offsetof(auto_params, threshold), .min = 0.0, .max = 1.0},
-    {.name = "floor", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+    {.name = "floor", .label = "smallest gain that counts", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "nor by less than this (held-out RMS, per unit light): below it a gain is "
                     "within an 8-bit painting's quantization",
      .offset = offsetof(auto_params, floor), .min = 0.0, .max = 1.0},
-    {.name = "every", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "every", .label = "views held out (one in)", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "one painted view in this many (one pixel, when one view is painted) is "
                     "held out to judge the candidates, which are fitted to the rest",
      .offset = offsetof(auto_params, every), .min = 2, .max = 64},
@@ -641,6 +641,16 @@ static int auto_holdout_ok(const void *params)
 
 const method method_auto = {
     .name = "auto",
+    .label = "Choose for me",
+    .summary = "Lets glint choose: one material, a brushed one, one with varying "
+        "colour or several materials, whichever best predicts painted views it "
+        "did not fit.",
+    .when = "Use it when unsure which model the painting needs (point lights): it "
+        "keeps the simplest unless a richer one is clearly better, and says "
+        "what it chose and why.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
+    .chooses = 1,
     .title = "Automatic: the simplest model that the painting needs",
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =

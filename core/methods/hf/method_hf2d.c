@@ -16,39 +16,39 @@
 
 static const char *const dims_values[] = {"1d", "2d", NULL};
 
-#define DIMS_ROW(NAME, IDX, WHAT)                                                            \
-    {.name = NAME, .type = METHOD_PARAM_ENUM, .affects = "precomputation",                  \
+#define DIMS_ROW(NAME, IDX, WHAT, LABEL, GROUP)                                              \
+    {.name = NAME, .label = LABEL, .group = GROUP, .type = METHOD_PARAM_ENUM, .affects = "precomputation",                  \
      .description = "factor " NAME " over " WHAT ": 1d over the length of the vector on "   \
                     "the tangent plane (isotropic), 2d over its parabolic map in the "      \
                     "tangent frame (res_2d^2 unknowns: direction around the normal)",       \
      .offset = offsetof(hf2d_params_t, dims) + (IDX) * sizeof(int), .values = dims_values}
 
 static const method_param hf2d_params[] = {
-    {.name = "res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res", .label = "detail (texels per 1D factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor", .offset = offsetof(hf2d_params_t, res),
      .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "res_2d", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res_2d", .label = "detail of a 2D factor (nodes per side)", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of each 2D factor: its unknowns grow as res_2d^2 and the "
                     "precomputation as the cube of all unknowns",
      .offset = offsetof(hf2d_params_t, sres), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
-    DIMS_ROW("p", 0, "the direction to the light"),
-    DIMS_ROW("q", 1, "the half vector"),
-    DIMS_ROW("r", 2, "the direction to the eye"),
-    {.name = "lambda", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    DIMS_ROW("p", 0, "the direction to the light", "light factor: 1D or 2D", METHOD_GROUP_ADVANCED),
+    DIMS_ROW("q", 1, "the half vector", "highlight factor: 1D or 2D", METHOD_GROUP_BASIC),
+    DIMS_ROW("r", 2, "the direction to the eye", "view factor: 1D or 2D", METHOD_GROUP_ADVANCED),
+    {.name = "lambda", .label = "smoothing of 1D factors", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "weight of the smoothing rows of the 1D factors",
      .offset = offsetof(hf2d_params_t, lambda), .min = 0.0, .max = HF_LAMBDA_MAX},
-    {.name = "lambda_2d", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "lambda_2d", .label = "smoothing of 2D factors", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "weight of the 2D Laplacian of the 2D factors: it also fills the nodes no "
                     "sample reaches (those outside the hemisphere's disc among them)",
      .offset = offsetof(hf2d_params_t, lambda_2d), .min = 0.0, .max = HF_LAMBDA_MAX},
-    {.name = "mapping", .option = "map", .type = METHOD_PARAM_TEXT, .affects = "fit",
+    {.name = "mapping", .label = "log mapping", .group = METHOD_GROUP_ADVANCED, .option = "map", .type = METHOD_PARAM_TEXT, .affects = "fit",
      .description = "mapping to log space (section 3.4)", .offset = offsetof(hf2d_params_t, map),
      .syntax = "log | add[:a] | sub[:margin], optionally ,eps=E", .examples = hf3_map_examples,
      .parse = hf3_map_parse, .format = hf3_map_format},
-    {.name = "model", .type = METHOD_PARAM_ENUM, .affects = "fit",
+    {.name = "model", .label = "what the factors fit", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "fit",
      .description = "radiance: factors approximate the painted value; brdf: painted / cos_i",
      .offset = offsetof(hf2d_params_t, model), .values = hf3_model_values},
-    {.name = "rcond", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "rcond", .label = "rank cutoff", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "relative singular-value cutoff: the gauge and nodes no sample or "
                     "smoothing reaches fall under it",
      .offset = offsetof(hf2d_params_t, rcond), .min = 1e-16, .max = 1.0, .max_exclusive = 1},
@@ -283,6 +283,13 @@ static int hf2d_holdout_ok(const void *params)
 
 const method method_hf2d = {
     .name = "hf2d",
+    .label = "Brushed or anisotropic material",
+    .summary = "One finish whose highlight depends on direction around the surface: "
+        "factors that are 2D maps of the light, half and view directions.",
+    .when = "Use it for brushed metal, satin or a hair-like sheen; directions are "
+        "measured around the object's vertical axis.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
     .title = "Three factors, any of them 2D over parabolic maps (anisotropic)",
     .reference = "Jaroszkiewicz & McCool, Fast Extraction of BRDFs and Material Maps from "
                  "Images, GI 2003, section 3.1; McCool, Ang & Ahmad, Homomorphic "

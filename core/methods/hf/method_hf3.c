@@ -386,6 +386,13 @@ double hf3_fit_seconds(const void *params, long nsamples)
 
 const method method_hf3 = {
     .name = "hf3",
+    .label = "One material for the whole object",
+    .summary = "One finish for the whole object, fitted to views lit by their point "
+        "light; a painted pattern is blended into one colour.",
+    .when = "Use it for a single finish (plastic, metal, paint) painted under the "
+        "views' point lights; patterns need several materials.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
     .title = "Homomorphic factorization into three 1D factors",
     .reference = "Jaroszkiewicz & McCool, Fast Extraction of BRDFs and Material Maps from "
                  "Images, GI 2003",

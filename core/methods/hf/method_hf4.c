@@ -225,8 +225,18 @@ int hf4_holdout_ok(const void *params)
     return ((const hf4_params_t *)params)->sres <= 32;
 }
 
+static const char *const hf4_surface[] = {"spatial", NULL};
+
 const method method_hf4 = {
     .name = "hf4",
+    .label = "One material, varying colour",
+    .summary = "One finish whose colour and brightness vary over the surface: the "
+        "point-light material times a colour texture.",
+    .when = "Use it for a faded print, dirt or a painted pattern on one finish; "
+        "different highlights in different places need several materials.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
+    .surface = hf4_surface,
     .title = "Four-factor product: three 1D factors times a spatial factor s(u, v)",
     .reference = "Jaroszkiewicz & McCool, Fast Extraction of BRDFs and Material Maps from "
                  "Images, GI 2003, section 4.2",

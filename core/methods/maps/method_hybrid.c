@@ -73,8 +73,19 @@ static int hybrid_holdout_ok(const void *params)
     return hf4_holdout_ok(&((const hybrid_params *)params)->h);
 }
 
+static const char *const hybrid_surface[] = {"coefficients", "spatial", NULL};
+
 const method method_hybrid = {
     .name = "hybrid",
+    .label = "Several materials, varying colour",
+    .summary = "Several finishes on one object, each free to change colour and "
+        "brightness within its region: material maps whose materials carry "
+        "their own texture.",
+    .when = "Use it for worn gold on red plastic and the like; the richest and "
+        "slowest point-light model.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
+    .surface = hybrid_surface,
     .title = "Hybrid: material maps of four-factor products",
     .reference = "Jaroszkiewicz & McCool, Fast Extraction of BRDFs and Material Maps from "
                  "Images, GI 2003, section 4.2",

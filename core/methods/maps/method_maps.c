@@ -221,8 +221,18 @@ static int maps_holdout_ok(const void *params)
     return hf3_holdout_ok(&((const maps_params *)params)->hf);
 }
 
+static const char *const maps_surface[] = {"coefficients", NULL};
+
 const method method_maps = {
     .name = "maps",
+    .label = "Several materials",
+    .summary = "Several finishes on one object: a few point-light materials blended "
+        "over the surface by textures.",
+    .when = "Use it for a logo on plastic, stripes or veins: paint each region as "
+        "it should look, and the fit finds the materials and where each one is.",
+    .lighting = METHOD_LIGHT_POINT,
+    .shows = METHOD_SHOWS_FACTORS,
+    .surface = maps_surface,
     .title = "Material maps: a sum of three-factor products weighted by textures",
     .reference = "Jaroszkiewicz & McCool, Fast Extraction of BRDFs and Material Maps from "
                  "Images, GI 2003, section 4.2",

@@ -134,7 +134,7 @@ static const char *const raster_examples[] = {"160x120", "320x240", "full", NULL
 static const char *const diffuse_examples[] = {"fit", "0.3", "0.35,0.25,0.15", NULL};
 
 static const method_param srbf_params_table[] = {
-    {.name = "env", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
+    {.name = "env", .label = "environment", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "the environment lighting the painted views: a built-in (studio, sky, "
                     "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID "
                     "of POST /api/v1/environments (HDR lat-long maps or cube crosses); the "
@@ -142,60 +142,60 @@ static const method_param srbf_params_table[] = {
      .offset = offsetof(srbf_params, env),
      .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
      .examples = env_examples, .parse = env_parse, .format = env_format},
-    {.name = "env_rotation", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "env_rotation", .label = "environment turned (degrees)", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "rotation of the environment about the up (+z) axis, degrees",
      .offset = offsetof(srbf_params, env_rotation), .min = -360.0, .max = 360.0},
-    {.name = "env_intensity", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+    {.name = "env_intensity", .label = "environment brightness", .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "scale of the environment's radiance (the painting is divided by it)",
      .offset = offsetof(srbf_params, env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
      .max = SRBF_MAX_ENV_INTENSITY},
-    {.name = "lights", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "lights", .label = "lights the environment becomes", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "lights the environment is compressed into (median cut): the speed-accuracy "
                     "knob; transfer time grows linearly with it",
      .offset = offsetof(srbf_params, lights), .min = 1, .max = 4096},
-    {.name = "basis_res", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "basis_res", .label = "lobe detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "hemicube resolution r of the lobe centres: J = 3 r^2 lobes (7: 147)",
      .offset = offsetof(srbf_params, basis_res), .min = SRBF_MIN_RES, .max = SRBF_MAX_RES},
-    {.name = "sigma", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "sigma", .label = "lobe width (radians)", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "width of each spherical Gaussian lobe, radians (pi/40 = 0.0785: half "
                     "maximum at 7.5 degrees)",
      .offset = offsetof(srbf_params, sigma), .min = SRBF_MIN_SIGMA, .max = SRBF_MAX_SIGMA},
-    {.name = "static", .type = METHOD_PARAM_ENUM, .affects = "precomputation",
+    {.name = "static", .label = "highlight shape term", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "precomputation",
      .description = "static term: paper = F/(a+b-ab) (eq. 11); smith = F G2/(4ab), a microfacet "
                     "term with Smith shadowing-masking",
      .offset = offsetof(srbf_params, static_term), .values = static_values},
-    {.name = "f0", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "f0", .label = "reflectance head-on", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "Fresnel reflectance at normal incidence (Schlick)",
      .offset = offsetof(srbf_params, f0), .min = 0.0, .max = 1.0},
-    {.name = "alpha", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+    {.name = "alpha", .label = "shadowing roughness", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "roughness of the Smith shadowing-masking term (static smith only)",
      .offset = offsetof(srbf_params, alpha), .min = 0.01, .max = 1.0},
-    {.name = "constraints", .type = METHOD_PARAM_ENUM, .affects = "fit",
+    {.name = "constraints", .label = "energy constraints", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "fit",
      .description = "energy: c >= 0 and albedo <= 1 (physical); nonneg: c >= 0 only; none: "
                     "unconstrained least squares (physically impossible looks allowed)",
      .offset = offsetof(srbf_params, constraints), .values = constraint_values},
-    {.name = "visibility", .type = METHOD_PARAM_ENUM, .affects = "precomputation",
+    {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "precomputation",
      .description = "shadows of the object on itself: auto casts rays unless the mesh is "
                     "convex",
      .offset = offsetof(srbf_params, visibility), .values = vis_values},
-    {.name = "raster", .type = METHOD_PARAM_TEXT, .affects = "precomputation",
+    {.name = "raster", .label = "pixels per view fitted", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "grid of pixels per view that become rows of the fit (the paper: 160x120); "
                     "full: every painted pixel",
      .offset = offsetof(srbf_params, raster), .syntax = "WxH | full",
      .examples = raster_examples, .parse = raster_parse, .format = raster_format},
-    {.name = "diffuse", .type = METHOD_PARAM_TEXT, .affects = "fit",
+    {.name = "diffuse", .label = "diffuse colour", .type = METHOD_PARAM_TEXT, .affects = "fit",
      .description = "diffuse albedo rho_d: fitted jointly (fit) or given (grey or r,g,b)",
      .offset = offsetof(srbf_params, diffuse), .syntax = "fit | A | R,G,B",
      .examples = diffuse_examples, .parse = diffuse_parse, .format = diffuse_format},
-    {.name = "smooth", .type = METHOD_PARAM_NUMBER, .affects = "fit",
+    {.name = "smooth", .label = "lobe smoothing", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "weight of the smoothness prior on p(h) (relative to the data): steadies "
                     "what the painted views do not determine",
      .offset = offsetof(srbf_params, smooth), .min = 0.0, .max = 1e3},
-    {.name = "grazing", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "grazing", .label = "grazing energy rings", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "rings of energy rows near the horizon (64 each) beside the 192 of the "
                     "hemicube, so energy holds at grazing angles too",
      .offset = offsetof(srbf_params, grazing), .min = 0, .max = 8},
-    {.name = "start", .type = METHOD_PARAM_ENUM, .affects = "fit",
+    {.name = "start", .label = "solver start", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "fit",
      .description = "where the constrained solver starts: cold = at zero (the same answer to "
                     "the bit for the same painting); warm = at the scene's previous answer with "
                     "these parameters (the same optimum, its last digits may differ): fewer "
@@ -721,6 +721,13 @@ static double srbf_fit_seconds(const void *params, long nsamples)
 
 const method method_srbf = {
     .name = "srbf",
+    .label = "One material under an environment",
+    .summary = "One finish seen under an environment: the highlight is built from many "
+        "small lobes, kept within energy conservation.",
+    .when = "Use it when you paint how the object looks under an environment (sky, "
+        "studio, an HDR map) rather than under a point light.",
+    .lighting = METHOD_LIGHT_ENV,
+    .shows = METHOD_SHOWS_LOBES,
     .title = "Spherical-Gaussian distribution BRDF under environment light",
     .reference = "Iwasaki, Dobashi, Yoshimoto & Nishita, Interactive BRDF Modeling under "
                  "Environment Lighting, 2009",

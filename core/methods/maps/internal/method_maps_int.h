@@ -15,33 +15,33 @@ extern const char *const maps_merge_values[];
  * components, merge, map_res, tol, refine, rounds and smooth (as
  * maps_params has them). */
 #define MAPS_PARAM_ROWS(T)                                                                     \
-    {.name = "components", .type = METHOD_PARAM_INT, .affects = "fit",                         \
+    {.name = "components", .label = "materials, at most", .type = METHOD_PARAM_INT, .affects = "fit",                         \
      .description = "at most this many products (materials) summed over the surface; each "    \
                     "costs one fit on the cached operator",                                    \
      .offset = offsetof(T, components), .min = 1, .max = MATMAP_MAX},                          \
-    {.name = "merge", .type = METHOD_PARAM_ENUM, .affects = "fit",                             \
+    {.name = "merge", .label = "how coefficients merge views", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "fit",                             \
      .description = "how per-sample scales become a coefficient texture: lsq, least squares "  \
                     "per texel over every view (the measured best); min, the smallest value "  \
                     "over views (seed 000)",                                                   \
      .offset = offsetof(T, merge), .values = maps_merge_values},                                    \
-    {.name = "map_res", .type = METHOD_PARAM_INT, .affects = "fit",                            \
+    {.name = "map_res", .label = "map size (texels per side)", .type = METHOD_PARAM_INT, .affects = "fit",                            \
      .description = "coefficient texture resolution (texels per side) over the surface's "     \
                     "texture coordinates",                                                     \
      .offset = offsetof(T, map_res), .min = MAPS_RES_MIN, .max = MAPS_RES_MAX},                \
-    {.name = "tolerance", .type = METHOD_PARAM_NUMBER, .affects = "fit",                       \
+    {.name = "tolerance", .label = "stop below this error", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",                       \
      .description = "stop adding products once the residual's RMS falls below this fraction "  \
                     "of the painting's",                                                       \
      .offset = offsetof(T, tol), .min = 0.0, .max = 1.0},                                      \
-    {.name = "refine", .type = METHOD_PARAM_INT, .affects = "fit",                             \
+    {.name = "refine", .label = "refinement sweeps", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "fit",                             \
      .description = "sweeps of the joint refinement: every coefficient of every product "      \
                     "adjusted together to the painting once the products are found (0: none)", \
      .offset = offsetof(T, refine), .min = 0, .max = MATMAP_REFINE_MAX},                       \
-    {.name = "rounds", .type = METHOD_PARAM_INT, .affects = "fit",                             \
+    {.name = "rounds", .label = "back-fitting rounds", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "fit",                             \
      .description = "back-fitting rounds: every product refitted to what the others leave, "   \
                     "then the coefficients again; stops early when a round gains under 1% "    \
                     "(0: none; needs refine)",                                                 \
      .offset = offsetof(T, rounds), .min = 0, .max = MATMAP_ROUNDS_MAX},                       \
-    {.name = "smooth", .type = METHOD_PARAM_NUMBER, .affects = "fit",                          \
+    {.name = "smooth", .label = "map smoothing", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",                          \
      .description = "how strongly neighbouring coefficient texels are held together in the "   \
                     "refinement: higher predicts new views better, lower fits the painted "    \
                     "ones closer (0: not at all)",                                             \
