@@ -52,29 +52,10 @@ int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *
 
 /* ---- materials ------------------------------------------------------------------------ */
 
-json_t *fitsvc_material_links(const char *id, const char *sid, const char *scid)
-{
-    char b[10][160];
-    snprintf(b[0], sizeof b[0], "/api/v1/materials/%s", id);
-    snprintf(b[1], sizeof b[1], "/api/v1/materials/%s/factors.png", id);
-    snprintf(b[2], sizeof b[2], "/api/v1/materials/%s/factors.exr", id);
-    snprintf(b[3], sizeof b[3], "/api/v1/materials/%s/shader", id);
-    snprintf(b[4], sizeof b[4], "/api/v1/materials/%s/package", id);
-    snprintf(b[5], sizeof b[5], "/api/v1/materials/%s/preview.png", id);
-    snprintf(b[6], sizeof b[6], "/api/v1/materials/%s/eval", id);
-    snprintf(b[7], sizeof b[7], "/api/v1/sessions/%s", sid);
-    snprintf(b[8], sizeof b[8], "/api/v1/scenes/%s", scid);
-    snprintf(b[9], sizeof b[9], "/api/v1/materials/%s/preview.exr", id);
-    return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:s}", "self", b[0],
-                     "factors_png", b[1], "factors_exr", b[2], "shader", b[3], "package", b[4],
-                     "preview_png", b[5], "preview_exr", b[9], "eval", b[6], "session", b[7],
-                     "scene", b[8]);
-}
-
 int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err)
 {
     json_t *j = NULL;
-    const char *sid, *scid;
+    const char *sid, *scid, *set = "";
     int rc;
 
     memset(out, 0, sizeof *out);
@@ -86,14 +67,16 @@ int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err
         return rc == GLINT_ENOTFOUND ? glint_err_set(err, rc, "no material %s", id) : rc;
     sid = json_string_value(json_object_get(j, "session_id"));
     scid = json_string_value(json_object_get(j, "scene_id"));
-    if (!sid && !scid && json_is_string(json_object_get(j, "gbuffer_set_id")))
+    if (!sid && !scid && json_is_string(json_object_get(j, "gbuffer_set_id"))) {
         sid = scid = ""; /* fitted from a G-buffer set (fitsvc_gbuf.c): no session, no scene */
+        set = json_string_value(json_object_get(j, "gbuffer_set_id"));
+    }
     if (!sid || !scid) {
         json_decref(j);
         return glint_err_set(err, GLINT_EINTERNAL, "material %s names no session or scene", id);
     }
-    if (!json_object_get(j, "links") && sid[0])
-        json_object_set_new(j, "links", fitsvc_material_links(id, sid, scid));
+    if (f->links) /* the links of today, whatever the record was stored with */
+        json_object_set_new(j, "links", f->links(id, sid, scid, set));
     snprintf(out->session, sizeof out->session, "%s", sid);
     snprintf(out->scene, sizeof out->scene, "%s", scid);
     out->text = json_text(j, 0);
@@ -364,15 +347,6 @@ static int task_bytes(fit_task *t, glint_err *err)
     return 0;
 }
 
-static json_t *views_json(const unsigned char *use, int nviews)
-{
-    json_t *a = json_array();
-    for (int v = 0; v < nviews; v++)
-        if (use[v])
-            json_array_append_new(a, json_integer(v));
-    return a;
-}
-
 int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamples,
                       glint_err *err)
 {
@@ -411,8 +385,8 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     fitsvc *f = t->f;
     const prep_scene *ps = prep_scene_of(t->scene);
     material m;
-    char mid[33], name[128], dir[4096], created[GLINT_TIME_LEN], key[1024];
-    json_t *d = NULL, *paintings, *pre, *summary;
+    char mid[33], key[1024];
+    json_t *d = NULL, *pre;
     const char *memory;
     double t0 = glint_now(), fit_s, rms;
     int rc, was_hit = prep_was_hit(p);
@@ -447,71 +421,17 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     }
     fit_s = glint_now() - t0;
     t0 = srv_timing_step(t->tm, "fit", t0);
-    pre = json_object_get(m.info, "precomputation");
-    if ((rc = glint_id_new_near(t->session_id, mid, err)))
-        goto done;
-    snprintf(name, sizeof name, "materials/%s", mid);
-    if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||
-        (rc = material_save_deferred(&m, dir, err)))
-        goto done;
-    t0 = srv_timing_step(t->tm, "save", t0);
-    paintings = json_array();
-    for (int v = 0; v < t->nviews; v++)
-        if (t->use[v])
-            json_array_append_new(paintings, json_pack("{s:i, s:I}", "view", v, "version",
-                                                       (json_int_t)t->versions[v]));
-    glint_time_iso(time(NULL), created);
-    d = json_pack("{s:s, s:s, s:s, s:s, s:s}", "id", mid, "session_id", t->session_id,
-                  "scene_id", t->scene_id, "created", created, "method", t->m->name);
-    if (!d) {
-        json_decref(paintings);
-        rc = glint_err_set(err, GLINT_ENOMEM, "cannot build the material object");
-        goto done;
+    {
+        fit_record_in in = {t->m,      t->session_id, t->scene_id, NULL, t->use,
+                            t->versions, t->nviews,   fit_s,       t->tm};
+        if ((rc = fit_record(f, &in, &m, mid, &d, err)))
+            goto done;
     }
-    summary = material_summary(&m);
-    json_object_update(d, summary);
-    json_decref(summary);
-    json_object_set(d, "params", json_object_get(m.info, "params"));
-    json_object_set_new(d, "views_used", views_json(t->use, t->nviews));
-    json_object_set_new(d, "paintings", paintings);
-    json_object_set(d, "errors", json_object_get(m.info, "errors"));
-    json_object_set(d, "seconds", json_object_get(m.info, "seconds"));
-    json_object_set(d, "precomputation", pre);
-    if (json_object_get(m.info, "choice")) /* method auto: what it chose and why */
-        json_object_set(d, "choice", json_object_get(m.info, "choice"));
-    json_object_set_new(d, "links", fitsvc_material_links(mid, t->session_id, t->scene_id));
-    /* the record and the session's "fit" event, in one commit; the studio
-     * hears of it and the scene's record grows */
+    t0 = glint_now();
+    /* the scene's record grows */
+    pre = json_object_get(m.info, "precomputation");
     rms = json_number_value(json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
     memory = json_string_value(json_object_get(json_object_get(pre, "cache"), "memory"));
-    {
-        json_t *res = json_object_get(d, "res");
-        json_t *ev = json_pack("{s:s, s:s, s:{s:s, s:f, s:f, s:i, s:s}}", "material_id", mid,
-                               "href",
-                               json_string_value(json_object_get(
-                                   json_object_get(d, "links"), "self")),
-                               "summary", "method", t->m->name, "rms_painted", rms,
-                               "fit_seconds", fit_s, "views", t->nused, "cache",
-                               memory ? memory : "?");
-        if (!ev) {
-            rc = glint_err_set(err, GLINT_ENOMEM, "cannot build the fit's event");
-            goto done;
-        }
-        if (res)
-            json_object_set(json_object_get(ev, "summary"), "res", res);
-        rc = store_material_put_event(f->st, mid, t->session_id, d, "fit", ev, NULL, err);
-        json_decref(ev);
-        if (rc)
-            goto done;
-    }
-    t0 = srv_timing_step(t->tm, "record", t0);
-    {
-        char *text = json_text(d, 0);
-        if (text)
-            memo_doc_put(f->memo, mid, t->session_id, t->scene_id, text, strlen(text));
-        free(text);
-    }
-    events_notify(f->ev, t->session_id);
     {
         glint_err pe;
         points_key(t->m, t->params, t->use, t->nviews, key, sizeof key);
@@ -683,6 +603,7 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
     f->ev = ev;
     f->work = cfg->work;
     f->background = cfg->background;
+    f->links = cfg->links;
     pthread_mutex_init(&f->lock, NULL);
     if (!(f->holdouts = json_object())) {
         free(f);

@@ -37,6 +37,11 @@ struct events;
 
 typedef struct fitsvc fitsvc;
 
+/* The links of a material object (the API's: api_material_links): id, and
+ * either its session and scene or its G-buffer set ("" for the other). */
+typedef json_t *(*fitsvc_links_fn)(const char *id, const char *session_id,
+                                   const char *scene_id, const char *set_id);
+
 typedef struct fitsvc_config {
     const char *cache_dir;   /* the disk layer (NULL: memory only) */
     size_t budget;           /* precomputations in memory; decoded paintings get an
@@ -44,6 +49,7 @@ typedef struct fitsvc_config {
     int threads;             /* job workers (1..64) */
     struct admit *work;      /* admission of fits (admit.h); NULL: none */
     int background;          /* FITSVC_BG_*: the held-out measurements' CPU priority */
+    fitsvc_links_fn links;   /* every material object's links (NULL: none) */
 } fitsvc_config;
 
 /* The CPU priority of work no one waits for (a fit point's held-out
@@ -114,11 +120,9 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
                         struct samples *s, float **rgb, json_t **doc, char job_id[33],
                         srv_timing *tm, glint_err *err);
 
-/* Links of a material object ({"self", "factors_png", ...}; a new object). */
-json_t *fitsvc_material_links(const char *id, const char *session_id, const char *scene_id);
-
 /* The serialized material `id` with its session and scene (from memory when
- * there, else from the store; a copy: free out->text).  GLINT_ENOTFOUND. */
+ * there, else from the store with its links made again, fitsvc_config.links;
+ * a copy: free out->text).  GLINT_ENOTFOUND. */
 int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err);
 
 /* Prometheus text for /metrics: fit requests, cache levels, jobs, memos. */

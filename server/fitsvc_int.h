@@ -1,5 +1,5 @@
 /* fitsvc_int.h: what the files of the fit service (fitsvc.c,
- * fitsvc_holdout.c) share.  Not part of the server's interface. */
+ * fitsvc_gbuf.c, fitsvc_record.c, fitsvc_holdout.c, ...) share.  Not part of the server's interface. */
 #ifndef GLINT_FITSVC_INT_H
 #define GLINT_FITSVC_INT_H
 
@@ -57,6 +57,7 @@ struct fitsvc {
     fit_memo_slot memos[FITSVC_MEMOS]; /* under lock */
     unsigned long long memo_clock, memo_chunks, memo_reused;
     fit_scene_counts counts[FITSVC_SCENES]; /* under lock */
+    fitsvc_links_fn links;           /* a material's links (fitsvc_config.links) */
 };
 
 /* Everything a fit needs, owned by the request or by its job. */
@@ -75,6 +76,30 @@ typedef struct fit_task {
     long nsamples;           /* samples of the painted views (task_bytes) */
     srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
 } fit_task;
+
+/* A fit to record (fit_record): the method asked for (auto's, not the one
+ * it chose), where the fit came from (a session and its scene, or a
+ * G-buffer set), the views fitted and its time. */
+typedef struct fit_record_in {
+    const method *method;
+    const char *session_id, *scene_id; /* a session's fit; NULL or "" for a set's */
+    const char *set_id;                /* a G-buffer set's fit; NULL for a session's */
+    const unsigned char *use;          /* nviews: the views fitted */
+    const long long *versions;         /* nviews: their paintings' versions (a session's) */
+    int nviews;
+    double fit_seconds;                /* the fit's own time, for the "fit" event */
+    srv_timing *tm;                    /* steps "save" and "record" (NULL: none) */
+} fit_record_in;
+
+/* Record a fitted material m, every fit's one path (fitsvc_record.c): its
+ * files saved under blobs "materials/<id>/" (id new, near the session's or
+ * set's), its document (the API's material object, links by
+ * fitsvc_config.links), its row stored under the session or set (a
+ * session's with its "fit" event, in one commit), the document offered to
+ * the memo, and the session's streams notified.  OUT: mid, *doc (a new
+ * reference).  m stays the caller's. */
+int fit_record(fitsvc *f, const fit_record_in *in, const material *m, char mid[33],
+               json_t **doc, glint_err *err);
 
 /* Schedule the held-out measurement of a fit point (key: the point's) in
  * the background, unless one for it is pending; failures are logged. */

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "admit.h"
+#include "api_common.h"
 #include "app.h"
 #include "config.h"
 #include "events.h"
@@ -210,7 +211,7 @@ int main(int argc, char **argv)
     {
         char cache_dir[4200];
         fitsvc_config fc = {cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, NULL,
-                            a.cfg.background_priority};
+                            a.cfg.background_priority, api_material_links};
         snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
         if (admit_open(a.cfg.work_bytes, a.cfg.work_slots, a.cfg.work_wait_s, &a.work, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
