@@ -355,9 +355,9 @@ int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamp
     return admit_cost(f->work, method_fit_seconds(m, params, nsamples), what, err);
 }
 
-int fitsvc_material_check(const material *m, glint_err *err)
+int fitsvc_material_check(const material *m, const fit_report *r, glint_err *err)
 {
-    if (json_is_object(json_object_get(m->info, "errors")))
+    if (r->errors_ok)
         return 0;
     glint_err_set(err, GLINT_ENUMERIC,
                   "the %s fit gave no finite error statistics (values out of scale), so no "
@@ -385,10 +385,10 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     fitsvc *f = t->f;
     const prep_scene *ps = prep_scene_of(t->scene);
     material m;
+    fit_report rep;
     char mid[33], key[1024];
-    json_t *d = NULL, *pre;
-    const char *memory;
-    double t0 = glint_now(), fit_s, rms;
+    json_t *d = NULL;
+    double t0 = glint_now(), fit_s;
     int rc, was_hit = prep_was_hit(p);
 
     *doc = NULL;
@@ -403,42 +403,33 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
         fitsvc_memo_take(f, t->session_id, key, &mm);
         for (int v = 0; tags && v < t->nviews; v++)
             tags[v] = t->use[v] ? (uint64_t)t->versions[v] : 0;
-        rc = prep_fit_reusing(p, t->paintings, NULL, tags, tags ? &mm : NULL, &m, err);
+        rc = prep_fit_reusing(p, t->paintings, NULL, tags, tags ? &mm : NULL, &m, &rep, err);
         free(tags);
-        if (!rc && (rc = fitsvc_material_check(&m, err)))
+        if (!rc && (rc = fitsvc_material_check(&m, &rep, err))) {
+            fit_report_free(&rep);
             material_free(&m);
+        }
         if (rc) { /* what the memo holds stays true of its tags */
             fitsvc_memo_put(f, t->session_id, key, &mm, 0, 0);
             return rc;
         }
-        {
-            json_t *pc = json_object_get(m.info, "precomputation");
-            fitsvc_memo_put(
-                f, t->session_id, key, &mm,
-                (int)json_integer_value(json_object_get(pc, "stream_chunks_reused")),
-                (int)json_integer_value(json_object_get(pc, "stream_chunks")));
-        }
+        fitsvc_memo_put(f, t->session_id, key, &mm, rep.stream_chunks_reused, rep.stream_chunks);
     }
     fit_s = glint_now() - t0;
     t0 = srv_timing_step(t->tm, "fit", t0);
     {
         fit_record_in in = {t->m,      t->session_id, t->scene_id, NULL, t->use,
                             t->versions, t->nviews,   fit_s,       t->tm};
-        if ((rc = fit_record(f, &in, &m, mid, &d, err)))
+        if ((rc = fit_record(f, &in, &m, &rep, mid, &d, err)))
             goto done;
     }
     t0 = glint_now();
-    /* the scene's record grows */
-    pre = json_object_get(m.info, "precomputation");
-    rms = json_number_value(json_object_get(json_object_get(m.info, "errors"), "rms_painted"));
-    memory = json_string_value(json_object_get(json_object_get(pre, "cache"), "memory"));
-    {
+    { /* the scene's record grows */
         glint_err pe;
-        points_key(t->m, t->params, t->use, t->nviews, key, sizeof key);
-        if (points_record(f->points, ps->hash, key, t->m->name, json_object_get(m.info, "params"),
+        if (points_record(f->points, ps->hash, key, t->m->name, rep.params,
                           json_object_get(d, "views_used"), prep_samples(p)->n, fit_s,
-                          memory && strcmp(memory, "built") == 0 ? prep_cold_seconds(p) : -1.0,
-                          prep_from_disk(p), rms, mid, &pe))
+                          strcmp(rep.memory, "built") == 0 ? rep.cold_seconds : -1.0,
+                          rep.from_disk, rep.rms_painted, mid, &pe))
             log_line("recording a fit point: %s", pe.msg);
         if (t->nused >= 2 && (!t->m->holdout_ok || t->m->holdout_ok(t->params)) &&
             !points_has_holdout(f->points, ps->hash, key))
@@ -455,6 +446,7 @@ static int fit_execute(fit_task *t, prep *p, job *j, json_t **doc, glint_err *er
     d = NULL;
 done:
     json_decref(d);
+    fit_report_free(&rep);
     material_free(&m);
     return rc;
 }

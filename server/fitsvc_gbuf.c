@@ -58,6 +58,7 @@ static int gb_execute(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
 static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
 {
     material m;
+    fit_report rep;
     char mid[33];
     double t0 = glint_now();
     int rc;
@@ -65,18 +66,15 @@ static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *
     *doc = NULL;
     if (j)
         job_progress(j, "fit", 0.9);
-    if ((rc = prep_fit(p, NULL, t->rgb, &m, err)))
+    if ((rc = prep_fit_reusing(p, NULL, t->rgb, NULL, NULL, &m, &rep, err)))
         return rc;
-    if ((rc = fitsvc_material_check(&m, err))) {
-        material_free(&m);
-        return rc;
-    }
-    {
+    if (!(rc = fitsvc_material_check(&m, &rep, err))) {
         fit_record_in in = {t->m,     NULL,      NULL, t->set_id, t->used, NULL, t->nviews,
                             glint_now() - t0, t->tm};
         srv_timing_step(t->tm, "fit", t0);
-        rc = fit_record(t->f, &in, &m, mid, doc, err);
+        rc = fit_record(t->f, &in, &m, &rep, mid, doc, err);
     }
+    fit_report_free(&rep);
     material_free(&m);
     return rc;
 }

@@ -91,15 +91,16 @@ typedef struct fit_record_in {
     srv_timing *tm;                    /* steps "save" and "record" (NULL: none) */
 } fit_record_in;
 
-/* Record a fitted material m, every fit's one path (fitsvc_record.c): its
- * files saved under blobs "materials/<id>/" (id new, near the session's or
- * set's), its document (the API's material object, links by
+/* Record a fitted material m with its report r, every fit's one path
+ * (fitsvc_record.c): its files saved under blobs "materials/<id>/" (id new,
+ * near the session's or set's), its document (the API's material object:
+ * the method's members of it passed on from r->members unread, links by
  * fitsvc_config.links), its row stored under the session or set (a
  * session's with its "fit" event, in one commit), the document offered to
  * the memo, and the session's streams notified.  OUT: mid, *doc (a new
- * reference).  m stays the caller's. */
-int fit_record(fitsvc *f, const fit_record_in *in, const material *m, char mid[33],
-               json_t **doc, glint_err *err);
+ * reference).  m and r stay the caller's. */
+int fit_record(fitsvc *f, const fit_record_in *in, const material *m, const fit_report *r,
+               char mid[33], json_t **doc, glint_err *err);
 
 /* Schedule the held-out measurement of a fit point (key: the point's) in
  * the background, unless one for it is pending; failures are logged. */
@@ -133,7 +134,7 @@ int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamp
  * the fit's error statistics.  A fit whose statistics could not be written
  * (not finite) is refused with GLINT_ENUMERIC, kind "numerical-failure",
  * rather than stored without them. */
-int fitsvc_material_check(const material *m, glint_err *err);
+int fitsvc_material_check(const material *m, const fit_report *r, glint_err *err);
 
 /* Job callbacks for the precomputation (cls: the job); the first is a
  * glint_cancel's stop (the job was cancelled or the daemon stops). */

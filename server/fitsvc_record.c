@@ -8,6 +8,7 @@
  *   store     its row, and for a session the "fit" event in the same commit;
  *   memo      its serialized document, for the reads that follow;
  *   events    the session's streams hear of it. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,7 +38,7 @@ static json_t *fit_event(const char *mid, const json_t *d, const char *mname, do
 /* The document: where the fit came from, the method's summary of the
  * material, its parameters, views, statistics and links. */
 static json_t *fit_document(fitsvc *f, const fit_record_in *in, const material *m,
-                            const char *mid)
+                            const fit_report *r, const char *mid)
 {
     const int session = in->session_id && in->session_id[0];
     char created[GLINT_TIME_LEN];
@@ -69,15 +70,10 @@ static json_t *fit_document(fitsvc *f, const fit_record_in *in, const material *
     summary = material_summary(m);
     json_object_update(d, summary);
     json_decref(summary);
-    json_object_set(d, "params", json_object_get(m->info, "params"));
     json_object_set_new(d, "views_used", views);
     if (paintings)
         json_object_set_new(d, "paintings", paintings);
-    json_object_set(d, "errors", json_object_get(m->info, "errors"));
-    json_object_set(d, "seconds", json_object_get(m->info, "seconds"));
-    json_object_set(d, "precomputation", json_object_get(m->info, "precomputation"));
-    if (json_object_get(m->info, "choice")) /* method auto: what it chose and why */
-        json_object_set(d, "choice", json_object_get(m->info, "choice"));
+    json_object_update(d, r->members); /* the method's: not read here */
     if (f->links)
         json_object_set_new(d, "links",
                             f->links(mid, session ? in->session_id : "",
@@ -85,8 +81,8 @@ static json_t *fit_document(fitsvc *f, const fit_record_in *in, const material *
     return d;
 }
 
-int fit_record(fitsvc *f, const fit_record_in *in, const material *m, char mid[33],
-               json_t **doc, glint_err *err)
+int fit_record(fitsvc *f, const fit_record_in *in, const material *m, const fit_report *r,
+               char mid[33], json_t **doc, glint_err *err)
 {
     const int session = in->session_id && in->session_id[0];
     const char *owner = session ? in->session_id : in->set_id;
@@ -103,18 +99,14 @@ int fit_record(fitsvc *f, const fit_record_in *in, const material *m, char mid[3
         (rc = material_save_deferred(m, dir, err)))
         return rc;
     t0 = srv_timing_step(in->tm, "save", t0);
-    if (!(d = fit_document(f, in, m, mid)))
+    if (!(d = fit_document(f, in, m, r, mid)))
         return glint_err_set(err, GLINT_ENOMEM, "cannot build the material object");
     if (session) { /* the record and the session's "fit" event, in one commit */
-        const json_t *pre = json_object_get(m->info, "precomputation");
-        double rms =
-            json_number_value(json_object_get(json_object_get(m->info, "errors"), "rms_painted"));
         json_t *ev;
         for (int v = 0; v < in->nviews; v++)
             nused += in->use[v] != 0;
-        ev = fit_event(mid, d, in->method->name, rms, in->fit_seconds, nused,
-                       json_string_value(json_object_get(json_object_get(pre, "cache"),
-                                                         "memory")));
+        ev = fit_event(mid, d, in->method->name, isfinite(r->rms_painted) ? r->rms_painted : 0.0,
+                       in->fit_seconds, nused, r->memory);
         if (!ev)
             rc = glint_err_set(err, GLINT_ENOMEM, "cannot build the fit's event");
         else
