@@ -295,12 +295,14 @@ static int task_samples(fit_task *t, long *n, glint_err *err)
     int rc, found = 0;
 
     pthread_mutex_lock(&f->lock);
-    for (int i = 0; i < FITSVC_SCENES && !found; i++)
-        if (strcmp(f->counts[i].id, t->scene_id) == 0 && f->counts[i].nviews == t->nviews) {
-            f->counts[i].used = ++f->memo_clock;
-            memcpy(got.n, f->counts[i].n, (size_t)t->nviews * sizeof got.n[0]);
+    for (lru_node *x = f->counts_lru.head; x && !found; x = x->next) {
+        fit_scene_counts *c = lru_entry(x, fit_scene_counts, node);
+        if (strcmp(c->id, t->scene_id) == 0 && c->nviews == t->nviews) {
+            lru_touch(&f->counts_lru, x);
+            memcpy(got.n, c->n, (size_t)t->nviews * sizeof got.n[0]);
             found = 1;
         }
+    }
     pthread_mutex_unlock(&f->lock);
     if (!found) {
         if (t->nviews > SCENE_MAX_VIEWS)
@@ -314,13 +316,17 @@ static int task_samples(fit_task *t, long *n, glint_err *err)
                 json_object_get(json_array_get(views, (size_t)v), "samples"));
         json_decref(doc);
         pthread_mutex_lock(&f->lock);
-        for (int i = 0; i < FITSVC_SCENES; i++) /* an empty slot, or the least recent */
-            if (!slot || !f->counts[i].id[0] ||
-                (slot->id[0] && f->counts[i].used < slot->used))
-                slot = &f->counts[i];
+        if (f->counts_lru.n < FITSVC_SCENES) { /* an empty slot */
+            for (int i = 0; i < FITSVC_SCENES && !slot; i++)
+                if (!f->counts[i].id[0])
+                    slot = &f->counts[i];
+            lru_push(&f->counts_lru, &slot->node);
+        } else { /* the least recently used */
+            slot = lru_entry(lru_oldest(&f->counts_lru), fit_scene_counts, node);
+            lru_touch(&f->counts_lru, &slot->node);
+        }
         snprintf(slot->id, sizeof slot->id, "%s", t->scene_id);
         slot->nviews = t->nviews;
-        slot->used = ++f->memo_clock;
         memcpy(slot->n, got.n, (size_t)t->nviews * sizeof got.n[0]);
         pthread_mutex_unlock(&f->lock);
     }

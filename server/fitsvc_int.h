@@ -9,6 +9,7 @@
 #include "events.h"
 #include "fitsvc.h"
 #include "jobs.h"
+#include "lru.h"
 #include "memo.h"
 #include "points.h"
 #include "prep.h"
@@ -17,24 +18,26 @@
 
 typedef struct pix_writer pix_writer;
 
-/* A session's fit memo (fitsvc_memo.c): its session, fit point (points.h's
- * key) and when it was last put back (0: free slot). */
+/* A session's fit memo (fitsvc_memo.c): its session and fit point
+ * (points.h's key).  A slot that holds one is in fitsvc's memo_lru (lru.h:
+ * the least recently put back makes room); a free one is in no list. */
 #define FITSVC_MEMOS 8
 typedef struct fit_memo_slot {
+    lru_node node;
+    int held;
     char session[33];
     char key[1024];
     method_memo mm;
-    unsigned long long used;
 } fit_memo_slot;
 
 /* A scene's samples per view, for the fits' memory bound (task_bytes):
  * scenes never change once made, so their documents need not be read and
- * parsed again on every fit. */
+ * parsed again on every fit.  A slot in use is in fitsvc's counts_lru. */
 #define FITSVC_SCENES 8
 typedef struct fit_scene_counts {
-    char id[33];             /* "": empty slot */
+    lru_node node;
+    char id[33];             /* "": empty slot (in no list) */
     int nviews;
-    unsigned long long used; /* fitsvc's memo_clock when last used */
     long n[SCENE_MAX_VIEWS];
 } fit_scene_counts;
 
@@ -55,8 +58,10 @@ struct fitsvc {
     json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
     pix_writer *pix;                 /* fitsvc_pixels.c; NULL: none */
     fit_memo_slot memos[FITSVC_MEMOS]; /* under lock */
-    unsigned long long memo_clock, memo_chunks, memo_reused;
+    lru_list memo_lru;                 /* the slots that hold a memo (under lock) */
+    unsigned long long memo_chunks, memo_reused;
     fit_scene_counts counts[FITSVC_SCENES]; /* under lock */
+    lru_list counts_lru;                    /* the slots in use (under lock) */
     fitsvc_links_fn links;           /* a material's links (fitsvc_config.links) */
 };
 
