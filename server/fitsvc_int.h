@@ -1,5 +1,9 @@
-/* fitsvc_int.h: what the files of the fit service (fitsvc.c,
- * fitsvc_gbuf.c, fitsvc_record.c, fitsvc_holdout.c, ...) share.  Not part of the server's interface. */
+/* fitsvc_int.h: what the files of the fit service share: fitsvc.c (life
+ * cycle, scenes, material documents, metrics), fitsvc_task.c (a session
+ * fit's paintings and bounds), fitsvc_session.c (session fits),
+ * fitsvc_gbuf.c (G-buffer set fits), fitsvc_record.c (recording every
+ * fit), fitsvc_memo.c, fitsvc_holdout.c and fitsvc_pixels.c.  Not part of
+ * the server's interface. */
 #ifndef GLINT_FITSVC_INT_H
 #define GLINT_FITSVC_INT_H
 
@@ -81,6 +85,17 @@ typedef struct fit_task {
     long nsamples;           /* samples of the painted views (task_bytes) */
     srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
 } fit_task;
+
+/* The task's paintings, read as a snapshot (the painted views form the
+ * pattern).  OUT: t->nviews, paintings, pins, use, versions, nused.
+ * GLINT_EINVAL with kind "no-paintings" when nothing is painted,
+ * "invalid-painting" for one that cannot be used (fitsvc_task.c). */
+int fit_task_read_paintings(fit_task *t, glint_err *err);
+/* The fit's memory bound: the method's for the samples of the painted
+ * views, and the paintings.  OUT: t->nsamples, t->bytes. */
+int fit_task_bytes(fit_task *t, glint_err *err);
+/* Free a task and release what it holds (accepts NULL; a job's free). */
+void fit_task_free(void *t);
 
 /* A fit to record (fit_record): the method asked for (auto's, not the one
  * it chose), where the fit came from (a session and its scene, or a
