@@ -86,15 +86,9 @@ int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err
 
 /* ---- life cycle ----------------------------------------------------------------------- */
 
-static void idle_flush(void *cls)
-{
-    points_flush(cls, 1);
-}
-
 int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, glint_err *err)
 {
     fitsvc *f;
-    char dir[4200];
     int rc;
 
     *out = NULL;
@@ -107,6 +101,10 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
     mallopt(M_TRIM_THRESHOLD, 64 << 20);
     if (!(f = calloc(1, sizeof *f)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    f->cache = cfg->cache;
+    f->jobs = cfg->jobs;
+    f->memo = cfg->memo;
+    f->points = cfg->points;
     f->st = st;
     f->ev = ev;
     f->work = cfg->work;
@@ -117,14 +115,7 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
         free(f);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     }
-    if (cfg->cache_dir)
-        snprintf(dir, sizeof dir, "%s/points", cfg->cache_dir);
-    if ((rc = cache_open(cfg->cache_dir, cfg->budget, &f->cache, err)) ||
-        (rc = memo_open(cfg->budget / 8, cfg->budget / 32, &f->memo, err)) ||
-        (rc = points_open(cfg->cache_dir ? dir : NULL, &f->points, err)) ||
-        (rc = jobs_open(cfg->threads, idle_flush, f->points, POINTS_SAVE_PERIOD_S, &f->jobs,
-                        err)) ||
-        (st && (rc = fitsvc_pixels_start(f, err)))) {
+    if (st && (rc = fitsvc_pixels_start(f, err))) {
         fitsvc_close(f);
         return rc;
     }
@@ -138,51 +129,15 @@ int fitsvc_open(const fitsvc_config *cfg, store *st, events *ev, fitsvc **out, g
     return 0;
 }
 
-void fitsvc_shutdown(fitsvc *f)
-{
-    if (f)
-        jobs_shutdown(f->jobs);
-}
-
-void fitsvc_stop(fitsvc *f)
-{
-    if (f)
-        jobs_stop(f->jobs);
-}
-
 void fitsvc_close(fitsvc *f)
 {
     if (!f)
         return;
-    jobs_close(f->jobs); /* running jobs finish first: they hold cache entries */
     fitsvc_pixels_stop(f); /* holds the memo's paintings while it writes */
     fitsvc_memo_close(f);
-    points_close(f->points);
-    memo_close(f->memo);
-    cache_close(f->cache);
     json_decref(f->holdouts);
     pthread_mutex_destroy(&f->lock);
     free(f);
-}
-
-cache *fitsvc_cache(fitsvc *f)
-{
-    return f->cache;
-}
-
-jobs *fitsvc_jobs(fitsvc *f)
-{
-    return f->jobs;
-}
-
-memo *fitsvc_memo(fitsvc *f)
-{
-    return f->memo;
-}
-
-points *fitsvc_points(fitsvc *f)
-{
-    return f->points;
 }
 
 void fitsvc_metrics(fitsvc *f, FILE *o)
