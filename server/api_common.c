@@ -315,6 +315,20 @@ json_t *api_material_links(const char *id, const char *sid, const char *scid,
     return l;
 }
 
+int api_material_relink(json_t *doc)
+{
+    const char *id = json_string_value(json_object_get(doc, "id"));
+    const char *sid = json_string_value(json_object_get(doc, "session_id"));
+    const char *scid = json_string_value(json_object_get(doc, "scene_id"));
+    const char *set = json_string_value(json_object_get(doc, "gbuffer_set_id"));
+    json_t *l;
+    if (!id)
+        return 0;
+    if (!(l = api_material_links(id, sid, scid, set)))
+        return -1;
+    return json_object_set_new(doc, "links", l);
+}
+
 int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err)
 {
     app *a = req->app;

@@ -119,6 +119,9 @@ int api_expiry_parse(const json_t *v, json_t *doc, glint_err *e);
  * its fitsvc_config.links.  A new object (NULL: out of memory). */
 json_t *api_material_links(const char *id, const char *session_id, const char *scene_id,
                            const char *set_id);
+/* The same set on a material document as stored (its links of today,
+ * whatever it was stored with); 0, or -1 out of memory. */
+int api_material_relink(json_t *doc);
 
 /* The material `mid` if the request may read its session.  OUT: *doc (free
  * doc->text). */

@@ -321,6 +321,9 @@ def test_13_api_the_material_is_served(d):
     lst = d.get("/api/v1/gbuffer-sets/%s/materials" % S["set"], headers=key(), status=200,
                 schema="MaterialList.json").json()["materials"]
     assert mid in [m["id"] for m in lst], lst
+    got = d.get("/api/v1/materials/" + mid, headers=key(), status=200).json()
+    assert [m["links"] for m in lst if m["id"] == mid] == [got["links"]], lst
+    assert "merl" in got["links"] and "gbuffer_set" in got["links"], got["links"]
 
 
 def test_14_api_bad_inputs(d):
