@@ -277,6 +277,58 @@ int api_session(http_req *req, const char *sid, int need_paint, json_t **doc, gl
     return rc;
 }
 
+json_t *api_material_links(const char *id, const char *sid, const char *scid,
+                           const char *set)
+{
+    static const char *const files[][2] = {
+        {"factors_png", "factors.png"}, {"factors_exr", "factors.exr"}, {"shader", "shader"},
+        {"package", "package"},         {"eval", "eval"},               {"merl", "merl.binary"},
+    };
+    json_t *l = json_object();
+    char b[160];
+    int bad = !l;
+
+    snprintf(b, sizeof b, "/api/v1/materials/%s", id);
+    bad |= json_object_set_new(l, "self", json_string(b));
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        snprintf(b, sizeof b, "/api/v1/materials/%s/%s", id, files[i][1]);
+        bad |= json_object_set_new(l, files[i][0], json_string(b));
+    }
+    if (sid && sid[0] && scid && scid[0]) {
+        snprintf(b, sizeof b, "/api/v1/materials/%s/preview.png", id);
+        bad |= json_object_set_new(l, "preview_png", json_string(b));
+        snprintf(b, sizeof b, "/api/v1/materials/%s/preview.exr", id);
+        bad |= json_object_set_new(l, "preview_exr", json_string(b));
+        snprintf(b, sizeof b, "/api/v1/sessions/%s", sid);
+        bad |= json_object_set_new(l, "session", json_string(b));
+        snprintf(b, sizeof b, "/api/v1/scenes/%s", scid);
+        bad |= json_object_set_new(l, "scene", json_string(b));
+    }
+    if (set && set[0]) {
+        snprintf(b, sizeof b, "/api/v1/gbuffer-sets/%s", set);
+        bad |= json_object_set_new(l, "gbuffer_set", json_string(b));
+    }
+    if (bad) {
+        json_decref(l);
+        return NULL;
+    }
+    return l;
+}
+
+int api_material_relink(json_t *doc)
+{
+    const char *id = json_string_value(json_object_get(doc, "id"));
+    const char *sid = json_string_value(json_object_get(doc, "session_id"));
+    const char *scid = json_string_value(json_object_get(doc, "scene_id"));
+    const char *set = json_string_value(json_object_get(doc, "gbuffer_set_id"));
+    json_t *l;
+    if (!id)
+        return 0;
+    if (!(l = api_material_links(id, sid, scid, set)))
+        return -1;
+    return json_object_set_new(doc, "links", l);
+}
+
 int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err)
 {
     app *a = req->app;

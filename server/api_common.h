@@ -110,6 +110,19 @@ json_t *api_session_public(struct app *a, const json_t *doc, int paint);
 #define API_EXPIRES_MAX 315360000 /* ten years */
 int api_expiry_parse(const json_t *v, json_t *doc, glint_err *e);
 
+/* The links of a material object, the same for every material however it
+ * was fitted: self, factors_png, factors_exr, shader, package, eval, merl;
+ * a material fitted through a session (session_id and scene_id non-empty)
+ * adds session, scene, preview_png and preview_exr; one fitted from a
+ * G-buffer set (set_id non-empty; it has no scene to preview on) adds
+ * gbuffer_set.  The one place they are made: the fit service takes it as
+ * its fitsvc_config.links.  A new object (NULL: out of memory). */
+json_t *api_material_links(const char *id, const char *session_id, const char *scene_id,
+                           const char *set_id);
+/* The same set on a material document as stored (its links of today,
+ * whatever it was stored with); 0, or -1 out of memory. */
+int api_material_relink(json_t *doc);
+
 /* The material `mid` if the request may read its session.  OUT: *doc (free
  * doc->text). */
 int api_material(http_req *req, const char *mid, memo_doc *doc, glint_err *err);

@@ -172,7 +172,7 @@ done:
         admit_leave(a->work, bytes);
     json_decref(d);
     material_free(&m);
-    cache_release(fitsvc_cache(a->fits), se);
+    cache_release(a->cache, se);
     free(doc.text);
     return r;
 }

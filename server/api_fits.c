@@ -82,7 +82,7 @@ http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id)
         http_header(&r, "Location", loc);
         return r;
     }
-    if (jobs_get(fitsvc_jobs(((app *)req->app)->fits), job_id, &jdoc, NULL, &e))
+    if (jobs_get(((app *)req->app)->jobs, job_id, &jdoc, NULL, &e))
         return api_error(&e);
     snprintf(loc, sizeof loc, "/api/v1/jobs/%s", job_id);
     r = http_json(202, json_pack("{s:o}", "job", job_with_links(jdoc)));
@@ -148,6 +148,12 @@ static http_resp session_materials(http_req *req)
     json_decref(sdoc);
     if (store_material_list(a->store, req->param[0], &list, &e))
         return api_error(&e);
+    for (size_t i = 0; i < json_array_size(list); i++)
+        if (api_material_relink(json_array_get(list, i))) {
+            json_decref(list);
+            glint_err_set(&e, GLINT_ENOMEM, "out of memory");
+            return api_error(&e);
+        }
     return http_json(200, json_pack("{s:o}", "materials", list));
 }
 
@@ -164,7 +170,7 @@ static int job_access(http_req *req, const char *id, int need_paint, json_t **jd
     int rc;
 
     *jdoc = NULL;
-    if (!glint_id_valid(id) || jobs_get(fitsvc_jobs(a->fits), id, jdoc, owner, e) ||
+    if (!glint_id_valid(id) || jobs_get(a->jobs, id, jdoc, owner, e) ||
         !owner[0]) { /* internal jobs are not visible */
         json_decref(*jdoc);
         *jdoc = NULL;
@@ -204,7 +210,7 @@ static http_resp job_delete(http_req *req)
     if (job_access(req, req->param[0], 1, &jdoc, &e))
         return api_error(&e);
     json_decref(jdoc);
-    if (jobs_cancel(fitsvc_jobs(a->fits), req->param[0], &jdoc, &e))
+    if (jobs_cancel(a->jobs, req->param[0], &jdoc, &e))
         return api_error(&e);
     running = strcmp(json_string_value(json_object_get(jdoc, "state")), "running") == 0;
     return http_json(running ? 202 : 200, json_pack("{s:o}", "job", job_with_links(jdoc)));
@@ -293,7 +299,7 @@ static http_resp job_events(http_req *req)
     json_decref(jdoc);
     if (!(s = calloc(1, sizeof *s)))
         return http_problem(503, "out-of-memory", "out of memory");
-    s->js = fitsvc_jobs(a->fits);
+    s->js = a->jobs;
     snprintf(s->id, sizeof s->id, "%s", req->param[0]);
     if (last || since) {
         char *end;

@@ -584,6 +584,12 @@ static http_resp sets_materials(http_req *req)
     json_decref(rec);
     if (store_material_list(a->store, req->param[0], &list, &e))
         return api_error(&e);
+    for (size_t i = 0; i < json_array_size(list); i++)
+        if (api_material_relink(json_array_get(list, i))) {
+            json_decref(list);
+            glint_err_set(&e, GLINT_ENOMEM, "out of memory");
+            return api_error(&e);
+        }
     return http_json(200, json_pack("{s:o}", "materials", list));
 }
 

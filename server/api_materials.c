@@ -586,7 +586,7 @@ done:
     if (admitted)
         admit_leave(a->work, bytes);
     material_free(&m);
-    cache_release(fitsvc_cache(a->fits), se);
+    cache_release(a->cache, se);
     free(doc.text);
     return r;
 }

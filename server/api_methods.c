@@ -48,7 +48,7 @@ static http_resp methods_get(http_req *req)
                        : api_error(&e);
         }
         hash = prep_scene_of(se)->hash;
-        pts = points_get(fitsvc_points(a->fits), hash);
+        pts = points_get(a->points, hash);
         json_array_foreach(pts, i, pt) {
             json_object_del(pt, "material_id");
             json_object_del(json_object_get(pt, "held_out"), "material_id");
@@ -56,7 +56,7 @@ static http_resp methods_get(http_req *req)
         json_object_set_new(out, "scene",
                             json_pack("{s:s, s:s, s:o}", "id", scid, "hash", hash, "points",
                                       pts));
-        cache_release(fitsvc_cache(a->fits), se);
+        cache_release(a->cache, se);
     }
     json_decref(sdoc);
     return http_json(200, out);

@@ -129,14 +129,14 @@ static int view_current(app *a, const char *session, const char *scene_id, int k
         json_decref(list);
     }
     if (listed > 0 &&
-        memo_painting_get(fitsvc_memo(a->fits), session, k, (long long)listed, &pin) == 0) {
+        memo_painting_get(a->memo, session, k, (long long)listed, &pin) == 0) {
         const img *m = memo_painting_img(pin);
         rc = img_alloc(im, m->width, m->height, m->channels, e);
         if (!rc) {
             memcpy(im->px, m->px, (size_t)m->width * m->height * m->channels * sizeof(float));
             rc = img_to_rgb(im, e);
         }
-        memo_painting_release(fitsvc_memo(a->fits), pin);
+        memo_painting_release(a->memo, pin);
         *version = listed;
         if (!rc && file) { /* the file of that version, if it is still the current one */
             int64_t v = 0;
@@ -387,7 +387,7 @@ static http_resp painting_put(http_req *req)
     if (rc)
         goto done;
     t0 = srv_timing_step(&req->timing, "store", t0);
-    memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &im);
+    memo_painting_offer(a->memo, req->param[0], k, (long long)version, &im);
     fitsvc_painting_stored(a->fits, req->param[0], k, (long long)version);
     events_notify(a->events, req->param[0]);
     srv_timing_step(&req->timing, "notify", t0);
@@ -629,7 +629,7 @@ again:
     pthread_mutex_unlock(session_lock(req->param[0]));
     locked = 0;
     /* the memo keeps the decoded image, so a fit need not decode it */
-    memo_painting_offer(fitsvc_memo(a->fits), req->param[0], k, (long long)version, &cur);
+    memo_painting_offer(a->memo, req->param[0], k, (long long)version, &cur);
     fitsvc_painting_stored(a->fits, req->param[0], k, (long long)version);
     events_notify(a->events, req->param[0]);
     r = http_json(200, json_pack("{s:i, s:I, s:I, s:I, s:i, s:I}", "view", k, "first_seq",

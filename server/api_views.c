@@ -119,7 +119,7 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
         api_work_ended(req, rc);
         admit_leave(a->work, bytes);
     }
-    cache_release(fitsvc_cache(a->fits), se);
+    cache_release(a->cache, se);
     return rc;
 }
 
@@ -178,7 +178,7 @@ static http_resp scene_gbuffer(http_req *req)
                                 &e);
         admit_leave(a->work, bytes);
     }
-    cache_release(fitsvc_cache(a->fits), se);
+    cache_release(a->cache, se);
     if (rc)
         return api_fail(&e, "G-buffer");
     return http_bytes_owned(200, "image/x-exr", data, len);

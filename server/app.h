@@ -1,9 +1,10 @@
 /* app.h: glintd's shared state, handed to every handler as req->app.
  *
  * Modules: http (transport), store (SQLite metadata + blob files in the data
- * directory), events (session streams), fitsvc (the precomputation cache,
- * jobs and fits), scenes (core scenes and base renders), the api_*
- * handlers, admit (expensive work against a memory budget).  Numerics stay in core/: the server reaches them through the
+ * directory), events (session streams), the precomputation cache, jobs,
+ * memo and points (opened here, lent to fitsvc), fitsvc (fits), scenes (core
+ * scenes and base renders), the api_* handlers, admit (expensive work
+ * against a memory budget).  Numerics stay in core/: the server reaches them through the
  * method (method.h), pipeline (prep.h), material (material.h) and render
  * (render.h) interfaces only. */
 #ifndef GLINTD_APP_H
@@ -64,6 +65,10 @@ struct events;
 struct fitsvc;
 struct render;
 struct admit;
+struct cache;
+struct jobs;
+struct memo;
+struct points;
 
 typedef struct app {
     app_config cfg;
@@ -72,7 +77,11 @@ typedef struct app {
     http_server *http;
     struct store *store;      /* store.h: SQLite + blobs */
     struct events *events;    /* events.h: per-session SSE streams */
-    struct fitsvc *fits;      /* fitsvc.h: the cache, jobs, fits */
+    struct cache *cache;      /* core cache.h: precomputations (scenes, patterns, levels) */
+    struct jobs *jobs;        /* jobs.h: background work (cold fits, measurements) */
+    struct memo *memo;        /* memo.h: decoded paintings and material documents */
+    struct points *points;    /* points.h: the scenes' speed-accuracy records */
+    struct fitsvc *fits;      /* fitsvc.h: fits, with the four above */
     struct render *render;    /* core render.h: previews (EGL opened on first use) */
     struct admit *work;       /* admit.h: renders, G-buffers and fits against a budget */
 } app;

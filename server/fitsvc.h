@@ -1,9 +1,9 @@
-/* fitsvc.h: fits as a service.  Owns the precomputation cache (core
- * cache.h, one for the daemon: scenes, patterns, every method's levels;
- * on disk under data_dir/cache), the job pool (jobs.h), the decoded
- * paintings and material documents (memo.h) and the speed-accuracy record
- * (points.h), and runs a fit from a session's paintings to a stored
- * material:
+/* fitsvc.h: fits as a service.  Runs a fit from a session's paintings (or
+ * a G-buffer set's samples) to a stored material, with what the app owns
+ * and lends it: the precomputation cache (core cache.h, one for the
+ * daemon: scenes, patterns, every method's levels; on disk under
+ * data_dir/cache), the job pool (jobs.h), the decoded paintings and
+ * material documents (memo.h) and the speed-accuracy record (points.h):
  *
  *   read the session's paintings (a snapshot; the painted views form the
  *   sampling pattern) -> the precomputation (prep.h): in memory now, the
@@ -37,13 +37,23 @@ struct events;
 
 typedef struct fitsvc fitsvc;
 
+/* The links of a material object (the API's: api_material_links): id, and
+ * either its session and scene or its G-buffer set ("" for the other). */
+typedef json_t *(*fitsvc_links_fn)(const char *id, const char *session_id,
+                                   const char *scene_id, const char *set_id);
+
+/* What the service uses and does not own: the app opens them before
+ * fitsvc_open and closes them after fitsvc_close, the jobs first of all
+ * (jobs_close: running jobs hold cache entries and record their fits
+ * here). */
 typedef struct fitsvc_config {
-    const char *cache_dir;   /* the disk layer (NULL: memory only) */
-    size_t budget;           /* precomputations in memory; decoded paintings get an
-                                eighth of it more, material documents a thirty-second */
-    int threads;             /* job workers (1..64) */
+    cache *cache;            /* the precomputation cache */
+    jobs *jobs;              /* the job pool: cold fits, held-out measurements */
+    memo *memo;              /* decoded paintings and material documents */
+    points *points;          /* the speed-accuracy record */
     struct admit *work;      /* admission of fits (admit.h); NULL: none */
     int background;          /* FITSVC_BG_*: the held-out measurements' CPU priority */
+    fitsvc_links_fn links;   /* every material object's links (NULL: none) */
 } fitsvc_config;
 
 /* The CPU priority of work no one waits for (a fit point's held-out
@@ -65,25 +75,14 @@ enum { FITSVC_BG_IDLE = 0, FITSVC_BG_LOW = 1, FITSVC_BG_NORMAL = 2 };
  * each time): call it once, at startup. */
 int fitsvc_open(const fitsvc_config *cfg, struct store *st, struct events *ev, fitsvc **out,
                 glint_err *err);
-/* End the job streams promptly (before the HTTP server stops). */
-void fitsvc_shutdown(fitsvc *f);
-/* The daemon stops: queued jobs fail, running ones are cancelled (their
- * builds stop within moments, cancel.h), no job starts (jobs_stop).
- * Returns at once; fitsvc_close joins them. */
-void fitsvc_stop(fitsvc *f);
-/* Stop the jobs, write the record, free everything.  Accepts NULL. */
+/* Free the service (the app closed its jobs before).  Accepts NULL. */
 void fitsvc_close(fitsvc *f);
-
-cache *fitsvc_cache(fitsvc *f);
-jobs *fitsvc_jobs(fitsvc *f);
-memo *fitsvc_memo(fitsvc *f);
-points *fitsvc_points(fitsvc *f);
 
 /* The core scene of a stored scene, through the cache (scenes never change:
  * loaded once, shared).  GLINT_ENOTFOUND for unknown ids; "" (the scene of
  * a material fitted from a G-buffer set: none) GLINT_EUNSUPPORTED with
  * kind "no-scene".  OUT: *out, one
- * reference (cache_release(fitsvc_cache(f), *out)). */
+ * reference (cache_release on the cache it was lent, *out)). */
 int fitsvc_scene(fitsvc *f, const char *scene_id, cache_entry **out, glint_err *err);
 
 /* Fit the session's paintings with method m and params (copied).  0 with
@@ -114,11 +113,9 @@ int fitsvc_fit_gbuffers(fitsvc *f, const char *set_id, const method *m, const vo
                         struct samples *s, float **rgb, json_t **doc, char job_id[33],
                         srv_timing *tm, glint_err *err);
 
-/* Links of a material object ({"self", "factors_png", ...}; a new object). */
-json_t *fitsvc_material_links(const char *id, const char *session_id, const char *scene_id);
-
 /* The serialized material `id` with its session and scene (from memory when
- * there, else from the store; a copy: free out->text).  GLINT_ENOTFOUND. */
+ * there, else from the store with its links made again, fitsvc_config.links;
+ * a copy: free out->text).  GLINT_ENOTFOUND. */
 int fitsvc_material_doc(fitsvc *f, const char *id, memo_doc *out, glint_err *err);
 
 /* Prometheus text for /metrics: fit requests, cache levels, jobs, memos. */

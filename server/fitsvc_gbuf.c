@@ -2,8 +2,8 @@
  *
  * The samples and values come made (core gbfit.h, in the request); this
  * file runs them through the cache like any pattern (prep_try_samples now,
- * else prep_acquire_samples in a job), stores the material's files under
- * blobs "materials/<id>/" before its row, and answers the material object.
+ * else prep_acquire_samples in a job) and records the material as every
+ * fit is (fit_record), under the set.
  * Numerics are core's. */
 #include <pthread.h>
 #include <stdio.h>
@@ -14,8 +14,6 @@
 #include "clock.h"
 #include "fitsvc.h"
 #include "fitsvc_int.h"
-#include "ids.h"
-#include "json_text.h"
 #include "material.h"
 #include "prep.h"
 #include "store.h"
@@ -44,22 +42,6 @@ static void gb_task_free(void *p)
     free(t);
 }
 
-static json_t *gb_links(const char *mid, const char *set_id)
-{
-    char b[8][160];
-    snprintf(b[0], sizeof b[0], "/api/v1/materials/%s", mid);
-    snprintf(b[1], sizeof b[1], "/api/v1/materials/%s/factors.png", mid);
-    snprintf(b[2], sizeof b[2], "/api/v1/materials/%s/factors.exr", mid);
-    snprintf(b[3], sizeof b[3], "/api/v1/materials/%s/shader", mid);
-    snprintf(b[4], sizeof b[4], "/api/v1/materials/%s/package", mid);
-    snprintf(b[5], sizeof b[5], "/api/v1/materials/%s/eval", mid);
-    snprintf(b[6], sizeof b[6], "/api/v1/materials/%s/merl.binary", mid);
-    snprintf(b[7], sizeof b[7], "/api/v1/gbuffer-sets/%s", set_id);
-    return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:s}", "self", b[0], "factors_png",
-                     b[1], "factors_exr", b[2], "shader", b[3], "package", b[4], "eval", b[5],
-                     "merl", b[6], "gbuffer_set", b[7]);
-}
-
 static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err);
 
 /* Fit with a prepared precomputation and store the material (a painter's
@@ -75,64 +57,24 @@ static int gb_execute(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
 
 static int gb_execute_run(gb_task *t, prep *p, job *j, json_t **doc, glint_err *err)
 {
-    fitsvc *f = t->f;
     material m;
-    char mid[33], name[128], dir[4096], created[GLINT_TIME_LEN];
-    json_t *d = NULL, *views, *summary;
+    fit_report rep;
+    char mid[33];
     double t0 = glint_now();
     int rc;
 
     *doc = NULL;
     if (j)
         job_progress(j, "fit", 0.9);
-    if ((rc = prep_fit(p, NULL, t->rgb, &m, err)))
+    if ((rc = prep_fit_reusing(p, NULL, t->rgb, NULL, NULL, &m, &rep, err)))
         return rc;
-    if ((rc = fitsvc_material_check(&m, err))) {
-        material_free(&m);
-        return rc;
+    if (!(rc = fitsvc_material_check(&m, &rep, err))) {
+        fit_record_in in = {t->m,     NULL,      NULL, t->set_id, t->used, NULL, t->nviews,
+                            glint_now() - t0, t->tm};
+        srv_timing_step(t->tm, "fit", t0);
+        rc = fit_record(t->f, &in, &m, &rep, mid, doc, err);
     }
-    t0 = srv_timing_step(t->tm, "fit", t0);
-    if ((rc = glint_id_new_near(t->set_id, mid, err)))
-        goto done;
-    snprintf(name, sizeof name, "materials/%s", mid);
-    if ((rc = store_blob_path(f->st, name, dir, sizeof dir, err)) ||
-        (rc = material_save_deferred(&m, dir, err)))
-        goto done;
-    t0 = srv_timing_step(t->tm, "save", t0);
-    glint_time_iso(time(NULL), created);
-    views = json_array();
-    for (int v = 0; v < t->nviews; v++)
-        if (t->used[v])
-            json_array_append_new(views, json_integer(v));
-    d = json_pack("{s:s, s:s, s:s, s:s, s:o}", "id", mid, "gbuffer_set_id", t->set_id,
-                  "created", created, "method", t->m->name, "views_used", views);
-    if (!d) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "cannot build the material object");
-        goto done;
-    }
-    summary = material_summary(&m);
-    json_object_update(d, summary);
-    json_decref(summary);
-    json_object_set(d, "params", json_object_get(m.info, "params"));
-    json_object_set(d, "errors", json_object_get(m.info, "errors"));
-    json_object_set(d, "seconds", json_object_get(m.info, "seconds"));
-    json_object_set(d, "precomputation", json_object_get(m.info, "precomputation"));
-    if (json_object_get(m.info, "choice")) /* method auto: what it chose and why */
-        json_object_set(d, "choice", json_object_get(m.info, "choice"));
-    json_object_set_new(d, "links", gb_links(mid, t->set_id));
-    if ((rc = store_material_put(f->st, mid, t->set_id, d, err)))
-        goto done;
-    srv_timing_step(t->tm, "record", t0);
-    {
-        char *text = json_text(d, 0);
-        if (text)
-            memo_doc_put(f->memo, mid, "", "", text, strlen(text));
-        free(text);
-    }
-    *doc = d;
-    d = NULL;
-done:
-    json_decref(d);
+    fit_report_free(&rep);
     material_free(&m);
     return rc;
 }

@@ -1,5 +1,9 @@
-/* fitsvc_int.h: what the files of the fit service (fitsvc.c,
- * fitsvc_holdout.c) share.  Not part of the server's interface. */
+/* fitsvc_int.h: what the files of the fit service share: fitsvc.c (life
+ * cycle, scenes, material documents, metrics), fitsvc_task.c (a session
+ * fit's paintings and bounds), fitsvc_session.c (session fits),
+ * fitsvc_gbuf.c (G-buffer set fits), fitsvc_record.c (recording every
+ * fit), fitsvc_memo.c, fitsvc_holdout.c and fitsvc_pixels.c.  Not part of
+ * the server's interface. */
 #ifndef GLINT_FITSVC_INT_H
 #define GLINT_FITSVC_INT_H
 
@@ -9,6 +13,7 @@
 #include "events.h"
 #include "fitsvc.h"
 #include "jobs.h"
+#include "lru.h"
 #include "memo.h"
 #include "points.h"
 #include "prep.h"
@@ -17,24 +22,26 @@
 
 typedef struct pix_writer pix_writer;
 
-/* A session's fit memo (fitsvc_memo.c): its session, fit point (points.h's
- * key) and when it was last put back (0: free slot). */
+/* A session's fit memo (fitsvc_memo.c): its session and fit point
+ * (points.h's key).  A slot that holds one is in fitsvc's memo_lru (lru.h:
+ * the least recently put back makes room); a free one is in no list. */
 #define FITSVC_MEMOS 8
 typedef struct fit_memo_slot {
+    lru_node node;
+    int held;
     char session[33];
     char key[1024];
     method_memo mm;
-    unsigned long long used;
 } fit_memo_slot;
 
 /* A scene's samples per view, for the fits' memory bound (task_bytes):
  * scenes never change once made, so their documents need not be read and
- * parsed again on every fit. */
+ * parsed again on every fit.  A slot in use is in fitsvc's counts_lru. */
 #define FITSVC_SCENES 8
 typedef struct fit_scene_counts {
-    char id[33];             /* "": empty slot */
+    lru_node node;
+    char id[33];             /* "": empty slot (in no list) */
     int nviews;
-    unsigned long long used; /* fitsvc's memo_clock when last used */
     long n[SCENE_MAX_VIEWS];
 } fit_scene_counts;
 
@@ -55,8 +62,11 @@ struct fitsvc {
     json_t *holdouts;                /* held-out measurements scheduled, by scene hash/key */
     pix_writer *pix;                 /* fitsvc_pixels.c; NULL: none */
     fit_memo_slot memos[FITSVC_MEMOS]; /* under lock */
-    unsigned long long memo_clock, memo_chunks, memo_reused;
+    lru_list memo_lru;                 /* the slots that hold a memo (under lock) */
+    unsigned long long memo_chunks, memo_reused;
     fit_scene_counts counts[FITSVC_SCENES]; /* under lock */
+    lru_list counts_lru;                    /* the slots in use (under lock) */
+    fitsvc_links_fn links;           /* a material's links (fitsvc_config.links) */
 };
 
 /* Everything a fit needs, owned by the request or by its job. */
@@ -75,6 +85,42 @@ typedef struct fit_task {
     long nsamples;           /* samples of the painted views (task_bytes) */
     srv_timing *tm;          /* steps of a fit run now (NULL in a job) */
 } fit_task;
+
+/* The task's paintings, read as a snapshot (the painted views form the
+ * pattern).  OUT: t->nviews, paintings, pins, use, versions, nused.
+ * GLINT_EINVAL with kind "no-paintings" when nothing is painted,
+ * "invalid-painting" for one that cannot be used (fitsvc_task.c). */
+int fit_task_read_paintings(fit_task *t, glint_err *err);
+/* The fit's memory bound: the method's for the samples of the painted
+ * views, and the paintings.  OUT: t->nsamples, t->bytes. */
+int fit_task_bytes(fit_task *t, glint_err *err);
+/* Free a task and release what it holds (accepts NULL; a job's free). */
+void fit_task_free(void *t);
+
+/* A fit to record (fit_record): the method asked for (auto's, not the one
+ * it chose), where the fit came from (a session and its scene, or a
+ * G-buffer set), the views fitted and its time. */
+typedef struct fit_record_in {
+    const method *method;
+    const char *session_id, *scene_id; /* a session's fit; NULL or "" for a set's */
+    const char *set_id;                /* a G-buffer set's fit; NULL for a session's */
+    const unsigned char *use;          /* nviews: the views fitted */
+    const long long *versions;         /* nviews: their paintings' versions (a session's) */
+    int nviews;
+    double fit_seconds;                /* the fit's own time, for the "fit" event */
+    srv_timing *tm;                    /* steps "save" and "record" (NULL: none) */
+} fit_record_in;
+
+/* Record a fitted material m with its report r, every fit's one path
+ * (fitsvc_record.c): its files saved under blobs "materials/<id>/" (id new,
+ * near the session's or set's), its document (the API's material object:
+ * the method's members of it passed on from r->members unread, links by
+ * fitsvc_config.links), its row stored under the session or set (a
+ * session's with its "fit" event, in one commit), the document offered to
+ * the memo, and the session's streams notified.  OUT: mid, *doc (a new
+ * reference).  m and r stay the caller's. */
+int fit_record(fitsvc *f, const fit_record_in *in, const material *m, const fit_report *r,
+               char mid[33], json_t **doc, glint_err *err);
 
 /* Schedule the held-out measurement of a fit point (key: the point's) in
  * the background, unless one for it is pending; failures are logged. */
@@ -108,7 +154,7 @@ int fitsvc_cost_check(fitsvc *f, const method *m, const void *params, long nsamp
  * the fit's error statistics.  A fit whose statistics could not be written
  * (not finite) is refused with GLINT_ENUMERIC, kind "numerical-failure",
  * rather than stored without them. */
-int fitsvc_material_check(const material *m, glint_err *err);
+int fitsvc_material_check(const material *m, const fit_report *r, glint_err *err);
 
 /* Job callbacks for the precomputation (cls: the job); the first is a
  * glint_cancel's stop (the job was cancelled or the daemon stops). */

@@ -13,23 +13,25 @@
 
 #include "fitsvc_int.h"
 
-static int slot_of(fitsvc *f, const char *session, const char *key)
+static fit_memo_slot *slot_of(fitsvc *f, const char *session, const char *key)
 {
-    for (int i = 0; i < FITSVC_MEMOS; i++)
-        if (f->memos[i].used && strcmp(f->memos[i].session, session) == 0 &&
-            strcmp(f->memos[i].key, key) == 0)
-            return i;
-    return -1;
+    for (lru_node *x = f->memo_lru.head; x; x = x->next) {
+        fit_memo_slot *sl = lru_entry(x, fit_memo_slot, node);
+        if (strcmp(sl->session, session) == 0 && strcmp(sl->key, key) == 0)
+            return sl;
+    }
+    return NULL;
 }
 
 void fitsvc_memo_take(fitsvc *f, const char *session, const char *key, method_memo *mm)
 {
-    int i;
+    fit_memo_slot *sl;
     memset(mm, 0, sizeof *mm);
     pthread_mutex_lock(&f->lock);
-    if ((i = slot_of(f, session, key)) >= 0) {
-        *mm = f->memos[i].mm;
-        memset(&f->memos[i], 0, sizeof f->memos[i]);
+    if ((sl = slot_of(f, session, key))) {
+        *mm = sl->mm;
+        lru_remove(&f->memo_lru, &sl->node);
+        memset(sl, 0, sizeof *sl);
     }
     pthread_mutex_unlock(&f->lock);
 }
@@ -38,7 +40,7 @@ void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_mem
                      int reused, int chunks)
 {
     method_memo old;
-    int i, lru = 0;
+    fit_memo_slot *sl;
 
     memset(&old, 0, sizeof old);
     if (strlen(session) >= sizeof f->memos[0].session || strlen(key) >= sizeof f->memos[0].key) {
@@ -48,18 +50,22 @@ void fitsvc_memo_put(fitsvc *f, const char *session, const char *key, method_mem
     pthread_mutex_lock(&f->lock);
     f->memo_chunks += (unsigned long long)(chunks > 0 ? chunks : 0);
     f->memo_reused += (unsigned long long)(reused > 0 ? reused : 0);
-    if ((i = slot_of(f, session, key)) < 0) {
-        for (i = 0; i < FITSVC_MEMOS && f->memos[i].used; i++)
-            if (f->memos[i].used < f->memos[lru].used)
-                lru = i;
-        if (i == FITSVC_MEMOS)
-            i = lru;
+    if ((sl = slot_of(f, session, key))) { /* one put back meanwhile: this one replaces it */
+        lru_touch(&f->memo_lru, &sl->node);
+    } else if (f->memo_lru.n < FITSVC_MEMOS) { /* a free slot */
+        for (int i = 0; i < FITSVC_MEMOS && !sl; i++)
+            if (!f->memos[i].held)
+                sl = &f->memos[i];
+        sl->held = 1;
+        lru_push(&f->memo_lru, &sl->node);
+    } else { /* the least recently put back makes room */
+        sl = lru_entry(lru_oldest(&f->memo_lru), fit_memo_slot, node);
+        lru_touch(&f->memo_lru, &sl->node);
     }
-    old = f->memos[i].mm; /* a memo put back meanwhile, or the evicted one */
-    snprintf(f->memos[i].session, sizeof f->memos[i].session, "%s", session);
-    snprintf(f->memos[i].key, sizeof f->memos[i].key, "%s", key);
-    f->memos[i].mm = *mm;
-    f->memos[i].used = ++f->memo_clock;
+    old = sl->mm;
+    snprintf(sl->session, sizeof sl->session, "%s", session);
+    snprintf(sl->key, sizeof sl->key, "%s", key);
+    sl->mm = *mm;
     pthread_mutex_unlock(&f->lock);
     memset(mm, 0, sizeof *mm);
     method_memo_clear(&old);
@@ -70,20 +76,22 @@ void fitsvc_memo_close(fitsvc *f)
     for (int i = 0; i < FITSVC_MEMOS; i++)
         method_memo_clear(&f->memos[i].mm);
     memset(f->memos, 0, sizeof f->memos);
+    memset(&f->memo_lru, 0, sizeof f->memo_lru);
 }
 
 void fitsvc_memo_metrics(fitsvc *f, FILE *o)
 {
     unsigned long long chunks, reused;
-    int held = 0;
+    int held;
     unsigned long long values = 0;
     pthread_mutex_lock(&f->lock);
     chunks = f->memo_chunks;
     reused = f->memo_reused;
-    for (int i = 0; i < FITSVC_MEMOS; i++) {
-        held += f->memos[i].used != 0;
-        if (f->memos[i].used && f->memos[i].mm.values)
-            values += (unsigned long long)f->memos[i].mm.values_n * 3 * sizeof(float);
+    held = (int)f->memo_lru.n;
+    for (lru_node *x = f->memo_lru.head; x; x = x->next) {
+        const fit_memo_slot *sl = lru_entry(x, fit_memo_slot, node);
+        if (sl->mm.values)
+            values += (unsigned long long)sl->mm.values_n * 3 * sizeof(float);
     }
     pthread_mutex_unlock(&f->lock);
     fprintf(o, "# HELP glintd_fit_stream_chunks_total Chunks of samples of the fits' passes, "

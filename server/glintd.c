@@ -18,17 +18,28 @@
 #include <unistd.h>
 
 #include "admit.h"
+#include "api_common.h"
 #include "app.h"
+#include "cache.h"
 #include "config.h"
 #include "events.h"
 #include "fitsvc.h"
 #include "fsio.h"
+#include "jobs.h"
 #include "log.h"
+#include "memo.h"
 #include "par.h"
+#include "points.h"
 #include "render.h"
 #include "store.h"
 
 #define GLINTD_ARENAS_MAX 4 /* malloc arenas, at most (fewer on fewer cores) */
+
+/* The jobs' idle moments write the speed-accuracy record (points.h). */
+static void idle_flush(void *cls)
+{
+    points_flush(cls, 1);
+}
 
 static void usage(FILE *f)
 {
@@ -208,10 +219,14 @@ int main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
 
     {
-        char cache_dir[4200];
-        fitsvc_config fc = {cache_dir, a.cfg.cache_bytes, a.cfg.worker_threads, NULL,
-                            a.cfg.background_priority};
+        char cache_dir[4200], points_dir[4300];
+        fitsvc_config fc = {NULL, NULL, NULL, NULL, NULL, a.cfg.background_priority,
+                            api_material_links};
+        size_t budget = a.cfg.cache_bytes; /* precomputations; decoded paintings get an
+                                              eighth of it more, material documents a
+                                              thirty-second */
         snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
+        snprintf(points_dir, sizeof points_dir, "%s/points", cache_dir);
         if (admit_open(a.cfg.work_bytes, a.cfg.work_slots, a.cfg.work_wait_s, &a.work, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
@@ -223,7 +238,19 @@ int main(int argc, char **argv)
             events_open(a.store, &a.events) ||
             /* replicas on one database: their strokes reach this one's streams */
             store_listen(a.store, events_on_store_change, a.events, &ge) ||
-            fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
+            cache_open(cache_dir, budget, &a.cache, &ge) ||
+            memo_open(budget / 8, budget / 32, &a.memo, &ge) ||
+            points_open(points_dir, &a.points, &ge) ||
+            jobs_open(a.cfg.worker_threads, idle_flush, a.points, POINTS_SAVE_PERIOD_S, &a.jobs,
+                      &ge)) {
+            fprintf(stderr, "glintd: %s\n", ge.msg);
+            return 1;
+        }
+        fc.cache = a.cache;
+        fc.jobs = a.jobs;
+        fc.memo = a.memo;
+        fc.points = a.points;
+        if (fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
             render_open(8, 0, &a.render, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
@@ -309,12 +336,16 @@ int main(int argc, char **argv)
      * admitted; the jobs stop (their builds ask) and no new one starts */
     __atomic_store_n(&a.stopping, 1, __ATOMIC_RELAXED);
     admit_stop(a.work);
-    fitsvc_stop(a.fits);
+    jobs_stop(a.jobs);
     events_shutdown(a.events); /* end the event streams, then the connections */
-    fitsvc_shutdown(a.fits);   /* and the job streams */
+    jobs_shutdown(a.jobs);     /* and the job streams */
     http_server_stop(a.http);
     free(routes);
+    jobs_close(a.jobs); /* running jobs finish first: they hold cache entries */
     fitsvc_close(a.fits);
+    points_close(a.points);
+    memo_close(a.memo);
+    cache_close(a.cache);
     render_close(a.render);
     store_listen_stop(a.store); /* it wakes the streams: stop it first */
     events_close(a.events);

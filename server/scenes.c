@@ -165,7 +165,7 @@ int scenes_base(app *a, const char *id, int view, int scale, img *out, glint_err
         store_blob_put(a->store, name, data, len, NULL); /* a cache: failure costs time only */
 done:
     free(data);
-    cache_release(fitsvc_cache(a->fits), se);
+    cache_release(a->cache, se);
     json_decref(doc);
     if (rc)
         img_free(out);

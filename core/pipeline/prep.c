@@ -511,28 +511,91 @@ static json_t *level_report(const cache_entry *e, cache_how how, double spent)
                      "waited_seconds", how == CACHE_JOINED ? spent : 0.0);
 }
 
-json_t *prep_report(const prep *p)
+/* How the preparation as a whole got its levels: built if any was built,
+ * else joined if any was waited for, else hit. */
+static cache_how overall_how(const prep *p)
 {
-    json_t *r = json_object(), *levels = json_object();
     cache_how overall = p->pattern_how;
-    const cache_entry *last = p->m->nlevels ? p->lv[p->m->nlevels - 1] : p->pattern;
-
-    json_object_set_new(levels, "pattern",
-                        level_report(p->pattern, p->pattern_how, p->pattern_spent));
     for (int i = 0; i < p->m->nlevels; i++) {
-        json_object_set_new(levels, p->m->levels[i].name,
-                            level_report(p->lv[i], p->how[i], p->spent[i]));
         if (p->how[i] == CACHE_BUILT || overall == CACHE_BUILT)
             overall = CACHE_BUILT;
         else if (p->how[i] == CACHE_JOINED)
             overall = CACHE_JOINED;
     }
-    json_object_set_new(r, "memory", json_string(cache_how_names[overall]));
+    return overall;
+}
+
+json_t *prep_report(const prep *p)
+{
+    json_t *r = json_object(), *levels = json_object();
+    const cache_entry *last = p->m->nlevels ? p->lv[p->m->nlevels - 1] : p->pattern;
+
+    json_object_set_new(levels, "pattern",
+                        level_report(p->pattern, p->pattern_how, p->pattern_spent));
+    for (int i = 0; i < p->m->nlevels; i++)
+        json_object_set_new(levels, p->m->levels[i].name,
+                            level_report(p->lv[i], p->how[i], p->spent[i]));
+    json_object_set_new(r, "memory", json_string(cache_how_names[overall_how(p)]));
     json_object_set_new(r, "disk", json_string(cache_disk_names[first_disk(p)]));
     json_object_set_new(r, "key", json_string(cache_key(last)));
     json_object_set_new(r, "cold_seconds", json_real(cache_cold_seconds(last)));
     json_object_set_new(r, "levels", levels);
     return r;
+}
+
+void fit_report_free(fit_report *r)
+{
+    if (!r)
+        return;
+    json_decref(r->members);
+    memset(r, 0, sizeof *r);
+}
+
+/* The members of the material document that a fit's info gives: the ones
+ * every method writes, and those of a method's own that people read (auto:
+ * what it chose and why).  The rest of the info stays in material.json. */
+static const char *const doc_members[] = {"params", "errors", "seconds", "precomputation",
+                                          "choice"};
+
+/* The report of a fit of preparation p that made material m. */
+static int report_of(const prep *p, const material *m, fit_report *r, glint_err *err)
+{
+    const json_t *info = m->info, *errors = json_object_get(info, "errors");
+    const json_t *pre = json_object_get(info, "precomputation");
+    const json_t *rms = json_object_get(errors, "rms_painted");
+    const char *chosen = json_string_value(json_object_get(json_object_get(info, "choice"),
+                                                           "chosen"));
+
+    memset(r, 0, sizeof *r);
+    r->errors_ok = json_is_object(errors);
+    r->rms_painted = json_is_number(rms) ? json_number_value(rms) : NAN;
+    r->fit_seconds = json_number_value(json_object_get(json_object_get(info, "seconds"), "fit"));
+    r->memory = cache_how_names[overall_how(p)];
+    r->cold_seconds = prep_cold_seconds(p);
+    r->from_disk = prep_from_disk(p);
+    r->levels = 1 + p->m->nlevels;
+    r->levels_built = p->pattern_how == CACHE_BUILT;
+    r->levels_loaded = r->levels_built && cache_disk_of(p->pattern) == CACHE_DISK_LOADED;
+    for (int i = 0; i < p->m->nlevels; i++)
+        if (p->how[i] == CACHE_BUILT) {
+            r->levels_built++;
+            r->levels_loaded += cache_disk_of(p->lv[i]) == CACHE_DISK_LOADED;
+        }
+    r->stream_chunks = (int)json_integer_value(json_object_get(pre, "stream_chunks"));
+    r->stream_chunks_reused =
+        (int)json_integer_value(json_object_get(pre, "stream_chunks_reused"));
+    snprintf(r->chosen, sizeof r->chosen, "%s", chosen ? chosen : "");
+    r->params = json_object_get(info, "params");
+    if (!(r->members = json_object()))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    for (size_t i = 0; i < sizeof doc_members / sizeof doc_members[0]; i++) {
+        json_t *v = json_object_get(info, doc_members[i]);
+        if (v && json_object_set(r->members, doc_members[i], v)) {
+            fit_report_free(r);
+            return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+        }
+    }
+    return 0;
 }
 
 /* The fit's inputs from a preparation (the arrays are the caller's). */
@@ -575,7 +638,7 @@ int prep_predict(const prep *p, const material *m, float *rgb, glint_err *err)
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err)
 {
-    return prep_fit_reusing(p, paintings, rgb, NULL, NULL, out, err);
+    return prep_fit_reusing(p, paintings, rgb, NULL, NULL, out, NULL, err);
 }
 
 /* The most a memo keeps of a pattern's painted values (3 n floats): 16
@@ -676,7 +739,8 @@ static int gather_reusing(const prep *p, const samples *s, const img *paintings,
 }
 
 int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
-                     const uint64_t *tags, method_memo *memo, material *out, glint_err *err)
+                     const uint64_t *tags, method_memo *memo, material *out, fit_report *rep,
+                     glint_err *err)
 {
     const samples *s = cache_data(p->pattern);
     const void *levels[METHOD_MAX_LEVELS];
@@ -748,7 +812,9 @@ int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
     json_object_set_new(pre, "cache", prep_report(p));
     if (read >= 0)
         json_object_set_new(pre, "values_views_read", json_integer(read));
-    return 0;
+    if (rep && (rc = report_of(p, out, rep, err)))
+        material_free(out);
+    return rc;
 }
 
 typedef struct count_ctx {

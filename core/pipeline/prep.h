@@ -112,13 +112,48 @@ int prep_try_samples(cache *c, const method *m, const void *params, const sample
  * material's info gets precomputation.cache (prep_report). */
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err);
+
+/* What a fit reports, typed: the figures a service records and shows,
+ * read here once from the preparation and from the method's info, and the
+ * method's own JSON for the material document, which a service passes on
+ * without reading its keys.  Free with fit_report_free. */
+typedef struct fit_report {
+    int errors_ok;            /* the method gave its error statistics (all finite): a
+                                 material without them is not worth keeping */
+    double rms_painted;       /* RMS of fitted minus painted over the painted samples
+                                 (NaN without statistics) */
+    double fit_seconds;       /* the fit's own time, reading the paintings included */
+    const char *memory;       /* the preparation as a whole: "hit", "built" (a level was
+                                 built) or "joined" (one was waited for); static */
+    double cold_seconds;      /* prep_cold_seconds */
+    int from_disk;            /* prep_from_disk */
+    int levels;               /* the preparation's levels, its pattern included */
+    int levels_built;         /* of those, made for this fit (from disk or computed) */
+    int levels_loaded;        /* of those made, read from the disk layer */
+    int stream_chunks;        /* the method's pass over the samples in chunks (0: none) */
+    int stream_chunks_reused; /* of those, the sums a memo's earlier fit gave */
+    char chosen[16];          /* a method that picks another to fit (auto): the one it
+                                 picked; "" otherwise */
+    const json_t *params;     /* the parameters fitted with (the material's: valid while
+                                 it lives) */
+    json_t *members;          /* the material document's members the fit gives, as the
+                                 method wrote them (proto/schemas/Material.json): params,
+                                 errors, seconds, precomputation and the method's own
+                                 (auto: choice); owned */
+} fit_report;
+
+/* Free what *r owns and zero it (accepts NULL and a zeroed report). */
+void fit_report_free(fit_report *r);
+
 /* prep_fit for a caller that fits the same views again and again (a
  * painter's session): tags (s->nviews, one per view) name each view's
  * painting, memo keeps what the method may reuse for the views whose tag
  * did not change (method_memo; one fit at a time).  The material is the
- * same bits as prep_fit's.  tags or memo NULL: prep_fit. */
+ * same bits as prep_fit's.  tags or memo NULL: prep_fit.  rep (may be
+ * NULL): OUT the fit's report (fit_report_free, after a success only). */
 int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
-                     const uint64_t *tags, method_memo *memo, material *out, glint_err *err);
+                     const uint64_t *tags, method_memo *memo, material *out, fit_report *rep,
+                     glint_err *err);
 
 /* The painted values the method's own model gives the preparation's
  * samples with material m (fitted by the same method): OUT rgb[3 n], NaN

@@ -500,6 +500,9 @@ def test_11_session_materials_and_fit_events(d):
                 status=200, schema="MaterialList.json").json()["materials"]
     ids = [m["id"] for m in lst]
     assert S["m32"]["id"] in ids and len(ids) >= 5
+    # listed with the links a material is answered with, the MERL table's too
+    listed = lst[ids.index(S["m32"]["id"])]["links"]
+    assert listed == S["m32"]["links"] and "merl" in listed and "session" in listed, listed
     events = sse_events(d, "/api/v1/sessions/%s/events?since=0" % S["session"], tok(S["view"]),
                         timeout=30, stop_types=("fit",))
     fits = [e for e in events if e[1] == "fit"]

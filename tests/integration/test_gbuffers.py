@@ -88,6 +88,19 @@ def test_16_api_every_method(d):
         print("%-6s rms_painted %.6f, through a session %.6f" % (
             method, m["errors"]["rms_painted"], ms["errors"]["rms_painted"]))
         close(m["errors"]["rms_painted"], ms["errors"]["rms_painted"], 1e-5, method + " rms")
+        # one path records both: the same links to the material's own
+        # resources, each to where it came from (previews need the scene)
+        own = {"self", "factors_png", "factors_exr", "shader", "package", "eval", "merl"}
+        assert set(m["links"]) == own | {"gbuffer_set"}, m["links"]
+        assert set(ms["links"]) == own | {"session", "scene", "preview_png", "preview_exr"}, \
+            ms["links"]
+        for mat in (m, ms):
+            assert all(mat["links"][k].startswith("/api/v1/materials/" + mat["id"])
+                       for k in own), mat["links"]
+        assert m["links"]["gbuffer_set"] == "/api/v1/gbuffer-sets/" + S["set"]
+        assert ms["links"]["session"] == "/api/v1/sessions/" + sid
+        # what a method adds of its own reaches both documents as it wrote it
+        assert ("choice" in m) == ("choice" in ms) == (method == "auto"), method
     st = new_set(d, views=1)
     chans, w, h = exr_named.read(S["gb"][0])
     d.put("/api/v1/gbuffer-sets/%s/views/0/gbuffer.exr" % st["id"],
@@ -308,6 +321,9 @@ def test_13_api_the_material_is_served(d):
     lst = d.get("/api/v1/gbuffer-sets/%s/materials" % S["set"], headers=key(), status=200,
                 schema="MaterialList.json").json()["materials"]
     assert mid in [m["id"] for m in lst], lst
+    got = d.get("/api/v1/materials/" + mid, headers=key(), status=200).json()
+    assert [m["links"] for m in lst if m["id"] == mid] == [got["links"]], lst
+    assert "merl" in got["links"] and "gbuffer_set" in got["links"], got["links"]
 
 
 def test_14_api_bad_inputs(d):

@@ -288,28 +288,49 @@ static int copy_paintings(img *q)
 }
 
 /* A fit through a memo, against a fit of the same paintings from nothing:
- * 0 when they have the same log-factors (bits) and error figures.  OUT:
- * *read, the views it read (values_views_read), and when asked the chunks
- * of its pass the memo gave (stream_chunks_reused) and their count. */
+ * 0 when they have the same log-factors (bits) and error figures, and the
+ * fit's typed report says what its info says.  OUT: *read, the views it
+ * read (values_views_read), and when asked the chunks of its pass the memo
+ * gave (stream_chunks_reused) and their count. */
 static int memo_fit_counts(const prep *p, const img *q, const uint64_t *tags, method_memo *mm,
                            int *read, int *reused, int *chunks)
 {
     json_t *pre;
     material a, b;
+    fit_report rep;
     glint_err e;
-    int same, res;
-    if (prep_fit_reusing(p, q, NULL, tags, mm, &a, &e))
+    int same, res, told;
+    if (prep_fit_reusing(p, q, NULL, tags, mm, &a, &rep, &e))
         return -1;
     if (prep_fit(p, q, NULL, &b, &e)) {
+        fit_report_free(&rep);
         material_free(&a);
         return -1;
+    }
+    pre = json_object_get(a.info, "precomputation");
+    /* the preparation built every level (no disk layer), pattern included */
+    told = rep.errors_ok && rep.levels == 1 + method_hf3.nlevels &&
+           rep.levels_built == rep.levels && rep.levels_loaded == 0 && !rep.from_disk &&
+           strcmp(rep.memory, "built") == 0 && rep.chosen[0] == '\0' &&
+           rep.rms_painted == json_number_value(json_object_get(
+                                  json_object_get(a.info, "errors"), "rms_painted")) &&
+           rep.stream_chunks == json_integer_value(json_object_get(pre, "stream_chunks")) &&
+           rep.stream_chunks_reused ==
+               json_integer_value(json_object_get(pre, "stream_chunks_reused")) &&
+           json_equal(json_object_get(rep.members, "precomputation"), pre) &&
+           json_equal((json_t *)rep.params, json_object_get(a.info, "params")) &&
+           json_object_size(rep.members) == 4;
+    fit_report_free(&rep);
+    if (!told) {
+        material_free(&a);
+        material_free(&b);
+        return 2;
     }
     res = hf3_factors(&a)->res;
     same = res == hf3_factors(&b)->res &&
            memcmp(hf3_factors(&a)->logf, hf3_factors(&b)->logf,
                   (size_t)9 * res * sizeof(double)) == 0 &&
            json_equal(json_object_get(a.info, "errors"), json_object_get(b.info, "errors"));
-    pre = json_object_get(a.info, "precomputation");
     *read = (int)json_integer_value(json_object_get(pre, "values_views_read"));
     if (reused)
         *reused = (int)json_integer_value(json_object_get(pre, "stream_chunks_reused"));
@@ -421,7 +442,7 @@ TEST(a_memo_reads_again_only_the_views_whose_tags_changed)
             q[5].px[k] *= 0.5f;
         q[5].px[(size_t)s->pixel[i5] * q[5].channels] = NAN;
         tags[5] = 200;
-        ASSERT_EQ(prep_fit_reusing(p, q, NULL, tags, mm, &m, &e), GLINT_ENONFINITE);
+        ASSERT_EQ(prep_fit_reusing(p, q, NULL, tags, mm, &m, NULL, &e), GLINT_ENONFINITE);
         memcpy(q[5].px, keep, np * sizeof *keep);
         free(keep);
         tags[5] = 6;
