@@ -253,7 +253,7 @@ static int sweep_srbf(const char *small, glint_err *e)
     unsigned char all[SCENE_MAX_VIEWS];
     prep_scene_source src = {lend_scene, NULL, &fit_scene};
     void *other = method_params_new(cur_method);
-    prep_request rq = {cur_method, other, NULL, all};
+    prep_request rq = {cur_method, other, NULL, all, NULL};
     cache_entry *se = NULL;
     prep *pp = NULL;
     int bad, rc, runs = sweep_runs;
