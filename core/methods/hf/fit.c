@@ -23,11 +23,6 @@ void fit_params_default(fit_params *p)
     p->rcond = hf_rcond_default(HF_ROUTE_EIG);
 }
 
-json_t *fit_params_to_json(const fit_params *p)
-{
-    return method_params_to_json(&method_hf3, p);
-}
-
 void fit_prep_free(fit_prep *fp)
 {
     if (!fp)
@@ -87,20 +82,6 @@ int fit_prepare(fit_prep *fp, const scene *sc, const gbuf *g, const unsigned cha
     if (rc)
         return rc;
     fp->t_samples = glint_now() - t0;
-    rc = prepare_rest(fp, cache_dir, err);
-    if (rc)
-        fit_prep_free(fp);
-    return rc;
-}
-
-int fit_prepare_samples(fit_prep *fp, samples *s, const fit_params *p, const char *cache_dir,
-                        glint_err *err)
-{
-    int rc;
-    memset(fp, 0, sizeof *fp);
-    fp->params = *p;
-    fp->s = *s;
-    memset(s, 0, sizeof *s);
     rc = prepare_rest(fp, cache_dir, err);
     if (rc)
         fit_prep_free(fp);

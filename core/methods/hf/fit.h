@@ -40,9 +40,6 @@ typedef struct fit_params {
 
 void fit_params_default(fit_params *p);
 
-/* Parameters as JSON (a new object; caller decrefs). */
-json_t *fit_params_to_json(const fit_params *p);
-
 typedef struct fit_prep {
     fit_params params;
     samples s;
@@ -58,11 +55,6 @@ typedef struct fit_prep {
  * with G-buffers g (one per view).  cache_dir may be NULL (no disk cache). */
 int fit_prepare(fit_prep *fp, const scene *sc, const gbuf *g, const unsigned char *use,
                 const fit_params *p, const char *cache_dir, glint_err *err);
-
-/* Prepare from an explicit sample set (e.g. imported samples); takes
- * ownership of *s (zeroed on return). */
-int fit_prepare_samples(fit_prep *fp, samples *s, const fit_params *p, const char *cache_dir,
-                        glint_err *err);
 
 /* Fit one set of paintings (one img per scene view; unused views ignored).
  * OUT: *out, whose info holds parameters, precomputation report, timings
