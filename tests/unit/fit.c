@@ -1,5 +1,6 @@
 /* fit.c: the direct path of the hf3 method, paintings -> material in one call
- * (fit.h); the same stages as the method's levels (method_hf3.c). */
+ * (fit.h), for the tests and the benchmarks; the same stages as the
+ * method's levels (method_hf3.c). */
 #include "fit.h"
 
 #include <math.h>
@@ -9,19 +10,6 @@
 #include "clock.h"
 #include "method_hf3.h"
 #include "pcache.h"
-
-void fit_params_default(fit_params *p)
-{
-    memset(p, 0, sizeof *p);
-    p->res = 128;
-    p->lambda = 0.1;
-    p->reg.kind = HF_REG_TRUNC;
-    hf_map_default(&p->map, HF_MAP_ADD);
-    p->model = HF_MODEL_RADIANCE;
-    p->prec = HF_F64;
-    p->route = HF_ROUTE_EIG;
-    p->rcond = hf_rcond_default(HF_ROUTE_EIG);
-}
 
 void fit_prep_free(fit_prep *fp)
 {
