@@ -117,7 +117,7 @@ int cfile_open(const char *dir, const char *name, const char magic[8], uint32_t 
 int cfile_get(cfile_r *r, void *dst, size_t n)
 {
     if (r->len - r->at < n)
-        return -1;
+        return GLINT_EFORMAT;
     memcpy(dst, r->data + r->at, n);
     r->at += n;
     return 0;
@@ -201,12 +201,14 @@ int cfile_stream_get(cfile_s *r, void *dst, size_t n)
     /* pieces small enough to be hashed while the cache holds them */
     const size_t piece = (size_t)256 << 10;
     char *p = dst;
-    if (!r->hash || r->len - r->at < n)
-        return -1;
+    if (!r->hash)
+        return GLINT_EINVAL;
+    if (r->len - r->at < n)
+        return GLINT_EFORMAT;
     for (size_t off = 0; off < n; off += piece) {
         size_t k = n - off < piece ? n - off : piece;
         if (read_full(r->fd, p + off, k))
-            return -1;
+            return GLINT_EIO;
         XXH64_update(r->hash, p + off, k);
     }
     r->at += n;
@@ -403,16 +405,20 @@ const void *cfile_map_take(cfile_m *m, size_t n)
 int cfile_map_align(cfile_m *m, size_t a)
 {
     size_t to = (m->at + a - 1) / a * a;
-    if (!m->base || to > m->len)
-        return -1;
+    if (!m->base)
+        return GLINT_EINVAL;
+    if (to > m->len)
+        return GLINT_EFORMAT;
     m->at = to;
     return 0;
 }
 
 int cfile_map_keep(cfile_m *m, void **base, size_t *size)
 {
-    if (!m->base || map_register(m->base, m->size) < 0)
-        return -1;
+    if (!m->base)
+        return GLINT_EINVAL;
+    if (map_register(m->base, m->size) < 0)
+        return GLINT_ERANGE;
     *base = m->base;
     *size = m->size;
     memset(m, 0, sizeof *m);

@@ -37,7 +37,7 @@ void cfile_put_u32(cfile_w *b, uint32_t v);
 int cfile_write(cfile_w *b, const char *dir, const char *name, glint_err *err);
 
 /* Being read: cfile_open checks size, magic, checksum and kind; cfile_get
- * reads the fields in order (-1 past the end); cfile_done says whether
+ * reads the fields in order (GLINT_EFORMAT past the end); cfile_done says whether
  * every byte was read; cfile_close frees. */
 typedef struct cfile_r {
     char *data;
@@ -53,7 +53,8 @@ void cfile_close(cfile_r *r);
 /* Being read straight into the caller's arrays (a large level: no copy of
  * the whole file is held, nothing is copied twice).  cfile_stream_open
  * checks the size, magic and kind; cfile_stream_get reads the next n bytes
- * of fields into dst (-1 past the fields, or when the file ends early);
+ * of fields into dst (GLINT_EFORMAT past the fields, GLINT_EIO when the
+ * read fails or the file ends early; GLINT_EINVAL when r is not open);
  * cfile_stream_left: the field bytes not read yet; cfile_stream_end checks
  * that every field was read and that the checksum matches (GLINT_EFORMAT
  * otherwise): until then nothing read is to be trusted.
@@ -76,10 +77,10 @@ void cfile_stream_close(cfile_s *r);
  * checks its size, magic, kind and checksum before returning;
  * cfile_map_take gives the next n bytes of fields where they lie (NULL
  * past the fields); cfile_map_align skips to the next multiple of `a`
- * bytes from the file's start (-1 past the fields; the writer put the
+ * bytes from the file's start (GLINT_EFORMAT past the fields; the writer put the
  * same padding with cfile_pad).  The mapping is private and writable (a
  * write stays the process's own).  cfile_map_keep makes it the caller's
- * (base, size) until cfile_unmap (-1 when the process keeps 4096 already:
+ * (base, size) until cfile_unmap (GLINT_ERANGE when the process keeps 4096 already:
  * the caller copies what it needs, then cfile_map_close unmaps).
  *
  * Cut short.  glint replaces cache files by rename and never truncates

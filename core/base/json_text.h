@@ -33,7 +33,7 @@ char *json_text(const json_t *j, int indent);
 
 /* The shortest text of a finite v that reads back as v, with a "." or an
  * exponent, into buf (NUL-terminated; 32 bytes are enough), its length;
- * -1 when it does not fit or v is not finite. */
+ * GLINT_ERANGE when it does not fit, GLINT_ENONFINITE when v is not finite. */
 int glint_dtoa_shortest(double v, char *buf, int size);
 
 #ifdef __cplusplus

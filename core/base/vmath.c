@@ -5,6 +5,8 @@
 #include <string.h>
 #include <stdlib.h>
 
+#include "err.h"
+
 static int log_map3_generic(const double *in, double *out, size_t n, const double off[3],
                             double sign, double floor, long clamped[3]);
 
@@ -131,7 +133,7 @@ int vmath_limit(const char *cap)
 {
     int lv = isa_cpu(), mx = isa_cap(cap ? cap : getenv("GLINT_VMATH"));
     if (cap && strcmp(cap, "avx2") && strcmp(cap, "sse2") && strcmp(cap, "avx512"))
-        return -1;
+        return GLINT_EINVAL;
     isa_now = lv < mx ? lv : mx;
     return 0;
 }
@@ -644,7 +646,7 @@ const char *vmath_impl(void)
 int vmath_limit(const char *cap)
 {
     if (cap && strcmp(cap, "avx2") && strcmp(cap, "sse2") && strcmp(cap, "avx512"))
-        return -1;
+        return GLINT_EINVAL;
     return 0;
 }
 

@@ -54,7 +54,7 @@ const char *vmath_impl(void);
  * of the environment variable GLINT_VMATH (same names; read at the first
  * call otherwise).  For tests and benchmarks that compare the
  * implementations; not thread-safe against calls running meanwhile.
- * Returns -1 for an unknown name (nothing changes). */
+ * Returns GLINT_EINVAL for an unknown name (nothing changes). */
 int vmath_limit(const char *cap);
 
 /* a . b over n in four partial sums: independent chains, so a long scan is

@@ -105,8 +105,8 @@ void fit_opts_init(fit_opts *o);
  * --cache-dir, --no-cache and every parameter of every method (malloc'ed;
  * free()).  NULL when out of memory. */
 struct option *fit_opts_table(const struct option *own, int nown);
-/* Take option c (from that table): 0 if it was a fit option, -1 if not,
- * > 0 (an exit status, message printed) on error. */
+/* Take option c (from that table): 0 if it was a fit option,
+ * GLINT_ENOTFOUND if not, > 0 (an exit status, message printed) on error. */
 int fit_opt(fit_opts *o, int c, const char *arg);
 /* Pick the method and apply the parameters given: 0 or an exit status. */
 int fit_opts_resolve(fit_opts *o);

@@ -88,7 +88,7 @@ int fit_opt(fit_opts *o, int c, const char *arg)
     }
     np = param_names(names, 128);
     if (c < FIT_OPT_BASE || c >= FIT_OPT_BASE + np)
-        return -1;
+        return GLINT_ENOTFOUND;
     if (o->nset == FIT_OPTS_MAX)
         return fail(1, "too many fit options");
     o->set[o->nset].name = names[c - FIT_OPT_BASE];

@@ -312,19 +312,19 @@ int render_parse_vec3(const char *s, double v[3])
 {
     char *end;
     if (!s)
-        return -1;
+        return GLINT_EINVAL;
     for (int i = 0; i < 3; i++) {
         v[i] = strtod(s, &end);
         if (end == s || !isfinite(v[i]) || fabs(v[i]) > 1e6)
-            return -1;
+            return GLINT_EINVAL;
         s = end;
         if (i < 2) {
             if (*s != ',')
-                return -1;
+                return GLINT_EINVAL;
             s++;
         }
     }
-    return *s ? -1 : 0;
+    return *s ? GLINT_EINVAL : 0;
 }
 
 int render_camera_view(const scene *sc, const render_camera *c, scene_view *v, glint_err *err)

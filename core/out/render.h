@@ -252,7 +252,7 @@ void render_camera_init(render_camera *c);
 int render_camera_view(const scene *sc, const render_camera *c, scene_view *out,
                        glint_err *err);
 
-/* "x,y,z": three finite numbers (0, or -1). */
+/* "x,y,z": three finite numbers, each within 1e6 (0, or GLINT_EINVAL). */
 int render_parse_vec3(const char *text, double v[3]);
 
 #endif

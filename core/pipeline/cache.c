@@ -19,7 +19,6 @@ enum { E_BUILDING, E_READY, E_FAILED };
 struct cache_entry {
     char key[CACHE_KEY_MAX];
     int level;               /* index into the statistics */
-    char level_name[32];
     int state;
     int refs;                /* holders: callers and child entries */
     int in_table;            /* findable (and, when READY, in the LRU list) */
@@ -345,7 +344,6 @@ int cache_acquire(cache *c, const cache_level *lv, const char *key, void *ctx,
     }
     snprintf(e->key, sizeof e->key, "%s", key);
     e->level = li;
-    snprintf(e->level_name, sizeof e->level_name, "%s", c->st.level[li].name);
     e->state = E_BUILDING;
     e->refs = 1;
     e->in_table = 1;
@@ -438,11 +436,6 @@ double cache_cold_seconds(const cache_entry *e)
 cache_disk cache_disk_of(const cache_entry *e)
 {
     return e->disk;
-}
-
-const char *cache_level_name(const cache_entry *e)
-{
-    return e->level_name;
 }
 
 void cache_stats_get(cache *c, cache_stats *out)

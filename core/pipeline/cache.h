@@ -130,7 +130,6 @@ void cache_release(cache *c, cache_entry *e);
 /* About an entry (valid while it is held). */
 const void *cache_data(const cache_entry *e);
 const char *cache_key(const cache_entry *e);
-const char *cache_level_name(const cache_entry *e);
 cache_entry *cache_parent(const cache_entry *e);
 size_t cache_bytes(const cache_entry *e);
 double cache_build_seconds(const cache_entry *e); /* this level's own build or load */

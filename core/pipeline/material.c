@@ -253,11 +253,6 @@ static json_t *manifest_of(const material *m, glint_err *err)
     return root;
 }
 
-json_t *material_to_json(const material *m)
-{
-    return m->method ? manifest_of(m, NULL) : NULL;
-}
-
 /* material_save, material_save_deferred: `defer` leaves the method's
  * derived files unwritten. */
 static int save(const material *m, const char *dir, int defer, glint_err *err)

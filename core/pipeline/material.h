@@ -109,9 +109,6 @@ json_t *material_summary(const material *m);
 /* How the GPU evaluates it (see method.h; release with material_gpu_free). */
 int material_gpu_get(const material *m, material_gpu *out, glint_err *err);
 
-/* The manifest as a new JSON object (caller decrefs). */
-json_t *material_to_json(const material *m);
-
 /* Write the directory described above (created if missing; every file
  * written atomically, material.json last). */
 int material_save(const material *m, const char *dir, glint_err *err);

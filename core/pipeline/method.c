@@ -135,26 +135,6 @@ void method_names(char *buf, size_t len)
     }
 }
 
-int method_register(const method *m, glint_err *err)
-{
-    int rc = 0;
-    pthread_once(&registry_once, registry_init);
-    if (!m || !name_ok(m->name) || !m->fit || !m->mat || !m->params_default)
-        return glint_err_set(err, GLINT_EINVAL, "method \"%.32s\": incomplete table or bad name",
-                             m && m->name ? m->name : "");
-    pthread_mutex_lock(&registry_lock);
-    for (int i = 0; i < nregistry; i++)
-        if (strcmp(registry[i]->name, m->name) == 0)
-            rc = glint_err_set(err, GLINT_EINVAL, "method \"%s\" is registered already", m->name);
-    if (!rc && nregistry == METHOD_MAX)
-        rc = glint_err_set(err, GLINT_ERANGE, "the registry holds %d methods already",
-                           METHOD_MAX);
-    if (!rc)
-        registry[nregistry++] = m;
-    pthread_mutex_unlock(&registry_lock);
-    return rc;
-}
-
 /* ---- parameters ------------------------------------------------------------------ */
 
 void *method_params_new(const method *m)

@@ -22,8 +22,9 @@
  * canonical spelling (materials, reports, cache keys of measured points).
  *
  * Thread-safety: methods are immutable; their functions may be called from
- * any thread at once on different data.  The registry is filled before
- * threads start (method_register) and read-only afterwards. */
+ * any thread at once on different data.  The registry is filled once, on
+ * first use, from method_registry.c (and a test build's method_extra), and
+ * is read-only afterwards. */
 #ifndef GLINT_METHOD_H
 #define GLINT_METHOD_H
 
@@ -363,9 +364,6 @@ int method_count(void);
 const method *method_find(const char *name);
 /* The names, comma-separated, for messages (OUT: buf). */
 void method_names(char *buf, size_t len);
-/* Add a method at startup (a build's extra methods).  GLINT_EINVAL for a
- * bad or taken name, GLINT_ERANGE when the registry is full. */
-int method_register(const method *m, glint_err *err);
 
 /* ---- parameters through the table --------------------------------------------------------- */
 

@@ -470,11 +470,6 @@ cache_entry *prep_pattern(const prep *p)
     return p->pattern;
 }
 
-const method *prep_method(const prep *p)
-{
-    return p->m;
-}
-
 double prep_cold_seconds(const prep *p)
 {
     return cache_cold_seconds(p->m->nlevels ? p->lv[p->m->nlevels - 1] : p->pattern);

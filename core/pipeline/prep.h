@@ -183,7 +183,6 @@ const samples *prep_samples(const prep *p);
 /* The pattern's cache entry (for cache_ref: keeping the samples alive
  * beyond the prep, e.g. for a held-out measurement). */
 cache_entry *prep_pattern(const prep *p);
-const method *prep_method(const prep *p);
 
 void prep_release(cache *c, prep *p); /* accepts NULL */
 

@@ -597,23 +597,6 @@ int samples_gather_views(const samples *s, const img *paintings, const unsigned 
     }
 }
 
-int samples_scatter(const samples *s, const float *rgb, float fill, img *imgs, glint_err *err)
-{
-    for (int v = 0; v < s->nviews; v++) {
-        int rc = img_alloc(&imgs[v], s->width, s->height, 3, err);
-        if (rc) {
-            for (int u = 0; u < v; u++)
-                img_free(&imgs[u]);
-            return rc;
-        }
-        for (size_t p = 0; p < (size_t)s->width * s->height * 3; p++)
-            imgs[v].px[p] = fill;
-    }
-    for (int i = 0; i < s->n; i++)
-        memcpy(imgs[s->view[i]].px + (size_t)s->pixel[i] * 3, rgb + 3 * i, 3 * sizeof(float));
-    return 0;
-}
-
 int samples_export(const samples *s, const float *rgb, int channel, const char *path,
                    glint_err *err)
 {

@@ -151,11 +151,6 @@ typedef struct samples_change {
 /* A new history id: unique in the process, never 0 (thread-safe). */
 uint64_t samples_change_id(void);
 
-/* Scatter per-sample RGB values (3 * n) into one RGB image per view
- * (OUT: imgs[nviews], allocated here; non-sample pixels get `fill`). */
-int samples_scatter(const samples *s, const float *rgb, float fill,
-                    img *imgs, glint_err *err);
-
 /* Write the samples in the reference's text format, one line per sample:
  *   view row col nx ny nz wix wiy wiz wox woy woz value
  * (value: channel `channel` of rgb, or omitted when rgb is NULL). */

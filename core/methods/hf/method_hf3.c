@@ -19,6 +19,19 @@ static_assert(sizeof(hf_model) == sizeof(int) && sizeof(hf_precision) == sizeof(
 
 /* ---- parameters -------------------------------------------------------------------- */
 
+void fit_params_default(fit_params *p)
+{
+    memset(p, 0, sizeof *p);
+    p->res = 128;
+    p->lambda = 0.1;
+    p->reg.kind = HF_REG_TRUNC;
+    hf_map_default(&p->map, HF_MAP_ADD);
+    p->model = HF_MODEL_RADIANCE;
+    p->prec = HF_F64;
+    p->route = HF_ROUTE_EIG;
+    p->rcond = hf_rcond_default(HF_ROUTE_EIG);
+}
+
 int hf3_reg_parse(const char *text, void *field, glint_err *err)
 {
     return hf_reg_parse(text, field, err);

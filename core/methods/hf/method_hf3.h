@@ -1,8 +1,8 @@
 /* method_hf3.h: the three-factor homomorphic factorization as a method
- * (Jaroszkiewicz & McCool 2003): method_hf3, and what the direct path of
- * fit.h and the tests need of its material.
+ * (Jaroszkiewicz & McCool 2003): method_hf3, its parameters, and what the
+ * families built on it (maps, auto) and the tests need of its material.
  *
- * Parameters are fit_params (fit.h); levels after the sampling pattern:
+ * Parameters are fit_params (below); levels after the sampling pattern:
  *   decomposition  key pcache_key_hf(pattern hash, res, lambda, route, rcond):
  *                  the design (sparse rows) and the decomposition of
  *                  B = [A; lambda L]; on disk through pcache.h
@@ -11,12 +11,26 @@
 #ifndef GLINT_METHOD_HF3_H
 #define GLINT_METHOD_HF3_H
 
-#include "fit.h"
 #include "hf.h"
 #include "material.h"
 #include "method.h"
 
 extern const method method_hf3;
+
+/* hf3's parameters (method_params_to_json spells them). */
+typedef struct fit_params {
+    int res;            /* texels per factor (default 128: the knee in BENCHMARKS.md) */
+    double lambda;      /* Laplacian weight (default 0.1) */
+    hf_reg reg;         /* default trunc:full */
+    hf_map map;         /* default add:0.1 (log(0.1 + f)) */
+    hf_model model;     /* default radiance */
+    hf_precision prec;  /* default double */
+    hf_route route;     /* default eig */
+    double rcond;       /* 0: hf_rcond_default */
+} fit_params;
+
+/* The defaults above (OUT: *p). */
+void fit_params_default(fit_params *p);
 
 /* Dense B of the svd route above this many bytes is refused (GLINT_ERANGE,
  * naming the eig route): the SVD's workspace is a few times B. */
@@ -45,7 +59,7 @@ typedef struct hf3_decomp {
 } hf3_decomp;
 
 /* Design + decomposition for a pattern (the decomposition level's build;
- * fit_prepare's too), reporting the stages "design" (0.25) and
+ * the tests' direct path too, tests/unit/fit.h), reporting the stages "design" (0.25) and
  * "decomposition" (0.3) through `progress` (may be NULL).  OUT: *out
  * (hf3_decomp_clear releases it). */
 int hf3_decomp_make(const fit_params *p, const samples *s,

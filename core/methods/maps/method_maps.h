@@ -40,10 +40,10 @@
 #ifndef GLINT_METHOD_MAPS_H
 #define GLINT_METHOD_MAPS_H
 
-#include "fit.h"
 #include "material.h"
 #include "matmap.h"
 #include "method.h"
+#include "method_hf3.h"
 
 #define MAPS_RES_MIN 2
 #define MAPS_RES_MAX 1024

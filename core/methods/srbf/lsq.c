@@ -114,11 +114,6 @@ void lsq_work_free(lsq_work *w)
     free(w);
 }
 
-const char *lsq_mode_name(lsq_mode m)
-{
-    return m == LSQ_NONNEG ? "nonneg" : m == LSQ_NONE ? "none" : "energy";
-}
-
 const char *lsq_status_name(lsq_status s)
 {
     return s == LSQ_INFEASIBLE ? "infeasible" : s == LSQ_MAXITER ? "max_iterations" : "optimal";

@@ -118,7 +118,6 @@ void lsq_work_free(lsq_work *w);
 int lsq_solve(const lsq_problem *p, lsq_mode mode, double rcond, lsq_work *w, double *c,
               lsq_result *res, glint_err *err);
 
-const char *lsq_mode_name(lsq_mode m);      /* "energy", "nonneg", "none" */
 const char *lsq_status_name(lsq_status s);  /* "optimal", "infeasible", "max_iterations" */
 
 #endif

@@ -1,5 +1,6 @@
 /* method_srbf_material.c: operations on srbf materials (method_srbf.h):
- * evaluation, manifest members, GPU binding and the fragment stage.
+ * evaluation, manifest members and GPU binding (the fragment stage:
+ * method_srbf_glsl.c).
  *
  * Manifest members: "basis": {"res", "J", "sigma", "lambda", "layout":
  * "hemicube"}, "static": {"term", "f0", "alpha"}, "diffuse": [r, g, b],
@@ -11,7 +12,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "glsl_parts.h"
 #include "method_srbf.h"
 
 #ifndef M_PI
@@ -295,64 +295,3 @@ const material_ops srbf_material_ops = {
     .gpu = srbf_gpu,
     .summary = srbf_summary,
 };
-
-const char srbf_glsl_frag[] =
-    "#version 300 es\n"
-    "// glint_material.frag: a glint srbf material (GLSL ES 3.00): the BRDF\n"
-    "// rho/pi + p(h) s(wi, wo), p(h) = sum_j c_j exp(lambda (h.xi_j - 1)),\n"
-    "// h and xi_j in the local frame t = normalize(+z x n) (at the poles\n"
-    "// normalize(+x x n)), b = n x t.  glint_material returns f (n.wi), the\n"
-    "// radiance for a unit point light; main scales it by u_light_intensity.\n"
-    "// Binding contract in shader.json.\n"
-    GLSL_PRECISION
-    "uniform highp sampler2D u_lobes;\n"
-    "uniform int u_lobes_n;\n"
-    "uniform float u_lambda;\n"
-    "uniform vec3 u_rho;\n"
-    "uniform int u_static;\n"
-    "uniform float u_f0;\n"
-    "uniform float u_alpha;\n"
-    GLSL_STAGE_IO
-    GLSL_UNIT
-    "float glint_g1(float x, float a2)\n"
-    "{\n"
-    "    return sqrt(a2 + (1.0 - a2) * x * x);\n"
-    "}\n"
-    "\n"
-    "float glint_static(vec3 wi, vec3 wo, vec3 h)\n"
-    "{\n"
-    "    float a = wi.z, b = wo.z;\n"
-    "    float x = 1.0 - clamp(dot(wi, h), 0.0, 1.0);\n"
-    "    float x2 = x * x;\n"
-    "    float F = u_f0 + (1.0 - u_f0) * x2 * x2 * x;\n"
-    "    if (u_static == 0)\n"
-    "        return F / (a + b - a * b);\n"
-    "    float a2 = u_alpha * u_alpha;\n"
-    "    float G2 = 2.0 * a * b / (b * glint_g1(a, a2) + a * glint_g1(b, a2));\n"
-    "    return F * G2 / (4.0 * a * b);\n"
-    "}\n"
-    "\n"
-    "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
-    "{\n"
-    "    vec3 z = vec3(0.0, 0.0, 1.0);\n"
-    "    vec3 t = cross(z, n);\n"
-    "    if (length(t) < 1e-6)\n"
-    "        t = cross(vec3(1.0, 0.0, 0.0), n);\n"
-    "    t = normalize(t);\n"
-    "    vec3 bt = cross(n, t);\n"
-    "    vec3 li = vec3(dot(t, wi), dot(bt, wi), dot(n, wi));\n"
-    "    vec3 lo = vec3(dot(t, wo), dot(bt, wo), dot(n, wo));\n"
-    "    if (!(li.z > 0.0) || !(lo.z > 0.0))\n"
-    "        return vec3(0.0);\n"
-    "    vec3 h = glint_unit(li + lo);\n"
-    "    vec3 p = vec3(0.0);\n"
-    "    for (int j = 0; j < u_lobes_n; j++) {\n"
-    "        vec3 xi = texelFetch(u_lobes, ivec2(j, 0), 0).rgb;\n"
-    "        float e = u_lambda * (dot(h, xi) - 1.0);\n"
-    "        if (e > -40.0)\n"
-    "            p += texelFetch(u_lobes, ivec2(j, 1), 0).rgb * exp(e);\n"
-    "    }\n"
-    "    return (u_rho / 3.14159265358979 + p * glint_static(li, lo, h)) * li.z;\n"
-    "}\n"
-    "\n"
-    GLSL_MAIN;

@@ -1,7 +1,8 @@
 /* fit.h: the direct path of the hf3 method (method_hf3.h) from paintings
  * to a material, as one call without the memory cache, for the tests and
- * the benchmarks (the command line and the daemon fit through prep.h, which
- * runs the same stages as cache levels):
+ * the benchmarks only (built for them, not into glintcore: the command
+ * line and the daemon fit through prep.h, which runs the same stages as
+ * cache levels):
  *
  *   scene G-buffers -> samples (pattern) -> design -> decomposition
  *   (cached by content hash) -> regularized operator -> fit -> material
@@ -17,32 +18,16 @@
 #ifndef GLINT_FIT_H
 #define GLINT_FIT_H
 
-#include <jansson.h>
-
 #include "err.h"
 #include "gbuf.h"
 #include "hf.h"
 #include "img.h"
 #include "material.h"
+#include "method_hf3.h"
 #include "samples.h"
 #include "scene.h"
 
-typedef struct fit_params {
-    int res;            /* texels per factor (default 128: the knee in BENCHMARKS.md) */
-    double lambda;      /* Laplacian weight (default 0.1) */
-    hf_reg reg;         /* default trunc:full */
-    hf_map map;         /* default add:0.1 (log(0.1 + f)) */
-    hf_model model;     /* default radiance */
-    hf_precision prec;  /* default double */
-    hf_route route;     /* default eig */
-    double rcond;       /* 0: hf_rcond_default */
-} fit_params;
-
-void fit_params_default(fit_params *p);
-
-/* Parameters as JSON (a new object; caller decrefs). */
-json_t *fit_params_to_json(const fit_params *p);
-
+/* fit_params and fit_params_default: method_hf3.h. */
 typedef struct fit_prep {
     fit_params params;
     samples s;
@@ -59,11 +44,6 @@ typedef struct fit_prep {
 int fit_prepare(fit_prep *fp, const scene *sc, const gbuf *g, const unsigned char *use,
                 const fit_params *p, const char *cache_dir, glint_err *err);
 
-/* Prepare from an explicit sample set (e.g. imported samples); takes
- * ownership of *s (zeroed on return). */
-int fit_prepare_samples(fit_prep *fp, samples *s, const fit_params *p, const char *cache_dir,
-                        glint_err *err);
-
 /* Fit one set of paintings (one img per scene view; unused views ignored).
  * OUT: *out, whose info holds parameters, precomputation report, timings
  * and errors on the painted samples.  `rgb` may be given instead of
@@ -72,8 +52,6 @@ int fit_run(const fit_prep *fp, const img *paintings, const float *rgb, material
             glint_err *err);
 
 void fit_prep_free(fit_prep *fp);
-
-
 
 /* Error of a material against reference images on the sample pixels
  * (mask, n.wi > 0, n.wo > 0) of nviews G-buffers: RMS and max |difference|

@@ -1,5 +1,6 @@
 /* fit.c: the direct path of the hf3 method, paintings -> material in one call
- * (fit.h); the same stages as the method's levels (method_hf3.c). */
+ * (fit.h), for the tests and the benchmarks; the same stages as the
+ * method's levels (method_hf3.c). */
 #include "fit.h"
 
 #include <math.h>
@@ -9,24 +10,6 @@
 #include "clock.h"
 #include "method_hf3.h"
 #include "pcache.h"
-
-void fit_params_default(fit_params *p)
-{
-    memset(p, 0, sizeof *p);
-    p->res = 128;
-    p->lambda = 0.1;
-    p->reg.kind = HF_REG_TRUNC;
-    hf_map_default(&p->map, HF_MAP_ADD);
-    p->model = HF_MODEL_RADIANCE;
-    p->prec = HF_F64;
-    p->route = HF_ROUTE_EIG;
-    p->rcond = hf_rcond_default(HF_ROUTE_EIG);
-}
-
-json_t *fit_params_to_json(const fit_params *p)
-{
-    return method_params_to_json(&method_hf3, p);
-}
 
 void fit_prep_free(fit_prep *fp)
 {
@@ -87,20 +70,6 @@ int fit_prepare(fit_prep *fp, const scene *sc, const gbuf *g, const unsigned cha
     if (rc)
         return rc;
     fp->t_samples = glint_now() - t0;
-    rc = prepare_rest(fp, cache_dir, err);
-    if (rc)
-        fit_prep_free(fp);
-    return rc;
-}
-
-int fit_prepare_samples(fit_prep *fp, samples *s, const fit_params *p, const char *cache_dir,
-                        glint_err *err)
-{
-    int rc;
-    memset(fp, 0, sizeof *fp);
-    fp->params = *p;
-    fp->s = *s;
-    memset(s, 0, sizeof *s);
     rc = prepare_rest(fp, cache_dir, err);
     if (rc)
         fit_prep_free(fp);
