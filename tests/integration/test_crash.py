@@ -33,9 +33,7 @@ VIEWS = (0, 7)
 
 
 def random_stroke(rng, n):
-    # the first point in the image (a stroke wholly outside it is refused,
-    # 422 stroke-outside-image); the others may leave it
-    pts = [[rng.uniform(0, SIZE), rng.uniform(0, SIZE)]]
+    pts = [[rng.uniform(-3, SIZE + 3), rng.uniform(-3, SIZE + 3)]]
     for _ in range(rng.randint(0, 3)):
         pts.append([pts[-1][0] + rng.uniform(-6, 6), pts[-1][1] + rng.uniform(-6, 6)])
     s = {"diameter": rng.uniform(1.5, 8), "kappa": rng.uniform(0, 0.3),
