@@ -758,21 +758,26 @@ void store_sweep(store *s)
             continue;
         while ((f = readdir(sd))) {
             char name[600], path[STORE_PATH_MAX];
-            int keep;
+            int keep, pixels = 0;
             if (f->d_name[0] == '.')
                 continue;
             snprintf(name, sizeof name, "sessions/%s/%s", e->d_name, f->d_name);
             {   /* a blob's decoded pixels go with it (store_pixels.c) */
                 size_t nl = strlen(name), sl = strlen(STORE_PIXELS_SUFFIX);
-                if (nl > sl && strcmp(name + nl - sl, STORE_PIXELS_SUFFIX) == 0)
+                if (nl > sl && strcmp(name + nl - sl, STORE_PIXELS_SUFFIX) == 0) {
                     name[nl - sl] = '\0';
+                    pixels = 1;
+                }
             }
             db_reset(st);
             db_bind_text(st, 1, e->d_name);
             db_bind_text(st, 2, name);
             keep = db_step(st, "sweeping", NULL) == DB_ROW;
+            /* a blob may be another replica's write before its commit (the
+             * grace); pixels are written after their blob's commit, so
+             * pixels whose blob no row names are left over at any age */
             if (!keep && snprintf(path, sizeof path, "%s/%s", sdir, f->d_name) < (int)sizeof path &&
-                store_sweepable(s, path))
+                (pixels || store_sweepable(s, path)))
                 unlink(path);
         }
         closedir(sd);
