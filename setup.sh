@@ -182,9 +182,9 @@ case "$mode" in
     # the daemon's previews on the CPU (GLINT_EGL=off: llvmpipe's JIT hung
     # under ASan); two tests a core, as they spend much of their time
     # waiting on the daemon's answers and its restarts
-    GLINT_EGL=off stage "sanitizers: glintd driven by the integration tests" \
+    GLINT_EGL=off GLINT_TEST_TIMEOUT_SCALE=3 stage "sanitizers: glintd driven by the integration tests" \
       meson test -C build-asan --suite integration --no-suite plain --print-errorlogs \
-        --num-processes $(( $(nproc) * 2 )) \
+        --num-processes $(( $(nproc) * 2 )) --timeout-multiplier 3 \
         --logbase testlog-integration || failed=$((failed + 1))
     logs=(build/meson-logs/testlog.json build/meson-logs/testlog-valgrind.json
           build-asan/meson-logs/testlog.json build-asan/meson-logs/testlog-integration.json)

@@ -55,6 +55,11 @@ def validate(body, schema_name):
     jsonschema.Draft202012Validator(schema, resolver=resolver).validate(body)
 
 
+# Waits only catch hangs; a loaded machine or a sanitizer build (setup.sh
+# sets GLINT_TEST_TIMEOUT_SCALE=3 there, as meson's --timeout-multiplier)
+# makes them longer, never shorter.
+TIMEOUT_SCALE = max(1.0, float(os.environ.get("GLINT_TEST_TIMEOUT_SCALE") or 1))
+
 # What a sanitizer build of glintd reported (AddressSanitizer, LeakSanitizer,
 # UndefinedBehaviorSanitizer write to its stderr, which is the log): each
 # finding fails the run (run_tests).
@@ -174,7 +179,7 @@ class Daemon:
     def request(self, method, path, status=None, schema=None, **kw):
         """HTTP request; checks the status, validates JSON (problem bodies
         against Problem.json, others against `schema`) and returns the response."""
-        kw.setdefault("timeout", 60)
+        kw.setdefault("timeout", 60 * TIMEOUT_SCALE)
         r = requests.request(method, self.base + path, **kw)
         if status is not None:
             assert r.status_code == status, "%s %s: status %d, want %d: %s" % (
@@ -256,7 +261,7 @@ def png_pixels(data):
 def sse_events(d, path, headers, timeout=120, stop_types=("done", "failed")):
     """Read a server-sent event stream; return [(id, type, data)] up to and
     including the first event whose type is in stop_types."""
-    r = requests.get(d.base + path, headers=headers, stream=True, timeout=timeout)
+    r = requests.get(d.base + path, headers=headers, stream=True, timeout=timeout * TIMEOUT_SCALE)
     assert r.status_code == 200, r.text
     assert r.headers["Content-Type"].startswith("text/event-stream")
     events, cur = [], {}
@@ -290,7 +295,7 @@ def fit_material(d, session, body, timeout=300):
     assert r.status_code in (201, 202), r.text
     if r.status_code == 201:
         return r.json()["id"]
-    jid, deadline = r.json()["job"]["id"], time.time() + timeout
+    jid, deadline = r.json()["job"]["id"], time.time() + timeout * TIMEOUT_SCALE
     while True:
         j = d.get("/api/v1/jobs/" + jid, headers=tok, status=200).json()["job"]
         if j["state"] in ("done", "failed"):
