@@ -1,14 +1,15 @@
 /* method_hf2d.c: three factors, any of them 2D over parabolic maps, as a
  * method ("hf2d", hf2d.h): parameters, the decomposition level and its
- * disk file, the fit. */
+ * disk file, the fit (the level's making and the fit's report are those of
+ * every method with 2D factors: method_hfx.c), the resource rules. */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "clock.h"
 #include "hf4.h"
+#include "internal/method_hfx_int.h"
 #include "method_hf2d.h"
 #include "method_hf3_parts.h"
 
@@ -87,10 +88,9 @@ hf2d_shape hf2d_shape_of(const hf2d_params_t *p)
 /* ---- the decomposition level -------------------------------------------------------- */
 
 typedef struct hf2d_level {
+    hfx_level t;
     hf2d_design d;
     hf2d_decomp dc;
-    double t_design;
-    double t_load;       /* seconds reading it from disk (0: built) */
 } hf2d_level;
 
 static void level_free(void *data)
@@ -114,39 +114,36 @@ static void level_key(const void *params, const samples *s, const char *prev_key
     hf2d_level_key(params, s->hash, key, len);
 }
 
-static size_t level_bytes(const hf2d_level *x)
+/* Memory held: the level, the decomposition's operator and the design's
+ * per-sample arrays. */
+static size_t level_bytes(const void *level)
 {
+    const hf2d_level *x = level;
     size_t op = x->dc.x.M ? (size_t)x->dc.x.n * x->dc.x.nsamples : (size_t)x->dc.x.n * (x->dc.x.rank + 1);
     return sizeof *x + op * sizeof(double) +
            (size_t)x->d.n * (6 * (sizeof(int32_t) + sizeof(double)) + sizeof(double));
 }
 
-static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
+/* The report counts V alone, n x rank (level_bytes adds s^2). */
+static size_t operator_bytes(const void *level)
 {
-    const hf2d_params_t *p = in->params;
-    hf2d_shape sh = hf2d_shape_of(p);
-    hf2d_level *x = calloc(1, sizeof *x);
-    double t0 = glint_now();
-    int rc;
-    if (!x)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    if (in->progress)
-        in->progress(in->progress_cls, "design", 0.25);
-    if ((rc = hf2d_design_build(in->s, &sh, &x->d, err))) {
-        free(x);
-        return rc;
-    }
-    x->t_design = glint_now() - t0;
-    if (in->progress)
-        in->progress(in->progress_cls, "decomposition", 0.3);
-    if ((rc = hf2d_decomp_build(&x->d, p->lambda, p->lambda_2d, p->rcond, &x->dc, err))) {
-        level_free(x);
-        return rc;
-    }
-    out->data = x;
-    out->bytes = level_bytes(x);
-    out->free = level_free;
-    return 0;
+    const hfx_decomp *g = &((const hf2d_level *)level)->dc.x;
+    return (size_t)g->n * (g->M ? g->nsamples : g->rank) * 8;
+}
+
+/* The design of the pattern s for the params' resolutions. */
+static int design(const void *params, const samples *s, void *level, glint_err *err)
+{
+    hf2d_shape sh = hf2d_shape_of(params);
+    return hf2d_design_build(s, &sh, &((hf2d_level *)level)->d, err);
+}
+
+/* The decomposition of the level's design with the params' weights and cut. */
+static int decompose(const void *params, void *level, glint_err *err)
+{
+    const hf2d_params_t *p = params;
+    hf2d_level *x = level;
+    return hf2d_decomp_build(&x->d, p->lambda, p->lambda_2d, p->rcond, &x->dc, err);
 }
 
 /* The disk layer: <dir>/<hash of the key>.hf2d (cfile.h, kind 1) holds the
@@ -162,6 +159,54 @@ int hf2d_decomp_save(const hf2d_decomp *dc, const char *dir, const char *key, gl
     return hfx_decomp_file_save(HF2D_MAGIC, ".hf2d", u, 5, d, 2, &dc->x, dir, key, err);
 }
 
+/* What a file of the params' decomposition begins with (the loaded level's
+ * decomposition told the same); returns its unknowns. */
+static int file_head(const void *params, void *level, hfx_file_head *h)
+{
+    const hf2d_params_t *p = params;
+    hf2d_decomp *dc = &((hf2d_level *)level)->dc;
+    int off[4];
+    dc->sh = hf2d_shape_of(p);
+    dc->lambda = p->lambda, dc->lambda_2d = p->lambda_2d;
+    *h = (hfx_file_head){.u = {(uint32_t)dc->sh.res, (uint32_t)dc->sh.sres,
+                               (uint32_t)dc->sh.dims[0], (uint32_t)dc->sh.dims[1],
+                               (uint32_t)dc->sh.dims[2]},
+                         .d = {p->lambda, p->lambda_2d}, .nu = 5, .nd = 2};
+    return hf2d_offsets(&dc->sh, off);
+}
+
+/* The factors of the painted values rgb through the level. */
+static int fit_factors(const void *params, const void *level, const float *rgb, void *factors,
+                       hfx_fit_stats *st, glint_err *err)
+{
+    const hf2d_params_t *p = params;
+    const hf2d_level *x = level;
+    return hf2d_fit(&x->d, &x->dc, &p->map, p->model, rgb, factors, st, err);
+}
+
+/* What the adapter of the 2D-factor methods (internal/method_hfx_int.h)
+ * needs of hf2d: the level and the fit are its. */
+static const hfx_method hf2d_hfx = {
+    .self = &method_hf2d,
+    .level_size = sizeof(hf2d_level),
+    .decomp_at = offsetof(hf2d_level, dc.x),
+    .factors_size = sizeof(hf2d_factors),
+    .magic = HF2D_MAGIC,
+    .ext = ".hf2d",
+    .design = design,
+    .decompose = decompose,
+    .file_head = file_head,
+    .bytes = level_bytes,
+    .free = level_free,
+    .operator_bytes = operator_bytes,
+    .fit = fit_factors,
+};
+
+static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    return hfx_level_build(&hf2d_hfx, in, out, err);
+}
+
 static int level_save(const method_build_in *in, const char *dir, const char *key,
                       const cache_value *v, glint_err *err)
 {
@@ -172,29 +217,7 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
 static int level_load(const method_build_in *in, const char *dir, const char *key,
                       cache_value *out, glint_err *err)
 {
-    const hf2d_params_t *p = in->params;
-    hf2d_shape sh = hf2d_shape_of(p);
-    hf2d_level *x = calloc(1, sizeof *x);
-    uint32_t u[5] = {(uint32_t)sh.res, (uint32_t)sh.sres, (uint32_t)sh.dims[0],
-                     (uint32_t)sh.dims[1], (uint32_t)sh.dims[2]};
-    double d[2] = {p->lambda, p->lambda_2d}, t0 = glint_now();
-    int rc, off[4];
-
-    if (!x)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    x->dc.sh = sh;
-    x->dc.lambda = d[0], x->dc.lambda_2d = d[1];
-    if ((rc = hfx_decomp_file_load(HF2D_MAGIC, ".hf2d", u, 5, d, 2, hf2d_offsets(&sh, off),
-                                   in->s->n, &x->dc.x, dir, key, err)) ||
-        (rc = hf2d_design_build(in->s, &sh, &x->d, err))) {
-        level_free(x);
-        return rc;
-    }
-    x->t_load = x->t_design = glint_now() - t0;
-    out->data = x;
-    out->bytes = level_bytes(x);
-    out->free = level_free;
-    return 0;
+    return hfx_level_load(&hf2d_hfx, in, dir, key, out, err);
 }
 
 static const method_level hf2d_levels[] = {
@@ -206,46 +229,7 @@ static const method_level hf2d_levels[] = {
 
 static int hf2d_fit_op(const method_fit_in *in, material *out, glint_err *err)
 {
-    const hf2d_params_t *p = in->params;
-    const hf2d_level *x = in->levels[0];
-    const hfx_decomp *g = &x->dc.x;
-    hf2d_factors *fac = calloc(1, sizeof *fac);
-    hfx_fit_stats st;
-    json_t *pre, *tim, *errs;
-    double t0 = glint_now();
-    int rc;
-
-    memset(out, 0, sizeof *out);
-    if (!fac)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    if ((rc = hf2d_fit(&x->d, &x->dc, &p->map, p->model, in->rgb, fac, &st, err))) {
-        free(fac);
-        return rc;
-    }
-    pre = json_pack("{s:s, s:s, s:i, s:i, s:i, s:s, s:i, s:i, s:i, s:f, s:f, s:f}",
-                    "pattern_hash", in->s->hash, "cache_key", in->keys[0], "samples", in->s->n,
-                    "unknowns", g->n, "rows", g->rows, "form", g->form, "numerical_rank",
-                    g->rank, "gauge_dims", g->gauge_dims, "null_dims", g->null_dims, "rcond",
-                    g->rcond, "s_max", g->s_max, "s_min_kept", g->s_min_kept);
-    json_object_set_new(pre, "unreached", json_integer(g->unreached));
-    json_object_set_new(pre, "operator_bytes",
-                        json_integer((json_int_t)((size_t)g->n * (g->M ? g->nsamples : g->rank) *
-                                                  8)));
-    tim = json_pack("{s:f, s:f, s:f, s:f}", "samples", in->pattern_seconds, "design",
-                    in->how[0] == CACHE_BUILT ? x->t_design : 0.0, "decomposition",
-                    in->how[0] != CACHE_BUILT           ? in->spent[0]
-                    : in->disk[0] == CACHE_DISK_LOADED ? x->t_load
-                                                        : g->seconds,
-                    "fit", glint_now() - t0);
-    errs = json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:I}", "rms_painted", st.rms,
-                     "max_abs_painted", st.max_abs, "log_residual_rms", st.log_residual,
-                     "clamped", st.clamped[0], st.clamped[1], st.clamped[2], "log_max",
-                     st.log_max, "log_clamped", (json_int_t)st.log_clamped);
-    material_init(out, &method_hf2d, fac,
-                  json_pack("{s:o, s:o, s:o, s:o}", "params",
-                            method_params_to_json(&method_hf2d, p), "precomputation", pre,
-                            "seconds", tim, "errors", errs));
-    return 0;
+    return hfx_method_fit(&hf2d_hfx, in, out, err);
 }
 
 /* Memory of a cold fit: the normal (or dense) matrix, the eigenvectors and

@@ -1,16 +1,15 @@
 /* method_hf4.c: the four-factor product as a method ("hf4", hf4.h):
- * parameters, the decomposition level, the fit, and its material (the
- * factors, files, GPU binding). */
+ * parameters, the decomposition level and its disk file, the fit (the
+ * level's making and the fit's report are those of every method with 2D
+ * factors: method_hfx.c), the resource rules. */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "clock.h"
-#include "fsio.h"
 #include "hf4.h"
-#include "img.h"
+#include "internal/method_hfx_int.h"
 #include "material.h"
 #include "method_hf4_parts.h"
 
@@ -42,10 +41,9 @@ static void hf4_params_default(void *params)
 /* ---- the decomposition level -------------------------------------------------------- */
 
 typedef struct hf4_level {
+    hfx_level t;
     hf4_design d;
     hf4_decomp dc;
-    double t_design;
-    double t_load;       /* seconds reading it from disk (0: built) */
 } hf4_level;
 
 /* Doubles the decomposition holds: V and s^2, or the kernel form's M. */
@@ -62,6 +60,21 @@ static void level_free(void *data)
     free(x);
 }
 
+/* Memory held: the level, the decomposition's operator and the design's
+ * per-sample arrays. */
+static size_t level_bytes(const void *level)
+{
+    const hf4_level *x = level;
+    return sizeof *x + op_doubles(&x->dc) * sizeof(double) +
+           (size_t)x->d.d.n * (3 * (sizeof(int32_t) + sizeof(double)) + 2 * 12);
+}
+
+/* The report counts V and s^2 as op_doubles does. */
+static size_t operator_bytes(const void *level)
+{
+    return op_doubles(&((const hf4_level *)level)->dc) * 8;
+}
+
 void hf4_level_key(const hf4_params_t *p, const char pattern_hash[33], char *key, size_t len)
 {
     snprintf(key, len, "hf4:%s:%d:%d:%.17g:%.17g:%.17g", pattern_hash, p->res, p->sres,
@@ -75,32 +88,19 @@ static void level_key(const void *params, const samples *s, const char *prev_key
     hf4_level_key(params, s->hash, key, len);
 }
 
-static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
+/* The design of the pattern s for the params' resolutions. */
+static int design(const void *params, const samples *s, void *level, glint_err *err)
 {
-    const hf4_params_t *p = in->params;
-    hf4_level *x = calloc(1, sizeof *x);
-    double t0 = glint_now();
-    int rc;
-    if (!x)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    if (in->progress)
-        in->progress(in->progress_cls, "design", 0.25);
-    if ((rc = hf4_design_build(in->s, p->res, p->sres, &x->d, err))) {
-        free(x);
-        return rc;
-    }
-    x->t_design = glint_now() - t0;
-    if (in->progress)
-        in->progress(in->progress_cls, "decomposition", 0.3);
-    if ((rc = hf4_decomp_build(&x->d, p->lambda, p->lambda_s, p->rcond, &x->dc, err))) {
-        level_free(x);
-        return rc;
-    }
-    out->data = x;
-    out->bytes = sizeof *x + op_doubles(&x->dc) * sizeof(double) +
-                 (size_t)x->d.d.n * (3 * (sizeof(int32_t) + sizeof(double)) + 2 * 12);
-    out->free = level_free;
-    return 0;
+    const hf4_params_t *p = params;
+    return hf4_design_build(s, p->res, p->sres, &((hf4_level *)level)->d, err);
+}
+
+/* The decomposition of the level's design with the params' weights and cut. */
+static int decompose(const void *params, void *level, glint_err *err)
+{
+    const hf4_params_t *p = params;
+    hf4_level *x = level;
+    return hf4_decomp_build(&x->d, p->lambda, p->lambda_s, p->rcond, &x->dc, err);
 }
 
 /* The disk layer: <dir>/<hash of the key>.hf4 (cfile.h, kind 1) holds the
@@ -116,6 +116,50 @@ int hf4_decomp_save(const hf4_decomp *dc, const char *dir, const char *key, glin
     return hfx_decomp_file_save(HF4_MAGIC, ".hf4", u, 2, d, 2, &dc->x, dir, key, err);
 }
 
+/* What a file of the params' decomposition begins with (the loaded level's
+ * decomposition told the same); returns its unknowns. */
+static int file_head(const void *params, void *level, hfx_file_head *h)
+{
+    const hf4_params_t *p = params;
+    hf4_decomp *dc = &((hf4_level *)level)->dc;
+    dc->res = p->res, dc->sres = p->sres, dc->lambda = p->lambda, dc->lambda_s = p->lambda_s;
+    *h = (hfx_file_head){.u = {(uint32_t)p->res, (uint32_t)p->sres},
+                         .d = {p->lambda, p->lambda_s}, .nu = 2, .nd = 2};
+    return 3 * p->res + p->sres * p->sres;
+}
+
+/* The factors of the painted values rgb through the level. */
+static int fit_factors(const void *params, const void *level, const float *rgb, void *factors,
+                       hfx_fit_stats *st, glint_err *err)
+{
+    const hf4_params_t *p = params;
+    const hf4_level *x = level;
+    return hf4_fit(&x->d, &x->dc, &p->map, p->model, rgb, factors, st, err);
+}
+
+/* What the adapter of the 2D-factor methods (internal/method_hfx_int.h)
+ * needs of hf4: the level and the fit are its. */
+static const hfx_method hf4_hfx = {
+    .self = &method_hf4,
+    .level_size = sizeof(hf4_level),
+    .decomp_at = offsetof(hf4_level, dc.x),
+    .factors_size = sizeof(hf4_factors),
+    .magic = HF4_MAGIC,
+    .ext = ".hf4",
+    .design = design,
+    .decompose = decompose,
+    .file_head = file_head,
+    .bytes = level_bytes,
+    .free = level_free,
+    .operator_bytes = operator_bytes,
+    .fit = fit_factors,
+};
+
+static int level_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    return hfx_level_build(&hf4_hfx, in, out, err);
+}
+
 static int level_save(const method_build_in *in, const char *dir, const char *key,
                       const cache_value *v, glint_err *err)
 {
@@ -126,28 +170,7 @@ static int level_save(const method_build_in *in, const char *dir, const char *ke
 static int level_load(const method_build_in *in, const char *dir, const char *key,
                       cache_value *out, glint_err *err)
 {
-    const hf4_params_t *p = in->params;
-    hf4_level *x = calloc(1, sizeof *x);
-    uint32_t u[2] = {(uint32_t)p->res, (uint32_t)p->sres};
-    double d[2] = {p->lambda, p->lambda_s}, t0 = glint_now();
-    int rc;
-
-    if (!x)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    x->dc.res = p->res, x->dc.sres = p->sres, x->dc.lambda = d[0], x->dc.lambda_s = d[1];
-    if ((rc = hfx_decomp_file_load(HF4_MAGIC, ".hf4", u, 2, d, 2,
-                                   3 * p->res + p->sres * p->sres, in->s->n, &x->dc.x, dir, key,
-                                   err)) ||
-        (rc = hf4_design_build(in->s, p->res, p->sres, &x->d, err))) {
-        level_free(x);
-        return rc;
-    }
-    x->t_load = x->t_design = glint_now() - t0;
-    out->data = x;
-    out->bytes = sizeof *x + op_doubles(&x->dc) * sizeof(double) +
-                 (size_t)x->d.d.n * (3 * (sizeof(int32_t) + sizeof(double)) + 2 * 12);
-    out->free = level_free;
-    return 0;
+    return hfx_level_load(&hf4_hfx, in, dir, key, out, err);
 }
 
 const method_level hf4_levels[HF4_NLEVELS] = {
@@ -159,46 +182,7 @@ const method_level hf4_levels[HF4_NLEVELS] = {
 
 static int hf4_fit_op(const method_fit_in *in, material *out, glint_err *err)
 {
-    const hf4_params_t *p = in->params;
-    const hf4_level *x = in->levels[0];
-    hf4_factors *fac = calloc(1, sizeof *fac);
-    hf4_fit_stats st;
-    json_t *pre, *tim, *errs;
-    double t0 = glint_now();
-    int rc;
-
-    memset(out, 0, sizeof *out);
-    if (!fac)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    if ((rc = hf4_fit(&x->d, &x->dc, &p->map, p->model, in->rgb, fac, &st, err))) {
-        free(fac);
-        return rc;
-    }
-    pre = json_pack("{s:s, s:s, s:i, s:i, s:i, s:s, s:i, s:i, s:i, s:f, s:f, s:f}",
-                    "pattern_hash", in->s->hash, "cache_key", in->keys[0], "samples", in->s->n,
-                    "unknowns", x->dc.x.n, "rows", x->dc.x.rows, "form", x->dc.x.form,
-                    "numerical_rank", x->dc.x.rank, "gauge_dims", x->dc.x.gauge_dims, "null_dims",
-                    x->dc.x.null_dims, "rcond", x->dc.x.rcond, "s_max", x->dc.x.s_max,
-                    "s_min_kept", x->dc.x.s_min_kept);
-    json_object_set_new(pre, "unreached", json_integer(x->dc.x.unreached));
-    json_object_set_new(pre, "operator_bytes",
-                        json_integer((json_int_t)(op_doubles(&x->dc) * 8)));
-    tim = json_pack("{s:f, s:f, s:f, s:f}", "samples", in->pattern_seconds, "design",
-                    in->how[0] == CACHE_BUILT ? x->t_design : 0.0, "decomposition",
-                    in->how[0] != CACHE_BUILT           ? in->spent[0]
-                    : in->disk[0] == CACHE_DISK_LOADED ? x->t_load
-                                                        : x->dc.x.seconds,
-                    "fit",
-                    glint_now() - t0);
-    errs = json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:I}", "rms_painted", st.rms,
-                     "max_abs_painted", st.max_abs, "log_residual_rms", st.log_residual,
-                     "clamped", st.clamped[0], st.clamped[1], st.clamped[2], "log_max",
-                     st.log_max, "log_clamped", (json_int_t)st.log_clamped);
-    material_init(out, &method_hf4, fac,
-                  json_pack("{s:o, s:o, s:o, s:o}", "params",
-                            method_params_to_json(&method_hf4, p), "precomputation", pre,
-                            "seconds", tim, "errors", errs));
-    return 0;
+    return hfx_method_fit(&hf4_hfx, in, out, err);
 }
 
 /* Memory of a cold fit: the normal (or dense) matrix and the eigenvectors,
