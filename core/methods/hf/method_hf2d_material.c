@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "img.h"
+#include "internal/method_hfx_int.h"
 #include "method_hf2d.h"
 
 static const char *const factor_names[3] = {"p", "q", "r"};
@@ -56,14 +57,10 @@ static int to_json(const void *data, json_t *root, glint_err *err)
     for (int c = 0; c < 3; c++)
         json_array_append_new(a, json_real(f->a_used[c]));
     json_object_set_new(root, "a_used", a);
-    for (int j = 0; j < 3; j++) {
-        json_t *rows = json_array();
-        for (int k = f->off[j]; k < f->off[j + 1]; k++)
-            json_array_append_new(rows, json_pack("[f,f,f]", f->logy[3 * (size_t)k],
-                                                  f->logy[3 * (size_t)k + 1],
-                                                  f->logy[3 * (size_t)k + 2]));
-        json_object_set_new(nodes, factor_names[j], rows);
-    }
+    for (int j = 0; j < 3; j++)
+        json_object_set_new(nodes, factor_names[j],
+                            hfx_log_nodes_json(f->logy + 3 * (size_t)f->off[j],
+                                               f->off[j + 1] - f->off[j]));
     json_object_set_new(root, "log_nodes", nodes);
     json_object_set_new(root, "frame",
                         json_string("t = normalize(Z x n), b = n x t; t = +X where |Z x n| "
@@ -78,31 +75,62 @@ static int to_json(const void *data, json_t *root, glint_err *err)
     return 0;
 }
 
+/* Each factor's log nodes from the manifest's log_nodes into f->logy (its
+ * shape set). */
+static int nodes_from_json(hf2d_factors *f, const json_t *nodes, const char *file,
+                           glint_err *err)
+{
+    for (int j = 0; j < 3; j++) {
+        json_t *rows = json_object_get(nodes, factor_names[j]);
+        int cnt = f->off[j + 1] - f->off[j], rc;
+        char what[16];
+        if (!json_is_array(rows) || json_array_size(rows) != (size_t)cnt)
+            return glint_err_set(err, GLINT_EFORMAT, "%s: log_nodes.%s must hold %d nodes",
+                                 file, factor_names[j], cnt);
+        snprintf(what, sizeof what, "log_nodes.%s", factor_names[j]);
+        if ((rc = hfx_log_nodes_get(rows, cnt, f->logy + 3 * (size_t)f->off[j], file, what,
+                                    err)))
+            return rc;
+    }
+    return 0;
+}
+
+/* The factors' shape from the manifest's res, res_2d and dims (OUT: *sh). */
+static int shape_from_json(const json_t *root, const char *file, hf2d_shape *sh,
+                           glint_err *err)
+{
+    json_t *v, *dims;
+    v = json_object_get(root, "res");
+    sh->res = json_is_integer(v) ? (int)json_integer_value(v) : -1;
+    v = json_object_get(root, "res_2d");
+    sh->sres = json_is_integer(v) ? (int)json_integer_value(v) : -1;
+    dims = json_object_get(root, "dims");
+    if (!json_is_array(dims) || json_array_size(dims) != 3)
+        return glint_err_set(err, GLINT_EFORMAT, "%s: dims must be an array of 3 integers",
+                             file);
+    for (int j = 0; j < 3; j++) {
+        json_t *d = json_array_get(dims, (size_t)j);
+        sh->dims[j] = json_is_integer(d) ? (int)json_integer_value(d) : -1;
+    }
+    if (hf2d_shape_check(sh, err)) {
+        glint_err_prefix(err, "%s", file);
+        return GLINT_EFORMAT;
+    }
+    return 0;
+}
+
 static int from_json(const json_t *root, const char *file, void **data, glint_err *err)
 {
     hf2d_factors *f;
     const char *model, *mapping;
-    json_t *v, *dims, *nodes;
+    json_t *v;
     hf2d_shape sh;
     hf_map map;
     int rc = GLINT_EFORMAT, n;
 
     *data = NULL;
-    v = json_object_get(root, "res");
-    sh.res = json_is_integer(v) ? (int)json_integer_value(v) : -1;
-    v = json_object_get(root, "res_2d");
-    sh.sres = json_is_integer(v) ? (int)json_integer_value(v) : -1;
-    dims = json_object_get(root, "dims");
-    if (!json_is_array(dims) || json_array_size(dims) != 3)
-        return glint_err_set(err, rc, "%s: dims must be an array of 3 integers", file);
-    for (int j = 0; j < 3; j++) {
-        json_t *d = json_array_get(dims, (size_t)j);
-        sh.dims[j] = json_is_integer(d) ? (int)json_integer_value(d) : -1;
-    }
-    if (hf2d_shape_check(&sh, err)) {
-        glint_err_prefix(err, "%s", file);
+    if (shape_from_json(root, file, &sh, err))
         return rc;
-    }
     model = json_string_value(json_object_get(root, "model"));
     mapping = json_string_value(json_object_get(root, "mapping"));
     if (!model || (strcmp(model, "radiance") != 0 && strcmp(model, "brdf") != 0))
@@ -133,30 +161,9 @@ static int from_json(const json_t *root, const char *file, void **data, glint_er
         free_op(f);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     }
-    nodes = json_object_get(root, "log_nodes");
-    for (int j = 0; j < 3; j++) {
-        json_t *rows = json_object_get(nodes, factor_names[j]);
-        int cnt = f->off[j + 1] - f->off[j];
-        if (!json_is_array(rows) || json_array_size(rows) != (size_t)cnt) {
-            free_op(f);
-            return glint_err_set(err, rc, "%s: log_nodes.%s must hold %d nodes", file,
-                                 factor_names[j], cnt);
-        }
-        for (int k = 0; k < cnt; k++) {
-            json_t *t = json_array_get(rows, (size_t)k);
-            for (int c = 0; c < 3; c++) {
-                json_t *x = json_array_get(t, (size_t)c);
-                double d = json_is_number(x) ? json_number_value(x) : NAN;
-                if (!json_is_array(t) || json_array_size(t) != 3 || !isfinite(d) ||
-                    fabs(d) > 700.0) {
-                    free_op(f);
-                    return glint_err_set(err, GLINT_ENONFINITE,
-                                         "%s: log_nodes.%s[%d] must be [r, g, b], finite "
-                                         "numbers in [-700, 700]", file, factor_names[j], k);
-                }
-                f->logy[3 * (size_t)(f->off[j] + k) + c] = d;
-            }
-        }
+    if ((rc = nodes_from_json(f, json_object_get(root, "log_nodes"), file, err))) {
+        free_op(f);
+        return rc;
     }
     *data = f;
     return 0;
@@ -245,17 +252,11 @@ static json_t *summary(const void *data)
 static int gpu(const void *data, material_gpu *g, glint_err *err)
 {
     const hf2d_factors *f = data;
-    int row0[3], W, H;
+    int row0[3], W, H, rc;
 
-    memset(g, 0, sizeof *g);
     layout(f, row0, &W, &H);
-    g->program = "hf2d";
-    g->frag_src = hf2d_glsl_frag;
-    g->tex_uniform = "u_factors";
-    g->tex_w = W;
-    g->tex_h = H;
-    if (!(g->tex = calloc((size_t)W * H * 3, sizeof *g->tex)))
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the factor texture");
+    if ((rc = hfx_gpu_begin(g, "hf2d", hf2d_glsl_frag, W, H, err)))
+        return rc;
     fill(f, g->tex, ident);
     g->nuniforms = 7;
     g->uniform[0] = (material_gpu_uniform){"u_res", "int", {f->sh.res, 0, 0},
@@ -267,14 +268,7 @@ static int gpu(const void *data, material_gpu *g, glint_err *err)
                                            "1 or 2: dimensions of p, q, r"};
     g->uniform[3] = (material_gpu_uniform){"u_rows", "vec3", {row0[0], row0[1], row0[2]},
                                            "first texture row of p, q, r"};
-    g->uniform[4] = (material_gpu_uniform){"u_map_kind", "int", {(int)f->map.kind, 0, 0},
-                                           "inverse mapping: 0 log, 1 add, 2 sub"};
-    g->uniform[5] = (material_gpu_uniform){"u_a", "vec3",
-                                           {f->a_used[0], f->a_used[1], f->a_used[2]},
-                                           "mapping offset per channel"};
-    g->uniform[6] = (material_gpu_uniform){"u_model_brdf", "int",
-                                           {f->model == HF_MODEL_BRDF, 0, 0},
-                                           "1: multiply by n.wi (brdf model)"};
+    hfx_gpu_mapping(&g->uniform[4], &f->map, f->a_used, f->model);
     g->manifest = json_pack("{s:s, s:i, s:i}", "texture_layout",
                             "u_factors: RGB float log nodes, width max(res, res_2d); a 1D "
                             "factor one row (node k at column k), a 2D factor res_2d rows "

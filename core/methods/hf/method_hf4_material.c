@@ -6,6 +6,7 @@
 
 #include "fsio.h"
 #include "img.h"
+#include "internal/method_hfx_int.h"
 #include "method_hf3_parts.h"
 #include "method_hf4.h"
 
@@ -47,11 +48,8 @@ static int hf4_to_json(const void *data, json_t *root, glint_err *err)
     int rc;
     if ((rc = hf3_material_ops.to_json(&h, root, err)))
         return rc;
-    if (!(ls = json_array()))
+    if (!(ls = hfx_log_nodes_json(f->logs, f->sres * f->sres)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for the manifest");
-    for (int t = 0; t < f->sres * f->sres; t++)
-        json_array_append_new(ls, json_pack("[f,f,f]", f->logs[3 * t], f->logs[3 * t + 1],
-                                            f->logs[3 * t + 2]));
     json_object_set_new(root, "s_res", json_integer(f->sres));
     json_object_set_new(root, "log_s", ls);
     json_object_set_new(root, "s_nodes",
@@ -98,20 +96,9 @@ static int hf4_from_json(const json_t *root, const char *file, void **data, glin
     memcpy(f->a_used, h->a_used, sizeof f->a_used);
     f->logf = h->logf;
     free(h);
-    for (int t = 0; t < S * S; t++) {
-        json_t *a = json_array_get(ls, (size_t)t);
-        for (int c = 0; c < 3; c++) {
-            json_t *x = json_array_get(a, (size_t)c);
-            double d = json_is_number(x) ? json_number_value(x) : NAN;
-            if (!json_is_array(a) || json_array_size(a) != 3 || !isfinite(d) ||
-                fabs(d) > 700.0) {
-                hf4_free_op(f);
-                return glint_err_set(err, GLINT_ENONFINITE,
-                                     "%s: log_s[%d] must be [r, g, b], finite numbers in "
-                                     "[-700, 700]", file, t);
-            }
-            f->logs[3 * t + c] = d;
-        }
+    if ((rc = hfx_log_nodes_get(ls, S * S, f->logs, file, "log_s", err))) {
+        hf4_free_op(f);
+        return rc;
     }
     hf4_factors_means(f);
     *data = f;
@@ -164,16 +151,10 @@ static json_t *hf4_summary(const void *data)
 static int hf4_gpu(const void *data, material_gpu *g, glint_err *err)
 {
     const hf4_factors *f = data;
-    int R = f->res, S = f->sres, W = R > S ? R : S, H = 3 + S;
+    int R = f->res, S = f->sres, W = R > S ? R : S, H = 3 + S, rc;
 
-    memset(g, 0, sizeof *g);
-    g->program = "hf4";
-    g->frag_src = hf4_glsl_frag;
-    g->tex_uniform = "u_factors";
-    g->tex_w = W;
-    g->tex_h = H;
-    if (!(g->tex = calloc((size_t)W * H * 3, sizeof *g->tex)))
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the factor texture");
+    if ((rc = hfx_gpu_begin(g, "hf4", hf4_glsl_frag, W, H, err)))
+        return rc;
     for (int j = 0; j < 3; j++)
         for (int k = 0; k < R; k++)
             for (int c = 0; c < 3; c++)
@@ -187,14 +168,7 @@ static int hf4_gpu(const void *data, material_gpu *g, glint_err *err)
     g->uniform[0] = (material_gpu_uniform){"u_res", "int", {R, 0, 0}, "texels per 1D factor"};
     g->uniform[1] = (material_gpu_uniform){"u_sres", "int", {S, 0, 0},
                                            "nodes per side of the spatial factor"};
-    g->uniform[2] = (material_gpu_uniform){"u_map_kind", "int", {(int)f->map.kind, 0, 0},
-                                           "inverse mapping: 0 log, 1 add, 2 sub"};
-    g->uniform[3] = (material_gpu_uniform){"u_a", "vec3",
-                                           {f->a_used[0], f->a_used[1], f->a_used[2]},
-                                           "mapping offset per channel"};
-    g->uniform[4] = (material_gpu_uniform){"u_model_brdf", "int",
-                                           {f->model == HF_MODEL_BRDF, 0, 0},
-                                           "1: multiply by n.wi (brdf model)"};
+    hfx_gpu_mapping(&g->uniform[2], &f->map, f->a_used, f->model);
     g->manifest = json_pack("{s:s, s:i, s:i}", "texture_layout",
                             "u_factors: RGB float, width max(res, s_res); rows 0-2 log p, q, "
                             "r (node texels); rows 3 .. 3 + s_res - 1 log s, node (i, j) at "

@@ -1,6 +1,7 @@
 /* method_hfx.c: the methods of factor products with 2D factors (hf4,
- * hf2d) as methods: their decomposition level and their fit's report
- * (internal/method_hfx_int.h). */
+ * hf2d) as methods: their decomposition level, their fit's report and the
+ * common parts of their materials (internal/method_hfx_int.h). */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -138,4 +139,58 @@ int hfx_method_fit(const hfx_method *m, const method_fit_in *in, material *out,
                             method_params_to_json(m->self, in->params), "precomputation", pre,
                             "seconds", tim, "errors", errs));
     return 0;
+}
+
+/* ---- the material --------------------------------------------------------------------- */
+
+json_t *hfx_log_nodes_json(const double *v, int count)
+{
+    json_t *a = json_array();
+    for (int k = 0; a && k < count; k++)
+        json_array_append_new(a, json_pack("[f,f,f]", v[3 * (size_t)k], v[3 * (size_t)k + 1],
+                                           v[3 * (size_t)k + 2]));
+    return a;
+}
+
+int hfx_log_nodes_get(const json_t *a, int count, double *v, const char *file,
+                      const char *what, glint_err *err)
+{
+    for (int k = 0; k < count; k++) {
+        json_t *t = json_array_get(a, (size_t)k);
+        for (int c = 0; c < 3; c++) {
+            json_t *x = json_array_get(t, (size_t)c);
+            double d = json_is_number(x) ? json_number_value(x) : NAN;
+            if (!json_is_array(t) || json_array_size(t) != 3 || !isfinite(d) || fabs(d) > 700.0)
+                return glint_err_set(err, GLINT_ENONFINITE,
+                                     "%s: %s[%d] must be [r, g, b], finite numbers in "
+                                     "[-700, 700]", file, what, k);
+            v[3 * (size_t)k + c] = d;
+        }
+    }
+    return 0;
+}
+
+int hfx_gpu_begin(material_gpu *g, const char *program, const char *frag_src, int w, int h,
+                  glint_err *err)
+{
+    memset(g, 0, sizeof *g);
+    g->program = program;
+    g->frag_src = frag_src;
+    g->tex_uniform = "u_factors";
+    g->tex_w = w;
+    g->tex_h = h;
+    if (!(g->tex = calloc((size_t)w * h * 3, sizeof *g->tex)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for the factor texture");
+    return 0;
+}
+
+void hfx_gpu_mapping(material_gpu_uniform u[3], const hf_map *map, const double a_used[3],
+                     hf_model model)
+{
+    u[0] = (material_gpu_uniform){"u_map_kind", "int", {(int)map->kind, 0, 0},
+                                  "inverse mapping: 0 log, 1 add, 2 sub"};
+    u[1] = (material_gpu_uniform){"u_a", "vec3", {a_used[0], a_used[1], a_used[2]},
+                                  "mapping offset per channel"};
+    u[2] = (material_gpu_uniform){"u_model_brdf", "int", {model == HF_MODEL_BRDF, 0, 0},
+                                  "1: multiply by n.wi (brdf model)"};
 }

@@ -6,9 +6,10 @@
  * decomposition of its rows, built, or read from its file in the cache
  * directory (hfx_decomp_file_load) with the design rebuilt from the
  * pattern.  The fit: the factors from the level, and the report every such
- * material carries (params, precomputation, seconds, errors).  A method
- * says what differs (its types, its calls, the names of its file) in an
- * hfx_method. */
+ * material carries (params, precomputation, seconds, errors).  The
+ * material: the log nodes in material.json and the GPU binding's common
+ * part.  A method says what differs (its types, its calls, the names of
+ * its file) in an hfx_method. */
 #ifndef GLINT_METHOD_HFX_INT_H
 #define GLINT_METHOD_HFX_INT_H
 
@@ -76,5 +77,25 @@ int hfx_level_load(const hfx_method *m, const method_build_in *in, const char *d
 /* The fit, as method.fit: the factors of in->levels[0] and their report. */
 int hfx_method_fit(const hfx_method *m, const method_fit_in *in, material *out,
                    glint_err *err);
+
+/* count log nodes (v: [r, g, b] each) as a JSON array of [r, g, b]; NULL
+ * when out of memory. */
+json_t *hfx_log_nodes_json(const double *v, int count);
+
+/* count log nodes from the JSON array a (its size checked by the caller)
+ * into v (OUT: 3 count).  GLINT_ENONFINITE naming file and what[k] for a
+ * node that is not [r, g, b] of finite numbers in [-700, 700]. */
+int hfx_log_nodes_get(const json_t *a, int count, double *v, const char *file,
+                      const char *what, glint_err *err);
+
+/* Start g (zeroed first) as a program with one RGB float texture of w x h
+ * (zeroed) in u_factors.  GLINT_ENOMEM: g holds nothing. */
+int hfx_gpu_begin(material_gpu *g, const char *program, const char *frag_src, int w, int h,
+                  glint_err *err);
+
+/* The uniforms of the inverse mapping and the model (OUT: u[3]: u_map_kind,
+ * u_a, u_model_brdf). */
+void hfx_gpu_mapping(material_gpu_uniform u[3], const hf_map *map, const double a_used[3],
+                     hf_model model);
 
 #endif
