@@ -1,7 +1,7 @@
 /* method_hybrid.c: the hybrid method, material maps of four-factor
- * products (method_hybrid.h): parameters and registration.  The fit is the
- * maps' (method_maps.c) over hf4's fits; the material is the maps'
- * (method_maps_material.c). */
+ * products (method_hybrid.h): parameters and registration.  Its checks, fit
+ * and resource rules are those of a maps_kind over hf4
+ * (method_maps_kind.c); the material is the maps' (method_maps_material.c). */
 #include "method_hybrid.h"
 
 #include <stddef.h>
@@ -29,48 +29,42 @@ static void hybrid_params_default(void *p)
     method_hf4.params_default(&hp->h);
     hp->h.sres = 16;
     matmap_params_default(&d);
+    MAPS_KNOBS_SET(hp, &d);
     hp->components = 4;
-    hp->merge = d.merge;
-    hp->map_res = d.res;
-    hp->tol = d.tol;
-    hp->refine = d.refine;
-    hp->rounds = d.rounds;
-    hp->smooth = d.smooth;
 }
+
+/* ---- the kind: maps over hf4 ---------------------------------------------------------- */
+
+static void hybrid_knobs(const void *params, matmap_params *q)
+{
+    MAPS_KNOBS(q, (const hybrid_params *)params);
+}
+
+static const maps_kind maps_of_hf4 = {&method_hybrid, &method_hf4, hybrid_knobs};
 
 static int hybrid_params_check(const void *params, glint_err *err)
 {
-    matmap_params q;
-    MAPS_KNOBS(&q, (const hybrid_params *)params);
-    return maps_knobs_check(&q, err);
+    return maps_kind_params_check(&maps_of_hf4, params, err);
 }
 
 static int hybrid_fit(const method_fit_in *in, material *out, glint_err *err)
 {
-    matmap_params q;
-    MAPS_KNOBS(&q, (const hybrid_params *)in->params);
-    return maps_fit_with(in, &method_hybrid, &method_hf4, &q, out, err);
-}
-
-/* hf4's fit, then the maps' rounds over the samples, per component. */
-static double hybrid_fit_seconds(const void *params, long nsamples)
-{
-    const hybrid_params *hp = params;
-    return hf4_fit_seconds(&hp->h, nsamples) +
-           (double)(hp->components + 1) * nsamples * METHOD_SECONDS_PER_SAMPLE;
-}
-
-static size_t hybrid_fit_bytes(const void *params, long nsamples)
-{
-    const hybrid_params *hp = params;
-    matmap_params q;
-    MAPS_KNOBS(&q, hp);
-    return hf4_fit_bytes(&hp->h, nsamples) + maps_extra_bytes(&q, nsamples);
+    return maps_kind_fit(&maps_of_hf4, in, out, err);
 }
 
 static int hybrid_holdout_ok(const void *params)
 {
-    return hf4_holdout_ok(&((const hybrid_params *)params)->h);
+    return maps_kind_holdout_ok(&maps_of_hf4, params);
+}
+
+static size_t hybrid_fit_bytes(const void *params, long nsamples)
+{
+    return maps_kind_fit_bytes(&maps_of_hf4, params, nsamples);
+}
+
+static double hybrid_fit_seconds(const void *params, long nsamples)
+{
+    return maps_kind_fit_seconds(&maps_of_hf4, params, nsamples);
 }
 
 static const char *const hybrid_surface[] = {"coefficients", "spatial", NULL};

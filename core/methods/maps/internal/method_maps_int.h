@@ -1,6 +1,7 @@
 /* method_maps_int.h: what a method of material maps over another
  * method's products (maps: hf3 products; hybrid: hf4 products) shares:
- * the maps' parameter rows and checks, the fit over a product method, the
+ * the maps' parameter rows, the method described by a maps_kind (its
+ * checks, fit and report, resource rules: method_maps_kind.c), the
  * material.  Not part of core's interface. */
 #ifndef GLINT_METHOD_MAPS_INT_H
 #define GLINT_METHOD_MAPS_INT_H
@@ -59,18 +60,44 @@ extern const char *const maps_merge_values[];
         (q)->smooth = (mp)->smooth;                                                              \
     } while (0)
 
-/* The checks across the knobs (rounds need refine; texture rows). */
-int maps_knobs_check(const matmap_params *q, glint_err *err);
+/* matmap_params q as the knobs of T: what MAPS_KNOBS reads. */
+#define MAPS_KNOBS_SET(mp, q)                                                                    \
+    do {                                                                                         \
+        (mp)->components = (q)->components;                                                      \
+        (mp)->merge = (q)->merge;                                                                \
+        (mp)->map_res = (q)->res;                                                                \
+        (mp)->tol = (q)->tol;                                                                    \
+        (mp)->refine = (q)->refine;                                                              \
+        (mp)->rounds = (q)->rounds;                                                              \
+        (mp)->smooth = (q)->smooth;                                                              \
+    } while (0)
 
-/* Fit in->rgb as maps whose products are fits of `product` (whose params
- * struct begins in->params, and whose levels in->levels are), the
- * material being one of method `self` (info.params from in->params). */
-int maps_fit_with(const method_fit_in *in, const method *self, const method *product,
-                  const matmap_params *q, material *out, glint_err *err);
+/* A method of material maps: the maps' knobs over the products of another
+ * method.  Its params struct begins with the product method's (so that the
+ * product's levels, keyed from the start of the params, are its levels,
+ * and a fit of either shares them) and holds the knobs after it.  maps
+ * and hybrid are two of these; each method's table takes its callbacks
+ * from the maps_kind_* functions of its own kind. */
+typedef struct maps_kind {
+    const method *self;          /* the method of maps */
+    const method *product;       /* the method of its products */
+    /* The knobs of a params struct of self (OUT: *q): MAPS_KNOBS of its type. */
+    void (*knobs)(const void *params, matmap_params *q);
+} maps_kind;
 
-/* Resources of a fit beyond the product method's: per sample and per
- * texel. */
-size_t maps_extra_bytes(const matmap_params *q, long nsamples);
+/* method.params_check: the checks across the knobs (rounds need refine;
+ * texture rows). */
+int maps_kind_params_check(const maps_kind *k, const void *params, glint_err *err);
+
+/* method.fit: in->rgb as maps whose products are fits of k->product, the
+ * material one of k->self; its report as the maps give it. */
+int maps_kind_fit(const maps_kind *k, const method_fit_in *in, material *out, glint_err *err);
+
+/* method.holdout_ok, fit_bytes, fit_seconds: the product method's, and
+ * what the maps add per sample and per texel. */
+int maps_kind_holdout_ok(const maps_kind *k, const void *params);
+size_t maps_kind_fit_bytes(const maps_kind *k, const void *params, long nsamples);
+double maps_kind_fit_seconds(const maps_kind *k, const void *params, long nsamples);
 
 extern const material_ops maps_material_ops;
 
