@@ -135,6 +135,7 @@ def main():
     fails = []
     with tempfile.TemporaryDirectory() as tmp:
         scene = os.path.join(tmp, "s.json")
+        cache = os.path.join(tmp, "cache")
         run([glint, "scene", "create", "--mesh", "sphere", "--size", "32", "-o", scene])
         for i, (name, tpl) in enumerate(presets(root)):
             for j, col in enumerate(COLOURS):
@@ -157,7 +158,8 @@ def main():
                 ref = pixels(os.path.join(paint, "view_%02d.exr" % VIEW))
                 for m in methods:
                     mat = os.path.join(tmp, "m_" + m)
-                    run([glint, "fit", scene, "--paintings", paint, "-o", mat, "--method", m])
+                    run([glint, "fit", scene, "--paintings", paint, "-o", mat, "--method", m,
+                         "--cache-dir", cache])
                     got = np.array(json.loads(run([glint, "summary", mat]))["base_colour"])
                     ball = os.path.join(tmp, "ball.exr")
                     run([glint, "render", mat, "--scene", scene, "--view", str(VIEW),
@@ -170,7 +172,7 @@ def main():
             mat = os.path.join(tmp, "m_srbf")
             run([glint, "paint", scene, "--brdf", spec, "--env", "sky", "-o", paint])
             run([glint, "fit", scene, "--paintings", paint, "-o", mat, "--method", "srbf",
-                 "--env", "sky"])
+                 "--env", "sky", "--cache-dir", cache])
             got = np.array(json.loads(run([glint, "summary", mat]))["base_colour"])
             want = truth_base_colour(spec)
             err = float(np.linalg.norm(got - want) / np.linalg.norm(want))
