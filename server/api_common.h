@@ -136,7 +136,7 @@ int api_material_read(http_req *req, const char *mid, struct material *m, glint_
 /* A scene's base render when its creation names none (api_scenes.c,
  * api_views.c): kd cos(theta_i) I, the Lambert 1/pi undone by the scale. */
 #define API_BASE_BRDF "lambert:kd=0.6"
-#define API_BASE_SCALE 3.14159265358979323846
+#define API_BASE_SCALE 1.0 /* scene.h's radiance: a white Lambertian facing the light reads I */
 
 /* The method and parameters of a fit request's body {"method", "params"},
  * checked once, before anything is read or queued, for sessions and

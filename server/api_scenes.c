@@ -528,10 +528,11 @@ static json_t *scene_doc(const scene *sc, const char *id, const char *label,
         glint_err_set(e, GLINT_ENOMEM, "cannot serialize the scene");
         return NULL;
     }
-    doc = json_pack("{s:s, s:s, s:s, s:i, s:i, s:s, s:o, s:I, s:s, s:{s:s, s:f}, s:o}", "id", id,
-                    "hash", hash, "mesh", label, "width", sc->width, "height", sc->height,
-                    "view_set", view_set, "views", views, "samples", (json_int_t)total,
-                    "created", now, "base", "brdf", base_spec, "scale", base_scale, "scene", js);
+    doc = json_pack("{s:s, s:s, s:s, s:i, s:i, s:s, s:o, s:I, s:s, s:{s:s, s:f}, s:o, s:s}",
+                    "id", id, "hash", hash, "mesh", label, "width", sc->width, "height",
+                    sc->height, "view_set", view_set, "views", views, "samples",
+                    (json_int_t)total, "created", now, "base", "brdf", base_spec, "scale",
+                    base_scale, "scene", js, "radiance", STORE_SCENE_RADIANCE);
     if (doc && strcmp(label, "upload") == 0)
         json_object_set_new(doc, "mesh_id", json_string(sc->mesh_name + 7));
     if (doc && base_env)

@@ -15,6 +15,7 @@
 #include "fsio.h"
 #include "ids.h"
 #include "json_text.h"
+#include "scene.h"
 #include "store_int.h"
 
 static const char *const store_schema_sqlite[] = {
@@ -63,6 +64,22 @@ char *store_dump(const json_t *j)
     return json_text(j, 0);
 }
 
+/* A scene stored before it named its radiance (scene.h) had its base
+ * rendered at scale pi for what is now scale 1 (a white Lambertian facing
+ * the light reads I): read it in today's units, so its base renders and the
+ * finishes painted over them keep their brightness. */
+static void scene_upgrade(json_t *doc)
+{
+    json_t *base = json_object_get(doc, "base");
+    double s = json_number_value(json_object_get(base, "scale"));
+
+    if (!json_is_object(doc) || json_object_get(doc, "radiance"))
+        return;
+    if (json_is_object(base) && s > 0.0)
+        json_object_set_new(base, "scale", json_real(s / GLINT_LIGHT_UNIT));
+    json_object_set_new(doc, "radiance", json_string(STORE_SCENE_RADIANCE));
+}
+
 json_t *store_load(const char *text, const char *what, glint_err *err)
 {
     json_error_t je;
@@ -70,6 +87,8 @@ json_t *store_load(const char *text, const char *what, glint_err *err)
     if (!j)
         glint_err_set(err, GLINT_EFORMAT, "database: %s holds malformed JSON: %s", what,
                       text ? je.text : "NULL");
+    else if (!strcmp(what, "scene"))
+        scene_upgrade(j);
     return j;
 }
 

@@ -48,6 +48,11 @@ struct img; /* img.h */
 
 #define STORE_SCHEMA_VERSION 1
 
+/* A scene document's "radiance": the units of its base renders and
+ * paintings (scene.h).  Documents without it are read as older ones
+ * (store.c: their base scale pi becomes 1). */
+#define STORE_SCENE_RADIANCE "pi I f cos_i: a white Lambertian facing a light of intensity I reads I"
+
 typedef struct store store;
 
 int store_open(const char *data_dir, store **out, glint_err *err);

@@ -210,7 +210,7 @@ int cmd_paint(int argc, char **argv)
         {"lights", required_argument, 0, 'K'}, {"shadows", required_argument, 0, 'S'},
         {0, 0, 0, 0}};
     const char *out = NULL, *fmt = "exr", *spec = NULL, *env = NULL, *shadows = "auto";
-    double scale = 0.0, used = 0.0, rot = 0.0, kl = 256;
+    double scale = 1.0, used = 0.0, rot = 0.0, kl = 256; /* 1: the radiance fits assume */
     int c, rc, is_sv, is_merl, is_fit;
     paint_sv sv;
     merl_table mt = {0};
@@ -242,8 +242,10 @@ int cmd_paint(int argc, char **argv)
             break;
         case 'b': spec = optarg; break;
         case 'o': out = optarg; break;
-        case 's':
-            if ((rc = parse_double(optarg, "--scale", 1e-12, 1e12, &scale)))
+        case 's': /* auto: the maximum over the views reads 1 (for 8-bit images) */
+            if (!strcmp(optarg, "auto"))
+                scale = 0.0;
+            else if ((rc = parse_double(optarg, "--scale", 1e-12, 1e12, &scale)))
                 return rc;
             break;
         case 'f':
@@ -252,11 +254,11 @@ int cmd_paint(int argc, char **argv)
             fmt = optarg;
             break;
         default:
-            return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr] [--env SPEC [--env-rotation DEG] [--lights K] [--shadows auto|on|off]]");
+            return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S|auto] [--format exr|png|hdr] [--env SPEC [--env-rotation DEG] [--lights K] [--shadows auto|on|off]]");
         }
     }
     if (!out || !spec || optind != argc - 1)
-        return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S] [--format exr|png|hdr]");
+        return fail(1, "usage: glint paint scene.json --brdf SPEC -o DIR [--scale S|auto] [--format exr|png|hdr]");
     /* PATTERN|BRDF|BRDF: a spatially varying truth over the texture coordinates */
     is_sv = strchr(spec, '|') != NULL;
     /* merl:FILE: a measured material, a table in the MERL layout (merl.h) */
@@ -363,7 +365,7 @@ int cmd_base_render(int argc, char **argv)
         "[--engine auto|egl|cpu] [--format png|exr]";
     const char *out = NULL, *spec = "lambert:kd=0.6", *fmt = "png";
     render_engine engine = RENDER_AUTO;
-    double scale = M_PI;
+    double scale = 1.0; /* scene.h's radiance: a white Lambertian facing the light reads I */
     int c, rc = 0;
     scene sc;
     glint_err e;

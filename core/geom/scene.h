@@ -17,6 +17,14 @@
  *    (default linspace(20, 70) degrees), at the same distance.  A constant
  *    angle would make every view of a sphere congruent: the same samples.
  *  - Lights are point lights of constant intensity (no 1/d^2 fall-off).
+ *  - Radiance, the one scale every stage uses (painting, base renders,
+ *    fits, summaries, previews, exports): a point light of intensity I
+ *    makes a white Lambertian surface facing it read I, so a pixel is
+ *    pi I f(wi, wo) cos_i for a BRDF f in 1/sr (view_light_scale: pi I).
+ *    A Lambertian of albedo a facing a light of intensity 1 reads a, and a
+ *    fit of it reads back base colour a.  Under an environment of radiance
+ *    L a pixel is the integral of L f cos_i (a white Lambertian under a
+ *    uniform sky of radiance 1 reads 1): the same scale, with no pi.
  *
  * Ownership: a scene owns its mesh and views; scene_free() releases them
  * and accepts NULL or a half-built scene.
@@ -42,9 +50,19 @@ typedef struct scene_view {
     double target[3];
     double half_fov;       /* radians, vertical half-angle, in (0, pi/2) */
     double light[3];       /* point light position */
-    double light_intensity;/* > 0, default 1 */
+    double light_intensity;/* > 0, default 1: a white Lambertian facing it reads this */
     double light_deg;      /* how the light was placed (informative; -1 if explicit) */
 } scene_view;
+
+/* The radiance of a point light of intensity 1 on a surface facing it,
+ * in the units a painted value is in (see Radiance above). */
+#define GLINT_LIGHT_UNIT 3.14159265358979323846
+
+/* The factor a view's pixel applies to f(wi, wo) cos_i: pi I. */
+static inline double view_light_scale(const scene_view *v)
+{
+    return GLINT_LIGHT_UNIT * v->light_intensity;
+}
 
 typedef struct scene {
     char mesh_name[SCENE_NAME_MAX]; /* a built-in ("sphere", "torus", "teapot"), or the label

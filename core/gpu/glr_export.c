@@ -158,9 +158,10 @@ static json_t *glr_manifest(const material *mat, const material_gpu *gpu)
                                             "camera position, world space"));
     json_array_append_new(unis, glr_uniform("u_light", "vec3", NULL, light,
                                             "point light position, world space"));
-    json_array_append_new(unis, glr_uniform("u_light_intensity", "float", json_real(1.0), light,
-                                            "light intensity (no distance fall-off); the output "
-                                            "is linear radiance"));
+    json_array_append_new(unis, glr_uniform("u_light_intensity", "float", json_real(GLINT_LIGHT_UNIT), light,
+                                            "pi I for a point light of intensity I (no distance "
+                                            "fall-off; a white Lambertian facing it reads I); the "
+                                            "output is linear radiance"));
     if (gpu->tex)
         json_array_append_new(unis, glr_uniform(gpu->tex_uniform, "sampler2D", json_integer(0),
                                                 cst, "texture unit holding the material's "

@@ -158,7 +158,7 @@ int glr_material_bind(glr *g, const material_gpu *gpu, const scene_view *v,
         else
             glUniform3f(loc, (float)u->v[0], (float)u->v[1], (float)u->v[2]);
     }
-    glUniform1f(mp->loc.light_intensity, (float)v->light_intensity);
+    glUniform1f(mp->loc.light_intensity, (float)view_light_scale(v)); /* scene.h: pi I */
     *out = mp;
     return glr_gl_check(err, "binding the material");
 }

@@ -163,7 +163,7 @@ static int glr_base_render_in(glr *g, const glr_mesh *m, const scene_view *v, in
         f0[c] = (float)b->f0[c];
     }
     glUseProgram(g->prog[GLR_PROG_BASE]);
-    glUniform1f(l->gain, (float)(scale * v->light_intensity));
+    glUniform1f(l->gain, (float)(scale * view_light_scale(v)));
     glUniform1i(l->kind, (GLint)b->kind);
     glUniform3fv(l->kd, 1, kd);
     glUniform3fv(l->ks, 1, ks);
@@ -264,7 +264,7 @@ static int glr_render_fragment_in(glr *g, const glr_mesh *m, const char *frag_sr
         glUniformMatrix4fv(l.model, 1, GL_FALSE, id4);
         glUniformMatrix3fv(l.normal_matrix, 1, GL_FALSE, id3);
     }
-    glUniform1f(l.light_intensity, (float)v->light_intensity);
+    glUniform1f(l.light_intensity, (float)view_light_scale(v));
     rc = glr_draw(g, p, &l, &g->ct, 1, m, v, width, height, clear0, err);
     if (!rc)
         rc = glr_color_readback(g, width, height, out, err);

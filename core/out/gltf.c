@@ -432,8 +432,8 @@ static char *extras_text(const material *m, const gltf_pbr *p, const gltf_bake *
                           "fit_rel_rms", p->rel_rms, "fit_pairs", p->pairs, "fit",
                           "least squares of f cos at the painted views' samples", "spatial_average",
                           p->spatial && !bake, "units",
-                          "per unit light as painted (base renders at the default scale pi "
-                          "hold pi times the BRDF they show)");
+                          "the BRDF of what was painted: a painted value is pi I f cos under a "
+                          "light of intensity I (a white Lambertian facing it reads I)");
     json_t *g = json_object_get(o, "glint");
     char *t;
     if (g && bake) {

@@ -3,7 +3,7 @@
 
 #include <string.h>
 
-/* a material's f: its value per unit light divided by n.wi */
+/* a material's f: its value divided by n.wi */
 static void material_f(const void *ctx, const double n[3], const double wi[3],
                        const double wo[3], double f[3])
 {

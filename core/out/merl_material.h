@@ -9,7 +9,7 @@
 #include "merl.h"
 
 /* Tabulate m (OUT: *out, merl_free; *st may be NULL) at each bin's centre
- * (merl.h): f = the material's value per unit light divided by n.wi.  A
+ * (merl.h): f = the material's value divided by n.wi (the BRDF).  A
  * material that varies over the surface is taken at its average (st->spatial).
  * nthreads <= 0: one per processor.  Thread-safety: reads m only. */
 int merl_from_material(const material *m, int nthreads, merl_table *out, merl_stats *st,

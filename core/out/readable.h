@@ -9,7 +9,8 @@
  *    the normal (hf2d) this plane runs along t = +X (vec3.h: the frame's
  *    pole fallback).  Spatially varying materials are read at their
  *    average over the surface (uv NULL).
- *  - f is the BRDF: the material's value per unit light divided by n.wi.
+ *  - f is the BRDF (per steradian): the material's value divided by n.wi
+ *    (a painted value is pi I f n.wi, scene.h).
  *  - base_colour = pi f with the light and the eye both at 45 degrees on
  *    the same side (the half vector 45 degrees off the normal, away from
  *    any highlight but the widest): a Lambertian surface of albedo kd

@@ -88,8 +88,8 @@ int gbfit_samples(const method *m, const gbuf *g, const img *paintings,
     samples_set_rule(s, m->pattern_rule);
     gbuf_hash(g, n, hash);
     for (int v = 0; v < n && !rc; v++)
-        if (use[v]) /* the paintings are per unit light */
-            rc = samples_add(s, v, &g[v], 0, 1.0, err);
+        if (use[v]) /* lit by a light of intensity 1 (scene.h: pi f cos_i) */
+            rc = samples_add(s, v, &g[v], 0, GLINT_LIGHT_UNIT, err);
     if (!rc && (rc = samples_end(s, use, hash, err)) == GLINT_EINVAL)
         glint_err_set(err, GLINT_EINVAL,
                       "the painted views' G-buffers hold no sample for method %s (a pixel is "

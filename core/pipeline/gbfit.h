@@ -3,7 +3,7 @@
  *
  * A G-buffer set is n views of one raster size, each a G-buffer with named
  * channels (gbuf.h: gbuf_from_named_ex) and, optionally, its RGB painting
- * per unit light.  The painted views form the sampling pattern by the
+ * under a light of intensity 1 (scene.h: pi f cos_i).  The painted views form the sampling pattern by the
  * method's rule (samples.h: SAMPLES_LIT for point-light methods, which need
  * wi; SAMPLES_SEEN for methods lit by an environment, which read N and wo
  * only), keyed by the G-buffers' content (gbuf_hash); the values are the

@@ -83,10 +83,12 @@ int material_gpu_get(const material *m, material_gpu *out, glint_err *err)
     return m->method->mat->gpu(m->data, out, err);
 }
 
-/* Shade one G-buffer pixel range [p0, p1) into out (RGB). */
+/* Shade one G-buffer pixel range [p0, p1) into out (RGB) under a light of
+ * intensity INTENSITY: pi I f cos_i (scene.h's radiance). */
 static void shade_pixels(const material *m, const gbuf *g, size_t p0, size_t p1,
                          double intensity, float background, float *out)
 {
+    double gain = GLINT_LIGHT_UNIT * intensity;
     void (*eval)(const void *, const double *, const double *, const double *,
                  const double *, double *) = m->method->mat->eval;
     for (size_t p = p0; p < p1; p++) {
@@ -107,7 +109,7 @@ static void shade_pixels(const material *m, const gbuf *g, size_t p0, size_t p1,
         }
         eval(m->data, g->uv ? uv : NULL, n, wi, wo, rgb);
         for (int c = 0; c < 3; c++)
-            o[c] = (float)(rgb[c] * intensity);
+            o[c] = (float)(rgb[c] * gain);
     }
 }
 
@@ -191,7 +193,7 @@ int material_error_views(const material *m, const gbuf *g, const scene_view *vie
         const gbuf *gb = &g[v];
         const img *t = &truth[v];
         size_t np = (size_t)gb->width * gb->height;
-        double I = views ? views[v].light_intensity : 1.0;
+        double I = GLINT_LIGHT_UNIT * (views ? views[v].light_intensity : 1.0);
         if (!t->px || t->width != gb->width || t->height != gb->height || t->channels < 1 ||
             t->channels == 2 || t->channels > 4)
             return glint_err_set(err, GLINT_EINVAL, "reference image %d does not match its view",

@@ -76,7 +76,8 @@ void material_envlit_preview(const void *ctx, const double uv[2], const double n
  * texture coordinates), 0 when one BRDF holds everywhere. */
 int material_spatial(const material *m);
 
-/* Shade a G-buffer: RGB radiance for a light of intensity `intensity`;
+/* Shade a G-buffer: RGB radiance for a light of intensity `intensity`
+ * (scene.h's radiance: pi I f cos_i);
  * covered pixels that are not lit and seen get 0, background pixels
  * `background`.  OUT: *out (RGB, allocated here). */
 int material_shade(const material *m, const gbuf *g, double intensity,
@@ -94,8 +95,8 @@ int material_render(const material *m, const mesh *msh, const scene_view *v,
 
 /* Error of a material against reference images on the sample pixels
  * (mask, n.wi > 0, n.wo > 0) of nviews G-buffers: RMS and max |difference|
- * over pixels and RGB channels, radiance scaled by each view's light
- * intensity (views may be NULL: intensity 1).  truth[v] must be sized like
+ * over pixels and RGB channels, radiance pi I f cos_i for each view's light
+ * intensity I (views may be NULL: I = 1).  truth[v] must be sized like
  * g[v] (1, 3 or 4 channels).  OUT: *rms, *max_abs, *count (any may be
  * NULL). */
 int material_error_views(const material *m, const gbuf *g, const scene_view *views,

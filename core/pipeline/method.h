@@ -156,7 +156,8 @@ void method_memo_drop_values(method_memo *mm);
 typedef struct method_fit_in {
     const void *params;
     const samples *s;             /* the sampling pattern */
-    const float *rgb;             /* 3 s->n painted values (sample-major, per unit light) */
+    const float *rgb;             /* 3 s->n painted values over their sample's
+                                     intensity (sample-major): f cos_i */
     const void *const *levels;    /* data of each level */
     const char *const *keys;      /* key of each level */
     const cache_how *how;         /* how this fit's preparation got each level */

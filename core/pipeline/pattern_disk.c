@@ -146,7 +146,7 @@ static int any_foreign(const samples *s, const scene *sc)
     double li[SCENE_MAX_VIEWS];
     int bad = 0;
     for (int v = 0; v < sc->nviews; v++)
-        li[v] = s->used[v] ? sc->views[v].light_intensity : NAN;
+        li[v] = s->used[v] ? view_light_scale(&sc->views[v]) : NAN;
     for (size_t i = 0; i < (size_t)s->n; i++)
         bad |= !(s->intensity[i] == li[s->view[i]]);
     return bad;

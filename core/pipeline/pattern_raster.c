@@ -35,7 +35,7 @@ static int view_samples(const scene *sc, int v, int band_rows, samples *s, atomi
         if ((rc = raster_view_rows(&sc->mesh, &sc->views[v], sc->width, sc->height, row0, nrows,
                                    &g, err)))
             break;
-        rc = samples_add(s, v, &g, row0, sc->views[v].light_intensity, err);
+        rc = samples_add(s, v, &g, row0, view_light_scale(&sc->views[v]), err);
         gbuf_free(&g);
     }
     if (rc)

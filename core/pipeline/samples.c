@@ -262,7 +262,7 @@ int samples_build(const gbuf *g, const scene_view *views, int nviews,
         return rc;
     for (int v = 0; v < nviews && !rc; v++)
         if (!use || use[v])
-            rc = samples_add(out, v, &g[v], 0, views ? views[v].light_intensity : 1.0, err);
+            rc = samples_add(out, v, &g[v], 0, views ? view_light_scale(&views[v]) : GLINT_LIGHT_UNIT, err);
     if (!rc)
         rc = samples_end(out, use, scene_hash, err);
     if (rc)

@@ -38,7 +38,9 @@ typedef struct samples {
     int *pixel;            /* n: row * width + col in that view */
     float *nrm, *wi, *wo;  /* 3n each: geometry at the sample */
     double *cos_i;         /* n: n.wi (> 0) */
-    double *intensity;     /* n: the light intensity of the sample's view */
+    double *intensity;     /* n: the radiance scale of the sample's view: pi I
+                              (scene.h's view_light_scale; a painted value is
+                              intensity * f * cos_i) */
     float *pos;            /* 3n: world position (0 for imported samples: has_pos = 0) */
     float *uv;             /* 2n: the surface's texture coordinates in [0,1]^2 (the mesh's,
                               or its automatic atlas'); 0 for imported samples */

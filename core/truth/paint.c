@@ -1,6 +1,7 @@
 /* paint.c: paint views with an analytic BRDF (paint.h).
  *
- * A pixel's value is scale * I * f(wi, wo) * cos_i, evaluated in double
+ * A pixel's value is scale * pi I * f(wi, wo) * cos_i (scene.h: a white
+ * Lambertian facing a light of intensity I reads I at scale 1), evaluated in double
  * and stored as float.  With an automatic scale the views are evaluated
  * twice (once for the maximum, once to write), so every stored value is
  * the correctly rounded product rather than a rescaled float. */
@@ -145,7 +146,7 @@ static int paint_check_view(const gbuf *g, const scene_view *v, int k, glint_err
     return 0;
 }
 
-/* Unscaled radiance I f cos_i of one pixel (OUT: rgb[3]); zero unless
+/* Unscaled radiance pi I f cos_i of one pixel (INTENSITY: pi I) (OUT: rgb[3]); zero unless
  * mask, cos_i > 0 and cos_o > 0.  GLINT_ENONFINITE for a covered pixel with
  * non-finite geometry or a non-finite result. */
 typedef struct truth {
@@ -231,7 +232,7 @@ static int paint_any(const truth *t, const gbuf *g, const scene_view *views, int
         for (k = 0; k < nviews; k++) {
             size_t np = (size_t)g[k].width * (size_t)g[k].height;
             for (size_t p = 0; p < np; p++) {
-                rc = paint_pixel(t, &g[k], views[k].light_intensity, p, k, rgb, err);
+                rc = paint_pixel(t, &g[k], view_light_scale(&views[k]), p, k, rgb, err);
                 if (rc)
                     return rc;
                 for (int c = 0; c < 3; c++)
@@ -252,7 +253,7 @@ static int paint_any(const truth *t, const gbuf *g, const scene_view *views, int
             goto fail_views;
         done = k + 1;
         for (size_t p = 0; p < np; p++) {
-            rc = paint_pixel(t, gk, views[k].light_intensity, p, k, rgb, err);
+            rc = paint_pixel(t, gk, view_light_scale(&views[k]), p, k, rgb, err);
             if (rc)
                 goto fail_views;
             for (int c = 0; c < 3; c++) {

@@ -1,6 +1,7 @@
 /* paint.h: paint a scene's views with an analytic BRDF, producing exactly
  * what a perfect artist would paint: per pixel radiance
- *   scale * I * f(wi, wo) * max(0, n.wi)
+ *   scale * pi I * f(wi, wo) * max(0, n.wi)   (scene.h's radiance: at scale 1
+ *   a white Lambertian facing a light of intensity I reads I)
  * on the pixels glint samples (mask, n.wi > 0, n.wo > 0), 0 elsewhere.
  * Images are RGB (3 channels), one per view, sized like the gbufs.
  * Pure and thread-safe: the output images are the caller's. */
@@ -14,9 +15,9 @@
 #include "scene.h"
 
 /* Paint nviews views.  `scale`:
- *   > 0  : multiply by it (HDR painting or a scale shared with other views);
- *   <= 0 : choose the scale that makes the maximum over these views 1 (the
- *          [0,1] convention); the chosen scale is written to *scale_out.
+ *   > 0  : multiply by it (1: the radiance every fit assumes);
+ *   <= 0 : choose the scale that makes the maximum over these views 1 (for
+ *          8-bit images; a fit of such views is off by that scale); the chosen scale is written to *scale_out.
  *          If no pixel is lit (every value 0) the chosen scale is 1.
  * *scale_out receives the scale used in both cases.  Errors: NaN scale,
  * light intensity not > 0, non-finite G-buffer vectors on covered pixels.

@@ -497,7 +497,8 @@ static int tiny_gbuf(gbuf *g, double shift)
     return 0;
 }
 
-/* What paint must produce at pixel p, before scaling. */
+/* What paint must produce at pixel p, before scaling (I: pi times the
+ * view's light intensity, scene.h). */
 static void expect_raw(const brdf *b, const gbuf *g, double I, int p, double out[3])
 {
     double n[3], wi[3], wo[3];
@@ -546,7 +547,7 @@ TEST(paint_fixed_scale)
         ASSERT(out[k].width == 3 && out[k].height == 2 && out[k].channels == 3);
         for (int p = 0; p < 6; p++) {
             double raw[3];
-            expect_raw(&b, &g[k], v[k].light_intensity, p, raw);
+            expect_raw(&b, &g[k], M_PI * v[k].light_intensity, p, raw);
             for (int c = 0; c < 3; c++) {
                 float got = out[k].px[3 * p + c];
                 float want = (float)(3.0 * raw[c]);
@@ -559,14 +560,14 @@ TEST(paint_fixed_scale)
             }
         }
     }
-    /* the hand value: view 0 pixel 1 is 3 * 1 * f * 0.8 */
+    /* the hand value: view 0 pixel 1 is 3 * pi 1 * f * 0.8 (scene.h: pi I f cos_i) */
     {
         double f[3];
         const double wi[3] = {0.6, 0.0, 0.8}, wo[3] = {0.0, 0.6, 0.8};
         brdf_eval(&b, Z, wi, wo, f);
-        ASSERT_NEAR(out[0].px[3], 3.0 * f[0] * 0.8, 1e-6 * f[0]);
+        ASSERT_NEAR(out[0].px[3], 3.0 * M_PI * f[0] * 0.8, 1e-6 * f[0]);
         /* view 1 has intensity 2.5 */
-        ASSERT_NEAR(out[1].px[3], 2.5 * 3.0 * f[0] * 0.8, 1e-6 * f[0]);
+        ASSERT_NEAR(out[1].px[3], 2.5 * 3.0 * M_PI * f[0] * 0.8, 1e-6 * f[0]);
     }
     img_free(&out[0]);
     img_free(&out[1]);
@@ -589,7 +590,7 @@ TEST(paint_auto_scale)
     for (int k = 0; k < 2; k++)
         for (int p = 0; p < 6; p++) {
             double raw[3];
-            expect_raw(&b, &g[k], v[k].light_intensity, p, raw);
+            expect_raw(&b, &g[k], M_PI * v[k].light_intensity, p, raw);
             for (int c = 0; c < 3; c++)
                 vmax = fmax(vmax, raw[c]);
         }
@@ -601,7 +602,7 @@ TEST(paint_auto_scale)
         for (int k = 0; k < 2; k++)
             for (int i = 0; i < 18; i++) {
                 double raw[3];
-                expect_raw(&b, &g[k], v[k].light_intensity, i / 3, raw);
+                expect_raw(&b, &g[k], M_PI * v[k].light_intensity, i / 3, raw);
                 ASSERT(out[k].px[i] <= 1.0f);
                 ASSERT_NEAR(out[k].px[i], raw[i % 3] / vmax, 1e-6);
                 m = fmaxf(m, out[k].px[i]);

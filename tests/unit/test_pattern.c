@@ -117,7 +117,7 @@ TEST(parallel_rasterization_is_the_serial_one_bit_for_bit)
         samples_set_rule(&whole, rule);
         for (int v = 0; v < SC.nviews; v++)
             if (USE[v])
-                ASSERT_OK(samples_add(&whole, v, &G[v], 0, SC.views[v].light_intensity, &e));
+                ASSERT_OK(samples_add(&whole, v, &G[v], 0, view_light_scale(&SC.views[v]), &e));
         ASSERT_OK(samples_end(&whole, USE, HASH, &e));
         ASSERT_OK(raster(&SC, HASH, USE, rule, 1, 7, &log, &serial, &e));
         ASSERT(same_samples(&whole, &serial));

@@ -110,7 +110,7 @@ TEST(patterns_built_in_bands_and_subsets_equal_whole_ones)
             gbuf b;
             ASSERT_OK(raster_view_rows(&SC.mesh, &SC.views[v], SC.width, SC.height, row0, n, &b,
                                        &e));
-            ASSERT_OK(samples_add(&banded, v, &b, row0, SC.views[v].light_intensity, &e));
+            ASSERT_OK(samples_add(&banded, v, &b, row0, view_light_scale(&SC.views[v]), &e));
             gbuf_free(&b);
         }
     }
