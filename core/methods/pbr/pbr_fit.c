@@ -1,5 +1,10 @@
-/* pbr_fit.c: the fit of pbr.h's model by GSL's multifit_nlinear (trust
- * region, Levenberg-Marquardt steps, Cholesky solves, More scaling).
+/* pbr_fit.c: the fit of pbr.h's model by GSL's nonlinear least squares
+ * (trust region, Levenberg-Marquardt steps, Cholesky solves, More
+ * scaling), in its large-problem form (gsl_multilarge_nlinear): the
+ * Jacobian is never stored, each pass over the samples accumulates J'J
+ * (p x p) and J'f, so an iteration costs two passes over the samples and
+ * O(p^2) memory beyond the residual vector (multifit_nlinear's stored J,
+ * 3n x p, and its column norms took most of the time).
  *
  * Protocol:
  *   1. starts: for each of o->starts roughnesses (PBR_START_ALPHA, in
@@ -25,7 +30,7 @@
 #include <gsl/gsl_blas.h>
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_errno.h>
-#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_multilarge_nlinear.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -38,9 +43,12 @@
 #endif
 
 #define PBR_NULL_REL 1e-10
-#define PBR_XTOL 1e-10
-#define PBR_GTOL 1e-12
-#define PBR_FTOL 1e-12
+/* GSL's tests: step (relative, in u), gradient, cost change; a start stops
+ * after PBR_START_ITER iterations at most (it only has to find the basin) */
+#define PBR_XTOL 1e-8
+#define PBR_GTOL 1e-8
+#define PBR_FTOL 1e-8
+#define PBR_START_ITER 25
 
 static const double PBR_START_ALPHA[PBR_MAX_STARTS] = {0.05, 0.15, 0.4, 0.01, 0.7,
                                                        0.1,  0.25, 0.03};
@@ -108,34 +116,66 @@ static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
     return isfinite(ss) ? GSL_SUCCESS : GSL_EDOM;
 }
 
-static int lm_df(const gsl_vector *x, void *data, gsl_matrix *Jm)
+/* J'u (TransJ = CblasTrans, u: 3n residuals, v: p) or J u (CblasNoTrans,
+ * u: p, v: 3n), and J'J when JTJ is not NULL, J with respect to u. */
+static int lm_df(CBLAS_TRANSPOSE_t TransJ, const gsl_vector *x, const gsl_vector *u, void *data,
+                 gsl_vector *v, gsl_matrix *JTJ)
 {
     const lm_ctx *cx = data;
     const pbr_geom *g = &cx->s->g;
-    double p[PBR_MAXP], dpdu[PBR_MAXP];
+    double p[PBR_MAXP], dpdu[PBR_MAXP], A[PBR_MAXP][PBR_MAXP] = {{0}}, jtu[PBR_MAXP] = {0};
     int np = cx->np;
     u_to_p(cx, x->data, p, dpdu);
     for (int i = 0; i < g->n; i++) {
         double m[3], J[3][PBR_MAXP];
         pbr_eval(cx->sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
         for (int c = 0; c < 3; c++) {
-            double *row = gsl_matrix_ptr(Jm, 3 * (size_t)i + c, 0);
+            double *row = J[c];
+            size_t r = 3 * (size_t)i + c;
             for (int k = 0; k < np; k++)
-                row[k] = J[c][k] * dpdu[k];
+                row[k] *= dpdu[k];
+            if (u && v) {
+                if (TransJ == CblasTrans) {
+                    double ur = gsl_vector_get(u, r);
+                    for (int k = 0; k < np; k++)
+                        jtu[k] += row[k] * ur;
+                } else {
+                    double s = 0.0;
+                    for (int k = 0; k < np; k++)
+                        s += row[k] * gsl_vector_get(u, (size_t)k);
+                    gsl_vector_set(v, r, s);
+                }
+            }
+            if (JTJ)
+                for (int a = 0; a < np; a++)
+                    if (row[a] != 0.0)
+                        for (int b = 0; b <= a; b++)
+                            A[a][b] += row[a] * row[b];
         }
     }
+    if (u && v && TransJ == CblasTrans)
+        for (int k = 0; k < np; k++)
+            gsl_vector_set(v, (size_t)k, jtu[k]);
+    if (JTJ)
+        for (int a = 0; a < np; a++)
+            for (int b = 0; b <= a; b++) {
+                gsl_matrix_set(JTJ, (size_t)a, (size_t)b, A[a][b]);
+                gsl_matrix_set(JTJ, (size_t)b, (size_t)a, A[a][b]);
+            }
     return GSL_SUCCESS;
 }
 
 /* Levenberg-Marquardt from p (in and out) on cx's samples with workspace w
  * (sized for them). */
-static void lm_run(lm_ctx *cx, gsl_multifit_nlinear_workspace *w, int max_iter, double *p,
+static void lm_run(lm_ctx *cx, gsl_multilarge_nlinear_workspace *w, int max_iter, double *p,
                    pbr_start_report *rep)
 {
-    gsl_multifit_nlinear_fdf fdf;
+    gsl_multilarge_nlinear_fdf fdf;
     double u[PBR_MAXP], nr;
     gsl_vector_view xv;
     int info = 0, status;
+
+    rep->converged = 0;
 
     p_to_u(cx, p, u);
     xv = gsl_vector_view_array(u, (size_t)cx->np);
@@ -145,17 +185,18 @@ static void lm_run(lm_ctx *cx, gsl_multifit_nlinear_workspace *w, int max_iter, 
     fdf.n = 3 * (size_t)cx->s->g.n;
     fdf.p = (size_t)cx->np;
     fdf.params = cx;
-    status = gsl_multifit_nlinear_init(&xv.vector, &fdf, w);
+    status = gsl_multilarge_nlinear_init(&xv.vector, &fdf, w);
     if (status == GSL_SUCCESS)
-        status = gsl_multifit_nlinear_driver((size_t)max_iter, PBR_XTOL, PBR_GTOL, PBR_FTOL,
-                                             NULL, NULL, &info, w);
-    memcpy(u, gsl_multifit_nlinear_position(w)->data, sizeof(double) * (size_t)cx->np);
+        status = gsl_multilarge_nlinear_driver((size_t)max_iter, PBR_XTOL, PBR_GTOL, PBR_FTOL,
+                                               NULL, NULL, &info, w);
+    rep->converged = status == GSL_SUCCESS;
+    memcpy(u, gsl_multilarge_nlinear_position(w)->data, sizeof(double) * (size_t)cx->np);
     u_to_p(cx, u, p, NULL);
-    nr = gsl_blas_dnrm2(gsl_multifit_nlinear_residual(w));
+    nr = gsl_blas_dnrm2(gsl_multilarge_nlinear_residual(w));
     rep->cost = 0.5 * nr * nr;
-    rep->iters = (int)gsl_multifit_nlinear_niter(w);
+    rep->iters = (int)gsl_multilarge_nlinear_niter(w);
     /* no progress possible at a minimum met exactly counts as converged */
-    rep->converged = (status == GSL_SUCCESS || status == GSL_ENOPROG) && isfinite(rep->cost);
+    rep->converged = (rep->converged || status == GSL_ENOPROG) && isfinite(rep->cost);
     if (!isfinite(rep->cost))
         rep->cost = INFINITY;
 }
@@ -362,13 +403,13 @@ static int subset_make(const pbr_set *all, int m, pbr_set *sub, double **buf, fl
     return 0;
 }
 
-static gsl_multifit_nlinear_workspace *lm_alloc(int n, int np)
+static gsl_multilarge_nlinear_workspace *lm_alloc(int n, int np)
 {
-    gsl_multifit_nlinear_parameters fp = gsl_multifit_nlinear_default_parameters();
-    fp.trs = gsl_multifit_nlinear_trs_lm;
-    fp.solver = gsl_multifit_nlinear_solver_cholesky;
-    fp.scale = gsl_multifit_nlinear_scale_more;
-    return gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &fp, 3 * (size_t)n,
+    gsl_multilarge_nlinear_parameters fp = gsl_multilarge_nlinear_default_parameters();
+    fp.trs = gsl_multilarge_nlinear_trs_lm;
+    fp.solver = gsl_multilarge_nlinear_solver_cholesky;
+    fp.scale = gsl_multilarge_nlinear_scale_more;
+    return gsl_multilarge_nlinear_alloc(gsl_multilarge_nlinear_trust, &fp, 3 * (size_t)n,
                                       (size_t)np);
 }
 
@@ -503,7 +544,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     lm_ctx cx;
     double *subd = NULL, best = INFINITY;
     float *suby = NULL;
-    gsl_multifit_nlinear_workspace *w = NULL;
+    gsl_multilarge_nlinear_workspace *w = NULL;
     int np = pbr_np(sp), starts, lit = 0, rc = 0;
     int use_sub = o->subset > 0 && g->n > o->subset;
 
@@ -541,7 +582,8 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
         linear_start(&cx, p);
         sr->alpha0 = PBR_START_ALPHA[s];
         if (lit) {
-            lm_run(&cx, w, o->max_iter, p, sr);
+            lm_run(&cx, w, use_sub && o->max_iter > PBR_START_ITER ? PBR_START_ITER : o->max_iter,
+                   p, sr);
         } else { /* a black painting: the start (kd = ks = 0 within 1e-4) is the answer */
             sr->cost = 0.0;
             sr->converged = 1;
@@ -560,7 +602,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     out->converged = out->start[out->best_start].converged;
     if (use_sub && lit) { /* refine on every sample */
         pbr_start_report fin;
-        gsl_multifit_nlinear_free(w);
+        gsl_multilarge_nlinear_free(w);
         cx.s = &all;
         if (!(w = lm_alloc(g->n, np))) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
@@ -582,7 +624,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     if ((rc = determine(&cx, out)))
         rc = glint_err_set(err, rc, "out of memory");
 done:
-    gsl_multifit_nlinear_free(w);
+    gsl_multilarge_nlinear_free(w);
     free(subd);
     free(suby);
     return rc;
