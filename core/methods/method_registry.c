@@ -7,12 +7,14 @@
 #include "method_hf4.h"
 #include "method_hybrid.h"
 #include "method_maps.h"
+#include "method_pbr.h"
 #include "method_srbf.h"
 
 extern const method *const method_builtin[];
 
 const method *const method_builtin[] = {
     &method_hf3,
+    &method_pbr,
     &method_srbf,
     &method_hf4,
     &method_hf2d,

@@ -352,7 +352,7 @@ TEST(every_method_through_the_cache)
     ASSERT_OK(paint_views(&b, g, fit_scene.views, fit_scene.nviews, 0, method_paint, NULL, &e));
     snprintf(fit_dir, sizeof fit_dir, "/tmp/glint-allocfail-XXXXXX");
     ASSERT(mkdtemp(fit_dir) != NULL);
-    sweep_all = 64; /* seven methods: fewer runs each */
+    sweep_all = 64; /* eight methods: fewer runs each */
     sweep_runs = 64;
     for (int i = 0; i < METHOD_SMALL_N; i++) {
         cur_method = method_find(method_small[i][0]);

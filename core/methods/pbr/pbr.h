@@ -1,0 +1,132 @@
+/* pbr.h: a physically based parametric BRDF and its fit by nonlinear least
+ * squares (GSL's multifit_nlinear).
+ *
+ * The model, isotropic, per colour channel c:
+ *
+ *   f_c = kd_c / pi + sum over lobes l of  ks_lc D(alpha_l) V(alpha_l) F_lc
+ *
+ *   D = a2 / (pi ((n.h)^2 (a2 - 1) + 1)^2)                    GGX, a2 = alpha^2
+ *   V = 0.5 / (co sqrt(a2 + (1 - a2) ci^2) + ci sqrt(a2 + (1 - a2) co^2))
+ *       (height-correlated Smith G2 / (4 ci co)), ci = n.wi, co = n.wo
+ *   F = F0 + (1 - F0) (1 - wi.h)^5                             Schlick
+ *
+ * with one or two lobes, each either
+ *   dielectric: ks per channel (the highlight's tint), one ior: F0 =
+ *               ((ior - 1) / (ior + 1))^2 for every channel, or
+ *   conductor:  one ks, F0 per channel (the metal's colour).
+ *
+ * Values are radiance per unit light: f_c ci, as the samples a method
+ * receives (scene.h's radiance pi I f ci divided by pi I).
+ *
+ * Parameters ("direct", p): kd[3], then per lobe 5 values: alpha, then
+ *   dielectric: ks[3], ior        conductor: ks, F0[3]
+ * each bounded (pbr_bounds): kd in [0, 1] (energy), alpha in [PBR_ALPHA_MIN,
+ * 1], ior in [PBR_IOR_MIN, PBR_IOR_MAX], F0 in [0, 1], ks in [0, PBR_KS_MAX]
+ * (a painted highlight may be brighter than a physical one: ks is bounded
+ * only to keep the problem finite).  The fit works on unconstrained u with
+ * p = lo + (hi - lo) sigmoid(u), so a parameter reaches a bound only in the
+ * limit; one whose sigmoid is within PBR_BOUND_TOL of 0 or 1 at the end is
+ * set to the bound and reported there.
+ *
+ * Thread-safety: no global state except GSL's error handler, which the first
+ * fit turns off once for the process (pthread_once; GSL's default aborts);
+ * any number of fits may run at once on different data. */
+#ifndef GLINT_PBR_H
+#define GLINT_PBR_H
+
+#include <jansson.h>
+
+#include "err.h"
+
+#define PBR_MAX_LOBES 2
+#define PBR_MAXP (3 + 5 * PBR_MAX_LOBES)
+#define PBR_ALPHA_MIN 0.002
+#define PBR_ALPHA_MAX 1.0
+#define PBR_IOR_MIN 1.01
+#define PBR_IOR_MAX 3.0
+#define PBR_KS_MAX 10.0
+#define PBR_BOUND_TOL 1e-6
+
+enum { PBR_DIELECTRIC = 0, PBR_CONDUCTOR = 1 };
+
+typedef struct pbr_spec {
+    int nlobes;  /* 1 or 2 */
+    int fresnel; /* PBR_DIELECTRIC or PBR_CONDUCTOR (both lobes) */
+} pbr_spec;
+
+/* Per-sample cosines (n arrays of n doubles): ci = n.wi > 0, co = n.wo > 0,
+ * ch = n.h, cd = wi.h, h the unit half vector. */
+typedef struct pbr_geom {
+    int n;
+    double *ci, *co, *ch, *cd;
+} pbr_geom;
+
+/* Number of direct parameters (3 + 5 nlobes). */
+int pbr_np(const pbr_spec *sp);
+
+/* The name of parameter k ("kd_r", "alpha", "ks_g", "ior", "f0_b"; the
+ * second lobe's end in "_2"); OUT buf. */
+void pbr_param_name(const pbr_spec *sp, int k, char *buf, size_t len);
+
+/* Bounds of the direct parameters (OUT lo, hi: pbr_np values). */
+void pbr_bounds(const pbr_spec *sp, double *lo, double *hi);
+
+/* The value (OUT m[3]: f_c ci) at one sample's cosines and, when J is not
+ * NULL, its derivatives with respect to the direct parameters (OUT J[c][k],
+ * k < pbr_np). */
+void pbr_eval(const pbr_spec *sp, const double *p, double ci, double co, double ch, double cd,
+              double m[3], double J[3][PBR_MAXP]);
+
+/* The same per lobe in one common form, for materials: per lobe alpha,
+ * ks[3] and F0[3] (dielectric: F0 from the ior; conductor: ks the same in
+ * every channel).  OUT f[3] (f itself, not times ci). */
+typedef struct pbr_lobe {
+    double alpha, ks[3], f0[3];
+} pbr_lobe;
+void pbr_lobes_of(const pbr_spec *sp, const double *p, pbr_lobe *lobes);
+void pbr_brdf(const double kd[3], const pbr_lobe *lobes, int nlobes, double ci, double co,
+              double ch, double cd, double f[3]);
+
+/* F0 of a dielectric of index ior. */
+double pbr_f0_of_ior(double ior);
+
+/* ---- the fit ----------------------------------------------------------------------- */
+
+typedef struct pbr_fit_opts {
+    int starts;    /* starts over the roughness (1..PBR_MAX_STARTS) */
+    int max_iter;  /* iterations per start */
+    int subset;    /* samples the starts are fitted on (the brightest eighth and an even
+                      draw of the rest); the best is then refined on all.  0: all */
+} pbr_fit_opts;
+
+#define PBR_MAX_STARTS 8
+
+typedef struct pbr_start_report {
+    double alpha0;    /* the first lobe's roughness it started from */
+    double cost;      /* 0.5 sum of squared residuals on the samples it was fitted to */
+    int iters, converged;
+} pbr_start_report;
+
+typedef struct pbr_fit_result {
+    double p[PBR_MAXP];     /* the parameters (bounds applied) */
+    double sigma[PBR_MAXP]; /* standard errors: sqrt(diag((J'J)^-1) s^2), s^2 the residual
+                               variance; NaN for a parameter at a bound or undetermined */
+    int at_bound[PBR_MAXP]; /* -1 lower, +1 upper, 0 inside */
+    int undetermined[PBR_MAXP]; /* 1: the views do not determine it */
+    int nstarts, best_start;
+    pbr_start_report start[PBR_MAX_STARTS];
+    int iters, converged;   /* the final refinement on all samples */
+    double cost;            /* 0.5 sum of squared residuals, all samples */
+    double rms;             /* RMS over samples and channels */
+    double resid_var;       /* s^2 = 2 cost / (3 n - free parameters) (0 when not positive) */
+    int nsamples_lit;       /* samples with a value above zero in some channel */
+} pbr_fit_result;
+
+/* Fit spec to the values y[3 n] (f_c ci per sample, sample-major) at
+ * geometry g.  GLINT_EINVAL when there are fewer than pbr_np samples (the
+ * message says how many there are and how many are needed), GLINT_ENUMERIC
+ * when no start gives a finite cost, GLINT_ENOMEM. */
+int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit_opts *o,
+            pbr_fit_result *out, glint_err *err);
+
+#endif

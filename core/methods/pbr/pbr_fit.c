@@ -1,0 +1,631 @@
+/* pbr_fit.c: the fit of pbr.h's model by GSL's nonlinear least squares
+ * (trust region, Levenberg-Marquardt steps, Cholesky solves, More
+ * scaling), in its large-problem form (gsl_multilarge_nlinear): the
+ * Jacobian is never stored, each pass over the samples accumulates J'J
+ * (p x p) and J'f, so an iteration costs two passes over the samples and
+ * O(p^2) memory beyond the residual vector (multifit_nlinear's stored J,
+ * 3n x p, and its column norms took most of the time).
+ *
+ * Protocol:
+ *   1. starts: for each of o->starts roughnesses (PBR_START_ALPHA, in
+ *      order), kd and ks from a linear least-squares solve with that
+ *      roughness and a fixed Fresnel (ior 1.5; conductor F0 0.5), the
+ *      coefficients kept >= 0 (every subset of the at most three columns
+ *      tried); then Levenberg-Marquardt on o->subset samples (the brightest
+ *      eighth, where the highlight is, and an even stride over the rest);
+ *   2. the start of least cost refined on every sample;
+ *   3. parameters within PBR_BOUND_TOL of a bound (in the sigmoid) set to
+ *      it; the cost, J'J and the residual variance s^2 computed on every
+ *      sample;
+ *   4. what the views determine: on J'J scaled by the parameters' ranges
+ *      (D J'J D), eigenvalues below PBR_NULL_REL times the largest span
+ *      directions the samples do not see; a parameter mostly (weight > 1/2)
+ *      in those is undetermined, and so is one whose standard error exceeds
+ *      half its range, and a lobe's roughness and Fresnel when its ks is 0.
+ *      Standard errors of the parameters inside their bounds from the
+ *      pseudo-inverse: sigma_k = sqrt(s^2 (D (DJ'JD)^+ D)_kk).
+ *
+ * Residuals are plain differences of values f ci (no weights, no robust
+ * loss: the paintings are the truth here, not measurements with outliers). */
+#include <gsl/gsl_blas.h>
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_multilarge_nlinear.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pbr.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define PBR_NULL_REL 1e-10
+/* GSL's tests: step (relative, in u), gradient, cost change; a start stops
+ * after PBR_START_ITER iterations at most (it only has to find the basin) */
+#define PBR_XTOL 1e-8
+#define PBR_GTOL 1e-8
+#define PBR_FTOL 1e-8
+#define PBR_START_ITER 25
+
+static const double PBR_START_ALPHA[PBR_MAX_STARTS] = {0.05, 0.15, 0.4, 0.01, 0.7,
+                                                       0.1,  0.25, 0.03};
+
+/* Samples the LM runs over: cosines and values (pointers into the caller's
+ * arrays, or a subset's copies). */
+typedef struct pbr_set {
+    pbr_geom g;
+    const float *y;
+} pbr_set;
+
+typedef struct lm_ctx {
+    const pbr_spec *sp;
+    const pbr_set *s;
+    double lo[PBR_MAXP], hi[PBR_MAXP];
+    int np;
+} lm_ctx;
+
+static pthread_once_t gsl_handler_once = PTHREAD_ONCE_INIT;
+
+static void gsl_handler_off(void)
+{
+    gsl_set_error_handler_off();
+}
+
+static double sigm(double x)
+{
+    return 1.0 / (1.0 + exp(-x));
+}
+
+static void u_to_p(const lm_ctx *cx, const double *u, double *p, double *dpdu)
+{
+    for (int k = 0; k < cx->np; k++) {
+        double s = sigm(u[k]), r = cx->hi[k] - cx->lo[k];
+        p[k] = cx->lo[k] + r * s;
+        if (dpdu)
+            dpdu[k] = r * s * (1.0 - s);
+    }
+}
+
+static void p_to_u(const lm_ctx *cx, const double *p, double *u)
+{
+    for (int k = 0; k < cx->np; k++) {
+        double y = (p[k] - cx->lo[k]) / (cx->hi[k] - cx->lo[k]);
+        y = fmin(fmax(y, 1e-12), 1.0 - 1e-12);
+        u[k] = log(y / (1.0 - y));
+    }
+}
+
+static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
+{
+    const lm_ctx *cx = data;
+    const pbr_geom *g = &cx->s->g;
+    double p[PBR_MAXP], ss = 0.0;
+    u_to_p(cx, x->data, p, NULL);
+    for (int i = 0; i < g->n; i++) {
+        double m[3];
+        pbr_eval(cx->sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, NULL);
+        for (int c = 0; c < 3; c++) {
+            double r = m[c] - cx->s->y[3 * (size_t)i + c];
+            f->data[3 * (size_t)i + c] = r;
+            ss += r * r;
+        }
+    }
+    return isfinite(ss) ? GSL_SUCCESS : GSL_EDOM;
+}
+
+/* J'u (TransJ = CblasTrans, u: 3n residuals, v: p) or J u (CblasNoTrans,
+ * u: p, v: 3n), and J'J when JTJ is not NULL, J with respect to u. */
+static int lm_df(CBLAS_TRANSPOSE_t TransJ, const gsl_vector *x, const gsl_vector *u, void *data,
+                 gsl_vector *v, gsl_matrix *JTJ)
+{
+    const lm_ctx *cx = data;
+    const pbr_geom *g = &cx->s->g;
+    double p[PBR_MAXP], dpdu[PBR_MAXP], A[PBR_MAXP][PBR_MAXP] = {{0}}, jtu[PBR_MAXP] = {0};
+    int np = cx->np;
+    u_to_p(cx, x->data, p, dpdu);
+    for (int i = 0; i < g->n; i++) {
+        double m[3], J[3][PBR_MAXP];
+        pbr_eval(cx->sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
+        for (int c = 0; c < 3; c++) {
+            double *row = J[c];
+            size_t r = 3 * (size_t)i + c;
+            for (int k = 0; k < np; k++)
+                row[k] *= dpdu[k];
+            if (u && v) {
+                if (TransJ == CblasTrans) {
+                    double ur = gsl_vector_get(u, r);
+                    for (int k = 0; k < np; k++)
+                        jtu[k] += row[k] * ur;
+                } else {
+                    double s = 0.0;
+                    for (int k = 0; k < np; k++)
+                        s += row[k] * gsl_vector_get(u, (size_t)k);
+                    gsl_vector_set(v, r, s);
+                }
+            }
+            if (JTJ)
+                for (int a = 0; a < np; a++)
+                    if (row[a] != 0.0)
+                        for (int b = 0; b <= a; b++)
+                            A[a][b] += row[a] * row[b];
+        }
+    }
+    if (u && v && TransJ == CblasTrans)
+        for (int k = 0; k < np; k++)
+            gsl_vector_set(v, (size_t)k, jtu[k]);
+    if (JTJ)
+        for (int a = 0; a < np; a++)
+            for (int b = 0; b <= a; b++) {
+                gsl_matrix_set(JTJ, (size_t)a, (size_t)b, A[a][b]);
+                gsl_matrix_set(JTJ, (size_t)b, (size_t)a, A[a][b]);
+            }
+    return GSL_SUCCESS;
+}
+
+/* Levenberg-Marquardt from p (in and out) on cx's samples with workspace w
+ * (sized for them). */
+static void lm_run(lm_ctx *cx, gsl_multilarge_nlinear_workspace *w, int max_iter, double *p,
+                   pbr_start_report *rep)
+{
+    gsl_multilarge_nlinear_fdf fdf;
+    double u[PBR_MAXP], nr;
+    gsl_vector_view xv;
+    int info = 0, status;
+
+    rep->converged = 0;
+
+    p_to_u(cx, p, u);
+    xv = gsl_vector_view_array(u, (size_t)cx->np);
+    memset(&fdf, 0, sizeof fdf);
+    fdf.f = lm_f;
+    fdf.df = lm_df;
+    fdf.n = 3 * (size_t)cx->s->g.n;
+    fdf.p = (size_t)cx->np;
+    fdf.params = cx;
+    status = gsl_multilarge_nlinear_init(&xv.vector, &fdf, w);
+    if (status == GSL_SUCCESS)
+        status = gsl_multilarge_nlinear_driver((size_t)max_iter, PBR_XTOL, PBR_GTOL, PBR_FTOL,
+                                               NULL, NULL, &info, w);
+    rep->converged = status == GSL_SUCCESS;
+    memcpy(u, gsl_multilarge_nlinear_position(w)->data, sizeof(double) * (size_t)cx->np);
+    u_to_p(cx, u, p, NULL);
+    nr = gsl_blas_dnrm2(gsl_multilarge_nlinear_residual(w));
+    rep->cost = 0.5 * nr * nr;
+    rep->iters = (int)gsl_multilarge_nlinear_niter(w);
+    /* no progress possible at a minimum met exactly counts as converged */
+    rep->converged = (rep->converged || status == GSL_ENOPROG) && isfinite(rep->cost);
+    if (!isfinite(rep->cost))
+        rep->cost = INFINITY;
+}
+
+/* Solve the k x k system G x = b (k <= 3) by Gaussian elimination with
+ * partial pivoting; 0, or -1 when singular. */
+static int small_solve(int k, const double G[3][3], const double *b, double *x)
+{
+    double A[3][4];
+    for (int i = 0; i < k; i++) {
+        for (int j = 0; j < k; j++)
+            A[i][j] = G[i][j];
+        A[i][k] = b[i];
+    }
+    for (int c = 0; c < k; c++) {
+        int piv = c;
+        for (int r = c + 1; r < k; r++)
+            if (fabs(A[r][c]) > fabs(A[piv][c]))
+                piv = r;
+        if (!(fabs(A[piv][c]) > 1e-300))
+            return -1;
+        for (int j = 0; j <= k; j++) {
+            double t = A[c][j];
+            A[c][j] = A[piv][j];
+            A[piv][j] = t;
+        }
+        for (int r = c + 1; r < k; r++) {
+            double f = A[r][c] / A[c][c];
+            for (int j = c; j <= k; j++)
+                A[r][j] -= f * A[c][j];
+        }
+    }
+    for (int r = k - 1; r >= 0; r--) {
+        double s = A[r][k];
+        for (int j = r + 1; j < k; j++)
+            s -= A[r][j] * x[j];
+        x[r] = s / A[r][r];
+    }
+    return 0;
+}
+
+/* min x'Gx - 2 x'b over x >= 0 (k <= 3 columns): every subset of columns
+ * solved, the best feasible one kept (x = 0 at worst). */
+static void small_nnls(int k, const double G[3][3], const double *b, double *x)
+{
+    double best = 0.0;
+    memset(x, 0, sizeof(double) * (size_t)k);
+    for (int mask = 1; mask < (1 << k); mask++) {
+        int idx[3], m = 0, ok = 1;
+        double Gs[3][3], bs[3], xs[3], full[3] = {0, 0, 0}, obj = 0.0;
+        for (int j = 0; j < k; j++)
+            if (mask & (1 << j))
+                idx[m++] = j;
+        for (int a = 0; a < m; a++) {
+            bs[a] = b[idx[a]];
+            for (int c = 0; c < m; c++)
+                Gs[a][c] = G[idx[a]][idx[c]];
+        }
+        if (small_solve(m, (const double(*)[3])Gs, bs, xs))
+            continue;
+        for (int a = 0; a < m; a++) {
+            if (!(xs[a] >= 0.0))
+                ok = 0;
+            full[idx[a]] = xs[a];
+        }
+        if (!ok)
+            continue;
+        for (int a = 0; a < k; a++) {
+            obj -= 2.0 * full[a] * b[a];
+            for (int c = 0; c < k; c++)
+                obj += full[a] * G[a][c] * full[c];
+        }
+        if (obj < best) {
+            best = obj;
+            memcpy(x, full, sizeof(double) * (size_t)k);
+        }
+    }
+}
+
+/* A start: the roughnesses given in p (lobe l at 3 + 5 l), kd and ks from
+ * the linear solve (see the protocol above), every value moved inside its
+ * bounds by 1e-4 of its range so that the sigmoid can leave it. */
+static void linear_start(const lm_ctx *cx, double *p)
+{
+    const pbr_spec *sp = cx->sp;
+    const pbr_geom *g = &cx->s->g;
+    int L = sp->nlobes, k = 1 + L;
+    double G[3][3] = {{0}}, b[3][3] = {{0}};
+
+    for (int l = 0; l < L; l++) {
+        int o = 3 + 5 * l;
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            p[o + 1] = p[o + 2] = p[o + 3] = 1.0;
+            p[o + 4] = 1.5;
+        } else {
+            p[o + 1] = 1.0;
+            p[o + 2] = p[o + 3] = p[o + 4] = 0.5;
+        }
+    }
+    for (int i = 0; i < g->n; i++) {
+        double col[3];
+        col[0] = g->ci[i] / M_PI;
+        for (int l = 0; l < L; l++) {
+            /* lobe l alone: its value in channel 0 with the others off */
+            pbr_spec one = {1, sp->fresnel};
+            double q[8] = {0, 0, 0}, m[3];
+            memcpy(q + 3, p + 3 + 5 * l, 5 * sizeof(double));
+            pbr_eval(&one, q, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, NULL);
+            col[1 + l] = m[0];
+        }
+        for (int a = 0; a < k; a++) {
+            for (int c = 0; c < 3; c++)
+                b[c][a] += col[a] * cx->s->y[3 * (size_t)i + c];
+            for (int e = 0; e < k; e++)
+                G[a][e] += col[a] * col[e];
+        }
+    }
+    {
+        double x[3][3], mx[PBR_MAX_LOBES] = {0};
+        for (int c = 0; c < 3; c++) {
+            small_nnls(k, (const double(*)[3])G, b[c], x[c]);
+            p[c] = x[c][0];
+            for (int l = 0; l < L; l++) {
+                if (sp->fresnel == PBR_DIELECTRIC)
+                    p[3 + 5 * l + 1 + c] = x[c][1 + l];
+                mx[l] = fmax(mx[l], x[c][1 + l]);
+            }
+        }
+        for (int l = 0; l < L; l++)
+            if (sp->fresnel == PBR_CONDUCTOR) {
+                /* per-channel scales s_c at F0 0.5: ks the largest, F0_c from the ratio */
+                p[3 + 5 * l + 1] = mx[l];
+                for (int c = 0; c < 3; c++)
+                    p[3 + 5 * l + 2 + c] = mx[l] > 0.0 ? 0.5 * x[c][1 + l] / mx[l] : 0.5;
+            }
+    }
+    for (int j = 0; j < cx->np; j++) {
+        double m = 1e-4 * (cx->hi[j] - cx->lo[j]);
+        p[j] = fmin(fmax(p[j], cx->lo[j] + m), cx->hi[j] - m);
+    }
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The subset of the starts: the brightest m/8 samples and an even stride
+ * over the others, copied (OUT: sub, its arrays in *buf, free()). */
+static int subset_make(const pbr_set *all, int m, pbr_set *sub, double **buf, float **ybuf)
+{
+    const pbr_geom *g = &all->g;
+    int n = g->n, nb = m / 8, k = 0, rest, step;
+    float *lum = malloc(sizeof(float) * (size_t)n), thr;
+    unsigned char *take = calloc((size_t)n, 1);
+    double *d = malloc(4 * sizeof(double) * (size_t)m);
+    float *y = malloc(3 * sizeof(float) * (size_t)m);
+    if (!lum || !take || !d || !y) {
+        free(lum);
+        free(take);
+        free(d);
+        free(y);
+        return GLINT_ENOMEM;
+    }
+    for (int i = 0; i < n; i++)
+        lum[i] = all->y[3 * (size_t)i] + all->y[3 * (size_t)i + 1] + all->y[3 * (size_t)i + 2];
+    qsort(lum, (size_t)n, sizeof *lum, cmp_float);
+    thr = lum[n - 1 - nb];
+    for (int i = 0; i < n && k < nb; i++) {
+        float v = all->y[3 * (size_t)i] + all->y[3 * (size_t)i + 1] + all->y[3 * (size_t)i + 2];
+        if (v > thr) {
+            take[i] = 1;
+            k++;
+        }
+    }
+    rest = n - k;
+    step = rest / (m - k) > 1 ? rest / (m - k) : 1;
+    for (int i = 0, j = 0; i < n && k < m; i++)
+        if (!take[i] && j++ % step == 0) {
+            take[i] = 1;
+            k++;
+        }
+    sub->g.n = k;
+    sub->g.ci = d;
+    sub->g.co = d + m;
+    sub->g.ch = d + 2 * (size_t)m;
+    sub->g.cd = d + 3 * (size_t)m;
+    for (int i = 0, j = 0; i < n; i++)
+        if (take[i]) {
+            sub->g.ci[j] = g->ci[i];
+            sub->g.co[j] = g->co[i];
+            sub->g.ch[j] = g->ch[i];
+            sub->g.cd[j] = g->cd[i];
+            for (int c = 0; c < 3; c++)
+                y[3 * (size_t)j + c] = all->y[3 * (size_t)i + c];
+            j++;
+        }
+    sub->y = y;
+    free(lum);
+    free(take);
+    *buf = d;
+    *ybuf = y;
+    return 0;
+}
+
+static gsl_multilarge_nlinear_workspace *lm_alloc(int n, int np)
+{
+    gsl_multilarge_nlinear_parameters fp = gsl_multilarge_nlinear_default_parameters();
+    fp.trs = gsl_multilarge_nlinear_trs_lm;
+    fp.solver = gsl_multilarge_nlinear_solver_cholesky;
+    fp.scale = gsl_multilarge_nlinear_scale_more;
+    return gsl_multilarge_nlinear_alloc(gsl_multilarge_nlinear_trust, &fp, 3 * (size_t)n,
+                                      (size_t)np);
+}
+
+/* Steps 3 and 4 of the protocol on every sample (r->p set, bounds snapped). */
+static int determine(const lm_ctx *cx, pbr_fit_result *r)
+{
+    const pbr_geom *g = &cx->s->g;
+    int np = cx->np, nfree = 0, status;
+    double A[PBR_MAXP * PBR_MAXP] = {0}, A0[PBR_MAXP * PBR_MAXP], D[PBR_MAXP], ss = 0.0, lmax = 0.0;
+    gsl_matrix_view Av = gsl_matrix_view_array(A, (size_t)np, (size_t)np);
+    gsl_vector *eval = gsl_vector_alloc((size_t)np);
+    gsl_matrix *evec = gsl_matrix_alloc((size_t)np, (size_t)np);
+    gsl_eigen_symmv_workspace *ew = gsl_eigen_symmv_alloc((size_t)np);
+
+    if (!eval || !evec || !ew) {
+        gsl_vector_free(eval);
+        gsl_matrix_free(evec);
+        gsl_eigen_symmv_free(ew);
+        return GLINT_ENOMEM;
+    }
+    for (int k = 0; k < np; k++)
+        D[k] = cx->hi[k] - cx->lo[k];
+    for (int i = 0; i < g->n; i++) {
+        double m[3], J[3][PBR_MAXP];
+        pbr_eval(cx->sp, r->p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
+        for (int c = 0; c < 3; c++) {
+            double d = m[c] - cx->s->y[3 * (size_t)i + c];
+            ss += d * d;
+            for (int a = 0; a < np; a++)
+                if (J[c][a] != 0.0)
+                    for (int b = a; b < np; b++)
+                        A[a * np + b] += J[c][a] * J[c][b] * D[a] * D[b];
+        }
+    }
+    for (int a = 0; a < np; a++)
+        for (int b = 0; b < a; b++)
+            A[a * np + b] = A[b * np + a];
+    memcpy(A0, A, sizeof A0); /* gsl_eigen_symmv overwrites A */
+    r->cost = 0.5 * ss;
+    r->rms = g->n ? sqrt(ss / (3.0 * g->n)) : 0.0;
+    status = gsl_eigen_symmv(&Av.matrix, eval, evec, ew);
+    for (int k = 0; k < np; k++)
+        lmax = fmax(lmax, gsl_vector_get(eval, (size_t)k));
+    for (int k = 0; k < np; k++) {
+        double null_w = 0.0;
+        for (int e = 0; e < np; e++)
+            if (!(gsl_vector_get(eval, (size_t)e) > PBR_NULL_REL * lmax)) {
+                double v = gsl_matrix_get(evec, (size_t)k, (size_t)e);
+                null_w += v * v;
+            }
+        r->undetermined[k] = status != GSL_SUCCESS || !(lmax > 0.0) || null_w > 0.5;
+        nfree += !r->at_bound[k];
+    }
+    r->resid_var = 3 * g->n > nfree ? ss / (3.0 * g->n - nfree) : 0.0;
+    /* sigma over the parameters inside their bounds: the pseudo-inverse of
+     * their block of D J'J D (the same eigen-analysis on that block; eval
+     * and evec reused as its workspace) */
+    {
+        int idx[PBR_MAXP], m = 0;
+        double B[PBR_MAXP * PBR_MAXP];
+        for (int k = 0; k < np; k++) {
+            r->sigma[k] = NAN;
+            if (!r->at_bound[k])
+                idx[m++] = k;
+        }
+        if (m > 0 && status == GSL_SUCCESS) {
+            gsl_matrix_view Bv = gsl_matrix_view_array(B, (size_t)m, (size_t)m);
+            gsl_vector_view ev = gsl_vector_subvector(eval, 0, (size_t)m);
+            gsl_matrix_view vv = gsl_matrix_submatrix(evec, 0, 0, (size_t)m, (size_t)m);
+            gsl_eigen_symmv_workspace *bw = gsl_eigen_symmv_alloc((size_t)m);
+            double bmax = 0.0;
+            for (int a = 0; a < m; a++)
+                for (int b = 0; b < m; b++)
+                    B[a * m + b] = A0[idx[a] * np + idx[b]];
+            if (bw && gsl_eigen_symmv(&Bv.matrix, &ev.vector, &vv.matrix, bw) == GSL_SUCCESS) {
+                for (int e = 0; e < m; e++)
+                    bmax = fmax(bmax, gsl_vector_get(&ev.vector, (size_t)e));
+                for (int a = 0; a < m; a++) {
+                    double v = 0.0;
+                    for (int e = 0; e < m; e++) {
+                        double le = gsl_vector_get(&ev.vector, (size_t)e);
+                        double x = gsl_matrix_get(&vv.matrix, (size_t)a, (size_t)e);
+                        if (le > PBR_NULL_REL * bmax)
+                            v += x * x / le;
+                    }
+                    r->sigma[idx[a]] = D[idx[a]] * sqrt(r->resid_var * v);
+                }
+            }
+            gsl_eigen_symmv_free(bw);
+        }
+    }
+    for (int k = 0; k < np; k++)
+        if (isfinite(r->sigma[k]) && r->sigma[k] > 0.5 * D[k])
+            r->undetermined[k] = 1;
+    /* a lobe without weight says nothing of its shape */
+    for (int l = 0; l < cx->sp->nlobes; l++) {
+        int o = 3 + 5 * l, nks = cx->sp->fresnel == PBR_DIELECTRIC ? 3 : 1;
+        double ks = 0.0;
+        for (int c = 0; c < nks; c++)
+            ks = fmax(ks, r->p[o + 1 + c]);
+        if (!(ks > 0.0)) {
+            r->undetermined[o] = 1;
+            if (cx->sp->fresnel == PBR_DIELECTRIC)
+                r->undetermined[o + 4] = 1;
+            else
+                for (int c = 0; c < 3; c++)
+                    r->undetermined[o + 2 + c] = 1;
+        }
+    }
+    for (int k = 0; k < np; k++)
+        if (r->undetermined[k])
+            r->sigma[k] = NAN;
+    gsl_vector_free(eval);
+    gsl_matrix_free(evec);
+    gsl_eigen_symmv_free(ew);
+    return 0;
+}
+
+/* 1 when parameter k is a weight (kd or ks), which a black painting sets to 0. */
+static int is_weight(const pbr_spec *sp, int k)
+{
+    int j = (k - 3) % 5;
+    if (k < 3)
+        return 1;
+    return sp->fresnel == PBR_CONDUCTOR ? j == 1 : j >= 1 && j <= 3;
+}
+
+int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit_opts *o,
+            pbr_fit_result *out, glint_err *err)
+{
+    pbr_set all = {*g, y}, sub;
+    lm_ctx cx;
+    double *subd = NULL, best = INFINITY;
+    float *suby = NULL;
+    gsl_multilarge_nlinear_workspace *w = NULL;
+    int np = pbr_np(sp), starts, lit = 0, rc = 0;
+    int use_sub = o->subset > 0 && g->n > o->subset;
+
+    memset(out, 0, sizeof *out);
+    if (sp->nlobes < 1 || sp->nlobes > PBR_MAX_LOBES)
+        return glint_err_set(err, GLINT_EINVAL, "pbr: %d lobes (1 or 2)", sp->nlobes);
+    if (g->n < np)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "pbr: %d lit sample%s, the model's %d parameters need at least %d",
+                             g->n, g->n == 1 ? "" : "s", np, np);
+    pthread_once(&gsl_handler_once, gsl_handler_off);
+    starts = o->starts < 1 ? 1 : o->starts > PBR_MAX_STARTS ? PBR_MAX_STARTS : o->starts;
+    memset(&cx, 0, sizeof cx);
+    cx.sp = sp;
+    cx.np = np;
+    pbr_bounds(sp, cx.lo, cx.hi);
+    for (int i = 0; i < g->n; i++)
+        lit += y[3 * (size_t)i] > 0.0f || y[3 * (size_t)i + 1] > 0.0f ||
+               y[3 * (size_t)i + 2] > 0.0f;
+    out->nsamples_lit = lit;
+
+    if (use_sub && (rc = subset_make(&all, o->subset, &sub, &subd, &suby)))
+        return glint_err_set(err, rc, "out of memory");
+    cx.s = use_sub ? &sub : &all;
+    if (lit && !(w = lm_alloc(cx.s->g.n, np))) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
+        goto done;
+    }
+    out->nstarts = starts;
+    for (int s = 0; s < starts; s++) {
+        double p[PBR_MAXP];
+        pbr_start_report *sr = &out->start[s];
+        for (int l = 0; l < sp->nlobes; l++)
+            p[3 + 5 * l] = l ? fmin(0.9, 5.0 * PBR_START_ALPHA[s]) : PBR_START_ALPHA[s];
+        linear_start(&cx, p);
+        sr->alpha0 = PBR_START_ALPHA[s];
+        if (lit) {
+            lm_run(&cx, w, use_sub && o->max_iter > PBR_START_ITER ? PBR_START_ITER : o->max_iter,
+                   p, sr);
+        } else { /* a black painting: the start (kd = ks = 0 within 1e-4) is the answer */
+            sr->cost = 0.0;
+            sr->converged = 1;
+        }
+        if (sr->cost < best) {
+            best = sr->cost;
+            out->best_start = s;
+            memcpy(out->p, p, sizeof p);
+        }
+    }
+    if (!isfinite(best)) {
+        rc = glint_err_set(err, GLINT_ENUMERIC, "pbr: no start gave a finite cost");
+        goto done;
+    }
+    out->iters = out->start[out->best_start].iters;
+    out->converged = out->start[out->best_start].converged;
+    if (use_sub && lit) { /* refine on every sample */
+        pbr_start_report fin;
+        gsl_multilarge_nlinear_free(w);
+        cx.s = &all;
+        if (!(w = lm_alloc(g->n, np))) {
+            rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
+            goto done;
+        }
+        lm_run(&cx, w, o->max_iter, out->p, &fin);
+        out->iters = fin.iters;
+        out->converged = fin.converged;
+    }
+    cx.s = &all;
+    for (int k = 0; k < np; k++) {
+        double t = (out->p[k] - cx.lo[k]) / (cx.hi[k] - cx.lo[k]);
+        out->at_bound[k] = t <= PBR_BOUND_TOL ? -1 : t >= 1.0 - PBR_BOUND_TOL ? 1 : 0;
+        if (!lit && is_weight(sp, k))
+            out->at_bound[k] = -1; /* kd and ks of a black painting: 0 */
+        if (out->at_bound[k])
+            out->p[k] = out->at_bound[k] < 0 ? cx.lo[k] : cx.hi[k];
+    }
+    if ((rc = determine(&cx, out)))
+        rc = glint_err_set(err, rc, "out of memory");
+done:
+    gsl_multilarge_nlinear_free(w);
+    free(subd);
+    free(suby);
+    return rc;
+}

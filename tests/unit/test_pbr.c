@@ -1,0 +1,446 @@
+/* test_pbr.c: the pbr method (core/methods/pbr): the model's derivatives
+ * against finite differences; recovery of its own parameters (dielectric
+ * and conductor, one and two lobes) within 1e-3; the ct truth of brdf.h
+ * (separable Smith there, height-correlated here: close, not exact); and
+ * the extremes: a Lambertian (roughness undetermined), a mirror-like
+ * highlight (roughness at its floor, reported), a black painting (kd = 0,
+ * finite report), a single sample (GLINT_EINVAL), a painting brighter than
+ * physical (kd clamped at 1, reported), one view only; the material's
+ * files read back and damaged ones refused.
+ *
+ * The samples are those of the default scene (the sphere, 12 views) at 64 x
+ * 64; values are f ci per unit light (scene.h), computed at the samples. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "brdf.h"
+#include "check.h"
+#include "material.h"
+#include "method_pbr.h"
+#include "raster.h"
+#include "samples.h"
+#include "scene.h"
+
+static scene SC;
+static gbuf *G;
+static samples S;     /* every view */
+static samples S1;    /* view 0 alone */
+
+static int setup(void)
+{
+    scene_params sp;
+    unsigned char one[SCENE_MAX_VIEWS] = {1};
+    char h[33];
+    glint_err e;
+    if (S.n)
+        return 0;
+    scene_params_default(&sp);
+    sp.width = sp.height = 64;
+    if (scene_create(&sp, &SC, &e) || raster_scene(&SC, &G, &e) ||
+        (scene_hash(&SC, h), samples_build(G, SC.views, SC.nviews, NULL, h, &S, &e)) ||
+        samples_build(G, SC.views, SC.nviews, one, h, &S1, &e)) {
+        fprintf(stderr, "setup: %s\n", e.msg);
+        return -1;
+    }
+    return 0;
+}
+
+static void dirs_of(const samples *s, int i, double n[3], double wi[3], double wo[3])
+{
+    for (int a = 0; a < 3; a++) {
+        n[a] = s->nrm[3 * (size_t)i + a];
+        wi[a] = s->wi[3 * (size_t)i + a];
+        wo[a] = s->wo[3 * (size_t)i + a];
+    }
+}
+
+/* Values of a brdf.h truth at the samples (malloc'ed, 3 n). */
+static float *values_brdf(const char *spec, const samples *s)
+{
+    brdf b;
+    float *v = malloc(3 * sizeof(float) * (size_t)s->n);
+    if (!v || brdf_parse(spec, &b, NULL)) {
+        free(v);
+        return NULL;
+    }
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], f[3];
+        dirs_of(s, i, n, wi, wo);
+        brdf_eval(&b, n, wi, wo, f);
+        for (int c = 0; c < 3; c++)
+            v[3 * (size_t)i + c] = (float)(f[c] * s->cos_i[i]);
+    }
+    return v;
+}
+
+/* Values of the pbr model itself with direct parameters p. */
+static float *values_pbr(const pbr_spec *sp, const double *p, const samples *s)
+{
+    material m;
+    pbr_material *pm = calloc(1, sizeof *pm);
+    float *v = malloc(3 * sizeof(float) * (size_t)s->n);
+    pm->sp = *sp;
+    memcpy(pm->p, p, sizeof(double) * (size_t)pbr_np(sp));
+    pbr_material_sync(pm);
+    material_init(&m, &method_pbr, pm, NULL);
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], f[3];
+        dirs_of(s, i, n, wi, wo);
+        material_eval(&m, n, wi, wo, f);
+        for (int c = 0; c < 3; c++)
+            v[3 * (size_t)i + c] = (float)f[c];
+    }
+    material_free(&m);
+    return v;
+}
+
+/* Fit values v on samples s with the method's parameters "name=value,...". */
+static int fit_values(const char *spec, const samples *s, const float *v, material *out,
+                      glint_err *e)
+{
+    pbr_params pp;
+    method_build_in bin;
+    method_fit_in in;
+    cache_value lv = {0};
+    const void *levels[1];
+    const char *keys[1] = {"pbr-geom:test"};
+    int rc;
+    method_pbr.params_default(&pp);
+    if (spec && spec[0]) {
+        char buf[256], *tok, *save;
+        snprintf(buf, sizeof buf, "%s", spec);
+        for (tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+            char *eq = strchr(tok, '=');
+            *eq = '\0';
+            if ((rc = method_param_set_text(&method_pbr, &pp, tok, eq + 1, e)))
+                return rc;
+        }
+    }
+    memset(&bin, 0, sizeof bin);
+    bin.params = &pp;
+    bin.s = s;
+    if ((rc = method_pbr.levels[0].build(&bin, &lv, e)))
+        return rc;
+    levels[0] = lv.data;
+    memset(&in, 0, sizeof in);
+    in.params = &pp;
+    in.s = s;
+    in.rgb = v;
+    in.levels = levels;
+    in.keys = keys;
+    rc = method_pbr.fit(&in, out, e);
+    lv.free(lv.data);
+    return rc;
+}
+
+/* 1 when the JSON array arr holds the string name. */
+static int lists(const json_t *arr, const char *name)
+{
+    size_t i;
+    json_t *v;
+    json_array_foreach(arr, i, v) {
+        const char *t = json_is_string(v) ? json_string_value(v)
+                                          : json_string_value(json_object_get(v, "name"));
+        if (t && !strcmp(t, name))
+            return 1;
+    }
+    return 0;
+}
+
+/* No NaN or infinity anywhere in the info (jansson would refuse them, but
+ * a value could also come out as null). */
+static int info_finite(const json_t *j)
+{
+    char *t = json_dumps(j, JSON_COMPACT);
+    int ok = t && !strstr(t, "nan") && !strstr(t, "inf") && !strstr(t, "null");
+    free(t);
+    return ok;
+}
+
+TEST(jacobian_matches_finite_differences)
+{
+    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
+                               {2, PBR_CONDUCTOR}};
+    const double geo[3][4] = {{0.9, 0.7, 0.98, 0.95}, {0.3, 0.8, 0.7, 0.6}, {0.15, 0.2, 0.5, 0.3}};
+    for (int t = 0; t < 4; t++) {
+        const pbr_spec *sp = &specs[t];
+        double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
+        int np = pbr_np(sp);
+        pbr_bounds(sp, lo, hi);
+        for (int k = 3; k < np; k++)
+            p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+        for (int gi = 0; gi < 3; gi++) {
+            double m[3], J[3][PBR_MAXP];
+            const double *q = geo[gi];
+            pbr_eval(sp, p, q[0], q[1], q[2], q[3], m, J);
+            for (int k = 0; k < np; k++) {
+                double a[PBR_MAXP], b[PBR_MAXP], ma[3], mb[3], hk = 1e-6 * (hi[k] - lo[k]);
+                memcpy(a, p, sizeof a);
+                memcpy(b, p, sizeof b);
+                a[k] += hk;
+                b[k] -= hk;
+                pbr_eval(sp, a, q[0], q[1], q[2], q[3], ma, NULL);
+                pbr_eval(sp, b, q[0], q[1], q[2], q[3], mb, NULL);
+                for (int c = 0; c < 3; c++)
+                    ASSERT_NEAR(J[c][k], (ma[c] - mb[c]) / (2 * hk),
+                                1e-6 * (1.0 + fabs(J[c][k])));
+            }
+        }
+    }
+}
+
+/* Fit the model's own values; every parameter back within 1e-3. */
+static void check_self(const pbr_spec *sp, const double *p, const char *spec)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    v = values_pbr(sp, p, &S);
+    ASSERT_OK(fit_values(spec, &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    ASSERT(pm != NULL);
+    for (int k = 0; k < pbr_np(sp); k++) {
+        char name[16];
+        pbr_param_name(sp, k, name, sizeof name);
+        ASSERT_MSG(fabs(pm->p[k] - p[k]) <= 1e-3, "%s: %.6g vs truth %.6g (%s)", name, pm->p[k],
+                   p[k], spec);
+    }
+    ASSERT_LT(json_number_value(json_object_get(json_object_get(m.info, "errors"),
+                                                 "rms_painted")), 1e-5);
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
+TEST(recovers_its_own_parameters)
+{
+    const pbr_spec d1 = {1, PBR_DIELECTRIC}, c1 = {1, PBR_CONDUCTOR}, d2 = {2, PBR_DIELECTRIC};
+    const double pd1[8] = {0.4, 0.3, 0.2, 0.25, 0.9, 0.8, 0.7, 1.6};
+    const double pc1[8] = {0.02, 0.03, 0.05, 0.3, 1.0, 0.9, 0.6, 0.3};
+    const double pd2[13] = {0.3, 0.25, 0.2, 0.08, 0.6, 0.6, 0.6, 1.5, 0.4, 0.5, 0.5, 0.5, 1.4};
+    check_self(&d1, pd1, "");
+    check_self(&c1, pc1, "fresnel=conductor");
+    check_self(&d2, pd2, "lobes=2,starts=4");
+}
+
+/* brdf.h's ct (separable Smith): close to its parameters. */
+TEST(ct_truth_close)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    ASSERT((v = values_brdf("ct:rough=0.2,kd=0.5,f0=0.04", &S)) != NULL);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    for (int c = 0; c < 3; c++)
+        ASSERT_NEAR(pm->kd[c], 0.5, 0.01);
+    ASSERT_NEAR(pm->lobe[0].alpha, 0.2, 0.01);
+    ASSERT_NEAR(pm->lobe[0].f0[0] * pm->lobe[0].ks[0], 0.04, 0.005);
+    ASSERT_LT(json_number_value(json_object_get(json_object_get(m.info, "errors"),
+                                                 "rms_painted")), 2e-3);
+    material_free(&m);
+    free(v);
+    /* a metal: no diffuse, coloured F0 */
+    ASSERT((v = values_brdf("ct:kd=0,f0=0.9/0.6/0.3,rough=0.3", &S)) != NULL);
+    ASSERT_OK(fit_values("fresnel=conductor", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    ASSERT_NEAR(pm->lobe[0].alpha, 0.3, 0.015);
+    for (int c = 0; c < 3; c++) {
+        ASSERT_LT(pm->kd[c], 0.01);
+        ASSERT_NEAR(pm->lobe[0].f0[c] * pm->lobe[0].ks[c], 0.9 - 0.3 * c, 0.03);
+    }
+    material_free(&m);
+    free(v);
+}
+
+TEST(lambert_roughness_undetermined)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    ASSERT((v = values_brdf("lambert:kd=0.6/0.4/0.2", &S)) != NULL);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    for (int c = 0; c < 3; c++)
+        ASSERT_NEAR(pm->kd[c], 0.6 - 0.2 * c, 0.01 * (0.6 - 0.2 * c));
+    ASSERT(lists(json_object_get(m.info, "undetermined"), "alpha"));
+    ASSERT(lists(json_object_get(m.info, "undetermined"), "ior"));
+    ASSERT(json_object_get(json_object_get(m.info, "determined"), "kd_r") != NULL);
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
+TEST(mirror_like_alpha_at_lower_bound)
+{
+    const pbr_spec sp = {1, PBR_DIELECTRIC};
+    const double p[8] = {0.3, 0.3, 0.3, 0.01, 1.0, 1.0, 1.0, 1.5};
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    v = values_pbr(&sp, p, &S);
+    /* sharper than the floor: the highlight's few samples pull alpha down */
+    for (int i = 0; i < S.n; i++) {
+        double n[3], wi[3], wo[3], f[3];
+        pbr_material q = {.sp = sp};
+        memcpy(q.p, p, sizeof p);
+        q.p[3] = 0.0005;
+        pbr_material_sync(&q);
+        dirs_of(&S, i, n, wi, wo);
+        pbr_material_ops.eval(&q, NULL, n, wi, wo, f);
+        for (int c = 0; c < 3; c++)
+            v[3 * (size_t)i + c] = (float)f[c];
+    }
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    ASSERT_NEAR(pm->lobe[0].alpha, PBR_ALPHA_MIN, 1e-9);
+    ASSERT(lists(json_object_get(m.info, "at_bound"), "alpha"));
+    for (int c = 0; c < 3; c++)
+        ASSERT_NEAR(pm->kd[c], 0.3, 0.01);
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
+TEST(black_painting)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    v = calloc(3 * (size_t)S.n, sizeof *v);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    for (int c = 0; c < 3; c++) {
+        ASSERT_EQ(pm->kd[c] == 0.0, 1);
+        ASSERT_EQ(pm->lobe[0].ks[c] == 0.0, 1);
+    }
+    ASSERT(lists(json_object_get(m.info, "undetermined"), "alpha"));
+    ASSERT(json_array_size(json_object_get(m.info, "notes")) >= 1);
+    ASSERT(info_finite(m.info));
+    ASSERT_EQ(json_number_value(json_object_get(json_object_get(m.info, "errors"),
+                                                "rms_painted")) == 0.0, 1);
+    material_free(&m);
+    free(v);
+}
+
+TEST(single_sample_is_refused)
+{
+    samples one;
+    material m;
+    glint_err e;
+    float v[3] = {0.1f, 0.1f, 0.1f};
+    ASSERT_OK(setup());
+    one = S;   /* the first sample alone (arrays borrowed) */
+    one.n = 1;
+    memset(&m, 0, sizeof m);
+    ASSERT_EQ(fit_values("", &one, v, &m, &e), GLINT_EINVAL);
+    ASSERT(strstr(e.msg, "1 lit sample") != NULL);
+    ASSERT(m.method == NULL);
+}
+
+TEST(brighter_than_physical_is_clamped)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    v = malloc(3 * sizeof(float) * (size_t)S.n);
+    for (int i = 0; i < S.n; i++)
+        for (int c = 0; c < 3; c++)
+            v[3 * (size_t)i + c] = (float)((c ? 0.5 : 1.6) / M_PI * S.cos_i[i]);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    ASSERT_EQ(pm->kd[0] == 1.0, 1);
+    ASSERT_NEAR(pm->kd[1], 0.5, 0.01);
+    ASSERT(lists(json_object_get(m.info, "at_bound"), "kd_r"));
+    ASSERT(!lists(json_object_get(m.info, "at_bound"), "kd_g"));
+    ASSERT(json_array_size(json_object_get(m.info, "notes")) >= 1);
+    ASSERT(strstr(json_string_value(json_array_get(json_object_get(m.info, "notes"), 0)),
+                  "clamped") != NULL);
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
+TEST(one_view_only)
+{
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    ASSERT_OK(setup());
+    ASSERT((v = values_brdf("ct:rough=0.2,kd=0.5,f0=0.04", &S1)) != NULL);
+    ASSERT_OK(fit_values("", &S1, v, &m, &e));
+    pm = pbr_material_of(&m);
+    for (int c = 0; c < 3; c++)
+        ASSERT_NEAR(pm->kd[c], 0.5, 0.02);
+    ASSERT_NEAR(pm->lobe[0].alpha, 0.2, 0.02);
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
+TEST(material_files_round_trip_and_damage)
+{
+    material m, b;
+    glint_err e;
+    float *v;
+    char dir[] = "/tmp/glint-pbr-XXXXXX", path[128];
+    FILE *f;
+    ASSERT_OK(setup());
+    ASSERT((v = values_brdf("ct:kd=0,f0=0.9/0.6/0.3,rough=0.3", &S)) != NULL);
+    ASSERT_OK(fit_values("fresnel=conductor,lobes=2", &S, v, &m, &e));
+    ASSERT(mkdtemp(dir) != NULL);
+    ASSERT_OK(material_save(&m, dir, &e));
+    ASSERT_OK(material_load(dir, &b, &e));
+    for (int i = 0; i < S.n; i += 97) {
+        double n[3], wi[3], wo[3], x[3], y[3];
+        dirs_of(&S, i, n, wi, wo);
+        material_eval(&m, n, wi, wo, x);
+        material_eval(&b, n, wi, wo, y);
+        for (int c = 0; c < 3; c++)
+            ASSERT_NEAR(x[c], y[c], 1e-12 * (1 + fabs(x[c])));
+    }
+    material_free(&b);
+    /* an alpha below the floor is refused with the file named */
+    snprintf(path, sizeof path, "%s/material.json", dir);
+    ASSERT((f = fopen(path, "w")) != NULL);
+    fputs("{\"format\": \"glint-material\", \"version\": 1, \"method\": \"pbr\", "
+          "\"fresnel\": \"conductor\", \"diffuse\": [0, 0, 0], "
+          "\"lobes\": [{\"alpha\": 0, \"ks\": 1, \"f0\": [0.9, 0.6, 0.3]}]}", f);
+    fclose(f);
+    ASSERT(material_load(dir, &b, &e) == GLINT_EFORMAT);
+    ASSERT(strstr(e.msg, "alpha") != NULL);
+    unlink(path);
+    rmdir(dir);
+    material_free(&m);
+    free(v);
+}
+
+TEST_LIST {
+    TEST_ENTRY(jacobian_matches_finite_differences),
+    TEST_ENTRY(recovers_its_own_parameters),
+    TEST_ENTRY(ct_truth_close),
+    TEST_ENTRY(lambert_roughness_undetermined),
+    TEST_ENTRY(mirror_like_alpha_at_lower_bound),
+    TEST_ENTRY(black_painting),
+    TEST_ENTRY(single_sample_is_refused),
+    TEST_ENTRY(brighter_than_physical_is_clamped),
+    TEST_ENTRY(one_view_only),
+    TEST_ENTRY(material_files_round_trip_and_damage),
+};
+
+TEST_MAIN()
