@@ -19,7 +19,7 @@ BUILD_PKGS=(
   gcc g++ meson ninja-build pkg-config curl
   libopenblas-dev liblapacke-dev libjansson-dev libxxhash-dev
   libopenimageio-dev libpng-dev libfmt-dev libdeflate-dev libmicrohttpd-dev libsqlite3-dev libpq-dev libassimp-dev
-  libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0 libembree-dev
+  libegl-dev libgles-dev libgl1-mesa-dri libegl-mesa0 libembree-dev libgsl-dev
 )
 # Test-only: the independent numpy reference, OpenImageIO's tools for
 # inspecting outputs, gnuplot for the benchmark plot, valgrind, and the
