@@ -107,6 +107,46 @@ static json_t *job_with_links(json_t *jdoc)
     return jdoc;
 }
 
+/* A session's paintings are lit as its scene's base is (the views' point
+ * lights, or base.env): a method lit otherwise would fit them to a light
+ * they were not painted under, so it is refused before any work.  (The
+ * reverse, a method lit by an environment on a scene whose base has point
+ * lights, stays open: paintings made elsewhere under an environment are
+ * uploaded to such sessions, the environment named by the method's env.) */
+static int fit_lighting_check(app *a, const char *scene_id, const method *m, glint_err *e)
+{
+    json_t *doc = NULL, *env;
+    const char *spec;
+    char names[256];
+    size_t len = 0;
+    int rc;
+
+    if (m->lighting != METHOD_LIGHT_POINT)
+        return 0;
+    if ((rc = store_scene_get(a->store, scene_id, &doc, e)))
+        return rc;
+    env = json_object_get(json_object_get(doc, "base"), "env");
+    if (!env) {
+        json_decref(doc);
+        return 0;
+    }
+    names[0] = '\0';
+    for (int i = 0; method_at(i); i++) {
+        const method *x = method_at(i);
+        if (x->lighting == METHOD_LIGHT_ENV && len + strlen(x->name) + 3 < sizeof names)
+            len += (size_t)snprintf(names + len, sizeof names - len, "%s%s", len ? ", " : "",
+                                    x->name);
+    }
+    spec = json_string_value(json_object_get(env, "spec"));
+    rc = api_reject(e, GLINT_EINVAL, "lighting-mismatch",
+                    "method %s fits views lit by their point lights, but this scene is painted "
+                    "under an environment (%.64s): fit it with a method lit by one (%s)",
+                    m->name, spec ? spec : "its base",
+                    names[0] ? names : "none is available");
+    json_decref(doc);
+    return rc;
+}
+
 static http_resp fits_create(http_req *req)
 {
     app *a = req->app;
@@ -126,7 +166,8 @@ static http_resp fits_create(http_req *req)
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);
         goto done;
     }
-    if (!(rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
+    if (!(rc = fit_lighting_check(a, scid, m, &e)) &&
+        !(rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
         r = api_fit_answer(req, doc, job_id);
 done:
     if (rc)

@@ -107,6 +107,12 @@ def test_02_environment(d):
     check_round_trip(d, sc, "lambert:kd=0.5", np.full(3, 0.5),
                      {"method": "srbf", "params": {"env": "sky", "lights": 64,
                                                     "basis_res": 5}})
+    # a method lit by point lights is refused on it, naming those lit by one
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for m in ("hf3", "auto"):
+        r = d.post("/api/v1/sessions/%s/fits" % s["id"], headers=tok(s["paint_token"]),
+                   json={"method": m}, status=422)
+        assert "lighting-mismatch" in r.text and "srbf" in r.text and "sky" in r.text, r.text
 
 
 def test_03_older_scene_documents(d):
