@@ -111,61 +111,73 @@ static void usage(FILE *f)
           f);
 }
 
-int main(int argc, char **argv)
-{
-    static const struct option lo[] = {
-        {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
-        {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
-        {"database", required_argument, 0, 1}, {"replica-name", required_argument, 0, 1},
-        {"env-dir", required_argument, 0, 1}, {"measured-dir", required_argument, 0, 1},
-        {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
-        {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
-        {"max-connections-per-ip", required_argument, 0, 1},
-        {"max-waiting-per-ip", required_argument, 0, 1}, {"health-reserve", required_argument, 0, 1},
-        {"header-timeout", required_argument, 0, 1}, {"min-body-rate", required_argument, 0, 1},
-        {"max-streams-per-session", required_argument, 0, 1},
-        {"max-streams-per-client", required_argument, 0, 1},
-        {"max-body-mb", required_argument, 0, 1}, {"max-image-dim", required_argument, 0, 1},
-        {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
-        {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
-        {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
-        {"work-max-seconds", required_argument, 0, 1},
-        {"background-priority", required_argument, 0, 1},
-        {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
-        {"allow-host", required_argument, 0, 1},
-        {"config", required_argument, 0, 2},
-        {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
-        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-    app a;
-    const char *port_file = NULL;
-    int c, idx, port = 0, sig;
-    char err[256];
-    sigset_t set;
-    glint_err ge;
-    http_config hc;
-    http_route *routes;
-    int nroutes = 0;
+static const struct option glintd_options[] = {
+    {"address", required_argument, 0, 1}, {"port", required_argument, 0, 1},
+    {"data-dir", required_argument, 0, 1}, {"web-dir", required_argument, 0, 1},
+    {"database", required_argument, 0, 1}, {"replica-name", required_argument, 0, 1},
+    {"env-dir", required_argument, 0, 1}, {"measured-dir", required_argument, 0, 1},
+    {"cache-mb", required_argument, 0, 1}, {"threads", required_argument, 0, 1},
+    {"timeout", required_argument, 0, 1}, {"max-connections", required_argument, 0, 1},
+    {"max-connections-per-ip", required_argument, 0, 1},
+    {"max-waiting-per-ip", required_argument, 0, 1}, {"health-reserve", required_argument, 0, 1},
+    {"header-timeout", required_argument, 0, 1}, {"min-body-rate", required_argument, 0, 1},
+    {"max-streams-per-session", required_argument, 0, 1},
+    {"max-streams-per-client", required_argument, 0, 1},
+    {"max-body-mb", required_argument, 0, 1}, {"max-image-dim", required_argument, 0, 1},
+    {"max-mesh-tris", required_argument, 0, 1}, {"max-strokes", required_argument, 0, 1},
+    {"max-stroke-work", required_argument, 0, 1}, {"work-mb", required_argument, 0, 1},
+    {"work-slots", required_argument, 0, 1}, {"work-wait", required_argument, 0, 1},
+    {"work-max-seconds", required_argument, 0, 1},
+    {"background-priority", required_argument, 0, 1},
+    {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
+    {"allow-host", required_argument, 0, 1},
+    {"config", required_argument, 0, 2},
+    {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
+    {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
 
-    memset(&a, 0, sizeof a);
-    par_blas_single(); /* glint's loops are parallel; BLAS's idle threads would spin */
-    /* Every connection has a thread of its own, and glibc gives threads up
-     * to 8 malloc arenas per core, each keeping the peak its threads
-     * reached: with a few hundred connections open (event streams), every
-     * large request landed in an arena of its own and stayed there
-     * (measured: 30 open streams, then 16 stroke requests of 320 KB: +136
-     * MB resident with 16 arenas, +20 MB with 2).  A few arenas serve the
-     * threads that actually run at once. */
-    {
-        long cpus = sysconf(_SC_NPROCESSORS_ONLN);
-        mallopt(M_ARENA_MAX, cpus < 2 ? 2 : cpus > GLINTD_ARENAS_MAX ? GLINTD_ARENAS_MAX
-                                                                     : (int)cpus);
-    }
-    config_default(&a.cfg);
+/* glintd_parse_options's answer when the daemon is to start (else it is
+ * the exit status). */
+#define GLINTD_START (-1)
+
+/* Every connection has a thread of its own, and glibc gives threads up to
+ * 8 malloc arenas per core, each keeping the peak its threads reached:
+ * with a few hundred connections open (event streams), every large
+ * request landed in an arena of its own and stayed there (measured: 30
+ * open streams, then 16 stroke requests of 320 KB: +136 MB resident with
+ * 16 arenas, +20 MB with 2).  A few arenas serve the threads that actually
+ * run at once. */
+static void glintd_limit_arenas(void)
+{
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    mallopt(M_ARENA_MAX, cpus < 2 ? 2 : cpus > GLINTD_ARENAS_MAX ? GLINTD_ARENAS_MAX
+                                                                 : (int)cpus);
+}
+
+/* --replica-name goes on every response: letters, digits, '.', '_', '-'. */
+static int glintd_replica_name_ok(const char *name)
+{
+    for (const char *ch = name; *ch; ch++)
+        if (!((*ch >= 'A' && *ch <= 'Z') || (*ch >= 'a' && *ch <= 'z') ||
+              (*ch >= '0' && *ch <= '9') || *ch == '.' || *ch == '_' || *ch == '-'))
+            return 0;
+    return 1;
+}
+
+/* The configuration: defaults, then the config file, then the options
+ * over it (OUT: *port_file).  GLINTD_START, or the status to exit with
+ * (--help, a bad option or value: the message is printed). */
+static int glintd_parse_options(int argc, char **argv, app_config *cfg, const char **port_file)
+{
+    const struct option *lo = glintd_options;
+    glint_err ge;
+    int c, idx;
+
+    config_default(cfg);
     /* the config file first, so that options override it: a first pass of
      * getopt finds --config (either form), the second applies the rest */
     opterr = 0;
     while ((c = getopt_long(argc, argv, "h", lo, &idx)) != -1)
-        if (c == 2 && config_load_file(&a.cfg, optarg, &ge)) {
+        if (c == 2 && config_load_file(cfg, optarg, &ge)) {
             fprintf(stderr, "glintd: %s\n", ge.msg);
             return 1;
         }
@@ -173,16 +185,16 @@ int main(int argc, char **argv)
     optind = 1;
     while ((c = getopt_long(argc, argv, "h", lo, &idx)) != -1) {
         if (c == 1) {
-            if (config_apply(&a.cfg, lo[idx].name, optarg, &ge)) {
+            if (config_apply(cfg, lo[idx].name, optarg, &ge)) {
                 fprintf(stderr, "glintd: %s\n", ge.msg);
                 return 1;
             }
         } else if (c == 2) {
             /* read in the first pass */
         } else if (c == 3) {
-            port_file = optarg;
+            *port_file = optarg;
         } else if (c == 4) {
-            a.cfg.quiet = 1;
+            cfg->quiet = 1;
         } else if (c == 'h') {
             usage(stdout);
             return 0;
@@ -195,162 +207,232 @@ int main(int argc, char **argv)
         fprintf(stderr, "glintd: unexpected argument '%s'\n", argv[optind]);
         return 1;
     }
-    for (const char *ch = a.cfg.replica_name; *ch; ch++)
-        if (!((*ch >= 'A' && *ch <= 'Z') || (*ch >= 'a' && *ch <= 'z') ||
-              (*ch >= '0' && *ch <= '9') || *ch == '.' || *ch == '_' || *ch == '-')) {
-            fprintf(stderr, "glintd: --replica-name: only letters, digits, '.', '_' and '-' "
-                            "(got '%s')\n", a.cfg.replica_name);
-            return 1;
-        }
-    if (fsio_mkdirs(a.cfg.data_dir, &ge)) {
-        fprintf(stderr, "glintd: %s\n", ge.msg);
+    if (!glintd_replica_name_ok(cfg->replica_name)) {
+        fprintf(stderr, "glintd: --replica-name: only letters, digits, '.', '_' and '-' "
+                        "(got '%s')\n", cfg->replica_name);
         return 1;
     }
+    return GLINTD_START;
+}
 
-    if (api_envs_init(a.cfg.env_dir, &ge) || api_measured_init(a.cfg.measured_dir, &ge)) {
-        fprintf(stderr, "glintd: %s\n", ge.msg);
-        return 1;
-    }
-    /* Block the stop signals in every thread; the main thread waits for them. */
-    sigemptyset(&set);
-    sigaddset(&set, SIGTERM);
-    sigaddset(&set, SIGINT);
-    pthread_sigmask(SIG_BLOCK, &set, NULL);
+/* The data directory, and the environment maps and measured tables on
+ * offer. */
+static int glintd_prepare_data(const app_config *cfg, glint_err *ge)
+{
+    int rc = fsio_mkdirs(cfg->data_dir, ge);
+    if (!rc)
+        rc = api_envs_init(cfg->env_dir, ge);
+    if (!rc)
+        rc = api_measured_init(cfg->measured_dir, ge);
+    return rc;
+}
+
+/* Block the stop signals in every thread (the threads started after this
+ * inherit the mask); the main thread waits for them (OUT: *set). */
+static void glintd_block_stop_signals(sigset_t *set)
+{
+    sigemptyset(set);
+    sigaddset(set, SIGTERM);
+    sigaddset(set, SIGINT);
+    pthread_sigmask(SIG_BLOCK, set, NULL);
     signal(SIGPIPE, SIG_IGN);
+}
 
-    {
-        char cache_dir[4200], points_dir[4300];
-        fitsvc_config fc = {NULL, NULL, NULL, NULL, NULL, a.cfg.background_priority,
-                            api_material_links};
-        size_t budget = a.cfg.cache_bytes; /* precomputations; decoded paintings get an
-                                              eighth of it more, material documents a
-                                              thirty-second */
-        snprintf(cache_dir, sizeof cache_dir, "%s/cache", a.cfg.data_dir);
-        snprintf(points_dir, sizeof points_dir, "%s/points", cache_dir);
-        if (admit_open(a.cfg.work_bytes, a.cfg.work_slots, a.cfg.work_wait_s, &a.work, &ge)) {
-            fprintf(stderr, "glintd: %s\n", ge.msg);
-            return 1;
-        }
-        admit_limit_seconds(a.work, a.cfg.work_max_seconds);
-        fc.work = a.work;
-        if (store_open_db(a.cfg.data_dir, a.cfg.database, &a.store, &ge) ||
-            api_envs_store(a.store, &ge) ||
-            events_open(a.store, &a.events) ||
-            /* replicas on one database: their strokes reach this one's streams */
-            store_listen(a.store, events_on_store_change, a.events, &ge) ||
-            cache_open(cache_dir, budget, &a.cache, &ge) ||
-            memo_open(budget / 8, budget / 32, &a.memo, &ge) ||
-            points_open(points_dir, &a.points, &ge) ||
-            jobs_open(a.cfg.worker_threads, idle_flush, a.points, POINTS_SAVE_PERIOD_S, &a.jobs,
-                      &ge)) {
-            fprintf(stderr, "glintd: %s\n", ge.msg);
-            return 1;
-        }
-        fc.cache = a.cache;
-        fc.jobs = a.jobs;
-        fc.memo = a.memo;
-        fc.points = a.points;
-        if (fitsvc_open(&fc, a.store, a.events, &a.fits, &ge) ||
-            render_open(8, 0, &a.render, &ge)) {
-            fprintf(stderr, "glintd: %s\n", ge.msg);
-            return 1;
-        }
-    }
-    events_set_limits(a.events, a.cfg.max_streams_per_session, a.cfg.max_streams_per_client);
-    /* error details never show where the data lives */
-    log_private_path(a.cfg.data_dir);
-    {
-        char real[PATH_MAX];
-        if (realpath(a.cfg.data_dir, real))
-            log_private_path(real);
-        if (realpath(a.cfg.web_dir, real))
-            log_private_path(real);
-    }
+/* The services behind the API, in the order they depend on each other:
+ * the work admission, the store and its event streams, the caches, the
+ * speed-accuracy record, the job threads, the fits and the renderer. */
+static int glintd_open_services(app *a, glint_err *ge)
+{
+    char cache_dir[4200], points_dir[4300];
+    fitsvc_config fc = {NULL, NULL, NULL, NULL, NULL, a->cfg.background_priority,
+                        api_material_links};
+    size_t budget = a->cfg.cache_bytes; /* precomputations; decoded paintings get an
+                                           eighth of it more, material documents a
+                                           thirty-second */
+    int rc;
 
-    {
-        const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
-                                      api_tokens_routes, api_fits_routes, api_materials_routes,
-                                      api_methods_routes, api_envs_routes,
-                                      api_measured_routes, api_exports_routes,
-                                      api_gbuffers_routes, api_views_routes};
-        const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
-                              api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
-                              api_methods_nroutes, api_envs_nroutes,
-                              api_measured_nroutes, api_exports_nroutes,
-                              api_gbuffers_nroutes, api_views_nroutes};
-        const int ntables = (int)(sizeof counts / sizeof counts[0]);
-        int total = 0;
-        for (int i = 0; i < ntables; i++)
-            total += counts[i];
-        routes = calloc((size_t)total, sizeof *routes);
-        if (!routes)
-            return 1;
-        for (int i = 0; i < ntables; i++) {
-            memcpy(routes + nroutes, tables[i], (size_t)counts[i] * sizeof *routes);
-            nroutes += counts[i];
-        }
-    }
+    snprintf(cache_dir, sizeof cache_dir, "%s/cache", a->cfg.data_dir);
+    snprintf(points_dir, sizeof points_dir, "%s/points", cache_dir);
+    if ((rc = admit_open(a->cfg.work_bytes, a->cfg.work_slots, a->cfg.work_wait_s, &a->work,
+                         ge)))
+        return rc;
+    admit_limit_seconds(a->work, a->cfg.work_max_seconds);
+    fc.work = a->work;
+    if ((rc = store_open_db(a->cfg.data_dir, a->cfg.database, &a->store, ge)) ||
+        (rc = api_envs_store(a->store, ge)) ||
+        (rc = events_open(a->store, &a->events)) ||
+        /* replicas on one database: their strokes reach this one's streams */
+        (rc = store_listen(a->store, events_on_store_change, a->events, ge)) ||
+        (rc = cache_open(cache_dir, budget, &a->cache, ge)) ||
+        (rc = memo_open(budget / 8, budget / 32, &a->memo, ge)) ||
+        (rc = points_open(points_dir, &a->points, ge)) ||
+        (rc = jobs_open(a->cfg.worker_threads, idle_flush, a->points, POINTS_SAVE_PERIOD_S,
+                        &a->jobs, ge)))
+        return rc;
+    fc.cache = a->cache;
+    fc.jobs = a->jobs;
+    fc.memo = a->memo;
+    fc.points = a->points;
+    if ((rc = fitsvc_open(&fc, a->store, a->events, &a->fits, ge)) ||
+        (rc = render_open(8, 0, &a->render, ge)))
+        return rc;
+    return 0;
+}
 
-    memset(&hc, 0, sizeof hc);
-    hc.address = a.cfg.address;
-    hc.port = a.cfg.port;
-    hc.max_body = a.cfg.lim.max_body;
-    hc.timeout_s = a.cfg.timeout_s;
-    hc.max_connections = a.cfg.max_connections;
-    hc.max_connections_per_ip = a.cfg.max_connections_per_ip;
-    hc.max_waiting_per_ip = a.cfg.max_waiting_per_ip;
-    hc.health_reserve = a.cfg.health_reserve;
-    hc.header_timeout_s = a.cfg.header_timeout_s;
-    hc.min_body_rate = a.cfg.min_body_rate;
-    hc.static_dir = a.cfg.web_dir;
-    hc.allow_origin = a.cfg.allow_origin[0] ? a.cfg.allow_origin : NULL;
-    hc.allow_host = a.cfg.allow_host[0] ? a.cfg.allow_host : NULL;
-    hc.check_host = !a.cfg.api_key[0] || a.cfg.allow_host[0];
-    hc.quiet = a.cfg.quiet;
-    hc.replica = a.cfg.replica_name[0] ? a.cfg.replica_name : NULL;
-    a.started = time(NULL);
-    if (http_server_start(&hc, routes, nroutes, &a, &a.http, &port, err, sizeof err)) {
-        fprintf(stderr, "glintd: %s\n", err);
-        free(routes);
-        return 1;
+/* Error details never show where the data lives: the data and web
+ * directories, as given and resolved, are private paths of the log. */
+static void glintd_hide_paths(const app_config *cfg)
+{
+    char real[PATH_MAX];
+    log_private_path(cfg->data_dir);
+    if (realpath(cfg->data_dir, real))
+        log_private_path(real);
+    if (realpath(cfg->web_dir, real))
+        log_private_path(real);
+}
+
+/* Every API module's routes in one table (OUT: *nroutes); NULL when out
+ * of memory. */
+static http_route *glintd_routes(int *nroutes)
+{
+    const http_route *tables[] = {api_core_routes, api_scenes_routes, api_sessions_routes,
+                                  api_tokens_routes, api_fits_routes, api_materials_routes,
+                                  api_methods_routes, api_envs_routes,
+                                  api_measured_routes, api_exports_routes,
+                                  api_gbuffers_routes, api_views_routes};
+    const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
+                          api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
+                          api_methods_nroutes, api_envs_nroutes,
+                          api_measured_nroutes, api_exports_nroutes,
+                          api_gbuffers_nroutes, api_views_nroutes};
+    const int ntables = (int)(sizeof counts / sizeof counts[0]);
+    int total = 0;
+    http_route *routes;
+
+    for (int i = 0; i < ntables; i++)
+        total += counts[i];
+    routes = calloc((size_t)total, sizeof *routes);
+    if (!routes)
+        return NULL;
+    *nroutes = 0;
+    for (int i = 0; i < ntables; i++) {
+        memcpy(routes + *nroutes, tables[i], (size_t)counts[i] * sizeof *routes);
+        *nroutes += counts[i];
     }
-    fprintf(stderr, "glintd: serving http://%s:%d/ (data %s, metadata in %s)\n", a.cfg.address,
-            port, a.cfg.data_dir, store_backend(a.store));
-    if (!hc.check_host || strcmp(a.cfg.allow_host, "*") == 0)
+    return routes;
+}
+
+/* The HTTP front's settings from the configuration (OUT: *hc). */
+static void glintd_http_config(const app_config *cfg, http_config *hc)
+{
+    memset(hc, 0, sizeof *hc);
+    hc->address = cfg->address;
+    hc->port = cfg->port;
+    hc->max_body = cfg->lim.max_body;
+    hc->timeout_s = cfg->timeout_s;
+    hc->max_connections = cfg->max_connections;
+    hc->max_connections_per_ip = cfg->max_connections_per_ip;
+    hc->max_waiting_per_ip = cfg->max_waiting_per_ip;
+    hc->health_reserve = cfg->health_reserve;
+    hc->header_timeout_s = cfg->header_timeout_s;
+    hc->min_body_rate = cfg->min_body_rate;
+    hc->static_dir = cfg->web_dir;
+    hc->allow_origin = cfg->allow_origin[0] ? cfg->allow_origin : NULL;
+    hc->allow_host = cfg->allow_host[0] ? cfg->allow_host : NULL;
+    hc->check_host = !cfg->api_key[0] || cfg->allow_host[0];
+    hc->quiet = cfg->quiet;
+    hc->replica = cfg->replica_name[0] ? cfg->replica_name : NULL;
+}
+
+/* Where the daemon serves and which Host names it answers, on stderr;
+ * the bound port written to `port_file` if one was asked for. */
+static void glintd_announce(const app *a, const http_config *hc, int port, const char *port_file)
+{
+    glint_err ge;
+    fprintf(stderr, "glintd: serving http://%s:%d/ (data %s, metadata in %s)\n", a->cfg.address,
+            port, a->cfg.data_dir, store_backend(a->store));
+    if (!hc->check_host || strcmp(a->cfg.allow_host, "*") == 0)
         fprintf(stderr, "glintd: answering any Host name (%s)\n",
-                hc.check_host ? "--allow-host *" : "the API key guards the API");
+                hc->check_host ? "--allow-host *" : "the API key guards the API");
     else
         fprintf(stderr, "glintd: answering the Host names localhost, IP addresses%s%s\n",
-                a.cfg.allow_host[0] ? " and " : " (--allow-host adds others)",
-                a.cfg.allow_host);
+                a->cfg.allow_host[0] ? " and " : " (--allow-host adds others)",
+                a->cfg.allow_host);
     if (port_file) {
         char buf[32];
         int n = snprintf(buf, sizeof buf, "%d\n", port);
         if (fsio_write_atomic(port_file, buf, (size_t)n, &ge))
             fprintf(stderr, "glintd: %s\n", ge.msg);
     }
+}
+
+/* After SIGTERM or SIGINT: the renders in flight ask a->stopping and stop;
+ * nothing new is admitted; the jobs stop (their builds ask) and no new one
+ * starts; the streams end, then the connections; then everything closes,
+ * each service after those that use it. */
+static void glintd_shutdown(app *a, http_route *routes)
+{
+    __atomic_store_n(&a->stopping, 1, __ATOMIC_RELAXED);
+    admit_stop(a->work);
+    jobs_stop(a->jobs);
+    events_shutdown(a->events); /* end the event streams, then the connections */
+    jobs_shutdown(a->jobs);     /* and the job streams */
+    http_server_stop(a->http);
+    free(routes);
+    jobs_close(a->jobs); /* running jobs finish first: they hold cache entries */
+    fitsvc_close(a->fits);
+    points_close(a->points);
+    memo_close(a->memo);
+    cache_close(a->cache);
+    render_close(a->render);
+    store_listen_stop(a->store); /* it wakes the streams: stop it first */
+    events_close(a->events);
+    store_close(a->store);
+    admit_close(a->work);
+}
+
+int main(int argc, char **argv)
+{
+    app a;
+    const char *port_file = NULL;
+    int port = 0, sig, nroutes = 0, rc;
+    char err[256];
+    sigset_t set;
+    glint_err ge;
+    http_config hc;
+    http_route *routes;
+
+    memset(&a, 0, sizeof a);
+    par_blas_single(); /* glint's loops are parallel; BLAS's idle threads would spin */
+    glintd_limit_arenas();
+    if ((rc = glintd_parse_options(argc, argv, &a.cfg, &port_file)) != GLINTD_START)
+        return rc;
+    if (glintd_prepare_data(&a.cfg, &ge)) {
+        fprintf(stderr, "glintd: %s\n", ge.msg);
+        return 1;
+    }
+    glintd_block_stop_signals(&set);
+    if (glintd_open_services(&a, &ge)) {
+        fprintf(stderr, "glintd: %s\n", ge.msg);
+        return 1;
+    }
+    events_set_limits(a.events, a.cfg.max_streams_per_session, a.cfg.max_streams_per_client);
+    glintd_hide_paths(&a.cfg);
+    routes = glintd_routes(&nroutes);
+    if (!routes)
+        return 1;
+    glintd_http_config(&a.cfg, &hc);
+    a.started = time(NULL);
+    if (http_server_start(&hc, routes, nroutes, &a, &a.http, &port, err, sizeof err)) {
+        fprintf(stderr, "glintd: %s\n", err);
+        free(routes);
+        return 1;
+    }
+    glintd_announce(&a, &hc, port, port_file);
     if (sigwait(&set, &sig) == 0)
         fprintf(stderr, "glintd: %s: cancelling the work in flight, finishing requests\n",
                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
-    /* the renders in flight ask a.stopping and stop; nothing new is
-     * admitted; the jobs stop (their builds ask) and no new one starts */
-    __atomic_store_n(&a.stopping, 1, __ATOMIC_RELAXED);
-    admit_stop(a.work);
-    jobs_stop(a.jobs);
-    events_shutdown(a.events); /* end the event streams, then the connections */
-    jobs_shutdown(a.jobs);     /* and the job streams */
-    http_server_stop(a.http);
-    free(routes);
-    jobs_close(a.jobs); /* running jobs finish first: they hold cache entries */
-    fitsvc_close(a.fits);
-    points_close(a.points);
-    memo_close(a.memo);
-    cache_close(a.cache);
-    render_close(a.render);
-    store_listen_stop(a.store); /* it wakes the streams: stop it first */
-    events_close(a.events);
-    store_close(a.store);
-    admit_close(a.work);
+    glintd_shutdown(&a, routes);
     fprintf(stderr, "glintd: stopped\n");
     return 0;
 }

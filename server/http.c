@@ -499,130 +499,160 @@ static void *uri_seen(void *cls, const char *uri, struct MHD_Connection *conn)
     return ctx;
 }
 
-static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
-                                  const char *method, const char *version,
-                                  const char *upload_data, size_t *upload_data_size,
-                                  void **con_cls)
+/* The request state when uri_seen could not allocate it: made again on
+ * the first on_request call (and kept in *con_cls); NULL if that fails
+ * too. */
+static req_ctx *req_ctx_late(void **con_cls)
 {
-    http_server *s = cls;
-    req_ctx *ctx = *con_cls;
-    http_req req;
-    http_resp resp = {0, NULL};
-    http_front_lease *lease;
-    char pbuf[1024];
-    int matched_path = 0, cors = 0;
-    const char *origin;
-    enum MHD_Result ret;
+    req_ctx *ctx = calloc(1, sizeof *ctx);
+    if (!ctx)
+        return NULL;
+    ctx->t0 = now_s();
+    *con_cls = ctx;
+    return ctx;
+}
 
-    if (!ctx) { /* uri_seen could not allocate */
-        ctx = calloc(1, sizeof *ctx);
-        if (!ctx)
-            return MHD_NO;
-        ctx->t0 = now_s();
-        *con_cls = ctx;
+/* The request log's line for an answer: the target as sent when uri_seen
+ * kept it, else the decoded path. */
+static void log_answer(http_server *s, const req_ctx *ctx, const char *method, const char *url,
+                       int status, double seconds)
+{
+    log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
+                strlen(ctx->target ? ctx->target : url), status, seconds);
+}
+
+/* Queue `resp` (which is destroyed), mark the request answered and log
+ * it. */
+static enum MHD_Result answer(http_server *s, req_ctx *ctx, struct MHD_Connection *conn,
+                              const char *method, const char *url, http_resp resp)
+{
+    enum MHD_Result ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
+    MHD_destroy_response(resp.r);
+    ctx->answered = 1;
+    log_answer(s, ctx, method, url, resp.status, now_s() - ctx->t0);
+    return ret;
+}
+
+/* First call: headers only.  Queue nothing now unless refusing (this
+ * libmicrohttpd answers "Connection: close" to responses queued on the
+ * first call, which a refusal wants).  A body to come is paced from here
+ * (min_body_rate). */
+static enum MHD_Result on_head(http_server *s, req_ctx *ctx, struct MHD_Connection *conn,
+                               const char *method, const char *url)
+{
+    http_resp resp;
+    const char *cl;
+
+    ctx->started = 1;
+    snprintf(ctx->method, sizeof ctx->method, "%s", method);
+    resp = check_request(s, ctx, conn);
+    if (!resp.r && s->cfg.check_host)
+        resp = check_host(s, conn, method, url);
+    if (resp.r)
+        return answer(s, ctx, conn, method, url, resp);
+    cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    if (s->cfg.min_body_rate && cl && strcmp(cl, "0") != 0) {
+        ctx->body_paced = 1;
+        ctx->body_t0 = now_s();
+        body_pace(conn, body_slack(s, ctx, ctx->body_t0));
     }
-    if (!ctx->started) {
-        /* First call: headers only.  Queue nothing now unless refusing (this
-         * libmicrohttpd answers "Connection: close" to responses queued on
-         * the first call, which a refusal wants). */
-        const char *cl;
-        ctx->started = 1;
-        snprintf(ctx->method, sizeof ctx->method, "%s", method);
-        resp = check_request(s, ctx, conn);
-        if (!resp.r && s->cfg.check_host)
-            resp = check_host(s, conn, method, url);
-        if (resp.r) {
-            ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
-            MHD_destroy_response(resp.r);
+    return MHD_YES;
+}
+
+/* Append n bytes to the body, NUL-terminated; once it would pass max_body
+ * it is dropped and only flagged (the route answers 413).  -1 when out of
+ * memory. */
+static int body_keep(const http_server *s, req_ctx *ctx, const char *data, size_t n)
+{
+    if (ctx->len + n > s->cfg.max_body) {
+        ctx->too_large = 1;
+        free(ctx->body);
+        ctx->body = NULL;
+        ctx->len = ctx->cap = 0;
+        return 0;
+    }
+    if (ctx->len + n + 1 > ctx->cap) {
+        size_t ncap = ctx->cap ? ctx->cap : 8192;
+        char *nb;
+        while (ncap < ctx->len + n + 1)
+            ncap *= 2;
+        nb = realloc(ctx->body, ncap);
+        if (!nb)
+            return -1;
+        ctx->body = nb;
+        ctx->cap = ncap;
+    }
+    memcpy(ctx->body + ctx->len, data, n);
+    ctx->len += n;
+    ctx->body[ctx->len] = '\0';
+    return 0;
+}
+
+/* A piece of the body (*size bytes, consumed): a body that has fallen
+ * behind min_body_rate closes the connection (logged as 408), else the
+ * piece is kept. */
+static enum MHD_Result on_body(http_server *s, req_ctx *ctx, struct MHD_Connection *conn,
+                               const char *method, const char *url, const char *data,
+                               size_t *size)
+{
+    if (ctx->body_paced) {
+        double now = now_s(), slack;
+        ctx->received += *size;
+        slack = body_slack(s, ctx, now);
+        if (slack <= 0) {
             ctx->answered = 1;
-            log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
-                        strlen(ctx->target ? ctx->target : url), resp.status, now_s() - ctx->t0);
-            return ret;
+            log_answer(s, ctx, method, url, 408, now - ctx->t0);
+            return MHD_NO; /* libmicrohttpd cannot answer in the middle of a body: close */
         }
-        cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-        if (s->cfg.min_body_rate && cl && strcmp(cl, "0") != 0) {
-            ctx->body_paced = 1;
-            ctx->body_t0 = now_s();
-            body_pace(conn, body_slack(s, ctx, ctx->body_t0));
-        }
-        return MHD_YES;
+        body_pace(conn, slack);
     }
-    if (*upload_data_size) {
-        if (ctx->body_paced) {
-            double now = now_s(), slack;
-            ctx->received += *upload_data_size;
-            slack = body_slack(s, ctx, now);
-            if (slack <= 0) {
-                ctx->answered = 1;
-                log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
-                            strlen(ctx->target ? ctx->target : url), 408, now - ctx->t0);
-                return MHD_NO; /* libmicrohttpd cannot answer in the middle of a body: close */
-            }
-            body_pace(conn, slack);
-        }
-        if (!ctx->too_large) {
-            size_t n = *upload_data_size;
-            if (ctx->len + n > s->cfg.max_body) {
-                ctx->too_large = 1;
-                free(ctx->body);
-                ctx->body = NULL;
-                ctx->len = ctx->cap = 0;
-            } else {
-                if (ctx->len + n + 1 > ctx->cap) {
-                    size_t ncap = ctx->cap ? ctx->cap : 8192;
-                    char *nb;
-                    while (ncap < ctx->len + n + 1)
-                        ncap *= 2;
-                    nb = realloc(ctx->body, ncap);
-                    if (!nb)
-                        return MHD_NO;
-                    ctx->body = nb;
-                    ctx->cap = ncap;
-                }
-                memcpy(ctx->body + ctx->len, upload_data, n);
-                ctx->len += n;
-                ctx->body[ctx->len] = '\0';
-            }
-        }
-        *upload_data_size = 0;
-        return MHD_YES;
-    }
-    if (ctx->body_paced) { /* the body is in: back to the idle timeout */
-        MHD_set_connection_option(conn, MHD_CONNECTION_OPTION_TIMEOUT, s->cfg.timeout_s);
-        ctx->body_paced = 0;
-    }
+    if (!ctx->too_large && body_keep(s, ctx, data, *size))
+        return MHD_NO;
+    *size = 0;
+    return MHD_YES;
+}
 
-    origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Origin");
+/* A request from another web origin (Origin unlike Host): admitted with
+ * CORS headers when --allow-origin names it (OUT: *cors), else only GET
+ * and HEAD go on and anything else is refused (403).  resp.r is NULL when
+ * the request goes on. */
+static http_resp check_origin(const http_server *s, struct MHD_Connection *conn,
+                              const char *method, const char *origin, int *cors)
+{
+    http_resp resp = {0, NULL};
     if (origin && !http_same_origin(origin, MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                                                    MHD_HTTP_HEADER_HOST))) {
         int safe = strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0;
         if (http_origin_allowed(s->cfg.allow_origin, origin))
-            cors = 1;
+            *cors = 1;
         else if (!safe)
             resp = http_problem(403, "cross-origin",
                                 "requests from the web origin %.200s are not admitted: glintd "
                                 "answers its own studio's pages (glintd --allow-origin admits "
                                 "others)", origin);
     }
-    if (!resp.r && strcmp(method, "OPTIONS") == 0) /* a preflight, or a probe of the methods */
-        resp = http_preflight(cors);
-    memset(&req, 0, sizeof req);
-    req.method = method;
-    req.path = url;
-    req.conn = conn;
-    req.body = ctx->body ? ctx->body : "";
-    req.body_len = ctx->len;
-    req.body_too_large = ctx->too_large;
-    req.app = s->app;
+    return resp;
+}
+
+/* The route whose pattern and method match answers (its path parameters
+ * are kept in pbuf); a path matched with another method is 405; a GET or
+ * HEAD outside /api/ is a static file; anything else 404.  resp.r is NULL
+ * only when building the response failed. */
+static http_resp dispatch(const http_server *s, http_req *req, struct MHD_Connection *conn,
+                          const char *method, const char *url, char *pbuf, size_t pbuflen)
+{
+    http_resp resp = {0, NULL};
+    int matched_path = 0;
+
     for (int i = 0; i < s->nroutes && !resp.r; i++) {
-        if (!match(s->routes[i].pattern, url, &req, pbuf, sizeof pbuf))
+        if (!match(s->routes[i].pattern, url, req, pbuf, pbuflen))
             continue;
         matched_path = 1;
         if (strcmp(s->routes[i].method, method) != 0)
             continue;
-        resp = s->routes[i].fn(&req);
-        if (req.release)
-            req.release(&req);
+        resp = s->routes[i].fn(req);
+        if (req->release)
+            req->release(req);
         break;
     }
     if (!resp.r) {
@@ -636,35 +666,86 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         else
             resp = http_problem(404, "not-found", "no such resource: %s %s", method, url);
     }
-    if (!resp.r)
-        resp = http_problem(500, NULL, "internal error building the response");
-    if (!resp.r)
-        return MHD_NO;
-    timing_header(&req.timing, &resp);
-    if (resp.status == 405)
-        MHD_add_response_header(resp.r, MHD_HTTP_HEADER_ALLOW, "GET, POST, PUT, DELETE");
+    return resp;
+}
+
+/* The headers every answer carries besides its own: Server-Timing, Allow
+ * on a 405, CORS for an admitted origin, Vary when there is an Origin,
+ * the replica's name, and Connection: close where the connection should
+ * not be kept. */
+static void common_headers(http_server *s, struct MHD_Connection *conn, http_resp *resp,
+                           const srv_timing *timing, int cors, const char *origin)
+{
+    http_front_lease *lease;
+
+    timing_header(timing, resp);
+    if (resp->status == 405)
+        MHD_add_response_header(resp->r, MHD_HTTP_HEADER_ALLOW, "GET, POST, PUT, DELETE");
     if (cors) {
-        MHD_add_response_header(resp.r, "Access-Control-Allow-Origin", origin);
-        MHD_add_response_header(resp.r, "Access-Control-Expose-Headers",
+        MHD_add_response_header(resp->r, "Access-Control-Allow-Origin", origin);
+        MHD_add_response_header(resp->r, "Access-Control-Expose-Headers",
                                 "Location, ETag, Content-Disposition, X-Glint-Env, Server-Timing, "
                                 "X-Glint-Replica");
     }
     if (origin)
-        MHD_add_response_header(resp.r, MHD_HTTP_HEADER_VARY, "Origin");
+        MHD_add_response_header(resp->r, MHD_HTTP_HEADER_VARY, "Origin");
     if (s->cfg.replica)
-        MHD_add_response_header(resp.r, "X-Glint-Replica", s->cfg.replica);
+        MHD_add_response_header(resp->r, "X-Glint-Replica", s->cfg.replica);
     /* a health check's reserve connection, and any connection while the
      * limits are nearly reached, is not kept alive */
     lease = conn_lease(conn);
     if (lease && (http_front_lease_is_reserve(lease) || http_front_busy(s->front, lease)))
-        MHD_add_response_header(resp.r, MHD_HTTP_HEADER_CONNECTION, "close");
-    ret = MHD_queue_response(conn, (unsigned)resp.status, resp.r);
-    MHD_destroy_response(resp.r);
-    ctx->answered = 1;
-    log_request(s, method, strlen(method), ctx->target ? ctx->target : url,
-                strlen(ctx->target ? ctx->target : url), resp.status, now_s() - ctx->t0);
+        MHD_add_response_header(resp->r, MHD_HTTP_HEADER_CONNECTION, "close");
+}
+
+/* libmicrohttpd's access handler, called with the head (on_head), with
+ * each piece of body (on_body), then once more to answer: origin checks,
+ * a preflight, the route (dispatch), the common headers. */
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
+                                  const char *method, const char *version,
+                                  const char *upload_data, size_t *upload_data_size,
+                                  void **con_cls)
+{
+    http_server *s = cls;
+    req_ctx *ctx = *con_cls;
+    http_req req;
+    http_resp resp;
+    char pbuf[1024];
+    int cors = 0;
+    const char *origin;
+
     (void)version;
-    return ret;
+    if (!ctx && !(ctx = req_ctx_late(con_cls))) /* uri_seen could not allocate */
+        return MHD_NO;
+    if (!ctx->started)
+        return on_head(s, ctx, conn, method, url);
+    if (*upload_data_size)
+        return on_body(s, ctx, conn, method, url, upload_data, upload_data_size);
+    if (ctx->body_paced) { /* the body is in: back to the idle timeout */
+        MHD_set_connection_option(conn, MHD_CONNECTION_OPTION_TIMEOUT, s->cfg.timeout_s);
+        ctx->body_paced = 0;
+    }
+
+    origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Origin");
+    resp = check_origin(s, conn, method, origin, &cors);
+    if (!resp.r && strcmp(method, "OPTIONS") == 0) /* a preflight, or a probe of the methods */
+        resp = http_preflight(cors);
+    memset(&req, 0, sizeof req);
+    req.method = method;
+    req.path = url;
+    req.conn = conn;
+    req.body = ctx->body ? ctx->body : "";
+    req.body_len = ctx->len;
+    req.body_too_large = ctx->too_large;
+    req.app = s->app;
+    if (!resp.r)
+        resp = dispatch(s, &req, conn, method, url, pbuf, sizeof pbuf);
+    if (!resp.r)
+        resp = http_problem(500, NULL, "internal error building the response");
+    if (!resp.r)
+        return MHD_NO;
+    common_headers(s, conn, &resp, &req.timing, cors, origin);
+    return answer(s, ctx, conn, method, url, resp);
 }
 
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,

@@ -214,23 +214,184 @@ void mesh_import_in_process(int on)
     mio_in_process = on;
 }
 
+/* What the loading process gathers from one importer child. */
+typedef struct mio_run {
+    mio_sink k;           /* the result pipe's bytes */
+    char errtext[400];    /* the child's stderr, line ends turned to spaces */
+    size_t nerr;
+    int status, reaped;   /* waitpid's status, if the child was reaped */
+    int timed_out;        /* the child outlived MESH_IMPORT_TIMEOUT_S (and was killed) */
+} mio_run;
+
+/* In the child, after fork: fd 3 <- result pipe, 2 <- stderr pipe,
+ * 1 <- /dev/null (the pipe ends are first moved out of the way of 0..3),
+ * every other descriptor closed and crashes left to their signals; then
+ * the import.  Never returns. */
+static void mio_child_start(const int out[2], const int errp[2], const char *path,
+                            const void *data, size_t len, const char *hint, const char *what)
+{
+    int wfd = fcntl(out[1], F_DUPFD, 10), efd = fcntl(errp[1], F_DUPFD, 10);
+    int devnull = open("/dev/null", O_WRONLY);
+    if (wfd < 0 || efd < 0)
+        _exit(5);
+    if (devnull >= 0 && devnull != 1)
+        dup2(devnull, 1);
+    dup2(efd, 2);
+    dup2(wfd, 3);
+    /* nothing of the parent's (sockets, files) stays open in the child */
+#ifdef SYS_close_range
+    if (syscall(SYS_close_range, 4u, ~0u, 0u) != 0)
+#endif
+        for (int fd = 4; fd < 4096; fd++)
+            close(fd);
+    /* a crash ends the child by its signal (the parent reports it) */
+    signal(SIGSEGV, SIG_DFL);
+    signal(SIGBUS, SIG_DFL);
+    signal(SIGFPE, SIG_DFL);
+    signal(SIGILL, SIG_DFL);
+    signal(SIGABRT, SIG_DFL);
+    signal(SIGPIPE, SIG_DFL);
+    mio_child(3, path, data, len, hint, what);
+    _exit(4); /* not reached */
+}
+
+/* Whatever the stderr pipe holds now, appended to r->errtext (truncated
+ * to fit); 0 once the pipe is closed or fails. */
+static int mio_read_stderr(mio_run *r, int fd)
+{
+    int open_err = 1;
+    for (;;) {
+        char b[512];
+        ssize_t n = read(fd, b, sizeof b);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK))
+            open_err = 0;
+        if (n <= 0)
+            break;
+        for (ssize_t j = 0; j < n && r->nerr + 1 < sizeof r->errtext; j++)
+            r->errtext[r->nerr++] = b[j] == '\n' || b[j] == '\r' ? ' ' : b[j];
+        r->errtext[r->nerr] = '\0';
+    }
+    return open_err;
+}
+
+/* Read both pipes (non-blocking) until the child has closed them, or
+ * until the time limit (r->timed_out). */
+static void mio_collect(mio_run *r, int outfd, int errfd, glint_err *err)
+{
+    double deadline = mio_now() + MESH_IMPORT_TIMEOUT_S;
+    int open_out = 1, open_err = 1;
+    while (open_out || open_err) {
+        struct pollfd pf[2];
+        int np = 0, wait_ms;
+        double left = deadline - mio_now();
+        if (left <= 0) {
+            r->timed_out = 1;
+            break;
+        }
+        wait_ms = left > 1000.0 ? 1000000 : (int)(left * 1000.0) + 1;
+        if (open_out)
+            pf[np++] = (struct pollfd){.fd = outfd, .events = POLLIN};
+        if (open_err)
+            pf[np++] = (struct pollfd){.fd = errfd, .events = POLLIN};
+        if (poll(pf, (nfds_t)np, wait_ms) < 0) {
+            if (errno == EINTR)
+                continue;
+            break;
+        }
+        for (int i = 0; i < np; i++) {
+            if (!(pf[i].revents & (POLLIN | POLLHUP | POLLERR)))
+                continue;
+            if (pf[i].fd == outfd) {
+                if (mio_sink_read(&r->k, outfd, err) != 0)
+                    open_out = 0;
+            } else {
+                open_err = mio_read_stderr(r, errfd);
+            }
+        }
+    }
+}
+
+/* The child killed if it ran out of time, then waited for. */
+static void mio_reap(mio_run *r, pid_t pid)
+{
+    if (r->timed_out)
+        kill(pid, SIGKILL);
+    for (;;) {
+        pid_t w = waitpid(pid, &r->status, 0);
+        if (w == pid) {
+            r->reaped = 1;
+            break;
+        }
+        if (w < 0 && errno == EINTR)
+            continue;
+        break; /* ECHILD: SIGCHLD ignored by the application; judge by the data */
+    }
+}
+
+/* The import's outcome from what the child did and sent: the time limit,
+ * a crash, no memory for the arrays, a sanitizer's report, anything
+ * inconsistent, the child's own error (bad_alloc being the memory limit),
+ * or success (OUT: *prims). */
+static int mio_verdict(mio_run *r, const char *what, long long *prims, glint_err *err)
+{
+    mio_sink *k = &r->k;
+    int rc;
+    if (r->timed_out)
+        return glint_err_set(err, GLINT_ERANGE, "%s: reading it took more than %d s (the limit)",
+                             what, MESH_IMPORT_TIMEOUT_S);
+    if (r->reaped && WIFSIGNALED(r->status)) {
+        int sig = WTERMSIG(r->status);
+        return glint_err_set(err, GLINT_EFORMAT,
+                             "%s: the importer (assimp) crashed on it (signal %d, %s)%s%s: the "
+                             "file is malformed", what, sig, strsignal(sig), r->nerr ? ": " : "",
+                             r->errtext);
+    }
+    if (k->bad == 2) /* out of memory for the arrays: err is set */
+        return GLINT_ENOMEM;
+    if (!k->header_done && strstr(r->errtext, "DEADLYSIGNAL"))
+        /* a sanitizer build reports the crash itself and exits */
+        return glint_err_set(err, GLINT_EFORMAT,
+                             "%s: the importer (assimp) crashed on it: %s: the file is malformed",
+                             what, r->errtext);
+    if (!k->header_done || k->bad ||
+        (r->reaped && (!WIFEXITED(r->status) || WEXITSTATUS(r->status) != 0)) ||
+        (k->w.rc == 0 && k->cur != k->nseg))
+        return glint_err_set(err,
+                             strstr(r->errtext, "Sanitizer") ? GLINT_EINTERNAL : GLINT_EFORMAT,
+                             "%s: the importer process failed (exit status %d)%s%s", what,
+                             r->reaped && WIFEXITED(r->status) ? WEXITSTATUS(r->status) : -1,
+                             r->nerr ? ": " : "", r->errtext);
+    if (k->w.rc) {
+        k->w.msg[sizeof k->w.msg - 1] = '\0';
+        rc = glint_err_set(err, k->w.rc < 0 && k->w.rc >= GLINT_EINTERNAL ? k->w.rc
+                                                                         : GLINT_EINTERNAL,
+                           "%s", k->w.msg);
+        /* assimp reports exhausting the child's memory limit as bad_alloc
+         * (in its own message: others may quote names from the file) */
+        if (k->w.rc == GLINT_EFORMAT && strstr(k->w.msg, "bad_alloc"))
+            rc = glint_err_set(err, GLINT_ERANGE,
+                               "%s: reading it needs more memory than the importer may use "
+                               "(%s)", what, k->w.msg);
+        return rc;
+    }
+    *prims = k->w.prims;
+    return 0;
+}
+
 int mio_import(const char *path, const void *data, size_t len, const char *hint,
                const char *what, mesh *raw, long long *prims, glint_err *err)
 {
-    int out[2] = {-1, -1}, errp[2] = {-1, -1}, rc, status = 0, reaped = 0, timed_out = 0;
-    int open_out, open_err;
-    char errtext[400];
-    size_t nerr = 0;
-    double deadline;
-    mio_sink k;
+    int out[2] = {-1, -1}, errp[2] = {-1, -1}, rc;
+    mio_run r;
     pid_t pid;
 
     if (mio_in_process)
         return mio_import_direct(path, data, len, hint, what, raw, prims, err);
     memset(raw, 0, sizeof *raw);
-    memset(&k, 0, sizeof k);
-    k.raw = raw;
-    errtext[0] = '\0';
+    memset(&r, 0, sizeof r);
+    r.k.raw = raw;
     if (pipe(out) || pipe(errp)) {
         rc = glint_err_set(err, GLINT_EIO, "%s: cannot create a pipe for the importer: %s", what,
                            strerror(errno));
@@ -246,140 +407,16 @@ int mio_import(const char *path, const void *data, size_t len, const char *hint,
                            "%s: cannot start the importer process: %s", what, strerror(errno));
         goto done;
     }
-    if (pid == 0) {
-        /* fd 3 <- result pipe, 2 <- stderr pipe, 1 <- /dev/null; the pipe
-         * ends are first moved out of the way of 0..3 */
-        int wfd = fcntl(out[1], F_DUPFD, 10), efd = fcntl(errp[1], F_DUPFD, 10);
-        int devnull = open("/dev/null", O_WRONLY);
-        if (wfd < 0 || efd < 0)
-            _exit(5);
-        if (devnull >= 0 && devnull != 1)
-            dup2(devnull, 1);
-        dup2(efd, 2);
-        dup2(wfd, 3);
-        /* nothing of the parent's (sockets, files) stays open in the child */
-#ifdef SYS_close_range
-        if (syscall(SYS_close_range, 4u, ~0u, 0u) != 0)
-#endif
-            for (int fd = 4; fd < 4096; fd++)
-                close(fd);
-        /* a crash ends the child by its signal (the parent reports it) */
-        signal(SIGSEGV, SIG_DFL);
-        signal(SIGBUS, SIG_DFL);
-        signal(SIGFPE, SIG_DFL);
-        signal(SIGILL, SIG_DFL);
-        signal(SIGABRT, SIG_DFL);
-        signal(SIGPIPE, SIG_DFL);
-        mio_child(3, path, data, len, hint, what);
-        _exit(4); /* not reached */
-    }
+    if (pid == 0)
+        mio_child_start(out, errp, path, data, len, hint, what);
     close(out[1]);
     close(errp[1]);
     out[1] = errp[1] = -1;
     fcntl(out[0], F_SETFL, fcntl(out[0], F_GETFL) | O_NONBLOCK);
     fcntl(errp[0], F_SETFL, fcntl(errp[0], F_GETFL) | O_NONBLOCK);
-    deadline = mio_now() + MESH_IMPORT_TIMEOUT_S;
-    open_out = open_err = 1;
-    while (open_out || open_err) {
-        struct pollfd pf[2];
-        int np = 0, wait_ms;
-        double left = deadline - mio_now();
-        if (left <= 0) {
-            timed_out = 1;
-            break;
-        }
-        wait_ms = left > 1000.0 ? 1000000 : (int)(left * 1000.0) + 1;
-        if (open_out)
-            pf[np++] = (struct pollfd){.fd = out[0], .events = POLLIN};
-        if (open_err)
-            pf[np++] = (struct pollfd){.fd = errp[0], .events = POLLIN};
-        if (poll(pf, (nfds_t)np, wait_ms) < 0) {
-            if (errno == EINTR)
-                continue;
-            break;
-        }
-        for (int i = 0; i < np; i++) {
-            if (!(pf[i].revents & (POLLIN | POLLHUP | POLLERR)))
-                continue;
-            if (pf[i].fd == out[0]) {
-                int r = mio_sink_read(&k, out[0], err);
-                if (r != 0)
-                    open_out = 0;
-            } else {
-                for (;;) {
-                    char b[512];
-                    ssize_t r = read(errp[0], b, sizeof b);
-                    if (r < 0 && errno == EINTR)
-                        continue;
-                    if (r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK))
-                        open_err = 0;
-                    if (r <= 0)
-                        break;
-                    for (ssize_t j = 0; j < r && nerr + 1 < sizeof errtext; j++)
-                        errtext[nerr++] = b[j] == '\n' || b[j] == '\r' ? ' ' : b[j];
-                    errtext[nerr] = '\0';
-                }
-            }
-        }
-    }
-    if (timed_out)
-        kill(pid, SIGKILL);
-    for (;;) {
-        pid_t w = waitpid(pid, &status, 0);
-        if (w == pid) {
-            reaped = 1;
-            break;
-        }
-        if (w < 0 && errno == EINTR)
-            continue;
-        break; /* ECHILD: SIGCHLD ignored by the application; judge by the data */
-    }
-    if (timed_out) {
-        rc = glint_err_set(err, GLINT_ERANGE, "%s: reading it took more than %d s (the limit)",
-                           what, MESH_IMPORT_TIMEOUT_S);
-        goto done;
-    }
-    if (reaped && WIFSIGNALED(status)) {
-        int sig = WTERMSIG(status);
-        rc = glint_err_set(err, GLINT_EFORMAT,
-                           "%s: the importer (assimp) crashed on it (signal %d, %s)%s%s: the "
-                           "file is malformed", what, sig, strsignal(sig), nerr ? ": " : "",
-                           errtext);
-        goto done;
-    }
-    if (k.bad == 2) { /* out of memory for the arrays: err is set */
-        rc = GLINT_ENOMEM;
-        goto done;
-    }
-    if (!k.header_done && strstr(errtext, "DEADLYSIGNAL")) {
-        /* a sanitizer build reports the crash itself and exits */
-        rc = glint_err_set(err, GLINT_EFORMAT,
-                           "%s: the importer (assimp) crashed on it: %s: the file is malformed",
-                           what, errtext);
-        goto done;
-    }
-    if (!k.header_done || k.bad || (reaped && (!WIFEXITED(status) || WEXITSTATUS(status) != 0)) ||
-        (k.w.rc == 0 && k.cur != k.nseg)) {
-        rc = glint_err_set(err, strstr(errtext, "Sanitizer") ? GLINT_EINTERNAL : GLINT_EFORMAT,
-                           "%s: the importer process failed (exit status %d)%s%s", what,
-                           reaped && WIFEXITED(status) ? WEXITSTATUS(status) : -1,
-                           nerr ? ": " : "", errtext);
-        goto done;
-    }
-    if (k.w.rc) {
-        k.w.msg[sizeof k.w.msg - 1] = '\0';
-        rc = glint_err_set(err, k.w.rc < 0 && k.w.rc >= GLINT_EINTERNAL ? k.w.rc : GLINT_EINTERNAL,
-                           "%s", k.w.msg);
-        /* assimp reports exhausting the child's memory limit as bad_alloc
-         * (in its own message: others may quote names from the file) */
-        if (k.w.rc == GLINT_EFORMAT && strstr(k.w.msg, "bad_alloc"))
-            rc = glint_err_set(err, GLINT_ERANGE,
-                               "%s: reading it needs more memory than the importer may use "
-                               "(%s)", what, k.w.msg);
-        goto done;
-    }
-    *prims = k.w.prims;
-    rc = 0;
+    mio_collect(&r, out[0], errp[0], err);
+    mio_reap(&r, pid);
+    rc = mio_verdict(&r, what, prims, err);
 done:
     for (int i = 0; i < 2; i++) {
         if (out[i] >= 0)

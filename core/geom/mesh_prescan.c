@@ -127,9 +127,6 @@ static int mio_ply_truncated(const char *what, const mio_ply_elem *e, unsigned l
                          what, e->name, i, e->count);
 }
 
-/* PLY: header counts against the limits, then a walk over the data that
- * checks every declared element is present.  Headers this scan does not
- * understand are left to assimp. */
 static int mio_ply_too_many(const char *what, unsigned long long n, unsigned long long max,
                             glint_err *err)
 {
@@ -138,228 +135,303 @@ static int mio_ply_too_many(const char *what, unsigned long long n, unsigned lon
                          "%llu", what, n, max);
 }
 
-static int mio_prescan_ply(const char *buf, size_t len, const char *what, long max_tris,
-                           glint_err *err)
-{
-    mio_ply_elem *el = NULL;
-    int nel = 0, fmt = -1, understood = 1, rc = 0; /* fmt: 0 ascii, 1 LE, 2 BE */
-    const char *p = buf, *end = buf + len, *data = NULL;
-    unsigned long long tris = 0;
-    long lines = 0;
+/* What the PLY scan has learnt so far. */
+typedef struct mio_ply_scan {
+    const char *what;
+    long max_tris;
+    mio_ply_elem *el;         /* MIO_PLY_MAX_ELEMS of them, nel declared */
+    int nel;
+    int fmt;                  /* -1 not declared, 0 ascii, 1 little endian, 2 big endian */
+    int understood;           /* 0: a declaration the scan cannot read (assimp will say) */
+    const char *data;         /* just after the end_header line; NULL before it is found */
+    unsigned long long tris;  /* triangles the face lists make so far */
+} mio_ply_scan;
 
-    el = calloc(MIO_PLY_MAX_ELEMS, sizeof *el);
-    if (!el)
-        return glint_err_set(err, GLINT_ENOMEM, "out of memory scanning %s", what);
-    /* header: one declaration per line, up to end_header */
+/* Results of a header line besides an error: go on to the next line, or
+ * stop reading the header (end_header found, or a declaration not
+ * understood). */
+#define MIO_PLY_NEXT 0
+#define MIO_PLY_STOP 1
+
+/* "element NAME COUNT" (the rest of the line at *q): the count against the
+ * limits, a face being one triangle at least. */
+static int mio_ply_decl_element(mio_ply_scan *s, const char **q, const char *eol,
+                                glint_err *err)
+{
+    mio_ply_elem *e;
+    const char *name, *tok;
+    size_t nl, tl;
+    if (s->nel == MIO_PLY_MAX_ELEMS)
+        return glint_err_set(err, GLINT_EFORMAT, "%s: PLY header declares more than %d elements",
+                             s->what, MIO_PLY_MAX_ELEMS);
+    e = &s->el[s->nel++];
+    if (!mio_token(q, eol, &name, &nl) || !mio_token(q, eol, &tok, &tl) ||
+        !mio_count(tok, tl, &e->count)) {
+        s->understood = 0; /* malformed: assimp will say so */
+        return MIO_PLY_STOP;
+    }
+    snprintf(e->name, sizeof e->name, "%.*s", (int)(nl < 31 ? nl : 31), name);
+    if (e->count > (unsigned long long)MESH_MAX_VERTS ||
+        (strcmp(e->name, "face") == 0 && e->count > (unsigned long long)s->max_tris))
+        return glint_err_set(err, GLINT_ERANGE,
+                             "%s: PLY header declares %llu \"%s\" elements, more than the limit "
+                             "of %ld", s->what, e->count, e->name,
+                             strcmp(e->name, "face") == 0 ? s->max_tris : (long)MESH_MAX_VERTS);
+    return MIO_PLY_NEXT;
+}
+
+/* "property TYPE NAME" or "property list COUNT_TYPE ITEM_TYPE NAME" (the
+ * rest of the line at *q), for the last element declared. */
+static int mio_ply_decl_property(mio_ply_scan *s, const char **q, const char *eol,
+                                 glint_err *err)
+{
+    mio_ply_elem *e = s->nel ? &s->el[s->nel - 1] : NULL;
+    mio_ply_prop *pr;
+    const char *tok;
+    size_t tl;
+    int sgn = 0;
+    if (e && e->nprops == MIO_PLY_MAX_PROPS)
+        return glint_err_set(err, GLINT_ERANGE,
+                             "%s: PLY element \"%s\" declares more than %d properties (the "
+                             "limit)", s->what, e->name, MIO_PLY_MAX_PROPS);
+    if (!e || !mio_token(q, eol, &tok, &tl)) {
+        s->understood = 0;
+        return MIO_PLY_STOP;
+    }
+    pr = &e->props[e->nprops++];
+    if (mio_tok_is(tok, tl, "list")) {
+        pr->list = 1;
+        if (!mio_token(q, eol, &tok, &tl) || !(pr->csize = mio_ply_type(tok, tl, &sgn))) {
+            s->understood = 0;
+            return MIO_PLY_STOP;
+        }
+        pr->csigned = sgn;
+        if (!mio_token(q, eol, &tok, &tl) || !(pr->size = mio_ply_type(tok, tl, NULL))) {
+            s->understood = 0;
+            return MIO_PLY_STOP;
+        }
+    } else if (!(pr->size = mio_ply_type(tok, tl, NULL))) {
+        s->understood = 0;
+        return MIO_PLY_STOP;
+    }
+    return MIO_PLY_NEXT;
+}
+
+/* One header line [p, eol): end_header, format, element and property are
+ * read; comment, obj_info and anything else are ignored. */
+static int mio_ply_header_line(mio_ply_scan *s, const char *p, const char *eol,
+                               const char *end, glint_err *err)
+{
+    const char *q = p, *tok;
+    size_t tl;
+    if (!mio_token(&q, eol, &tok, &tl))
+        return MIO_PLY_NEXT;
+    if (mio_tok_is(tok, tl, "end_header")) {
+        s->data = eol < end ? eol + 1 : end;
+        return MIO_PLY_STOP;
+    }
+    if (mio_tok_is(tok, tl, "format")) {
+        if (mio_token(&q, eol, &tok, &tl)) {
+            if (mio_tok_is(tok, tl, "ascii"))
+                s->fmt = 0;
+            else if (mio_tok_is(tok, tl, "binary_little_endian"))
+                s->fmt = 1;
+            else if (mio_tok_is(tok, tl, "binary_big_endian"))
+                s->fmt = 2;
+        }
+        return MIO_PLY_NEXT;
+    }
+    if (mio_tok_is(tok, tl, "element"))
+        return mio_ply_decl_element(s, &q, eol, err);
+    if (mio_tok_is(tok, tl, "property"))
+        return mio_ply_decl_property(s, &q, eol, err);
+    return MIO_PLY_NEXT;
+}
+
+/* The header, one declaration per line up to end_header (or to the first
+ * declaration not understood), within MIO_PLY_MAX_HEADER_LINES lines. */
+static int mio_ply_header(mio_ply_scan *s, const char *buf, const char *end, glint_err *err)
+{
+    const char *p = buf;
+    long lines = 0;
     while (p < end) {
-        const char *eol = memchr(p, '\n', (size_t)(end - p)), *q = p, *tok;
+        const char *eol = memchr(p, '\n', (size_t)(end - p));
+        int rc;
+        if (!eol)
+            eol = end;
+        if (++lines > MIO_PLY_MAX_HEADER_LINES)
+            return glint_err_set(err, GLINT_ERANGE,
+                                 "%s: PLY header has more than %d lines (the limit)", s->what,
+                                 MIO_PLY_MAX_HEADER_LINES);
+        rc = mio_ply_header_line(s, p, eol, end, err);
+        if (rc < 0)
+            return rc;
+        if (rc == MIO_PLY_STOP)
+            break;
+        p = eol < end ? eol + 1 : end;
+    }
+    return 0;
+}
+
+/* Just after the first end_header line of [buf, end), or NULL. */
+static const char *mio_ply_find_end_header(const char *buf, const char *end)
+{
+    for (const char *q = buf; q < end;) {
+        const char *eol = memchr(q, '\n', (size_t)(end - q)), *r = q, *tok;
         size_t tl;
         if (!eol)
             eol = end;
-        if (++lines > MIO_PLY_MAX_HEADER_LINES) {
-            rc = glint_err_set(err, GLINT_ERANGE,
-                               "%s: PLY header has more than %d lines (the limit)", what,
-                               MIO_PLY_MAX_HEADER_LINES);
-            goto done;
-        }
-        if (mio_token(&q, eol, &tok, &tl)) {
-            if (mio_tok_is(tok, tl, "end_header")) {
-                data = eol < end ? eol + 1 : end;
-                break;
-            } else if (mio_tok_is(tok, tl, "format")) {
-                if (mio_token(&q, eol, &tok, &tl)) {
-                    if (mio_tok_is(tok, tl, "ascii"))
-                        fmt = 0;
-                    else if (mio_tok_is(tok, tl, "binary_little_endian"))
-                        fmt = 1;
-                    else if (mio_tok_is(tok, tl, "binary_big_endian"))
-                        fmt = 2;
-                }
-            } else if (mio_tok_is(tok, tl, "element")) {
-                mio_ply_elem *e;
-                const char *name;
-                size_t nl;
-                if (nel == MIO_PLY_MAX_ELEMS) {
-                    rc = glint_err_set(err, GLINT_EFORMAT,
-                                       "%s: PLY header declares more than %d elements", what,
-                                       MIO_PLY_MAX_ELEMS);
-                    goto done;
-                }
-                e = &el[nel++];
-                if (!mio_token(&q, eol, &name, &nl) || !mio_token(&q, eol, &tok, &tl) ||
-                    !mio_count(tok, tl, &e->count)) {
-                    understood = 0; /* malformed: assimp will say so */
-                    break;
-                }
-                snprintf(e->name, sizeof e->name, "%.*s", (int)(nl < 31 ? nl : 31), name);
-                /* a face is one triangle at least */
-                if (e->count > (unsigned long long)MESH_MAX_VERTS ||
-                    (strcmp(e->name, "face") == 0 && e->count > (unsigned long long)max_tris)) {
-                    rc = glint_err_set(err, GLINT_ERANGE,
-                                       "%s: PLY header declares %llu \"%s\" elements, more than "
-                                       "the limit of %ld", what, e->count, e->name,
-                                       strcmp(e->name, "face") == 0 ? max_tris
-                                                                    : (long)MESH_MAX_VERTS);
-                    goto done;
-                }
-            } else if (mio_tok_is(tok, tl, "property")) {
-                mio_ply_elem *e = nel ? &el[nel - 1] : NULL;
-                mio_ply_prop *pr;
-                int sgn = 0;
-                if (e && e->nprops == MIO_PLY_MAX_PROPS) {
-                    rc = glint_err_set(err, GLINT_ERANGE,
-                                       "%s: PLY element \"%s\" declares more than %d properties "
-                                       "(the limit)", what, e->name, MIO_PLY_MAX_PROPS);
-                    goto done;
-                }
-                if (!e || !mio_token(&q, eol, &tok, &tl)) {
-                    understood = 0;
-                    break;
-                }
-                pr = &e->props[e->nprops++];
-                if (mio_tok_is(tok, tl, "list")) {
-                    pr->list = 1;
-                    if (!mio_token(&q, eol, &tok, &tl) ||
-                        !(pr->csize = mio_ply_type(tok, tl, &sgn))) {
-                        understood = 0;
-                        break;
-                    }
-                    pr->csigned = sgn;
-                    if (!mio_token(&q, eol, &tok, &tl) || !(pr->size = mio_ply_type(tok, tl, NULL))) {
-                        understood = 0;
-                        break;
-                    }
-                } else if (!(pr->size = mio_ply_type(tok, tl, NULL))) {
-                    understood = 0;
-                    break;
-                }
-            }
-            /* comment, obj_info and anything else: ignored */
-        }
-        p = eol < end ? eol + 1 : end;
+        if (mio_token(&r, eol, &tok, &tl) && mio_tok_is(tok, tl, "end_header"))
+            return eol < end ? eol + 1 : end;
+        q = eol < end ? eol + 1 : end;
     }
-    if (!data) { /* the header loop may have stopped early: look again */
-        for (const char *q = buf; q < end;) {
-            const char *eol = memchr(q, '\n', (size_t)(end - q)), *r = q, *tok;
-            size_t tl;
-            if (!eol)
-                eol = end;
-            if (mio_token(&r, eol, &tok, &tl) && mio_tok_is(tok, tl, "end_header")) {
-                data = eol < end ? eol + 1 : end;
-                break;
-            }
-            q = eol < end ? eol + 1 : end;
-        }
+    return NULL;
+}
+
+/* A list of n items in property j: if it is the face's first list
+ * (`corners`), its n - 2 triangles count against the limit. */
+static int mio_ply_count_tris(mio_ply_scan *s, int j, int corners, unsigned long long n,
+                              glint_err *err)
+{
+    if (j == corners && n >= 3 && (s->tris += n - 2) > (unsigned long long)s->max_tris)
+        return mio_ply_too_many(s->what, s->tris, (unsigned long long)s->max_tris, err);
+    return 0;
+}
+
+/* ASCII property j of element e's record i at *p: its tokens present, and
+ * a list's length a count in range. */
+static int mio_ply_ascii_prop(mio_ply_scan *s, const mio_ply_elem *e, unsigned long long i,
+                              int j, int corners, const char **p, const char *end,
+                              glint_err *err)
+{
+    const char *tok;
+    size_t tl;
+    unsigned long long n;
+    int rc;
+    if (!mio_token(p, end, &tok, &tl))
+        return mio_ply_truncated(s->what, e, i, err);
+    if (!e->props[j].list)
+        return 0;
+    if (!mio_count(tok, tl, &n) || n > MIO_PLY_MAX_LIST)
+        return glint_err_set(err, GLINT_EFORMAT,
+                             "%s: PLY element \"%s\" %llu: list length \"%.*s\" is not a count "
+                             "in 0..%d", s->what, e->name, i, (int)(tl < 32 ? tl : 32), tok,
+                             MIO_PLY_MAX_LIST);
+    if ((rc = mio_ply_count_tris(s, j, corners, n, err)))
+        return rc;
+    for (unsigned long long t = 0; t < n; t++)
+        if (!mio_token(p, end, &tok, &tl))
+            return mio_ply_truncated(s->what, e, i, err);
+    return 0;
+}
+
+/* A binary list count of pr->csize bytes at p, in the file's byte order;
+ * -1 for a negative one or one beyond LLONG_MAX. */
+static long long mio_ply_binary_count(const mio_ply_prop *pr, const char *p, int fmt)
+{
+    unsigned char b[8] = {0};
+    unsigned long long u = 0;
+    for (int c = 0; c < pr->csize; c++)
+        b[c] = (unsigned char)p[fmt == 1 ? c : pr->csize - 1 - c];
+    for (int c = pr->csize - 1; c >= 0; c--)
+        u = (u << 8) | b[c];
+    if (pr->csigned && pr->csize < 8 && (u >> (8 * pr->csize - 1)) & 1)
+        return -1; /* negative count */
+    return u > (unsigned long long)LLONG_MAX ? -1 : (long long)u;
+}
+
+/* Binary property j of element e's record i at *p: its bytes present, and
+ * a list's count in range. */
+static int mio_ply_binary_prop(mio_ply_scan *s, const mio_ply_elem *e, unsigned long long i,
+                               int j, int corners, const char **p, const char *end,
+                               glint_err *err)
+{
+    const mio_ply_prop *pr = &e->props[j];
+    long long n;
+    int rc;
+    if (!pr->list) {
+        if ((size_t)(end - *p) < (size_t)pr->size)
+            return mio_ply_truncated(s->what, e, i, err);
+        *p += pr->size;
+        return 0;
     }
-    if (!data) {
-        /* assimp 5.2 loops forever on a PLY header without end_header */
+    if ((size_t)(end - *p) < (size_t)pr->csize)
+        return mio_ply_truncated(s->what, e, i, err);
+    n = mio_ply_binary_count(pr, *p, s->fmt);
+    *p += pr->csize;
+    if (n < 0 || n > MIO_PLY_MAX_LIST)
+        return glint_err_set(err, GLINT_EFORMAT,
+                             "%s: PLY element \"%s\" %llu: list length %lld outside 0..%d",
+                             s->what, e->name, i, n, MIO_PLY_MAX_LIST);
+    if ((rc = mio_ply_count_tris(s, j, corners, (unsigned long long)n, err)))
+        return rc;
+    if ((size_t)(end - *p) / (size_t)pr->size < (size_t)n)
+        return mio_ply_truncated(s->what, e, i, err);
+    *p += (size_t)n * (size_t)pr->size;
+    return 0;
+}
+
+/* Element e's records from *p: a binary element of scalars is skipped as
+ * one block; otherwise property by property. */
+static int mio_ply_walk_elem(mio_ply_scan *s, const mio_ply_elem *e, const char **p,
+                             const char *end, glint_err *err)
+{
+    int all_scalar = 1, corners = -1; /* the face's first list: its corners */
+    size_t rec = 0;
+    for (int j = 0; j < e->nprops; j++) {
+        all_scalar &= !e->props[j].list;
+        rec += (size_t)e->props[j].size;
+        if (e->props[j].list && corners < 0 && strcmp(e->name, "face") == 0)
+            corners = j;
+    }
+    if (s->fmt != 0 && all_scalar) {
+        size_t left = (size_t)(end - *p);
+        if (rec && left / rec < e->count)
+            return mio_ply_truncated(s->what, e, left / rec, err);
+        *p += rec * (size_t)e->count;
+        return 0;
+    }
+    for (unsigned long long i = 0; i < e->count; i++)
+        for (int j = 0; j < e->nprops; j++) {
+            int rc = s->fmt == 0 ? mio_ply_ascii_prop(s, e, i, j, corners, p, end, err)
+                                 : mio_ply_binary_prop(s, e, i, j, corners, p, end, err);
+            if (rc)
+                return rc;
+        }
+    return 0;
+}
+
+/* PLY: header counts against the limits, then a walk over the data that
+ * checks every declared element is present.  Headers this scan does not
+ * understand are left to assimp. */
+static int mio_prescan_ply(const char *buf, size_t len, const char *what, long max_tris,
+                           glint_err *err)
+{
+    const char *end = buf + len, *p;
+    mio_ply_scan s;
+    int rc;
+
+    memset(&s, 0, sizeof s);
+    s.what = what;
+    s.max_tris = max_tris;
+    s.fmt = -1;
+    s.understood = 1;
+    s.el = calloc(MIO_PLY_MAX_ELEMS, sizeof *s.el);
+    if (!s.el)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory scanning %s", what);
+    rc = mio_ply_header(&s, buf, end, err);
+    if (!rc && !s.data) /* the header loop may have stopped early: look again */
+        s.data = mio_ply_find_end_header(buf, end);
+    if (!rc && !s.data) /* assimp 5.2 loops forever on a PLY header without end_header */
         rc = glint_err_set(err, GLINT_EFORMAT,
                            "%s: PLY header has no end_header line (truncated file)", what);
-        goto done;
+    /* malformed declarations are left to assimp, which reports them */
+    if (!rc && s.understood && s.fmt >= 0) {
+        p = s.data;
+        for (int k = 0; k < s.nel && !rc; k++)
+            rc = mio_ply_walk_elem(&s, &s.el[k], &p, end, err);
     }
-    if (!understood || fmt < 0)
-        goto done; /* malformed declarations: assimp reports them */
-
-    /* data */
-    p = data;
-    for (int k = 0; k < nel; k++) {
-        const mio_ply_elem *e = &el[k];
-        int all_scalar = 1, corners = -1; /* the face's first list: its corners */
-        size_t rec = 0;
-        for (int j = 0; j < e->nprops; j++) {
-            all_scalar &= !e->props[j].list;
-            rec += (size_t)e->props[j].size;
-            if (e->props[j].list && corners < 0 && strcmp(e->name, "face") == 0)
-                corners = j;
-        }
-        if (fmt != 0 && all_scalar) {
-            size_t left = (size_t)(end - p);
-            if (rec && left / rec < e->count) {
-                rc = mio_ply_truncated(what, e, left / rec, err);
-                goto done;
-            }
-            p += rec * (size_t)e->count;
-            continue;
-        }
-        for (unsigned long long i = 0; i < e->count; i++)
-            for (int j = 0; j < e->nprops; j++) {
-                const mio_ply_prop *pr = &e->props[j];
-                if (fmt == 0) {
-                    const char *tok;
-                    size_t tl;
-                    unsigned long long n;
-                    if (!mio_token(&p, end, &tok, &tl)) {
-                        rc = mio_ply_truncated(what, e, i, err);
-                        goto done;
-                    }
-                    if (!pr->list)
-                        continue;
-                    if (!mio_count(tok, tl, &n) || n > MIO_PLY_MAX_LIST) {
-                        rc = glint_err_set(err, GLINT_EFORMAT,
-                                           "%s: PLY element \"%s\" %llu: list length \"%.*s\" is "
-                                           "not a count in 0..%d", what, e->name, i,
-                                           (int)(tl < 32 ? tl : 32), tok, MIO_PLY_MAX_LIST);
-                        goto done;
-                    }
-                    if (j == corners && n >= 3 &&
-                        (tris += n - 2) > (unsigned long long)max_tris) {
-                        rc = mio_ply_too_many(what, tris, (unsigned long long)max_tris, err);
-                        goto done;
-                    }
-                    for (unsigned long long t = 0; t < n; t++)
-                        if (!mio_token(&p, end, &tok, &tl)) {
-                            rc = mio_ply_truncated(what, e, i, err);
-                            goto done;
-                        }
-                } else {
-                    unsigned char b[8] = {0};
-                    long long n = 0;
-                    if (!pr->list) {
-                        if ((size_t)(end - p) < (size_t)pr->size) {
-                            rc = mio_ply_truncated(what, e, i, err);
-                            goto done;
-                        }
-                        p += pr->size;
-                        continue;
-                    }
-                    if ((size_t)(end - p) < (size_t)pr->csize) {
-                        rc = mio_ply_truncated(what, e, i, err);
-                        goto done;
-                    }
-                    for (int c = 0; c < pr->csize; c++)
-                        b[c] = (unsigned char)p[fmt == 1 ? c : pr->csize - 1 - c];
-                    p += pr->csize;
-                    {
-                        unsigned long long u = 0;
-                        for (int c = pr->csize - 1; c >= 0; c--)
-                            u = (u << 8) | b[c];
-                        if (pr->csigned && pr->csize < 8 && (u >> (8 * pr->csize - 1)) & 1)
-                            n = -1; /* negative count */
-                        else
-                            n = u > (unsigned long long)LLONG_MAX ? -1 : (long long)u;
-                    }
-                    if (n < 0 || n > MIO_PLY_MAX_LIST) {
-                        rc = glint_err_set(err, GLINT_EFORMAT,
-                                           "%s: PLY element \"%s\" %llu: list length %lld "
-                                           "outside 0..%d", what, e->name, i, n,
-                                           MIO_PLY_MAX_LIST);
-                        goto done;
-                    }
-                    if (j == corners && n >= 3 &&
-                        (tris += (unsigned long long)n - 2) > (unsigned long long)max_tris) {
-                        rc = mio_ply_too_many(what, tris, (unsigned long long)max_tris, err);
-                        goto done;
-                    }
-                    if ((size_t)(end - p) / (size_t)pr->size < (size_t)n) {
-                        rc = mio_ply_truncated(what, e, i, err);
-                        goto done;
-                    }
-                    p += (size_t)n * (size_t)pr->size;
-                }
-            }
-    }
-done:
-    free(el);
+    free(s.el);
     return rc;
 }
 

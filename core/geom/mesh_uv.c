@@ -378,6 +378,497 @@ static double uvg_pack(uvg_item *it, size_t n, double g, double *sx, double *sy)
     return uvg_shelf(it, n, bestW, g, sx, sy);
 }
 
+/* The parameterization's working state, from the labels to the packed
+ * charts: each step below fills some of it and reads what earlier steps
+ * left.  uvg_work_free releases whatever is allocated. */
+typedef struct uvg_work {
+    mesh *m;
+    size_t nv, nt;
+    double diag, mean_edge;
+    uint32_t *canon;          /* per vertex: its welded representative */
+    unsigned char *lab, *lab2; /* per triangle: axis label; the smoothing's next labels */
+    double *fn;               /* 3 per triangle: unit normal */
+    double *t2;               /* 6 per triangle: projection onto its label's plane */
+    uint32_t *nbo, *nbs;      /* edge neighbours of t: nbs[nbo[t] .. nbo[t + 1]) */
+    int32_t *chart;           /* per triangle: its chart, -1 while it has none */
+    uint32_t *rej;            /* per triangle: the last chart that refused it */
+    uint32_t *ctri, *cstart;  /* chart c's triangles: ctri[cstart[c] .. cstart[c + 1]) */
+    unsigned char *caxis;     /* per chart: its axis */
+    size_t nch;
+    uvg_seed *order;          /* seeds, best aligned with their axis first */
+    uvg_ctx x;
+    uint32_t *last, *newid;   /* per vertex, while splitting at chart borders */
+    uint32_t *orig, *newtri, *vstart; /* split vertices: source vertex, triangles,
+                                         chart c's vertices vstart[c] .. vstart[c + 1] */
+    size_t nn;                /* vertices after splitting */
+    double *ps;               /* 2 per split vertex: position in its laid-out chart */
+    uvg_item *items;          /* per chart: extent, then placement */
+    double *shx, *shy;        /* shelf packing's scratch */
+    double side, gutter;      /* the packed square's side and the gap, chart units */
+    float *npos, *nnrm, *nuv; /* the new vertex arrays */
+} uvg_work;
+
+static void uvg_work_free(uvg_work *w)
+{
+    free(w->canon);
+    free(w->lab);
+    free(w->lab2);
+    free(w->fn);
+    free(w->t2);
+    free(w->nbo);
+    free(w->nbs);
+    free(w->chart);
+    free(w->rej);
+    free(w->ctri);
+    free(w->cstart);
+    free(w->caxis);
+    free(w->order);
+    free(w->x.stamp);
+    free(w->x.big);
+    uvg_grid_free(&w->x.grid);
+    free(w->last);
+    free(w->newid);
+    free(w->orig);
+    free(w->newtri);
+    free(w->vstart);
+    free(w->ps);
+    free(w->items);
+    free(w->shx);
+    free(w->shy);
+    free(w->npos);
+    free(w->nnrm);
+    free(w->nuv);
+}
+
+/* Every allocation failure of the parameterization reads the same. */
+static int uvg_nomem(const uvg_work *w, glint_err *err)
+{
+    return glint_err_set(err, GLINT_ENOMEM, "out of memory parameterizing %zu triangles",
+                         w->nt);
+}
+
+/* The per-triangle arrays the labelling and the chart growth need. */
+static int uvg_work_alloc(uvg_work *w, glint_err *err)
+{
+    size_t nv = w->nv, nt = w->nt;
+    w->canon = malloc(nv * sizeof *w->canon);
+    w->lab = malloc(nt);
+    w->lab2 = malloc(nt);
+    w->fn = malloc(3 * nt * sizeof *w->fn);
+    w->t2 = malloc(6 * nt * sizeof *w->t2);
+    w->nbo = calloc(nt + 1, sizeof *w->nbo);
+    w->chart = malloc(nt * sizeof *w->chart);
+    w->rej = malloc(nt * sizeof *w->rej);
+    w->ctri = malloc(nt * sizeof *w->ctri);
+    w->cstart = malloc((nt + 1) * sizeof *w->cstart);
+    w->caxis = malloc(nt);
+    w->order = malloc(nt * sizeof *w->order);
+    w->x.stamp = calloc(nt, sizeof *w->x.stamp);
+    w->x.big = malloc(nt * sizeof *w->x.big);
+    if (!w->canon || !w->lab || !w->lab2 || !w->fn || !w->t2 || !w->nbo || !w->chart ||
+        !w->rej || !w->ctri || !w->cstart || !w->caxis || !w->order || !w->x.stamp ||
+        !w->x.big)
+        return uvg_nomem(w, err);
+    return 0;
+}
+
+/* Step 1: each triangle's unit normal and the axis closest to it, and the
+ * mean edge length (which sizes the chart grid's cells). */
+static void uvg_label_triangles(uvg_work *w)
+{
+    const mesh *m = w->m;
+    double mean_edge = 0.0;
+    for (size_t t = 0; t < w->nt; t++) {
+        v3 n;
+        double l = mio_tri_cross_len(m->pos, m->tri + 3 * t, &n), best = -INFINITY;
+        int a = 0;
+        n = l > 0.0 ? v3_scale(n, 1.0 / l) : v3_make(0, 0, 0);
+        v3_store(n, w->fn + 3 * t);
+        for (int k = 0; k < 6; k++) {
+            double d = uvg_axis_dot(k, w->fn + 3 * t);
+            if (d > best) {
+                best = d;
+                a = k;
+            }
+        }
+        w->lab[t] = (unsigned char)a;
+        for (int k = 0; k < 3; k++) {
+            const float *p = m->pos + 3 * (size_t)m->tri[3 * t + k];
+            const float *q = m->pos + 3 * (size_t)m->tri[3 * t + (k + 1) % 3];
+            mean_edge += v3_len(v3_sub(v3_loadf(p), v3_loadf(q)));
+        }
+    }
+    w->mean_edge = mean_edge / (3.0 * (double)w->nt);
+}
+
+/* Triangle adjacency (CSR in nbo, nbs) from the sorted welded edges: the
+ * triangles of an edge are paired, and chained along a non-manifold edge.
+ * The first pass counts, the second fills. */
+static int uvg_adjacency(uvg_work *w, glint_err *err)
+{
+    size_t nt = w->nt, ne = 3 * nt, total = 0;
+    uint32_t *nbo = w->nbo;
+    mio_pair *edges = NULL;
+    int rc = mio_edges_sorted(w->m, w->canon, &edges, err);
+    if (rc)
+        return rc;
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t i = 0; i < ne;) {
+            size_t j = i + 1;
+            while (j < ne && edges[j].key == edges[i].key)
+                j++;
+            for (size_t k = i; k + 1 < j; k++) {
+                uint32_t a = edges[k].val / 3, b = edges[k + 1].val / 3;
+                if (a == b)
+                    continue;
+                if (pass == 0) {
+                    nbo[a + 1]++;
+                    nbo[b + 1]++;
+                } else {
+                    w->nbs[nbo[a]++] = b;
+                    w->nbs[nbo[b]++] = a;
+                }
+            }
+            i = j;
+        }
+        if (pass == 0) {
+            for (size_t t = 0; t < nt; t++)
+                nbo[t + 1] += nbo[t];
+            total = nbo[nt];
+            w->nbs = malloc((total ? total : 1) * sizeof *w->nbs);
+            if (!w->nbs) {
+                free(edges);
+                return uvg_nomem(w, err);
+            }
+        } else {
+            /* nbo[t] now holds the end of t's list: shift back */
+            for (size_t t = nt; t > 0; t--)
+                nbo[t] = nbo[t - 1];
+            nbo[0] = 0;
+        }
+    }
+    free(edges);
+    return 0;
+}
+
+/* Label smoothing (Jacobi passes): a triangle takes the label most of its
+ * neighbours hold, if at least two do and its normal is close enough to
+ * that axis. */
+static void uvg_smooth_labels(uvg_work *w)
+{
+    for (int pass = 0; pass < UVG_SMOOTH_PASSES; pass++) {
+        size_t changed = 0;
+        for (size_t t = 0; t < w->nt; t++) {
+            int cnt[6] = {0, 0, 0, 0, 0, 0}, best = w->lab[t];
+            for (uint32_t k = w->nbo[t]; k < w->nbo[t + 1]; k++)
+                cnt[w->lab[w->nbs[k]]]++;
+            for (int a = 0; a < 6; a++)
+                if (cnt[a] > cnt[best])
+                    best = a;
+            w->lab2[t] = w->lab[t];
+            if (best != w->lab[t] && cnt[best] >= 2 &&
+                uvg_axis_dot(best, w->fn + 3 * t) >= UVG_MIN_COS) {
+                w->lab2[t] = (unsigned char)best;
+                changed++;
+            }
+        }
+        memcpy(w->lab, w->lab2, w->nt);
+        if (!changed)
+            break;
+    }
+}
+
+/* Before the growth: every triangle projected onto its label's plane,
+ * without a chart, and the seeds in order of decreasing alignment. */
+static void uvg_order_seeds(uvg_work *w)
+{
+    const mesh *m = w->m;
+    for (size_t t = 0; t < w->nt; t++) {
+        for (int k = 0; k < 3; k++)
+            uvg_project(w->lab[t], m->pos + 3 * (size_t)m->tri[3 * t + k],
+                        w->t2 + 6 * t + 2 * k, w->t2 + 6 * t + 2 * k + 1);
+        w->order[t].key = uvg_axis_dot(w->lab[t], w->fn + 3 * t);
+        w->order[t].t = (uint32_t)t;
+        w->chart[t] = -1;
+        w->rej[t] = UINT32_MAX;
+    }
+    qsort(w->order, w->nt, sizeof *w->order, uvg_seed_cmp);
+}
+
+/* Grow chart w->nch breadth-first from `seed` over neighbours of the same
+ * label whose projection overlaps none of the chart's triangles; *n counts
+ * the triangles placed in charts so far.  -1 on allocation failure. */
+static int uvg_grow_chart(uvg_work *w, uint32_t seed, size_t *n)
+{
+    uvg_ctx *x = &w->x;
+    uint32_t *ctri = w->ctri;
+    size_t nch = w->nch;
+    int axis = w->lab[seed];
+
+    w->cstart[nch] = (uint32_t)*n;
+    w->caxis[nch] = (unsigned char)axis;
+    uvg_grid_reset(&x->grid);
+    x->nbig = 0;
+    x->c0 = *n;
+    w->chart[seed] = (int32_t)nch;
+    ctri[(*n)++] = seed;
+    x->c1 = *n;
+    if (uvg_insert(x, seed))
+        return -1;
+    for (size_t head = x->c0; head < *n; head++) {
+        uint32_t s = ctri[head];
+        for (uint32_t k = w->nbo[s]; k < w->nbo[s + 1]; k++) {
+            uint32_t u = w->nbs[k];
+            if (w->chart[u] >= 0 || w->lab[u] != axis || w->rej[u] == (uint32_t)nch)
+                continue;
+            x->c1 = *n;
+            if (uvg_conflicts(x, u)) {
+                w->rej[u] = (uint32_t)nch;
+                continue;
+            }
+            w->chart[u] = (int32_t)nch;
+            ctri[(*n)++] = u;
+            x->c1 = *n;
+            if (uvg_insert(x, u))
+                return -1;
+        }
+    }
+    return 0;
+}
+
+/* Step 2: charts grown from the seeds in order, each from the first seed
+ * left without a chart.  What only the growth needs is released after. */
+static int uvg_grow_charts(uvg_work *w, glint_err *err)
+{
+    uvg_ctx *x = &w->x;
+    size_t n = 0;
+
+    uvg_order_seeds(w);
+    x->t2 = w->t2;
+    x->nt = w->nt;
+    x->ctri = w->ctri;
+    x->tol = 1e-9 * w->diag;
+    x->tiny_area = 1e-24 * w->diag * w->diag;
+    if (uvg_grid_init(&x->grid, 1024))
+        return uvg_nomem(w, err);
+    x->grid.h = 2.0 * w->mean_edge > 1e-12 * w->diag ? 2.0 * w->mean_edge : w->diag;
+    for (size_t o = 0; o < w->nt; o++) {
+        uint32_t seed = w->order[o].t;
+        if (w->chart[seed] >= 0)
+            continue;
+        if (uvg_grow_chart(w, seed, &n))
+            return uvg_nomem(w, err);
+        w->nch++;
+    }
+    w->cstart[w->nch] = (uint32_t)n;
+    free(w->nbs);
+    w->nbs = NULL;
+    free(w->t2);
+    w->t2 = NULL;
+    uvg_grid_free(&x->grid);
+    return 0;
+}
+
+/* Step 3: one vertex per (vertex, chart) pair, numbered chart by chart;
+ * the triangles renumbered to them. */
+static int uvg_split_vertices(uvg_work *w, glint_err *err)
+{
+    const mesh *m = w->m;
+    size_t nt = w->nt, nn = 0;
+
+    if (3 * nt > (size_t)INT_MAX / 3)
+        return glint_err_set(err, GLINT_ERANGE, "too many triangles (%zu) to parameterize", nt);
+    w->last = calloc(w->nv, sizeof *w->last);
+    w->newid = malloc(w->nv * sizeof *w->newid);
+    w->orig = malloc(3 * nt * sizeof *w->orig);
+    w->newtri = malloc(3 * nt * sizeof *w->newtri);
+    w->vstart = malloc((w->nch + 1) * sizeof *w->vstart);
+    if (!w->last || !w->newid || !w->orig || !w->newtri || !w->vstart)
+        return uvg_nomem(w, err);
+    for (size_t c = 0; c < w->nch; c++) {
+        w->vstart[c] = (uint32_t)nn;
+        for (size_t i = w->cstart[c]; i < w->cstart[c + 1]; i++) {
+            size_t t = w->ctri[i];
+            for (int k = 0; k < 3; k++) {
+                uint32_t v = m->tri[3 * t + k];
+                if (w->last[v] != (uint32_t)c + 1) {
+                    w->last[v] = (uint32_t)c + 1;
+                    w->newid[v] = (uint32_t)nn;
+                    w->orig[nn++] = v;
+                }
+                w->newtri[3 * t + k] = w->newid[v];
+            }
+        }
+    }
+    w->vstart[w->nch] = (uint32_t)nn;
+    w->nn = nn;
+    return 0;
+}
+
+/* The rotation (cosine, sine; among UVG_ROT_STEPS angles in [0, 90)
+ * degrees) that gives the points ps[2 i0 .. 2 i1) the smallest bounding
+ * rectangle; the first of equals (within a relative 1e-12) wins. */
+static void uvg_best_rotation(const double *ps, size_t i0, size_t i1, double *bc, double *bs)
+{
+    double bestA = INFINITY;
+    *bc = 1.0;
+    *bs = 0.0;
+    for (int r = 0; r < UVG_ROT_STEPS; r++) {
+        double th = (3.14159265358979323846 / 2) * r / UVG_ROT_STEPS;
+        double co = cos(th), si = sin(th), A, lx, ly, hx, hy;
+        lx = ly = INFINITY;
+        hx = hy = -INFINITY;
+        for (size_t i = i0; i < i1; i++) {
+            double u = co * ps[2 * i] - si * ps[2 * i + 1];
+            double v = si * ps[2 * i] + co * ps[2 * i + 1];
+            lx = fmin(lx, u);
+            hx = fmax(hx, u);
+            ly = fmin(ly, v);
+            hy = fmax(hy, v);
+        }
+        A = (hx - lx) * (hy - ly);
+        if (A < bestA * (1.0 - 1e-12)) {
+            bestA = A;
+            *bc = co;
+            *bs = si;
+        }
+    }
+}
+
+/* Step 4 for chart c: its vertices projected onto its axis plane, rotated
+ * to the smallest bounding rectangle, laid flat (width >= height) and
+ * moved to the origin; its extent goes to items[c]. */
+static void uvg_flatten_chart(uvg_work *w, size_t c)
+{
+    double *ps = w->ps, bc, bs, lx, ly, hx, hy;
+    size_t i0 = w->vstart[c], i1 = w->vstart[c + 1];
+
+    for (size_t i = i0; i < i1; i++)
+        uvg_project(w->caxis[c], w->m->pos + 3 * (size_t)w->orig[i], ps + 2 * i, ps + 2 * i + 1);
+    uvg_best_rotation(ps, i0, i1, &bc, &bs);
+    lx = ly = INFINITY;
+    hx = hy = -INFINITY;
+    for (size_t i = i0; i < i1; i++) {
+        double u = bc * ps[2 * i] - bs * ps[2 * i + 1];
+        double v = bs * ps[2 * i] + bc * ps[2 * i + 1];
+        ps[2 * i] = u;
+        ps[2 * i + 1] = v;
+        lx = fmin(lx, u);
+        hx = fmax(hx, u);
+        ly = fmin(ly, v);
+        hy = fmax(hy, v);
+    }
+    if (hy - ly > hx - lx) { /* lay it flat: rotate by +90 degrees */
+        for (size_t i = i0; i < i1; i++) {
+            double u = ps[2 * i];
+            ps[2 * i] = -ps[2 * i + 1];
+            ps[2 * i + 1] = u;
+        }
+        {
+            double t0 = lx, t1 = hx;
+            lx = -hy;
+            hx = -ly;
+            ly = t0;
+            hy = t1;
+        }
+    }
+    for (size_t i = i0; i < i1; i++) {
+        ps[2 * i] -= lx;
+        ps[2 * i + 1] -= ly;
+    }
+    w->items[c].w = hx - lx;
+    w->items[c].h = hy - ly;
+    w->items[c].c = (uint32_t)c;
+}
+
+/* Step 4: every chart flattened (uvg_flatten_chart). */
+static int uvg_flatten_charts(uvg_work *w, glint_err *err)
+{
+    size_t nch = w->nch;
+    w->ps = malloc(2 * w->nn * sizeof *w->ps);
+    w->items = malloc((nch ? nch : 1) * sizeof *w->items);
+    w->shx = malloc((nch ? nch : 1) * sizeof *w->shx);
+    w->shy = malloc((nch ? nch : 1) * sizeof *w->shy);
+    if (!w->ps || !w->items || !w->shx || !w->shy)
+        return uvg_nomem(w, err);
+    for (size_t c = 0; c < nch; c++)
+        uvg_flatten_chart(w, c);
+    return 0;
+}
+
+/* Step 5: the charts shelf-packed into a square.  The gutter is a fixed
+ * fraction of the square's side, which depends on the gutter: three
+ * rounds settle it, and a last packing uses the gutter of the side found. */
+static void uvg_pack_charts(uvg_work *w)
+{
+    size_t nch = w->nch;
+    double sumA = 0.0, side, g;
+    for (size_t c = 0; c < nch; c++)
+        sumA += w->items[c].w * w->items[c].h;
+    qsort(w->items, nch, sizeof *w->items, uvg_item_cmp);
+    side = sqrt(sumA / 0.7);
+    if (!(side > 0.0))
+        side = w->diag;
+    for (int it = 0; it < 3; it++) {
+        g = UVG_GUTTER * side;
+        side = uvg_pack(w->items, nch, g, w->shx, w->shy);
+    }
+    g = UVG_GUTTER * side;
+    w->side = uvg_pack(w->items, nch, g, w->shx, w->shy);
+    w->gutter = g;
+}
+
+/* The new vertex arrays: uvs from the packing (one uniform scale maps the
+ * square onto [0,1]^2), positions and normals copied from each split
+ * vertex's source (zero normals if the mesh has none). */
+static int uvg_vertex_arrays(uvg_work *w, glint_err *err)
+{
+    const mesh *m = w->m;
+    size_t nn = w->nn;
+    double side = w->side, g = w->gutter;
+
+    w->npos = malloc(3 * nn * sizeof *w->npos);
+    w->nnrm = malloc(3 * nn * sizeof *w->nnrm);
+    w->nuv = malloc(2 * nn * sizeof *w->nuv);
+    if (!w->npos || !w->nnrm || !w->nuv)
+        return uvg_nomem(w, err);
+    for (size_t k = 0; k < w->nch; k++) {
+        size_t c = w->items[k].c;
+        double ox = w->items[k].x + 0.5 * g, oy = w->items[k].y + 0.5 * g;
+        for (size_t i = w->vstart[c]; i < w->vstart[c + 1]; i++) {
+            double u = (w->ps[2 * i] + ox) / side, v = (w->ps[2 * i + 1] + oy) / side;
+            w->nuv[2 * i] = (float)fmin(1.0, fmax(0.0, u));
+            w->nuv[2 * i + 1] = (float)fmin(1.0, fmax(0.0, v));
+        }
+    }
+    for (size_t i = 0; i < nn; i++) {
+        memcpy(w->npos + 3 * i, m->pos + 3 * (size_t)w->orig[i], 3 * sizeof(float));
+        if (m->nrm)
+            memcpy(w->nnrm + 3 * i, m->nrm + 3 * (size_t)w->orig[i], 3 * sizeof(float));
+        else
+            w->nnrm[3 * i] = w->nnrm[3 * i + 1] = w->nnrm[3 * i + 2] = 0.0f;
+    }
+    return 0;
+}
+
+/* The mesh takes the new arrays (the work no longer owns them) and the
+ * renumbered triangles. */
+static void uvg_commit(uvg_work *w, int *ncharts)
+{
+    mesh *m = w->m;
+    free(m->pos);
+    free(m->nrm);
+    free(m->uv);
+    m->pos = w->npos;
+    m->nrm = w->nnrm;
+    m->uv = w->nuv;
+    w->npos = w->nnrm = w->nuv = NULL;
+    memcpy(m->tri, w->newtri, 3 * w->nt * sizeof *w->newtri);
+    m->nverts = (int)w->nn;
+    if (ncharts)
+        *ncharts = w->nch > INT_MAX ? INT_MAX : (int)w->nch;
+}
+
 /* glint's automatic parameterization.
  *
  * Method (a segmentation into near-planar charts, each projected
@@ -417,380 +908,37 @@ static double uvg_pack(uvg_item *it, size_t n, double g, double *sx, double *sy)
  * OUT (optional): *ncharts. */
 int mio_uv_generate(mesh *m, int *ncharts, glint_err *err)
 {
-    size_t nv, nt, nch = 0, nn = 0;
-    uint32_t *canon = NULL, *nbo = NULL, *nbs = NULL, *ctri = NULL, *cstart = NULL;
-    uint32_t *rej = NULL, *last = NULL, *newid = NULL, *orig = NULL, *newtri = NULL;
-    uint32_t *vstart = NULL;
-    int32_t *chart = NULL;
-    unsigned char *lab = NULL, *lab2 = NULL, *caxis = NULL;
-    double *fn = NULL, *t2 = NULL, *ps = NULL, *shx = NULL, *shy = NULL;
-    mio_pair *edges = NULL;
-    uvg_seed *order = NULL;
-    uvg_item *items = NULL;
-    uvg_ctx x;
-    float *npos = NULL, *nnrm = NULL, *nuv = NULL;
-    double diag, mean_edge = 0.0;
+    uvg_work w;
     int rc;
 
-    memset(&x, 0, sizeof x);
-    nv = (size_t)m->nverts;
-    nt = (size_t)m->ntris;
-    diag = mio_bbox_diag(m->pos, nv);
-    if (!(diag > 0.0) || !isfinite(diag))
-        diag = 1.0;
-
-    canon = malloc(nv * sizeof *canon);
-    lab = malloc(nt);
-    lab2 = malloc(nt);
-    fn = malloc(3 * nt * sizeof *fn);
-    t2 = malloc(6 * nt * sizeof *t2);
-    nbo = calloc(nt + 1, sizeof *nbo);
-    chart = malloc(nt * sizeof *chart);
-    rej = malloc(nt * sizeof *rej);
-    ctri = malloc(nt * sizeof *ctri);
-    cstart = malloc((nt + 1) * sizeof *cstart);
-    caxis = malloc(nt);
-    order = malloc(nt * sizeof *order);
-    x.stamp = calloc(nt, sizeof *x.stamp);
-    x.big = malloc(nt * sizeof *x.big);
-    if (!canon || !lab || !lab2 || !fn || !t2 || !nbo || !chart || !rej || !ctri || !cstart ||
-        !caxis || !order || !x.stamp || !x.big)
-        goto nomem;
-    rc = mio_weld(m->pos, nv, canon, err);
-    if (rc)
-        goto done;
-
-    /* 1. normals, labels */
-    for (size_t t = 0; t < nt; t++) {
-        v3 n;
-        double l = mio_tri_cross_len(m->pos, m->tri + 3 * t, &n), best = -INFINITY;
-        int a = 0;
-        n = l > 0.0 ? v3_scale(n, 1.0 / l) : v3_make(0, 0, 0);
-        v3_store(n, fn + 3 * t);
-        for (int k = 0; k < 6; k++) {
-            double d = uvg_axis_dot(k, fn + 3 * t);
-            if (d > best) {
-                best = d;
-                a = k;
-            }
-        }
-        lab[t] = (unsigned char)a;
-        for (int k = 0; k < 3; k++) {
-            const float *p = m->pos + 3 * (size_t)m->tri[3 * t + k];
-            const float *q = m->pos + 3 * (size_t)m->tri[3 * t + (k + 1) % 3];
-            mean_edge += v3_len(v3_sub(v3_loadf(p), v3_loadf(q)));
-        }
+    memset(&w, 0, sizeof w);
+    w.m = m;
+    w.nv = (size_t)m->nverts;
+    w.nt = (size_t)m->ntris;
+    w.diag = mio_bbox_diag(m->pos, w.nv);
+    if (!(w.diag > 0.0) || !isfinite(w.diag))
+        w.diag = 1.0;
+    rc = uvg_work_alloc(&w, err);
+    if (!rc)
+        rc = mio_weld(m->pos, w.nv, w.canon, err);
+    if (!rc) {
+        uvg_label_triangles(&w);
+        rc = uvg_adjacency(&w, err);
     }
-    mean_edge /= 3.0 * (double)nt;
-
-    /* adjacency (CSR) from the sorted welded edges: pairs, and chains
-     * along non-manifold edges */
-    rc = mio_edges_sorted(m, canon, &edges, err);
-    if (rc)
-        goto done;
-    {
-        size_t ne = 3 * nt, total = 0;
-        for (int pass = 0; pass < 2; pass++) {
-            for (size_t i = 0; i < ne;) {
-                size_t j = i + 1;
-                while (j < ne && edges[j].key == edges[i].key)
-                    j++;
-                for (size_t k = i; k + 1 < j; k++) {
-                    uint32_t a = edges[k].val / 3, b = edges[k + 1].val / 3;
-                    if (a == b)
-                        continue;
-                    if (pass == 0) {
-                        nbo[a + 1]++;
-                        nbo[b + 1]++;
-                    } else {
-                        nbs[nbo[a]++] = b;
-                        nbs[nbo[b]++] = a;
-                    }
-                }
-                i = j;
-            }
-            if (pass == 0) {
-                for (size_t t = 0; t < nt; t++)
-                    nbo[t + 1] += nbo[t];
-                total = nbo[nt];
-                nbs = malloc((total ? total : 1) * sizeof *nbs);
-                if (!nbs)
-                    goto nomem;
-            } else {
-                /* nbo[t] now holds the end of t's list: shift back */
-                for (size_t t = nt; t > 0; t--)
-                    nbo[t] = nbo[t - 1];
-                nbo[0] = 0;
-            }
-        }
-        free(edges);
-        edges = NULL;
+    if (!rc) {
+        uvg_smooth_labels(&w);
+        rc = uvg_grow_charts(&w, err);
     }
-
-    /* label smoothing */
-    for (int pass = 0; pass < UVG_SMOOTH_PASSES; pass++) {
-        size_t changed = 0;
-        for (size_t t = 0; t < nt; t++) {
-            int cnt[6] = {0, 0, 0, 0, 0, 0}, best = lab[t];
-            for (uint32_t k = nbo[t]; k < nbo[t + 1]; k++)
-                cnt[lab[nbs[k]]]++;
-            for (int a = 0; a < 6; a++)
-                if (cnt[a] > cnt[best])
-                    best = a;
-            lab2[t] = lab[t];
-            if (best != lab[t] && cnt[best] >= 2 &&
-                uvg_axis_dot(best, fn + 3 * t) >= UVG_MIN_COS) {
-                lab2[t] = (unsigned char)best;
-                changed++;
-            }
-        }
-        memcpy(lab, lab2, nt);
-        if (!changed)
-            break;
+    if (!rc)
+        rc = uvg_split_vertices(&w, err);
+    if (!rc)
+        rc = uvg_flatten_charts(&w, err);
+    if (!rc) {
+        uvg_pack_charts(&w);
+        rc = uvg_vertex_arrays(&w, err);
     }
-
-    /* 2. chart growth */
-    for (size_t t = 0; t < nt; t++) {
-        for (int k = 0; k < 3; k++)
-            uvg_project(lab[t], m->pos + 3 * (size_t)m->tri[3 * t + k], t2 + 6 * t + 2 * k,
-                        t2 + 6 * t + 2 * k + 1);
-        order[t].key = uvg_axis_dot(lab[t], fn + 3 * t);
-        order[t].t = (uint32_t)t;
-        chart[t] = -1;
-        rej[t] = UINT32_MAX;
-    }
-    qsort(order, nt, sizeof *order, uvg_seed_cmp);
-    x.t2 = t2;
-    x.nt = nt;
-    x.ctri = ctri;
-    x.tol = 1e-9 * diag;
-    x.tiny_area = 1e-24 * diag * diag;
-    if (uvg_grid_init(&x.grid, 1024))
-        goto nomem;
-    x.grid.h = 2.0 * mean_edge > 1e-12 * diag ? 2.0 * mean_edge : diag;
-    {
-        size_t n = 0;
-        for (size_t o = 0; o < nt; o++) {
-            uint32_t seed = order[o].t;
-            int axis;
-            if (chart[seed] >= 0)
-                continue;
-            axis = lab[seed];
-            cstart[nch] = (uint32_t)n;
-            caxis[nch] = (unsigned char)axis;
-            uvg_grid_reset(&x.grid);
-            x.nbig = 0;
-            x.c0 = n;
-            chart[seed] = (int32_t)nch;
-            ctri[n++] = seed;
-            x.c1 = n;
-            if (uvg_insert(&x, seed))
-                goto nomem;
-            for (size_t head = x.c0; head < n; head++) {
-                uint32_t s = ctri[head];
-                for (uint32_t k = nbo[s]; k < nbo[s + 1]; k++) {
-                    uint32_t u = nbs[k];
-                    if (chart[u] >= 0 || lab[u] != axis || rej[u] == (uint32_t)nch)
-                        continue;
-                    x.c1 = n;
-                    if (uvg_conflicts(&x, u)) {
-                        rej[u] = (uint32_t)nch;
-                        continue;
-                    }
-                    chart[u] = (int32_t)nch;
-                    ctri[n++] = u;
-                    x.c1 = n;
-                    if (uvg_insert(&x, u))
-                        goto nomem;
-                }
-            }
-            nch++;
-        }
-        cstart[nch] = (uint32_t)n;
-    }
-    free(nbs);
-    nbs = NULL;
-    free(t2);
-    t2 = NULL;
-    uvg_grid_free(&x.grid);
-
-    /* 3. split vertices per chart */
-    if (3 * nt > (size_t)INT_MAX / 3) {
-        rc = glint_err_set(err, GLINT_ERANGE, "too many triangles (%zu) to parameterize", nt);
-        goto done;
-    }
-    last = calloc(nv, sizeof *last);
-    newid = malloc(nv * sizeof *newid);
-    orig = malloc(3 * nt * sizeof *orig);
-    newtri = malloc(3 * nt * sizeof *newtri);
-    vstart = malloc((nch + 1) * sizeof *vstart);
-    if (!last || !newid || !orig || !newtri || !vstart)
-        goto nomem;
-    for (size_t c = 0; c < nch; c++) {
-        vstart[c] = (uint32_t)nn;
-        for (size_t i = cstart[c]; i < cstart[c + 1]; i++) {
-            size_t t = ctri[i];
-            for (int k = 0; k < 3; k++) {
-                uint32_t v = m->tri[3 * t + k];
-                if (last[v] != (uint32_t)c + 1) {
-                    last[v] = (uint32_t)c + 1;
-                    newid[v] = (uint32_t)nn;
-                    orig[nn++] = v;
-                }
-                newtri[3 * t + k] = newid[v];
-            }
-        }
-    }
-    vstart[nch] = (uint32_t)nn;
-
-    /* 4. projection, rotation, extents */
-    ps = malloc(2 * nn * sizeof *ps);
-    items = malloc((nch ? nch : 1) * sizeof *items);
-    shx = malloc((nch ? nch : 1) * sizeof *shx);
-    shy = malloc((nch ? nch : 1) * sizeof *shy);
-    if (!ps || !items || !shx || !shy)
-        goto nomem;
-    for (size_t c = 0; c < nch; c++) {
-        double bestA = INFINITY, bc = 1.0, bs = 0.0, lx, ly, hx, hy;
-        for (size_t i = vstart[c]; i < vstart[c + 1]; i++)
-            uvg_project(caxis[c], m->pos + 3 * (size_t)orig[i], ps + 2 * i, ps + 2 * i + 1);
-        for (int r = 0; r < UVG_ROT_STEPS; r++) {
-            double th = (3.14159265358979323846 / 2) * r / UVG_ROT_STEPS;
-            double co = cos(th), si = sin(th), A;
-            lx = ly = INFINITY;
-            hx = hy = -INFINITY;
-            for (size_t i = vstart[c]; i < vstart[c + 1]; i++) {
-                double u = co * ps[2 * i] - si * ps[2 * i + 1];
-                double v = si * ps[2 * i] + co * ps[2 * i + 1];
-                lx = fmin(lx, u);
-                hx = fmax(hx, u);
-                ly = fmin(ly, v);
-                hy = fmax(hy, v);
-            }
-            A = (hx - lx) * (hy - ly);
-            if (A < bestA * (1.0 - 1e-12)) {
-                bestA = A;
-                bc = co;
-                bs = si;
-            }
-        }
-        lx = ly = INFINITY;
-        hx = hy = -INFINITY;
-        for (size_t i = vstart[c]; i < vstart[c + 1]; i++) {
-            double u = bc * ps[2 * i] - bs * ps[2 * i + 1];
-            double v = bs * ps[2 * i] + bc * ps[2 * i + 1];
-            ps[2 * i] = u;
-            ps[2 * i + 1] = v;
-            lx = fmin(lx, u);
-            hx = fmax(hx, u);
-            ly = fmin(ly, v);
-            hy = fmax(hy, v);
-        }
-        if (hy - ly > hx - lx) { /* lay it flat: rotate by +90 degrees */
-            for (size_t i = vstart[c]; i < vstart[c + 1]; i++) {
-                double u = ps[2 * i];
-                ps[2 * i] = -ps[2 * i + 1];
-                ps[2 * i + 1] = u;
-            }
-            {
-                double t0 = lx, t1 = hx;
-                lx = -hy;
-                hx = -ly;
-                ly = t0;
-                hy = t1;
-            }
-        }
-        for (size_t i = vstart[c]; i < vstart[c + 1]; i++) {
-            ps[2 * i] -= lx;
-            ps[2 * i + 1] -= ly;
-        }
-        items[c].w = hx - lx;
-        items[c].h = hy - ly;
-        items[c].c = (uint32_t)c;
-    }
-
-    /* 5. packing, with the gutter in uv units fixed by iteration */
-    {
-        double sumA = 0.0, side, g;
-        for (size_t c = 0; c < nch; c++)
-            sumA += items[c].w * items[c].h;
-        qsort(items, nch, sizeof *items, uvg_item_cmp);
-        side = sqrt(sumA / 0.7);
-        if (!(side > 0.0))
-            side = diag;
-        for (int it = 0; it < 3; it++) {
-            g = UVG_GUTTER * side;
-            side = uvg_pack(items, nch, g, shx, shy);
-        }
-        g = UVG_GUTTER * side;
-        side = uvg_pack(items, nch, g, shx, shy);
-        npos = malloc(3 * nn * sizeof *npos);
-        nnrm = malloc(3 * nn * sizeof *nnrm);
-        nuv = malloc(2 * nn * sizeof *nuv);
-        if (!npos || !nnrm || !nuv)
-            goto nomem;
-        for (size_t k = 0; k < nch; k++) {
-            size_t c = items[k].c;
-            double ox = items[k].x + 0.5 * g, oy = items[k].y + 0.5 * g;
-            for (size_t i = vstart[c]; i < vstart[c + 1]; i++) {
-                double u = (ps[2 * i] + ox) / side, v = (ps[2 * i + 1] + oy) / side;
-                nuv[2 * i] = (float)fmin(1.0, fmax(0.0, u));
-                nuv[2 * i + 1] = (float)fmin(1.0, fmax(0.0, v));
-            }
-        }
-    }
-    for (size_t i = 0; i < nn; i++) {
-        memcpy(npos + 3 * i, m->pos + 3 * (size_t)orig[i], 3 * sizeof(float));
-        if (m->nrm)
-            memcpy(nnrm + 3 * i, m->nrm + 3 * (size_t)orig[i], 3 * sizeof(float));
-        else
-            nnrm[3 * i] = nnrm[3 * i + 1] = nnrm[3 * i + 2] = 0.0f;
-    }
-    free(m->pos);
-    free(m->nrm);
-    free(m->uv);
-    m->pos = npos;
-    m->nrm = nnrm;
-    m->uv = nuv;
-    npos = nnrm = nuv = NULL;
-    memcpy(m->tri, newtri, 3 * nt * sizeof *newtri);
-    m->nverts = (int)nn;
-    if (ncharts)
-        *ncharts = nch > INT_MAX ? INT_MAX : (int)nch;
-    rc = 0;
-    goto done;
-
-nomem:
-    rc = glint_err_set(err, GLINT_ENOMEM, "out of memory parameterizing %zu triangles", nt);
-done:
-    free(canon);
-    free(lab);
-    free(lab2);
-    free(fn);
-    free(t2);
-    free(nbo);
-    free(nbs);
-    free(chart);
-    free(rej);
-    free(ctri);
-    free(cstart);
-    free(caxis);
-    free(order);
-    free(edges);
-    free(x.stamp);
-    free(x.big);
-    uvg_grid_free(&x.grid);
-    free(last);
-    free(newid);
-    free(orig);
-    free(newtri);
-    free(vstart);
-    free(ps);
-    free(items);
-    free(shx);
-    free(shy);
-    free(npos);
-    free(nnrm);
-    free(nuv);
+    if (!rc)
+        uvg_commit(&w, ncharts);
+    uvg_work_free(&w);
     return rc;
 }

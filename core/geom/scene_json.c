@@ -174,18 +174,144 @@ static int scene_json_depth_ok(const char *text, int limit)
     return 1;
 }
 
+/* The text within the size and depth limits, parsed (OUT: *root, a new
+ * reference). */
+static int scene_json_parse(const char *text, json_t **root, glint_err *err)
+{
+    json_error_t jerr;
+    size_t len = strnlen(text, (size_t)SCENE_JSON_MAX_BYTES + 1);
+
+    if (len > SCENE_JSON_MAX_BYTES)
+        return glint_err_set(err, GLINT_ERANGE, "scene JSON larger than %u bytes",
+                             SCENE_JSON_MAX_BYTES);
+    if (!scene_json_depth_ok(text, SCENE_JSON_MAX_DEPTH))
+        return glint_err_set(err, GLINT_EFORMAT, "scene JSON nested deeper than %d levels",
+                             SCENE_JSON_MAX_DEPTH);
+    *root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &jerr);
+    if (!*root)
+        return glint_err_set(err, GLINT_EFORMAT, "scene JSON: %s (line %d, column %d)",
+                             jerr.text, jerr.line, jerr.column);
+    return 0;
+}
+
+/* The document is an object of known fields, of this format and version. */
+static int scene_json_header(const json_t *root, glint_err *err)
+{
+    static const char *const keys[] = {"format", "version", "mesh", "mesh_file", "width",
+                                       "height", "views", NULL};
+    const json_t *j;
+    long long version;
+    int rc;
+
+    if (!json_is_object(root))
+        return glint_err_set(err, GLINT_EFORMAT, "scene JSON: expected an object, got %s",
+                             scene_json_kind(root));
+    if ((rc = scene_json_keys(root, keys, "scene", err)))
+        return rc;
+    j = json_object_get(root, "format");
+    if (!j)
+        return glint_err_set(err, GLINT_EFORMAT, "scene.format: missing (expected \"%s\")",
+                             SCENE_FORMAT);
+    if (!json_is_string(j) || strcmp(json_string_value(j), SCENE_FORMAT) != 0)
+        return glint_err_set(err, GLINT_EFORMAT, "scene.format: expected \"%s\"", SCENE_FORMAT);
+    if ((rc = scene_json_int(root, "version", &version, err)))
+        return rc;
+    if (version != SCENE_VERSION)
+        return glint_err_set(err, GLINT_EUNSUPPORTED,
+                             "scene.version %lld unsupported (this build reads version %d)",
+                             version, SCENE_VERSION);
+    return 0;
+}
+
+/* "mesh" (the name) and the optional "mesh_file", made absolute against
+ * `base_dir`. */
+static int scene_json_mesh(const json_t *root, const char *base_dir, scene *out,
+                           glint_err *err)
+{
+    const json_t *j = json_object_get(root, "mesh");
+    int rc;
+
+    if (!j)
+        return glint_err_set(err, GLINT_EFORMAT, "scene.mesh: missing");
+    if (!json_is_string(j))
+        return glint_err_set(err, GLINT_EFORMAT, "scene.mesh: expected a string, got %s",
+                             scene_json_kind(j));
+    if (json_string_length(j) >= SCENE_NAME_MAX)
+        return glint_err_set(err, GLINT_ERANGE, "scene.mesh: name longer than %d bytes",
+                             SCENE_NAME_MAX - 1);
+    snprintf(out->mesh_name, sizeof out->mesh_name, "%s", json_string_value(j));
+
+    j = json_object_get(root, "mesh_file");
+    if (!j)
+        return 0;
+    if (!json_is_string(j))
+        return glint_err_set(err, GLINT_EFORMAT, "scene.mesh_file: expected a string, got %s",
+                             scene_json_kind(j));
+    if (json_string_length(j) == 0 || json_string_length(j) >= SCENE_PATH_MAX ||
+        strlen(json_string_value(j)) != json_string_length(j))
+        return glint_err_set(err, GLINT_EFORMAT,
+                             "scene.mesh_file: expected a path of 1..%d bytes without NUL",
+                             SCENE_PATH_MAX - 1);
+    rc = scene_abs_path(base_dir, json_string_value(j), out->mesh_path, err);
+    if (rc)
+        glint_err_prefix(err, "scene.mesh_file");
+    return rc;
+}
+
+/* "width" and "height", within the limits. */
+static int scene_json_size(const json_t *root, scene *out, glint_err *err)
+{
+    long long width, height;
+    int rc;
+
+    if ((rc = scene_json_int(root, "width", &width, err)) ||
+        (rc = scene_json_int(root, "height", &height, err)))
+        return rc;
+    if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE)
+        return glint_err_set(err, GLINT_ERANGE, "scene.width %lld outside %d..%d", width,
+                             SCENE_MIN_SIZE, SCENE_MAX_SIZE);
+    if (height < SCENE_MIN_SIZE || height > SCENE_MAX_SIZE)
+        return glint_err_set(err, GLINT_ERANGE, "scene.height %lld outside %d..%d", height,
+                             SCENE_MIN_SIZE, SCENE_MAX_SIZE);
+    out->width = (int)width;
+    out->height = (int)height;
+    return 0;
+}
+
+/* "views": 1..SCENE_MAX_VIEWS of them, each read and checked
+ * (scene_json_view). */
+static int scene_json_views(const json_t *root, scene *out, glint_err *err)
+{
+    const json_t *jviews = json_object_get(root, "views");
+    size_t nviews;
+
+    if (!jviews)
+        return glint_err_set(err, GLINT_EFORMAT, "scene.views: missing");
+    if (!json_is_array(jviews))
+        return glint_err_set(err, GLINT_EFORMAT, "scene.views: expected an array, got %s",
+                             scene_json_kind(jviews));
+    nviews = json_array_size(jviews);
+    if (nviews < 1 || nviews > SCENE_MAX_VIEWS)
+        return glint_err_set(err, GLINT_ERANGE, "scene.views: %zu views, expected 1..%d",
+                             nviews, SCENE_MAX_VIEWS);
+    out->views = calloc(nviews, sizeof *out->views);
+    if (!out->views)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory for %zu views", nviews);
+    out->nviews = (int)nviews;
+    for (size_t k = 0; k < nviews; k++) {
+        int rc = scene_json_view(json_array_get(jviews, k), (int)k, &out->views[k], err);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
 /* scene_from_json with relative mesh files resolved against `base_dir`
  * (NULL: the working directory). */
 static int scene_from_json_at(const char *text, const char *base_dir, scene *out,
                               glint_err *err)
 {
-    static const char *const keys[] = {"format", "version", "mesh", "mesh_file", "width",
-                                       "height", "views", NULL};
-    json_error_t jerr;
     json_t *root = NULL;
-    const json_t *j, *jviews;
-    long long version, width, height;
-    size_t nviews, len;
     int rc;
 
     if (!out)
@@ -193,126 +319,13 @@ static int scene_from_json_at(const char *text, const char *base_dir, scene *out
     memset(out, 0, sizeof *out);
     if (!text)
         return glint_err_set(err, GLINT_EINVAL, "scene_from_json: text is NULL");
-    len = strnlen(text, (size_t)SCENE_JSON_MAX_BYTES + 1);
-    if (len > SCENE_JSON_MAX_BYTES)
-        return glint_err_set(err, GLINT_ERANGE, "scene JSON larger than %u bytes",
-                             SCENE_JSON_MAX_BYTES);
-    if (!scene_json_depth_ok(text, SCENE_JSON_MAX_DEPTH))
-        return glint_err_set(err, GLINT_EFORMAT, "scene JSON nested deeper than %d levels",
-                             SCENE_JSON_MAX_DEPTH);
-    root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &jerr);
-    if (!root)
-        return glint_err_set(err, GLINT_EFORMAT, "scene JSON: %s (line %d, column %d)",
-                             jerr.text, jerr.line, jerr.column);
-    if (!json_is_object(root)) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene JSON: expected an object, got %s",
-                           scene_json_kind(root));
+    if ((rc = scene_json_parse(text, &root, err)))
+        return rc;
+    if ((rc = scene_json_header(root, err)) ||
+        (rc = scene_json_mesh(root, base_dir, out, err)) ||
+        (rc = scene_json_size(root, out, err)) ||
+        (rc = scene_json_views(root, out, err)))
         goto fail;
-    }
-    if ((rc = scene_json_keys(root, keys, "scene", err)))
-        goto fail;
-
-    j = json_object_get(root, "format");
-    if (!j) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.format: missing (expected \"%s\")",
-                           SCENE_FORMAT);
-        goto fail;
-    }
-    if (!json_is_string(j) || strcmp(json_string_value(j), SCENE_FORMAT) != 0) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.format: expected \"%s\"", SCENE_FORMAT);
-        goto fail;
-    }
-    if ((rc = scene_json_int(root, "version", &version, err)))
-        goto fail;
-    if (version != SCENE_VERSION) {
-        rc = glint_err_set(err, GLINT_EUNSUPPORTED,
-                           "scene.version %lld unsupported (this build reads version %d)",
-                           version, SCENE_VERSION);
-        goto fail;
-    }
-
-    j = json_object_get(root, "mesh");
-    if (!j) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.mesh: missing");
-        goto fail;
-    }
-    if (!json_is_string(j)) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.mesh: expected a string, got %s",
-                           scene_json_kind(j));
-        goto fail;
-    }
-    if (json_string_length(j) >= SCENE_NAME_MAX) {
-        rc = glint_err_set(err, GLINT_ERANGE, "scene.mesh: name longer than %d bytes",
-                           SCENE_NAME_MAX - 1);
-        goto fail;
-    }
-    snprintf(out->mesh_name, sizeof out->mesh_name, "%s", json_string_value(j));
-
-    j = json_object_get(root, "mesh_file");
-    if (j) {
-        if (!json_is_string(j)) {
-            rc = glint_err_set(err, GLINT_EFORMAT, "scene.mesh_file: expected a string, got %s",
-                               scene_json_kind(j));
-            goto fail;
-        }
-        if (json_string_length(j) == 0 || json_string_length(j) >= SCENE_PATH_MAX ||
-            strlen(json_string_value(j)) != json_string_length(j)) {
-            rc = glint_err_set(err, GLINT_EFORMAT,
-                               "scene.mesh_file: expected a path of 1..%d bytes without NUL",
-                               SCENE_PATH_MAX - 1);
-            goto fail;
-        }
-        rc = scene_abs_path(base_dir, json_string_value(j), out->mesh_path, err);
-        if (rc) {
-            glint_err_prefix(err, "scene.mesh_file");
-            goto fail;
-        }
-    }
-
-    if ((rc = scene_json_int(root, "width", &width, err)) ||
-        (rc = scene_json_int(root, "height", &height, err)))
-        goto fail;
-    if (width < SCENE_MIN_SIZE || width > SCENE_MAX_SIZE) {
-        rc = glint_err_set(err, GLINT_ERANGE, "scene.width %lld outside %d..%d", width,
-                           SCENE_MIN_SIZE, SCENE_MAX_SIZE);
-        goto fail;
-    }
-    if (height < SCENE_MIN_SIZE || height > SCENE_MAX_SIZE) {
-        rc = glint_err_set(err, GLINT_ERANGE, "scene.height %lld outside %d..%d", height,
-                           SCENE_MIN_SIZE, SCENE_MAX_SIZE);
-        goto fail;
-    }
-    out->width = (int)width;
-    out->height = (int)height;
-
-    jviews = json_object_get(root, "views");
-    if (!jviews) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.views: missing");
-        goto fail;
-    }
-    if (!json_is_array(jviews)) {
-        rc = glint_err_set(err, GLINT_EFORMAT, "scene.views: expected an array, got %s",
-                           scene_json_kind(jviews));
-        goto fail;
-    }
-    nviews = json_array_size(jviews);
-    if (nviews < 1 || nviews > SCENE_MAX_VIEWS) {
-        rc = glint_err_set(err, GLINT_ERANGE, "scene.views: %zu views, expected 1..%d", nviews,
-                           SCENE_MAX_VIEWS);
-        goto fail;
-    }
-    out->views = calloc(nviews, sizeof *out->views);
-    if (!out->views) {
-        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory for %zu views", nviews);
-        goto fail;
-    }
-    out->nviews = (int)nviews;
-    for (size_t k = 0; k < nviews; k++) {
-        rc = scene_json_view(json_array_get(jviews, k), (int)k, &out->views[k], err);
-        if (rc)
-            goto fail;
-    }
-
     /* The mesh last: building or loading it is the expensive step. */
     rc = scene_load_mesh(out, err);
     if (rc) {
