@@ -220,7 +220,7 @@ static void srbf_params_default(void *pv)
     p->lights = 256;
     p->basis_res = 7;
     p->sigma = M_PI / 40.0;
-    p->static_term = SRBF_STATIC_PAPER;
+    p->static_term = SRBF_STATIC_SMITH; /* generalizes several times better (docs/methods.md) */
     p->f0 = 0.25;
     p->alpha = 0.3;
     p->constraints = LSQ_ENERGY;
