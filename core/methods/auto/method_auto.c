@@ -17,19 +17,21 @@
 
 static const method_param auto_params_table[] = {
     {.name = "res", .label = "detail (texels per factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "texels per 1D factor of every candidate",
-     .offset = offsetof(auto_params, res), .min = HF_RES_MIN, .max = HF_RES_MAX},
+     .description = "texels per 1D factor of every candidate; 0: each at the settings a fit "
+                    "of its own would have (hf3 and maps 128, hf4, hybrid and hf2d 32)",
+     .offset = offsetof(auto_params, res), .min = 0, .max = HF_RES_MAX},
     {.name = "s_res", .label = "colour texture size", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of the spatial factor of the four-factor candidates "
-                    "(hf4, hybrid)",
-     .offset = offsetof(auto_params, sres), .min = HF4_SRES_MIN, .max = HF4_SRES_MAX},
+                    "(hf4, hybrid); 0: hf4's own (32)",
+     .offset = offsetof(auto_params, sres), .min = 0, .max = HF4_SRES_MAX},
     {.name = "res_2d", .label = "detail of a 2D factor", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
-     .description = "nodes per side of the 2D q of the anisotropic candidate (hf2d)",
-     .offset = offsetof(auto_params, res_2d), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
+     .description = "nodes per side of the 2D q of the anisotropic candidate (hf2d); 0: its "
+                    "own (32)",
+     .offset = offsetof(auto_params, res_2d), .min = 0, .max = HF2D_SRES_MAX},
     {.name = "components", .label = "materials, at most", .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "at most this many products in the material-maps candidates (maps, "
-                    "hybrid)",
-     .offset = offsetof(auto_params, components), .min = 1, .max = MATMAP_MAX},
+                    "hybrid); 0: their own (5 and 4)",
+     .offset = offsetof(auto_params, components), .min = 0, .max = MATMAP_MAX},
     {.name = "threshold", .label = "how much better a richer model must be", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "a richer model is taken only when it lowers the held-out RMS by more "
                     "than this fraction of the current choice's",
@@ -53,13 +55,33 @@ static void auto_params_default(void *params)
 {
     auto_params *p = params;
     memset(p, 0, sizeof *p);
-    p->res = 32;
-    p->sres = 32;
-    p->res_2d = 32;
-    p->components = 5;
+    /* 0: every candidate at the settings a fit of its own would have, so the
+     * choice is never a cheaper model than the one it is compared with
+     * (maps shares hf3's decomposition and hybrid hf4's, so those two run
+     * at their partner's resolution, which is at least their own) */
+    p->res = 0;
+    p->sres = 0;
+    p->res_2d = 0;
+    p->components = 0;
     p->threshold = 0.1;
     p->floor = 1.0 / 255.0 / 4.0;
     p->every = 4;
+}
+
+/* A resolution given (not 0) must be one its candidates take. */
+static int auto_params_check(const void *params, glint_err *err)
+{
+    const auto_params *p = params;
+    if (p->res && p->res < HF_RES_MIN)
+        return glint_err_set(err, GLINT_EINVAL, "params.res must be 0 or in %d..%d", HF_RES_MIN,
+                             HF_RES_MAX);
+    if (p->sres && p->sres < HF4_SRES_MIN)
+        return glint_err_set(err, GLINT_EINVAL, "params.s_res must be 0 or in %d..%d",
+                             HF4_SRES_MIN, HF4_SRES_MAX);
+    if (p->res_2d && p->res_2d < HF2D_SRES_MIN)
+        return glint_err_set(err, GLINT_EINVAL, "params.res_2d must be 0 or in %d..%d",
+                             HF2D_SRES_MIN, HF2D_SRES_MAX);
+    return 0;
 }
 
 /* The candidates' parameters. */
@@ -74,19 +96,26 @@ typedef struct cands {
 static void candidates(const auto_params *p, cands *c)
 {
     fit_params_default(&c->fp);
-    c->fp.res = p->res;
+    if (p->res)
+        c->fp.res = p->res;
     method_hf2d.params_default(&c->dp); /* q 2D, p and r 1D */
-    c->dp.res = p->res;
-    c->dp.sres = p->res_2d;
+    if (p->res)
+        c->dp.res = p->res;
+    if (p->res_2d)
+        c->dp.sres = p->res_2d;
     method_hf4.params_default(&c->hp);
-    c->hp.res = p->res;
-    c->hp.sres = p->sres;
+    if (p->res)
+        c->hp.res = p->res;
+    if (p->sres)
+        c->hp.sres = p->sres;
     method_maps.params_default(&c->mp);
-    c->mp.hf = c->fp;
-    c->mp.components = p->components;
+    c->mp.hf = c->fp; /* hf3's decomposition serves the maps' products */
+    if (p->components)
+        c->mp.components = p->components;
     method_hybrid.params_default(&c->yp);
     c->yp.h = c->hp; /* hf4's decomposition serves the hybrid's products */
-    c->yp.components = p->components;
+    if (p->components)
+        c->yp.components = p->components;
 }
 
 /* ---- levels: the split, each candidate's precomputation on the kept pixels, then on all -- */
@@ -669,6 +698,7 @@ const method method_auto = {
     .presets = auto_presets,
     .npresets = (int)(sizeof auto_presets / sizeof auto_presets[0]),
     .params_default = auto_params_default,
+    .params_check = auto_params_check,
     .levels = auto_levels,
     .nlevels = (int)(sizeof auto_levels / sizeof auto_levels[0]),
     .fit = auto_fit,
