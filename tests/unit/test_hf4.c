@@ -24,6 +24,7 @@
 #include "raster.h"
 #include "samples.h"
 #include "sv_fixture.h"
+#include "view_errors.h"
 
 static scene SC;
 static gbuf *G;
@@ -473,6 +474,10 @@ TEST(the_method_fits_a_varying_colour)
                json_number_value(json_object_get(json_object_get(four.info, "seconds"),
                                                  "decomposition")));
         ASSERT_LT(r4, 0.5 * r1);
+        {
+            const char *w = rms_by_view_wrong(four.info);
+            ASSERT_MSG(!w, "hf4: %s", w);
+        }
     }
     ASSERT(material_spatial(&four));
     ASSERT(mkdtemp(dir));
