@@ -397,6 +397,22 @@ static json_t *param_value_json(const method_param *p, const void *params)
     return json_null();
 }
 
+json_t *method_rms_by_view(const double *se, const long *n, int nviews)
+{
+    json_t *a = json_array();
+    for (int k = 0; a && k < nviews; k++) {
+        if (n[k] <= 0)
+            continue;
+        if (json_array_append_new(a, json_pack("{s:i, s:f, s:I}", "view", k, "rms",
+                                               sqrt(se[k] / (3.0 * n[k])), "samples",
+                                               (json_int_t)n[k]))) {
+            json_decref(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
 json_t *method_params_to_json(const method *m, const void *params)
 {
     json_t *o = json_object();

@@ -396,6 +396,14 @@ int method_param_set_text(const method *m, void *params, const char *name, const
 /* Every parameter with its canonical value (a new object). */
 json_t *method_params_to_json(const method *m, const void *params);
 
+/* A method's errors by painted view: the "rms_by_view" member of its
+ * "errors" object, [{"view": k, "rms": x, "samples": n}, ...] for the views
+ * with samples, ascending k.  se[k]: the sum of squared residuals of view
+ * k's samples over their three channels, n[k]: its samples (nviews each);
+ * rms = sqrt(se / (3 n)), as rms_painted is of the sums over every view.
+ * A new array, NULL when out of memory. */
+json_t *method_rms_by_view(const double *se, const long *n, int nviews);
+
 /* The canonical text of one parameter (OUT: buf). */
 void method_param_format(const method_param *p, const void *params, char *buf, size_t len);
 

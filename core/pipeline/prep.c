@@ -543,6 +543,7 @@ void fit_report_free(fit_report *r)
     if (!r)
         return;
     json_decref(r->members);
+    free(r->view_errors);
     memset(r, 0, sizeof *r);
 }
 
@@ -552,6 +553,30 @@ void fit_report_free(fit_report *r)
 static const char *const doc_members[] = {"params", "errors", "seconds", "precomputation",
                                           "choice"};
 
+/* The errors by view a method gave (errors.rms_by_view, method_rms_by_view)
+ * into r; entries not of that form are skipped. */
+static int view_errors_of(const json_t *errors, fit_report *r, glint_err *err)
+{
+    const json_t *a = json_object_get(errors, "rms_by_view");
+    size_t i;
+
+    if (!json_is_array(a) || json_array_size(a) == 0)
+        return 0;
+    if (!(r->view_errors = malloc(json_array_size(a) * sizeof *r->view_errors)))
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    for (i = 0; i < json_array_size(a); i++) {
+        const json_t *e = json_array_get(a, i), *v = json_object_get(e, "view"), *x = json_object_get(e, "rms"),
+                     *n = json_object_get(e, "samples");
+        if (!json_is_integer(v) || !json_is_number(x) || !json_is_integer(n))
+            continue;
+        r->view_errors[r->nview_errors].view = (int)json_integer_value(v);
+        r->view_errors[r->nview_errors].rms = json_number_value(x);
+        r->view_errors[r->nview_errors].samples = (long)json_integer_value(n);
+        r->nview_errors++;
+    }
+    return 0;
+}
+
 /* The report of a fit of preparation p that made material m. */
 static int report_of(const prep *p, const material *m, fit_report *r, glint_err *err)
 {
@@ -560,6 +585,7 @@ static int report_of(const prep *p, const material *m, fit_report *r, glint_err 
     const json_t *rms = json_object_get(errors, "rms_painted");
     const char *chosen = json_string_value(json_object_get(json_object_get(info, "choice"),
                                                            "chosen"));
+    int rc;
 
     memset(r, 0, sizeof *r);
     r->errors_ok = json_is_object(errors);
@@ -581,8 +607,12 @@ static int report_of(const prep *p, const material *m, fit_report *r, glint_err 
         (int)json_integer_value(json_object_get(pre, "stream_chunks_reused"));
     snprintf(r->chosen, sizeof r->chosen, "%s", chosen ? chosen : "");
     r->params = json_object_get(info, "params");
-    if (!(r->members = json_object()))
+    if ((rc = view_errors_of(errors, r, err)))
+        return rc;
+    if (!(r->members = json_object())) {
+        fit_report_free(r);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
     for (size_t i = 0; i < sizeof doc_members / sizeof doc_members[0]; i++) {
         json_t *v = json_object_get(info, doc_members[i]);
         if (v && json_object_set(r->members, doc_members[i], v)) {

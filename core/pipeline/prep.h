@@ -117,6 +117,14 @@ int prep_fit(const prep *p, const img *paintings, const float *rgb, material *ou
  * read here once from the preparation and from the method's info, and the
  * method's own JSON for the material document, which a service passes on
  * without reading its keys.  Free with fit_report_free. */
+/* One painted view's share of rms_painted: sqrt(sum of view k's samples'
+ * squared residuals / (3 samples)). */
+typedef struct fit_view_error {
+    int view;
+    double rms;
+    long samples;
+} fit_view_error;
+
 typedef struct fit_report {
     int errors_ok;            /* the method gave its error statistics (all finite): a
                                  material without them is not worth keeping */
@@ -134,6 +142,9 @@ typedef struct fit_report {
     int stream_chunks_reused; /* of those, the sums a memo's earlier fit gave */
     char chosen[16];          /* a method that picks another to fit (auto): the one it
                                  picked; "" otherwise */
+    int nview_errors;         /* the method's errors by painted view (errors.rms_by_view),
+                                 views with samples in ascending order; 0: none given */
+    fit_view_error *view_errors; /* nview_errors; owned */
     const json_t *params;     /* the parameters fitted with (the material's: valid while
                                  it lives) */
     json_t *members;          /* the material document's members the fit gives, as the

@@ -159,7 +159,7 @@ int main(int argc, char **argv)
                 goto fail;
             tc = glint_now() - t1 < tc ? glint_now() - t1 : tc;
             t1 = glint_now();
-            if (hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e))
+            if (hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e))
                 goto fail;
             tf = glint_now() - t1 < tf ? glint_now() - t1 : tf;
             n = dc.x.n;

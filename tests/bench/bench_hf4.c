@@ -117,7 +117,7 @@ int main(int argc, char **argv)
                 goto fail;
             tc = glint_now() - t1 < tc ? glint_now() - t1 : tc;
             t1 = glint_now();
-            if (hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e))
+            if (hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e))
                 goto fail;
             tf = glint_now() - t1 < tf ? glint_now() - t1 : tf;
             n = dc.x.n;

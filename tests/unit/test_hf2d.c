@@ -174,7 +174,7 @@ static void dense_compare(const samples *ss, int R, int S, double rcond, double 
     hf_map_default(&map, HF_MAP_LOG);
     ASSERT_OK(hf2d_design_build(ss, &sh, &d, &e));
     ASSERT_OK(hf2d_decomp_build(&d, lam, lam2, rcond, &dc, &e));
-    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, NULL, &e));
+    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, NULL, &e));
     rows = N + (R - 2) + 2 * S * S;
     ldb = rows > n ? rows : n;
     B = calloc((size_t)rows * n, sizeof *B);
@@ -326,7 +326,7 @@ static int fit_and_measure(const brdf *truth, const hf2d_shape *sh, double *rms_
     double se = 0.0;
     hf_map_default(&map, HF_MAP_ADD);
     if (hf2d_design_build(&SFIT, sh, &d, &e) || hf2d_decomp_build(&d, 0.1, 0.1, 0, &dc, &e) ||
-        hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e)) {
+        hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e)) {
         fprintf(stderr, "fit: %s\n", e.msg);
         free(rgb);
         return -1;
@@ -394,7 +394,7 @@ TEST(uniform_painting)
     hf_map_default(&map, HF_MAP_ADD);
     ASSERT_OK(hf2d_design_build(&SFIT, &sh, &d, &e));
     ASSERT_OK(hf2d_decomp_build(&d, 0.1, 0.1, 0, &dc, &e));
-    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
+    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e));
     printf("  uniform: rms %.2e, log_max %.3f\n", st.rms, st.log_max);
     ASSERT_LT(st.rms, 1e-9);
     ASSERT_EQ(st.log_clamped, 0);
@@ -445,7 +445,7 @@ TEST(dense_form_unreached_nodes_and_bad_shapes)
     hf_map_default(&map, HF_MAP_ADD);
     ASSERT_OK(hf2d_design_build(&few, &sh, &d, &e));
     ASSERT_OK(hf2d_decomp_build(&d, 0.0, 0.0, 0, &dc, &e));
-    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
+    ASSERT_OK(hf2d_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e));
     printf("  %d samples, n %d: %s form, rank %d, unreached %d, null %d; rms %.2e, log_max "
            "%.2f\n", few.n, dc.x.n, dc.x.form, dc.x.rank, dc.x.unreached, dc.x.null_dims,
            st.rms, st.log_max);

@@ -24,6 +24,7 @@
 #include "raster.h"
 #include "samples.h"
 #include "sv_fixture.h"
+#include "view_errors.h"
 
 static scene SC;
 static gbuf *G;
@@ -108,7 +109,7 @@ TEST(a_product_is_recovered)
     hf_map_default(&map, HF_MAP_LOG);
     ASSERT_OK(hf4_design_build(&S1, 16, 8, &d, &e));
     ASSERT_OK(hf4_decomp_build(&d, 1e-4, 1e-4, 0, &dc, &e));
-    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
+    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e));
     printf("  %d samples, n %d (%s form), rank %d, gauge %d, null %d: rms %.2e (max value "
            "%.3f), log residual %.2e\n",
            S1.n, dc.x.n, dc.x.form, dc.x.rank, dc.x.gauge_dims, dc.x.null_dims, st.rms, mx,
@@ -168,7 +169,7 @@ static void dense_compare(const samples *ss, int R, int S, double rcond, double 
     hf_map_default(&map, HF_MAP_LOG);
     ASSERT_OK(hf4_design_build(ss, R, S, &d, &e));
     ASSERT_OK(hf4_decomp_build(&d, lam, lams, rcond, &dc, &e));
-    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, NULL, &e));
+    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, NULL, &e));
     check_gauge(&f);
     rows = N + 3 * (R - 2) + S * S;
     ldb = rows > n ? rows : n;
@@ -297,7 +298,7 @@ TEST(dense_form_and_unreached_nodes)
     hf_map_default(&map, HF_MAP_ADD);
     ASSERT_OK(hf4_design_build(&S1, 8, 64, &d, &e));
     ASSERT_OK(hf4_decomp_build(&d, 0.1, 0.0, 0, &dc, &e));
-    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
+    ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e));
     printf("  %d samples, n %d (%d reached by no row), rows %d: %s form, rank %d, null %d; "
            "rms %.2e, log max %.2f\n", S1.n, dc.x.n, dc.x.unreached, dc.x.rows, dc.x.form, dc.x.rank,
            dc.x.null_dims, st.rms, st.log_max);
@@ -365,7 +366,7 @@ TEST(few_samples_no_smoothing_of_s)
     ASSERT_OK(hf4_design_build(&few, 32, 16, &d, &e));
     for (int k = 0; k < 2; k++) {
         ASSERT_OK(hf4_decomp_build(&d, 0.1, 0.0, k ? 0.0 : 1e-6, &dc, &e));
-        ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, &f, &st, &e));
+        ASSERT_OK(hf4_fit(&d, &dc, &map, HF_MODEL_RADIANCE, rgb, NULL, &f, &st, &e));
         rms[k] = st.rms;
         printf("  %d samples, rcond %.0e: %s form, n %d, rank %d, null %d (unreached %d); "
                "rms %.4f, log max %.2f, %ld clamped\n", few.n, dc.x.rcond, dc.x.form, dc.x.n,
@@ -473,6 +474,10 @@ TEST(the_method_fits_a_varying_colour)
                json_number_value(json_object_get(json_object_get(four.info, "seconds"),
                                                  "decomposition")));
         ASSERT_LT(r4, 0.5 * r1);
+        {
+            const char *w = rms_by_view_wrong(four.info);
+            ASSERT_MSG(!w, "hf4: %s", w);
+        }
     }
     ASSERT(material_spatial(&four));
     ASSERT(mkdtemp(dir));

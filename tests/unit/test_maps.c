@@ -23,6 +23,7 @@
 #include "raster.h"
 #include "samples.h"
 #include "sv_fixture.h"
+#include "view_errors.h"
 
 #define STRIPES "stripes:freq=3,duty=0.5|lambert:kd=0.7/0.15/0.1|ct:kd=0.05,f0=0.9/0.7/0.3,rough=0.25"
 
@@ -95,6 +96,10 @@ TEST(two_materials_beat_one)
     ASSERT_OK(fit(&mp, STRIPES, &maps));
     ASSERT(strcmp(material_method_name(&maps), "maps") == 0);
     ASSERT(material_spatial(&maps) && !material_spatial(&one));
+    {
+        const char *w = rms_by_view_wrong(maps.info);
+        ASSERT_MSG(!w, "maps: %s", w);
+    }
     stop = json_object_get(maps.info, "stop");
     printf("  stripes, 12 views: hf3 rms %.4f; maps rms %.4f (%d products, stop %s, model "
            "rel rms greedy %.3f, refined %.3f, after %d rounds %.3f), %.2f s\n",

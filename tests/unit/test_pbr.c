@@ -22,6 +22,7 @@
 #include "raster.h"
 #include "samples.h"
 #include "scene.h"
+#include "view_errors.h"
 
 static scene SC;
 static gbuf *G;
@@ -244,6 +245,10 @@ TEST(ct_truth_close)
     ASSERT_NEAR(pm->lobe[0].f0[0] * pm->lobe[0].ks[0], 0.04, 0.005);
     ASSERT_LT(json_number_value(json_object_get(json_object_get(m.info, "errors"),
                                                  "rms_painted")), 2e-3);
+    {
+        const char *w = rms_by_view_wrong(m.info);
+        ASSERT_MSG(!w, "pbr: %s", w);
+    }
     material_free(&m);
     free(v);
     /* a metal: no diffuse, coloured F0 */

@@ -227,12 +227,13 @@ void hf2d_factors_free(hf2d_factors *f)
 }
 
 int hf2d_fit(const hf2d_design *x, const hf2d_decomp *dc, const hf_map *map, hf_model model,
-             const float *rgb, hf2d_factors *fac, hfx_fit_stats *st, glint_err *err)
+             const float *rgb, const int *view, hf2d_factors *fac, hfx_fit_stats *st,
+             glint_err *err)
 {
     rows_ctx c;
     hfx_rows r = hf2d_rows(x, dc->lambda, dc->lambda_2d, &c);
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->cos_i, .nfactors = 3,
-                      .off = x->off, .log_max = HF2D_LOG_MAX};
+                      .off = x->off, .log_max = HF2D_LOG_MAX, .view = view};
     int n = x->off[3], rc;
     double *y;
 

@@ -112,7 +112,8 @@ typedef struct hf2d_factors {
 
 /* Fit RGB samples (3 n, sample-major).  OUT: *fac, *st (may be NULL). */
 int hf2d_fit(const hf2d_design *d, const hf2d_decomp *dc, const hf_map *map, hf_model model,
-             const float *rgb, hf2d_factors *fac, hfx_fit_stats *st, glint_err *err);
+             const float *rgb, const int *view, hf2d_factors *fac, hfx_fit_stats *st,
+             glint_err *err);
 
 /* The material at unit vectors (OUT rgb[3]); 0 unless n.wi > 0 and
  * n.wo > 0. */

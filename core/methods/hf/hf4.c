@@ -219,14 +219,15 @@ void hf4_factors_eval(const hf4_factors *f, const double uv[2], const double n[3
 }
 
 int hf4_fit(const hf4_design *x, const hf4_decomp *dc, const hf_map *map, hf_model model,
-            const float *rgb, hf4_factors *fac, hf4_fit_stats *st, glint_err *err)
+            const float *rgb, const int *view, hf4_factors *fac, hf4_fit_stats *st,
+            glint_err *err)
 {
     int R = x->d.res, S = x->sres, n = dc->x.n, rc;
     int off[5] = {0, R, 2 * R, 3 * R, 3 * R + S * S};
     hf4_rows_ctx c = {.x = x, .lambda = dc->lambda, .lambda_s = dc->lambda_s};
     hfx_rows r = rows_of(&c);
     hfx_problem pb = {.map = map, .model = model, .cos_i = x->d.cos_i, .nfactors = 4,
-                      .off = off, .log_max = HF4_LOG_MAX};
+                      .off = off, .log_max = HF4_LOG_MAX, .view = view};
     double *y;
 
     memset(fac, 0, sizeof *fac);

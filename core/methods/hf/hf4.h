@@ -126,7 +126,8 @@ typedef hfx_fit_stats hf4_fit_stats;
 /* Fit RGB samples (3 n, sample-major, per unit light).  OUT: *fac, *st (may
  * be NULL).  GLINT_ENONFINITE for a non-finite value. */
 int hf4_fit(const hf4_design *d, const hf4_decomp *dc, const hf_map *map, hf_model model,
-            const float *rgb, hf4_factors *fac, hf4_fit_stats *st, glint_err *err);
+            const float *rgb, const int *view, hf4_factors *fac, hf4_fit_stats *st,
+            glint_err *err);
 
 /* The material at uv (NULL: mean_s) and unit vectors (OUT rgb[3]); 0
  * unless n.wi > 0 and n.wo > 0. */

@@ -386,8 +386,12 @@ gauge: /* the canonical gauge: equal mean log per factor and channel */
                     v *= pb->cos_i[i];
                 e = v - rgb[3 * (size_t)i + c];
                 se += e * e;
+                if (pb->view)
+                    st.view_se[pb->view[i]] += e * e;
                 mx = fabs(e) > mx ? fabs(e) : mx;
             }
+            if (pb->view)
+                st.view_n[pb->view[i]]++;
         }
         st.log_residual = N ? sqrt(ss / (3.0 * N)) : 0.0;
         st.rms = N ? sqrt(se / (3.0 * N)) : 0.0;

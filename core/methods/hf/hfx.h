@@ -127,6 +127,8 @@ int hfx_decomp_file_load(const char *magic, const char *ext, const uint32_t *u, 
                          const double *d, int nd, int n, int nsamples, hfx_decomp *g,
                          const char *dir, const char *key, glint_err *err);
 
+#define HFX_MAX_VIEWS 256 /* scene.h's SCENE_MAX_VIEWS */
+
 typedef struct hfx_fit_stats {
     int clamped[3];      /* samples floored at eps before the log, per channel */
     long log_clamped;    /* log-factor values clamped to +-log_max */
@@ -134,6 +136,10 @@ typedef struct hfx_fit_stats {
     double log_residual; /* RMS of A y - f~ over samples and channels (log space) */
     double rms, max_abs; /* reconstruction - sample, linear */
     double seconds;      /* the fit (mapping, application, gauge) */
+    /* with the problem's view: rms's sums view by view, the squared linear
+     * errors of each view's samples over the channels and its samples */
+    double view_se[HFX_MAX_VIEWS];
+    long view_n[HFX_MAX_VIEWS];
 } hfx_fit_stats;
 
 /* What a fit needs besides the rows and the decomposition. */
@@ -144,6 +150,8 @@ typedef struct hfx_problem {
     int nfactors;        /* J */
     const int *off;      /* J + 1: factor j's unknowns are off[j] .. off[j+1]-1 */
     double log_max;      /* range of a returned log value */
+    const int *view;     /* nsamples: each sample's view (< HFX_MAX_VIEWS), for the errors by
+                            view; NULL: none */
 } hfx_problem;
 
 /* Fit RGB samples (3 nsamples, sample-major).  OUT: y (n x 3, column per

@@ -176,12 +176,12 @@ static int file_head(const void *params, void *level, hfx_file_head *h)
 }
 
 /* The factors of the painted values rgb through the level. */
-static int fit_factors(const void *params, const void *level, const float *rgb, void *factors,
-                       hfx_fit_stats *st, glint_err *err)
+static int fit_factors(const void *params, const void *level, const float *rgb,
+                       const int *view, void *factors, hfx_fit_stats *st, glint_err *err)
 {
     const hf2d_params_t *p = params;
     const hf2d_level *x = level;
-    return hf2d_fit(&x->d, &x->dc, &p->map, p->model, rgb, factors, st, err);
+    return hf2d_fit(&x->d, &x->dc, &p->map, p->model, rgb, view, factors, st, err);
 }
 
 /* What the adapter of the 2D-factor methods (internal/method_hfx_int.h)

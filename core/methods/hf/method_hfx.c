@@ -106,13 +106,15 @@ static json_t *seconds_report(const hfx_method *m, const method_fit_in *in, doub
                      "fit", glint_now() - t0);
 }
 
-/* The report's errors: the fit's statistics. */
-static json_t *errors_report(const hfx_fit_stats *st)
+/* The report's errors: the fit's statistics (view by view over the
+ * samples' nviews views). */
+static json_t *errors_report(const hfx_fit_stats *st, int nviews)
 {
-    return json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:I}", "rms_painted", st->rms,
+    return json_pack("{s:f, s:f, s:f, s:[i,i,i], s:f, s:I, s:o}", "rms_painted", st->rms,
                      "max_abs_painted", st->max_abs, "log_residual_rms", st->log_residual,
                      "clamped", st->clamped[0], st->clamped[1], st->clamped[2], "log_max",
-                     st->log_max, "log_clamped", (json_int_t)st->log_clamped);
+                     st->log_max, "log_clamped", (json_int_t)st->log_clamped, "rms_by_view",
+                     method_rms_by_view(st->view_se, st->view_n, nviews));
 }
 
 int hfx_method_fit(const hfx_method *m, const method_fit_in *in, material *out,
@@ -127,13 +129,13 @@ int hfx_method_fit(const hfx_method *m, const method_fit_in *in, material *out,
     memset(out, 0, sizeof *out);
     if (!fac)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
-    if ((rc = m->fit(in->params, in->levels[0], in->rgb, fac, &st, err))) {
+    if ((rc = m->fit(in->params, in->levels[0], in->rgb, in->s->view, fac, &st, err))) {
         free(fac);
         return rc;
     }
     pre = precomputation_report(m, in);
     tim = seconds_report(m, in, t0);
-    errs = errors_report(&st);
+    errs = errors_report(&st, in->s->nviews);
     material_init(out, m->self, fac,
                   json_pack("{s:o, s:o, s:o, s:o}", "params",
                             method_params_to_json(m->self, in->params), "precomputation", pre,

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "scene.h"
 #include "internal/method_maps_int.h"
 
 const char *const maps_merge_values[] = {"lsq", "min", NULL};
@@ -76,20 +77,26 @@ static int src_predict(void *cls, const material *m, float *f, glint_err *err)
 }
 
 /* RMS and max |difference| of the fitted material against the painted
- * values on every sample, per unit light (as hf3 reports them). */
+ * values on every sample, per unit light (as hf3 reports them), and the
+ * squared differences and samples of each view (vse, vn: s->nviews, zeroed
+ * here) apart, for the errors by view. */
 static void painted_errors(const material *m, const samples *s, const float *rgb, double *rms,
-                           double *max_abs)
+                           double *max_abs, double *vse, long *vn)
 {
     double ss = 0.0, mx = 0.0;
+    memset(vse, 0, (size_t)s->nviews * sizeof *vse);
+    memset(vn, 0, (size_t)s->nviews * sizeof *vn);
     for (int i = 0; i < s->n; i++) {
         double v[3];
         sample_eval(m, s, i, v);
         for (int c = 0; c < 3; c++) {
             double d = v[c] - rgb[3 * (size_t)i + c];
             ss += d * d;
+            vse[s->view[i]] += d * d;
             if (fabs(d) > mx)
                 mx = fabs(d);
         }
+        vn[s->view[i]]++;
     }
     *rms = s->n ? sqrt(ss / (3.0 * s->n)) : 0.0;
     *max_abs = mx;
@@ -139,7 +146,8 @@ int maps_kind_fit(const maps_kind *k, const method_fit_in *in, material *out, gl
     matmap_params q;
     matmap mm;
     json_t *info, *pre, *comps, *tim, *errs, *stops;
-    double t0 = glint_now(), rms, mx;
+    double t0 = glint_now(), rms, mx, vse[SCENE_MAX_VIEWS];
+    long vn[SCENE_MAX_VIEWS];
     int rc;
 
     memset(out, 0, sizeof *out);
@@ -157,9 +165,10 @@ int maps_kind_fit(const maps_kind *k, const method_fit_in *in, material *out, gl
         json_decref(stops);
         return rc;
     }
-    painted_errors(out, in->s, in->rgb, &rms, &mx);
-    errs = json_pack("{s:f, s:f, s:f}", "rms_painted", rms, "max_abs_painted", mx,
-                     "residual_rel_rms", maps_matmap(out)->rel_rms[maps_matmap(out)->k]);
+    painted_errors(out, in->s, in->rgb, &rms, &mx, vse, vn);
+    errs = json_pack("{s:f, s:f, s:f, s:o}", "rms_painted", rms, "max_abs_painted", mx,
+                     "residual_rel_rms", maps_matmap(out)->rel_rms[maps_matmap(out)->k],
+                     "rms_by_view", method_rms_by_view(vse, vn, in->s->nviews));
     tim = json_pack("{s:f, s:f}", "maps", maps_matmap(out)->seconds, "fit", glint_now() - t0);
     info = json_pack("{s:o, s:o, s:o, s:o, s:o, s:o, s:s}", "params",
                      method_params_to_json(k->self, in->params), "precomputation",

@@ -174,7 +174,7 @@ static int pbr_method_fit(const method_fit_in *in, material *out, glint_err *err
     const pbr_geom *g = in->levels[0];
     double t0 = glint_now();
     pbr_spec sp = {pp->lobes, pp->fresnel};
-    pbr_fit_opts o = {pp->starts, pp->max_iter, pp->start_samples};
+    pbr_fit_opts o = {pp->starts, pp->max_iter, pp->start_samples, in->s->view};
     pbr_fit_result *r = malloc(sizeof *r);
     pbr_material *pm = NULL;
     json_t *info, *det;
@@ -200,11 +200,13 @@ static int pbr_method_fit(const method_fit_in *in, material *out, glint_err *err
     memcpy(pm->p, r->p, sizeof pm->p);
     pbr_material_sync(pm);
     det = report_determination(&sp, r, r->nsamples_lit == 0);
-    info = json_pack("{s:o, s:{s:s, s:s, s:i}, s:{s:f, s:f}, s:{s:f}, s:o}", "params",
+    info = json_pack("{s:o, s:{s:s, s:s, s:i}, s:{s:f, s:f}, s:{s:f, s:o}, s:o}", "params",
                      method_params_to_json(&method_pbr, pp), "precomputation", "pattern_hash",
                      in->s->hash, "cache_key", in->keys[0], "samples", in->s->n, "seconds",
                      "samples", in->pattern_seconds, "fit", glint_now() - t0, "errors",
-                     "rms_painted", r->rms, "fit", report_fit(r));
+                     "rms_painted", r->rms, "rms_by_view",
+                     method_rms_by_view(r->view_se, r->view_n, in->s->nviews), "fit",
+                     report_fit(r));
     if (!info || !det) {
         json_decref(info);
         json_decref(det);

@@ -97,7 +97,11 @@ typedef struct pbr_fit_opts {
     int max_iter;  /* iterations per start */
     int subset;    /* samples the starts are fitted on (the brightest eighth and an even
                       draw of the rest); the best is then refined on all.  0: all */
+    const int *view; /* n: each sample's view (< PBR_MAX_VIEWS), for the errors by view in
+                        the result; NULL: none */
 } pbr_fit_opts;
+
+#define PBR_MAX_VIEWS 256 /* scene.h's SCENE_MAX_VIEWS */
 
 #define PBR_MAX_STARTS 8
 
@@ -120,6 +124,9 @@ typedef struct pbr_fit_result {
     double rms;             /* RMS over samples and channels */
     double resid_var;       /* s^2 = 2 cost / (3 n - free parameters) (0 when not positive) */
     int nsamples_lit;       /* samples with a value above zero in some channel */
+    double view_se[PBR_MAX_VIEWS]; /* with opts' view: the squared residuals of each view's
+                                      samples over the channels (rms's sums, view by view) */
+    long view_n[PBR_MAX_VIEWS];    /* and its samples */
 } pbr_fit_result;
 
 /* Fit spec to the values y[3 n] (f_c ci per sample, sample-major) at

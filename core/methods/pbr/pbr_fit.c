@@ -65,6 +65,7 @@ typedef struct lm_ctx {
     const pbr_set *s;
     double lo[PBR_MAXP], hi[PBR_MAXP];
     int np;
+    const int *view; /* every sample's view (pbr_fit_opts), NULL: none */
 } lm_ctx;
 
 static pthread_once_t gsl_handler_once = PTHREAD_ONCE_INIT;
@@ -438,11 +439,15 @@ static int determine(const lm_ctx *cx, pbr_fit_result *r)
         for (int c = 0; c < 3; c++) {
             double d = m[c] - cx->s->y[3 * (size_t)i + c];
             ss += d * d;
+            if (cx->view)
+                r->view_se[cx->view[i]] += d * d;
             for (int a = 0; a < np; a++)
                 if (J[c][a] != 0.0)
                     for (int b = a; b < np; b++)
                         A[a * np + b] += J[c][a] * J[c][b] * D[a] * D[b];
         }
+        if (cx->view)
+            r->view_n[cx->view[i]]++;
     }
     for (int a = 0; a < np; a++)
         for (int b = 0; b < a; b++)
@@ -613,6 +618,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
         out->converged = fin.converged;
     }
     cx.s = &all;
+    cx.view = o->view; /* the errors by view, on every sample */
     for (int k = 0; k < np; k++) {
         double t = (out->p[k] - cx.lo[k]) / (cx.hi[k] - cx.lo[k]);
         out->at_bound[k] = t <= PBR_BOUND_TOL ? -1 : t >= 1.0 - PBR_BOUND_TOL ? 1 : 0;

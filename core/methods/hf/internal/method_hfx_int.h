@@ -62,9 +62,9 @@ typedef struct hfx_method {
     /* The report's operator_bytes of the level's decomposition. */
     size_t (*operator_bytes)(const void *level);
     /* Fit the painted values rgb with the level (OUT: the zeroed factors,
-     * *st). */
-    int (*fit)(const void *params, const void *level, const float *rgb, void *factors,
-               hfx_fit_stats *st, glint_err *err);
+     * *st; view: each sample's view, for st's errors by view). */
+    int (*fit)(const void *params, const void *level, const float *rgb, const int *view,
+               void *factors, hfx_fit_stats *st, glint_err *err);
 } hfx_method;
 
 /* The level's build and disk load, as method_level's (the method's own
