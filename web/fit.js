@@ -85,12 +85,19 @@ export class FitPanel extends EventTarget {
     this.points = (m.scene && m.scene.points) || [];
     try { this.envs = (await this.api.environments()).environments; } catch (_) { this.envs = null; }
     const sel = $('fit-method');
+    const env = this.sceneEnv();
     sel.textContent = '';
     for (const x of this.methods) {
       const o = document.createElement('option');
       o.value = x.name;
       o.textContent = x.label || x.name;
       o.title = `${x.summary || x.title} (${x.name})`;
+      // the daemon refuses a point-light method on a scene painted under an
+      // environment (lighting-mismatch): offered, but not choosable
+      if (env && x.lighting === 'point') {
+        o.disabled = true;
+        o.title += ' — needs the views\' point lights; this scene is painted under an environment';
+      }
       sel.appendChild(o);
     }
     sel.onchange = () => this.setMethod(sel.value);

@@ -27,6 +27,8 @@ run({
     await openStudio(page, url);
     await page.waitForSelector('#param-env', { state: 'attached' });
     assertEq(await page.inputValue('#fit-method'), 'srbf', 'the environment method is chosen');
+    assert(await page.evaluate(() => document.querySelector('#fit-method option[value="hf3"]').disabled),
+      'a method lit by point lights is offered but not choosable (the daemon refuses it: lighting-mismatch)');
     assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');
     assertEq(await page.inputValue('#param-env_rotation'), '30', 'turned as the scene is');
     // the base the artist paints on is lit by the sky, not by the view's point light
