@@ -577,6 +577,54 @@ static int view_errors_of(const json_t *errors, fit_report *r, glint_err *err)
     return 0;
 }
 
+/* A method lit by point lights fits the painted values over each sample's
+ * intensity (samples_gather: f cos_i, scene.h) and gives its errors in
+ * those units; the material states them in the painting's, times each
+ * view's pi I: exactly, view by view, for errors.rms_by_view and, when
+ * every sample has one intensity, for rms_painted and max_abs_painted;
+ * else rms_painted pooled from the views' when they are given.  srbf, lit
+ * by an environment, fits and reports the painting's own values. */
+static void errors_in_painted_units(const prep *p, material *m)
+{
+    json_t *errors = json_object_get(m->info, "errors"), *byv, *x;
+    const samples *s = prep_samples(p);
+    double iv[SCENE_MAX_VIEWS], I, ss = 0.0;
+    long n = 0;
+    int uniform = 1;
+    size_t k;
+
+    if (p->m->lighting != METHOD_LIGHT_POINT || !json_is_object(errors) || !s || s->n == 0)
+        return;
+    I = s->intensity[0];
+    for (int v = 0; v < SCENE_MAX_VIEWS; v++)
+        iv[v] = NAN;
+    for (int i = 0; i < s->n; i++) {
+        iv[s->view[i]] = s->intensity[i];
+        uniform &= s->intensity[i] == I;
+    }
+    byv = json_object_get(errors, "rms_by_view");
+    json_array_foreach(byv, k, x) {
+        json_t *v = json_object_get(x, "view"), *r = json_object_get(x, "rms");
+        json_int_t vk = json_integer_value(v);
+        double rv;
+        if (!json_is_integer(v) || !json_is_number(r) || vk < 0 || vk >= SCENE_MAX_VIEWS ||
+            isnan(iv[vk]))
+            continue;
+        rv = json_number_value(r) * iv[vk];
+        json_object_set_new(x, "rms", json_real(rv));
+        ss += rv * rv * (double)json_integer_value(json_object_get(x, "samples"));
+        n += (long)json_integer_value(json_object_get(x, "samples"));
+    }
+    if (uniform) {
+        static const char *const keys[] = {"rms_painted", "max_abs_painted"};
+        for (int i = 0; i < 2; i++)
+            if (json_is_number(x = json_object_get(errors, keys[i])))
+                json_object_set_new(errors, keys[i], json_real(json_number_value(x) * I));
+    } else if (n > 0) {
+        json_object_set_new(errors, "rms_painted", json_real(sqrt(ss / (double)n)));
+    }
+}
+
 /* The report of a fit of preparation p that made material m. */
 static int report_of(const prep *p, const material *m, fit_report *r, glint_err *err)
 {
@@ -837,6 +885,7 @@ int prep_fit_reusing(const prep *p, const img *paintings, const float *rgb,
     json_object_set_new(pre, "cache", prep_report(p));
     if (read >= 0)
         json_object_set_new(pre, "values_views_read", json_integer(read));
+    errors_in_painted_units(p, out);
     if (rep && (rc = report_of(p, out, rep, err)))
         material_free(out);
     return rc;

@@ -76,6 +76,23 @@ static inline void brdf_truth(const void *cls, const double n[3], const double w
     brdf_eval(cls, n, wi, wo, rgb);
 }
 
+/* prep_fit of painted radiance rgb[3 s->n]: a method is given the painted
+ * values over each sample's intensity (samples_gather), so they are made
+ * so here, as the pipeline makes them. */
+static inline int fit_painted(prep *pp, const float *rgb, material *out, glint_err *e)
+{
+    const samples *s = prep_samples(pp);
+    float *v = malloc((size_t)3 * (s->n ? s->n : 1) * sizeof *v);
+    int rc;
+    if (!v)
+        return glint_err_set(e, GLINT_ENOMEM, "out of memory");
+    for (int i = 0; i < 3 * s->n; i++)
+        v[i] = (float)(rgb[i] * (1.0 / s->intensity[i / 3]));
+    rc = prep_fit(pp, NULL, v, out, e);
+    free(v);
+    return rc;
+}
+
 /* Radiance of every sample of s under lights l with BRDF f (OUT: rgb). */
 static inline void render_samples(const samples *s, const env_lights *l, truth_fn f,
                                   const void *cls, float *rgb)

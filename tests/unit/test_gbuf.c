@@ -181,13 +181,13 @@ TEST(a_set_of_gbuffers_makes_samples_by_the_methods_rule)
     ASSERT_EQ(s.view[0], 1);
     ASSERT_EQ(s.pixel[0], 0);
     ASSERT(!s.used[0] && s.used[1]);
-    ASSERT_NEAR(rgb[2], 0.02, 1e-7);
+    ASSERT_NEAR(rgb[2], 0.02 / M_PI, 1e-7); /* over the light of intensity 1: pi (scene.h) */
     samples_free(&s);
     free(rgb);
     ASSERT_OK(gbfit_samples(seen, g, p, use, 2, 0, &s, &rgb, &e));
     ASSERT_EQ(s.n, 2); /* pixels 0 and 1: seen, lit or not */
     ASSERT_EQ(s.pixel[1], 1);
-    ASSERT_NEAR(rgb[3], 0.25, 1e-7);
+    ASSERT_NEAR(rgb[3], 0.25 / M_PI, 1e-7);
     samples_free(&s);
     free(rgb);
     ASSERT(method_find("hf4") != NULL);

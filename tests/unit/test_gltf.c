@@ -438,7 +438,7 @@ static int side_render(const gltf_side *g, const mesh *gm, const scene_view *v, 
         }
         spec_brdf(base, m, expo == 2 ? r * r : r, n, wi, wo, f);
         for (int c = 0; c < 3; c++)
-            out->px[3 * p + c] = (float)(v->light_intensity * f[c] * ci);
+            out->px[3 * p + c] = (float)(M_PI * v->light_intensity * f[c] * ci); /* scene.h */
     }
     gbuf_free(&gb);
     return 0;

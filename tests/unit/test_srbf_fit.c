@@ -34,7 +34,7 @@ static int fit_and_measure(srbf_params *p, truth_fn f, const void *cls, errs *ou
     render_samples(s, &l0, f, cls, rgb);
     for (int i = 0; i < 3 * s->n; i++)
         rgb[i] = (float)(rgb[i] * p->env_intensity);
-    if (prep_fit(pp, NULL, rgb, &out->m, &e)) {
+    if (fit_painted(pp, rgb, &out->m, &e)) {
         fprintf(stderr, "  fit: %s\n", e.msg);
         goto done;
     }
@@ -76,6 +76,7 @@ TEST(a_known_srbf_material_is_recovered_on_new_views_and_rotations)
     ASSERT_OK(setup());
     ASSERT_OK(known_material(0.6, 7, &truth));
     params_default(&p);
+    p.static_term = SRBF_STATIC_PAPER; /* the known material's static term */
     p.diffuse.fit = 0;
     memcpy(p.diffuse.rgb, truth.rho, sizeof truth.rho);
     p.smooth = 0.0;
@@ -87,6 +88,7 @@ TEST(a_known_srbf_material_is_recovered_on_new_views_and_rotations)
     ASSERT(r.rotated <= 0.01);
     material_free(&r.m);
     params_default(&p);
+    p.static_term = SRBF_STATIC_PAPER;
     ASSERT_OK(fit_and_measure(&p, srbf_truth, &truth, &r));
     {
         char *rho = json_dumps(info_get(&r.m, "diffuse", "rgb"), JSON_COMPACT);
@@ -226,7 +228,7 @@ TEST(a_sun_pixel_and_lobe_widths_at_the_ends_give_finite_materials)
         s = prep_samples(pp);
         rgb = calloc((size_t)3 * s->n, sizeof *rgb);
         rgb[3 * (s->n / 2)] = rgb[3 * (s->n / 2) + 1] = rgb[3 * (s->n / 2) + 2] = 1e3f;
-        ASSERT_OK(prep_fit(pp, NULL, rgb, &m, &e));
+        ASSERT_OK(fit_painted(pp, rgb, &m, &e));
         mx = dense_albedo_max(&m, &el);
         printf("  sigma %g: one pixel at 1e3, max albedo %.6f, rel rms %.4f\n", sigmas[k], mx,
                json_real_value(info_get(&m, "errors", "rel_rms_painted")));
@@ -270,7 +272,7 @@ TEST(nothing_lit_is_a_clear_error_and_impossible_budgets_are_refused)
     snprintf(p.env, sizeof p.env, "test:black");
     ASSERT_OK(view_samples(0, &p, &pp));
     rgb = calloc((size_t)3 * prep_samples(pp)->n, sizeof *rgb);
-    ASSERT_EQ(prep_fit(pp, NULL, rgb, &m, &e), GLINT_EINVAL);
+    ASSERT_EQ(fit_painted(pp, rgb, &m, &e), GLINT_EINVAL);
     printf("  nothing lit: %s\n", e.msg);
     ASSERT(strstr(e.msg, "nothing is lit") != NULL);
     free(rgb);
@@ -321,7 +323,7 @@ TEST(the_precomputation_survives_a_restart_on_disk)
             for (int i = 0; i < 3 * prep_samples(pp)->n; i++)
                 rgb[i] = (float)(0.2 + 0.1 * sin(0.01 * i));
         }
-        ASSERT_OK(prep_fit(pp, NULL, rgb, &m[round], &e));
+        ASSERT_OK(fit_painted(pp, rgb, &m[round], &e));
         disk = json_string_value(json_object_get(
             json_object_get(json_object_get(m[round].info, "precomputation"), "cache"), "disk"));
         printf("  round %d: disk %s\n", round, disk);

@@ -37,7 +37,7 @@ TEST(a_repaint_starts_from_the_kept_factor)
             p.smooth *= 1.5;
             ASSERT_OK(view_samples(0, &p, &pp));
         }
-        ASSERT_OK(prep_fit(pp, NULL, rgb, &m[k], &e));
+        ASSERT_OK(fit_painted(pp, rgb, &m[k], &e));
         ch = json_object_get(json_object_get(m[k].info, "errors"), "channels");
         ASSERT_EQ((int)json_array_size(ch), 3);
         for (size_t c = 0; c < 3; c++) {
@@ -177,12 +177,12 @@ TEST(a_warm_repaint_reaches_the_cold_optimum)
     for (int i = n / 3; i < n / 3 + n / 10; i++) /* the stroke: a band 40% brighter */
         for (int k = 0; k < 3; k++)
             b[3 * i + k] *= 1.4f;
-    ASSERT_OK(prep_fit(ppw, NULL, a, &m0, &e));
+    ASSERT_OK(fit_painted(ppw, a, &m0, &e));
     for (int ch = 0; ch < 3; ch++)
         ASSERT_MSG(!strcmp(chan_str(&m0, ch, "start"), "cold"), "first fit: %s",
                    chan_str(&m0, ch, "start"));
-    ASSERT_OK(prep_fit(ppw, NULL, b, &mw, &e));
-    ASSERT_OK(prep_fit(ppc, NULL, b, &mc, &e));
+    ASSERT_OK(fit_painted(ppw, b, &mw, &e));
+    ASSERT_OK(fit_painted(ppc, b, &mc, &e));
     for (int ch = 0; ch < 3; ch++) {
         double ow = chan_num(&mw, ch, "objective"), oc = chan_num(&mc, ch, "objective");
         ASSERT_MSG(!strcmp(chan_str(&mw, ch, "start"), "warm"), "repaint channel %d: %s", ch,
@@ -214,11 +214,11 @@ TEST(a_warm_repaint_reaches_the_cold_optimum)
         ASSERT_OK(view_samples(0, &pg, &pp));
         for (int i = 0; i < 3 * n; i++)
             a[i] = (float)(5.0 + 2.0 * sin(0.011 * i)); /* far over the budget: rows active */
-        ASSERT_OK(prep_fit(pp, NULL, a, &m0, &e));
+        ASSERT_OK(fit_painted(pp, a, &m0, &e));
         prep_release(C, pp);
         pg.diffuse.rgb[0] = pg.diffuse.rgb[1] = pg.diffuse.rgb[2] = 0.9;
         ASSERT_OK(view_samples(0, &pg, &pp));
-        ASSERT_OK(prep_fit(pp, NULL, a, &mw, &e));
+        ASSERT_OK(fit_painted(pp, a, &mw, &e));
         for (int ch = 0; ch < 3; ch++) {
             cold += !strcmp(chan_str(&mw, ch, "start"), "cold");
             ASSERT(chan_num(&mw, ch, "max_violation") <= 1e-9);
@@ -258,6 +258,7 @@ TEST(held_out_views_are_rendered_under_the_environment)
 
     ASSERT_OK(setup());
     params_default(&p);
+    p.static_term = SRBF_STATIC_PAPER; /* the known material's static term */
     p.lights = 52; /* levels of its own */
     p.basis_res = REPAINT_RES;
     use[0] = use[5] = 1;
@@ -270,7 +271,7 @@ TEST(held_out_views_are_rendered_under_the_environment)
     rgb = malloc((size_t)3 * s->n * sizeof *rgb);
     pred = malloc((size_t)3 * s->n * sizeof *pred);
     render_samples(s, &l, srbf_truth, &truth, rgb);
-    ASSERT_OK(prep_fit(pp, NULL, rgb, &m, &e));
+    ASSERT_OK(fit_painted(pp, rgb, &m, &e));
     ASSERT_OK(prep_predict(pp, &m, pred, &e));
     for (int i = 0; i < s->n; i++) {
         if (isnan(pred[3 * i]))
