@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glsl_parts.h"
 #include "method_pbr.h"
 
 static const char *const fresnel_names[] = {"dielectric", "conductor"};
@@ -146,7 +147,7 @@ static int pbr_mat_from_json(const json_t *root, const char *file, void **data, 
 static const char frag[] =
     "#version 300 es\n"
     "// pbr: kd/pi + up to two GGX lobes, height-correlated Smith, Schlick Fresnel\n"
-    "precision highp float;\n"
+    GLSL_PRECISION
     "uniform vec3 u_kd;\n"
     "uniform float u_alpha1;\n"
     "uniform vec3 u_ks1;\n"
@@ -154,15 +155,9 @@ static const char frag[] =
     "uniform float u_alpha2;\n"
     "uniform vec3 u_ks2;\n"
     "uniform vec3 u_f02;\n"
-    "uniform vec3 u_eye;\n"
-    "uniform vec3 u_light;\n"
-    "uniform float u_light_intensity;\n"
-    "in vec3 v_pos;\n"
-    "in vec3 v_nrm;\n"
-    "in vec2 v_uv;\n"
-    "layout(location = 0) out vec4 o_color;\n"
+    GLSL_STAGE_IO
     "const float PI = 3.14159265358979323846;\n"
-    "vec3 glint_unit(vec3 v) { float l = length(v); return l > 0.0 ? v / l : v; }\n"
+    GLSL_UNIT
     "vec3 pbr_lobe(float alpha, vec3 ks, vec3 f0, float ci, float co, float ch, float w5)\n"
     "{\n"
     "    float a2 = alpha * alpha, d = ch * ch * (a2 - 1.0) + 1.0;\n"
@@ -183,12 +178,7 @@ static const char frag[] =
     "             pbr_lobe(u_alpha2, u_ks2, u_f02, ci, co, ch, w5);\n"
     "    return f * ci;\n"
     "}\n"
-    "void main()\n"
-    "{\n"
-    "    vec3 n = glint_unit(v_nrm);\n"
-    "    o_color = vec4(glint_material(n, glint_unit(u_light - v_pos), glint_unit(u_eye - v_pos))"
-    " * u_light_intensity, 1.0);\n"
-    "}\n";
+    GLSL_MAIN;
 
 static int pbr_mat_gpu(const void *data, material_gpu *g, glint_err *err)
 {
