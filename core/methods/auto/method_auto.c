@@ -13,6 +13,7 @@
 #include "method_hf4.h"
 #include "method_hybrid.h"
 #include "method_maps.h"
+#include "method_pbr.h"
 #include "scene.h"
 
 static const method_param auto_params_table[] = {
@@ -91,6 +92,7 @@ typedef struct cands {
     hf4_params_t hp;
     maps_params mp;
     hybrid_params yp;
+    pbr_params bp;
 } cands;
 
 static void candidates(const auto_params *p, cands *c)
@@ -116,6 +118,7 @@ static void candidates(const auto_params *p, cands *c)
     c->yp.h = c->hp; /* hf4's decomposition serves the hybrid's products */
     if (p->components)
         c->yp.components = p->components;
+    method_pbr.params_default(&c->bp);
 }
 
 /* ---- levels: the split, each candidate's precomputation on the kept pixels, then on all -- */
@@ -124,14 +127,17 @@ static void candidates(const auto_params *p, cands *c)
  * hf3's two and hf4's one on every sample; hf2d's one on the kept pixels
  * and on every sample */
 enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_HF2D, LV_FULL_HF2D,
-       LV_N };
+       LV_PBR, LV_FULL_PBR, LV_N };
+
+/* What a held-out sample measures. */
+enum { HELD_NO, HELD_NEW, HELD_BEYOND };
 
 typedef struct split {
     samples train;
-    unsigned char *held;   /* per sample of the pattern: 1 held out */
+    unsigned char *held;   /* per sample of the pattern: HELD_* */
     int nheld;
     int by_views;          /* 1: whole views held out; 0: pixels */
-    unsigned char held_view[SCENE_MAX_VIEWS];
+    unsigned char held_view[SCENE_MAX_VIEWS];  /* HELD_* per view */
 } split;
 
 /* Held out by pixel (one view painted): tiles of HELD_TILE x HELD_TILE
@@ -151,6 +157,47 @@ static int pixel_held(int view, int pixel, int width, int every)
     return h % (unsigned)every == 0;
 }
 
+/* The views held out, when two or more views hold samples (a painted
+ * view whose pixels are all unlit or hidden is no measure): one in
+ * `every` of them inside the painted range (at least one), and, when four
+ * or more are painted, also the view whose light lies farthest from its
+ * eye (the smallest mean wi.wo over its samples): lights beyond the range
+ * the others paint, where a model that only interpolates fails.  At least
+ * two views are kept.  Marks held[v] HELD_NEW or HELD_BEYOND; 1 when views
+ * are held out, 0 when fewer than two are painted (pixels are then). */
+static int held_views(const samples *s, int every, unsigned char held[SCENE_MAX_VIEWS])
+{
+    int used[SCENE_MAX_VIEWS], nu = 0, nh = 0, far = -1;
+    double dot[SCENE_MAX_VIEWS] = {0}, cnt[SCENE_MAX_VIEWS] = {0};
+    for (int i = 0; i < s->n; i++) {
+        int v = s->view[i];
+        const float *wi = s->wi + 3 * (size_t)i, *wo = s->wo + 3 * (size_t)i;
+        if (v < 0 || v >= SCENE_MAX_VIEWS)
+            continue;
+        dot[v] += (double)wi[0] * wo[0] + (double)wi[1] * wo[1] + (double)wi[2] * wo[2];
+        cnt[v] += 1.0;
+    }
+    for (int v = 0; v < s->nviews && v < SCENE_MAX_VIEWS; v++)
+        if (s->used[v] && cnt[v] > 0.0)
+            used[nu++] = v;
+    if (nu < 2)
+        return 0;
+    for (int k = 0; k < nu; k++)
+        if (k % every == every / 2 || (nh == 0 && k == nu - 1)) {
+            held[used[k]] = HELD_NEW;
+            nh++;
+        }
+    if (nu - nh < 3)
+        return 1;
+    for (int k = 0; k < nu; k++) {
+        int v = used[k];
+        if (!held[v] && (far < 0 || dot[v] / cnt[v] < dot[far] / cnt[far]))
+            far = v;
+    }
+    held[far] = HELD_BEYOND;
+    return 1;
+}
+
 static void split_free(void *data)
 {
     split *x = data;
@@ -163,7 +210,7 @@ static void split_key(const void *params, const samples *s, const char *prev_key
                       size_t len)
 {
     (void)prev_key;
-    snprintf(key, len, "auto-split:%s:%d", s->hash, ((const auto_params *)params)->every);
+    snprintf(key, len, "auto-split:%s:%d:far", s->hash, ((const auto_params *)params)->every);
 }
 
 static int split_build(const method_build_in *in, cache_value *out, glint_err *err)
@@ -181,32 +228,13 @@ static int split_build(const method_build_in *in, cache_value *out, glint_err *e
         free(x);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     }
-    {
-        /* whole views when two or more are painted: one in `every` of them,
-         * at least one, at most all but one; else one pixel in `every` */
-        /* views that hold samples: a painted view whose pixels are all
-         * unlit or hidden is no measure */
-        int used[SCENE_MAX_VIEWS], nu = 0, nh = 0;
-        unsigned char has[SCENE_MAX_VIEWS] = {0};
-        for (int i = 0; i < s->n; i++)
-            if (s->view[i] >= 0 && s->view[i] < SCENE_MAX_VIEWS)
-                has[s->view[i]] = 1;
-        for (int v = 0; v < s->nviews && v < SCENE_MAX_VIEWS; v++)
-            if (s->used[v] && has[v])
-                used[nu++] = v;
-        x->by_views = nu >= 2;
-        for (int k = 0; k < nu && x->by_views; k++)
-            if (k % p->every == p->every / 2 || (nh == 0 && k == nu - 1)) {
-                x->held_view[used[k]] = 1;
-                nh++;
-            }
-        for (int i = 0; i < s->n; i++) {
-            x->held[i] = (unsigned char)(x->by_views ? x->held_view[s->view[i]]
-                                                     : pixel_held(s->view[i], s->pixel[i],
-                                                                  s->width, p->every));
-            keep[i] = !x->held[i];
-            x->nheld += x->held[i];
-        }
+    x->by_views = held_views(s, p->every, x->held_view);
+    for (int i = 0; i < s->n; i++) {
+        x->held[i] = x->by_views ? x->held_view[s->view[i]]
+                                 : (unsigned char)(pixel_held(s->view[i], s->pixel[i], s->width,
+                                                              p->every) ? HELD_NEW : HELD_NO);
+        keep[i] = !x->held[i];
+        x->nheld += !!x->held[i];
     }
     snprintf(tag, sizeof tag, "auto-train-%d", p->every);
     if (x->nheld < 1 || x->nheld == s->n)
@@ -455,6 +483,43 @@ static int fhf2dd_save(const method_build_in *in, const char *dir, const char *k
     return full_save(in, &method_hf2d, &cs.dp, dir, key, v, err);
 }
 
+/* pbr's one level (its per-sample angles) on the kept pixels, keyed from
+ * the split, and on every sample, keyed as a direct pbr fit keys it (from
+ * the pattern's hash). */
+static void pbrg_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    cands cs;
+    char own[CACHE_KEY_MAX], sk[CACHE_KEY_MAX];
+    candidates(params, &cs);
+    split_key(params, s, prev_key, sk, sizeof sk);
+    method_pbr.levels[0].key(&cs.bp, s, sk, own, sizeof own);
+    snprintf(key, len, "%s", own);
+}
+
+static int pbrg_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_pbr, 0, NULL, &cs.bp, out, err);
+}
+
+static void fpbrg_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    (void)prev_key;
+    candidates(params, &cs);
+    method_pbr.levels[0].key(&cs.bp, s, s->hash, key, len);
+}
+
+static int fpbrg_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_pbr, 0, NULL, &cs.bp, out, err);
+}
+
 static const method_level auto_levels[] = {
     {.name = "split", .progress = 0.05, .key = split_key, .build = split_build},
     {.name = "decomposition", .progress = 0.1, .key = hf3d_key, .build = hf3d_build},
@@ -469,21 +534,48 @@ static const method_level auto_levels[] = {
      .build = hf2dd_build},
     {.name = "full anisotropic decomposition", .progress = 0.85, .key = fhf2dd_key,
      .build = fhf2dd_build, .load = fhf2dd_load, .save = fhf2dd_save},
+    {.name = "physical angles", .progress = 0.88, .key = pbrg_key, .build = pbrg_build},
+    {.name = "full physical angles", .progress = 0.9, .key = fpbrg_key, .build = fpbrg_build},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
 
-#define NCAND 5 /* hf3, hf2d, hf4, maps, hybrid: cheapest first */
+/* The candidates, cheapest first, each with its levels on the kept pixels
+ * and on every sample (maps reuses hf3's, hybrid hf4's). */
+typedef struct cand_def {
+    const method *m;
+    size_t params;                /* offset of its parameters in cands */
+    int nlv;
+    int train_lv[2], full_lv[2];
+} cand_def;
 
-/* The held-out RMS of material m: per unit light, RGB, over the held
- * samples. */
-static double held_rms(const material *m, const samples *s, const split *x, const float *rgb)
+static const cand_def CANDS[] = {
+    {&method_hf3, offsetof(cands, fp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
+    {&method_pbr, offsetof(cands, bp), 1, {LV_PBR}, {LV_FULL_PBR}},
+    {&method_hf2d, offsetof(cands, dp), 1, {LV_HF2D}, {LV_FULL_HF2D}},
+    {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
+    {&method_maps, offsetof(cands, mp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
+    {&method_hybrid, offsetof(cands, yp), 1, {LV_HF4}, {LV_FULL_HF4}},
+};
+#define NCAND ((int)(sizeof CANDS / sizeof CANDS[0]))
+
+static const void *cand_params(const cands *cs, int c)
+{
+    return (const char *)cs + CANDS[c].params;
+}
+
+/* A candidate's error on the held-out samples: per unit light, RGB, the
+ * material evaluated at each sample's texture coordinates; RMS over those
+ * held as `which` (HELD_NEW, HELD_BEYOND; 0: every held one).  -1 when
+ * none is held so. */
+static double held_rms(const material *m, const samples *s, const split *x, const float *rgb,
+                       int which)
 {
     double ss = 0.0;
     long cnt = 0;
     for (int i = 0; i < s->n; i++) {
         double n[3], wi[3], wo[3], uv[2], v[3];
-        if (!x->held[i])
+        if (!x->held[i] || (which && x->held[i] != which))
             continue;
         for (int c = 0; c < 3; c++) {
             n[c] = s->nrm[3 * (size_t)i + c];
@@ -499,13 +591,13 @@ static double held_rms(const material *m, const samples *s, const split *x, cons
         }
         cnt++;
     }
-    return cnt ? sqrt(ss / (3.0 * cnt)) : 0.0;
+    return cnt ? sqrt(ss / (3.0 * cnt)) : -1.0;
 }
 
-/* Fit method m (params mp) to samples s, values rgb, with auto's levels
- * from `base` (hf3's two, or hf4's one). */
-static int fit_on(const method_fit_in *in, const method *m, const void *mp, const samples *s,
-                  const float *rgb, int base, material *out, glint_err *err)
+/* Fit candidate c (parameters from cs) to samples s, values rgb, with
+ * auto's levels lv (its own levels in order). */
+static int fit_on(const method_fit_in *in, int c, const cands *cs, const samples *s,
+                  const float *rgb, const int *lvi, material *out, glint_err *err)
 {
     method_fit_in ci = *in;
     const void *lv[2];
@@ -513,117 +605,152 @@ static int fit_on(const method_fit_in *in, const method *m, const void *mp, cons
     cache_how how[2];
     double spent[2];
     cache_disk disk[2];
-    int nl = m->nlevels < 2 ? m->nlevels : 2;
-    for (int l = 0; l < nl; l++) {
-        lv[l] = in->levels[base + l];
-        ky[l] = in->keys[base + l];
-        how[l] = in->how[base + l];
-        spent[l] = in->spent[base + l];
-        disk[l] = in->disk[base + l];
+    for (int l = 0; l < CANDS[c].nlv; l++) {
+        lv[l] = in->levels[lvi[l]];
+        ky[l] = in->keys[lvi[l]];
+        how[l] = in->how[lvi[l]];
+        spent[l] = in->spent[lvi[l]];
+        disk[l] = in->disk[lvi[l]];
     }
-    ci.params = mp;
+    ci.params = cand_params(cs, c);
     ci.s = s;
     ci.rgb = rgb;
     ci.memo = NULL; /* samples and values of auto's own choosing */
     ci.view_tags = NULL;
+    ci.values_change = NULL;
     ci.levels = lv;
     ci.keys = ky;
     ci.how = how;
     ci.spent = spent;
     ci.disk = disk;
-    return m->fit(&ci, out, err);
+    return CANDS[c].m->fit(&ci, out, err);
 }
 
-static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
+/* What each candidate scored. */
+typedef struct scores {
+    double held[NCAND], held_new[NCAND], held_beyond[NCAND], secs[NCAND];
+} scores;
+
+/* Fit every candidate to the kept samples and measure it on the held-out
+ * ones. */
+static int fit_candidates(const method_fit_in *in, const cands *cs, material *cand, scores *sc,
+                          glint_err *err)
 {
-    const auto_params *p = in->params;
     const split *x = in->levels[0];
     const samples *s = in->s, *tr = &x->train;
-    cands cs;
-    float *trgb = NULL;
-    material cand[NCAND];
-    const method *ms[NCAND] = {&method_hf3, &method_hf2d, &method_hf4, &method_maps,
-                               &method_hybrid};
-    const void *ps[NCAND] = {&cs.fp, &cs.dp, &cs.hp, &cs.mp, &cs.yp};
-    /* each candidate's levels on the kept pixels and on every sample (maps
-     * reuses hf3's, hybrid hf4's) */
-    static const int train_lv[NCAND] = {LV_HF3, LV_HF2D, LV_HF4, LV_HF3, LV_HF4};
-    static const int full_lv[NCAND] = {LV_FULL_HF3, LV_FULL_HF2D, LV_FULL_HF4, LV_FULL_HF3,
-                                       LV_FULL_HF4};
-    double held[NCAND], secs[NCAND], t0 = glint_now();
-    int chosen = 0, rc = 0;
-    json_t *list, *choice;
-
-    memset(out, 0, sizeof *out);
-    memset(cand, 0, sizeof cand);
-    candidates(p, &cs);
-    /* coefficient texels no more than a sixteenth of the samples: finer
-     * textures hold texels that few samples reach, fitted to the painted
-     * views' own residuals (tests/unit/test_auto.c) */
-    cs.mp.map_res = (int)floor(sqrt(tr->n / 16.0));
-    cs.mp.map_res = cs.mp.map_res < 8 ? 8 : cs.mp.map_res > 128 ? 128 : cs.mp.map_res;
-    cs.yp.map_res = cs.mp.map_res;
-    if (!(trgb = malloc(3 * (size_t)tr->n * sizeof *trgb)))
+    float *trgb = malloc(3 * (size_t)tr->n * sizeof *trgb);
+    int rc = 0;
+    if (!trgb)
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     for (int i = 0, k = 0; i < s->n; i++)
         if (!x->held[i]) {
             memcpy(trgb + 3 * (size_t)k, in->rgb + 3 * (size_t)i, 3 * sizeof *trgb);
             k++;
         }
-    for (int c = 0; c < NCAND; c++) {
-        secs[c] = glint_now();
-        if ((rc = fit_on(in, ms[c], ps[c], tr, trgb, train_lv[c], &cand[c], err))) {
-            glint_err_prefix(err, "auto, candidate %s", ms[c]->name);
-            goto done;
+    for (int c = 0; c < NCAND && !rc; c++) {
+        double t = glint_now();
+        if ((rc = fit_on(in, c, cs, tr, trgb, CANDS[c].train_lv, &cand[c], err))) {
+            glint_err_prefix(err, "auto, candidate %s", CANDS[c].m->name);
+            break;
         }
-        secs[c] = glint_now() - secs[c];
-        held[c] = held_rms(&cand[c], s, x, in->rgb);
+        sc->secs[c] = glint_now() - t;
+        sc->held[c] = held_rms(&cand[c], s, x, in->rgb, 0);
+        sc->held_new[c] = held_rms(&cand[c], s, x, in->rgb, HELD_NEW);
+        sc->held_beyond[c] = held_rms(&cand[c], s, x, in->rgb, HELD_BEYOND);
     }
-    /* cheapest first; a richer candidate is taken when it beats the current
-     * choice by more than the threshold (hf4 and maps are alternatives:
-     * each is measured against the choice so far) */
-    list = json_array();
+    free(trgb);
+    return rc;
+}
+
+/* The rule: cheapest first; a later candidate is taken when its held-out
+ * RMS is below the current choice's by more than the threshold (a
+ * fraction) and the floor.  Each take lowers the held-out RMS, so the
+ * choice is never worse on the held-out samples than the first, the
+ * simplest.  Writes each candidate's figures into `list`; the chosen
+ * index. */
+static int choose(const auto_params *p, const material *cand, const scores *sc, json_t *list)
+{
+    int chosen = 0;
     for (int c = 0; c < NCAND; c++) {
-        int take = c > 0 && held[c] < held[chosen] * (1.0 - p->threshold) &&
-                   held[chosen] - held[c] > p->floor;
-        json_array_append_new(
-            list, json_pack("{s:s, s:f, s:f, s:f, s:b}", "method", ms[c]->name, "held_out_rms",
-                            held[c], "rms_painted",
-                            json_number_value(json_object_get(
-                                json_object_get(cand[c].info, "errors"), "rms_painted")),
-                            "fit_seconds", secs[c], "taken", c == 0 || take));
+        int take = c > 0 && sc->held[c] < sc->held[chosen] * (1.0 - p->threshold) &&
+                   sc->held[chosen] - sc->held[c] > p->floor;
+        json_t *e = json_pack(
+            "{s:s, s:s, s:f, s:f, s:f, s:b}", "method", CANDS[c].m->name, "label",
+            CANDS[c].m->label, "held_out_rms", sc->held[c], "rms_painted",
+            json_number_value(json_object_get(json_object_get(cand[c].info, "errors"),
+                                              "rms_painted")),
+            "fit_seconds", sc->secs[c], "taken", c == 0 || take);
+        if (sc->held_new[c] >= 0.0)
+            json_object_set_new(e, "held_out_rms_new_views", json_real(sc->held_new[c]));
+        if (sc->held_beyond[c] >= 0.0)
+            json_object_set_new(e, "held_out_rms_beyond", json_real(sc->held_beyond[c]));
+        json_array_append_new(list, e);
         if (take)
             chosen = c;
     }
-    choice = json_pack("{s:s, s:o, s:f, s:f, s:s, s:i, s:i, s:i, s:s}", "chosen",
-                       ms[chosen]->name, "candidates", list, "threshold", p->threshold, "floor",
-                       p->floor, "held_out",
-                       x->by_views ? "views" : "pixels", "held_out_every", p->every,
-                       "held_out_samples", x->nheld, "candidate_samples", tr->n,
-                       "rule",
-                       "cheapest first (hf3, hf2d, hf4, maps, hybrid); a richer one is taken "
-                       "when its "
-                       "held-out RMS is below the current choice's by more than the "
-                       "threshold (a fraction) and the floor; the material is the chosen "
-                       "method refitted to every painted sample");
+    return chosen;
+}
+
+static json_t *choice_report(const auto_params *p, const split *x, int chosen, json_t *list)
+{
+    json_t *choice = json_pack(
+        "{s:s, s:o, s:f, s:f, s:s, s:i, s:i, s:i, s:s}", "chosen", CANDS[chosen].m->name,
+        "candidates", list, "threshold", p->threshold, "floor", p->floor, "held_out",
+        x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
+        x->nheld, "candidate_samples", x->train.n, "rule",
+        "cheapest first (hf3, pbr, hf2d, hf4, maps, hybrid); a later one is taken when its "
+        "held-out RMS is below the current choice's by more than the threshold (a fraction) "
+        "and the floor, so the choice is never worse on the held-out samples than hf3; the "
+        "material is the chosen method refitted to every painted sample");
     if (x->by_views) {
-        json_t *hv = json_array();
+        json_t *hv = json_array(), *hb = json_array();
         for (int v = 0; v < SCENE_MAX_VIEWS; v++)
             if (x->held_view[v])
-                json_array_append_new(hv, json_integer(v));
+                json_array_append_new(x->held_view[v] == HELD_BEYOND ? hb : hv,
+                                      json_integer(v));
         json_object_set_new(choice, "held_out_views", hv);
+        json_object_set_new(choice, "held_out_views_beyond", hb);
+    }
+    return choice;
+}
+
+static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
+{
+    const auto_params *p = in->params;
+    const split *x = in->levels[0];
+    cands cs;
+    material cand[NCAND];
+    scores sc;
+    double t0 = glint_now(), tf;
+    int chosen, rc;
+    json_t *choice;
+
+    memset(out, 0, sizeof *out);
+    memset(cand, 0, sizeof cand);
+    memset(&sc, 0, sizeof sc);
+    candidates(p, &cs);
+    /* coefficient texels no more than a sixteenth of the samples: finer
+     * textures hold texels that few samples reach, fitted to the painted
+     * views' own residuals (tests/unit/test_auto.c) */
+    cs.mp.map_res = (int)floor(sqrt(x->train.n / 16.0));
+    cs.mp.map_res = cs.mp.map_res < 8 ? 8 : cs.mp.map_res > 128 ? 128 : cs.mp.map_res;
+    cs.yp.map_res = cs.mp.map_res;
+    if ((rc = fit_candidates(in, &cs, cand, &sc, err)))
+        goto done;
+    {
+        json_t *list = json_array();
+        chosen = choose(p, cand, &sc, list);
+        choice = choice_report(p, x, chosen, list);
     }
     /* the chosen model refitted to every painted sample: the candidates saw
      * all but the held-out ones */
-    {
-        double tf = glint_now();
-        if ((rc = fit_on(in, ms[chosen], ps[chosen], s, in->rgb, full_lv[chosen], out, err))) {
-            json_decref(choice);
-            glint_err_prefix(err, "auto, %s refitted to every sample", ms[chosen]->name);
-            goto done;
-        }
-        json_object_set_new(choice, "refit_seconds", json_real(glint_now() - tf));
+    tf = glint_now();
+    if ((rc = fit_on(in, chosen, &cs, in->s, in->rgb, CANDS[chosen].full_lv, out, err))) {
+        json_decref(choice);
+        glint_err_prefix(err, "auto, %s refitted to every sample", CANDS[chosen].m->name);
+        goto done;
     }
+    json_object_set_new(choice, "refit_seconds", json_real(glint_now() - tf));
     if (!out->info)
         out->info = json_object();
     json_object_set(out->info, "chosen_params", json_object_get(out->info, "params"));
@@ -633,7 +760,6 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
 done:
     for (int c = 0; c < NCAND; c++)
         material_free(&cand[c]);
-    free(trgb);
     return rc;
 }
 
@@ -642,11 +768,8 @@ static size_t auto_fit_bytes(const void *params, long nsamples)
     cands cs;
     size_t b = 0;
     candidates(params, &cs);
-    b += method_fit_bytes(&method_hf3, &cs.fp, nsamples);
-    b += method_fit_bytes(&method_hf2d, &cs.dp, nsamples);
-    b += method_fit_bytes(&method_hf4, &cs.hp, nsamples);
-    b += method_fit_bytes(&method_maps, &cs.mp, nsamples);
-    b += method_fit_bytes(&method_hybrid, &cs.yp, nsamples);
+    for (int c = 0; c < NCAND; c++)
+        b += method_fit_bytes(CANDS[c].m, cand_params(&cs, c), nsamples);
     return b;
 }
 
@@ -654,12 +777,11 @@ static size_t auto_fit_bytes(const void *params, long nsamples)
 static double auto_fit_seconds(const void *params, long nsamples)
 {
     cands cs;
+    double t = 0.0;
     candidates(params, &cs);
-    return method_fit_seconds(&method_hf3, &cs.fp, nsamples) +
-           method_fit_seconds(&method_hf2d, &cs.dp, nsamples) +
-           method_fit_seconds(&method_hf4, &cs.hp, nsamples) +
-           method_fit_seconds(&method_maps, &cs.mp, nsamples) +
-           method_fit_seconds(&method_hybrid, &cs.yp, nsamples);
+    for (int c = 0; c < NCAND; c++)
+        t += method_fit_seconds(CANDS[c].m, cand_params(&cs, c), nsamples);
+    return t;
 }
 
 static int auto_holdout_ok(const void *params)
@@ -683,12 +805,16 @@ const method method_auto = {
     .title = "Automatic: the simplest model that the painting needs",
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =
-        "Fits one material (hf3), one anisotropic material (hf2d: a 2D q), one material with "
-        "a colour texture (hf4), material maps "
-        "(maps) and maps of textured materials (hybrid) to the painted pixels but one in `every`, and keeps the cheapest whose error "
-        "on the held-out pixels is not beaten by a richer one by more than `threshold`. The "
-        "material is the chosen method's; info.choice lists every candidate's held-out and "
-        "painted RMS and why it was or was not taken.",
+        "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), one "
+        "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
+        "material maps (maps) and maps of textured materials (hybrid), each at its own "
+        "settings, to the painted views but those held out (one in `every`, and the one whose "
+        "light is farthest from its eye: a light beyond the painted range; one pixel tile in "
+        "`every` when one view is painted), and keeps the cheapest whose error on the "
+        "held-out samples is not beaten by a later one by more than `threshold`: never worse "
+        "there than hf3. The material is the chosen method's, refitted to every painted "
+        "sample; info.choice lists every candidate's held-out RMS (pooled, on new views and "
+        "beyond the range) and painted RMS and why it was or was not taken.",
     .held_out = "leave-one-view-out: for each painted view, fit the others and measure the RMS "
                 "error on that view's painted pixels; pooled over views",
     .schema = "FitParamsAuto.json",

@@ -3,11 +3,16 @@
  *
  * One painted view in `every` is held out (the views at every/2,
  * every/2 + every, ... of the painted ones: lights and directions inside
- * the painted range, not its ends); with one view painted, one tile of
- * 8x8 pixels in `every` (a hash of the tile: the same split for every
- * painting of a pattern).  The candidates, cheapest first, are fitted to
- * the rest:
+ * the painted range), and with four or more painted also the view whose
+ * light lies farthest from its eye (the smallest mean wi.wo): a light
+ * beyond the range the others paint.  At least two views are kept.  With
+ * one view painted, one tile of 8x8 pixels in `every` (a hash of the
+ * tile: the same split for every painting of a pattern).  The candidates,
+ * cheapest first, each at the settings a fit of its own would have, are
+ * fitted to the rest:
  *   hf3   one material (method_hf3.h)
+ *   pbr   one physically based material: Lambert + GGX (method_pbr.h),
+ *         which extrapolates to new light by construction
  *   hf2d  one material whose q is 2D over the half vector's parabolic map:
  *         a highlight that depends on direction around the normal
  *         (method_hf2d.h)
@@ -15,7 +20,8 @@
  *   maps  a sum of products weighted by coefficient textures (method_maps.h)
  *   hybrid  maps whose products are hf4's (method_hybrid.h)
  * and each is measured on the held-out pixels (RMS, per unit light, RGB,
- * the material evaluated at each pixel's texture coordinates).  The choice
+ * the material evaluated at each pixel's texture coordinates; pooled, and
+ * apart for the views inside the range and the one beyond it).  The choice
  * starts at hf3; a richer candidate replaces it only when its held-out RMS
  * is below the current choice's by more than `threshold` (a fraction) and
  * by more than `floor` (a quarter of an 8-bit step by default: a smaller
@@ -25,8 +31,10 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * hf2d, hf4, maps and hybrid are alternatives, not steps of one chain, so
- * each is measured against the choice so far.  The material is the chosen
+ * pbr, hf2d, hf4, maps and hybrid are alternatives, not steps of one
+ * chain, so each is measured against the choice so far; every take lowers
+ * the held-out RMS, so the answer is never worse on the held-out samples
+ * than hf3, the simplest.  The material is the chosen
  * method refitted to every painted sample, held-out ones included (its
  * manifest names that method); info.choice lists
  * every candidate's held-out and painted RMS, fit time and whether it was
@@ -37,7 +45,8 @@
  * hf3's, hybrid hf4's); then the same three on every sample, keyed and
  * built as hf3 and hf4 key and build them (the same cache entries, on disk
  * too, as a direct fit of either), for the refit; hf2d's decomposition on
- * the kept pixels and on every sample likewise.  The auto method makes
+ * the kept pixels and on every sample likewise, and pbr's one level (its
+ * per-sample angles) too.  The auto method makes
  * no material of its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
