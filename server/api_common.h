@@ -152,7 +152,15 @@ int api_fit_body(const json_t *body, int has_mesh, const struct method **m, void
 /* The answer to a fit request: 201 with the material `doc` (fitted now;
  * the reference is taken) and its Location, else 202 with job `job_id`
  * and its links.  api_fits.c. */
-http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id);
+/* warnings: NULL, or an array of plain sentences (its reference passes to
+ * the answer, as "warnings" in the material or beside the job). */
+http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id, json_t *warnings);
+
+/* The warnings of a fit of method m to views that are (point_lit 1) lit
+ * by point lights, `why` saying how that is known: a method lit by an
+ * environment fitted to them assumes a lighting they were not painted
+ * under.  NULL when there is none. */
+json_t *api_lighting_warning(const struct method *m, int point_lit, const char *why);
 
 /* G-buffer sets (api_gbuffers.c): 1 when the set `id` exists; 0 when the
  * request may use it (the API key, when one is set), else GLINT_EAUTH. */

@@ -68,9 +68,9 @@ int api_fit_body(const json_t *body, int has_mesh, const method **m, void **para
 
 static json_t *job_with_links(json_t *jdoc);
 
-http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id)
+http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id, json_t *warnings)
 {
-    json_t *jdoc = NULL;
+    json_t *jdoc = NULL, *body;
     char loc[128];
     glint_err e;
     http_resp r;
@@ -78,16 +78,35 @@ http_resp api_fit_answer(http_req *req, json_t *doc, const char *job_id)
     if (doc) { /* fitted now */
         snprintf(loc, sizeof loc, "/api/v1/materials/%s",
                  json_string_value(json_object_get(doc, "id")));
+        if (warnings)
+            json_object_set_new(doc, "warnings", warnings);
         r = http_json(201, doc);
         http_header(&r, "Location", loc);
         return r;
     }
-    if (jobs_get(((app *)req->app)->jobs, job_id, &jdoc, NULL, &e))
+    if (jobs_get(((app *)req->app)->jobs, job_id, &jdoc, NULL, &e)) {
+        json_decref(warnings);
         return api_error(&e);
+    }
     snprintf(loc, sizeof loc, "/api/v1/jobs/%s", job_id);
-    r = http_json(202, json_pack("{s:o}", "job", job_with_links(jdoc)));
+    body = json_pack("{s:o}", "job", job_with_links(jdoc));
+    if (warnings)
+        json_object_set_new(body, "warnings", warnings);
+    r = http_json(202, body);
     http_header(&r, "Location", loc);
     return r;
+}
+
+json_t *api_lighting_warning(const method *m, int point_lit, const char *why)
+{
+    char msg[512];
+    if (m->lighting != METHOD_LIGHT_ENV || !point_lit)
+        return NULL;
+    snprintf(msg, sizeof msg,
+             "%s fits views painted under an environment, but these are lit by point lights "
+             "(%s): unless your paintings were made under the environment it names, fit them "
+             "with a method lit by lamps", m->label ? m->label : m->name, why);
+    return json_pack("[s]", msg);
 }
 
 static json_t *job_with_links(json_t *jdoc)
@@ -111,9 +130,12 @@ static json_t *job_with_links(json_t *jdoc)
  * lights, or base.env): a method lit otherwise would fit them to a light
  * they were not painted under, so it is refused before any work.  (The
  * reverse, a method lit by an environment on a scene whose base has point
- * lights, stays open: paintings made elsewhere under an environment are
- * uploaded to such sessions, the environment named by the method's env.) */
-static int fit_lighting_check(app *a, const char *scene_id, const method *m, glint_err *e)
+ * lights, stays open, with a warning in the answer: paintings made
+ * elsewhere under an environment are uploaded to such sessions, the
+ * environment named by the method's env.)  OUT *point_lit: the base is lit
+ * by the views' point lights. */
+static int fit_lighting_check(app *a, const char *scene_id, const method *m, int *point_lit,
+                              glint_err *e)
 {
     json_t *doc = NULL, *env;
     const char *spec;
@@ -121,12 +143,11 @@ static int fit_lighting_check(app *a, const char *scene_id, const method *m, gli
     size_t len = 0;
     int rc;
 
-    if (m->lighting != METHOD_LIGHT_POINT)
-        return 0;
     if ((rc = store_scene_get(a->store, scene_id, &doc, e)))
         return rc;
     env = json_object_get(json_object_get(doc, "base"), "env");
-    if (!env) {
+    *point_lit = !env;
+    if (!env || m->lighting != METHOD_LIGHT_POINT) {
         json_decref(doc);
         return 0;
     }
@@ -157,7 +178,7 @@ static http_resp fits_create(http_req *req)
     char job_id[33];
     http_resp r;
     glint_err e;
-    int rc;
+    int rc, point_lit = 0;
 
     if ((rc = api_session(req, sid, 1, &sdoc, &e)) || (rc = api_body_json(req, &body, &e)) ||
         (rc = api_fit_body(body, 1, &m, &params, &e)))
@@ -166,9 +187,11 @@ static http_resp fits_create(http_req *req)
         rc = glint_err_set(&e, GLINT_EINTERNAL, "session %s names no scene", sid);
         goto done;
     }
-    if (!(rc = fit_lighting_check(a, scid, m, &e)) &&
+    if (!(rc = fit_lighting_check(a, scid, m, &point_lit, &e)) &&
         !(rc = fitsvc_fit(a->fits, sid, scid, m, params, &doc, job_id, &req->timing, &e)))
-        r = api_fit_answer(req, doc, job_id);
+        r = api_fit_answer(req, doc, job_id,
+                           api_lighting_warning(m, point_lit, "the scene's base renders, which "
+                                                              "the studio paints over"));
 done:
     if (rc)
         r = api_error(&e);

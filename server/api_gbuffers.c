@@ -467,8 +467,10 @@ done:
 
 /* Decode the painted views of a set for method m and make its samples and
  * values (core gbfit.h).  OUT: *s, *rgb. */
+/* OUT *all_wi: 1 when every painted view's G-buffer names its light's
+ * direction (views lit by point lights). */
 static int gb_samples(app *a, const char *id, const method *m, int n, int w, int h,
-                      samples *s, float **rgb, glint_err *e)
+                      samples *s, float **rgb, int *all_wi, glint_err *e)
 {
     gbuf *g = calloc((size_t)n, sizeof *g);
     img *im = calloc((size_t)n, sizeof *im);
@@ -509,6 +511,7 @@ static int gb_samples(app *a, const char *id, const method *m, int n, int w, int
             rc = glint_err_kind(e, "invalid-gbuffer");
         free(data);
         has_uv &= uv;
+        *all_wi &= wi;
         use[k] = 1;
         painted++;
     }
@@ -543,7 +546,7 @@ static http_resp sets_fit(http_req *req)
     size_t bytes = 0;
     http_resp r;
     glint_err e;
-    int n, w, h, rc, admitted = 0;
+    int n, w, h, rc, admitted = 0, all_wi = 1;
 
     memset(&s, 0, sizeof s);
     if ((rc = gb_open(req, id, &rec, &n, &w, &h, &e)) ||
@@ -553,12 +556,14 @@ static http_resp sets_fit(http_req *req)
     if ((rc = admit_enter(a->work, bytes, "decoding a G-buffer set", &e)))
         goto done;
     admitted = 1;
-    rc = gb_samples(a, id, m, n, w, h, &s, &rgb, &e);
+    rc = gb_samples(a, id, m, n, w, h, &s, &rgb, &all_wi, &e);
     admit_leave(a->work, bytes);
     admitted = 0;
     if (!rc && !(rc = fitsvc_fit_gbuffers(a->fits, id, m, params, &s, &rgb, &doc, job_id,
                                           &req->timing, &e)))
-        r = api_fit_answer(req, doc, job_id);
+        r = api_fit_answer(req, doc, job_id,
+                           api_lighting_warning(m, all_wi, "every view's G-buffer names a "
+                                                               "light direction"));
 done:
     if (rc)
         r = api_error(&e);

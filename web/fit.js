@@ -93,10 +93,15 @@ export class FitPanel extends EventTarget {
       o.textContent = x.label || x.name;
       o.title = `${x.summary || x.title} (${x.name})`;
       // the daemon refuses a point-light method on a scene painted under an
-      // environment (lighting-mismatch): offered, but not choosable
+      // environment (lighting-mismatch), and an environment's method on a
+      // scene painted under lamps would assume a light the paintings never
+      // had: offered, but not choosable
       if (env && x.lighting === 'point') {
         o.disabled = true;
         o.title += ' — needs the views\' point lights; this scene is painted under an environment';
+      } else if (!env && x.lighting === 'environment') {
+        o.disabled = true;
+        o.title += ' — needs paintings made under an environment; this scene is painted under lamps';
       }
       sel.appendChild(o);
     }

@@ -53,7 +53,16 @@ run({
     assert(lit, 'the base render is the render under the environment');
   },
   async 'srbf in the studio: environment, fit, lobe, energy, preview under the environment'(t) {
-    const { url } = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96 });
+    // a scene painted under lamps offers the environment's method but not to choose
+    const lamps = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96 });
+    const p0 = await t.page();
+    await openStudio(p0, lamps.url);
+    await p0.waitForSelector('#fit-method option[value="srbf"]', { state: 'attached' });
+    assert(await p0.evaluate(() => document.querySelector('#fit-method option[value="srbf"]').disabled),
+           'an environment\'s method is not choosable on a scene painted under lamps');
+    await p0.close();
+    const { url } = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96,
+                                                base: { env: { spec: 'sky', lights: 32 } } });
     const page = await t.page();
     await openStudio(page, url);
     await page.waitForSelector('#quality .q[data-preset]');
