@@ -39,8 +39,14 @@ static const method_param pbr_params_table[] = {
     {.name = "start_samples", .label = "samples per start", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "samples each start is fitted on (the brightest eighth and an even "
-                    "draw of the rest) before the best is refined on all; 0: all",
+                    "draw of the rest) before the best is refined; 0: all",
      .offset = offsetof(pbr_params, start_samples), .min = 0, .max = 1 << 24},
+    {.name = "refine_samples", .label = "samples refined on", .group = METHOD_GROUP_ADVANCED,
+     .type = METHOD_PARAM_INT, .affects = "fit",
+     .description = "samples the best start is refined on (drawn as the starts' are, when "
+                    "more than they); 0: all.  The errors, the uncertainties and what the "
+                    "views determine are computed on every sample",
+     .offset = offsetof(pbr_params, refine_samples), .min = 0, .max = 1 << 24},
 };
 
 static void pbr_params_default(void *p)
@@ -51,6 +57,7 @@ static void pbr_params_default(void *p)
     pp->starts = 3;
     pp->max_iter = 100;
     pp->start_samples = 4096;
+    pp->refine_samples = 16384;
 }
 
 /* ---- the pbr-geom level ------------------------------------------------------------- */
@@ -161,9 +168,10 @@ static json_t *report_fit(const pbr_fit_result *r)
                                                 r->start[s].alpha0, "cost", r->start[s].cost,
                                                 "iterations", r->start[s].iters, "converged",
                                                 r->start[s].converged));
-    return json_pack("{s:o, s:i, s:i, s:b, s:f, s:f, s:i}", "starts", starts, "best_start",
-                     r->best_start, "iterations", r->iters, "converged", r->converged, "cost",
-                     r->cost, "residual_variance", r->resid_var, "lit_samples", r->nsamples_lit);
+    return json_pack("{s:o, s:i, s:i, s:b, s:i, s:f, s:f, s:i}", "starts", starts,
+                     "best_start", r->best_start, "iterations", r->iters, "converged",
+                     r->converged, "refine_samples", r->refine_samples, "cost", r->cost,
+                     "residual_variance", r->resid_var, "lit_samples", r->nsamples_lit);
 }
 
 /* ---- the fit ----------------------------------------------------------------------------- */
@@ -174,7 +182,9 @@ static int pbr_method_fit(const method_fit_in *in, material *out, glint_err *err
     const pbr_geom *g = in->levels[0];
     double t0 = glint_now();
     pbr_spec sp = {pp->lobes, pp->fresnel};
-    pbr_fit_opts o = {pp->starts, pp->max_iter, pp->start_samples, in->s->view};
+    pbr_fit_opts o = {.starts = pp->starts, .max_iter = pp->max_iter,
+                      .subset = pp->start_samples, .refine = pp->refine_samples,
+                      .view = in->s->view};
     pbr_fit_result *r = malloc(sizeof *r);
     pbr_material *pm = NULL;
     json_t *info, *det;

@@ -35,6 +35,7 @@ typedef struct pbr_params {
     int starts;         /* roughnesses started from */
     int max_iter;       /* iterations per start */
     int start_samples;  /* samples the starts are fitted on (0: all) */
+    int refine_samples; /* samples the best start is refined on (0: all) */
 } pbr_params;
 
 /* A material's data: the fitted parameters and their common form. */
