@@ -255,6 +255,37 @@ static int split_build(const method_build_in *in, cache_value *out, glint_err *e
     return 0;
 }
 
+/* A candidate's build reports its own stages over its own preparation
+ * ("design", 0.3 of hf3's); auto's caller hears them as the auto level
+ * being built, its fraction mapped between that level's start and the
+ * next's, so the stage names and the bar move as auto's. */
+typedef struct relay {
+    const method_build_in *in;
+    double from, to;
+} relay;
+
+static void relay_progress(void *cls, const char *stage, double fraction)
+{
+    const relay *r = cls;
+    (void)stage;
+    fraction = fraction < 0.0 ? 0.0 : fraction > 1.0 ? 1.0 : fraction;
+    r->in->progress(r->in->progress_cls, method_auto.levels[r->in->level].name,
+                    r->from + (r->to - r->from) * fraction);
+}
+
+static int relayed_build(const method_build_in *in, const method *m, int k, method_build_in *c,
+                         cache_value *out, glint_err *err)
+{
+    const method_level *lv = method_auto.levels;
+    relay r = {in, lv[in->level].progress,
+               in->level + 1 < method_auto.nlevels ? lv[in->level + 1].progress : 0.9};
+    if (in->progress) {
+        c->progress = relay_progress;
+        c->progress_cls = &r;
+    }
+    return m->levels[k].build(c, out, err);
+}
+
 /* A candidate level: its method's level k, built on the kept pixels. */
 static int candidate_build(const method_build_in *in, const method *m, int k,
                            const void *const *prev, const void *params, cache_value *out,
@@ -265,7 +296,7 @@ static int candidate_build(const method_build_in *in, const method *m, int k,
     c.s = &((const split *)in->prev[0])->train;
     c.prev = prev;
     c.level = k;
-    return m->levels[k].build(&c, out, err);
+    return relayed_build(in, m, k, &c, out, err);
 }
 
 static void hf3d_key(const void *params, const samples *s, const char *prev_key, char *key,
@@ -333,7 +364,7 @@ static int full_build(const method_build_in *in, const method *m, int k, const v
     c.params = params;
     c.prev = prev;
     c.level = k;
-    return m->levels[k].build(&c, out, err);
+    return relayed_build(in, m, k, &c, out, err);
 }
 
 static void fhf3d_key(const void *params, const samples *s, const char *prev_key, char *key,
