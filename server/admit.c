@@ -152,10 +152,12 @@ static int room_for(admit *a, const admit_ticket *t)
     if (t->cls == ADMIT_BACKGROUND && s->waiting_by[ADMIT_INTERACTIVE] > 0)
         return ROOM_RESERVED;
     if (t->cls == ADMIT_BACKGROUND && s->reserve > 0) {
-        /* its share of the memory too; alone, it may take the whole budget */
+        /* its share of the memory too, but the first piece of background
+         * work may take more (so one larger than the share is not starved
+         * while interactive work comes and goes) */
         size_t share = s->budget / (size_t)s->slots * (size_t)(s->slots - s->reserve);
         if (s->running_by[ADMIT_BACKGROUND] >= s->slots - s->reserve ||
-            (s->running > 0 && t->bytes > share - (a->held_bg < share ? a->held_bg : share)))
+            (s->running_by[ADMIT_BACKGROUND] > 0 && a->held_bg + t->bytes > share))
             return ROOM_RESERVED;
     }
     return ROOM_OK;

@@ -22,10 +22,12 @@
  * Priorities and fairness.  Work comes in two classes: interactive (what a
  * person waits on: fits, previews that follow the mouse, base renders) and
  * background (renders a client asked for at low priority, such as the
- * studio's reference renders for its error table, and exports).  Background
- * work never takes the last `reserve` slots (glintd --work-interactive), and
- * never enters while interactive work waits for room, so a stroke's fit or
- * a preview does not queue behind renders that take minutes.  Work that
+ * studio's reference renders for its error table, exports, the held-out
+ * measurements after fits).  Background work never takes the last
+ * `reserve` slots (glintd --work-interactive), nor more memory than the
+ * unreserved slots' share of the budget once some of it runs, and never
+ * enters while interactive work waits for room, so a stroke's fit or a
+ * preview does not queue behind renders that take minutes.  Work that
  * names its client (admit_ticket.client: the owner key a browser sends, else
  * the client's address) holds at most `per_client` slots at once (glintd
  * --work-per-client), so one person cannot take the whole budget; this is

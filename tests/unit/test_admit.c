@@ -344,6 +344,20 @@ TEST(background_work_leaves_the_reserved_slot)
     admit_get_stats(a, &st);
     ASSERT_EQ(st.running, 0);
     ASSERT_EQ(st.held, 0);
+    /* its share of the memory, (3 - 1) / 3 of the budget, once some runs:
+     * the first piece may take more */
+    admit_limit_classes(a, 1, 3);
+    b1.bytes = 80 * MB;
+    b2.bytes = 1 * MB;
+    i1.bytes = 19 * MB;
+    ASSERT_OK(admit_take(a, &b1, "an export", 0, &e));
+    ASSERT_EQ(admit_take(a, &b2, "a reference render", 0, &e), GLINT_EBUSY);
+    ASSERT_OK(admit_take(a, &i1, "a preview", 0, &e));
+    admit_give(a, &b1);
+    ASSERT_OK(admit_take(a, &b2, "a reference render", 0, &e));
+    admit_give(a, &b2);
+    admit_give(a, &i1);
+    b1.bytes = b2.bytes = b3.bytes = MB;
     /* with no reserve, background work takes every slot */
     admit_limit_classes(a, 0, 3);
     ASSERT_OK(admit_take(a, &b1, "1", 0, &e));
