@@ -140,6 +140,38 @@ void api_cancel_init(http_req *req, glint_cancel *c)
     c->cls = req;
 }
 
+int api_low_priority(http_req *req)
+{
+    const char *p = http_header_in(req, "Priority");
+    /* a Structured Field dictionary: "u=5", "u=5, i", "i, u=6" */
+    for (const char *s = p; s && *s; s++) {
+        if (s[0] == 'u' && s[1] == '=' && s[2] >= '0' && s[2] <= '7' &&
+            (s == p || s[-1] == ' ' || s[-1] == ',') &&
+            (s[3] == '\0' || s[3] == ',' || s[3] == ' ' || s[3] == ';'))
+            return s[2] >= '4';
+    }
+    return 0;
+}
+
+void api_work_ticket(http_req *req, size_t bytes, int background, admit_ticket *t)
+{
+    const char *owner = NULL;
+    glint_err ignored;
+    memset(t, 0, sizeof *t);
+    t->bytes = bytes;
+    t->cls = background || api_low_priority(req) ? ADMIT_BACKGROUND : ADMIT_INTERACTIVE;
+    if (auth_owner_key(req, &owner, &ignored) == 0 && owner)
+        snprintf(t->client, sizeof t->client, "o:%s", owner);
+    else {
+        char addr[HTTP_CLIENT_KEY_MAX];
+        http_client_key(req, addr, sizeof addr);
+        if (addr[0])
+            snprintf(t->client, sizeof t->client, "a:%s", addr);
+    }
+    t->gone = request_stop;
+    t->gone_cls = req;
+}
+
 void api_work_ended(http_req *req, int rc)
 {
     if (rc == GLINT_ECANCELLED)

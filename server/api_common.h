@@ -67,6 +67,20 @@ void api_cancel_init(http_req *req, struct glint_cancel *c);
 struct app;
 void api_stop_cancel_init(struct app *a, struct glint_cancel *c);
 
+/* A ticket (admit.h) for a request's work of `bytes`: the client is the
+ * owner key the request sends (X-Glint-Owner, a browser's), else its
+ * address (http_client_key); the wait gives up once the client has gone
+ * or the daemon stops.  The class is background when `background` is set
+ * or the request asks for low priority (RFC 9218's Priority header with an
+ * urgency of 4 to 7, less urgent than the default 3: the studio's
+ * reference renders), else interactive.  OUT: *t, valid while req is. */
+struct admit_ticket;
+void api_work_ticket(http_req *req, size_t bytes, int background, struct admit_ticket *t);
+
+/* 1 when the request's Priority header (RFC 9218) states an urgency of 4
+ * or more (u=4 .. u=7). */
+int api_low_priority(http_req *req);
+
 /* After admitted work (admit.h) ended with rc: a cancelled one is counted
  * (admit_cancelled). */
 void api_work_ended(http_req *req, int rc);

@@ -43,14 +43,15 @@ static http_resp merl_get(http_req *req)
     http_resp r;
     glint_err e;
     char info[200];
-    int rc, admitted = 0;
+    int rc;
+    admit_ticket ticket = {0};
 
     if ((rc = api_material(req, req->param[0], &doc, &e)))
         return api_error(&e);
     free(doc.text);
-    if ((rc = admit_enter(a->work, bytes, "a MERL table", &e)))
+    api_work_ticket(req, bytes, 1, &ticket);
+    if ((rc = admit_take(a->work, &ticket, "a MERL table", 0, &e)))
         return api_error(&e);
-    admitted = 1;
     if ((rc = api_material_load(a, req->param[0], &m, &e)) ||
         (rc = merl_from_material(&m, 0, &t, &st, &e)) ||
         (rc = merl_write_mem(&t, &data, &len, &e)))
@@ -68,8 +69,7 @@ done:
         r = api_error(&e);
     merl_free(&t);
     material_free(&m);
-    if (admitted)
-        admit_leave(a->work, bytes);
+    admit_give(a->work, &ticket);
     return r;
 }
 
@@ -119,7 +119,8 @@ static http_resp glb_get(http_req *req)
     http_resp r;
     glint_err e;
     char info[400];
-    int rc, admitted = 0;
+    int rc;
+    admit_ticket ticket = {0};
 
     if (bq && (api_parse_count(bq, &bake_res) || bake_res > GLTF_BAKE_RES_MAX))
         return http_problem(400, "invalid-parameter",
@@ -147,9 +148,9 @@ static http_resp glb_get(http_req *req)
     bytes = (size_t)sc->nviews * sc->width * sc->height * 64 +
             (size_t)sc->mesh.nverts * 32 + (size_t)sc->mesh.ntris * 12 +
             (size_t)bake_res * (size_t)bake_res * 64 + ((size_t)2 << 20); /* textures, tables */
-    if ((rc = admit_enter(a->work, bytes, "a glTF export", &e)))
+    api_work_ticket(req, bytes, 1, &ticket);
+    if ((rc = admit_take(a->work, &ticket, "a glTF export", 0, &e)))
         goto done;
-    admitted = 1;
     if ((rc = api_material_load(a, mid, &m, &e)) ||
         (rc = gltf_export_scene(&m, sc, use, (int)bake_res, &glb, &len, &p, &gi, &e)))
         goto done;
@@ -168,8 +169,7 @@ static http_resp glb_get(http_req *req)
 done:
     if (rc)
         r = api_error(&e);
-    if (admitted)
-        admit_leave(a->work, bytes);
+    admit_give(a->work, &ticket);
     json_decref(d);
     material_free(&m);
     cache_release(a->cache, se);

@@ -516,10 +516,11 @@ static http_resp preview(http_req *req, const char *format)
     size_t len = 0;
     http_resp r;
     glint_err e;
-    int w = 0, h = 0, rc, admitted = 0;
+    int w = 0, h = 0, rc;
     size_t bytes = 0;
     char what[64];
     glint_cancel cancel;
+    admit_ticket ticket = {0};
 
     api_cancel_init(req, &cancel);
     if ((rc = api_material(req, mid, &doc, &e)))
@@ -554,14 +555,14 @@ static http_resp preview(http_req *req, const char *format)
     snprintf(what, sizeof what, "a %dx%d preview", w, h);
     /* its time is estimated before it takes a slot: refused up front when
      * beyond the limit, and cancelled when the client leaves */
+    api_work_ticket(req, bytes, 0, &ticket);
     if ((rc = api_material_load(a, mid, &m, &e)) ||
         (rc = admit_cost(a->work,
                          render_material_cost(a->render, eng, mkey, msh, &m, has_env ? &env : NULL,
                                               w, h),
                          what, &e)) ||
-        (rc = admit_enter(a->work, bytes, what, &e)))
+        (rc = admit_take(a->work, &ticket, what, 0, &e)))
         goto done;
-    admitted = 1;
     rc = has_env ? render_material_env(a->render, eng, mkey, msh, &m, &env, &v, w, h, &im, &info,
                                        &used, &cancel, &e)
                  : render_material(a->render, eng, mkey, msh, &m, &v, w, h, &im, &used, &cancel,
@@ -583,8 +584,7 @@ done:
     if (rc)
         r = api_error(&e);
     img_free(&im);
-    if (admitted)
-        admit_leave(a->work, bytes);
+    admit_give(a->work, &ticket);
     material_free(&m);
     cache_release(a->cache, se);
     free(doc.text);

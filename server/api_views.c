@@ -82,6 +82,7 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
     int rc, has_env, W, H;
     double cost = 0.0;
     glint_cancel cancel;
+    admit_ticket ticket;
 
     api_cancel_init(req, &cancel);
     if ((rc = api_env_query(req, &env, &has_env, e)))
@@ -106,10 +107,11 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
     H = sc->height * ps;
     bytes = render_peak_bytes(RENDER_CPU, 1, W, H) +
             (has_env ? (size_t)W * H * 8 * (size_t)((env.lights + 63) / 64) : 0);
+    api_work_ticket(req, bytes, 0, &ticket);
     if (!rc && !(rc = render_base_cost(NULL, RENDER_CPU, NULL, &sc->mesh, spec,
                                        has_env ? &env : NULL, W, H, &cost, e)) &&
         !(rc = admit_cost(a->work, cost, "the base render", e)) &&
-        !(rc = admit_enter(a->work, bytes, "the base render", e))) {
+        !(rc = admit_take(a->work, &ticket, "the base render", 0, e))) {
         /* on the CPU: at scale 1 the pixels are exactly those a painting is sampled at */
         if ((rc = has_env ? render_base_env(NULL, RENDER_CPU, NULL, &sc->mesh, spec, scale, &env,
                                             &view, W, H, im, NULL, NULL, &cancel, e)
@@ -117,7 +119,7 @@ static int scene_base_custom(http_req *req, const json_t *doc, int k, int ps, im
                                         scale, im, NULL, &cancel, e)))
             glint_err_prefix(e, "rendering");
         api_work_ended(req, rc);
-        admit_leave(a->work, bytes);
+        admit_give(a->work, &ticket);
     }
     cache_release(a->cache, se);
     return rc;
@@ -165,6 +167,7 @@ static http_resp scene_gbuffer(http_req *req)
     size_t len = 0, bytes;
     glint_err e;
     int k, rc;
+    admit_ticket ticket;
 
     if (scene_view_arg(req, &doc, &k, &e))
         return api_error(&e);
@@ -173,10 +176,11 @@ static http_resp scene_gbuffer(http_req *req)
         return api_fail(&e, "scene");
     sc = prep_scene_of(se)->sc;
     bytes = render_gbuffer_peak_bytes(sc->width, sc->height);
-    if ((rc = admit_enter(a->work, bytes, "the G-buffer", &e)) == 0) {
+    api_work_ticket(req, bytes, 0, &ticket);
+    if ((rc = admit_take(a->work, &ticket, "the G-buffer", 0, &e)) == 0) {
         rc = render_gbuffer_exr(&sc->mesh, &sc->views[k], sc->width, sc->height, &data, &len,
                                 &e);
-        admit_leave(a->work, bytes);
+        admit_give(a->work, &ticket);
     }
     cache_release(a->cache, se);
     if (rc)

@@ -42,6 +42,8 @@ typedef struct app_config {
     int work_slots;           /* ... pieces of it at once */
     int work_wait_s;          /* how long a request waits for room (admit.h) */
     int work_max_seconds;     /* largest estimate of one piece of work, seconds (0: none) */
+    int work_interactive;     /* slots kept for interactive work (-1: admit.h's default) */
+    int work_per_client;      /* slots one client may hold (-1: admit.h's default) */
     int worker_threads;       /* background jobs */
     int background_priority;  /* fitsvc.h FITSVC_BG_*: measurements no one waits for */
     unsigned timeout_s;       /* idle timeout of a kept-alive connection */

@@ -24,6 +24,8 @@ void config_default(app_config *c)
     c->work_slots = 4;
     c->work_wait_s = 10;
     c->work_max_seconds = 600;
+    c->work_interactive = -1; /* admit.h's defaults */
+    c->work_per_client = -1;
     c->timeout_s = 30;
     c->max_connections = 256;
     c->max_connections_per_ip = 64;
@@ -94,6 +96,8 @@ static const struct {
     NUM_OPT("work-slots", 1, 1024, K_INT, work_slots),
     NUM_OPT("work-wait", 0, 3600, K_INT, work_wait_s),
     NUM_OPT("work-max-seconds", 0, 1000000, K_INT, work_max_seconds),
+    NUM_OPT("work-interactive", 0, 1023, K_INT, work_interactive),
+    NUM_OPT("work-per-client", 1, 1024, K_INT, work_per_client),
     NUM_OPT("timeout", 1, 3600, K_UNSIGNED, timeout_s),
     NUM_OPT("max-connections", 1, 100000, K_UNSIGNED, max_connections),
     NUM_OPT("max-connections-per-ip", 1, 100000, K_UNSIGNED, max_connections_per_ip),

@@ -181,10 +181,13 @@ static int holdout_job(job *j, void *arg, json_t **result, glint_err *err)
     holdout_run x;
     pthread_t th;
     int rc;
+    /* background work: it measures a fit already answered, so fits and
+     * previews people wait on go first (admit.h) */
+    admit_ticket t = {.bytes = h->bytes, .cls = ADMIT_BACKGROUND, .gone = fitsvc_job_cancelled,
+                      .gone_cls = j};
 
     (void)result;
-    if (h->f->work && (rc = admit_wait(h->f->work, h->bytes, "a held-out measurement",
-                                       fitsvc_job_cancelled, j, err)))
+    if (h->f->work && (rc = admit_take(h->f->work, &t, "a held-out measurement", 1, err)))
         return rc;
     memset(&x, 0, sizeof x);
     x.h = h;
@@ -193,8 +196,7 @@ static int holdout_job(job *j, void *arg, json_t **result, glint_err *err)
         pthread_join(th, NULL);
     else /* no thread to spare: not measured now (the point's next fit asks again) */
         x.rc = glint_err_set(&x.err, GLINT_ENOMEM, "no thread for the held-out measurement");
-    if (h->f->work)
-        admit_leave(h->f->work, h->bytes);
+    admit_give(h->f->work, &t);
     if ((rc = x.rc)) {
         *err = x.err;
         return rc;

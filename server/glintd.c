@@ -72,6 +72,12 @@ static void usage(FILE *f)
           "  --work-max-seconds S  the largest estimate of one piece of such work, in\n"
           "                        seconds of one core (a preview, a base render, a cold\n"
           "                        fit); beyond it 413 before it starts; 0 for no limit (600)\n"
+          "  --work-interactive N  of --work-slots, kept for what people wait on (fits,\n"
+          "                        previews, base renders): reference renders a client asks\n"
+          "                        for at low priority and exports never take them, and wait\n"
+          "                        while such work waits (1; 0 with one slot)\n"
+          "  --work-per-client N   ... pieces of such work one client (its owner key, else its\n"
+          "                        address) holds at once (half of --work-slots, at least 1)\n"
           "  --timeout S           idle timeout of a kept-alive connection, seconds (30)\n"
           "  --max-connections N   connections served at once, health checks aside (256)\n"
           "  --max-connections-per-ip N\n"
@@ -257,6 +263,13 @@ static int glintd_open_services(app *a, glint_err *ge)
                          ge)))
         return rc;
     admit_limit_seconds(a->work, a->cfg.work_max_seconds);
+    {
+        admit_stats st;
+        admit_get_stats(a->work, &st);
+        admit_limit_classes(a->work,
+                            a->cfg.work_interactive >= 0 ? a->cfg.work_interactive : st.reserve,
+                            a->cfg.work_per_client > 0 ? a->cfg.work_per_client : st.per_client);
+    }
     fc.work = a->work;
     if ((rc = store_open_db(a->cfg.data_dir, a->cfg.database, &a->store, ge)) ||
         (rc = api_envs_store(a->store, ge)) ||

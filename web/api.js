@@ -5,9 +5,12 @@
 // downloads), the optional daemon API key as Authorization: Bearer, this
 // browser's owner key as X-Glint-Owner on scene and environment calls (it
 // owns the scenes and environment maps uploaded here: only they are listed,
-// only they may be deleted), and a
+// only they may be deleted; on material renders it names this browser, so
+// glintd counts its work against one client's share), and a
 // refusal comes back as an ApiError carrying the problem+json body
 // (RFC 9457: type, title, status, detail) so the studio can show it.
+
+import { Requests } from './requests.js';
 
 export class ApiError extends Error {
   constructor(status, problem, what) {
@@ -31,6 +34,7 @@ export class Api {
       this.owner = Array.from(b, x => x.toString(16).padStart(2, '0')).join('');
       localStorage.setItem('glint.owner', this.owner);
     }
+    this.images = new Requests();   // every image request of the studio (requests.js)
   }
 
   headers(extra) {
@@ -50,7 +54,7 @@ export class Api {
 
   async request(method, path, { body, type, query, what, signal, raw, headers } = {}) {
     const h = this.headers(headers);
-    if (/^\/(scenes|environments)(\/|$)/.test(path)) h['X-Glint-Owner'] = this.owner;
+    if (/^\/(scenes|environments|materials)(\/|$)/.test(path)) h['X-Glint-Owner'] = this.owner;
     let payload = body;
     if (body !== undefined && !(body instanceof Uint8Array) && !(body instanceof Blob) && !(body instanceof ArrayBuffer)) {
       payload = JSON.stringify(body);
@@ -70,7 +74,9 @@ export class Api {
       try {
         problem = ct.includes('json') ? await r.json() : { title: r.statusText, detail: (await r.text()).slice(0, 300) };
       } catch (_) { problem = { title: r.statusText }; }
-      throw new ApiError(r.status, problem, what);
+      const e = new ApiError(r.status, problem, what);
+      e.retryAfter = r.headers.get('Retry-After');
+      throw e;
     }
     if (raw) return r;
     if (r.status === 204) return null;
@@ -98,11 +104,11 @@ export class Api {
   putPainting(sid, k, bytes) {
     return this.request('PUT', `/sessions/${sid}/views/${k}/painting`, { body: bytes, type: 'image/x-exr', what: 'Uploading the painting' });
   }
-  painting(sid, k, format) {
-    return this.request('GET', `/sessions/${sid}/views/${k}/painting`, { query: { format: format || 'exr' }, raw: true, what: 'Reading the painting of view ' + k });
+  painting(sid, k, format, signal) {
+    return this.request('GET', `/sessions/${sid}/views/${k}/painting`, { query: { format: format || 'exr' }, raw: true, signal, what: 'Reading the painting of view ' + k });
   }
-  base(sceneId, k, format) {
-    return this.request('GET', `/scenes/${sceneId}/views/${k}/base.png`, { query: format ? { format } : undefined, raw: true, what: 'Reading the base render of view ' + k });
+  base(sceneId, k, format, signal) {
+    return this.request('GET', `/scenes/${sceneId}/views/${k}/base.png`, { query: format ? { format } : undefined, raw: true, signal, what: 'Reading the base render of view ' + k });
   }
   strokes(sid, since, limit) { return this.get(`/sessions/${sid}/strokes`, { query: { since, limit: limit || 1000 }, what: 'Reading strokes' }); }
   environments() { return this.get('/environments', { what: 'Reading the environments' }); }
@@ -115,8 +121,10 @@ export class Api {
   job(id) { return this.get('/jobs/' + id, { what: 'Reading the job' }); }
   material(id) { return this.get('/materials/' + id, { what: 'Reading the material' }); }
   materials(sid) { return this.get(`/sessions/${sid}/materials`, { what: 'Listing materials' }); }
-  materialFile(id, file, query, signal) {
-    return this.request('GET', `/materials/${id}/${file}`, { query, raw: true, signal, what: 'Reading ' + file });
+  // headers: e.g. { Priority: 'u=6' } for a render glintd may run after
+  // interactive work (requests.js).
+  materialFile(id, file, query, signal, headers) {
+    return this.request('GET', `/materials/${id}/${file}`, { query, raw: true, signal, headers, what: 'Reading ' + file });
   }
 }
 

@@ -4,6 +4,8 @@
 // turns the environment; glintd renders each frame
 // (GET /materials/{id}/preview.png?object=ball&env=&env_rotation=).
 
+import { CLASS, isAbort } from './requests.js';
+
 const $ = id => document.getElementById(id);
 
 // The ball's camera: a little above the equator, looking at the origin
@@ -37,6 +39,8 @@ export class Ball extends EventTarget {
 
   setMaterial(m) {
     this.mat = m;
+    const c = $('ball');
+    c.style.opacity = this.frames && c.dataset.material !== m.id ? '0.35' : '';
     $('ball-empty').classList.toggle('hidden', this.frames > 0);
     this.request();
   }
@@ -66,37 +70,53 @@ export class Ball extends EventTarget {
              env_rotation: $('ball-rot').value };
   }
 
-  // One request in flight; the newest wanted frame follows when it returns.
+  // What a frame is for: the material and the environment (turning it
+  // waits for the frame in flight; another material or environment aborts it).
+  frameKey() { return this.mat ? this.mat.id + '|' + ($('ball-env').value || 'studio') : ''; }
+
+  // One request in flight per material and environment; the newest wanted
+  // frame follows when it returns.
   request() {
     $('ball-rot-v').textContent = $('ball-rot').value + '°';
     if (!this.mat) return;
     this.want++;
+    if (this.inflight && this.inflight.key !== this.frameKey()) {
+      this.api.images.abort('ball', 'another material or environment');
+      this.inflight = null;
+    }
     if (!this.inflight) this.fetchFrame();
   }
 
   async fetchFrame() {
-    const n = this.want, mat = this.mat, q = this.query();
-    this.inflight = true;
+    const n = this.want, mat = this.mat, q = this.query(), key = this.frameKey();
+    const job = this.inflight = { key, n };
+    const current = () => this.mat === mat && this.frameKey() === key;
     const t0 = performance.now();
     try {
-      const r = await this.api.materialFile(mat.id, 'preview.png', q);
+      const r = await this.api.images.run('ball', (signal, h) => this.api.materialFile(mat.id, 'preview.png', q, signal, h),
+        { cls: CLASS.interactive, current });
       const bmp = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none' });
-      if (mat === this.mat && n > this.shown) {
-        $('ball').getContext('2d').drawImage(bmp, 0, 0, SIZE, SIZE);
+      if (current() && n > this.shown) {
+        const c = $('ball');
+        c.getContext('2d').drawImage(bmp, 0, 0, SIZE, SIZE);
+        c.dataset.material = mat.id;
+        c.style.opacity = '';
         this.shown = n;
         this.frames++;
         this.last = { ms: performance.now() - t0, renderer: r.headers.get('X-Glint-Renderer') || '',
-                      env: r.headers.get('X-Glint-Env') || '', query: q };
+                      env: r.headers.get('X-Glint-Env') || '', query: q, material: mat.id };
         $('ball-empty').classList.add('hidden');
         $('ball').title = `the material on a ball under ${q.env}, turned ${q.env_rotation}° ` +
           `(${Math.round(this.last.ms)} ms) · drag: turn the light · double-click: reset`;
         this.dispatchEvent(new CustomEvent('frame', { detail: this.last }));
       }
     } catch (e) {
-      this.dispatchEvent(new CustomEvent('error', { detail: e }));
+      if (!isAbort(e)) this.dispatchEvent(new CustomEvent('error', { detail: e }));
     } finally {
-      this.inflight = false;
-      if (this.want > n && mat === this.mat) this.fetchFrame();
+      if (this.inflight === job) {
+        this.inflight = null;
+        if (this.want > n && this.mat) this.fetchFrame();
+      }
     }
   }
 }

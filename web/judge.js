@@ -12,6 +12,7 @@ import { methodNamed, shows, sizeText, underEnv } from './methods.js';
 import { SurfacePanel } from './surface.js';
 import { loadSummary, renderSummary } from './summary.js';
 import { Ball } from './ball.js';
+import { CLASS, isAbort } from './requests.js';
 
 const $ = id => document.getElementById(id);
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -99,7 +100,11 @@ export class Judge extends EventTarget {
     return { env: spec, env_rotation: $('env-rot').value, lights: String(Math.min(1024, lights || 256)) };
   }
 
-  emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+  // A superseded request's AbortError is no error to show.
+  emit(type, detail) {
+    if (type === 'error' && isAbort(detail)) return;
+    this.dispatchEvent(new CustomEvent(type, { detail }));
+  }
 
   bindTabs() {
     for (const b of document.querySelectorAll('.tabs button')) {
@@ -114,8 +119,10 @@ export class Judge extends EventTarget {
   // ---- the material ------------------------------------------------------------------
 
   async setMaterial(m, k) {
+    if (this.mat && this.mat.id !== m.id) this.api.images.abortPrefix('reference:', 'another material is shown');
     this.mat = m;
     this.envDefault(m);
+    this.markStale();
     const what = shows(m), lobe = what === 'lobes', factors = what === 'factors';
     $('factors-wrap').classList.toggle('hidden', !factors);
     $('lobe-wrap').classList.toggle('hidden', !lobe);
@@ -202,12 +209,29 @@ export class Judge extends EventTarget {
     this.request();
   }
 
-  // One request in flight; while it runs, later moves only update what is
-  // wanted, and the newest wanted frame is asked for when it returns.
+  // What a preview is for: the material and the light (a new one of either
+  // aborts the frame in flight; camera and light moves wait for it).
+  frameKey() { return this.mat ? this.mat.id + '|' + this.envSpec() : ''; }
+
+  // The preview shows another material than the current one (or none yet):
+  // dimmed until the current one's frame is drawn.
+  markStale() {
+    const c = $('preview'), stale = c.dataset.material !== (this.mat ? this.mat.id : '');
+    c.style.opacity = stale && this.frames ? '0.35' : '';
+  }
+
+  // One request in flight for the same material and light; while it runs,
+  // later moves only update what is wanted, and the newest wanted frame is
+  // asked for when it returns.  A request for another material or light
+  // aborts it (requests.js: the daemon frees its slot).
   request() {
     if (!this.mat || !this.cam) return;
     this.want++;
     this.drawGizmo();
+    if (this.inflight && this.inflight.key !== this.frameKey()) {
+      this.api.images.abort('preview', 'another material or light');
+      this.inflight = null;
+    }
     if (!this.inflight) this.fetchFrame();
   }
 
@@ -215,27 +239,44 @@ export class Judge extends EventTarget {
     const n = this.want;
     const c = this.cam, f = a => a.map(x => x.toFixed(4)).join(',');
     const q = Object.assign({ eye: f(c.eye), light: f(c.light), target: f(c.target), size: '256' }, this.envQuery());
-    this.inflight = true;
-    const mat = this.mat;
+    const mat = this.mat, key = this.frameKey(), job = this.inflight = { key, n };
+    const current = () => this.mat === mat && this.frameKey() === key;
     try {
-      const r = await this.api.materialFile(mat.id, 'preview.png', q);
+      const r = await this.api.images.run('preview', (signal, h) => this.api.materialFile(mat.id, 'preview.png', q, signal, h),
+        { cls: CLASS.interactive, current, busy: e => this.showBusy(e) });
       const bmp = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none' });
-      if (mat === this.mat && n > this.shown) {
-        const g = $('preview').getContext('2d');
-        g.drawImage(bmp, 0, 0, 256, 256);
-        this.shown = n;
-        this.frames++;
-        $('preview-empty').classList.add('hidden');
-        this.lastRenderer = r.headers.get('X-Glint-Renderer') || '';
-        this.lastEnv = r.headers.get('X-Glint-Env') || '';
-        this.emit('frame', { n, renderer: this.lastRenderer });
-      }
+      if (current() && n > this.shown) this.drawFrame(bmp, mat, n, r);
     } catch (e) {
       this.emit('error', e);
     } finally {
-      this.inflight = false;
-      if (this.want > n && mat === this.mat) this.fetchFrame();
+      if (this.inflight === job) {
+        this.inflight = null;
+        if (this.want > n && this.mat) this.fetchFrame();
+      }
     }
+  }
+
+  // Draw a frame of mat (the current material: checked by the caller).
+  drawFrame(bmp, mat, n, r) {
+    const cv = $('preview');
+    cv.getContext('2d').drawImage(bmp, 0, 0, 256, 256);
+    cv.dataset.material = mat.id;
+    cv.dataset.frame = String(n);
+    this.shown = n;
+    this.frames++;
+    this.markStale();
+    $('preview-empty').classList.add('hidden');
+    this.lastRenderer = r.headers.get('X-Glint-Renderer') || '';
+    this.lastEnv = r.headers.get('X-Glint-Env') || '';
+    this.emit('frame', { n, renderer: this.lastRenderer, material: mat.id });
+  }
+
+  // The daemon is busy: its words (what it does, that the preview will
+  // follow) under the preview while the request waits to be asked again.
+  showBusy(e) {
+    const el = $('preview-empty');
+    el.textContent = (e.problem && e.problem.detail) || 'the server is busy; the preview will follow';
+    el.classList.remove('hidden');
   }
 
   // The light's direction as seen from the camera, drawn over the preview.
@@ -266,7 +307,8 @@ export class Judge extends EventTarget {
 
   async loadManifest() {
     const mat = this.mat;
-    const r = await this.api.materialFile(mat.id, 'material.json');
+    const r = await this.api.images.run('manifest', (signal, h) => this.api.materialFile(mat.id, 'material.json', undefined, signal, h),
+      { current: () => mat === this.mat });
     const man = await r.json();
     if (mat !== this.mat) return;
     this.manifest = man;
@@ -288,7 +330,8 @@ export class Judge extends EventTarget {
 
   async loadFactors() {
     const mat = this.mat;
-    const r = await this.api.materialFile(mat.id, 'factors.exr');
+    const r = await this.api.images.run('factors', (signal, h) => this.api.materialFile(mat.id, 'factors.exr', undefined, signal, h),
+      { current: () => mat === this.mat });
     const im = await decodeImage(await r.arrayBuffer());
     if (mat !== this.mat) return;
     this.factors = im;             // 3 rows (p, q, r) per product x res texels, RGB, linear
@@ -478,7 +521,10 @@ export class Judge extends EventTarget {
     const q = { view: String(k), renderer: 'cpu', size: String(sc.paint_width || sc.width) };
     if (underEnv(mat)) Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
                                           lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
-    const r = await this.api.materialFile(mat.id, 'preview.exr', q);
+    // a reference render: after the studio's other requests, and in the
+    // daemon after interactive work; dropped once another material is shown
+    const r = await this.api.images.run(`reference:view${k}`, (signal, h) => this.api.materialFile(mat.id, 'preview.exr', q, signal, h),
+      { cls: CLASS.reference, current: () => this.mat === mat });
     return decodeImage(await r.arrayBuffer());
   }
 

@@ -35,6 +35,7 @@ import { encodeEXR } from './exr.js';
 import { cloneImage, cropBox, decodeImage, pasteBox } from './image.js';
 import { EventStream } from './sse.js';
 import { API, ApiError } from './api.js';
+import { CLASS } from './requests.js';
 
 const UNDO_DEPTH = 64;
 
@@ -123,13 +124,14 @@ export class Session extends EventTarget {
   // its base render as of L.  On a mismatch, read again.
 
   async fetchImage(k) {
-    const r = await this.api.painting(this.id, k, 'exr');
+    // through the studio's image queue, before previews and reference renders
+    const r = await this.api.images.run(null, signal => this.api.painting(this.id, k, 'exr', signal), { cls: CLASS.paint });
     const version = +(r.headers.get('X-Glint-Version') || 0);
     return { im: await decodeImage(await r.arrayBuffer()), version };
   }
 
   async fetchBase(k) {
-    const r = await this.api.base(this.doc.scene_id, k, 'exr');
+    const r = await this.api.images.run(null, signal => this.api.base(this.doc.scene_id, k, 'exr', signal), { cls: CLASS.paint });
     return decodeImage(await r.arrayBuffer());
   }
 

@@ -10,6 +10,7 @@
 // between nodes at (i, j) / (s_res - 1).
 
 import { decodeEXR } from './exr.js';
+import { isAbort } from './requests.js';
 import { surfaceTextures } from './methods.js';
 
 const $ = id => document.getElementById(id);
@@ -90,7 +91,8 @@ export class SurfacePanel {
       : !kind.spatial
         ? `${K} materials, each weighted over the surface by its coefficient texture (white: this material, black: none of it).`
         : `${K} materials, each weighted by its coefficient texture and tinted by its own spatial factor.`;
-    const get = async f => decodeEXR(await (await this.api.materialFile(mat.id, f)).arrayBuffer());
+    const get = async f => decodeEXR(await (await this.api.images.run('surface:' + f,
+      (signal, h) => this.api.materialFile(mat.id, f, undefined, signal, h), { current: () => mat === this.mat })).arrayBuffer());
     const [coef, spatial] = await Promise.all([kind.coef ? get('coefficients.exr') : null,
                                                kind.spatial ? get('spatial.exr') : null]);
     if (mat !== this.mat) return;
@@ -107,9 +109,11 @@ export class SurfacePanel {
     const sc = this.session.scene;
     if (!this.gbuf.has(k)) {
       try {
-        const r = await this.api.request('GET', `/scenes/${sc.id}/views/${k}/gbuffer.exr`, { raw: true, what: 'Reading the G-buffer of view ' + k });
+        const r = await this.api.images.run('gbuffer:' + k,
+          signal => this.api.request('GET', `/scenes/${sc.id}/views/${k}/gbuffer.exr`, { raw: true, signal, what: 'Reading the G-buffer of view ' + k }));
         this.gbuf.set(k, await decodeEXR(await r.arrayBuffer(), ['uv.U', 'uv.V', 'mask']));
       } catch (e) {
+        if (isAbort(e)) return;
         $('surface-caption').textContent = 'the object view needs the G-buffer: ' + e.message;
         return;
       }

@@ -13,6 +13,7 @@
 
 import { decodeEXR } from './exr.js';
 import { newImage } from './image.js';
+import { CLASS } from './requests.js';
 
 const uvCache = new Map();   // `${sceneId}/${k}` -> Promise of {w, h, data: U, V, mask}
 
@@ -21,7 +22,7 @@ export function viewUV(api, sceneId, k) {
   const key = `${sceneId}/${k}`;
   if (!uvCache.has(key)) {
     const p = (async () => {
-      const r = await api.request('GET', `/scenes/${sceneId}/views/${k}/gbuffer.exr`, { raw: true, what: 'Reading the G-buffer of view ' + k });
+      const r = await api.images.run(null, signal => api.request('GET', `/scenes/${sceneId}/views/${k}/gbuffer.exr`, { raw: true, signal, what: 'Reading the G-buffer of view ' + k }), { cls: CLASS.paint });
       return decodeEXR(await r.arrayBuffer(), ['uv.U', 'uv.V', 'mask']);
     })();
     p.catch(() => uvCache.delete(key));

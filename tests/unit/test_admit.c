@@ -3,9 +3,13 @@
  * what cannot fit now, waiting work enters as soon as room is made and gives
  * up when cancelled, many threads entering and leaving at once keep the
  * books exact, estimates beyond the time limit are refused with both
- * numbers, and a stop ends every wait. */
+ * numbers, and a stop ends every wait.  Classes and clients: background work
+ * leaves the reserved slots to interactive work and yields to interactive
+ * work that waits; one client holds at most its share; a request whose
+ * client went away while it waited gives up at once and takes nothing. */
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <string.h>
 #include <time.h>
 
@@ -264,6 +268,237 @@ TEST(stop_ends_the_waits_and_refuses_new_work)
     admit_close(w.a);
 }
 
+/* A ticket's waiter on its own thread: admit_take with its class and
+ * client, polling gone. */
+typedef struct taker {
+    admit *a;
+    admit_ticket t;
+    int forever;
+    atomic_int gone, polls, done, rc;
+    glint_err e;
+} taker;
+
+static int taker_gone(void *cls)
+{
+    taker *k = cls;
+    atomic_fetch_add(&k->polls, 1);
+    return atomic_load(&k->gone);
+}
+
+static void *take_main(void *arg)
+{
+    taker *k = arg;
+    int rc;
+    k->t.gone = taker_gone;
+    k->t.gone_cls = k;
+    rc = admit_take(k->a, &k->t, "a render", k->forever, &k->e);
+    atomic_store(&k->rc, rc);
+    atomic_store(&k->done, 1);
+    return NULL;
+}
+
+static void taker_polled(taker *k, int n)
+{
+    while (atomic_load(&k->polls) < n)
+        sleep_s(1e-3);
+}
+
+static admit_ticket ticket(size_t bytes, admit_class cls, const char *client)
+{
+    admit_ticket t = {.bytes = bytes, .cls = cls};
+    snprintf(t.client, sizeof t.client, "%s", client ? client : "");
+    return t;
+}
+
+TEST(background_work_leaves_the_reserved_slot)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    admit_ticket b1 = ticket(MB, ADMIT_BACKGROUND, NULL), b2 = b1, b3 = b1;
+    admit_ticket i1 = ticket(MB, ADMIT_INTERACTIVE, NULL);
+    ASSERT_OK(admit_open(100 * MB, 3, 0, &a, NULL));
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.reserve, 1); /* the defaults: one slot kept, half the slots a client */
+    ASSERT_EQ(st.per_client, 1);
+    ASSERT_OK(admit_take(a, &b1, "reference render 1", 0, &e));
+    ASSERT_OK(admit_take(a, &b2, "reference render 2", 0, &e));
+    ASSERT_EQ(admit_take(a, &b3, "reference render 3", 0, &e), GLINT_EBUSY);
+    ASSERT(strcmp(e.kind, "busy") == 0);
+    ASSERT_MSG(strstr(e.msg, "reference render 3 will follow") && strstr(e.msg, "keeps room"),
+               "%s", e.msg);
+    ASSERT_EQ(b3.held, 0);
+    ASSERT_OK(admit_take(a, &i1, "a preview", 0, &e)); /* the kept slot */
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running, 3);
+    ASSERT_EQ(st.running_by[ADMIT_BACKGROUND], 2);
+    ASSERT_EQ(st.running_by[ADMIT_INTERACTIVE], 1);
+    ASSERT_EQ(st.refused_by[ADMIT_BACKGROUND], 1);
+    ASSERT_EQ(st.refused_by[ADMIT_INTERACTIVE], 0);
+    admit_give(a, &b1);
+    admit_give(a, &b1); /* once only */
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running, 2);
+    admit_give(a, &b2);
+    admit_give(a, &i1);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running, 0);
+    ASSERT_EQ(st.held, 0);
+    /* its share of the memory, (3 - 1) / 3 of the budget, once some runs:
+     * the first piece may take more */
+    admit_limit_classes(a, 1, 3);
+    b1.bytes = 80 * MB;
+    b2.bytes = 1 * MB;
+    i1.bytes = 19 * MB;
+    ASSERT_OK(admit_take(a, &b1, "an export", 0, &e));
+    ASSERT_EQ(admit_take(a, &b2, "a reference render", 0, &e), GLINT_EBUSY);
+    ASSERT_OK(admit_take(a, &i1, "a preview", 0, &e));
+    admit_give(a, &b1);
+    ASSERT_OK(admit_take(a, &b2, "a reference render", 0, &e));
+    admit_give(a, &b2);
+    admit_give(a, &i1);
+    b1.bytes = b2.bytes = b3.bytes = MB;
+    /* with no reserve, background work takes every slot */
+    admit_limit_classes(a, 0, 3);
+    ASSERT_OK(admit_take(a, &b1, "1", 0, &e));
+    ASSERT_OK(admit_take(a, &b2, "2", 0, &e));
+    ASSERT_OK(admit_take(a, &b3, "3", 0, &e));
+    admit_give(a, &b1);
+    admit_give(a, &b2);
+    admit_give(a, &b3);
+    admit_close(a);
+}
+
+TEST(background_work_yields_to_interactive_work_that_waits)
+{
+    admit *a;
+    admit_stats st;
+    admit_ticket running = ticket(MB, ADMIT_INTERACTIVE, NULL);
+    taker bg = {0}, fit = {0};
+    pthread_t tb, tf;
+    ASSERT_OK(admit_open(100 * MB, 1, 0, &a, NULL)); /* one slot: nothing reserved */
+    ASSERT_OK(admit_take(a, &running, "a fit", 0, NULL));
+    bg.a = fit.a = a;
+    bg.forever = fit.forever = 1;
+    bg.t = ticket(MB, ADMIT_BACKGROUND, NULL);
+    fit.t = ticket(MB, ADMIT_INTERACTIVE, NULL);
+    ASSERT_OK(pthread_create(&tb, NULL, take_main, &bg)); /* the render waits first */
+    taker_polled(&bg, 2);
+    ASSERT_OK(pthread_create(&tf, NULL, take_main, &fit));
+    taker_polled(&fit, 2);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.waiting_by[ADMIT_BACKGROUND], 1);
+    ASSERT_EQ(st.waiting_by[ADMIT_INTERACTIVE], 1);
+    admit_give(a, &running);
+    pthread_join(tf, NULL); /* the fit enters first, though it came second */
+    ASSERT_EQ(atomic_load(&fit.rc), 0);
+    ASSERT_EQ(atomic_load(&bg.done), 0);
+    taker_polled(&bg, atomic_load(&bg.polls) + 2); /* it went round and still waits */
+    ASSERT_EQ(atomic_load(&bg.done), 0);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running_by[ADMIT_INTERACTIVE], 1);
+    ASSERT_EQ(st.running_by[ADMIT_BACKGROUND], 0);
+    admit_give(a, &fit.t);
+    pthread_join(tb, NULL);
+    ASSERT_EQ(atomic_load(&bg.rc), 0);
+    admit_give(a, &bg.t);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running, 0);
+    ASSERT_EQ(st.waiting_by[0] + st.waiting_by[1], 0);
+    admit_close(a);
+}
+
+TEST(one_client_holds_at_most_its_share)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    admit_ticket x1 = ticket(MB, ADMIT_BACKGROUND, "o:artist-x"), x2 = x1;
+    admit_ticket x3 = ticket(MB, ADMIT_INTERACTIVE, "o:artist-x");
+    admit_ticket y1 = ticket(MB, ADMIT_INTERACTIVE, "o:artist-y");
+    admit_ticket anon = ticket(MB, ADMIT_INTERACTIVE, NULL);
+    ASSERT_OK(admit_open(100 * MB, 5, 0, &a, NULL));
+    admit_limit_classes(a, 1, 2);
+    ASSERT_OK(admit_take(a, &x1, "reference render 1", 0, &e));
+    ASSERT_OK(admit_take(a, &x2, "reference render 2", 0, &e));
+    ASSERT_EQ(admit_take(a, &x3, "your preview", 0, &e), GLINT_EBUSY);
+    ASSERT(strcmp(e.kind, "busy") == 0);
+    ASSERT_MSG(strstr(e.msg, "rendering your reference images") &&
+                   strstr(e.msg, "your preview will follow") && strstr(e.msg, "--work-per-client"),
+               "%s", e.msg);
+    ASSERT_OK(admit_take(a, &y1, "another artist's preview", 0, &e));
+    ASSERT_OK(admit_take(a, &anon, "a fit", 0, &e)); /* no client: not counted */
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.refused_client, 1);
+    ASSERT_EQ(st.running, 4);
+    admit_give(a, &x1);
+    ASSERT_OK(admit_take(a, &x3, "your preview", 0, &e)); /* its share has room again */
+    admit_give(a, &x2);
+    admit_give(a, &x3);
+    admit_give(a, &y1);
+    admit_give(a, &anon);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.running, 0);
+    /* the rows of clients are reused: many clients one after another */
+    for (int i = 0; i < 50; i++) {
+        char who[16];
+        snprintf(who, sizeof who, "a:10.0.0.%d", i);
+        x1 = ticket(MB, ADMIT_INTERACTIVE, who);
+        ASSERT_OK(admit_take(a, &x1, "a preview", 0, &e));
+        admit_give(a, &x1);
+    }
+    admit_close(a);
+}
+
+TEST(a_request_whose_client_went_away_while_waiting_takes_nothing)
+{
+    admit *a;
+    admit_stats st;
+    glint_err e;
+    admit_ticket render = ticket(10 * MB, ADMIT_INTERACTIVE, "a:10.0.0.1"), next;
+    taker k = {0};
+    pthread_t t;
+    /* a request waits up to an hour: only its client's going ends the wait */
+    ASSERT_OK(admit_open(100 * MB, 1, 3600, &a, NULL));
+    ASSERT_OK(admit_take(a, &render, "a render", 0, &e));
+    k.a = a;
+    k.t = ticket(10 * MB, ADMIT_INTERACTIVE, "a:10.0.0.2");
+    ASSERT_OK(pthread_create(&t, NULL, take_main, &k));
+    taker_polled(&k, 2);
+    atomic_store(&k.gone, 1);
+    pthread_join(t, NULL); /* at its next round: the test's timeout catches a hang */
+    ASSERT_EQ(atomic_load(&k.rc), GLINT_EBUSY);
+    ASSERT(strcmp(k.e.kind, "cancelled") == 0);
+    ASSERT_EQ(k.t.held, 0);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.gone_waiting, 1);
+    ASSERT_EQ(st.running, 1);
+    ASSERT_EQ(st.held, 10 * MB);
+    ASSERT_EQ(st.waiting_by[ADMIT_INTERACTIVE], 0);
+    admit_give(a, &render); /* the slot is free for the next request at once */
+    next = ticket(10 * MB, ADMIT_INTERACTIVE, "a:10.0.0.3");
+    ASSERT_OK(admit_take(a, &next, "the next preview", 0, &e));
+    admit_give(a, &next);
+    admit_close(a);
+}
+
+TEST(class_limits_are_clamped)
+{
+    admit *a;
+    admit_stats st;
+    ASSERT_OK(admit_open(100 * MB, 4, 0, &a, NULL));
+    admit_limit_classes(a, 9, 0);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.reserve, 3); /* background work keeps one slot */
+    ASSERT_EQ(st.per_client, 1);
+    admit_limit_classes(a, -1, 99);
+    admit_get_stats(a, &st);
+    ASSERT_EQ(st.reserve, 0);
+    ASSERT_EQ(st.per_client, 4);
+    admit_limit_classes(NULL, 1, 1);
+    admit_close(a);
+}
+
 /* Many threads entering (or waiting) and leaving: the held bytes never pass
  * the budget and the books end at zero. */
 typedef struct churn {
@@ -337,5 +572,10 @@ TEST_LIST{
     TEST_ENTRY(null_admits_everything),
     TEST_ENTRY(an_estimate_beyond_the_limit_is_refused_with_both_numbers),
     TEST_ENTRY(stop_ends_the_waits_and_refuses_new_work),
+    TEST_ENTRY(background_work_leaves_the_reserved_slot),
+    TEST_ENTRY(background_work_yields_to_interactive_work_that_waits),
+    TEST_ENTRY(one_client_holds_at_most_its_share),
+    TEST_ENTRY(a_request_whose_client_went_away_while_waiting_takes_nothing),
+    TEST_ENTRY(class_limits_are_clamped),
 };
 TEST_MAIN()
