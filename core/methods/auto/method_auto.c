@@ -674,7 +674,7 @@ const method method_auto = {
     .summary = "Lets glint choose: one material, a brushed one, one with varying "
         "colour or several materials, whichever best predicts painted views it "
         "did not fit.",
-    .when = "Use it when unsure which model the painting needs (point lights): it "
+    .when = "Use it when unsure which model the painting needs (lit by lamps): it "
         "keeps the simplest unless a richer one is clearly better, and says "
         "what it chose and why.",
     .lighting = METHOD_LIGHT_POINT,

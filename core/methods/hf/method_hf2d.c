@@ -267,9 +267,9 @@ static int hf2d_holdout_ok(const void *params)
 
 const method method_hf2d = {
     .name = "hf2d",
-    .label = "Brushed or anisotropic material",
+    .label = "Brushed / anisotropic",
     .summary = "One finish whose highlight depends on direction around the surface: "
-        "factors that are 2D maps of the light, half and view directions.",
+        "its look is learnt as maps over the light and view directions.",
     .when = "Use it for brushed metal, satin or a hair-like sheen; directions are "
         "measured around the object's vertical axis.",
     .lighting = METHOD_LIGHT_POINT,

@@ -721,9 +721,9 @@ static double srbf_fit_seconds(const void *params, long nsamples)
 
 const method method_srbf = {
     .name = "srbf",
-    .label = "One material under an environment",
+    .label = "Under an environment",
     .summary = "One finish seen under an environment: the highlight is built from many "
-        "small lobes, kept within energy conservation.",
+        "small soft spots of light, never reflecting more light than it receives.",
     .when = "Use it when you paint how the object looks under an environment (sky, "
         "studio, an HDR map) rather than under a point light.",
     .lighting = METHOD_LIGHT_ENV,
