@@ -25,10 +25,10 @@ static const char *const dims_values[] = {"1d", "2d", NULL};
      .offset = offsetof(hf2d_params_t, dims) + (IDX) * sizeof(int), .values = dims_values}
 
 static const method_param hf2d_params[] = {
-    {.name = "res", .label = "detail (texels per 1D factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor", .offset = offsetof(hf2d_params_t, res),
      .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "res_2d", .label = "detail of a 2D factor (nodes per side)", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res_2d", .label = "detail of the direction maps", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of each 2D factor: its unknowns grow as res_2d^2 and the "
                     "precomputation as the cube of all unknowns",
      .offset = offsetof(hf2d_params_t, sres), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
