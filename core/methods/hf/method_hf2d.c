@@ -269,7 +269,7 @@ const method method_hf2d = {
     .name = "hf2d",
     .label = "Brushed / anisotropic",
     .summary = "One finish whose highlight depends on direction around the surface: "
-        "its look is learnt as maps over the light and view directions.",
+        "its look is learnt as a function of the light and view directions.",
     .when = "Use it for brushed metal, satin or a hair-like sheen; directions are "
         "measured around the object's vertical axis.",
     .lighting = METHOD_LIGHT_POINT,
