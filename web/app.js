@@ -472,8 +472,8 @@ function addActivity(ev) {
   const d = ev.data || {};
   let what;
   const who = ev.type === 'stroke' && typeof d.tag === 'string' && d.tag.includes('~') ? d.tag.slice(d.tag.indexOf('~') + 1) : '';
-  if (ev.type === 'stroke') what = `<b>${d.mode}</b> v${ev.view} D${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
-  else if (ev.type === 'painting') what = `<b>image</b> v${ev.view}`;
+  if (ev.type === 'stroke') what = `<b>${d.mode}</b> view ${ev.view} · size ${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
+  else if (ev.type === 'painting') what = `<b>image</b> view ${ev.view}`;
   else if (ev.type === 'fit') what = `<b>fit</b> <span class="fitwhat"></span>`;
   else what = `<b>${ev.type}</b>`;
   li.innerHTML = `<span class="num">#${ev.seq}</span> ${what}`;

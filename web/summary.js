@@ -30,7 +30,8 @@ export function renderSummary(sm) {
   $('sum-highlight').textContent = highlightWords(sm.highlight);
   const alb = sm.albedo.map(a => `${a.theta_deg}°: ${lum(a.rgb).toFixed(3)}`).join(' · ');
   const over = sm.albedo.some(a => Math.max(...a.rgb) > 1);
-  $('sum-albedo').textContent = `reflects (albedo) ${alb}` + (over ? ' — above 1: more than it receives' : '');
+  $('sum-albedo').textContent = `share of the light it reflects, by the light's angle: ${alb}` + (over ? ' — above 1: more than it receives' : '');
+  $('sum-albedo').title = 'advanced: the directional albedo (luminance) at each angle of incidence';
   drawPolar($('sum-polar'), sm);
 }
 
