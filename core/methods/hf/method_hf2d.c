@@ -28,7 +28,7 @@ static const method_param hf2d_params[] = {
     {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor", .offset = offsetof(hf2d_params_t, res),
      .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "res_2d", .label = "detail of the direction maps", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res_2d", .label = "detail over directions", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of each 2D factor: its unknowns grow as res_2d^2 and the "
                     "precomputation as the cube of all unknowns",
      .offset = offsetof(hf2d_params_t, sres), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
