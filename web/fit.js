@@ -34,6 +34,7 @@ function explain(e) {
 
 // The size of a configuration in words (texels per factor, or lobes).
 export function sizeLabel(params) {
+  if (params.res === 0) return { text: '', title: 'detail: each model at the detail a fit of its own would use' };
   if (params.res != null) return { text: String(params.res), title: `detail ${params.res} (texels per factor)` };
   if (params.basis_res != null) {
     const J = 3 * params.basis_res * params.basis_res;
