@@ -33,7 +33,7 @@ static const method_param hf2d_params[] = {
                     "precomputation as the cube of all unknowns",
      .offset = offsetof(hf2d_params_t, sres), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
     DIMS_ROW("p", 0, "the direction to the light", "light factor: 1D or 2D", METHOD_GROUP_ADVANCED),
-    DIMS_ROW("q", 1, "the half vector", "highlight factor: 1D or 2D", METHOD_GROUP_BASIC),
+    DIMS_ROW("q", 1, "the half vector", "highlight: round (1d) or stretched (2d)", METHOD_GROUP_BASIC),
     DIMS_ROW("r", 2, "the direction to the eye", "view factor: 1D or 2D", METHOD_GROUP_ADVANCED),
     {.name = "lambda", .label = "smoothing of 1D factors", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "weight of the smoothing rows of the 1D factors",
