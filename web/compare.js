@@ -109,9 +109,9 @@ export class Compare {
     g.putImageData(im, 0, 0);
     const L = $('compare-legend');
     const of = x => sd.level > 0 ? pct(x / sd.level) : x.toPrecision(2);
-    L.innerHTML = '<span class="sw" style="background:rgb(255,65,35)"></span>fit brighter <span class="sw" style="background:rgb(35,140,255)"></span>darker' +
+    L.innerHTML = '<span class="sw" style="background:rgb(255,65,35)"></span>brighter <span class="sw" style="background:rgb(35,140,255)"></span>darker' +
       ` ±${of(sd.scale)}`;
-    L.title = `In this view: ${errorMeaning(sd.level > 0 ? sd.rms / sd.level : null)}. Full colour is ±${of(sd.scale)} of the painting's brightness ` +
+    L.title = `Red: the fit is brighter than the painting; blue: darker. In this view: ${errorMeaning(sd.level > 0 ? sd.rms / sd.level : null)}. Full colour is ±${of(sd.scale)} of the painting's brightness ` +
       `(99% of the object's pixels differ by less). Advanced: luminance of the fit minus the painting over ${sd.pixels} pixels of the object, ` +
       `full colour ±${sd.scale.toPrecision(3)} (${to8(sd.scale, 1)}/255 of display white), RMS ${sd.rms.toPrecision(3)}, painting's RMS ${sd.level.toPrecision(3)}.`;
     this.last = { mode: 'diff', k: this.k, mat: this.judge.mat.id, scale: sd.scale, rms: sd.rms, pixels: sd.pixels, level: sd.level };

@@ -139,8 +139,10 @@ run({
     // the scale as a percentage of the painting's brightness (its luminance's RMS over the same pixels)
     const scalePct = 100 * ref.p99 / ref.level, shownPct = parseFloat(legend.slice(legend.indexOf('±') + 1));
     t.log(`legend "${legend}": ±${scalePct.toFixed(3)}% independently`);
-    assert(legend.includes('fit brighter') && /±[\d.]+%/.test(legend), 'the legend prints the scale as a percentage: ' + legend);
+    assert(legend.includes('brighter') && /±[\d.]+%/.test(legend), 'the legend prints the scale as a percentage: ' + legend);
     assertLE(Math.abs(shownPct - scalePct), Math.max(0.006, 0.051 * scalePct), 'the legend\'s percentage');
+    const clipped = await page.evaluate(() => { const L = document.getElementById('compare-legend'); return L.scrollWidth - L.clientWidth; });
+    assertLE(clipped, 0, 'the legend shows whole (px cut off)');
     const title = await page.getAttribute('#compare-legend', 'title');
     assert(/differs from your painting by about/.test(title), 'the legend\'s title says what the figure means: ' + title);
     assert(title.includes('RMS ' + mine.rms.toPrecision(3)), 'the legend\'s title gives the RMS under advanced');
@@ -177,6 +179,9 @@ run({
         }).map(el => el.id || el.className);
       });
       assertEq(cut.join(','), '', `${w}x${h}: status bar items cut off`);
+      const legendCut = await page.evaluate(() => { const L = document.getElementById('compare-legend'); return [L.scrollWidth - L.clientWidth, L.textContent, document.getElementById('st-view').scrollWidth - document.getElementById('st-view').clientWidth]; });
+      assertLE(legendCut[0], 0, `${w}x${h}: the compare legend "${legendCut[1]}" shows whole (px cut off)`);
+      assertLE(legendCut[2], 0, `${w}x${h}: the view's label shows whole (px cut off)`);
       // the material ball, its controls (light, turn) and the tabs below it above the fold too
       for (const sel of ['#ball', '#ball-row select', '#ball-row input[type=range]', '.tabs button >> nth=-1']) {
         const box = await page.locator(sel).first().boundingBox();
