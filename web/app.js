@@ -10,7 +10,8 @@ import { blit } from './image.js';
 import { bindPhoto, cancelPhoto, onSurface, renderPhoto, stagePhoto } from './photo.js';
 import { bindPresets } from './presets.js';
 import { bindGuide } from './guide.js';
-import { sizeText } from './methods.js';
+import { methodNamed, methodOf, sizeText } from './methods.js';
+import { envLabels, errorMeaning, pct, relError, sessionLevel } from './words.js';
 
 const $ = id => document.getElementById(id);
 const api = new Api();
@@ -151,9 +152,10 @@ function bindStart() {
   dz.ondragleave = () => dz.classList.remove('over');
   dz.ondrop = e => { e.preventDefault(); dz.classList.remove('over'); if (e.dataTransfer.files[0]) upload(e.dataTransfer.files[0]); };
   api.environments().then(r => {
+    const names = envLabels(r.environments);
     for (const e of r.environments) {
-      const o = document.createElement('option');
-      o.value = e.spec; o.textContent = e.name + (e.kind === 'builtin' ? ' (built-in sky)' : '');
+      const o = document.createElement('option'), l = names.get(e.spec);
+      o.value = e.spec; o.textContent = l.text; o.title = l.title;
       $('base-light-sel').appendChild(o);
     }
   }).catch(() => { /* the point lights stay available */ });
@@ -284,7 +286,7 @@ function setupStudioUI(S) {
   for (const v of S.views) {
     const bt = document.createElement('button');
     bt.className = 'thumb'; bt.dataset.k = v.k;
-    bt.title = `view ${v.k} (${v.k < 9 ? 'key ' + (v.k + 1) : 'arrows'}) · ${sc.views[v.k].samples} samples`;
+    bt.title = `view ${v.k} (${v.k < 9 ? 'key ' + (v.k + 1) : 'arrows'}) · ${sc.views[v.k].samples} pixels of the object`;
     const c = document.createElement('canvas'); c.width = sc.paint_width || sc.width; c.height = sc.paint_height || sc.height;
     const lab = document.createElement('span'); lab.className = 'k'; lab.textContent = v.k;
     const dot = document.createElement('span'); dot.className = 'dot'; dot.title = 'painted';
@@ -346,8 +348,8 @@ function selectView(k, first) {
   const go = () => {
     state.painter.show(k, !first);
     const sv = S.scene.views[k];
-    $('st-view').textContent = `view ${k} · ${sv.samples} samples` + (sv.light_deg != null ? ` · light ${sv.light_deg.toFixed(0)}°` : '');
-    $('st-view').title = $('st-view').textContent + ' (samples: the pixels of the object this view gives the fit)';
+    $('st-view').textContent = `view ${k}` + (sv.light_deg != null ? ` · light ${sv.light_deg.toFixed(0)}°` : '');
+    $('st-view').title = `view ${k} · ${sv.samples} pixels of the object this view gives the fit` + (sv.light_deg != null ? ` · light ${sv.light_deg.toFixed(0)}°` : '');
     updateUndo();
     history.replaceState(null, '', sessionHash(S.id, S.token, k));
   };
@@ -397,7 +399,7 @@ function updateBrushUI() {
   $('opacity-v').textContent = b.opacity.toFixed(2);
   $('scale-v').textContent = b.scale.toFixed(2);
   $('cval').textContent = '(' + b.color.map(v => v.toFixed(2)).join(', ') + ')';
-  $('color').title = 'Brush colour C ' + $('cval').textContent;
+  $('color').title = 'Brush colour ' + $('cval').textContent;
   for (const [id, v] of [['diameter', b.diameter], ['kappa', b.kappa.toFixed(3)], ['opacity', b.opacity.toFixed(2)], ['scale', b.scale.toFixed(2)]])
     $(id).title = String(v);
   $('intensity').classList.toggle('hidden', !$('hdr').checked);
@@ -425,7 +427,7 @@ function setColorFrom(rgb) {
   $('neg').checked = neg;
   if (state.tool === 'pick') state.tool = 'paint';
   updateBrushUI();
-  toast('Color picked', '(' + rgb.map(v => v.toFixed(3)).join(', ') + ')');
+  toast('Colour picked', `red ${rgb[0].toFixed(2)}, green ${rgb[1].toFixed(2)}, blue ${rgb[2].toFixed(2)}`);
 }
 
 function updateUndo() {
@@ -470,13 +472,15 @@ function addActivity(ev) {
   const d = ev.data || {};
   let what;
   const who = ev.type === 'stroke' && typeof d.tag === 'string' && d.tag.includes('~') ? d.tag.slice(d.tag.indexOf('~') + 1) : '';
-  if (ev.type === 'stroke') what = `<b>${d.mode}</b> v${ev.view} D${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
-  else if (ev.type === 'painting') what = `<b>image</b> v${ev.view}`;
-  else if (ev.type === 'fit') what = `<b>fit</b> ${d.summary ? (d.summary.res != null ? d.summary.res : d.summary.method || '') + ' · ' + (+d.summary.rms_painted).toFixed(4) : ''}`;
+  if (ev.type === 'stroke') what = `<b>${d.mode}</b> view ${ev.view} · size ${+(+d.diameter).toFixed(1)}` + (who ? ` <span class="by" style="color:hsl(${hue(who)} 60% 65%)"></span>` : '');
+  else if (ev.type === 'painting') what = `<b>image</b> view ${ev.view}`;
+  else if (ev.type === 'fit') what = `<b>fit</b> <span class="fitwhat"></span>`;
   else what = `<b>${ev.type}</b>`;
   li.innerHTML = `<span class="num">#${ev.seq}</span> ${what}`;
   const by = li.querySelector('.by');
   if (by) by.textContent = who;
+  const fw = li.querySelector('.fitwhat');
+  if (fw && d.summary) { const md = methodNamed(d.summary.chosen || d.summary.method); fw.textContent = md ? md.label : ''; }
   li.title = `${ev.type} #${ev.seq} at ${t}` + (ev.type === 'stroke' ? ` · ${JSON.stringify(d).slice(0, 200)}` : '');
   li.dataset.seq = ev.seq;
   if (ev.view != null) li.dataset.view = ev.view;
@@ -546,7 +550,7 @@ async function loadFitAndMaterials(S) {
     const { material: m, ms, cached } = e.detail;
     addMaterialOption(m, true);
     showMaterial(m);
-    $('fit-result').innerHTML = `<span title="${cached ? 'the precomputation was in memory: fitted in the request' : 'the precomputation was built (a job)'}">${cached ? 'cached' : 'built'}</span> · <em>${ms < 1000 ? ms.toFixed(0) + ' ms' : (ms / 1000).toFixed(1) + ' s'}</em> · RMS <em>${m.errors.rms_painted.toFixed(4)}</em>`;
+    showFitResult(m, ms, cached);
     window.glint.lastFit = { id: m.id, ms, cached };
   });
   $('mat-sel').onchange = async () => {
@@ -562,17 +566,42 @@ async function loadFitAndMaterials(S) {
   else { const o = document.createElement('option'); o.value = ''; o.textContent = 'no fit yet'; $('mat-sel').appendChild(o); }
 }
 
+// The fit's result beside the Fit button: how long it took and its error
+// as a percentage of the painting's brightness (the meaning and the RMS in
+// the tooltip).
+function showFitResult(m, ms, cached) {
+  const frac = relError(m.errors.rms_painted, sessionLevel(state.session, m.views_used || []));
+  const el = $('fit-result');
+  el.textContent = '';
+  const t = document.createElement('em');
+  t.textContent = ms < 1000 ? ms.toFixed(0) + ' ms' : (ms / 1000).toFixed(1) + ' s';
+  const e = document.createElement('em');
+  e.textContent = frac != null ? pct(frac) : (+m.errors.rms_painted).toFixed(4);
+  el.append(t, frac != null ? ' · ' : ' · error ', e, frac != null ? ' off your painting' : '');
+  el.title = (frac != null ? errorMeaning(frac) + '. ' : '') + (cached ? 'Quick: the precomputation was in memory.' : 'The precomputation was built first.') +
+    ` Advanced: RMS ${(+m.errors.rms_painted).toFixed(4)}.`;
+}
+
+// A material's name in the list: its time and what it models; its size
+// and RMS in the tooltip.
+function materialText(m) {
+  const d = methodOf(m), t = (m.created || '').slice(11, 19);
+  return { text: `${t} · ${d ? d.label : m.method || ''}`, title: `${sizeText(m)} · RMS ${(+m.errors.rms_painted).toFixed(4)}` + (d ? ` · method ${d.name}` : '') };
+}
+
 function addMaterialOption(m, select) {
   const sel = $('mat-sel');
   for (const o of [...sel.options]) if (!o.value) o.remove();
   if (![...sel.options].some(o => o.value === m.id)) {
     const o = document.createElement('option');
     o.value = m.id;
-    const t = (m.created || '').slice(11, 19);
-    o.textContent = `${t} · ${sizeText(m)} · RMS ${(+m.errors.rms_painted).toFixed(4)}`;
+    const l = materialText(m);
+    o.textContent = l.text; o.title = l.title;
     sel.appendChild(o);
   }
   if (select) sel.value = m.id;
+  const on = sel.selectedOptions[0];
+  sel.title = on && on.title ? on.textContent + ' · ' + on.title : 'Materials of this session';
 }
 
 function showMaterial(m) {
@@ -592,7 +621,8 @@ async function onFitEvent(ev) {
     const m = await api.material(id);
     addMaterialOption(m, $('follow').checked);
     if ($('follow').checked) showMaterial(m);
-    toast('New fit', `${sizeText(m)} · RMS ${m.errors.rms_painted.toFixed(4)}` + ($('follow').checked ? '' : ' — pick it in the material list'));
+    const d = methodOf(m), frac = relError(m.errors.rms_painted, sessionLevel(S, m.views_used || []));
+    toast('New fit', `${d ? d.label : 'a material'}` + (frac != null ? `, ${pct(frac)} off the painting` : '') + ($('follow').checked ? '' : ' — pick it in the material list'));
     if (state.fit) state.fit.refresh();
   } catch (e) { showError(e); }
 }

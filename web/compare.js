@@ -9,26 +9,30 @@
 // rasterizer that defines the fit's samples).
 
 import { blit, resizeImage, to8 } from './image.js';
+import { errorMeaning, pct } from './words.js';
 
 const $ = id => document.getElementById(id);
 const lum = (d, i) => 0.2126 * d[3 * i] + 0.7152 * d[3 * i + 1] + 0.0722 * d[3 * i + 2];
 
 // The signed luminance difference over the object and its scale: d[i] =
 // Y(fitted) - Y(painted) (NaN off the object), scale = the 99th percentile
-// of |d| (at least 1e-4), rms over the object.
+// of |d| (at least 1e-4), rms over the object; level = the RMS of the
+// painting's luminance there (the brightness the percentages are of).
 export function signedDiff(painted, fitted, base) {
   const n = painted.w * painted.h, d = new Float32Array(n), mags = [];
-  let s2 = 0;
+  let s2 = 0, p2 = 0;
   for (let i = 0; i < n; i++) {
     const on = lum(base.data, i) > 0 || lum(fitted.data, i) > 0;
     if (!on) { d[i] = NaN; continue; }
     d[i] = lum(fitted.data, i) - lum(painted.data, i);
     mags.push(Math.abs(d[i]));
     s2 += d[i] * d[i];
+    p2 += lum(painted.data, i) ** 2;
   }
   mags.sort((a, b) => a - b);
   const p99 = mags.length ? mags[Math.min(mags.length - 1, Math.floor(0.99 * mags.length))] : 0;
-  return { d, scale: Math.max(1e-4, p99), rms: mags.length ? Math.sqrt(s2 / mags.length) : 0, pixels: mags.length };
+  const level = mags.length ? Math.sqrt(p2 / mags.length) : 0;
+  return { d, scale: Math.max(1e-4, p99), rms: mags.length ? Math.sqrt(s2 / mags.length) : 0, pixels: mags.length, level };
 }
 
 // Diverging colours: 0 dark grey, +1 red, -1 blue.
@@ -89,7 +93,10 @@ export class Compare {
       g.clearRect(0, 0, x, h);
       g.fillStyle = 'rgba(255,255,255,.85)';
       g.fillRect(Math.min(w - 1, x), 0, 1, h);
-      $('compare-legend').textContent = 'painted | fitted';
+      // the view's error from the judge's table, when it has this view
+      const row = this.judge.rows && this.judge.rows.get(this.k), lv = row && row.level.level();
+      $('compare-legend').textContent = 'painted | fitted' + (lv ? ` · ${pct(row.rms / lv)} off` : '');
+      $('compare-legend').title = lv ? `In this view: ${errorMeaning(row.rms / lv)} (advanced: RMS ${row.rms.toPrecision(3)})` : '';
       this.last = { mode: 'split', k: this.k, mat: this.judge.mat.id, split: x };
       return;
     }
@@ -101,10 +108,12 @@ export class Compare {
     }
     g.putImageData(im, 0, 0);
     const L = $('compare-legend');
-    L.innerHTML = '<span class="sw" style="background:rgb(255,65,35)"></span>fit brighter <span class="sw" style="background:rgb(35,140,255)"></span>darker' +
-      ` ±${sd.scale.toPrecision(2)}`;
-    L.title = `Luminance of the fit minus the painting over ${sd.pixels} pixels of the object. Full colour is ±${sd.scale.toPrecision(3)} ` +
-      `(${to8(sd.scale, 1)}/255 of display white; 99% of the object's pixels differ by less), RMS ${sd.rms.toPrecision(3)}.`;
-    this.last = { mode: 'diff', k: this.k, mat: this.judge.mat.id, scale: sd.scale, rms: sd.rms, pixels: sd.pixels };
+    const of = x => sd.level > 0 ? pct(x / sd.level) : x.toPrecision(2);
+    L.innerHTML = '<span class="sw" style="background:rgb(255,65,35)"></span>brighter <span class="sw" style="background:rgb(35,140,255)"></span>darker' +
+      ` ±${of(sd.scale)}`;
+    L.title = `Red: the fit is brighter than the painting; blue: darker. In this view: ${errorMeaning(sd.level > 0 ? sd.rms / sd.level : null)}. Full colour is ±${of(sd.scale)} of the painting's brightness ` +
+      `(99% of the object's pixels differ by less). Advanced: luminance of the fit minus the painting over ${sd.pixels} pixels of the object, ` +
+      `full colour ±${sd.scale.toPrecision(3)} (${to8(sd.scale, 1)}/255 of display white), RMS ${sd.rms.toPrecision(3)}, painting's RMS ${sd.level.toPrecision(3)}.`;
+    this.last = { mode: 'diff', k: this.k, mat: this.judge.mat.id, scale: sd.scale, rms: sd.rms, pixels: sd.pixels, level: sd.level };
   }
 }

@@ -7,6 +7,7 @@
 import { API, ApiError } from './api.js';
 import { EventStream } from './sse.js';
 import { methods, setMethods, startMethod } from './methods.js';
+import { envLabels, envLabel, envNth, pct, relError, sessionLevel } from './words.js';
 
 const $ = id => document.getElementById(id);
 
@@ -33,10 +34,11 @@ function explain(e) {
 
 // The size of a configuration in words (texels per factor, or lobes).
 export function sizeLabel(params) {
-  if (params.res != null) return { text: String(params.res), title: `${params.res} texels per factor` };
+  if (params.res === 0) return { text: '', title: 'detail: each model at the detail a fit of its own would use' };
+  if (params.res != null) return { text: String(params.res), title: `detail ${params.res} (texels per factor)` };
   if (params.basis_res != null) {
     const J = 3 * params.basis_res * params.basis_res;
-    return { text: `${J}`, title: `${J} lobes, ${params.lights != null ? params.lights + ' lights' : ''}` };
+    return { text: `${J}`, title: `highlight detail ${J} (lobes)${params.lights != null ? ', ' + params.lights + ' light samples' : ''}` };
   }
   return { text: '', title: '' };
 }
@@ -91,7 +93,7 @@ export class FitPanel extends EventTarget {
       const o = document.createElement('option');
       o.value = x.name;
       o.textContent = x.label || x.name;
-      o.title = `${x.summary || x.title} (${x.name})`;
+      o.title = x.summary || x.label || '';
       // the daemon refuses a point-light method on a scene painted under an
       // environment (lighting-mismatch), and an environment's method on a
       // scene painted under lamps would assume a light the paintings never
@@ -133,7 +135,8 @@ export class FitPanel extends EventTarget {
     this.method = this.methods.find(x => x.name === name) || this.methods[0];
     const sel = $('fit-method');
     sel.value = this.method.name;
-    sel.title = this.method.title + (this.method.reference ? ' — ' + this.method.reference : '');
+    sel.title = this.method.summary || this.method.label || '';
+    this.methodAdvanced();
     $('method-note').textContent = [this.method.summary || this.method.title, this.method.when].filter(Boolean).join(' ');
     this.inputs = {};
     this.preset = null;                  // a method without presets: its own parameters
@@ -185,51 +188,80 @@ export class FitPanel extends EventTarget {
     box.textContent = '';
     const basic = this.method.params.filter(p => p.group !== 'advanced');
     const advanced = this.method.params.filter(p => p.group === 'advanced');
-    for (const p of [...basic, ...advanced]) {
-      if (p === advanced[0]) {
-        const h = document.createElement('div'); h.className = 'group';
-        h.textContent = 'advanced';
-        box.appendChild(h);
-      }
-      const lab = document.createElement('label');
-      lab.textContent = p.label || p.name;
-      lab.title = `${p.name}: ${p.description}`;
-      let inp, extra = null;
-      if (p.name === 'env' && this.envs) {           // the environments glintd offers
-        inp = document.createElement('select');
-        for (const e of this.envs) { const o = document.createElement('option'); o.value = e.spec; o.textContent = e.name; inp.appendChild(o); }
-        extra = this.envUpload(inp);
-      } else if (p.enum) {
-        inp = document.createElement('select');
-        for (const v of p.enum) { const o = document.createElement('option'); o.value = o.textContent = v; inp.appendChild(o); }
-      } else {
-        inp = document.createElement('input');
-        if (p.type === 'string') {
-          inp.type = 'text';
-          if (p.examples) {
-            const dl = document.createElement('datalist'); dl.id = 'dl-' + p.name;
-            for (const v of p.examples) { const o = document.createElement('option'); o.value = v; dl.appendChild(o); }
-            box.appendChild(dl); inp.setAttribute('list', dl.id);
-          }
-        } else {
-          inp.type = 'number';
-          inp.step = p.type === 'integer' ? '1' : 'any';
-          if (p.minimum != null) inp.min = p.minimum;
-          if (p.maximum != null) inp.max = p.maximum;
-        }
-      }
-      inp.value = p.default;
-      inp.id = 'param-' + p.name;
-      inp.title = p.description + (p.syntax ? ' (' + p.syntax + ')' : '') + ' · changing it costs: ' + p.affects;
-      inp.addEventListener('input', () => { this.preset = this.matchPreset(); this.renderQuality(); });
-      this.inputs[p.name] = { p, inp };
-      lab.htmlFor = inp.id;
-      box.append(lab, inp);
-      if (extra) box.appendChild(extra);
-      const d = document.createElement('div'); d.className = 'desc';
-      d.textContent = p.affects === 'precomputation' ? 'new precomputation' : p.affects === 'operator' ? 'new operator' : 'free';
-      box.appendChild(d);
+    for (const p of basic) this.addParam(box, p, false);
+    if (!advanced.length) return;
+    // the parameters most people leave alone, by their technical names too,
+    // behind a disclosure of their own
+    const det = document.createElement('details');
+    det.id = 'params-advanced'; det.className = 'adv';
+    const sum = document.createElement('summary'); sum.textContent = 'advanced';
+    sum.title = 'settings most people leave alone, with their technical names';
+    const grid = document.createElement('div'); grid.className = 'params-grid';
+    det.append(sum, grid);
+    box.appendChild(det);
+    for (const p of advanced) this.addParam(grid, p, true);
+  }
+
+  // One parameter: its label, its input and what changing it costs.  In
+  // the advanced part the technical name follows the plain one.
+  addParam(box, p, technical) {
+    const lab = document.createElement('label');
+    lab.textContent = p.label || p.name;
+    if (technical && p.label && p.label !== p.name) {
+      const n = document.createElement('code'); n.className = 'pname'; n.textContent = p.name;
+      lab.append(' ', n);
     }
+    lab.title = technical ? `${p.name}: ${p.description}` : p.description;
+    let inp, extra = null;
+    if (p.name === 'env' && this.envs) {           // the environments glintd offers
+      inp = document.createElement('select');
+      const names = envLabels(this.envs);
+      for (const e of this.envs) {
+        const o = document.createElement('option'), l = names.get(e.spec);
+        o.value = e.spec; o.textContent = l.text; o.title = l.title; inp.appendChild(o);
+      }
+      extra = this.envUpload(inp);
+    } else if (p.enum) {
+      inp = document.createElement('select');
+      for (const v of p.enum) { const o = document.createElement('option'); o.value = o.textContent = v; inp.appendChild(o); }
+    } else {
+      inp = document.createElement('input');
+      if (p.type === 'string') {
+        inp.type = 'text';
+        if (p.examples) {
+          const dl = document.createElement('datalist'); dl.id = 'dl-' + p.name;
+          for (const v of p.examples) { const o = document.createElement('option'); o.value = v; dl.appendChild(o); }
+          box.appendChild(dl); inp.setAttribute('list', dl.id);
+        }
+      } else {
+        inp.type = 'number';
+        inp.step = p.type === 'integer' ? '1' : 'any';
+        if (p.minimum != null) inp.min = p.minimum;
+        if (p.maximum != null) inp.max = p.maximum;
+      }
+    }
+    inp.value = p.default;
+    inp.id = 'param-' + p.name;
+    inp.title = p.description + (technical && p.syntax ? ' (' + p.syntax + ')' : '') +
+      (p.affects === 'fit' ? ' · quick to change' : ' · changing it rebuilds the precomputation (the next fit is slower)');
+    inp.addEventListener('input', () => { this.preset = this.matchPreset(); this.renderQuality(); });
+    this.inputs[p.name] = { p, inp };
+    lab.htmlFor = inp.id;
+    box.append(lab, inp);
+    if (extra) box.appendChild(extra);
+    const d = document.createElement('div'); d.className = 'desc';
+    d.textContent = p.affects === 'fit' ? 'quick to change' : 'changing it makes the next fit slower';
+    d.title = technical ? 'changing it costs: ' + p.affects : '';
+    box.appendChild(d);
+  }
+
+  // The method's technical name, model and reference, in the advanced
+  // part under the method's note.
+  methodAdvanced() {
+    const el = $('method-tech');
+    if (!el) return;
+    const m = this.method;
+    el.querySelector('.body').textContent = [`method ${m.name}`, m.title, m.reference].filter(Boolean).join(' · ');
   }
 
   // An HDR file of the artist's (OpenEXR or Radiance, lat-long or a cube
@@ -248,11 +280,12 @@ export class FitPanel extends EventTarget {
       try {
         const name = file.name.replace(/[^\x20-\x7e]|["\\]/g, '_').slice(0, 60) || 'upload';
         const e = await this.api.uploadEnvironment(new Uint8Array(await file.arrayBuffer()), name);
+        const l = envLabel(e, envNth(this.envs, e.name) + 1);
         this.envs.push(e);
-        const o = document.createElement('option'); o.value = e.spec; o.textContent = e.name;
+        const o = document.createElement('option'); o.value = e.spec; o.textContent = l.text; o.title = l.title;
         sel.appendChild(o); sel.value = e.spec;
         sel.dispatchEvent(new Event('input', { bubbles: true }));
-        this.emit('envs', e);
+        this.emit('envs', Object.assign({}, e, { name: l.text, title: l.title }));
       } catch (err) { this.emit('error', err); }
       f.value = '';
     };
@@ -329,9 +362,10 @@ export class FitPanel extends EventTarget {
     box.textContent = '';
     const head = document.createElement('div');
     head.className = 'q head';
-    head.innerHTML = '<span></span><span>quality</span><span title="a fit when its precomputation is in memory">fit</span><span title="the first fit of a configuration: builds the precomputation">first</span><span title="RMS error: held-out (each painted view left out in turn) when measured, else on the painted pixels">error</span>';
+    head.innerHTML = '<span></span><span>quality</span><span title="a fit when its precomputation is in memory">fit</span><span title="the first fit of a configuration: builds the precomputation">first</span><span title="how far the fitted material is from your painting, as a percentage of the painting\'s brightness: on views left out of the fit when measured (each painted view in turn), else on the painted views">error</span>';
     box.appendChild(head);
     const d = this.defaults();
+    const level = sessionLevel(this.session, this.paintedViews());
     const cell = (html, title) => { const c = document.createElement('span'); c.className = 'v'; c.innerHTML = html; if (title) c.title = title; return c; };
     const addRow = (name, params, onpick, on) => {
       const row = document.createElement('label');
@@ -355,8 +389,9 @@ export class FitPanel extends EventTarget {
         const other = found.exact ? '' : '<sup title="measured with another set of painted views">*</sup>';
         row.append(cell(`<em>${fmtTime(p.fit_seconds)}</em>`, `median of the last ${Math.min(16, p.fits)} fit(s), precomputation in memory`),
                    cell(cold != null ? `<em>${fmtTime(cold)}</em>` : '—', p.cold_seconds != null ? 'precomputation from scratch' : 'precomputation with the decomposition from the disk cache'),
-                   cell(`<em>${err.toFixed(3)}</em>${p.held_out_rms != null ? '<sup>ho</sup>' : ''}${other}`,
-                        `RMS painted ${fmtErr(p.rms_painted)}, held-out ${fmtErr(p.held_out_rms)} (${p.samples} samples, views ${p.views.join(' ')})`));
+                   cell(`<em>${level ? pct(relError(err, level)) : err.toFixed(3)}</em>${p.held_out_rms != null ? '<sup title="on views left out of the fit">°</sup>' : ''}${other}`,
+                        (p.held_out_rms != null ? 'on views left out of the fit' : 'on the painted views') +
+                        ` · advanced: RMS painted ${fmtErr(p.rms_painted)}, held-out ${fmtErr(p.held_out_rms)} (${p.samples} samples, views ${p.views.join(' ')})`));
       } else {
         const est = params.res != null ? this.estimateCold(params.res) : null;
         row.append(cell('—', 'not measured on this scene yet'),

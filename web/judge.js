@@ -10,6 +10,7 @@ import { fmtErr, fmtTime } from './fit.js';
 import { drawEnergy, drawLobe, isLobeMaterial } from './lobe.js';
 import { methodNamed, shows, sizeText, underEnv } from './methods.js';
 import { SurfacePanel } from './surface.js';
+import { envLabels, errorMeaning, Level, pct, relError, sessionLevel } from './words.js';
 import { loadSummary, renderSummary } from './summary.js';
 import { Ball } from './ball.js';
 import { CLASS, isAbort } from './requests.js';
@@ -52,11 +53,12 @@ export class Judge extends EventTarget {
   bindEnv() {
     const sel = $('preview-light');
     this.api.environments().then(r => {
+      const names = envLabels(r.environments);
       for (const e of r.environments) {
-        const o = document.createElement('option');
-        o.value = e.spec; o.textContent = e.name + (e.kind === 'builtin' ? ' (built-in)' : '');
+        const o = document.createElement('option'), l = names.get(e.spec);
+        o.value = e.spec; o.textContent = l.text; o.title = l.title;
         sel.appendChild(o);
-        this.ball.addEnv({ spec: e.spec, name: o.textContent });
+        this.ball.addEnv({ spec: e.spec, name: o.textContent, title: l.title });
       }
       if (this.mat) this.envDefault(this.mat);
     }).catch(e => this.emit('error', e));
@@ -68,6 +70,7 @@ export class Judge extends EventTarget {
   addEnv(e) {
     const o = document.createElement('option');
     o.value = e.spec; o.textContent = e.name;
+    if (e.title) o.title = e.title;
     $('preview-light').appendChild(o);
     this.ball.addEnv(e);
   }
@@ -321,9 +324,10 @@ export class Judge extends EventTarget {
     if (!isLobeMaterial(man)) return;
     drawLobe($('lobe'), man);
     const d = man.diffuse || [0, 0, 0], used = m.weights_nonzero;
-    $('lobe-note').textContent = `diffuse albedo ${d.map(x => (+x).toFixed(3)).join(' / ')}` +
-      (used != null ? ` · ${used} lobe weights non-zero` : '') +
-      ` · static term ${man.static ? man.static.term : '?'}`;
+    $('lobe-note').textContent = `base colour ${d.map(x => (+x).toFixed(3)).join(' / ')}`;
+    $('lobe-tech').querySelector('.body').textContent = `diffuse albedo ${d.map(x => (+x).toFixed(3)).join(' / ')} · ${man.centres.length} lobes, ` +
+      `σ = ${(man.basis.sigma * 180 / Math.PI).toFixed(1)}°` + (used != null ? ` · ${used} lobe weights non-zero` : '') +
+      ` · static term ${man.static ? man.static.term : '?'} · p(h): the distribution of half vectors`;
   }
 
   // ---- factor curves -----------------------------------------------------------------
@@ -345,7 +349,8 @@ export class Judge extends EventTarget {
     if (!im) return;
     if (this.mat && Array.isArray(this.mat.dims)) return this.drawFactors2d(g, c, im);
     const log = $('factors-log').checked;
-    const names = [['p(π_p)', 'light: |wi| on the tangent plane'], ['q(π_q)', 'half vector'], ['r(π_r)', 'view: |wo| on the tangent plane']];
+    // each curve in words on the plot; its symbol under "advanced" below it
+    const names = [['how the light\'s direction changes the colour'], ['the highlight: how the colour changes near the mirror direction'], ['how the viewing direction changes the colour']];
     const H = c.height / 3, L = 34, Rm = 6, W = c.width - L - Rm;
     // a material map's product k: rows 3k .. 3k + 2
     const k = Math.min(this.surface.product || 0, Math.floor(im.h / 3) - 1), row0 = 3 * Math.max(0, k);
@@ -360,13 +365,12 @@ export class Judge extends EventTarget {
       if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
       g.fillStyle = '#8d94a3'; g.font = '11px system-ui';
       g.fillText(names[j][0], L, y0 - 3);
-      g.fillStyle = '#5d6473'; g.fillText(names[j][1], L + 44, y0 - 3);
       g.strokeStyle = '#323744'; g.strokeRect(L, y0, W, h);
       g.fillStyle = '#8d94a3'; g.font = '9px system-ui'; g.textAlign = 'right';
       g.fillText(log ? '1e' + hi.toFixed(1) : hi.toPrecision(3), L - 3, y0 + 8);
       g.fillText(log ? '1e' + lo.toFixed(1) : lo.toPrecision(3), L - 3, y0 + h);
       g.textAlign = 'left';
-      if (j === 2) { g.fillText('0', L, y0 + h + 10); g.textAlign = 'right'; g.fillText('π = 1', L + W, y0 + h + 10); g.textAlign = 'left'; }
+      if (j === 2) { g.fillText('straight on', L, y0 + h + 10); g.textAlign = 'right'; g.fillText('grazing', L + W, y0 + h + 10); g.textAlign = 'left'; }
       const cols = ['#ff6b6b', '#6bd66b', '#6ba4ff'];
       for (let ch = 0; ch < 3; ch++) {
         g.strokeStyle = cols[ch]; g.lineWidth = 1.3; g.globalCompositeOperation = 'lighter';
@@ -387,7 +391,7 @@ export class Judge extends EventTarget {
   // as a curve; each panel scaled to its own range.
   drawFactors2d(g, c, im) {
     const m = this.mat, S = m.res_2d, log = $('factors-log').checked;
-    const names = [['p', 'light direction'], ['q', 'half vector'], ['r', 'view direction']];
+    const names = [['light', 'direction'], ['highlight', ''], ['view', 'direction']];
     const Wp = c.width / 3, tf = v => log ? Math.log10(Math.max(v, 1e-6)) : v;
     let row = 0;
     for (let j = 0; j < 3; j++) {
@@ -400,7 +404,7 @@ export class Judge extends EventTarget {
       let lo = Math.min(...vals), hi = Math.max(...vals);
       if (hi - lo < 1e-9) { hi += 0.5; lo -= 0.5; }
       g.fillStyle = '#8d94a3'; g.font = '11px system-ui'; g.textAlign = 'left';
-      g.fillText(`${names[j][0]} (${two ? '2D' : '1D'}): ${names[j][1]}`, x0, 12);
+      g.fillText(`${names[j][0]} ${two ? 'map' : 'curve'}`, x0, 12);
       if (two) {
         const cell = size / S, y0 = 18;
         for (let y = 0; y < S; y++) for (let x = 0; x < S; x++) {
@@ -413,7 +417,7 @@ export class Judge extends EventTarget {
         g.strokeStyle = '#8d94a3'; g.beginPath();
         g.arc(x0 + size / 2, y0 + size / 2, size / 2, 0, 2 * Math.PI); g.stroke();
         g.fillStyle = '#5d6473'; g.font = '9px system-ui';
-        g.fillText('t →   b ↑   (normal at the centre)', x0, y0 + size + 11);
+        g.fillText('centre: straight on · rim: grazing', x0, y0 + size + 11);
       } else {
         const y0 = 18, h = size, cols = ['#ff6b6b', '#6bd66b', '#6ba4ff'];
         g.strokeStyle = '#323744'; g.strokeRect(x0, y0, size, h);
@@ -427,7 +431,7 @@ export class Judge extends EventTarget {
           g.stroke();
         }
         g.fillStyle = '#5d6473'; g.font = '9px system-ui';
-        g.fillText('0 … 1: length on the tangent plane', x0, y0 + h + 11);
+        g.fillText('straight on … grazing', x0, y0 + h + 11);
       }
       row += rows;
     }
@@ -444,21 +448,8 @@ export class Judge extends EventTarget {
     const S = this.session, sc = S.scene;
     const tb = $('err-table').querySelector('tbody');
     tb.textContent = '';
-    const e = mat.errors || {};
     const env = underEnv(mat);
-    $('err-summary').innerHTML = `fit: RMS <b>${fmtErr(e.rms_painted)}</b>` + (e.max_abs_painted != null ? `, max ${fmtErr(e.max_abs_painted)}` : '') +
-      (e.diagnostic_samples != null && mat.precomputation && e.diagnostic_samples < mat.precomputation.samples
-        ? ` <span title="estimated on an evenly spaced subsample${e.diagnostic_runs > 1 ? `: ${e.diagnostic_runs} runs of ${Math.round(e.diagnostic_samples / e.diagnostic_runs)} consecutive samples` : ''}">over ${e.diagnostic_samples} of ${mat.precomputation.samples} samples</span>`
-        : ` over ${mat.precomputation ? mat.precomputation.samples : '?'} samples`) +
-      ` · ${sizeText(mat)} · fit ${fmtTime(mat.seconds && mat.seconds.fit)}` +
-      (e.albedo_max_rows != null ? ` · highest albedo ${e.albedo_max_rows.toFixed(4)}` : '');
-    if (mat.choice && mat.choice.candidates) {
-      // what the automatic choice weighed: each model's error on what it did not fit
-      const c = mat.choice;
-      $('err-summary').innerHTML += `<div id="auto-choice" class="small">chose <b>${(methodNamed(c.chosen) || { label: c.chosen }).label}</b> (${c.chosen}): error on the ${c.held_out === 'views' ? 'views' : 'pixels'} held out, ` +
-        c.candidates.map(x => `${x.method} ${fmtErr(x.held_out_rms)}`).join(' · ') +
-        ` <span class="muted" title="${c.rule || ''}">(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)</span></div>`;
-    }
+    this.renderErrSummary(mat, sessionLevel(S, mat.views_used || []));
     this.rows = new Map();
     const square = sc.width === sc.height;
     const used = mat.views_used || [];
@@ -472,7 +463,7 @@ export class Judge extends EventTarget {
       tr.onclick = () => { this.showDiff(k); this.emit('select-view', k); };
       tb.appendChild(tr);
     }
-    if (!square) { $('err-summary').innerHTML += '<br>per-view errors need a square raster (previews are square)'; return; }
+    if (!square) return;
     await Promise.all(used.map(async k => {
       let fitted = await this.fittedFor(k, mat);
       if (mat !== this.mat) return;
@@ -481,6 +472,7 @@ export class Judge extends EventTarget {
       const painted = v.conf, base = resizeImage(v.base, painted.w, painted.h);
       if (fitted.w !== painted.w || fitted.h !== painted.h) fitted = resizeImage(fitted, painted.w, painted.h);
       let s2 = 0, n = 0, mx = 0;
+      const lv = new Level();
       const diff = new Float32Array(painted.w * painted.h);
       for (let i = 0; i < painted.w * painted.h; i++) {
         const lit = env ? fitted.data[3 * i] > 0 || fitted.data[3 * i + 1] > 0 || fitted.data[3 * i + 2] > 0
@@ -490,18 +482,23 @@ export class Judge extends EventTarget {
         for (let c = 0; c < 3; c++) {
           const d = fitted.data[3 * i + c] - painted.data[3 * i + c];
           s2 += d * d; mx = Math.max(mx, Math.abs(d)); dm += Math.abs(d) / 3;
+          lv.add(painted.data[3 * i + c]);
         }
         diff[i] = dm; n++;
       }
       const rms = n ? Math.sqrt(s2 / (3 * n)) : 0;
       const stale = snap.has(k) && now.has(k) && snap.get(k) !== now.get(k);
-      this.rows.set(k, { rms, max: mx, n, fitted, painted, diff, stale });
+      this.rows.set(k, { rms, max: mx, n, fitted, painted, diff, stale, level: lv });
       const tr = tb.querySelector(`tr[data-view="${k}"]`);
       if (tr) {
-        tr.innerHTML = `<td>${k}${stale ? ' <span title="painted again since this fit">*</span>' : ''}</td><td><span class="meter"></span>${fmtErr(rms)}</td><td>${fmtErr(mx)}</td><td>${n}</td>`;
+        const L = lv.level();
+        tr.innerHTML = `<td>${k}${stale ? ' <span title="painted again since this fit">*</span>' : ''}</td><td title="${errorMeaning(relError(rms, L))} (advanced: RMS ${fmtErr(rms)})"><span class="meter"></span>${pct(relError(rms, L))}</td>` +
+          `<td title="advanced: ${fmtErr(mx)} in the painting's units">${pct(relError(mx, L))}</td><td>${n}</td>`;
       }
     }));
     if (mat !== this.mat) return;
+    this.level = [...this.rows.values()].reduce((a, r) => a.merge(r.level), new Level()).level();
+    this.renderErrSummary(mat, this.level);
     // bars relative to the worst view
     const worst = Math.max(1e-12, ...[...this.rows.values()].map(r => r.rms));
     for (const [k, r] of this.rows) {
@@ -511,6 +508,55 @@ export class Judge extends EventTarget {
     this.emit('errors', this.rows);
     const k = used.includes(prefer) ? prefer : used[0];
     if (k != null) this.showDiff(k);
+  }
+
+  // The fit's error in words (a percentage of the painting's brightness,
+  // level: the RMS of the painted values over the views' object pixels;
+  // null until the views are read), what the automatic choice weighed, and
+  // the figures behind them (RMS, samples, size, method) behind an
+  // "advanced" disclosure.
+  renderErrSummary(mat, level) {
+    const e = mat.errors || {}, box = $('err-summary');
+    const frac = relError(e.rms_painted, level);
+    const samples = e.diagnostic_samples != null && mat.precomputation && e.diagnostic_samples < mat.precomputation.samples
+      ? `over ${e.diagnostic_samples} of ${mat.precomputation.samples} samples (an evenly spaced subsample${e.diagnostic_runs > 1 ? `: ${e.diagnostic_runs} runs of ${Math.round(e.diagnostic_samples / e.diagnostic_runs)} consecutive samples` : ''})`
+      : `over ${mat.precomputation ? mat.precomputation.samples : '?'} samples`;
+    const d = methodNamed((mat.choice && mat.choice.chosen) || mat.method);
+    const tech = [`RMS ${fmtErr(e.rms_painted)}` + (e.max_abs_painted != null ? `, max ${fmtErr(e.max_abs_painted)}` : '') + ' ' + samples,
+      sizeText(mat), `method ${d ? d.name : mat.method}`, `fit ${fmtTime(mat.seconds && mat.seconds.fit)}`]
+      .concat(e.albedo_max_rows != null ? [`highest albedo ${e.albedo_max_rows.toFixed(4)}`] : []);
+    box.textContent = '';
+    const line = document.createElement('div');
+    line.id = 'err-meaning';
+    line.textContent = level != null ? errorMeaning(frac) : 'measuring the error against your painting…';
+    box.appendChild(line);
+    if (mat.choice && mat.choice.candidates) box.appendChild(this.choiceWords(mat.choice, level));
+    const adv = document.createElement('details');
+    adv.className = 'adv'; adv.id = 'err-advanced';
+    const sm = document.createElement('summary'); sm.textContent = 'advanced';
+    const body = document.createElement('div'); body.textContent = tech.join(' · ');
+    if (mat.choice && mat.choice.candidates)
+      body.textContent += ' · candidates (held-out RMS): ' + mat.choice.candidates.map(x => `${x.method} ${fmtErr(x.held_out_rms)}`).join(', ');
+    adv.append(sm, body);
+    box.appendChild(adv);
+    if (!(this.session.scene.width === this.session.scene.height)) box.append('per-view errors need a square raster (previews are square)');
+  }
+
+  // What the automatic choice weighed, in words: the chosen model's label,
+  // each candidate's label and its error on what it did not fit.
+  choiceWords(c, level) {
+    const div = document.createElement('div');
+    div.id = 'auto-choice'; div.className = 'small';
+    const name = x => (methodNamed(x) || { label: x }).label;
+    const b = document.createElement('b'); b.textContent = name(c.chosen);
+    const on = c.held_out === 'views' ? 'views' : 'parts of the painting';
+    div.append('Chose ', b, `: the error of each on ${on} it did not see — `,
+      c.candidates.map(x => `${name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
+    const why = document.createElement('span');
+    why.className = 'muted'; why.title = c.rule || '';
+    why.textContent = `(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)`;
+    div.appendChild(why);
+    return div;
   }
 
   // The material rendered for view k as the fit saw it: the CPU renderer at

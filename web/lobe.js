@@ -49,10 +49,9 @@ export function drawLobe(canvas, m) {
   g.beginPath(); g.arc(cx, cy, R, 0, 7); g.stroke();
   g.beginPath(); g.moveTo(cx - R, cy); g.lineTo(cx + R, cy); g.stroke();
   g.fillStyle = '#8d94a3'; g.font = '10px system-ui';
-  g.fillText('p(h) from above', 4, D + 12);
-  g.fillText('centre: normal · rim: horizon', 4, D + 24);
-  g.fillText(`${m.centres.length} lobes, σ = ${(m.basis.sigma * 180 / Math.PI).toFixed(1)}°`, 4, D + 36);
-  g.fillText(`max ${mx.toPrecision(3)}`, 4, D + 48);
+  g.fillText('the highlight, from above', 4, D + 12);
+  g.fillText('centre: straight on · rim: grazing', 4, D + 24);
+  g.fillText(`brightest ${mx.toPrecision(3)}`, 4, D + 36);
   // the cut through the plane of incidence: p(h) against the angle of h
   const L = D + 28, T = 14, CW = W - L - 6, CH = D - 30;
   const cut = [];
@@ -69,8 +68,8 @@ export function drawLobe(canvas, m) {
     g.stroke(); g.globalCompositeOperation = 'source-over';
   }
   g.fillStyle = '#8d94a3';
-  g.fillText('p(h) across the plane of incidence', L, T - 3);
-  g.fillText('-90°', L, T + CH + 11); g.textAlign = 'center'; g.fillText('0° (normal)', L + CW / 2, T + CH + 11);
+  g.fillText('the highlight across the surface', L, T - 3);
+  g.fillText('-90°', L, T + CH + 11); g.textAlign = 'center'; g.fillText('0° (straight on)', L + CW / 2, T + CH + 11);
   g.textAlign = 'right'; g.fillText('90°', L + CW, T + CH + 11); g.textAlign = 'left';
 }
 
@@ -84,7 +83,7 @@ export function drawEnergy(canvas, errors) {
   const n = prof.elevation_deg.length, L = 34, T = 16, CW = W - L - 8, CH = H - T - 30;
   const top = 1.1;
   g.fillStyle = '#8d94a3'; g.font = '10px system-ui';
-  g.fillText(`albedo by outgoing elevation (${prof.enforced ? 'limit enforced' : 'not constrained'})`, L, T - 4);
+  g.fillText(`light reflected, by viewing angle (${prof.enforced ? 'kept within what it receives' : 'not held to what it receives'})`, L, T - 4);
   g.strokeStyle = '#323744'; g.strokeRect(L, T, CW, CH);
   const yOf = a => T + CH - CH * Math.min(a, top) / top;
   g.strokeStyle = '#e0b84d'; g.setLineDash([4, 3]);

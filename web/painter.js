@@ -5,7 +5,14 @@
 //
 // The canvas holds the image at its own raster size (1 canvas pixel = 1
 // image pixel) and is scaled by a CSS transform, so its pixels are exactly
-// the 8-bit view of the floats (image.js) at any zoom.
+// the 8-bit view of the floats (image.js) at any zoom.  On the screen an
+// image pixel covers zoom x devicePixelRatio device pixels: fitting to the
+// window picks a zoom that makes this a whole number (and puts the image's
+// corner on a device pixel), so every pixel is drawn the same size; at a
+// zoom where it is not (a browser zoom of 225-275%, or the wheel), the
+// canvas is smoothed instead of drawn as blocks of uneven widths, which
+// made stair-stepped edges.  The brush cursor's canvas is sized in device
+// pixels.
 
 import { LiveStroke } from './brush.js';
 import { blit, cloneImage } from './image.js';
@@ -62,19 +69,43 @@ export class Painter extends EventTarget {
 
   applyTransform() {
     this.el.stage.style.transform = `translate(${this.panX}px, ${this.panY}px) scale(${this.zoom})`;
+    this.applyRendering();
     this.emit('zoom', this.zoom);
     this.drawCursor();
   }
 
   fitToWindow() {
     const vp = this.el.viewport.getBoundingClientRect();
-    const w = this.el.paint.width, h = this.el.paint.height;
+    const w = this.el.paint.width, h = this.el.paint.height, dpr = devicePixelRatio || 1;
     let z = Math.min((vp.width - 24) / w, (vp.height - 24) / h);
-    z = z >= 1 ? Math.floor(z * 4) / 4 : z;          // crisp steps when enlarging
+    if (z * dpr >= 1) z = Math.floor(z * dpr + 1e-9) / dpr;     // whole device pixels per image pixel
     this.zoom = Math.max(0.1, z);
-    this.panX = Math.round((vp.width - w * this.zoom) / 2);
-    this.panY = Math.round((vp.height - h * this.zoom) / 2);
+    // the image's corner on a device pixel (the viewport may not start on one)
+    const snap = (o, x) => Math.round((o + x) * dpr) / dpr - o;
+    this.panX = snap(vp.left, (vp.width - w * this.zoom) / 2);
+    this.panY = snap(vp.top, (vp.height - h * this.zoom) / 2);
+    this.fitted = true;
     this.applyTransform();
+  }
+
+  // Device pixels per image pixel; blocks of one size (pixelated) when it
+  // is a whole number or large (8 and up, where one device pixel more or
+  // less does not show), else smoothed.
+  applyRendering() {
+    const k = this.zoom * (devicePixelRatio || 1);
+    const whole = k >= 1 && Math.abs(k - Math.round(k)) < 1e-3;
+    const mode = whole || k >= 8 ? 'pixelated' : 'auto';
+    if (this.el.stage.dataset.rendering !== mode) {
+      this.el.stage.dataset.rendering = mode;
+      for (const c of this.el.stage.querySelectorAll('canvas')) c.style.imageRendering = mode;
+    }
+  }
+
+  // A browser zoom changes devicePixelRatio: the rendering follows it, and
+  // so does the cursor's canvas.
+  watchRatio() {
+    const mq = matchMedia(`(resolution: ${devicePixelRatio || 1}dppx)`);
+    mq.addEventListener('change', () => { this.applyRendering(); this.resizeCursor(); this.watchRatio(); }, { once: true });
   }
 
   zoomAt(factor, cx, cy) {
@@ -84,6 +115,7 @@ export class Painter extends EventTarget {
     const ix = (cx - this.panX) / this.zoom, iy = (cy - this.panY) / this.zoom;
     this.zoom = z;
     this.panX = cx - ix * z; this.panY = cy - iy * z;
+    this.fitted = false;
     this.applyTransform();
   }
 
@@ -109,7 +141,10 @@ export class Painter extends EventTarget {
       const p = this.toImage(e);
       this.zoomAt(Math.exp(-e.deltaY * (e.deltaMode ? 0.05 : 0.0015)), p.cx, p.cy);
     }, { passive: false });
-    new ResizeObserver(() => this.resizeCursor()).observe(vp);
+    // the painting area changed size (the window, the guide above it, a
+    // wrapped toolbar): a view still fitted to the window is fitted again
+    new ResizeObserver(() => { this.resizeCursor(); if (this.fitted && this.k >= 0) this.fitToWindow(); }).observe(vp);
+    this.watchRatio();
   }
 
   panning(e) { return this.tool === 'pan' || this.spaceHeld || e.button === 1 || !this.session.canPaint && this.tool !== 'pick'; }
@@ -164,6 +199,7 @@ export class Painter extends EventTarget {
     this.mouse = p;
     if (this.drag) {
       this.panX = this.drag.px + e.clientX - this.drag.x;
+      this.fitted = false;
       this.panY = this.drag.py + e.clientY - this.drag.y;
       this.applyTransform();
       return;
@@ -219,15 +255,19 @@ export class Painter extends EventTarget {
   // ---- brush cursor -------------------------------------------------------------------
 
   resizeCursor() {
-    const r = this.el.viewport.getBoundingClientRect();
-    this.el.cursor.width = Math.max(1, Math.round(r.width));
-    this.el.cursor.height = Math.max(1, Math.round(r.height));
+    const r = this.el.viewport.getBoundingClientRect(), dpr = devicePixelRatio || 1;
+    this.el.cursor.width = Math.max(1, Math.round(r.width * dpr));
+    this.el.cursor.height = Math.max(1, Math.round(r.height * dpr));
+    this.el.cursor.style.width = r.width + 'px';
+    this.el.cursor.style.height = r.height + 'px';
     this.drawCursor();
   }
 
   drawCursor() {
-    const c = this.el.cursor, g = c.getContext('2d');
+    const c = this.el.cursor, g = c.getContext('2d'), dpr = c.width / Math.max(1, parseFloat(c.style.width) || c.width);
+    g.setTransform(1, 0, 0, 1, 0, 0);
     g.clearRect(0, 0, c.width, c.height);
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);          // drawn in CSS pixels
     const m = this.mouse;
     if (!m || this.drag || this.tool === 'pan' || this.spaceHeld || !this.session.canPaint && this.tool !== 'pick') return;
     const sx = this.panX + m.x * this.zoom, sy = this.panY + m.y * this.zoom;

@@ -12,19 +12,21 @@ import { decodeImage } from './image.js';
 const $ = id => document.getElementById(id);
 let state, api, toast, showError;
 
+// Each finish by how it looks (name); id is the value the finish list
+// keeps; the analytic spec and its parameters are in the tooltip.
 export const PRESETS = [
-  { name: 'matte', title: 'Matte: diffuse only (chalk, clay, unfinished wood)', spec: kd => `lambert:kd=${kd}` },
-  { name: 'plastic', title: 'Plastic: a diffuse colour under a white, fairly sharp highlight', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.25` },
-  { name: 'glossy', title: 'Glossy paint: a sharp white highlight', spec: kd => `ct:kd=${kd},f0=0.05,rough=0.1` },
-  { name: 'metal', title: 'Metal: no diffuse; the colour is in the highlight (gold when the colour is)', spec: kd => `ct:kd=0,f0=${kd},rough=0.2` },
-  { name: 'satin', title: 'Satin / brushed: a highlight stretched around the vertical axis (fit it as a brushed material)', spec: kd => `ward:kd=${kd},ks=0.4,rough=0.08,rough_y=0.3` },
-  { name: 'rough', title: 'Rough: a wide, dim highlight (rubber, unglazed ceramic)', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.6` },
-  // the analytic truths glint paints with (brdf.h's defaults; the colour is not used)
-  { name: 'truth: phong32', title: 'Phong, exponent 32 (the reference truth)', spec: () => 'phong32', fixed: true },
-  { name: 'truth: blinn20', title: 'Blinn-Phong, exponent 20 (the reference truth)', spec: () => 'blinn20', fixed: true },
-  { name: 'truth: ct0.2', title: 'Cook-Torrance GGX, roughness 0.2 (the reference truth)', spec: () => 'ct0.2', fixed: true },
-  { name: 'truth: ct0.5', title: 'Cook-Torrance GGX, roughness 0.5 (the reference truth)', spec: () => 'ct0.5', fixed: true },
-  { name: 'truth: ward', title: 'Isotropic Ward, roughness 0.2', spec: () => 'ward', fixed: true },
+  { id: 'matte', name: 'matte clay', title: 'Diffuse only, no highlight: chalk, clay, unfinished wood', spec: kd => `lambert:kd=${kd}` },
+  { id: 'plastic', name: 'satin plastic', title: 'A diffuse colour under a white, fairly sharp highlight', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.25` },
+  { id: 'glossy', name: 'glossy paint', title: 'A sharp white highlight over the colour', spec: kd => `ct:kd=${kd},f0=0.05,rough=0.1` },
+  { id: 'metal', name: 'polished metal', title: 'No diffuse colour: the colour is in the highlight (gold when the colour is)', spec: kd => `ct:kd=0,f0=${kd},rough=0.2` },
+  { id: 'satin', name: 'brushed satin', title: 'A highlight stretched around the vertical axis (fit it as brushed / anisotropic)', spec: kd => `ward:kd=${kd},ks=0.4,rough=0.08,rough_y=0.3` },
+  { id: 'rough', name: 'rough rubber', title: 'A wide, dim highlight: rubber, unglazed ceramic', spec: kd => `ct:kd=${kd},f0=0.04,rough=0.6` },
+  // the analytic truths glint's own tests paint with (brdf.h's defaults; the colour is not used)
+  { id: 'truth: phong32', name: 'white plastic, sharp highlight', title: 'Grey-white with a sharp highlight; its own colour', tech: 'Phong, exponent 32, the reference truth', spec: () => 'phong32', fixed: true },
+  { id: 'truth: blinn20', name: 'white plastic, soft highlight', title: 'Grey-white with a softer highlight; its own colour', tech: 'Blinn-Phong, exponent 20, the reference truth', spec: () => 'blinn20', fixed: true },
+  { id: 'truth: ct0.2', name: 'white glaze, glossy', title: 'A glossy glaze; its own colour', tech: 'Cook-Torrance GGX, roughness 0.2, the reference truth', spec: () => 'ct0.2', fixed: true },
+  { id: 'truth: ct0.5', name: 'white glaze, rough', title: 'A rough glaze; its own colour', tech: 'Cook-Torrance GGX, roughness 0.5, the reference truth', spec: () => 'ct0.5', fixed: true },
+  { id: 'truth: ward', name: 'white satin', title: 'A soft satin sheen; its own colour', tech: 'isotropic Ward, roughness 0.2', spec: () => 'ward', fixed: true },
 ];
 
 // '#rrggbb' -> 'r/g/b' in [0, 1] (linear, as the studio reads 8-bit values).
@@ -50,7 +52,7 @@ export function presetQuery(scene, spec) {
 }
 
 function presetChosen() {
-  const p = PRESETS.find(x => x.name === $('preset-sel').value) || PRESETS[0];
+  const p = PRESETS.find(x => x.id === $('preset-sel').value) || PRESETS[0];
   $('preset-colour').disabled = !!p.fixed;
   $('preset-note').textContent = p.title;
   return p;
@@ -70,8 +72,15 @@ async function applyPreset() {
       await S.uploadImage(v.k, await decodeImage(await r.arrayBuffer()));
       btn.textContent = `${++n} of ${S.views.length}…`;
     }
-    toast('Every view painted', `${n} views now show ${p.name} (${spec}); edit them, then fit`);
+    toast('Every view painted', `${n} views now show ${p.name}; edit them, then fit`);
   } catch (e) { showError(e); } finally { btn.disabled = false; btn.textContent = 'Paint all views'; }
+}
+
+// The finish list's entry for a finish: its look, its id as the value.
+function presetOption(p) {
+  const o = document.createElement('option');
+  o.value = p.id; o.textContent = p.name; o.title = p.title + ' · advanced: ' + (p.tech || p.spec('kd'));
+  return o;
 }
 
 // Wire the finish controls to the studio (once).
@@ -79,24 +88,18 @@ export function bindPresets(ctx) {
   ({ state, api, toast, showError } = ctx);
   const sel = $('preset-sel');
   if (sel.options.length) return;
-  for (const p of PRESETS) {
-    const o = document.createElement('option');
-    o.value = o.textContent = p.name;
-    o.title = p.title;
-    sel.appendChild(o);
-  }
+  for (const p of PRESETS) sel.appendChild(presetOption(p));
   sel.onchange = presetChosen;
   $('preset-apply').onclick = applyPreset;
   presetChosen();
   api.measured().then(r => {
     for (const m of r.materials || []) {
       const fit = m.spec.startsWith('merl:') ? '' : ' ' + m.spec.slice(0, 3);
-      const p = { name: 'measured: ' + m.name + fit, title: `Measured (${m.layout}): ${m.name}, as the server holds it; the colour is not used`, spec: () => m.spec, fixed: true };
+      const look = m.name.replace(/[-_.]+/g, ' ').trim();
+      const p = { id: 'measured: ' + m.name + fit, name: `${look} (measured${fit ? ', fitted' : ''})`,
+                  title: 'Measured from a real material; its own colour', tech: `${m.layout}, ${m.spec}`, spec: () => m.spec, fixed: true };
       PRESETS.push(p);
-      const o = document.createElement('option');
-      o.value = o.textContent = p.name;
-      o.title = p.title;
-      sel.appendChild(o);
+      sel.appendChild(presetOption(p));
     }
   }).catch(() => { /* the analytic finishes stay */ });
 }

@@ -30,20 +30,36 @@ export function renderSummary(sm) {
   $('sum-highlight').textContent = highlightWords(sm.highlight);
   const alb = sm.albedo.map(a => `${a.theta_deg}°: ${lum(a.rgb).toFixed(3)}`).join(' · ');
   const over = sm.albedo.some(a => Math.max(...a.rgb) > 1);
-  $('sum-albedo').textContent = `reflects (albedo) ${alb}` + (over ? ' — above 1: more than it receives' : '');
+  $('sum-albedo').textContent = `share of the light it reflects, by the light's angle: ${alb}` + (over ? ' — above 1: more than it receives' : '');
+  $('sum-albedo').title = 'advanced: the directional albedo (luminance) at each angle of incidence';
   drawPolar($('sum-polar'), sm);
 }
 
 // f in the plane of incidence, one curve per light angle, as a polar plot:
-// the normal up, the light's side to the left.
+// the normal up, the light's side to the left; the viewing angle marked at
+// 0, 30, 60 and 90 degrees each side, the radius read as brightness.
+export const POLAR_TICKS = [-90, -60, -30, 0, 30, 60, 90];
+
+// The plot's geometry on a W x H canvas: the centre (the point on the
+// surface), the outer ring's radius, and where each angle's label goes.
+export function polarLayout(W, H) {
+  const cx = W / 2, cy = H - 18, R = Math.min(W / 2 - 26, H - 42);
+  const ticks = POLAR_TICKS.map(t => {
+    const a = t * Math.PI / 180;
+    return { deg: t, text: `${Math.abs(t)}°`, x: cx + (R + 11) * Math.sin(a), y: cy - (R + 9) * Math.cos(a) };
+  });
+  return { cx, cy, R, ticks };
+}
+
 export function drawPolar(c, sm) {
-  const g = c.getContext('2d'), W = c.width, H = c.height, cx = W / 2, cy = H - 18, R = Math.min(W / 2 - 10, H - 30);
+  const g = c.getContext('2d'), W = c.width, H = c.height, { cx, cy, R, ticks } = polarLayout(W, H);
   g.clearRect(0, 0, W, H);
   let mx = 1e-9;
   for (const p of sm.polar) for (const f of p.f) mx = Math.max(mx, lum(f));
   g.strokeStyle = '#323744';
   for (const k of [0.25, 0.5, 0.75, 1]) { g.beginPath(); g.arc(cx, cy, R * k, Math.PI, 2 * Math.PI); g.stroke(); }
   g.beginPath(); g.moveTo(cx - R, cy); g.lineTo(cx + R, cy); g.moveTo(cx, cy); g.lineTo(cx, cy - R); g.stroke();
+  drawPolarTicks(g, cx, cy, R, ticks);
   const cols = ['#ffb45e', '#6bd66b', '#6ba4ff'];
   sm.polar.forEach((p, j) => {
     g.strokeStyle = cols[j % 3]; g.lineWidth = 1.5; g.beginPath();
@@ -60,6 +76,22 @@ export function drawPolar(c, sm) {
     g.fillText(`light ${p.theta_i_deg}°`, 6, 12 + 12 * j);
   });
   g.fillStyle = '#8d94a3'; g.font = '9px system-ui'; g.textAlign = 'right';
-  g.fillText(`f (luminance), outer ring ${mx.toPrecision(3)}`, W - 4, 12);
+  g.fillText(`brightness · outer ring ${mx.toPrecision(3)}`, W - 4, 12);
+  g.textAlign = 'center';
+  g.fillText('viewing angle from straight on', cx, H - 3);
   g.textAlign = 'left';
+}
+
+// Spokes and labels at the viewing angles of POLAR_TICKS, just outside
+// the outer ring (angle a from the normal: x = sin a, y = cos a).
+function drawPolarTicks(g, cx, cy, R, ticks) {
+  g.save();
+  g.strokeStyle = '#2a2e38'; g.fillStyle = '#8d94a3'; g.font = '9px system-ui';
+  g.textAlign = 'center'; g.textBaseline = 'middle';
+  for (const t of ticks) {
+    const a = t.deg * Math.PI / 180;
+    if (t.deg % 90) { g.beginPath(); g.moveTo(cx, cy); g.lineTo(cx + R * Math.sin(a), cy - R * Math.cos(a)); g.stroke(); }
+    g.fillText(t.text, t.x, t.y);
+  }
+  g.restore();
 }

@@ -144,9 +144,14 @@ run({
       const td = document.querySelector('#err-table tbody tr td:nth-child(2)');
       return td && /\d/.test(td.textContent);
     }), 60000, 'per-view errors');
-    const rms = await page.evaluate(() => parseFloat(document.querySelector('#err-table tbody tr td:nth-child(2)').textContent));
-    t.log(`view 0 RMS against the render under the environment: ${rms}`);
+    // shown as a percentage of the painting's brightness; the RMS behind it
+    const { rms, level, shown } = await page.evaluate(() => {
+      const tr = document.querySelector('#err-table tbody tr'), r = window.glint.state.judge.rows.get(+tr.dataset.view);
+      return { rms: r.rms, level: r.level.level(), shown: tr.querySelector('td:nth-child(2)').textContent };
+    });
+    t.log(`view 0 against the render under the environment: "${shown}", RMS ${rms} over the painting's ${level}`);
     assert(isFinite(rms) && rms < 0.5, 'a finite per-view error');
+    assert(/%$/.test(shown) && Math.abs(parseFloat(shown) - 100 * rms / level) <= Math.max(0.05, 0.051 * 100 * rms / level), 'shown as its percentage: ' + shown);
     // the point light is still there, for any material
     const n1 = await page.evaluate(() => window.glint.state.judge.frames);
     await setValue(page, 'preview-light', '', 'change');

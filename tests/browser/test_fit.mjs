@@ -183,7 +183,7 @@ run({
     // the quality control now shows measured figures for the default preset
     await page.waitForFunction(() => {
       const cells = [...document.querySelectorAll('#quality .q[data-preset="default"] .v')].map(c => c.textContent);
-      return cells.length === 3 && /\d/.test(cells[0]) && /\d/.test(cells[1]) && /^0\.\d{3}/.test(cells[2]);
+      return cells.length === 3 && /\d/.test(cells[0]) && /\d/.test(cells[1]) && /^[\d.]+%/.test(cells[2]);   // the error as a percentage
     });
     t.log('quality row: ' + (await page.locator('#quality .q[data-preset="default"]').innerText()).replace(/\s+/g, ' '));
     // export

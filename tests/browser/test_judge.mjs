@@ -59,7 +59,7 @@ run({
     // its line on the methods comes from GET /methods (their labels)
     await page.waitForFunction(() => document.getElementById('guide-methods').textContent.length > 0);
     const guideText = await page.textContent('#guide');
-    assert(/one material for the whole object/.test(guideText) && /several materials/.test(guideText), 'the guide says what the methods can represent');
+    assert(/one finish, lit by lamps/.test(guideText) && /varies over the surface/.test(guideText), 'the guide says what the methods can represent');
     // start from the plastic finish on every view, then paint a highlight on view 3
     await page.selectOption('#preset-sel', 'plastic');
     await page.click('#preset-apply');
@@ -126,15 +126,26 @@ run({
       const ds = [];
       for (let i = 0; i < n * n; i++) if (Y(b, i) > 0 || Y(f, i) > 0) ds.push(Y(f, i) - Y(p, i));
       const mags = ds.map(Math.abs).sort((a, b) => a - b);
-      return { pixels: ds.length, p99: mags[Math.floor(0.99 * mags.length)], rms: Math.sqrt(ds.reduce((a, d) => a + d * d, 0) / ds.length) };
+      let p2 = 0;
+      for (let i = 0; i < n * n; i++) if (Y(b, i) > 0 || Y(f, i) > 0) p2 += Y(p, i) ** 2;
+      return { pixels: ds.length, p99: mags[Math.floor(0.99 * mags.length)], rms: Math.sqrt(ds.reduce((a, d) => a + d * d, 0) / ds.length),
+               level: Math.sqrt(p2 / ds.length) };
     }, [f.id, session.id, session.paint_token, 96]);
     t.log(`difference: full colour ±${mine.scale.toPrecision(3)}, RMS ${mine.rms.toPrecision(3)} over ${mine.pixels} px (independently: ±${ref.p99.toPrecision(3)}, ${ref.rms.toPrecision(3)}, ${ref.pixels} px)`);
     assertEq(mine.pixels, ref.pixels, 'the object pixels compared');
     assertLE(Math.abs(mine.scale - ref.p99), 1e-5 + 1e-4 * ref.p99, 'the difference\'s scale is its 99th percentile');
     assertLE(Math.abs(mine.rms - ref.rms), 1e-5 + 1e-4 * ref.rms, 'the difference\'s RMS');
     const legend = await page.textContent('#compare-legend');
-    assert(legend.includes('fit brighter') && legend.includes('±' + mine.scale.toPrecision(2)), 'the legend prints the scale: ' + legend);
-    assert((await page.getAttribute('#compare-legend', 'title')).includes('RMS ' + mine.rms.toPrecision(3)), 'the legend\'s title gives the RMS');
+    // the scale as a percentage of the painting's brightness (its luminance's RMS over the same pixels)
+    const scalePct = 100 * ref.p99 / ref.level, shownPct = parseFloat(legend.slice(legend.indexOf('±') + 1));
+    t.log(`legend "${legend}": ±${scalePct.toFixed(3)}% independently`);
+    assert(legend.includes('brighter') && /±[\d.]+%/.test(legend), 'the legend prints the scale as a percentage: ' + legend);
+    assertLE(Math.abs(shownPct - scalePct), Math.max(0.006, 0.051 * scalePct), 'the legend\'s percentage');
+    const clipped = await page.evaluate(() => { const L = document.getElementById('compare-legend'); return L.scrollWidth - L.clientWidth; });
+    assertLE(clipped, 0, 'the legend shows whole (px cut off)');
+    const title = await page.getAttribute('#compare-legend', 'title');
+    assert(/differs from your painting by about/.test(title), 'the legend\'s title says what the figure means: ' + title);
+    assert(title.includes('RMS ' + mine.rms.toPrecision(3)), 'the legend\'s title gives the RMS under advanced');
     const sat = await page.evaluate(() => {
       const c = document.getElementById('overlay-fit'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
       let full = 0, any = 0;
@@ -168,6 +179,9 @@ run({
         }).map(el => el.id || el.className);
       });
       assertEq(cut.join(','), '', `${w}x${h}: status bar items cut off`);
+      const legendCut = await page.evaluate(() => { const L = document.getElementById('compare-legend'); return [L.scrollWidth - L.clientWidth, L.textContent, document.getElementById('st-view').scrollWidth - document.getElementById('st-view').clientWidth]; });
+      assertLE(legendCut[0], 0, `${w}x${h}: the compare legend "${legendCut[1]}" shows whole (px cut off)`);
+      assertLE(legendCut[2], 0, `${w}x${h}: the view's label shows whole (px cut off)`);
       // the material ball, its controls (light, turn) and the tabs below it above the fold too
       for (const sel of ['#ball', '#ball-row select', '#ball-row input[type=range]', '.tabs button >> nth=-1']) {
         const box = await page.locator(sel).first().boundingBox();

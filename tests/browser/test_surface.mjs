@@ -67,10 +67,15 @@ run({
     assertEq(await page.inputValue('#fit-method'), 'auto', 'glint chooses the model by default');
     const a = await fit(page);
     assert(a.choice && a.choice.candidates.length === 5, 'the automatic choice reports its candidates');
-    await page.waitForSelector('#auto-choice');
+    // said in percentages once the views' brightness is known
+    await page.waitForFunction(() => /\d%/.test((document.getElementById('auto-choice') || {}).textContent || ''), null, { timeout: 60000 });
     const said = await page.textContent('#auto-choice');
     t.log(`auto: ${said}`);
-    assert(said.includes(a.choice.chosen) && ['hf3', 'hf2d', 'hf4', 'maps', 'hybrid'].every(m => said.includes(m)), 'every candidate named');
+    // every candidate by its label (from GET /methods), with its error as a percentage; no method names
+    const labels = new Map((await t.daemon.api('GET', '/methods')).methods.map(m => [m.name, m.label]));
+    assert(said.includes(labels.get(a.choice.chosen)) && ['hf3', 'hf2d', 'hf4', 'maps', 'hybrid'].every(m => said.includes(labels.get(m))), 'every candidate by its label');
+    assert(!['hf3', 'hf2d', 'hf4', 'maps', 'hybrid'].some(m => new RegExp(`\\b${m}\\b`).test(said)), 'no method names: ' + said);
+    assertEq((said.match(/\d%/g) || []).length >= 5, true, 'each candidate\'s error as a percentage: ' + said);
 
     // material maps of 3 products
     await setValue(page, 'fit-method', 'maps');

@@ -5,6 +5,7 @@ lists exactly the registered methods, and GET /api/v1/methods describes
 them exactly as the table does (`glint methods --json`)."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -102,6 +103,15 @@ def test_methods_say_what_they_are_for(d):
         assert any(p["group"] == "basic" for p in m["params"]), m["name"]
         for p in m["params"]:
             assert p["label"] and p["label"] != p["name"], (m["name"], p["name"])
+    # what the studio shows of a method is in the artist's words: no
+    # method's name (hf3, srbf, ...) in a label, summary or when-to-use
+    named = re.compile(r"(?<![A-Za-z0-9_])(%s)(?![A-Za-z0-9_])" % "|".join(re.escape(m["name"]) for m in api))
+    for m in api:
+        for field in ("label", "summary", "when"):
+            assert not named.search(m[field]), (m["name"], field, m[field])
+        for p in m["params"]:
+            if p["group"] == "basic":
+                assert not named.search(p["label"]), (m["name"], p["name"], p["label"])
     by = {m["name"]: m for m in api}
     assert [m["name"] for m in api if m["chooses"]] == ["auto"]
     assert by["srbf"]["lighting"] == "environment" and by["srbf"]["shows"] == "lobes"

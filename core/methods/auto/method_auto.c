@@ -17,7 +17,7 @@
 #include "scene.h"
 
 static const method_param auto_params_table[] = {
-    {.name = "res", .label = "detail (texels per factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor of every candidate; 0: each at the settings a fit "
                     "of its own would have (hf3 and maps 128, hf4, hybrid and hf2d 32)",
      .offset = offsetof(auto_params, res), .min = 0, .max = HF_RES_MAX},
@@ -827,7 +827,7 @@ const method method_auto = {
     .summary = "Lets glint choose: one material, a brushed one, one with varying "
         "colour or several materials, whichever best predicts painted views it "
         "did not fit.",
-    .when = "Use it when unsure which model the painting needs (point lights): it "
+    .when = "Use it when unsure which model the painting needs (lit by lamps): it "
         "keeps the simplest unless a richer one is clearly better, and says "
         "what it chose and why.",
     .lighting = METHOD_LIGHT_POINT,

@@ -25,15 +25,15 @@ static const char *const dims_values[] = {"1d", "2d", NULL};
      .offset = offsetof(hf2d_params_t, dims) + (IDX) * sizeof(int), .values = dims_values}
 
 static const method_param hf2d_params[] = {
-    {.name = "res", .label = "detail (texels per 1D factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "texels per 1D factor", .offset = offsetof(hf2d_params_t, res),
      .min = HF_RES_MIN, .max = HF_RES_MAX},
-    {.name = "res_2d", .label = "detail of a 2D factor (nodes per side)", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "res_2d", .label = "detail over directions", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "nodes per side of each 2D factor: its unknowns grow as res_2d^2 and the "
                     "precomputation as the cube of all unknowns",
      .offset = offsetof(hf2d_params_t, sres), .min = HF2D_SRES_MIN, .max = HF2D_SRES_MAX},
     DIMS_ROW("p", 0, "the direction to the light", "light factor: 1D or 2D", METHOD_GROUP_ADVANCED),
-    DIMS_ROW("q", 1, "the half vector", "highlight factor: 1D or 2D", METHOD_GROUP_BASIC),
+    DIMS_ROW("q", 1, "the half vector", "highlight: round (1d) or stretched (2d)", METHOD_GROUP_BASIC),
     DIMS_ROW("r", 2, "the direction to the eye", "view factor: 1D or 2D", METHOD_GROUP_ADVANCED),
     {.name = "lambda", .label = "smoothing of 1D factors", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "weight of the smoothing rows of the 1D factors",
@@ -267,9 +267,9 @@ static int hf2d_holdout_ok(const void *params)
 
 const method method_hf2d = {
     .name = "hf2d",
-    .label = "Brushed or anisotropic material",
+    .label = "Brushed / anisotropic",
     .summary = "One finish whose highlight depends on direction around the surface: "
-        "factors that are 2D maps of the light, half and view directions.",
+        "its look is learnt as a function of the light and view directions.",
     .when = "Use it for brushed metal, satin or a hair-like sheen; directions are "
         "measured around the object's vertical axis.",
     .lighting = METHOD_LIGHT_POINT,

@@ -399,7 +399,7 @@ double hf3_fit_seconds(const void *params, long nsamples)
 
 const method method_hf3 = {
     .name = "hf3",
-    .label = "One material for the whole object",
+    .label = "One finish, lit by lamps",
     .summary = "One finish for the whole object, fitted to views lit by their point "
         "light; a painted pattern is blended into one colour.",
     .when = "Use it for a single finish (plastic, metal, paint) painted under the "

@@ -18,7 +18,7 @@ extern const char *const hf3_model_values[], *const hf3_precision_values[],
 /* The parameter rows of hf3 for a params struct T holding a fit_params at
  * member path P ("" for fit_params itself, "hf." for one inside). */
 #define HF3_PARAM_ROWS(T, P)                                                                    \
-    {.name = "res", .label = "detail (texels per factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",                      \
+    {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",                                          \
      .description = "texels per factor: accuracy up to about 128 at a 128x128 raster; "         \
                     "precomputation grows as res^3",                                            \
      .offset = offsetof(T, P res), .min = HF_RES_MIN, .max = HF_RES_MAX},                       \

@@ -213,9 +213,9 @@ static const char *const hf4_surface[] = {"spatial", NULL};
 
 const method method_hf4 = {
     .name = "hf4",
-    .label = "One material, varying colour",
+    .label = "One finish, colour varies",
     .summary = "One finish whose colour and brightness vary over the surface: the "
-        "point-light material times a colour texture.",
+        "lamp-lit finish times a colour texture.",
     .when = "Use it for a faded print, dirt or a painted pattern on one finish; "
         "different highlights in different places need several materials.",
     .lighting = METHOD_LIGHT_POINT,

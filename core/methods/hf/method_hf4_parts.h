@@ -12,7 +12,7 @@
 /* The parameter rows of hf4 for a params struct T holding an hf4_params_t
  * at member path P ("" for hf4_params_t itself, "h." for one inside). */
 #define HF4_PARAM_ROWS(T, P)                                                                  \
-    {.name = "res", .label = "detail (texels per factor)", .type = METHOD_PARAM_INT, .affects = "precomputation",                    \
+    {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",                                        \
      .description = "texels per 1D factor (p, q, r)", .offset = offsetof(T, P res),           \
      .min = HF_RES_MIN, .max = HF_RES_MAX},                                                   \
     {.name = "s_res", .label = "colour texture size", .type = METHOD_PARAM_INT, .affects = "precomputation",                  \

@@ -71,12 +71,12 @@ static const char *const hybrid_surface[] = {"coefficients", "spatial", NULL};
 
 const method method_hybrid = {
     .name = "hybrid",
-    .label = "Several materials, varying colour",
+    .label = "Varies over the surface, with texture",
     .summary = "Several finishes on one object, each free to change colour and "
-        "brightness within its region: material maps whose materials carry "
-        "their own texture.",
+        "brightness within its region: masks of finishes, each with "
+        "a colour texture of its own.",
     .when = "Use it for worn gold on red plastic and the like; the richest and "
-        "slowest point-light model.",
+        "slowest model lit by lamps.",
     .lighting = METHOD_LIGHT_POINT,
     .shows = METHOD_SHOWS_FACTORS,
     .surface = hybrid_surface,

@@ -70,9 +70,9 @@ static const char *const maps_surface[] = {"coefficients", NULL};
 
 const method method_maps = {
     .name = "maps",
-    .label = "Several materials",
-    .summary = "Several finishes on one object: a few point-light materials blended "
-        "over the surface by textures.",
+    .label = "Varies over the surface",
+    .summary = "Several finishes on one object: a few lamp-lit finishes blended "
+        "over the surface by painted-in masks.",
     .when = "Use it for a logo on plastic, stripes or veins: paint each region as "
         "it should look, and the fit finds the materials and where each one is.",
     .lighting = METHOD_LIGHT_POINT,

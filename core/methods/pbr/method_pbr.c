@@ -243,9 +243,9 @@ static size_t pbr_fit_bytes(const void *params, long nsamples)
 
 const method method_pbr = {
     .name = "pbr",
-    .label = "Physically based (GGX)",
+    .label = "Physically based",
     .summary = "One material as a few physical numbers: a diffuse colour, a roughness and a "
-        "Fresnel reflectance (GGX highlight).",
+        "reflectance (how mirror-like it is, seen head-on).",
     .when = "Use it when you want a compact, standard material (the kind game engines and "
         "renderers take) and the painting looks like plastic, paint or metal.",
     .lighting = METHOD_LIGHT_POINT,

@@ -149,11 +149,11 @@ static const method_param srbf_params_table[] = {
      .description = "scale of the environment's radiance (the painting is divided by it)",
      .offset = offsetof(srbf_params, env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
      .max = SRBF_MAX_ENV_INTENSITY},
-    {.name = "lights", .label = "lights the environment becomes", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "lights", .label = "light samples of the environment", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "lights the environment is compressed into (median cut): the speed-accuracy "
                     "knob; transfer time grows linearly with it",
      .offset = offsetof(srbf_params, lights), .min = 1, .max = 4096},
-    {.name = "basis_res", .label = "lobe detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
+    {.name = "basis_res", .label = "highlight detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "hemicube resolution r of the lobe centres: J = 3 r^2 lobes (7: 147)",
      .offset = offsetof(srbf_params, basis_res), .min = SRBF_MIN_RES, .max = SRBF_MAX_RES},
     {.name = "sigma", .label = "lobe width (radians)", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
@@ -721,9 +721,9 @@ static double srbf_fit_seconds(const void *params, long nsamples)
 
 const method method_srbf = {
     .name = "srbf",
-    .label = "One material under an environment",
+    .label = "Under an environment",
     .summary = "One finish seen under an environment: the highlight is built from many "
-        "small lobes, kept within energy conservation.",
+        "small soft spots of light, never reflecting more light than it receives.",
     .when = "Use it when you paint how the object looks under an environment (sky, "
         "studio, an HDR map) rather than under a point light.",
     .lighting = METHOD_LIGHT_ENV,

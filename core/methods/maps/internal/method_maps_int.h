@@ -25,7 +25,7 @@ extern const char *const maps_merge_values[];
                     "per texel over every view (the measured best); min, the smallest value "  \
                     "over views (seed 000)",                                                   \
      .offset = offsetof(T, merge), .values = maps_merge_values},                                    \
-    {.name = "map_res", .label = "map size (texels per side)", .type = METHOD_PARAM_INT, .affects = "fit",                            \
+    {.name = "map_res", .label = "detail of where each finish is", .type = METHOD_PARAM_INT, .affects = "fit",                        \
      .description = "coefficient texture resolution (texels per side) over the surface's "     \
                     "texture coordinates",                                                     \
      .offset = offsetof(T, map_res), .min = MAPS_RES_MIN, .max = MAPS_RES_MAX},                \
