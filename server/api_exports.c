@@ -309,10 +309,17 @@ static http_resp usda_get(http_req *req)
     if (mq && strcmp(mq, "0") && strcmp(mq, "1"))
         return http_problem(400, "invalid-parameter", "mesh must be 0 or 1");
     with_mesh = !mq || strcmp(mq, "0");
-    if (!(rc = export_src_open(req, mid, &x, &e)) && !(rc = export_fit(a, mid, &x, &p, &e)))
-    {
+    if (!(rc = export_src_open(req, mid, &x, &e)) && !(rc = export_fit(a, mid, &x, &p, &e))) {
+        /* the text, twice over while its buffer grows: about 75 bytes a
+         * vertex (point, normal, st) and 20 a triangle */
+        size_t bytes = with_mesh ? 2 * ((size_t)x.sc->mesh.nverts * 80 +
+                                        (size_t)x.sc->mesh.ntris * 24) + ((size_t)1 << 16)
+                                 : 0;
         snprintf(note, sizeof note, "glint material %s.", mid);
-        rc = usda_write(&p, with_mesh ? &x.sc->mesh : NULL, note, &text, &len, &e);
+        if (!(rc = admit_enter(a->work, bytes, "a USD layer", &e))) {
+            rc = usda_write(&p, with_mesh ? &x.sc->mesh : NULL, note, &text, &len, &e);
+            admit_leave(a->work, bytes);
+        }
     }
     if (rc) {
         export_src_close(a, &x);

@@ -10,6 +10,7 @@ import math
 import os
 import re
 import struct
+import subprocess
 import sys
 import tempfile
 
@@ -20,6 +21,12 @@ import export_specs  # noqa: E402
 SIZE = 48
 S = {}
 CT = "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"
+CLI = os.environ.get("GLINT_CLI") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(os.environ.get("GLINTD", "build/server/glintd")))),
+    "core", "glint")
+# red plastic with gold stripes (test_exports.py's): a material of maps varies over the surface
+STRIPES = ("stripes:freq=3,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|"
+           "ct:kd=0,f0=0.9/0.7/0.3,rough=0.25")
 EXTS = {"glb": "glb", "mtlx": "mtlx", "usda": "usda", "merl": "binary", "brdf": "brdf",
         "package": "tar"}
 
@@ -161,6 +168,40 @@ def test_05_access_and_errors(d):
         d.get("/api/v1/materials/%s/%s" % ("0" * 32, p), headers=tok(S["session"]["view_token"]),
               status=404)
     get(d, "material.usda?mesh=2", status=400)
+
+
+def test_06_a_material_that_varies_exports_its_average_and_says_so(d):
+    tmp = tempfile.mkdtemp(prefix="glint-fmt-sv-")
+    scene = os.path.join(tmp, "scene.json")
+    subprocess.run([CLI, "scene", "create", "--size", str(SIZE), "-o", scene], check=True,
+                   stdout=subprocess.DEVNULL)
+    subprocess.run([CLI, "paint", scene, "--brdf", STRIPES, "-o", os.path.join(tmp, "paint")],
+                   check=True, stdout=subprocess.DEVNULL)
+    sc = d.post("/api/v1/scenes", json={"width": SIZE, "height": SIZE}, status=201).json()
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for k in range(len(sc["views"])):
+        with open(os.path.join(tmp, "paint", "view_%02d.exr" % k), "rb") as f:
+            d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+                  headers=dict(tok(s["paint_token"]), **{"Content-Type": "image/x-exr"}),
+                  data=f.read(), status=200)
+    mid = fit_material(d, s, {"method": "maps", "params": {"res": 32, "map_res": 16, "components": 3}})
+    h = tok(s["view_token"])
+    lst = d.get("/api/v1/materials/%s/exports" % mid, headers=h, status=200,
+                schema="ExportList.json").json()
+    print("maps:", json.dumps(lst["fit"]), [(e["format"], e["how_close"]["rel_rms"], e["expensive"])
+                                            for e in lst["exports"]])
+    assert lst["fit"]["spatial"], lst["fit"]
+    glb = [e for e in lst["exports"] if e["format"] == "glb"][0]
+    assert glb["expensive"] and "textures come closer" in glb["how_close"]["note"], glb
+    # the average of gold and red plastic is further from either than a plain plastic's fit
+    assert lst["fit"]["rel_rms"] > 0.05, lst["fit"]
+    mtlx = d.get("/api/v1/materials/%s/material.mtlx" % mid, headers=h, status=200).text
+    assert "this is its average" in mtlx and "spatial=1" in \
+        d.get("/api/v1/materials/%s/material.mtlx" % mid, headers=h, status=200).headers["X-Glint-Fit"]
+    export_specs.check_mtlx(mtlx)
+    usda = d.get("/api/v1/materials/%s/material.usda?mesh=0" % mid, headers=h, status=200).text
+    assert "this is its average" in usda
+    export_specs.check_usda(usda)
 
 
 if __name__ == "__main__":
