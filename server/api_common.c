@@ -435,3 +435,41 @@ int api_dir_file(const char *dir, const char *name, char *real, size_t len, long
         *size = (long long)st.st_size;
     return 0;
 }
+
+/* ---- downloads ------------------------------------------------------------------------------ */
+
+/* s cut to [A-Za-z0-9._-] into out (at most cap - 1 characters) */
+static void filename_part(const char *s, char *out, size_t cap)
+{
+    size_t k = 0;
+    for (; s && *s && k + 1 < cap; s++) {
+        char c = *s;
+        int ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+                 c == '.' || c == '_' || c == '-';
+        out[k++] = ok ? c : '_';
+    }
+    out[k] = 0;
+}
+
+void api_export_filename(struct app *a, const char *mid, const char *scene_id, const char *ext,
+                         char *out, size_t cap)
+{
+    char stem[48] = "glint", name[128];
+    json_t *doc = NULL;
+    glint_err e;
+    if (scene_id && scene_id[0] && !store_scene_get(a->store, scene_id, &doc, &e)) {
+        const char *mname = json_string_value(json_object_get(doc, "mesh"));
+        if (mname && *mname)
+            snprintf(stem, sizeof stem, "%s", strcmp(mname, "upload") ? mname : "mesh");
+    }
+    json_decref(doc);
+    snprintf(name, sizeof name, "%s-%.8s.%s", stem, mid ? mid : "", ext ? ext : "bin");
+    filename_part(name, out, cap);
+}
+
+void api_attachment(http_resp *r, const char *name)
+{
+    char disp[200];
+    snprintf(disp, sizeof disp, "attachment; filename=\"%s\"", name);
+    http_header(r, "Content-Disposition", disp);
+}

@@ -147,6 +147,15 @@ int api_material_load(struct app *a, const char *mid, struct material *m, glint_
 /* Both: the material `mid` loaded if the request may read it (OUT: *m). */
 int api_material_read(http_req *req, const char *mid, struct material *m, glint_err *err);
 
+/* A download's file name: "<the scene's mesh>-<the id's first 8
+ * characters>.<ext>" ("glint-..." for a material without a scene), cut to
+ * [A-Za-z0-9._-] (OUT: out, at most cap - 1 characters).  api_common.c. */
+void api_export_filename(struct app *a, const char *mid, const char *scene_id, const char *ext,
+                         char *out, size_t cap);
+/* Content-Disposition: attachment; filename="<name>" on r (name as
+ * api_export_filename makes it: nothing to quote). */
+void api_attachment(http_resp *r, const char *name);
+
 /* A scene's base render when its creation names none (api_scenes.c,
  * api_views.c): kd cos(theta_i) I, the Lambert 1/pi undone by the scale. */
 #define API_BASE_BRDF "lambert:kd=0.6"

@@ -379,7 +379,7 @@ static http_resp package_get(http_req *req)
     const char *mid = req->param[0];
     static const unsigned char zero[1024];
     glint_buf t = {0};
-    char disp[160], *mem;
+    char disp[128], scene_id[33], *mem;
     size_t len;
     time_t now = time(NULL);
     memo_doc doc;
@@ -389,6 +389,7 @@ static http_resp package_get(http_req *req)
     if (api_material(req, mid, &doc, &e))
         return api_error(&e);
     free(doc.text);
+    memcpy(scene_id, doc.scene, sizeof scene_id);
     if (files_ensure(a, mid, &e) || shader_ensure(a, mid, &e) ||
         tar_dir(a, &t, mid, "", now, &e) ||
         tar_dir(a, &t, mid, "shader", now, &e)) {
@@ -400,8 +401,8 @@ static http_resp package_get(http_req *req)
         return http_problem(503, "out-of-memory", "out of memory");
     }
     r = http_bytes_owned(200, "application/x-tar", mem, len);
-    snprintf(disp, sizeof disp, "attachment; filename=\"glint-material-%s.tar\"", mid);
-    http_header(&r, "Content-Disposition", disp);
+    api_export_filename(a, mid, scene_id, "tar", disp, sizeof disp);
+    api_attachment(&r, disp);
     return r;
 }
 

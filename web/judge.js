@@ -3,7 +3,8 @@
 // GET /materials/{id}/preview.png?eye=&light=&size=), the error per view
 // (painted versus fitted, computed here from the painting and a render of
 // the material for that view, with a difference image), the three factor
-// curves (factors.exr) and the export links.
+// curves (factors.exr) and the exports (each a download with its file
+// name and how close it comes to the fitted material).
 
 import { decodeImage, resizeImage } from './image.js';
 import { fmtErr, fmtTime } from './fit.js';
@@ -24,6 +25,27 @@ const mul = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
 // Spherical coordinates about +z (the scene's world up).
 function toSph(v) { const r = len(v); return { r, az: Math.atan2(v[1], v[0]), el: Math.asin(Math.max(-1, Math.min(1, v[2] / r))) }; }
 function fromSph(s) { const c = Math.cos(s.el); return [s.r * c * Math.cos(s.az), s.r * c * Math.sin(s.az), s.r * Math.sin(s.el)]; }
+
+// The export formats by the names artists know them by.
+const EXPORT_NAMES = {
+  glb: 'glTF (.glb)', mtlx: 'MaterialX (.mtlx)', usda: 'USD (.usda)', merl: 'MERL table (.binary)',
+  brdf: 'BRDF Explorer (.brdf)', package: 'glint package (.tar)',
+};
+
+// How close an export comes to the fitted material, in a few words.
+function howClose(c) {
+  if (c.exact) return 'Exactly the fitted material.';
+  if (c.rel_rms == null) return c.note;
+  const p = 100 * c.rel_rms;
+  return (p < 0.1 ? 'Under 0.1%' : p.toFixed(p < 10 ? 1 : 0) + '%') + ' off the fitted material.';
+}
+
+function exportNote(text) {
+  const li = document.createElement('li');
+  li.className = 'small muted';
+  li.textContent = text;
+  return li;
+}
 
 export class Judge extends EventTarget {
   constructor(api, session) {
@@ -115,6 +137,7 @@ export class Judge extends EventTarget {
         for (const o of document.querySelectorAll('.tabs button')) o.classList.toggle('on', o === b);
         for (const t of ['errors', 'factors', 'summary', 'export']) $('tab-' + t).classList.toggle('hidden', t !== b.dataset.tab);
         if (b.dataset.tab === 'factors' && this.mat) { const w = shows(this.mat); if (w === 'lobes') this.drawLobe(); else if (w === 'factors') this.drawFactors(); }
+        if (b.dataset.tab === 'export' && this.mat) this.showExports(this.mat);
       };
     }
   }
@@ -137,11 +160,10 @@ export class Judge extends EventTarget {
     this.resetCamera(k);
     this.ball.setMaterial(m);
     const q = t => this.api.url(`/materials/${m.id}/${t}`);
-    $('dl-package').href = q('package');
-    $('dl-package').download = `glint-material-${m.id.slice(0, 8)}.tar`;
     $('dl-factors-png').href = q('factors.png');
     $('dl-factors-exr').href = q('factors.exr');
-    $('dl-shader').href = q('shader');
+    this.exportsOf = null;
+    if (!$('tab-export').classList.contains('hidden')) this.showExports(m);
     this.factors = null;
     this.manifest = null;
     if (lobe) this.loadManifest().catch(e => this.emit('error', e));
@@ -151,6 +173,59 @@ export class Judge extends EventTarget {
     loadSummary(this.api, m).then(sm => { if (m === this.mat) { this.summary = sm; renderSummary(sm); } })
       .catch(e => this.emit('error', e));
     this.computeErrors(k).catch(e => this.emit('error', e));
+  }
+
+  // ---- export ------------------------------------------------------------------------
+  // The files the material exports to (GET /materials/{id}/exports: its
+  // name, what it is for, how close it comes), listed when the Export tab
+  // is first shown for a material (the list fits the material's glTF
+  // numbers: a second or so), each a button that downloads it with the
+  // session's token, fetched into a Blob and saved under the list's name.
+
+  showExports(m) {
+    if (this.exportsOf === m) return;
+    this.exportsOf = m;
+    const ul = $('exports');
+    ul.replaceChildren(exportNote('Listing the formats…'));
+    this.api.get(`/materials/${m.id}/exports`, { what: 'Listing the exports' }).then(lst => {
+      if (m !== this.mat) return;
+      ul.replaceChildren(...lst.exports.map(x => this.exportRow(m, x)));
+    }).catch(e => {
+      if (m !== this.mat) return;
+      this.exportsOf = null;
+      ul.replaceChildren(exportNote('The formats could not be listed: ' + e.message));
+      this.emit('error', e);
+    });
+  }
+
+  exportRow(m, x) {
+    const li = document.createElement('li');
+    const b = document.createElement('button');
+    b.id = 'dl-' + x.format;
+    b.className = x.format === 'glb' ? 'primary' : '';
+    b.textContent = (EXPORT_NAMES[x.format] || x.format);
+    b.title = 'Download ' + x.file_name + ': ' + x.carries;
+    b.disabled = !x.available;
+    b.onclick = () => this.download(m, x, b);
+    const what = document.createElement('span');
+    what.className = 'small';
+    what.textContent = x.use_in + '. ' + (x.available ? howClose(x.how_close) : x.reason || 'not available for this material');
+    li.append(b, what);
+    return li;
+  }
+
+  async download(m, x, b) {
+    const label = b.textContent;
+    b.disabled = true;
+    b.textContent = x.expensive ? 'preparing (a few seconds)…' : 'preparing…';
+    try {
+      const r = await this.api.materialFile(m.id, x.url.slice(x.url.lastIndexOf('/') + 1));
+      const u = URL.createObjectURL(await r.blob());
+      const a = document.createElement('a');
+      a.href = u; a.download = x.file_name;
+      document.body.appendChild(a); a.click(); a.remove();
+      setTimeout(() => URL.revokeObjectURL(u), 60000);
+    } catch (e) { this.emit('error', e); } finally { b.textContent = label; b.disabled = false; }
   }
 
   // ---- preview -----------------------------------------------------------------------

@@ -7,7 +7,8 @@
  *   cmd_scene.c   scene, gbuffer, paint, base-render
  *   fit_opts.c    the fit options, from the methods' parameter tables
  *   cmd_fit.c     fit, fit-samples, export-samples
- *   cmd_render.c  render, eval, export-shader, and the renderer
+ *   cmd_render.c  render, eval, the exports (shader, MERL, .brdf, glTF,
+ *                 MaterialX, USD), and the renderer
  *   cmd_demo.c    demo
  *   cmd_methods.c methods: the catalogue, and each method's JSON Schema
  *
@@ -144,6 +145,8 @@ int cmd_export_shader(int argc, char **argv);
 int cmd_export_merl(int argc, char **argv);
 int cmd_export_brdf(int argc, char **argv);
 int cmd_export_gltf(int argc, char **argv);
+int cmd_export_mtlx(int argc, char **argv);
+int cmd_export_usda(int argc, char **argv);
 int cmd_demo(int argc, char **argv);          /* cmd_demo.c */
 int cmd_methods(int argc, char **argv);       /* cmd_methods.c */
 

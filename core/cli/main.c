@@ -54,6 +54,10 @@ static void usage(FILE *f)
           "                                      the scene's mesh with a glTF metallic-\n"
           "                                      roughness material fitted to MATDIR,\n"
           "                                      N x N textures where it varies (32)\n"
+          "  export-mtlx MATDIR --scene scene.json -o FILE.mtlx\n"
+          "                                      that fit as a MaterialX standard_surface\n"
+          "  export-usda MATDIR --scene scene.json [--no-mesh] -o FILE.usda\n"
+          "                                      that fit as a UsdPreviewSurface on the mesh\n"
           "  export-merl (MATDIR | --brdf SPEC) -o FILE.binary\n"
           "                                      a material (or an analytic truth) as a MERL\n"
           "                                      table (90x90x180 bins, isotropic; BRDF\n"
@@ -119,6 +123,7 @@ int main(int argc, char **argv)
         {"demo", cmd_demo}, {"base-render", cmd_base_render},
         {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
         {"export-brdf", cmd_export_brdf}, {"export-gltf", cmd_export_gltf},
+        {"export-mtlx", cmd_export_mtlx}, {"export-usda", cmd_export_usda},
         {"methods", cmd_methods}};
     static char name[64];
 

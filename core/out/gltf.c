@@ -462,15 +462,41 @@ static char *extras_text(const material *m, const gltf_pbr *p, const gltf_bake *
     return t;
 }
 
+/* The samples of the views flagged in `use` (NULL: all) of sc (OUT: *s,
+ * samples_free; the G-buffers are freed here: samples copy what they need). */
+static int scene_samples(const scene *sc, const unsigned char *use, samples *s, glint_err *err)
+{
+    gbuf *g = NULL;
+    char hash[33];
+    int rc;
+    scene_hash(sc, hash);
+    if (!(rc = raster_scene(sc, &g, err)))
+        rc = samples_build(g, sc->views, sc->nviews, use, hash, s, err);
+    raster_free_all(g, sc->nviews);
+    return rc;
+}
+
+int gltf_fit_scene(const material *m, const scene *sc, const unsigned char *use, gltf_pbr *out,
+                   glint_err *err)
+{
+    samples s;
+    int rc;
+    memset(&s, 0, sizeof s);
+    memset(out, 0, sizeof *out);
+    if (!(rc = scene_samples(sc, use, &s, err)))
+        rc = gltf_fit_material(m, &s, out, err);
+    samples_free(&s);
+    return rc;
+}
+
 int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
                       int bake_res, void **glb, size_t *len, gltf_pbr *out,
                       gltf_export_info *info, glint_err *err)
 {
-    gbuf *g = NULL;
     samples s;
     gltf_bake bake;
     gltf_export_info dummy;
-    char hash[33], *extras = NULL;
+    char *extras = NULL;
     int rc, baked = 0;
 
     *glb = NULL;
@@ -483,10 +509,7 @@ int gltf_export_scene(const material *m, const scene *sc, const unsigned char *u
     if (bake_res < 0 || bake_res > GLTF_BAKE_RES_MAX)
         return glint_err_set(err, GLINT_ERANGE, "texture size %d outside 0..%d (0: no textures)",
                              bake_res, GLTF_BAKE_RES_MAX);
-    scene_hash(sc, hash);
-    if ((rc = raster_scene(sc, &g, err)) ||
-        (rc = samples_build(g, sc->views, sc->nviews, use, hash, &s, err)) ||
-        (rc = gltf_fit_material(m, &s, out, err)))
+    if ((rc = scene_samples(sc, use, &s, err)) || (rc = gltf_fit_material(m, &s, out, err)))
         goto done;
     if (out->spatial && !bake_res)
         snprintf(info->note, sizeof info->note, "textures were not asked for: the average only");
@@ -514,6 +537,5 @@ done:
     free(extras);
     gltf_bake_free(&bake);
     samples_free(&s);
-    raster_free_all(g, sc->nviews);
     return rc;
 }

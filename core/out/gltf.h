@@ -84,6 +84,12 @@ typedef void (*gltf_fn)(const void *ctx, const double n[3], const double wi[3],
                         const double wo[3], double rad[3]);
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *s, gltf_pbr *out, glint_err *err);
 
+/* The fit alone, as gltf_export_scene makes it: m fitted at the samples of
+ * the views flagged in `use` (NULL: all) of scene sc (OUT: *out).  What
+ * the MaterialX and USD exports carry (mtlx.h, usda.h). */
+int gltf_fit_scene(const material *m, const scene *sc, const unsigned char *use, gltf_pbr *out,
+                   glint_err *err);
+
 /* ---- textures ---------------------------------------------------------------------------- */
 
 #define GLTF_BAKE_RES_DEFAULT 32  /* texels per side */

@@ -4,6 +4,7 @@
 # status, never a crash).  usage: test_cli.sh path/to/glint
 set -u
 G=${1:?usage: test_cli.sh path/to/glint}
+SRC=$(cd "$(dirname "$0")/../.." && pwd)  # the source tree: the export checks of tests/integration
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 pass=0 fail=0
@@ -167,6 +168,15 @@ expect_ok "export-brdf" "$G" export-brdf "$T/mat" -o "$T/mat.brdf"
 expect_ok "export-gltf" "$G" export-gltf "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" -o "$T/mat.glb"
 [ "$(head -c 4 "$T/mat.glb")" = glTF ] && grep -q '"roughness"' "$T/out" && ok "export-gltf writes binary glTF and its fit" || bad "export-gltf writes binary glTF and its fit"
 expect_err "export-gltf usage" 1 "usage" "$G" export-gltf "$T/mat" -o "$T/x.glb"
+expect_ok "export-mtlx" "$G" export-mtlx "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" -o "$T/mat.mtlx"
+grep -q '"fit_rel_rms"' "$T/out" && python3 "$SRC/tests/integration/export_specs.py" mtlx "$T/mat.mtlx" && ok "export-mtlx: standard_surface inputs as the node definition has them" || bad "export-mtlx: standard_surface inputs as the node definition has them"
+# (the layer with the sphere's mesh, 19 MB, is checked whole by the integration tests)
+expect_ok "export-usda" "$G" export-usda "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" -o "$T/mat.usda"
+grep -q 'def Mesh "mesh"' "$T/mat.usda" && grep -q 'rel material:binding = </glint/material>' "$T/mat.usda" && ok "export-usda: the mesh bound to the material" || bad "export-usda: the mesh bound to the material"
+expect_ok "export-usda --no-mesh" "$G" export-usda "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" --no-mesh -o "$T/nomesh.usda"
+! grep -q 'def Mesh' "$T/nomesh.usda" && python3 "$SRC/tests/integration/export_specs.py" usda "$T/nomesh.usda" && ok "export-usda --no-mesh: the UsdPreviewSurface alone, as the specification has it" || bad "export-usda --no-mesh: the UsdPreviewSurface alone, as the specification has it"
+expect_err "export-mtlx usage" 1 "usage" "$G" export-mtlx "$T/mat" -o "$T/x.mtlx"
+expect_err "export-mtlx --no-mesh is usda's" 1 "usage" "$G" export-mtlx "$T/mat" --scene "$T/scene.json" --no-mesh -o "$T/x.mtlx"
 head -1 "$T/mat.brdf" | grep -q '^analytic$' && grep -q 'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)' "$T/mat.brdf" && ok "export-brdf writes BRDF Explorer's format" || bad "export-brdf writes BRDF Explorer's format"
 
 # environment lighting: truths painted under a built-in sky, the srbf fit, a preview

@@ -10,7 +10,10 @@ real daemon, and its material is downloaded as
                  (ES 3.00 and 3.30 core), unpacked from GET .../package
   material.brdf  BRDF Explorer's analytic file
   material.glb   the mesh with a glTF 2.0 metallic-roughness material
-and hf3's as a MERL table (material.binary: 35 MB, one is enough to show
+  material.mtlx  that material as MaterialX standard_surface
+  material.usda  that material as a UsdPreviewSurface on the mesh (hf3's; the
+                 others' without the mesh: 19 MB each otherwise)
+(the two checked against their node definitions, export_specs.py) and hf3's as a MERL table (material.binary: 35 MB, one is enough to show
 the layout).  examples/README.txt lists what was written and what opens it."""
 import io
 import json
@@ -24,6 +27,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import fit_material, run_tests  # noqa: E402
+import export_specs  # noqa: E402
 
 SIZE = 48
 CT = "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"
@@ -149,9 +153,17 @@ def test_01_every_method_in_every_format(d):
         glb = d.get("/api/v1/materials/%s/material.glb" % mid, headers=h, status=200).content
         check_glb(glb, spatial)
         write(os.path.join(method, "material.glb"), glb)
-        print("%-5s %-28s package %2d files, .brdf %7d bytes, .glb %7d bytes"
+        # MaterialX and USD
+        mtlx = d.get("/api/v1/materials/%s/material.mtlx" % mid, headers=h, status=200).text
+        export_specs.check_mtlx(mtlx)
+        write(os.path.join(method, "material.mtlx"), mtlx.encode())
+        usda = d.get("/api/v1/materials/%s/material.usda%s" % (mid, "" if method == "hf3" else "?mesh=0"),
+                     headers=h, status=200).text
+        assert export_specs.check_usda(usda)[1] == (1 if method == "hf3" else 0)
+        write(os.path.join(method, "material.usda"), usda.encode())
+        print("%-5s %-28s package %2d files, .brdf %7d bytes, .glb %7d bytes, .mtlx %5d, .usda %8d"
               % (method, mat.get("method", method) + " " + mid[:8], len(names), len(brdf),
-                 len(glb)))
+                 len(glb), len(mtlx), len(usda)))
         if method == "hf3":
             merl = d.get("/api/v1/materials/%s/merl.binary" % mid, headers=h, status=200).content
             assert len(merl) == 12 + 8 * 3 * 90 * 90 * 180
@@ -164,6 +176,8 @@ def test_01_every_method_in_every_format(d):
              "                         ES 3.00 and 3.30 core, shader.json: the bindings)",
              "  METHOD/material.brdf   BRDF Explorer (File > Open BRDF)",
              "  METHOD/material.glb    glTF 2.0: Blender (File > Import > glTF), three.js, any viewer",
+             "  METHOD/material.mtlx   MaterialX standard_surface: Houdini, Maya, Substance, MaterialXView",
+             "  METHOD/material.usda   USD UsdPreviewSurface (hf3's with the mesh): Omniverse, Houdini, Blender 4+, usdview",
              "  hf3/material.binary    the MERL layout: BRDF Explorer, ALTA, dj_brdf", "",
              "Files:"] + ["  %-60s %10d bytes" % (rel, n) for rel, n in WRITTEN]
     with open(os.path.join(OUT, "README.txt"), "w") as f:

@@ -224,7 +224,7 @@ def test_04_material_files(d):
     d.get("/api/v1/materials/%s/shader/..%%2f..%%2fglint.db" % mid, headers=h, status=404)
     pkg = d.get("/api/v1/materials/%s/package" % mid, headers=h, status=200)
     assert pkg.headers["Content-Type"] == "application/x-tar"
-    assert mid in pkg.headers["Content-Disposition"]
+    assert pkg.headers["Content-Disposition"] == 'attachment; filename="sphere-%s.tar"' % mid[:8]
     with tarfile.open(fileobj=io.BytesIO(pkg.content)) as t:
         names = sorted(n.split("/", 1)[1] for n in t.getnames())
         assert names == sorted(["material.json", "factors.png", "factors.exr",

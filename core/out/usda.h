@@ -1,0 +1,41 @@
+/* usda.h: a glint material as a text USD layer (.usda): a Material prim
+ * whose surface is a UsdPreviewSurface shader (OpenUSD's
+ * pxr/usdImaging/plugin/usdShaders/shaders/shaderDefs.usda; read by
+ * Omniverse, Houdini Solaris, Blender 4+, usdview, Apple's Quick Look),
+ * and, when a mesh is given, the scene's mesh as a UsdGeomMesh bound to it.
+ *
+ * What it carries: gltf.h's metallic-roughness fit (the .glb's numbers),
+ * in the preview surface's metallic workflow:
+ *   diffuseColor = baseColor (linear; "interpreted as albedo" there),
+ *   metallic, roughness (squared into the GGX alpha, as glTF does),
+ *   useSpecularWorkflow 0, ior 1.5 (its dielectric F0 ((1 - ior) /
+ *   (1 + ior))^2 = 0.04, glTF's).
+ * The average over the surface only (no textures: the .glb bakes them),
+ * and the layer's doc string says so, with fit_rel_rms: the relative RMS
+ * error of the glTF model's fit against the material on the painted views.
+ *
+ * The layer: upAxis "Z" (glint's world up), metersPerUnit 1, defaultPrim
+ * "glint" (an Xform) holding Mesh "mesh" (points, normals and primvars:st
+ * per vertex, faceVertexCounts all 3, faceVertexIndices, subdivisionScheme
+ * "none", orientation rightHanded: the mesh's counter-clockwise triangles;
+ * st = glint's uv, origin at the bottom left as in USD) and Material
+ * "material" with Shader "surface".  Numbers with 7 significant digits.
+ * Thread-safety: none needed (no state). */
+#ifndef GLINT_USDA_H
+#define GLINT_USDA_H
+
+#include "err.h"
+#include "gltf.h"
+#include "mesh.h"
+
+#define USDA_IOR 1.5
+
+/* The layer for p, with msh (NULL: the material alone) (OUT: *text,
+ * NUL-terminated, malloc'ed: the caller frees; *len its length).  `note`
+ * (may be NULL) is one more line of the layer's doc.  GLINT_EINVAL for a
+ * p with a value outside [0, 1] or not finite or a mesh without
+ * positions, normals or triangles, GLINT_ENOMEM. */
+int usda_write(const gltf_pbr *p, const mesh *msh, const char *note, char **text, size_t *len,
+               glint_err *err);
+
+#endif

@@ -1,0 +1,271 @@
+"""Checks of glint's MaterialX (.mtlx) and USD (.usda) exports against the
+node definitions of their specifications (no MaterialX or USD reader is
+packaged where the tests run).
+
+The tables below are copied from the specifications' own node definitions:
+  - MaterialX, libraries/bxdf/standard_surface.mtlx (nodedef
+    ND_standard_surface_surfaceshader_100, which ND_standard_surface_surfaceshader
+    1.0.1 inherits) and libraries/stdlib/stdlib_defs.mtlx (ND_surfacematerial),
+    AcademySoftwareFoundation/MaterialX at 4177b2cbd48b579ca1e8f7d9901584d811c63b68;
+  - UsdPreviewSurface, pxr/usdImaging/plugin/usdShaders/shaders/shaderDefs.usda
+    (def Shader "UsdPreviewSurface"), PixarAnimationStudios/OpenUSD at
+    59992d2178afcebd89273759f2bddfe730e59aa8, and the UsdGeomMesh / UsdGeomPointBased
+    attribute types of pxr/usd/usdGeom/schema.usda there.
+
+What is checked: every input's name and type against the table, each value
+parses as its type and lies in the definition's range (uimin..uimax; for USD
+the documented range: metallic, roughness [0, 1], colours [0, 1] for a fitted
+albedo, ior > 0), the shader is connected as the specification says
+(surfacematerial.surfaceshader names the standard_surface node; the
+Material's outputs:surface connects to the shader's outputs:surface), every
+file an input names exists next to the export (none is expected: the files
+carry the average), and for USD the mesh's arrays agree (3 indices per face,
+indices in range, one normal and st per point).
+
+usage: export_specs.py mtlx|usda FILE   (exit status 0 when it conforms)
+"""
+import math
+import os
+import re
+import sys
+import xml.etree.ElementTree as ET
+
+# name: (type, min, max) of ND_standard_surface_surfaceshader_100 (uimin, uimax;
+# uisoftmin/uisoftmax where only those are given: not a hard range, so None).
+STANDARD_SURFACE = {
+    "base": ("float", 0.0, 1.0), "base_color": ("color3", 0.0, 1.0),
+    "diffuse_roughness": ("float", 0.0, 1.0), "metalness": ("float", 0.0, 1.0),
+    "specular": ("float", 0.0, 1.0), "specular_color": ("color3", 0.0, 1.0),
+    "specular_roughness": ("float", 0.0, 1.0), "specular_IOR": ("float", 0.0, None),
+    "specular_anisotropy": ("float", 0.0, 1.0), "specular_rotation": ("float", 0.0, 1.0),
+    "transmission": ("float", 0.0, 1.0), "transmission_color": ("color3", 0.0, 1.0),
+    "transmission_depth": ("float", 0.0, None), "transmission_scatter": ("color3", 0.0, 1.0),
+    "transmission_scatter_anisotropy": ("float", 0.0, 1.0),
+    "transmission_dispersion": ("float", 0.0, None),
+    "transmission_extra_roughness": ("float", -1.0, 1.0), "subsurface": ("float", 0.0, 1.0),
+    "subsurface_color": ("color3", 0.0, 1.0), "subsurface_radius": ("color3", 0.0, 1.0),
+    "subsurface_scale": ("float", 0.0, None), "subsurface_anisotropy": ("float", -1.0, 1.0),
+    "sheen": ("float", 0.0, 1.0), "sheen_color": ("color3", 0.0, 1.0),
+    "sheen_roughness": ("float", 0.0, 1.0), "coat": ("float", 0.0, 1.0),
+    "coat_color": ("color3", 0.0, 1.0), "coat_roughness": ("float", 0.0, 1.0),
+    "coat_anisotropy": ("float", 0.0, 1.0), "coat_rotation": ("float", 0.0, 1.0),
+    "coat_IOR": ("float", 0.0, None), "coat_normal": ("vector3", None, None),
+    "coat_affect_color": ("float", 0.0, 1.0), "coat_affect_roughness": ("float", 0.0, 1.0),
+    "thin_film_thickness": ("float", 0.0, None), "thin_film_IOR": ("float", 0.0, None),
+    "emission": ("float", 0.0, None), "emission_color": ("color3", 0.0, 1.0),
+    "opacity": ("color3", 0.0, 1.0), "thin_walled": ("boolean", None, None),
+    "normal": ("vector3", None, None), "tangent": ("vector3", None, None),
+}
+STANDARD_SURFACE_OUTPUT = "surfaceshader"
+# ND_surfacematerial (stdlib_defs.mtlx): its inputs and its output type.
+SURFACEMATERIAL = {"surfaceshader": "surfaceshader", "backsurfaceshader": "surfaceshader",
+                   "displacementshader": "displacementshader"}
+SURFACEMATERIAL_OUTPUT = "material"
+# What glint writes: the inputs that carry the fit (the rest keep their defaults).
+MTLX_FIT_INPUTS = {"base_color", "metalness", "specular_roughness", "specular_IOR"}
+
+# UsdPreviewSurface inputs (shaderDefs.usda): name: (USD type, min, max).
+PREVIEW_SURFACE = {
+    "diffuseColor": ("color3f", 0.0, 1.0), "emissiveColor": ("color3f", 0.0, None),
+    "useSpecularWorkflow": ("int", 0, 1), "specularColor": ("color3f", 0.0, 1.0),
+    "metallic": ("float", 0.0, 1.0), "roughness": ("float", 0.0, 1.0),
+    "clearcoat": ("float", 0.0, 1.0), "clearcoatRoughness": ("float", 0.0, 1.0),
+    "opacity": ("float", 0.0, 1.0), "opacityThreshold": ("float", 0.0, 1.0),
+    "ior": ("float", 1e-6, None), "normal": ("normal3f", -1.0, 1.0),
+    "displacement": ("float", None, None), "occlusion": ("float", 0.0, 1.0),
+}
+PREVIEW_SURFACE_OUTPUTS = {"surface": "token", "displacement": "token"}
+USD_FIT_INPUTS = {"diffuseColor", "metallic", "roughness", "useSpecularWorkflow", "ior"}
+# UsdGeomMesh / UsdGeomPointBased attributes glint writes, with their schema types.
+USD_MESH_ATTRS = {
+    "faceVertexCounts": "int[]", "faceVertexIndices": "int[]", "points": "point3f[]",
+    "normals": "normal3f[]", "primvars:st": "texCoord2f[]", "subdivisionScheme": "token",
+    "orientation": "token",
+}
+COMPONENTS = {"float": 1, "int": 1, "color3": 3, "vector3": 3, "color3f": 3, "normal3f": 3}
+
+
+class Bad(Exception):
+    pass
+
+
+def need(cond, msg):
+    if not cond:
+        raise Bad(msg)
+
+
+def in_range(name, vals, lo, hi):
+    for v in vals:
+        need(math.isfinite(v), "%s: %r is not finite" % (name, v))
+        need(lo is None or v >= lo, "%s: %r below %r" % (name, v, lo))
+        need(hi is None or v <= hi, "%s: %r above %r" % (name, v, hi))
+
+
+def check_files(path, names):
+    """Every file an export names exists next to it."""
+    base = os.path.dirname(os.path.abspath(path))
+    for n in names:
+        need(os.path.exists(os.path.join(base, n)), "names a file not in the export: %s" % n)
+
+
+def check_mtlx(text, path=None):
+    """The MaterialX document's nodes against the node definitions; returns
+    {input: value} of the standard_surface."""
+    root = ET.fromstring(text)
+    need(root.tag == "materialx", "root element is %s, not materialx" % root.tag)
+    need(re.fullmatch(r"1\.3[89]", root.get("version", "")), "materialx version %r" % root.get("version"))
+    surfs = root.findall("standard_surface")
+    mats = root.findall("surfacematerial")
+    need(len(surfs) == 1 and len(mats) == 1, "one standard_surface and one surfacematerial")
+    s, m = surfs[0], mats[0]
+    need(s.get("type") == STANDARD_SURFACE_OUTPUT, "standard_surface type %r" % s.get("type"))
+    need(m.get("type") == SURFACEMATERIAL_OUTPUT, "surfacematerial type %r" % m.get("type"))
+    values, files = {}, []
+    for inp in s.findall("input"):
+        n, t = inp.get("name"), inp.get("type")
+        need(n in STANDARD_SURFACE, "standard_surface has no input %r" % n)
+        want, lo, hi = STANDARD_SURFACE[n]
+        need(t == want, "%s is %s in the nodedef, %s here" % (n, want, t))
+        need(n not in values, "input %s given twice" % n)
+        if inp.get("nodename") or inp.get("nodegraph"):
+            continue
+        if t == "filename":
+            files.append(inp.get("value"))
+            continue
+        vals = [float(x) for x in inp.get("value", "").split(",")]
+        need(len(vals) == COMPONENTS[t], "%s: %d components for %s" % (n, len(vals), t))
+        in_range(n, vals, lo, hi)
+        values[n] = vals if len(vals) > 1 else vals[0]
+    need(MTLX_FIT_INPUTS <= set(values), "missing %s" % (MTLX_FIT_INPUTS - set(values)))
+    for inp in m.findall("input"):
+        n, t = inp.get("name"), inp.get("type")
+        need(n in SURFACEMATERIAL and SURFACEMATERIAL[n] == t, "surfacematerial input %s %s" % (n, t))
+    conn = [i for i in m.findall("input") if i.get("name") == "surfaceshader"]
+    need(len(conn) == 1 and conn[0].get("nodename") == s.get("name"),
+         "surfacematerial.surfaceshader does not name the standard_surface")
+    for img in root.iter("image"):
+        for inp in img.findall("input"):
+            if inp.get("type") == "filename":
+                files.append(inp.get("value"))
+    if path:
+        check_files(path, files)
+    return values
+
+
+def usd_prims(text):
+    """The layer's prims: [(kind, name, metadata, body text)] by brace matching
+    (a small parser for what glint writes: def blocks, attributes one per line)."""
+    prims, i = [], 0
+    for m in re.finditer(r'def (\w+) "(\w+)"', text):
+        j = text.index("{", m.end())
+        depth, k = 0, j
+        while True:
+            depth += {"{": 1, "}": -1}.get(text[k], 0)
+            if depth == 0:
+                break
+            k += 1
+        prims.append((m.group(1), m.group(2), text[m.end():j], text[j + 1:k]))
+    return prims
+
+
+def own_lines(body):
+    """The lines of a prim's body outside its child prims."""
+    out, depth = [], 0
+    for line in body.splitlines():
+        if depth == 0 and not line.strip().startswith("def "):
+            out.append(line.strip())
+        depth += line.count("{") - line.count("}")
+    return out
+
+
+def parse_tuple_values(s):
+    return [float(x) for x in re.findall(r"[-+0-9.eE]+", s)]
+
+
+def check_usda(text, path=None):
+    """The layer's shader and mesh against the specification; returns
+    {input: value} of the UsdPreviewSurface."""
+    need(text.startswith("#usda 1.0"), "not a text USD layer")
+    need(re.search(r'defaultPrim = "glint"', text), "no defaultPrim")
+    need(re.search(r'upAxis = "Z"', text), "upAxis is not Z")
+    prims = {name: (kind, body) for kind, name, _, body in usd_prims(text)}
+    meta = {name: md for _, name, md, _ in usd_prims(text)}
+    shaders = [(n, b) for n, (k, b) in prims.items() if k == "Shader"]
+    mats = [(n, b) for n, (k, b) in prims.items() if k == "Material"]
+    need(len(shaders) == 1 and len(mats) == 1, "one Material and one Shader")
+    sname, sbody = shaders[0]
+    mname, mbody = mats[0]
+    need('uniform token info:id = "UsdPreviewSurface"' in sbody, "the shader is not a UsdPreviewSurface")
+    values, files = {}, []
+    for line in own_lines(sbody):
+        m = re.match(r"(\w+) inputs:(\w+) = (.+)$", line)
+        if m:
+            t, n, v = m.groups()
+            need(n in PREVIEW_SURFACE, "UsdPreviewSurface has no input %r" % n)
+            want, lo, hi = PREVIEW_SURFACE[n]
+            need(t == want, "%s is %s in shaderDefs.usda, %s here" % (n, want, t))
+            if t == "asset":
+                files.append(v.strip("@"))
+                continue
+            vals = parse_tuple_values(v)
+            need(len(vals) == COMPONENTS[t], "%s: %d components for %s" % (n, len(vals), t))
+            if t == "int":
+                need(re.fullmatch(r"-?\d+", v.strip()), "%s: %r is not an int" % (n, v))
+            in_range(n, vals, lo, hi)
+            values[n] = vals if len(vals) > 1 else vals[0]
+            continue
+        m = re.match(r"(\w+) outputs:(\w+)$", line)
+        if m:
+            need(PREVIEW_SURFACE_OUTPUTS.get(m.group(2)) == m.group(1), "output %s" % line)
+    need(USD_FIT_INPUTS <= set(values), "missing %s" % (USD_FIT_INPUTS - set(values)))
+    need(values["useSpecularWorkflow"] == 0, "not the metallic workflow")
+    need(re.search(r"token outputs:surface\.connect = </glint/%s/%s\.outputs:surface>" % (mname, sname), mbody),
+         "the Material's surface does not connect to the shader")
+    meshes = [(n, b) for n, (k, b) in prims.items() if k == "Mesh"]
+    for n, body in meshes:
+        check_usd_mesh(body, meta[n], mname)
+    for m in re.finditer(r"@([^@]+)@", text):
+        files.append(m.group(1))
+    if path:
+        check_files(path, files)
+    return values, len(meshes)
+
+
+def check_usd_mesh(body, meta, mname):
+    attrs = {}
+    for line in own_lines(body):
+        m = re.match(r"(?:uniform )?([\w\[\]]+) ([\w:]+) = (.+?)(?: \($)?$", line)
+        if m and m.group(2) in USD_MESH_ATTRS:
+            need(m.group(1) == USD_MESH_ATTRS[m.group(2)], "%s is %s, not %s" % (m.group(2), m.group(1), USD_MESH_ATTRS[m.group(2)]))
+            attrs[m.group(2)] = m.group(3)
+    for a in ("faceVertexCounts", "faceVertexIndices", "points", "normals"):
+        need(a in attrs, "the mesh has no %s" % a)
+    counts = [int(x) for x in re.findall(r"-?\d+", attrs["faceVertexCounts"])]
+    idx = [int(x) for x in re.findall(r"-?\d+", attrs["faceVertexIndices"])]
+    pts = parse_tuple_values(attrs["points"])
+    nrm = parse_tuple_values(attrs["normals"])
+    need(len(pts) % 3 == 0 and len(pts) >= 9, "points are not triples")
+    np_ = len(pts) // 3
+    need(sum(counts) == len(idx) and all(c == 3 for c in counts), "faces and indices disagree")
+    need(min(idx) >= 0 and max(idx) < np_, "an index outside the points")
+    need(len(nrm) == 3 * np_, "one normal per point (interpolation vertex)")
+    for k in range(np_):
+        ln = math.sqrt(sum(nrm[3 * k + e] ** 2 for e in range(3)))
+        need(abs(ln - 1.0) < 1e-3, "normal %d has length %g" % (k, ln))
+    if "primvars:st" in attrs:
+        st = parse_tuple_values(attrs["primvars:st"])
+        need(len(st) == 2 * np_, "one st per point")
+        in_range("st", st, 0.0, 1.0)
+    need(re.search(r"rel material:binding = </glint/%s>" % mname, body), "the mesh is not bound to the Material")
+    need(re.search(r'apiSchemas = \[[^]]*"MaterialBindingAPI"', meta), "the mesh does not apply MaterialBindingAPI")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3 or sys.argv[1] not in ("mtlx", "usda"):
+        sys.exit("usage: export_specs.py mtlx|usda FILE")
+    with open(sys.argv[2], encoding="utf-8") as f:
+        t = f.read()
+    try:
+        print(check_mtlx(t, sys.argv[2]) if sys.argv[1] == "mtlx" else check_usda(t, sys.argv[2]))
+    except (Bad, ET.ParseError, ValueError) as e:
+        sys.exit("%s: %s" % (sys.argv[2], e))

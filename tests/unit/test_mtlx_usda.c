@@ -1,0 +1,152 @@
+/* test_mtlx_usda.c: the MaterialX and USD writers (mtlx.h, usda.h).
+ * - The numbers written are the fit's, in the inputs the specifications
+ *   name, at the extremes of their range (0 and 1) too.
+ * - What is not a material (a value outside [0, 1], NaN, a negative
+ *   error) and what is not a mesh (no normals, no triangle) are refused
+ *   with GLINT_EINVAL, nothing written.
+ * - Names and notes cannot break the documents: node names cut to
+ *   identifiers, "--" kept out of an XML comment, quotes out of a USD doc.
+ * - A mesh: one triangle with its points, normals, st and indices; without
+ *   uv, no st.  The spec checks of whole files are tests/integration/
+ *   export_specs.py's (run by the CLI and integration tests). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "mtlx.h"
+#include "usda.h"
+
+static gltf_pbr pbr(double r, double g, double b, double m, double rough)
+{
+    gltf_pbr p;
+    memset(&p, 0, sizeof p);
+    p.base[0] = r, p.base[1] = g, p.base[2] = b;
+    p.metallic = m;
+    p.roughness = rough;
+    p.rel_rms = 0.0123;
+    p.pairs = 77;
+    return p;
+}
+
+TEST(mtlx_carries_the_fit)
+{
+    gltf_pbr p = pbr(0.25, 0.5, 0.75, 0.125, 0.5);
+    char *t = NULL;
+    glint_err e;
+    ASSERT_OK(mtlx_write(&p, "glint_ab", NULL, &t, &e));
+    ASSERT(strstr(t, "<standard_surface name=\"SR_glint_ab\" type=\"surfaceshader\">"));
+    ASSERT(strstr(t, "name=\"base_color\" type=\"color3\" value=\"0.25, 0.5, 0.75\""));
+    ASSERT(strstr(t, "name=\"metalness\" type=\"float\" value=\"0.125\""));
+    ASSERT(strstr(t, "name=\"specular_roughness\" type=\"float\" value=\"0.5\""));
+    ASSERT(strstr(t, "name=\"specular_IOR\" type=\"float\" value=\"1.5\""));
+    ASSERT(strstr(t, "nodename=\"SR_glint_ab\""));
+    ASSERT(strstr(t, "fit_rel_rms 0.0123") && strstr(t, "(77 pairs)"));
+    ASSERT(!strstr(t, "average")); /* not spatial: no word of an average */
+    free(t);
+    p.spatial = 1;
+    ASSERT_OK(mtlx_write(&p, NULL, NULL, &t, &e));
+    ASSERT(strstr(t, "this is its average") && strstr(t, "SR_glint\""));
+    free(t);
+}
+
+TEST(mtlx_extremes_and_refusals)
+{
+    gltf_pbr lo = pbr(0, 0, 0, 0, 0), hi = pbr(1, 1, 1, 1, 1), bad;
+    char *t = NULL;
+    glint_err e;
+    ASSERT_OK(mtlx_write(&lo, "x", NULL, &t, &e));
+    ASSERT(strstr(t, "value=\"0, 0, 0\"") && strstr(t, "name=\"metalness\" type=\"float\" value=\"0\""));
+    free(t);
+    ASSERT_OK(mtlx_write(&hi, "x", NULL, &t, &e));
+    ASSERT(strstr(t, "value=\"1, 1, 1\"") && strstr(t, "name=\"specular_roughness\" type=\"float\" value=\"1\""));
+    free(t);
+    double *field[] = {&bad.base[1], &bad.metallic, &bad.roughness, &bad.rel_rms};
+    double vals[] = {NAN, 1.0000001, -1e-9, INFINITY};
+    for (int f = 0; f < 4; f++)
+        for (int v = 0; v < 4; v++) {
+            bad = pbr(0.5, 0.5, 0.5, 0.5, 0.5);
+            *field[f] = vals[v];
+            if (f == 3 && v == 1)
+                continue; /* an error above 1 is an error, not a bad material */
+            t = (char *)1;
+            ASSERT_EQ(mtlx_write(&bad, "x", NULL, &t, &e), GLINT_EINVAL);
+            ASSERT(t == NULL);
+            ASSERT_EQ(usda_write(&bad, NULL, NULL, &t, &(size_t){0}, &e), GLINT_EINVAL);
+            ASSERT(t == NULL);
+        }
+}
+
+TEST(names_and_notes_cannot_break_the_documents)
+{
+    gltf_pbr p = pbr(0.5, 0.5, 0.5, 0, 0.5);
+    char *t = NULL;
+    size_t n;
+    glint_err e;
+    ASSERT_OK(mtlx_write(&p, "9 bad\"<name>", "a -- note --> with an end", &t, &e));
+    ASSERT(strstr(t, "name=\"SR_m9_bad__name_\""));
+    ASSERT(!strstr(t, "note --")); /* the comment holds no "--" of the note */
+    ASSERT(strstr(t, "a -  note - > with an end")); /* each "--" cut to "- " */
+    {
+        const char *c0 = strstr(t, "<!--"), *c1 = strstr(c0 + 4, "-->");
+        ASSERT(c0 && c1);
+        for (const char *q = c0 + 4; q < c1; q++)
+            ASSERT(!(q[0] == '-' && q[1] == '-'));
+        ASSERT(strstr(c1, "<standard_surface")); /* the comment ends before the nodes */
+    }
+    free(t);
+    ASSERT_OK(usda_write(&p, NULL, "a \"\"\" quote \\ and\nline", &t, &n, &e));
+    ASSERT_EQ(n, strlen(t));
+    {
+        const char *d0 = strstr(t, "doc = \"\"\""), *d1 = strstr(d0 + 9, "\"\"\"");
+        ASSERT(d0 && d1 && strstr(d1, "metersPerUnit")); /* the doc ends where it should */
+    }
+    free(t);
+}
+
+TEST(usda_material_and_mesh)
+{
+    gltf_pbr p = pbr(0.2, 0.4, 0.6, 1, 0.3);
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, nrm[] = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    float uv[] = {0, 0, 1, 0, 0, 1};
+    uint32_t tri[] = {0, 1, 2};
+    mesh m = {3, 1, pos, nrm, uv, tri};
+    char *t = NULL;
+    size_t n;
+    glint_err e;
+    ASSERT_OK(usda_write(&p, NULL, NULL, &t, &n, &e));
+    ASSERT(strstr(t, "#usda 1.0") == t && !strstr(t, "def Mesh"));
+    ASSERT(strstr(t, "uniform token info:id = \"UsdPreviewSurface\""));
+    ASSERT(strstr(t, "color3f inputs:diffuseColor = (0.2, 0.4, 0.6)"));
+    ASSERT(strstr(t, "float inputs:metallic = 1\n") && strstr(t, "float inputs:roughness = 0.3\n"));
+    ASSERT(strstr(t, "int inputs:useSpecularWorkflow = 0") && strstr(t, "float inputs:ior = 1.5"));
+    ASSERT(strstr(t, "outputs:surface.connect = </glint/material/surface.outputs:surface>"));
+    free(t);
+    ASSERT_OK(usda_write(&p, &m, NULL, &t, &n, &e));
+    ASSERT(strstr(t, "int[] faceVertexCounts = [3]\n"));
+    ASSERT(strstr(t, "int[] faceVertexIndices = [0, 1, 2]\n"));
+    ASSERT(strstr(t, "point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n"));
+    ASSERT(strstr(t, "normal3f[] normals = [(0, 0, 1), (0, 0, 1), (0, 0, 1)] ("));
+    ASSERT(strstr(t, "texCoord2f[] primvars:st = [(0, 0), (1, 0), (0, 1)] ("));
+    ASSERT(strstr(t, "rel material:binding = </glint/material>"));
+    free(t);
+    m.uv = NULL;
+    ASSERT_OK(usda_write(&p, &m, NULL, &t, &n, &e));
+    ASSERT(!strstr(t, "primvars:st") && strstr(t, "def Mesh"));
+    free(t);
+    m.nrm = NULL;
+    ASSERT_EQ(usda_write(&p, &m, NULL, &t, &n, &e), GLINT_EINVAL);
+    m.nrm = nrm;
+    m.ntris = 0;
+    ASSERT_EQ(usda_write(&p, &m, NULL, &t, &n, &e), GLINT_EINVAL);
+    ASSERT(t == NULL);
+}
+
+TEST_LIST{
+    TEST_ENTRY(mtlx_carries_the_fit),
+    TEST_ENTRY(mtlx_extremes_and_refusals),
+    TEST_ENTRY(names_and_notes_cannot_break_the_documents),
+    TEST_ENTRY(usda_material_and_mesh),
+};
+TEST_MAIN()
