@@ -226,6 +226,7 @@ async function openStudio(route) {
   }
   remember(S.doc, S.scene, route.token);
   setupStudioUI(S);
+  autoExpose(S, k0);
   selectView(k0, true);
   performance.mark('glint-paintable');
   window.glint.paintableMs = performance.now();
@@ -234,6 +235,32 @@ async function openStudio(route) {
   S.connect();
   S.loadRest().then(() => { for (const v of S.views) drawThumb(v.k); }).catch(showError);
   loadFitAndMaterials(S).catch(showError);
+}
+
+// A scene painted under an environment reads in the environment's own
+// radiance, often far above 1 (a sky at noon): the display exposure starts
+// at the largest of the offered steps that keeps the first view's base
+// render's 99th percentile of brightness at most 1, so its thumbnails and
+// canvas do not open pure white.  Point-lit scenes keep 1x: there a white
+// matte surface facing the lamp reads 1.
+function autoExpose(S, k) {
+  const v = S.views[k], env = S.scene && S.scene.base && S.scene.base.env;
+  if (!env || !v || !v.base) return;
+  const d = v.base.data, lum = [];
+  for (let i = 0; i < d.length; i += 3) {
+    const y = 0.2126 * d[i] + 0.7152 * d[i + 1] + 0.0722 * d[i + 2];
+    if (y > 0) lum.push(y);
+  }
+  if (!lum.length) return;
+  lum.sort((a, b) => a - b);
+  const p99 = lum[Math.min(lum.length - 1, Math.floor(0.99 * lum.length))];
+  const sel = $('exposure');
+  const steps = [...sel.options].map(o => +o.value).sort((a, b) => b - a);
+  const e = steps.find(x => p99 * x <= 1) || steps[steps.length - 1];
+  sel.value = String(e);
+  state.painter.setExposure(e);
+  sel.title = `Display exposure (does not change the painting); set to ${sel.selectedOptions[0].textContent} ` +
+    'so the environment-lit view is not blown out';
 }
 
 // The session link does not open the session (glintd refused the session

@@ -30,6 +30,24 @@ run({
     assert(await page.evaluate(() => document.querySelector('#fit-method option[value="hf3"]').disabled),
       'a method lit by point lights is offered but not choosable (the daemon refuses it: lighting-mismatch)');
     assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');
+    // the display exposure opens where the environment-lit view is not blown
+    // out: the 99th percentile of the shown base render's brightness at most 1
+    // at the largest step that allows it
+    const ex = await page.evaluate(() => {
+      const S = window.glint.state.session, v = S.views.find(x => x.base);
+      const d = v.base.data, lum = [];
+      for (let i = 0; i < d.length; i += 3) {
+        const y = 0.2126 * d[i] + 0.7152 * d[i + 1] + 0.0722 * d[i + 2];
+        if (y > 0) lum.push(y);
+      }
+      lum.sort((a, b) => a - b);
+      return { p99: lum[Math.floor(0.99 * (lum.length - 1))], e: +document.getElementById('exposure').value,
+               painter: window.glint.state.painter.exposure };
+    });
+    t.log(`environment-lit base: 99th percentile ${ex.p99.toFixed(3)}, exposure ${ex.e}x`);
+    assertEq(ex.painter, ex.e, 'the canvas shows the exposure the control says');
+    assert(ex.p99 * ex.e <= 1.0001 || ex.e === 0.25, 'not blown out: ' + JSON.stringify(ex));
+    assert(ex.e === 4 || ex.p99 * ex.e * 2 > 1, 'the largest step that is not: ' + JSON.stringify(ex));
     assertEq(await page.inputValue('#param-env_rotation'), '30', 'turned as the scene is');
     // the base the artist paints on is lit by the sky, not by the view's point light
     const lit = await page.evaluate(async id => {
