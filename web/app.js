@@ -574,11 +574,13 @@ async function loadFitAndMaterials(S) {
   judge.addEventListener('reset', () => judge.resetCamera(state.k));
   judge.addEventListener('select-view', e => selectView(e.detail));
   fit.addEventListener('material', e => {
-    const { material: m, ms, cached } = e.detail;
+    const { material: m, ms, cached, first } = e.detail;
     addMaterialOption(m, true);
     showMaterial(m);
     showFitResult(m, ms, cached);
-    window.glint.lastFit = { id: m.id, ms, cached };
+    // a first look, shown while a choosing method works, is not the fit
+    if (first) window.glint.firstLook = { id: m.id, ms, method: m.method };
+    else window.glint.lastFit = { id: m.id, ms, cached };
   });
   $('mat-sel').onchange = async () => {
     const id = $('mat-sel').value;

@@ -433,14 +433,19 @@ export class FitPanel extends EventTarget {
     this.setProgress(0, 'sending…');
     try {
       await this.session.writeChain;       // the strokes made so far are in the fit
+      // a method that chooses among others takes a while: the quickest of
+      // those it weighs is fitted beside it and shown first, then replaced
+      const first = this.method.chooses ? this.firstLook(t0) : null;
       const r = await this.api.fit(this.session.id, { method: this.method.name, params: this.values() });
       const body = await r.json();
       if (r.status === 201) {
+        this.firstDone = true;
         this.setProgress(null);
         this.emit('material', { material: body, ms: performance.now() - t0, cached: true });
       } else {
         await this.follow(body.job, t0);
       }
+      if (first) await first.catch(() => {});
       this.refresh();
     } catch (e) {
       this.setProgress(null);
@@ -451,12 +456,38 @@ export class FitPanel extends EventTarget {
     }
   }
 
+  // The first look while a choosing method works: the first method offered
+  // for the same lighting that does not choose (the quickest the daemon
+  // lists first), at its own settings, shown only while the choice is still
+  // running and labelled as such.  Its failure is not the fit's: nothing is
+  // shown then.
+  async firstLook(t0) {
+    this.firstDone = false;
+    const q = this.methods.find(x => !x.chooses && x.lighting === this.method.lighting);
+    if (!q) return;
+    const r = await this.api.fit(this.session.id, { method: q.name });
+    let m = await r.json();
+    if (r.status !== 201) {
+      let j = m.job;
+      while (j && j.state !== 'done' && j.state !== 'failed' && !this.firstDone) {
+        await new Promise(ok => setTimeout(ok, 150));
+        j = (await this.api.job(j.id)).job;
+      }
+      if (!j || j.state !== 'done' || this.firstDone) return;
+      m = await this.api.material(j.material_id);
+    }
+    if (this.firstDone) return;
+    this.emit('material', { material: m, ms: performance.now() - t0, cached: r.status === 201, first: true });
+    this.firstNote = `showing ${q.label.charAt(0).toLowerCase() + q.label.slice(1)} first; `;
+  }
+
   // Stream a job's progress until it is done (or failed).  The handler
   // answers each event at once (sse.js): the job's last event closes the
   // stream for good, and the material it names is read after that.
   follow(job, t0) {
     return new Promise((resolve, reject) => {
-      const show = j => this.setProgress(j.progress, `${j.stage} ${(100 * j.progress).toFixed(0)}%` + (j.seconds != null ? ` · ${fmtTime(j.seconds)}` : ''));
+      this.firstNote = '';
+      const show = j => this.setProgress(j.progress, (this.firstNote || '') + `${j.stage} ${(100 * j.progress).toFixed(0)}%` + (j.seconds != null ? ` · ${fmtTime(j.seconds)}` : ''));
       show(job);
       const es = new EventStream(`${API}/jobs/${job.id}/events`, {
         headers: { 'X-Glint-Token': this.session.token },
@@ -464,6 +495,7 @@ export class FitPanel extends EventTarget {
         onEvent: (type, j) => {
           if (typeof j !== 'object' || j === null) return undefined;
           if (type === 'done' || j.state === 'done') {
+            this.firstDone = true;
             this.setProgress(null);
             this.api.material(j.material_id).then(
               m => { this.emit('material', { material: m, ms: performance.now() - t0, cached: false, job: j }); resolve(); },
@@ -471,6 +503,7 @@ export class FitPanel extends EventTarget {
             return 'stop';
           }
           if (type === 'failed' || j.state === 'failed') {
+            this.firstDone = true;
             this.setProgress(null);
             reject(new Error('The fit failed: ' + (j.error || 'no reason given')));
             return 'stop';

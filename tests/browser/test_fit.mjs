@@ -135,6 +135,9 @@ run({
     await page.waitForFunction(() => window.glint.state.k === 2 && window.glint.state.session.views[2].state === 'ready');
     await drawStroke(page, [[40, 70], [70, 60]]);
     await settled(page, 2);
+    // the three-factor model, whose factor curves are checked below (the
+    // automatic choice may take a model without factors)
+    await page.selectOption('#fit-method', 'hf3');
     const f = await fit(page);
     await page.waitForFunction(() => window.glint.state.judge.rows && window.glint.state.judge.rows.size === 2, null, { timeout: 60000 });
     const rows = await page.evaluate(() => [...window.glint.state.judge.rows].map(([k, r]) => ({ k, rms: r.rms, n: r.n })));
