@@ -61,7 +61,7 @@ def main():
     ap.add_argument("glint")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--every", type=int, default=4)
-    ap.add_argument("--methods", default="hf3,pbr,auto")
+    ap.add_argument("--methods", default="hf3,pbr,pbr_detail,auto")
     ap.add_argument("--data", default=os.path.join(os.path.dirname(__file__), "..", "..", "..",
                                                    "shared", "data", "measured"))
     a = ap.parse_args()
