@@ -372,8 +372,12 @@ static int pbr_detail_fit(const method_fit_in *in, material *out, glint_err *err
 
     memset(&w, 0, sizeof w);
     memset(out, 0, sizeof *out);
-    if ((rc = check_finite(in, err)) || (rc = fit_base(in, &bm, err)))
+    if ((rc = check_finite(in, err)))
         return rc;
+    if ((rc = fit_base(in, &bm, err))) {
+        glint_err_prefix(err, "pbr_detail: the base's fit");
+        return rc;
+    }
     t1 = glint_now();
     w.fb = malloc((size_t)6 * (in->s->n ? in->s->n : 1) * sizeof *w.fb);
     if (!w.fb) {
