@@ -118,7 +118,7 @@ def check(name, col, m, want, got, ball, ref, fails):
     err = float(np.linalg.norm(got - want) / np.linalg.norm(want))
     berr = rel_rms(ball, ref)
     mean = float(ball.mean() / ref.mean())
-    print("%-8s %-14s %-7s finish %-24s fit %-24s base colour %6.2f%%  view %d: %5.2f%% RMS, "
+    print("%-8s %-14s %-10s finish %-24s fit %-24s base colour %6.2f%%  view %d: %5.2f%% RMS, "
           "mean x %.4f" % (name, col, m, np.round(want, 4), np.round(got, 4), 100 * err, VIEW,
                            100 * berr, mean), flush=True)
     if m in BASE_CHECKED.get(name, POINT_METHODS) and err > TOL_METHOD.get(m, TOL):
