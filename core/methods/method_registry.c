@@ -8,6 +8,7 @@
 #include "method_hybrid.h"
 #include "method_maps.h"
 #include "method_pbr.h"
+#include "method_pbr_detail.h"
 #include "method_srbf.h"
 
 extern const method *const method_builtin[];
@@ -15,6 +16,7 @@ extern const method *const method_builtin[];
 const method *const method_builtin[] = {
     &method_hf3,
     &method_pbr,
+    &method_pbr_detail,
     &method_srbf,
     &method_hf4,
     &method_hf2d,

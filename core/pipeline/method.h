@@ -180,7 +180,7 @@ typedef struct method_fit_in {
 
 /* ---- the material ------------------------------------------------------------------------ */
 
-#define MATERIAL_GPU_MAX_UNIFORMS 8
+#define MATERIAL_GPU_MAX_UNIFORMS 12
 
 typedef struct material_gpu_uniform {
     const char *name;             /* "u_res" */

@@ -61,7 +61,7 @@ def main():
     ap.add_argument("glint")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--every", type=int, default=4)
-    ap.add_argument("--methods", default="hf3,pbr,auto")
+    ap.add_argument("--methods", default="hf3,pbr,pbr_detail,auto")
     ap.add_argument("--data", default=os.path.join(os.path.dirname(__file__), "..", "..", "..",
                                                    "shared", "data", "measured"))
     a = ap.parse_args()
@@ -103,7 +103,7 @@ def main():
                 e_n = error(a.glint, mat, sc["new"], dirs["new"], 20, tmp)
                 e_b = error(a.glint, mat, sc["beyond"], dirs["beyond"], 20, tmp)
                 res[m].append((name, e_p, e_n, e_b, secs))
-                print("%-26s %-6s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s"
+                print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s"
                       % (name, m, 100 * e_p, 100 * e_n, 100 * e_b, secs), flush=True)
     print()
     print("| method | materials | painted median | new views median | p90 | beyond median | "

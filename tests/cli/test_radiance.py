@@ -36,7 +36,7 @@ BALL_TOL = 0.12     # a painted view rendered from the fit: relative RMS (hf2d o
                     # glossy: 8.0-9.4%)
 MEAN_TOL = 0.02     # ... and its mean over the finish's: the scale itself
 COLOURS = ["0.5/0.5/0.5", "0.8/0.45/0.1", "0.1/0.3/0.7"]
-POINT_METHODS = ["hf3", "pbr", "hf4", "hf2d", "maps", "hybrid", "auto"]
+POINT_METHODS = ["hf3", "pbr", "pbr_detail", "hf4", "hf2d", "maps", "hybrid", "auto"]
 VIEW = 3
 # Which methods each finish is checked with: those that model it.  Metal
 # has no diffuse colour (its colour is in the highlight; the summary's base
@@ -118,7 +118,7 @@ def check(name, col, m, want, got, ball, ref, fails):
     err = float(np.linalg.norm(got - want) / np.linalg.norm(want))
     berr = rel_rms(ball, ref)
     mean = float(ball.mean() / ref.mean())
-    print("%-8s %-14s %-7s finish %-24s fit %-24s base colour %6.2f%%  view %d: %5.2f%% RMS, "
+    print("%-8s %-14s %-10s finish %-24s fit %-24s base colour %6.2f%%  view %d: %5.2f%% RMS, "
           "mean x %.4f" % (name, col, m, np.round(want, 4), np.round(got, 4), 100 * err, VIEW,
                            100 * berr, mean), flush=True)
     if m in BASE_CHECKED.get(name, POINT_METHODS) and err > TOL_METHOD.get(m, TOL):
