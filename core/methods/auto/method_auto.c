@@ -14,6 +14,7 @@
 #include "method_hybrid.h"
 #include "method_maps.h"
 #include "method_pbr.h"
+#include "method_pbr_detail.h"
 #include "scene.h"
 
 static const method_param auto_params_table[] = {
@@ -93,6 +94,7 @@ typedef struct cands {
     maps_params mp;
     hybrid_params yp;
     pbr_params bp;
+    pbr_detail_params xp;
 } cands;
 
 static void candidates(const auto_params *p, cands *c)
@@ -119,6 +121,9 @@ static void candidates(const auto_params *p, cands *c)
     if (p->components)
         c->yp.components = p->components;
     method_pbr.params_default(&c->bp);
+    method_pbr_detail.params_default(&c->xp); /* hf3's levels and pbr's, shared */
+    if (p->res)
+        c->xp.hf.res = p->res;
 }
 
 /* ---- levels: the split, each candidate's precomputation on the kept pixels, then on all -- */
@@ -577,12 +582,14 @@ typedef struct cand_def {
     const method *m;
     size_t params;                /* offset of its parameters in cands */
     int nlv;
-    int train_lv[2], full_lv[2];
+    int train_lv[3], full_lv[3];
 } cand_def;
 
 static const cand_def CANDS[] = {
     {&method_hf3, offsetof(cands, fp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
     {&method_pbr, offsetof(cands, bp), 1, {LV_PBR}, {LV_FULL_PBR}},
+    {&method_pbr_detail, offsetof(cands, xp), 3, {LV_PBR, LV_HF3, LV_HF3 + 1},
+     {LV_FULL_PBR, LV_FULL_HF3, LV_FULL_HF3 + 1}},
     {&method_hf2d, offsetof(cands, dp), 1, {LV_HF2D}, {LV_FULL_HF2D}},
     {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
     {&method_maps, offsetof(cands, mp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
@@ -631,11 +638,11 @@ static int fit_on(const method_fit_in *in, int c, const cands *cs, const samples
                   const float *rgb, const int *lvi, material *out, glint_err *err)
 {
     method_fit_in ci = *in;
-    const void *lv[2];
-    const char *ky[2];
-    cache_how how[2];
-    double spent[2];
-    cache_disk disk[2];
+    const void *lv[3];
+    const char *ky[3];
+    cache_how how[3];
+    double spent[3];
+    cache_disk disk[3];
     for (int l = 0; l < CANDS[c].nlv; l++) {
         lv[l] = in->levels[lvi[l]];
         ky[l] = in->keys[lvi[l]];
@@ -729,7 +736,8 @@ static json_t *choice_report(const auto_params *p, const split *x, int chosen, j
         "candidates", list, "threshold", p->threshold, "floor", p->floor, "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
-        "cheapest first (hf3, pbr, hf2d, hf4, maps, hybrid); a later one is taken when its "
+        "cheapest first (hf3, pbr, pbr_detail, hf2d, hf4, maps, hybrid); a later one is "
+        "taken when its "
         "held-out RMS is below the current choice's by more than the threshold (a fraction) "
         "and the floor, so the choice is never worse on the held-out samples than hf3; the "
         "material is the chosen method refitted to every painted sample");
@@ -836,7 +844,8 @@ const method method_auto = {
     .title = "Automatic: the simplest model that the painting needs",
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =
-        "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), one "
+        "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), the "
+        "same times a three-factor detail of what it leaves (pbr_detail), one "
         "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
         "material maps (maps) and maps of textured materials (hybrid), each at its own "
         "settings, to the painted views but those held out (one in `every`, and the one whose "

@@ -13,6 +13,8 @@
  *   hf3   one material (method_hf3.h)
  *   pbr   one physically based material: Lambert + GGX (method_pbr.h),
  *         which extrapolates to new light by construction
+ *   pbr_detail  pbr times a three-factor detail of what it leaves
+ *         (method_pbr_detail.h; pbr's level and hf3's, shared)
  *   hf2d  one material whose q is 2D over the half vector's parabolic map:
  *         a highlight that depends on direction around the normal
  *         (method_hf2d.h)
@@ -31,7 +33,7 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * pbr, hf2d, hf4, maps and hybrid are alternatives, not steps of one
+ * pbr, pbr_detail, hf2d, hf4, maps and hybrid are alternatives, not steps of one
  * chain, so each is measured against the choice so far; every take lowers
  * the held-out RMS, so the answer is never worse on the held-out samples
  * than hf3, the simplest.  The material is the chosen
