@@ -57,6 +57,8 @@ run({
     await page.waitForSelector('#quality .q[data-preset]');
     await drawStroke(page, [[30, 30], [60, 40]]);
     await settled(page, 0);
+    // one fit, one job (a method that chooses sends a quick first look beside it)
+    await page.selectOption('#fit-method', 'hf3');
     // glintd answers with a job that fails while building its precomputation
     const id = 'f00d'.repeat(8);
     const job = (seq, o) => Object.assign({ id, kind: 'fit', state: 'running', progress: 0.2, stage: 'precomputation', created: new Date().toISOString() }, o);

@@ -177,6 +177,8 @@ run({
   async 'strokes reach the other artist while a reference render runs'(t) {
     // on a machine busy with other tests a render may be told to wait (503), and is asked again
     t.allowConsole(/status of 503/);
+    // its daemon stops under the two studios, cutting their event streams
+    t.allowConsole(/\/events\?.*|ERR_INCOMPLETE_CHUNKED_ENCODING/);
     // a daemon of its own: no held-out measurement of another test's fits running (background work too)
     const d = await new Daemon(['--work-max-seconds', '0', '--background-priority', 'normal', '--quiet']).start();
     try {

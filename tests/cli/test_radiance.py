@@ -53,7 +53,8 @@ VIEW_CHECKED = {"satin": ["maps", "hybrid"]}
 def presets(root):
     """(name, template) of every finish with a colour in web/presets.js."""
     text = open(os.path.join(root, "web", "presets.js")).read()
-    out = re.findall(r"name: '([^']+)',[^\n]*spec: kd => `([^`]+)`", text)
+    # the finish list's stable ids (the names shown are words of the look)
+    out = re.findall(r"id: '([^']+)',[^\n]*spec: kd => `([^`]+)`", text)
     if len(out) < 5:
         raise SystemExit("web/presets.js: expected the colour finishes, found %r" % out)
     return out
