@@ -435,7 +435,9 @@ export class FitPanel extends EventTarget {
       await this.session.writeChain;       // the strokes made so far are in the fit
       // a method that chooses among others takes a while: the quickest of
       // those it weighs is fitted beside it and shown first, then replaced
-      const first = this.method.chooses ? this.firstLook(t0) : null;
+      // (its failure is not the fit's: caught here, before the fit's own
+      // error can leave it unawaited)
+      const first = this.method.chooses ? this.firstLook(t0).catch(() => {}) : null;
       const r = await this.api.fit(this.session.id, { method: this.method.name, params: this.values() });
       const body = await r.json();
       if (r.status === 201) {
@@ -445,7 +447,7 @@ export class FitPanel extends EventTarget {
       } else {
         await this.follow(body.job, t0);
       }
-      if (first) await first.catch(() => {});
+      if (first) await first;
       this.refresh();
     } catch (e) {
       this.setProgress(null);
