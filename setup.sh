@@ -89,7 +89,9 @@ stage() {
 
 # The main job: glintd serving the studio on localhost, with a demo scene
 # (the built-in teapot, 12 views) and a painting session created through the
-# API on first start and reused afterwards.  Stops on Ctrl-C.
+# API on first start and reused afterwards; glintd answers it as its demo
+# session (--demo-session: GET /api/v1/demo), which the studio lists first
+# among the recent sessions.  Stops on Ctrl-C.
 json_field() {  # json_field NAME < json: the first string value of "NAME"
   grep -o "\"$1\": *\"[^\"]*\"" | head -n1 | sed 's/.*: *"\(.*\)"/\1/'
 }
@@ -101,18 +103,21 @@ run_daemon() {
   envs=()
   # the CC0 environment maps beside the checkout, offered as data:<file>
   [ -d ../shared/data/envmaps ] && envs=(--env-dir ../shared/data/envmaps)
-  ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web "${envs[@]}" &
+  demo="$data/demo-session.json"
+  ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web "${envs[@]}" \
+    --demo-session "$demo" &
   local pid=$!
   trap 'kill -TERM $pid 2>/dev/null; wait $pid; exit 0' INT TERM
   for _ in $(seq 100); do curl -fs "$base/healthz" >/dev/null && break; sleep 0.1; done
-  demo="$data/demo-session.json"
   sid=$(json_field id 2>/dev/null < "$demo" || true)
   tok=$(json_field paint_token 2>/dev/null < "$demo" || true)
   if [ -z "$sid" ] || ! curl -fs "$base/api/v1/sessions/$sid?token=$tok" >/dev/null; then
     scene=$(curl -fsS -X POST "$base/api/v1/scenes" -H 'Content-Type: application/json' \
               -d '{"mesh": "teapot", "width": 256, "height": 256}' | json_field id)
+    # whole or not at all: glintd reads the file at each GET /api/v1/demo
     curl -fsS -X POST "$base/api/v1/sessions" -H 'Content-Type: application/json' \
-         -d "{\"scene_id\": \"$scene\"}" > "$demo"
+         -d "{\"scene_id\": \"$scene\"}" > "$demo.tmp"
+    mv "$demo.tmp" "$demo"
     sid=$(json_field id < "$demo")
     tok=$(json_field paint_token < "$demo")
   fi

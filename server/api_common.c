@@ -55,6 +55,7 @@ static const struct {
     {"storage-full", 507},      /* the data directory's disk (fsio_err_kind) */
     {"storage-read-only", 503},
     {"owner-queue-full", 429},  /* one owner's jobs (jobs.h) */
+    {"demo-file-invalid", 500}, /* the operator's --demo-session file (api_demo.c) */
 };
 
 int api_status(const glint_err *e)

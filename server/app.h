@@ -55,6 +55,7 @@ typedef struct app_config {
     unsigned min_body_rate;   /* bytes/s a request body must keep up (0: no minimum) */
     unsigned max_streams_per_session; /* event streams open on one session (events.h) */
     unsigned max_streams_per_client;  /* ... for one client */
+    char demo_session[4096];  /* the demo session's file, GET /api/v1/demo ("" = none) */
     char api_key[256];        /* "" = none */
     char allow_origin[1024];  /* other web origins admitted (http.h); "" = none */
     char allow_host[1024];    /* Host names served besides addresses and localhost (http.h) */
@@ -117,6 +118,12 @@ extern const http_route api_measured_routes[];   /* measured materials on offer 
 extern const int api_measured_nroutes;
 /* The measured materials' resolver (api_measured.c), set before threads start. */
 int api_measured_init(const char *dir, glint_err *err);
+extern const http_route api_demo_routes[];       /* the demo session (--demo-session) */
+extern const int api_demo_nroutes;
+/* The demo session's id from its file (the answer of POST /api/v1/sessions;
+ * OUT: id).  GLINT_ENOTFOUND (kind "no-demo") when the file is not there;
+ * else a code of kind "demo-file-invalid" naming what is wrong.  api_demo.c. */
+int api_demo_read(const char *path, char id[33], glint_err *err);
 /* Uploaded environments live in the store's blobs (after store_open). */
 int api_envs_store(struct store *s, glint_err *err);
 

@@ -78,6 +78,7 @@ static const struct {
     STR_OPT("web-dir", web_dir),   STR_OPT("env-dir", env_dir),
     STR_OPT("measured-dir", measured_dir), STR_OPT("api-key", api_key),
     STR_OPT("allow-origin", allow_origin), STR_OPT("allow-host", allow_host),
+    STR_OPT("demo-session", demo_session),
 };
 
 /* The numeric options: name, range, and where the value goes. */

@@ -25,6 +25,7 @@
 #include "events.h"
 #include "fitsvc.h"
 #include "fsio.h"
+#include "ids.h"
 #include "jobs.h"
 #include "log.h"
 #include "memo.h"
@@ -111,6 +112,10 @@ static void usage(FILE *f)
           "                        (421), so that a web page on a name that resolves to\n"
           "                        this machine cannot use it; checked without --api-key,\n"
           "                        and with it when this is given (none by default)\n"
+          "  --demo-session FILE   the session every visitor of the studio may open and\n"
+          "                        paint: FILE holds the answer of POST /api/v1/sessions\n"
+          "                        (read at each GET /api/v1/demo, so it may be written\n"
+          "                        after the daemon starts; none by default)\n"
           "  --config FILE         JSON config file (keys as the long options, '-' as '_')\n"
           "  --port-file FILE      write the bound port there once listening\n"
           "  --quiet               no request log\n",
@@ -136,7 +141,7 @@ static const struct option glintd_options[] = {
     {"work-max-seconds", required_argument, 0, 1},
     {"background-priority", required_argument, 0, 1},
     {"api-key", required_argument, 0, 1}, {"allow-origin", required_argument, 0, 1},
-    {"allow-host", required_argument, 0, 1},
+    {"allow-host", required_argument, 0, 1}, {"demo-session", required_argument, 0, 1},
     {"config", required_argument, 0, 2},
     {"port-file", required_argument, 0, 3}, {"quiet", no_argument, 0, 4},
     {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
@@ -302,6 +307,7 @@ static void glintd_hide_paths(const app_config *cfg)
         log_private_path(real);
     if (realpath(cfg->web_dir, real))
         log_private_path(real);
+    log_private_path(cfg->demo_session); /* after the data directory it may lie in */
 }
 
 /* Every API module's routes in one table (OUT: *nroutes); NULL when out
@@ -312,12 +318,12 @@ static http_route *glintd_routes(int *nroutes)
                                   api_tokens_routes, api_fits_routes, api_materials_routes,
                                   api_methods_routes, api_envs_routes,
                                   api_measured_routes, api_exports_routes,
-                                  api_gbuffers_routes, api_views_routes};
+                                  api_gbuffers_routes, api_views_routes, api_demo_routes};
     const int counts[] = {api_core_nroutes, api_scenes_nroutes, api_sessions_nroutes,
                           api_tokens_nroutes, api_fits_nroutes, api_materials_nroutes,
                           api_methods_nroutes, api_envs_nroutes,
                           api_measured_nroutes, api_exports_nroutes,
-                          api_gbuffers_nroutes, api_views_nroutes};
+                          api_gbuffers_nroutes, api_views_nroutes, api_demo_nroutes};
     const int ntables = (int)(sizeof counts / sizeof counts[0]);
     int total = 0;
     http_route *routes;
@@ -357,6 +363,24 @@ static void glintd_http_config(const app_config *cfg, http_config *hc)
     hc->replica = cfg->replica_name[0] ? cfg->replica_name : NULL;
 }
 
+/* The demo session's file, when one is named: what GET /api/v1/demo will
+ * answer, on stderr.  Not fatal: the file may be written (or replaced by
+ * a valid one) after the start. */
+static void glintd_announce_demo(const app_config *cfg)
+{
+    char id[GLINT_ID_LEN];
+    glint_err ge;
+    if (!cfg->demo_session[0])
+        return;
+    if (api_demo_read(cfg->demo_session, id, &ge) == 0)
+        fprintf(stderr, "glintd: demo session %s (from %s)\n", id, cfg->demo_session);
+    else if (ge.code == GLINT_ENOTFOUND)
+        fprintf(stderr, "glintd: --demo-session: no %s yet: GET /api/v1/demo answers 204 "
+                        "until it is written\n", cfg->demo_session);
+    else
+        fprintf(stderr, "glintd: warning: --demo-session: %s\n", ge.msg);
+}
+
 /* Where the daemon serves and which Host names it answers, on stderr;
  * the bound port written to `port_file` if one was asked for. */
 static void glintd_announce(const app *a, const http_config *hc, int port, const char *port_file)
@@ -371,6 +395,7 @@ static void glintd_announce(const app *a, const http_config *hc, int port, const
         fprintf(stderr, "glintd: answering the Host names localhost, IP addresses%s%s\n",
                 a->cfg.allow_host[0] ? " and " : " (--allow-host adds others)",
                 a->cfg.allow_host);
+    glintd_announce_demo(&a->cfg);
     if (port_file) {
         char buf[32];
         int n = snprintf(buf, sizeof buf, "%d\n", port);
