@@ -95,6 +95,8 @@ export class Api {
   uploadMesh(bytes, format) {
     return this.request('POST', '/meshes', { body: bytes, type: 'application/octet-stream', query: { format }, what: 'Uploading the mesh' });
   }
+  // the daemon's demo session with its paint token; null where it has none (204)
+  demo() { return this.get('/demo', { what: 'Reading the demo session' }); }
   createSession(sceneId) { return this.post('/sessions', { scene_id: sceneId }, { what: 'Creating the session' }); }
   session(id) { return this.get('/sessions/' + id, { what: 'Reading the session' }); }
   replaceTokens(sid, body) { return this.post(`/sessions/${sid}/tokens`, body, { what: 'Replacing the links' }); }

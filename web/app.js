@@ -83,15 +83,40 @@ async function showStart() {
   loadScenes();
 }
 
+// The sessions this browser remembers, and the daemon's demo session first
+// (GET /demo: one every visitor may paint) once it has answered.
 function renderRecent() {
+  renderRecentList(null);
+  demoEntry().then(d => { if (d) renderRecentList(d); });
+}
+
+// The demo session as an entry of the list, or null where the daemon has
+// none (or cannot say: the remembered sessions stay listed).
+async function demoEntry() {
+  try {
+    const s = await api.demo();
+    if (!s) return null;
+    const sc = await api.scene(s.scene_id);
+    return { id: s.id, token: s.paint_token, mesh: sc.mesh, size: sc.width + '×' + sc.height, demo: true };
+  } catch (_) {
+    return null;
+  }
+}
+
+function renderRecentList(demo) {
   const ul = $('recent');
   ul.textContent = '';
-  const list = JSON.parse(localStorage.getItem('glint.recent') || '[]');
+  const mine = JSON.parse(localStorage.getItem('glint.recent') || '[]');
+  const list = demo ? [demo, ...mine.filter(r => r.id !== demo.id)] : mine;
   if (!list.length) { ul.innerHTML = '<li class="muted">none yet</li>'; return; }
   for (const r of list) {
     const li = document.createElement('li');
     const s = document.createElement('span');
-    s.textContent = `${r.mesh} ${r.size} · ${r.access === 'view' ? 'view only · ' : ''}${new Date(r.at).toLocaleString()}`;
+    if (r.demo) {
+      li.className = 'demo';
+      s.textContent = `Demo: ${r.mesh} ${r.size}`;
+      s.title = 'This server\'s demo session: everyone who opens the studio here can paint it';
+    } else s.textContent = `${r.mesh} ${r.size} · ${r.access === 'view' ? 'view only · ' : ''}${new Date(r.at).toLocaleString()}`;
     const b = document.createElement('a'); b.className = 'button'; b.textContent = 'Open'; b.href = sessionHash(r.id, r.token);
     li.append(s, b); ul.appendChild(li);
   }
