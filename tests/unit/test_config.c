@@ -25,7 +25,7 @@ TEST(defaults_are_the_documented_ones)
     ASSERT_EQ(c.cache_bytes, (size_t)512 << 20);
     ASSERT_EQ(c.lim.max_body, (size_t)32 << 20);
     ASSERT_EQ(c.lim.max_image_dim, 4096);
-    ASSERT(c.api_key[0] == '\0' && c.allow_origin[0] == '\0');
+    ASSERT(c.api_key[0] == '\0' && c.allow_origin[0] == '\0' && c.demo_session[0] == '\0');
     ASSERT_EQ(c.background_priority, FITSVC_BG_IDLE);
 }
 
@@ -126,12 +126,14 @@ TEST(a_file_with_both_spellings_and_every_type)
     app_config c;
     glint_err e;
     ASSERT_OK(load(&c, "{\"port\": 9000, \"data_dir\": \"/srv/g\", \"max-strokes\": \"50\","
-                       " \"quiet\": true, \"allow_origin\": \"https://a.example\"}", &e));
+                       " \"quiet\": true, \"allow_origin\": \"https://a.example\","
+                       " \"demo_session\": \"/srv/g/demo-session.json\"}", &e));
     ASSERT_EQ(c.port, 9000);
     ASSERT(strcmp(c.data_dir, "/srv/g") == 0);
     ASSERT_EQ(c.lim.max_strokes, 50);
     ASSERT_EQ(c.quiet, 1);
     ASSERT(strcmp(c.allow_origin, "https://a.example") == 0);
+    ASSERT(strcmp(c.demo_session, "/srv/g/demo-session.json") == 0);
 }
 
 TEST(a_bad_file_names_what_is_wrong)
