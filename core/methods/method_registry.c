@@ -9,6 +9,7 @@
 #include "method_maps.h"
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
+#include "method_pbr_env.h"
 #include "method_srbf.h"
 
 extern const method *const method_builtin[];
@@ -18,6 +19,7 @@ const method *const method_builtin[] = {
     &method_pbr,
     &method_pbr_detail,
     &method_srbf,
+    &method_pbr_env,
     &method_hf4,
     &method_hf2d,
     &method_maps,

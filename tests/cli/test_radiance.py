@@ -11,7 +11,7 @@ method that fits point-lit paintings, through the command line:
   from the BRDF's formulas (brdf.h), within TOL;
   the fitted material rendered at a painted view (the ball) matches the
   finish's render of that view within BALL_TOL (relative RMS).
-The environment method (srbf) does the same for paintings under a sky.
+The environment's methods (srbf, pbr_env) do the same for paintings under a sky.
 
 usage: test_radiance.py GLINT SOURCE_ROOT [--table]  (--table: print every
 figure and do not fail; the figures quoted in BENCHMARKS.md)."""
@@ -37,6 +37,7 @@ BALL_TOL = 0.12     # a painted view rendered from the fit: relative RMS (hf2d o
 MEAN_TOL = 0.02     # ... and its mean over the finish's: the scale itself
 COLOURS = ["0.5/0.5/0.5", "0.8/0.45/0.1", "0.1/0.3/0.7"]
 POINT_METHODS = ["hf3", "pbr", "pbr_detail", "hf4", "hf2d", "maps", "hybrid", "auto"]
+ENV_METHODS = ["srbf", "pbr_env"]
 VIEW = 3
 # Which methods each finish is checked with: those that model it.  Metal
 # has no diffuse colour (its colour is in the highlight; the summary's base
@@ -166,21 +167,23 @@ def main():
                     run([glint, "render", mat, "--scene", scene, "--view", str(VIEW),
                          "--engine", "cpu", "-o", ball])
                     check(name, col, m, want, got, pixels(ball), ref, fails)
-        # under an environment: paint --env and srbf agree on the scale too
+        # under an environment: paint --env and the environment's methods agree on the
+        # scale too
         for col in COLOURS:
             spec = "lambert:kd=" + col
             paint = os.path.join(tmp, "env")
-            mat = os.path.join(tmp, "m_srbf")
             run([glint, "paint", scene, "--brdf", spec, "--env", "sky", "-o", paint])
-            run([glint, "fit", scene, "--paintings", paint, "-o", mat, "--method", "srbf",
-                 "--env", "sky", "--cache-dir", cache])
-            got = np.array(json.loads(run([glint, "summary", mat]))["base_colour"])
             want = truth_base_colour(spec)
-            err = float(np.linalg.norm(got - want) / np.linalg.norm(want))
-            print("matte under the sky, srbf: finish %s fit %s base colour %.2f%%"
-                  % (np.round(want, 4), np.round(got, 4), 100 * err), flush=True)
-            if err > TOL:
-                fails.append("srbf %s: base colour %.2f%% off" % (col, 100 * err))
+            for m in ENV_METHODS:
+                mat = os.path.join(tmp, "m_" + m)
+                run([glint, "fit", scene, "--paintings", paint, "-o", mat, "--method", m,
+                     "--env", "sky", "--cache-dir", cache])
+                got = np.array(json.loads(run([glint, "summary", mat]))["base_colour"])
+                err = float(np.linalg.norm(got - want) / np.linalg.norm(want))
+                print("matte under the sky, %s: finish %s fit %s base colour %.2f%%"
+                      % (m, np.round(want, 4), np.round(got, 4), 100 * err), flush=True)
+                if err > TOL:
+                    fails.append("%s %s: base colour %.2f%% off" % (m, col, 100 * err))
     for f in fails:
         print("FAIL " + f)
     if fails and not table:

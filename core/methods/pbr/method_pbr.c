@@ -118,7 +118,7 @@ static const method_level pbr_levels[] = {
 
 /* ---- the report ----------------------------------------------------------------------- */
 
-static json_t *report_determination(const pbr_spec *sp, const pbr_fit_result *r, int black)
+json_t *pbr_report_determination(const pbr_spec *sp, const pbr_fit_result *r, int black)
 {
     json_t *det = json_object(), *und = json_array(), *bnd = json_array(), *notes = json_array();
     double lo[PBR_MAXP], hi[PBR_MAXP];
@@ -160,7 +160,7 @@ static json_t *report_determination(const pbr_spec *sp, const pbr_fit_result *r,
                      "at_bound", bnd, "notes", notes);
 }
 
-static json_t *report_fit(const pbr_fit_result *r)
+json_t *pbr_report_fit(const pbr_fit_result *r)
 {
     json_t *starts = json_array();
     for (int s = 0; s < r->nstarts; s++)
@@ -209,14 +209,14 @@ static int pbr_method_fit(const method_fit_in *in, material *out, glint_err *err
     pm->sp = sp;
     memcpy(pm->p, r->p, sizeof pm->p);
     pbr_material_sync(pm);
-    det = report_determination(&sp, r, r->nsamples_lit == 0);
+    det = pbr_report_determination(&sp, r, r->nsamples_lit == 0);
     info = json_pack("{s:o, s:{s:s, s:s, s:i}, s:{s:f, s:f}, s:{s:f, s:o}, s:o}", "params",
                      method_params_to_json(&method_pbr, pp), "precomputation", "pattern_hash",
                      in->s->hash, "cache_key", in->keys[0], "samples", in->s->n, "seconds",
                      "samples", in->pattern_seconds, "fit", glint_now() - t0, "errors",
                      "rms_painted", r->rms, "rms_by_view",
                      method_rms_by_view(r->view_se, r->view_n, in->s->nviews), "fit",
-                     report_fit(r));
+                     pbr_report_fit(r));
     if (!info || !det) {
         json_decref(info);
         json_decref(det);

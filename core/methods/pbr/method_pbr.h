@@ -49,7 +49,15 @@ typedef struct pbr_material {
 /* Fill the common form (kd, lobe) of pm from pm->sp and pm->p. */
 void pbr_material_sync(pbr_material *pm);
 
-/* The data of a pbr material, or NULL for another method's. */
+/* The data of a pbr material (of a method whose materials are pbr's: pbr,
+ * pbr_env), or NULL for another method's. */
 const pbr_material *pbr_material_of(const material *m);
+
+/* The report's members on what the views determine ("determined",
+ * "undetermined", "at_bound", "notes"; black: the painting is black on every
+ * lit sample) and on the fit itself (starts, iterations, convergence,
+ * cost): new objects, for methods that fit pbr's model. */
+json_t *pbr_report_determination(const pbr_spec *sp, const pbr_fit_result *r, int black);
+json_t *pbr_report_fit(const pbr_fit_result *r);
 
 #endif

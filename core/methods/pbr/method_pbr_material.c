@@ -22,7 +22,7 @@ void pbr_material_sync(pbr_material *pm)
 
 const pbr_material *pbr_material_of(const material *m)
 {
-    return m && m->method == &method_pbr ? m->data : NULL;
+    return m && m->method && m->method->mat == &pbr_material_ops ? m->data : NULL;
 }
 
 static void pbr_mat_eval(const void *data, const double uv[2], const double n[3],

@@ -170,3 +170,34 @@ void pbr_brdf(const double kd[3], const pbr_lobe *lobes, int nlobes, double ci, 
             f[c] += lobes[l].ks[c] * dv * (lobes[l].f0[c] + (1.0 - lobes[l].f0[c]) * w5);
     }
 }
+
+long pbr_geom_terms(const pbr_geom *g)
+{
+    return g->off ? g->off[g->n] : g->n;
+}
+
+void pbr_sample_eval(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double m[3],
+                     double J[3][PBR_MAXP])
+{
+    int np = pbr_np(sp);
+    if (!g->off) {
+        pbr_eval(sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
+        return;
+    }
+    m[0] = m[1] = m[2] = 0.0;
+    if (J)
+        for (int c = 0; c < 3; c++)
+            memset(J[c], 0, sizeof(double) * (size_t)np);
+    for (int t = g->off[i]; t < g->off[i + 1]; t++) {
+        double mt[3], Jt[3][PBR_MAXP];
+        const float *w = g->w + 3 * (size_t)t;
+        pbr_eval(sp, p, g->ci[t], g->co[t], g->ch[t], g->cd[t], mt, J ? Jt : NULL);
+        for (int c = 0; c < 3; c++) {
+            double wc = w[c];
+            m[c] += wc * mt[c];
+            if (J)
+                for (int k = 0; k < np; k++)
+                    J[c][k] += wc * Jt[c][k];
+        }
+    }
+}

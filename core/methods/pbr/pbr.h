@@ -56,12 +56,28 @@ typedef struct pbr_spec {
     int fresnel; /* PBR_DIELECTRIC or PBR_CONDUCTOR (both lobes) */
 } pbr_spec;
 
-/* Per-sample cosines (n arrays of n doubles): ci = n.wi > 0, co = n.wo > 0,
- * ch = n.h, cd = wi.h, h the unit half vector. */
+/* The samples' geometry.  Point lights (off NULL): one light a sample,
+ * its cosines at index i of four arrays of n doubles: ci = n.wi > 0,
+ * co = n.wo > 0, ch = n.h, cd = wi.h, h the unit half vector.
+ *
+ * Several lights a sample (an environment compressed into lights): sample
+ * i sums the terms off[i] .. off[i + 1] - 1 (off: n + 1 entries, off[0] =
+ * 0); the cosine arrays are indexed by term (off[n] entries each) and
+ * w[3 t + c] is term t's weight in channel c (the light's power times its
+ * visibility from the sample).  A sample's value is then
+ *
+ *   m_c = sum over its terms t of w_tc (f_c ci)_t
+ *
+ * the radiance it reflects in units of the lights' powers. */
 typedef struct pbr_geom {
     int n;
     double *ci, *co, *ch, *cd;
+    int *off;   /* NULL: one term a sample, weight 1 */
+    float *w;   /* 3 off[n] weights (with off) */
 } pbr_geom;
+
+/* Terms of g (n without off). */
+long pbr_geom_terms(const pbr_geom *g);
 
 /* Number of direct parameters (3 + 5 nlobes). */
 int pbr_np(const pbr_spec *sp);
@@ -78,6 +94,12 @@ void pbr_bounds(const pbr_spec *sp, double *lo, double *hi);
  * k < pbr_np). */
 void pbr_eval(const pbr_spec *sp, const double *p, double ci, double co, double ch, double cd,
               double m[3], double J[3][PBR_MAXP]);
+
+/* The value of sample i of g (OUT m[3]) and, when J is not NULL, its
+ * derivatives (OUT J[c][k]): pbr_eval at its one light, or the weighted sum
+ * over its terms. */
+void pbr_sample_eval(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double m[3],
+                     double J[3][PBR_MAXP]);
 
 /* The same per lobe in one common form, for materials: per lobe alpha,
  * ks[3] and F0[3] (dielectric: F0 from the ior; conductor: ks the same in

@@ -61,7 +61,21 @@ static const double PBR_START_ALPHA[PBR_MAX_STARTS] = {0.05, 0.15, 0.4, 0.01, 0.
 typedef struct pbr_set {
     pbr_geom g;
     const float *y;
+    /* a subset's own copies (NULL for the caller's arrays): set_free */
+    double *own_d;
+    float *own_y;
 } pbr_set;
+
+static void set_free(pbr_set *s)
+{
+    free(s->own_d);
+    free(s->own_y);
+    if (s->own_d) { /* a subset's off and w are its own too */
+        free(s->g.off);
+        free(s->g.w);
+    }
+    memset(s, 0, sizeof *s);
+}
 
 typedef struct lm_ctx {
     const pbr_spec *sp;
@@ -110,7 +124,7 @@ static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
     u_to_p(cx, x->data, p, NULL);
     for (int i = 0; i < g->n; i++) {
         double m[3];
-        pbr_eval(cx->sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, NULL);
+        pbr_sample_eval(cx->sp, p, g, i, m, NULL);
         for (int c = 0; c < 3; c++) {
             double r = m[c] - cx->s->y[3 * (size_t)i + c];
             f->data[3 * (size_t)i + c] = r;
@@ -132,7 +146,7 @@ static int lm_df(CBLAS_TRANSPOSE_t TransJ, const gsl_vector *x, const gsl_vector
     u_to_p(cx, x->data, p, dpdu);
     for (int i = 0; i < g->n; i++) {
         double m[3], J[3][PBR_MAXP];
-        pbr_eval(cx->sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
+        pbr_sample_eval(cx->sp, p, g, i, m, J);
         for (int c = 0; c < 3; c++) {
             double *row = J[c];
             size_t r = 3 * (size_t)i + c;
@@ -288,7 +302,7 @@ static void linear_start(const lm_ctx *cx, double *p)
     const pbr_spec *sp = cx->sp;
     const pbr_geom *g = &cx->s->g;
     int L = sp->nlobes, k = 1 + L;
-    double G[3][3] = {{0}}, b[3][3] = {{0}};
+    double G[3][3][3] = {{{0}}}, b[3][3] = {{0}};
 
     for (int l = 0; l < L; l++) {
         int o = 3 + 5 * l;
@@ -301,27 +315,38 @@ static void linear_start(const lm_ctx *cx, double *p)
         }
     }
     for (int i = 0; i < g->n; i++) {
-        double col[3];
-        col[0] = g->ci[i] / M_PI;
-        for (int l = 0; l < L; l++) {
-            /* lobe l alone: its value in channel 0 with the others off */
-            pbr_spec one = {1, sp->fresnel};
-            double q[8] = {0, 0, 0}, m[3];
-            memcpy(q + 3, p + 3 + 5 * l, 5 * sizeof(double));
-            pbr_eval(&one, q, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, NULL);
-            col[1 + l] = m[0];
+        /* each channel's columns: the diffuse term and each lobe alone, the
+         * channel's weights of the sample's lights applied */
+        double col[3][3] = {{0}};
+        int t0 = g->off ? g->off[i] : i, t1 = g->off ? g->off[i + 1] : i + 1;
+        for (int t = t0; t < t1; t++) {
+            double v[3];
+            v[0] = g->ci[t] / M_PI;
+            for (int l = 0; l < L; l++) {
+                /* lobe l alone: its value in channel 0 with the others off */
+                pbr_spec one = {1, sp->fresnel};
+                double q[8] = {0, 0, 0}, m[3];
+                memcpy(q + 3, p + 3 + 5 * l, 5 * sizeof(double));
+                pbr_eval(&one, q, g->ci[t], g->co[t], g->ch[t], g->cd[t], m, NULL);
+                v[1 + l] = m[0];
+            }
+            for (int c = 0; c < 3; c++) {
+                double w = g->off ? g->w[3 * (size_t)t + c] : 1.0;
+                for (int a = 0; a < k; a++)
+                    col[c][a] += w * v[a];
+            }
         }
-        for (int a = 0; a < k; a++) {
-            for (int c = 0; c < 3; c++)
-                b[c][a] += col[a] * cx->s->y[3 * (size_t)i + c];
-            for (int e = 0; e < k; e++)
-                G[a][e] += col[a] * col[e];
-        }
+        for (int c = 0; c < 3; c++)
+            for (int a = 0; a < k; a++) {
+                b[c][a] += col[c][a] * cx->s->y[3 * (size_t)i + c];
+                for (int e = 0; e < k; e++)
+                    G[c][a][e] += col[c][a] * col[c][e];
+            }
     }
     {
         double x[3][3], mx[PBR_MAX_LOBES] = {0};
         for (int c = 0; c < 3; c++) {
-            small_nnls(k, (const double(*)[3])G, b[c], x[c]);
+            small_nnls(k, (const double(*)[3])G[c], b[c], x[c]);
             p[c] = x[c][0];
             for (int l = 0; l < L; l++) {
                 if (sp->fresnel == PBR_DIELECTRIC)
@@ -349,23 +374,12 @@ static int cmp_float(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* The subset of the starts: the brightest m/8 samples and an even stride
- * over the others, copied (OUT: sub, its arrays in *buf, free()). */
-static int subset_make(const pbr_set *all, int m, pbr_set *sub, double **buf, float **ybuf)
+/* Which m samples the subset takes: the brightest m/8 and an even stride
+ * over the others (OUT: take[n], 1 where taken; returns how many). */
+static int subset_pick(const pbr_set *all, int m, float *lum, unsigned char *take)
 {
-    const pbr_geom *g = &all->g;
-    int n = g->n, nb = m / 8, k = 0, rest, step;
-    float *lum = malloc(sizeof(float) * (size_t)n), thr;
-    unsigned char *take = calloc((size_t)n, 1);
-    double *d = malloc(4 * sizeof(double) * (size_t)m);
-    float *y = malloc(3 * sizeof(float) * (size_t)m);
-    if (!lum || !take || !d || !y) {
-        free(lum);
-        free(take);
-        free(d);
-        free(y);
-        return GLINT_ENOMEM;
-    }
+    int n = all->g.n, nb = m / 8, k = 0, rest, step;
+    float thr;
     for (int i = 0; i < n; i++)
         lum[i] = all->y[3 * (size_t)i] + all->y[3 * (size_t)i + 1] + all->y[3 * (size_t)i + 2];
     qsort(lum, (size_t)n, sizeof *lum, cmp_float);
@@ -384,27 +398,74 @@ static int subset_make(const pbr_set *all, int m, pbr_set *sub, double **buf, fl
             take[i] = 1;
             k++;
         }
+    return k;
+}
+
+/* The subset of the starts (subset_pick), copied with its terms (OUT: sub,
+ * released by set_free). */
+static int subset_make(const pbr_set *all, int m, pbr_set *sub)
+{
+    const pbr_geom *g = &all->g;
+    int n = g->n, k;
+    long nt = 0;
+    float *lum = malloc(sizeof(float) * (size_t)n), *y = NULL, *w = NULL;
+    unsigned char *take = calloc((size_t)n, 1);
+    double *d = NULL;
+    int *off = NULL;
+    if (!lum || !take)
+        goto oom;
+    k = subset_pick(all, m, lum, take);
+    for (int i = 0; i < n; i++)
+        if (take[i])
+            nt += g->off ? g->off[i + 1] - g->off[i] : 1;
+    d = malloc(4 * sizeof(double) * (size_t)(nt ? nt : 1));
+    y = malloc(3 * sizeof(float) * (size_t)(k ? k : 1));
+    if (!d || !y)
+        goto oom;
+    if (g->off && (!(off = malloc(sizeof(int) * ((size_t)k + 1))) ||
+                   !(w = malloc(3 * sizeof(float) * (size_t)(nt ? nt : 1)))))
+        goto oom;
+    memset(sub, 0, sizeof *sub);
     sub->g.n = k;
     sub->g.ci = d;
-    sub->g.co = d + m;
-    sub->g.ch = d + 2 * (size_t)m;
-    sub->g.cd = d + 3 * (size_t)m;
-    for (int i = 0, j = 0; i < n; i++)
+    sub->g.co = d + nt;
+    sub->g.ch = d + 2 * (size_t)nt;
+    sub->g.cd = d + 3 * (size_t)nt;
+    sub->g.off = off;
+    sub->g.w = w;
+    for (int i = 0, j = 0, t = 0; i < n; i++)
         if (take[i]) {
-            sub->g.ci[j] = g->ci[i];
-            sub->g.co[j] = g->co[i];
-            sub->g.ch[j] = g->ch[i];
-            sub->g.cd[j] = g->cd[i];
+            int t0 = g->off ? g->off[i] : i, t1 = g->off ? g->off[i + 1] : i + 1;
+            if (off)
+                off[j] = t;
+            for (int s = t0; s < t1; s++, t++) {
+                sub->g.ci[t] = g->ci[s];
+                sub->g.co[t] = g->co[s];
+                sub->g.ch[t] = g->ch[s];
+                sub->g.cd[t] = g->cd[s];
+                if (w)
+                    memcpy(w + 3 * (size_t)t, g->w + 3 * (size_t)s, 3 * sizeof *w);
+            }
             for (int c = 0; c < 3; c++)
                 y[3 * (size_t)j + c] = all->y[3 * (size_t)i + c];
             j++;
+            if (off)
+                off[j] = t;
         }
     sub->y = y;
+    sub->own_d = d;
+    sub->own_y = y;
     free(lum);
     free(take);
-    *buf = d;
-    *ybuf = y;
     return 0;
+oom:
+    free(lum);
+    free(take);
+    free(d);
+    free(y);
+    free(off);
+    free(w);
+    return GLINT_ENOMEM;
 }
 
 static gsl_multilarge_nlinear_workspace *lm_alloc(int n, int np)
@@ -438,7 +499,7 @@ static int determine(const lm_ctx *cx, pbr_fit_result *r)
         D[k] = cx->hi[k] - cx->lo[k];
     for (int i = 0; i < g->n; i++) {
         double m[3], J[3][PBR_MAXP];
-        pbr_eval(cx->sp, r->p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
+        pbr_sample_eval(cx->sp, r->p, g, i, m, J);
         for (int c = 0; c < 3; c++) {
             double d = m[c] - cx->s->y[3 * (size_t)i + c];
             ss += d * d;
@@ -553,17 +614,15 @@ static int refine(lm_ctx *cx, const pbr_set *all, const pbr_fit_opts *o,
 {
     pbr_start_report fin;
     pbr_set ref;
-    double *refd = NULL;
-    float *refy = NULL;
     int use = o->refine > 0 && all->g.n > o->refine && o->refine > o->subset;
     gsl_multilarge_nlinear_free(*w);
     *w = NULL;
-    if (use && subset_make(all, o->refine, &ref, &refd, &refy))
+    memset(&ref, 0, sizeof ref);
+    if (use && subset_make(all, o->refine, &ref))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     cx->s = use ? &ref : all;
     if (!(*w = lm_alloc(cx->s->g.n, cx->np))) {
-        free(refd);
-        free(refy);
+        set_free(&ref);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
     }
     lm_run(cx, *w, o->max_iter, out->p, &fin);
@@ -571,23 +630,22 @@ static int refine(lm_ctx *cx, const pbr_set *all, const pbr_fit_opts *o,
     out->converged = fin.converged;
     out->refine_samples = cx->s->g.n;
     cx->s = all;
-    free(refd);
-    free(refy);
+    set_free(&ref);
     return 0;
 }
 
 int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit_opts *o,
             pbr_fit_result *out, glint_err *err)
 {
-    pbr_set all = {*g, y}, sub;
+    pbr_set all = {*g, y, NULL, NULL}, sub;
     lm_ctx cx;
-    double *subd = NULL, best = INFINITY;
-    float *suby = NULL;
+    double best = INFINITY;
     gsl_multilarge_nlinear_workspace *w = NULL;
     int np = pbr_np(sp), starts, lit = 0, rc = 0;
     int use_sub = o->subset > 0 && g->n > o->subset;
 
     memset(out, 0, sizeof *out);
+    memset(&sub, 0, sizeof sub);
     if (sp->nlobes < 1 || sp->nlobes > PBR_MAX_LOBES)
         return glint_err_set(err, GLINT_EINVAL, "pbr: %d lobes (1 or 2)", sp->nlobes);
     if (g->n < np)
@@ -605,7 +663,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
                y[3 * (size_t)i + 2] > 0.0f;
     out->nsamples_lit = lit;
 
-    if (use_sub && (rc = subset_make(&all, o->subset, &sub, &subd, &suby)))
+    if (use_sub && (rc = subset_make(&all, o->subset, &sub)))
         return glint_err_set(err, rc, "out of memory");
     cx.s = use_sub ? &sub : &all;
     if (lit && !(w = lm_alloc(cx.s->g.n, np))) {
@@ -655,7 +713,6 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
         rc = glint_err_set(err, rc, "out of memory");
 done:
     gsl_multilarge_nlinear_free(w);
-    free(subd);
-    free(suby);
+    set_free(&sub);
     return rc;
 }

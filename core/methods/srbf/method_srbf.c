@@ -28,7 +28,7 @@ static_assert(sizeof(srbf_static_kind) == sizeof(int) && sizeof(lsq_mode) == siz
 
 /* ---- parameters -------------------------------------------------------------------- */
 
-static int env_parse(const char *text, void *field, glint_err *err)
+int srbf_env_parse(const char *text, void *field, glint_err *err)
 {
     int rc = env_spec_check(text, err);
     if (!rc)
@@ -36,12 +36,12 @@ static int env_parse(const char *text, void *field, glint_err *err)
     return rc;
 }
 
-static void env_format(const void *field, char *buf, size_t len)
+void srbf_env_format(const void *field, char *buf, size_t len)
 {
     snprintf(buf, len, "%s", (const char *)field);
 }
 
-static int raster_parse(const char *text, void *field, glint_err *err)
+int srbf_raster_parse(const char *text, void *field, glint_err *err)
 {
     srbf_raster *r = field;
     int w, h, n = 0;
@@ -59,7 +59,7 @@ static int raster_parse(const char *text, void *field, glint_err *err)
     return 0;
 }
 
-static void raster_format(const void *field, char *buf, size_t len)
+void srbf_raster_format(const void *field, char *buf, size_t len)
 {
     const srbf_raster *r = field;
     if (r->w <= 0)
@@ -126,11 +126,11 @@ static void diffuse_format(const void *field, char *buf, size_t len)
 
 static const char *const static_values[] = {"paper", "smith", NULL};
 static const char *const constraint_values[] = {"energy", "nonneg", "none", NULL};
-static const char *const vis_values[] = {"auto", "on", "off", NULL};
+const char *const srbf_vis_values[] = {"auto", "on", "off", NULL};
 static const char *const start_values[] = {"warm", "cold", NULL}; /* SRBF_START_* */
-static const char *const env_examples[] = {"studio", "sky", "sunset", "builtin:white",
+const char *const srbf_env_examples[] = {"studio", "sky", "sunset", "builtin:white",
                                            "data:courtyard.exr", NULL};
-static const char *const raster_examples[] = {"160x120", "320x240", "full", NULL};
+const char *const srbf_raster_examples[] = {"160x120", "320x240", "full", NULL};
 static const char *const diffuse_examples[] = {"fit", "0.3", "0.35,0.25,0.15", NULL};
 
 static const method_param srbf_params_table[] = {
@@ -141,7 +141,7 @@ static const method_param srbf_params_table[] = {
                     "command line reads a map by its path instead (file:PATH)",
      .offset = offsetof(srbf_params, env),
      .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
-     .examples = env_examples, .parse = env_parse, .format = env_format},
+     .examples = srbf_env_examples, .parse = srbf_env_parse, .format = srbf_env_format},
     {.name = "env_rotation", .label = "environment turned (degrees)", .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
      .description = "rotation of the environment about the up (+z) axis, degrees",
      .offset = offsetof(srbf_params, env_rotation), .min = -360.0, .max = 360.0},
@@ -177,12 +177,12 @@ static const method_param srbf_params_table[] = {
     {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_ENUM, .affects = "precomputation",
      .description = "shadows of the object on itself: auto casts rays unless the mesh is "
                     "convex",
-     .offset = offsetof(srbf_params, visibility), .values = vis_values},
+     .offset = offsetof(srbf_params, visibility), .values = srbf_vis_values},
     {.name = "raster", .label = "pixels per view fitted", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "grid of pixels per view that become rows of the fit (the paper: 160x120); "
                     "full: every painted pixel",
      .offset = offsetof(srbf_params, raster), .syntax = "WxH | full",
-     .examples = raster_examples, .parse = raster_parse, .format = raster_format},
+     .examples = srbf_raster_examples, .parse = srbf_raster_parse, .format = srbf_raster_format},
     {.name = "diffuse", .label = "diffuse colour", .type = METHOD_PARAM_TEXT, .affects = "fit",
      .description = "diffuse albedo rho_d: fitted jointly (fit) or given (grey or r,g,b)",
      .offset = offsetof(srbf_params, diffuse), .syntax = "fit | A | R,G,B",

@@ -91,6 +91,17 @@ enum { SRBF_START_WARM = 0, SRBF_START_COLD = 1 };
  * everywhere. */
 #define SRBF_ENERGY_MARGIN 1e-3
 
+/* The environment's and the raster's text parameters, for other methods
+ * lit by the same environments (method.h's method_param.parse and format),
+ * with their examples, and the visibility's values ("auto", "on", "off"). */
+int srbf_env_parse(const char *text, void *field, glint_err *err);
+void srbf_env_format(const void *field, char *buf, size_t len);
+int srbf_raster_parse(const char *text, void *field, glint_err *err);
+void srbf_raster_format(const void *field, char *buf, size_t len);
+extern const char *const srbf_env_examples[];
+extern const char *const srbf_raster_examples[];
+extern const char *const srbf_vis_values[];
+
 /* ---- level data ---------------------------------------------------------------------- */
 
 typedef struct srbf_energy {

@@ -1,0 +1,428 @@
+/* bench_env_measured.c: how fits of measured materials painted under an
+ * environment hold up under new views and new light.
+ *
+ *   bench_env_measured [--data DIR] [--every K] [--size WxH] [--methods a,b]
+ *                      [--views 3,1]
+ *
+ * For every K-th material of DIR/measured/merl56_fits.json (default 4: 14
+ * of the 56; the published sgd fits): the sphere at WxH (default 64x48)
+ * with the 20 views of the icosahedron's face centres; views 0, 7 and 14
+ * painted (or view 0 alone) under environment A; each method (srbf,
+ * pbr_env; their defaults, the environment named) fitted to them and its
+ * material rendered where nothing was painted:
+ *   new      the other views under A;
+ *   rotated  those views under A turned 120 degrees about the up axis;
+ *   other    those views under environment B.
+ * A = DIR/envmaps/courtyard.exr, B = DIR/envmaps/sunset.exr (the built-in
+ * sky and sunset when absent).  Truths and renders sum 512 median-cut
+ * lights of the map (the fits' own 256 are their precomputation: the
+ * compression's error is part of what is measured).  The sphere is convex:
+ * no shadows.  The error of a set of views is the relative RMS over their
+ * pixels, |render - truth| / |truth|, the material evaluated as previews
+ * are (material_eval_preview: srbf's tabulated p(h), within 0.5%).
+ * Printed per material the errors, then per method and view count the
+ * median, the 90th percentile and the worst material, with the median warm
+ * fit time (a second fit of the same painting, precomputation cached).
+ *
+ * Nothing here is asserted; the figures go to BENCHMARKS.md. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "cache.h"
+#include "clock.h"
+#include "env.h"
+#include "material.h"
+#include "measured.h"
+#include "method.h"
+#include "prep.h"
+#include "samples.h"
+#include "scene.h"
+#include "test_paths.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define NVIEWS 20
+#define MAXM 64
+#define MAXMAT MEASURED_MAX
+
+static char DATA[1024];
+static int eval_lights = 512; /* --lights */
+
+static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
+{
+    struct stat st;
+    if (strncmp(spec, "data:", 5) || strchr(spec + 5, '/'))
+        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment %s", spec);
+    snprintf(path, len, "%s/envmaps/%s", DATA, spec + 5);
+    if (stat(path, &st))
+        return glint_err_set(err, GLINT_ENOTFOUND, "%s: no such file", path);
+    return 0;
+}
+
+static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
+{
+    (void)id;
+    (void)err;
+    *out = cls;
+    return 0;
+}
+
+static int lights_of(const char *spec, double rot_deg, env_lights *l, glint_err *e)
+{
+    env_map m;
+    int rc = env_resolve(spec, &m, e);
+    if (!rc)
+        rc = env_compress(&m, ENV_CUT_MEDIAN, eval_lights, rot_deg * M_PI / 180.0, 1.0, l, e);
+    env_map_free(&m);
+    return rc;
+}
+
+/* What is rendered: a measured truth or a fitted material. */
+typedef struct shader {
+    const measured_truth *t;
+    const material *m;
+} shader;
+
+/* f (n.wi) at unit vectors: a material's eval holds the cosine, a truth's
+ * f does not. */
+static void shade(const shader *sh, const double n[3], const double wi[3], const double wo[3],
+                  double cs, double f[3])
+{
+    if (sh->t) {
+        measured_eval(sh->t, n, wi, wo, f);
+        for (int c = 0; c < 3; c++)
+            f[c] *= cs;
+    } else
+        material_eval_preview(sh->m, n, wi, wo, f);
+}
+
+/* The samples of s under lights l (f cos summed; OUT rgb[3 n]). */
+static void render(const samples *s, const env_lights *l, const shader *sh, float *rgb)
+{
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wo[3], acc[3] = {0, 0, 0};
+        for (int e = 0; e < 3; e++) {
+            n[e] = s->nrm[3 * i + e];
+            wo[e] = s->wo[3 * i + e];
+        }
+        for (int k = 0; k < l->k; k++) {
+            const double *d = l->dir + 3 * k;
+            double cs = n[0] * d[0] + n[1] * d[1] + n[2] * d[2], v[3];
+            if (cs <= 0.0)
+                continue;
+            shade(sh, n, d, wo, cs, v);
+            for (int c = 0; c < 3; c++)
+                acc[c] += l->power[3 * k + c] * v[c];
+        }
+        for (int c = 0; c < 3; c++)
+            rgb[3 * i + c] = (float)acc[c];
+    }
+}
+
+enum { E_PAINTED, E_NEW, E_ROT, E_OTHER, E_N };
+static const char *const E_NAME[E_N] = {"painted", "new views", "rotated", "other env"};
+
+typedef struct result {
+    double e[E_N];
+    double fit_ms;
+    int ok;
+} result;
+
+/* A material's truths over the views measured, rendered once for every
+ * method (OUT of truth_get: the array for error k over s). */
+typedef struct truths {
+    const measured_truth *t;
+    float *a[E_N];
+} truths;
+
+static void truths_free(truths *tr)
+{
+    for (int k = 0; k < E_N; k++)
+        free(tr->a[k]);
+    memset(tr->a, 0, sizeof tr->a);
+}
+
+typedef struct bench {
+    cache *c;
+    cache_entry *se;
+    const char *envA;
+    env_lights lA, lRot, lB;
+} bench;
+
+static const float *truth_get(truths *tr, int k, const samples *s, const env_lights *l)
+{
+    shader st = {tr->t, NULL};
+    if (!tr->a[k] && (tr->a[k] = malloc((size_t)3 * s->n * sizeof(float))))
+        render(s, l, &st, tr->a[k]);
+    return tr->a[k];
+}
+
+/* The relative RMS of material m against truth k over s under l. */
+static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
+                      const material *m)
+{
+    const float *a = truth_get(tr, k, s, l);
+    float *b = malloc((size_t)3 * s->n * sizeof *b);
+    shader sm = {NULL, m};
+    double num = 0.0, den = 0.0;
+    if (!a || !b) {
+        free(b);
+        return NAN;
+    }
+    render(s, l, &sm, b);
+    for (long i = 0; i < 3L * s->n; i++) {
+        num += ((double)b[i] - a[i]) * ((double)b[i] - a[i]);
+        den += (double)a[i] * a[i];
+    }
+    free(b);
+    return den > 0.0 ? sqrt(num / den) : NAN;
+}
+
+/* One method fitted to one material painted in the views of `use` under A;
+ * its errors (OUT r).  0, or -1 with the reason printed. */
+static int run_one(bench *b, const method *m, truths *tr, const unsigned char *use,
+                   const unsigned char *rest, result *r)
+{
+    void *par = method_params_new(m);
+    prep *p = NULL, *pn = NULL;
+    material mat, warm;
+    glint_err e;
+    float *rgb = NULL;
+    const samples *s;
+    const measured_truth *t = tr->t;
+    int rc = -1;
+    double t0;
+
+    memset(&mat, 0, sizeof mat);
+    memset(&warm, 0, sizeof warm);
+    if (!par || method_param_set_text(m, par, "env", b->envA, &e))
+        goto done;
+    {
+        prep_request rq = {m, par, b->se, use, NULL}, rn = {m, par, b->se, rest, NULL};
+        if (prep_acquire(b->c, &rq, NULL, NULL, &p, &e) ||
+            prep_acquire(b->c, &rn, NULL, NULL, &pn, &e))
+            goto done;
+    }
+    s = prep_samples(p);
+    if (!(rgb = malloc((size_t)3 * s->n * sizeof *rgb)))
+        goto done;
+    memcpy(rgb, truth_get(tr, E_PAINTED, s, &b->lA), (size_t)3 * s->n * sizeof *rgb);
+    for (long i = 0; i < 3L * s->n; i++) /* a painting is radiance over its view's intensity */
+        rgb[i] = (float)(rgb[i] / s->intensity[i / 3]);
+    if (prep_fit(p, NULL, rgb, &warm, &e))
+        goto done;
+    t0 = glint_now();
+    if (prep_fit(p, NULL, rgb, &mat, &e))
+        goto done;
+    r->fit_ms = (glint_now() - t0) * 1e3;
+    if (getenv("BENCH_ENV_DEBUG")) {
+        char *txt = json_dumps(json_object_get(mat.info, "errors"), JSON_COMPACT);
+        printf("    %s errors: %.600s\n", m->name, txt ? txt : "");
+        free(txt);
+    }
+    r->e[E_PAINTED] = rel_rms(tr, E_PAINTED, s, &b->lA, &mat);
+    s = prep_samples(pn);
+    r->e[E_NEW] = rel_rms(tr, E_NEW, s, &b->lA, &mat);
+    r->e[E_ROT] = rel_rms(tr, E_ROT, s, &b->lRot, &mat);
+    r->e[E_OTHER] = rel_rms(tr, E_OTHER, s, &b->lB, &mat);
+    rc = 0;
+done:
+    if (rc)
+        printf("  %s on %s: failed: %s\n", m->name, t->name, e.msg);
+    free(rgb);
+    material_free(&mat);
+    material_free(&warm);
+    prep_release(b->c, p);
+    prep_release(b->c, pn);
+    free(par);
+    return rc;
+}
+
+static int dcmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double pct(const double *v, int n, double q)
+{
+    double s[MAXMAT];
+    memcpy(s, v, (size_t)n * sizeof *s);
+    qsort(s, (size_t)n, sizeof *s, dcmp);
+    return s[(int)fmin(n - 1, floor(q * (n - 1) + 0.5))];
+}
+
+static void summary(const char *mname, int nv, const result *res, const measured_truth *mats,
+                    int n)
+{
+    double v[MAXMAT], ms[MAXMAT];
+    int idx[MAXMAT], k2 = 0;
+    for (int i = 0; i < n; i++)
+        if (res[i].ok)
+            idx[k2++] = i;
+    if (!k2)
+        return;
+    printf("| %s | %d |", mname, nv);
+    for (int k = 0; k < E_N; k++) {
+        int worst = idx[0];
+        for (int j = 0; j < k2; j++) {
+            v[j] = res[idx[j]].e[k];
+            if (res[idx[j]].e[k] > res[worst].e[k])
+                worst = idx[j];
+        }
+        printf(" %.1f%% / %.1f%%%s%s |", 100 * pct(v, k2, 0.5), 100 * pct(v, k2, 0.9),
+               k == E_NEW ? ", worst " : "", k == E_NEW ? mats[worst].name : "");
+    }
+    for (int j = 0; j < k2; j++)
+        ms[j] = res[idx[j]].fit_ms;
+    printf(" %.0f |\n", pct(ms, k2, 0.5));
+}
+
+static void views_of(int nv, unsigned char *use, unsigned char *rest)
+{
+    static const int painted[3] = {0, 7, 14};
+    memset(use, 0, SCENE_MAX_VIEWS);
+    memset(rest, 0, SCENE_MAX_VIEWS);
+    for (int k = 0; k < nv; k++)
+        use[painted[k]] = 1;
+    for (int v = 0; v < NVIEWS; v++)
+        rest[v] = !use[v];
+}
+
+int main(int argc, char **argv)
+{
+    char path[1200], methods[256] = "srbf,pbr_env", viewsarg[32] = "3,1";
+    const char *envA = "data:courtyard.exr", *envB = "data:sunset.exr";
+    const method *ms[8];
+    int env_given = 0, every = 4, w = 64, h = 48, nm = 0, nmat = 0, nvs[2], nnv = 0;
+    measured_set set;
+    measured_truth *mats;
+    scene sc;
+    bench b;
+    glint_err e;
+    struct stat st;
+
+    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--data") && i + 1 < argc)
+            snprintf(DATA, sizeof DATA, "%s", argv[++i]);
+        else if (!strcmp(argv[i], "--every") && i + 1 < argc)
+            every = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--size") && i + 1 < argc)
+            sscanf(argv[++i], "%dx%d", &w, &h);
+        else if (!strcmp(argv[i], "--methods") && i + 1 < argc)
+            snprintf(methods, sizeof methods, "%s", argv[++i]);
+        else if (!strcmp(argv[i], "--env") && i + 2 < argc) {
+            envA = argv[++i];
+            envB = argv[++i];
+            env_given = 1;
+        } else if (!strcmp(argv[i], "--lights") && i + 1 < argc)
+            eval_lights = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--views") && i + 1 < argc)
+            snprintf(viewsarg, sizeof viewsarg, "%s", argv[++i]);
+        else {
+            fprintf(stderr, "usage: %s [--data DIR] [--every K] [--size WxH] [--methods a,b] "
+                            "[--views 3,1] [--env A B] [--lights K]\n", argv[0]);
+            return 2;
+        }
+    }
+    if (every < 1 || w < 8 || h < 8) {
+        fprintf(stderr, "bad --every or --size\n");
+        return 2;
+    }
+    for (char *tok = strtok(methods, ","); tok && nm < 8; tok = strtok(NULL, ","))
+        if (!(ms[nm++] = method_find(tok))) {
+            fprintf(stderr, "unknown method %s\n", tok);
+            return 2;
+        }
+    for (char *tok = strtok(viewsarg, ","); tok && nnv < 2; tok = strtok(NULL, ","))
+        nvs[nnv++] = atoi(tok) == 1 ? 1 : 3;
+    snprintf(path, sizeof path, "%s/measured/%s", DATA, MEASURED_FITS_FILE);
+    if (stat(path, &st)) {
+        printf("bench_env_measured: %s absent: nothing measured\n", path);
+        return 0;
+    }
+    if (measured_load(path, &set, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        return 1;
+    }
+    env_set_resolver(data_resolver);
+    snprintf(path, sizeof path, "%s/envmaps/courtyard.exr", DATA);
+    if (!env_given && stat(path, &st)) {
+        envA = "sky";
+        envB = "sunset";
+    }
+    mats = calloc((size_t)set.n, sizeof *mats);
+    for (int i = 0; i < set.n; i += every)
+        measured_truth_of(&set.m[i], MEASURED_SGD, &mats[nmat++]);
+    {
+        scene_params sp;
+        scene_params_default(&sp);
+        sp.width = w;
+        sp.height = h;
+        sp.view_set = SCENE_VIEWS_ICO20;
+        if (scene_create(&sp, &sc, &e)) {
+            fprintf(stderr, "%s\n", e.msg);
+            return 1;
+        }
+    }
+    memset(&b, 0, sizeof b);
+    b.envA = envA;
+    if (lights_of(envA, 0.0, &b.lA, &e) || lights_of(envA, 120.0, &b.lRot, &e) ||
+        lights_of(envB, 0.0, &b.lB, &e) || cache_open(NULL, (size_t)8 << 30, &b.c, &e)) {
+        fprintf(stderr, "%s\n", e.msg);
+        return 1;
+    }
+    {
+        prep_scene_source src = {borrowed, NULL, &sc};
+        if (prep_scene_acquire(b.c, "s", &src, &b.se, &e)) {
+            fprintf(stderr, "%s\n", e.msg);
+            return 1;
+        }
+    }
+    printf("# %d sgd materials (every %d of %d), sphere %dx%d, environment %s (rotated 120 "
+           "degrees; other: %s), truths and renders with %d lights\n",
+           nmat, every, set.n, w, h, envA, envB, eval_lights);
+    result *res = calloc((size_t)2 * nm * nmat, sizeof *res);
+    for (int vi = 0; vi < nnv; vi++) {
+        unsigned char use[SCENE_MAX_VIEWS], rest[SCENE_MAX_VIEWS];
+        views_of(nvs[vi], use, rest);
+        for (int i = 0; i < nmat; i++) {
+            truths tr = {&mats[i], {NULL}};
+            for (int mi = 0; mi < nm; mi++) {
+                result *r = &res[((size_t)vi * nm + mi) * nmat + i];
+                if (run_one(&b, ms[mi], &tr, use, rest, r))
+                    continue;
+                r->ok = 1;
+                printf("  %-28s %-8s %d view%s: painted %.4f new %.4f rotated %.4f other %.4f "
+                       "(%.0f ms)\n", mats[i].name, ms[mi]->name, nvs[vi],
+                       nvs[vi] > 1 ? "s" : "", r->e[E_PAINTED], r->e[E_NEW], r->e[E_ROT],
+                       r->e[E_OTHER], r->fit_ms);
+                fflush(stdout);
+            }
+            truths_free(&tr);
+        }
+    }
+    printf("\n| method | views |");
+    for (int k = 0; k < E_N; k++)
+        printf(" %s median / p90 |", E_NAME[k]);
+    printf(" warm fit ms (median) |\n|---|---|---|---|---|---|---|\n");
+    for (int vi = 0; vi < nnv; vi++)
+        for (int mi = 0; mi < nm; mi++)
+            summary(ms[mi]->name, nvs[vi], res + ((size_t)vi * nm + mi) * nmat, mats, nmat);
+    free(res);
+    cache_release(b.c, b.se);
+    cache_close(b.c);
+    env_lights_free(&b.lA);
+    env_lights_free(&b.lRot);
+    env_lights_free(&b.lB);
+    scene_free(&sc);
+    measured_free(&set);
+    free(mats);
+    return 0;
+}
