@@ -26,7 +26,7 @@ run({
     assertEq(scene.base.env.spec, 'sky', 'the scene keeps its environment');
     await openStudio(page, url);
     await page.waitForSelector('#param-env', { state: 'attached' });
-    assertEq(await page.inputValue('#fit-method'), 'srbf', 'the environment method is chosen');
+    assertEq(await page.inputValue('#fit-method'), 'pbr_env', 'the first environment method (physically based) is chosen');
     assert(await page.evaluate(() => document.querySelector('#fit-method option[value="hf3"]').disabled),
       'a method lit by point lights is offered but not choosable (the daemon refuses it: lighting-mismatch)');
     assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');

@@ -39,6 +39,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "par.h"
 #include "pbr.h"
 
 #ifndef M_PI
@@ -116,22 +117,115 @@ static void p_to_u(const lm_ctx *cx, const double *p, double *u)
     }
 }
 
-static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
+/* The passes over the samples run as PBR_BLOCKS blocks of consecutive
+ * samples, each with its own sums, combined in block order: the result does
+ * not depend on how many threads ran them (par.h).  They run on the pool
+ * when the terms are worth it (par_worth), otherwise in turn here. */
+#define PBR_BLOCKS 16
+
+typedef struct pass {
+    const lm_ctx *cx;
+    const double *p, *dpdu;
+    const gsl_vector *u;          /* df: the vector J or J' multiplies (NULL: none) */
+    gsl_vector *v;                /* df: the product; f: the residuals */
+    int trans;                    /* df: 1 for J'u */
+    int want_jtj;
+    double ss[PBR_BLOCKS];        /* f: each block's sum of squared residuals */
+    double jtu[PBR_BLOCKS][PBR_MAXP];
+    double A[PBR_BLOCKS][PBR_MAXP][PBR_MAXP];
+} pass;
+
+static void block_range(int n, int b, int *i0, int *i1)
 {
-    const lm_ctx *cx = data;
+    *i0 = (int)((long)n * b / PBR_BLOCKS);
+    *i1 = (int)((long)n * (b + 1) / PBR_BLOCKS);
+}
+
+static void pass_run(pass *ps, par_fn fn)
+{
+    const pbr_geom *g = &ps->cx->s->g;
+    if (par_worth((size_t)pbr_geom_terms(g) * 8))
+        par_run(PBR_BLOCKS, fn, ps);
+    else
+        for (int b = 0; b < PBR_BLOCKS; b++)
+            fn(ps, b);
+}
+
+static void f_block(void *ctx, int b)
+{
+    pass *ps = ctx;
+    const lm_ctx *cx = ps->cx;
     const pbr_geom *g = &cx->s->g;
-    double p[PBR_MAXP], ss = 0.0;
-    u_to_p(cx, x->data, p, NULL);
-    for (int i = 0; i < g->n; i++) {
+    double ss = 0.0;
+    int i0, i1;
+    block_range(g->n, b, &i0, &i1);
+    for (int i = i0; i < i1; i++) {
         double m[3];
-        pbr_sample_eval(cx->sp, p, g, i, m, NULL);
+        pbr_sample_eval(cx->sp, ps->p, g, i, m, NULL);
         for (int c = 0; c < 3; c++) {
             double r = m[c] - cx->s->y[3 * (size_t)i + c];
-            f->data[3 * (size_t)i + c] = r;
+            ps->v->data[3 * (size_t)i + c] = r;
             ss += r * r;
         }
     }
+    ps->ss[b] = ss;
+}
+
+static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
+{
+    const lm_ctx *cx = data;
+    double p[PBR_MAXP], ss = 0.0;
+    pass *ps = malloc(sizeof *ps);
+    if (!ps)
+        return GSL_ENOMEM;
+    u_to_p(cx, x->data, p, NULL);
+    ps->cx = cx;
+    ps->p = p;
+    ps->v = f;
+    pass_run(ps, f_block);
+    for (int b = 0; b < PBR_BLOCKS; b++)
+        ss += ps->ss[b];
+    free(ps);
     return isfinite(ss) ? GSL_SUCCESS : GSL_EDOM;
+}
+
+static void df_block(void *ctx, int b)
+{
+    pass *ps = ctx;
+    const lm_ctx *cx = ps->cx;
+    const pbr_geom *g = &cx->s->g;
+    int np = cx->np, i0, i1;
+    double (*A)[PBR_MAXP] = ps->A[b], *jtu = ps->jtu[b];
+    memset(ps->A[b], 0, sizeof ps->A[b]);
+    memset(ps->jtu[b], 0, sizeof ps->jtu[b]);
+    block_range(g->n, b, &i0, &i1);
+    for (int i = i0; i < i1; i++) {
+        double m[3], J[3][PBR_MAXP];
+        pbr_sample_eval(cx->sp, ps->p, g, i, m, J);
+        for (int c = 0; c < 3; c++) {
+            double *row = J[c];
+            size_t r = 3 * (size_t)i + c;
+            for (int k = 0; k < np; k++)
+                row[k] *= ps->dpdu[k];
+            if (ps->u && ps->v) {
+                if (ps->trans) {
+                    double ur = gsl_vector_get(ps->u, r);
+                    for (int k = 0; k < np; k++)
+                        jtu[k] += row[k] * ur;
+                } else {
+                    double sv = 0.0;
+                    for (int k = 0; k < np; k++)
+                        sv += row[k] * gsl_vector_get(ps->u, (size_t)k);
+                    gsl_vector_set(ps->v, r, sv);
+                }
+            }
+            if (ps->want_jtj)
+                for (int a = 0; a < np; a++)
+                    if (row[a] != 0.0)
+                        for (int q = 0; q <= a; q++)
+                            A[a][q] += row[a] * row[q];
+        }
+    }
 }
 
 /* J'u (TransJ = CblasTrans, u: 3n residuals, v: p) or J u (CblasNoTrans,
@@ -140,46 +234,37 @@ static int lm_df(CBLAS_TRANSPOSE_t TransJ, const gsl_vector *x, const gsl_vector
                  gsl_vector *v, gsl_matrix *JTJ)
 {
     const lm_ctx *cx = data;
-    const pbr_geom *g = &cx->s->g;
-    double p[PBR_MAXP], dpdu[PBR_MAXP], A[PBR_MAXP][PBR_MAXP] = {{0}}, jtu[PBR_MAXP] = {0};
+    double p[PBR_MAXP], dpdu[PBR_MAXP];
     int np = cx->np;
+    pass *ps = malloc(sizeof *ps);
+    if (!ps)
+        return GSL_ENOMEM;
     u_to_p(cx, x->data, p, dpdu);
-    for (int i = 0; i < g->n; i++) {
-        double m[3], J[3][PBR_MAXP];
-        pbr_sample_eval(cx->sp, p, g, i, m, J);
-        for (int c = 0; c < 3; c++) {
-            double *row = J[c];
-            size_t r = 3 * (size_t)i + c;
-            for (int k = 0; k < np; k++)
-                row[k] *= dpdu[k];
-            if (u && v) {
-                if (TransJ == CblasTrans) {
-                    double ur = gsl_vector_get(u, r);
-                    for (int k = 0; k < np; k++)
-                        jtu[k] += row[k] * ur;
-                } else {
-                    double s = 0.0;
-                    for (int k = 0; k < np; k++)
-                        s += row[k] * gsl_vector_get(u, (size_t)k);
-                    gsl_vector_set(v, r, s);
-                }
-            }
-            if (JTJ)
-                for (int a = 0; a < np; a++)
-                    if (row[a] != 0.0)
-                        for (int b = 0; b <= a; b++)
-                            A[a][b] += row[a] * row[b];
+    ps->cx = cx;
+    ps->p = p;
+    ps->dpdu = dpdu;
+    ps->u = u;
+    ps->v = v;
+    ps->trans = TransJ == CblasTrans;
+    ps->want_jtj = JTJ != NULL;
+    pass_run(ps, df_block);
+    if (u && v && ps->trans)
+        for (int k = 0; k < np; k++) {
+            double sk = 0.0;
+            for (int b = 0; b < PBR_BLOCKS; b++)
+                sk += ps->jtu[b][k];
+            gsl_vector_set(v, (size_t)k, sk);
         }
-    }
-    if (u && v && TransJ == CblasTrans)
-        for (int k = 0; k < np; k++)
-            gsl_vector_set(v, (size_t)k, jtu[k]);
     if (JTJ)
         for (int a = 0; a < np; a++)
-            for (int b = 0; b <= a; b++) {
-                gsl_matrix_set(JTJ, (size_t)a, (size_t)b, A[a][b]);
-                gsl_matrix_set(JTJ, (size_t)b, (size_t)a, A[a][b]);
+            for (int q = 0; q <= a; q++) {
+                double sa = 0.0;
+                for (int b = 0; b < PBR_BLOCKS; b++)
+                    sa += ps->A[b][a][q];
+                gsl_matrix_set(JTJ, (size_t)a, (size_t)q, sa);
+                gsl_matrix_set(JTJ, (size_t)q, (size_t)a, sa);
             }
+    free(ps);
     return GSL_SUCCESS;
 }
 
