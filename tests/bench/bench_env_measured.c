@@ -2,7 +2,11 @@
  * environment hold up under new views and new light.
  *
  *   bench_env_measured [--data DIR] [--every K] [--size WxH] [--methods a,b]
- *                      [--views 3,1]
+ *                      [--views 3,1] [--env A B] [--lights K] [--set NAME=VALUE]...
+ *
+ * --env: environments A and B (specs, e.g. sky sunset); --lights: the
+ * lights truths and renders sum; --set: a parameter of every method that
+ * has it (e.g. start_samples=256), for the speed-accuracy trade.
  *
  * For every K-th material of DIR/measured/merl56_fits.json (default 4: 14
  * of the 56; the published sgd fits): the sphere at WxH (default 64x48)
@@ -52,6 +56,8 @@
 
 static char DATA[1024];
 static int eval_lights = 512; /* --lights */
+static const char *sets[8]; /* --set NAME=VALUE: a parameter of every method that has it */
+static int nsets;
 
 static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
 {
@@ -179,6 +185,19 @@ static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
         num += ((double)b[i] - a[i]) * ((double)b[i] - a[i]);
         den += (double)a[i] * a[i];
     }
+    if (getenv("BENCH_ENV_DEBUG")) { /* by view: error, and the view's share of |truth|^2 */
+        double vn[64] = {0}, vd[64] = {0};
+        for (long i = 0; i < 3L * s->n; i++) {
+            int v = s->view[i / 3] & 63;
+            vn[v] += ((double)b[i] - a[i]) * ((double)b[i] - a[i]);
+            vd[v] += (double)a[i] * a[i];
+        }
+        printf("    error %d by view:", k);
+        for (int v = 0; v < 64; v++)
+            if (vd[v] > 0.0)
+                printf(" %d:%.2f(%.0f%%)", v, sqrt(vn[v] / vd[v]), 100 * vd[v] / den);
+        printf("\n");
+    }
     free(b);
     return den > 0.0 ? sqrt(num / den) : NAN;
 }
@@ -202,6 +221,13 @@ static int run_one(bench *b, const method *m, truths *tr, const unsigned char *u
     memset(&warm, 0, sizeof warm);
     if (!par || method_param_set_text(m, par, "env", b->envA, &e))
         goto done;
+    for (int k = 0; k < nsets; k++) {
+        char name[64];
+        const char *eq = strchr(sets[k], '=');
+        snprintf(name, sizeof name, "%.*s", (int)(eq - sets[k]), sets[k]);
+        if (method_param_find(m, name) && method_param_set_text(m, par, name, eq + 1, &e))
+            goto done;
+    }
     {
         prep_request rq = {m, par, b->se, use, NULL}, rn = {m, par, b->se, rest, NULL};
         if (prep_acquire(b->c, &rq, NULL, NULL, &p, &e) ||
@@ -323,11 +349,15 @@ int main(int argc, char **argv)
             env_given = 1;
         } else if (!strcmp(argv[i], "--lights") && i + 1 < argc)
             eval_lights = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--set") && i + 1 < argc && nsets < 8 &&
+                 strchr(argv[i + 1], '=') && argv[i + 1][0] != '=')
+            sets[nsets++] = argv[++i];
         else if (!strcmp(argv[i], "--views") && i + 1 < argc)
             snprintf(viewsarg, sizeof viewsarg, "%s", argv[++i]);
         else {
             fprintf(stderr, "usage: %s [--data DIR] [--every K] [--size WxH] [--methods a,b] "
-                            "[--views 3,1] [--env A B] [--lights K]\n", argv[0]);
+                            "[--views 3,1] [--env A B] [--lights K] [--set NAME=VALUE]...\n",
+                    argv[0]);
             return 2;
         }
     }

@@ -36,6 +36,11 @@ static const method_param pbr_params_table[] = {
      .description = "Levenberg-Marquardt iterations allowed per start and for the final "
                     "refinement",
      .offset = offsetof(pbr_params, max_iter), .min = 1, .max = 10000},
+    {.name = "start_iter", .label = "iterations per start on its samples",
+     .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "fit",
+     .description = "Levenberg-Marquardt iterations of each start on its samples (it only has "
+                    "to find the basin the refinement then converges in)",
+     .offset = offsetof(pbr_params, start_iter), .min = 1, .max = 10000},
     {.name = "start_samples", .label = "samples per start", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "samples each start is fitted on (the brightest eighth and an even "
@@ -56,6 +61,7 @@ static void pbr_params_default(void *p)
     pp->fresnel = PBR_DIELECTRIC;
     pp->starts = 3;
     pp->max_iter = 100;
+    pp->start_iter = 25;
     pp->start_samples = 4096;
     pp->refine_samples = 16384;
 }
@@ -182,7 +188,7 @@ static int pbr_method_fit(const method_fit_in *in, material *out, glint_err *err
     const pbr_geom *g = in->levels[0];
     double t0 = glint_now();
     pbr_spec sp = {pp->lobes, pp->fresnel};
-    pbr_fit_opts o = {.starts = pp->starts, .max_iter = pp->max_iter,
+    pbr_fit_opts o = {.starts = pp->starts, .max_iter = pp->max_iter, .start_iter = pp->start_iter,
                       .subset = pp->start_samples, .refine = pp->refine_samples,
                       .view = in->s->view};
     pbr_fit_result *r = malloc(sizeof *r);

@@ -34,6 +34,7 @@ typedef struct pbr_params {
     int fresnel;        /* PBR_DIELECTRIC or PBR_CONDUCTOR */
     int starts;         /* roughnesses started from */
     int max_iter;       /* iterations per start */
+    int start_iter;     /* iterations of each start on its subset (pbr_fit_opts) */
     int start_samples;  /* samples the starts are fitted on (0: all) */
     int refine_samples; /* samples the best start is refined on (0: all) */
 } pbr_params;

@@ -119,6 +119,8 @@ double pbr_f0_of_ior(double ior);
 typedef struct pbr_fit_opts {
     int starts;    /* starts over the roughness (1..PBR_MAX_STARTS) */
     int max_iter;  /* iterations per start */
+    int start_iter; /* iterations of each start when it runs on a subset (it only has to
+                       find the basin); 0: PBR_START_ITER */
     int subset;    /* samples the starts are fitted on (the brightest eighth and an even
                       draw of the rest); the best is then refined.  0: all */
     int refine;    /* samples the best start is refined on, drawn alike (used when above

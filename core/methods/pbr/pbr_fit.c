@@ -728,6 +728,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     gsl_multilarge_nlinear_workspace *w = NULL;
     int np = pbr_np(sp), starts, lit = 0, rc = 0;
     int use_sub = o->subset > 0 && g->n > o->subset;
+    int cap = o->start_iter > 0 ? o->start_iter : PBR_START_ITER;
 
     memset(out, 0, sizeof *out);
     memset(&sub, 0, sizeof sub);
@@ -764,8 +765,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
         linear_start(&cx, p);
         sr->alpha0 = PBR_START_ALPHA[s];
         if (lit) {
-            lm_run(&cx, w, use_sub && o->max_iter > PBR_START_ITER ? PBR_START_ITER : o->max_iter,
-                   p, sr);
+            lm_run(&cx, w, use_sub && o->max_iter > cap ? cap : o->max_iter, p, sr);
         } else { /* a black painting: the start (kd = ks = 0 within 1e-4) is the answer */
             sr->cost = 0.0;
             sr->converged = 1;

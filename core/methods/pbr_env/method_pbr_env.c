@@ -69,6 +69,11 @@ static const method_param pbr_env_params_table[] = {
      .description = "Levenberg-Marquardt iterations allowed per start and for the final "
                     "refinement",
      .offset = PBRP(max_iter), .min = 1, .max = 10000},
+    {.name = "start_iter", .label = "iterations per start on its pixels",
+     .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "fit",
+     .description = "Levenberg-Marquardt iterations of each start on its pixels (it only has "
+                    "to find the basin the refinement then converges in)",
+     .offset = PBRP(start_iter), .min = 1, .max = 10000},
     {.name = "start_samples", .label = "pixels per start", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "fitted pixels each start is fitted on (the brightest eighth and an even "
@@ -102,6 +107,10 @@ static void pbr_env_params_default(void *p)
     pp->env.raster.h = 48;
     pp->pbr.start_samples = 512;
     pp->pbr.refine_samples = 2048;
+    /* ten iterations find the basin: on every eighth measured material under
+     * the courtyard (bench_env_measured --every 8 --views 3) the errors were
+     * those of 25 to the digit, the warm fit 671 ms against 1152 */
+    pp->pbr.start_iter = 10;
 }
 
 static int pbr_env_params_usable(const void *p, const method_source *src, const char **param,
@@ -369,6 +378,7 @@ static int pbr_env_fit(const method_fit_in *in, material *out, glint_err *err)
         goto done;
     {
         pbr_fit_opts o = {.starts = pp->pbr.starts, .max_iter = pp->pbr.max_iter,
+                          .start_iter = pp->pbr.start_iter,
                           .subset = pp->pbr.start_samples, .refine = pp->pbr.refine_samples,
                           .view = view};
         if ((rc = pbr_fit(&sp, &x->g, y, &o, r, err)))
