@@ -4,6 +4,9 @@
  *   bench_env_measured [--data DIR] [--every K] [--size WxH] [--methods a,b]
  *                      [--views 3,1] [--env A B] [--lights K] [--set NAME=VALUE]...
  *
+ * Methods: any environment method, and srbf+kd: srbf with its diffuse
+ * colour given, the one pbr_env fits to the same painting (the lobes fit
+ * what the parametric diffuse leaves).
  * --env: environments A and B (specs, e.g. sky sunset); --lights: the
  * lights truths and renders sum; --set: a parameter of every method that
  * has it (e.g. start_samples=256), for the speed-accuracy trade.
@@ -40,6 +43,7 @@
 #include "env.h"
 #include "material.h"
 #include "measured.h"
+#include "method_pbr_env.h"
 #include "method.h"
 #include "prep.h"
 #include "samples.h"
@@ -202,10 +206,48 @@ static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
     return den > 0.0 ? sqrt(num / den) : NAN;
 }
 
+/* The diffuse colour pbr_env fits to the painting of the views of `use`
+ * (OUT kd): what srbf is given with "srbf+kd" (its diffuse separated by
+ * the parametric fit, the lobes fitted to the rest). */
+static int pbr_env_kd(bench *b, truths *tr, const unsigned char *use, double kd[3],
+                      glint_err *e)
+{
+    void *par = method_params_new(&method_pbr_env);
+    prep *p = NULL;
+    material mat;
+    float *rgb = NULL;
+    const samples *s;
+    int rc = -1;
+    memset(&mat, 0, sizeof mat);
+    if (!par || method_param_set_text(&method_pbr_env, par, "env", b->envA, e))
+        goto done;
+    {
+        prep_request rq = {&method_pbr_env, par, b->se, use, NULL};
+        if (prep_acquire(b->c, &rq, NULL, NULL, &p, e))
+            goto done;
+    }
+    s = prep_samples(p);
+    if (!(rgb = malloc((size_t)3 * s->n * sizeof *rgb)))
+        goto done;
+    memcpy(rgb, truth_get(tr, E_PAINTED, s, &b->lA), (size_t)3 * s->n * sizeof *rgb);
+    for (long i = 0; i < 3L * s->n; i++)
+        rgb[i] = (float)(rgb[i] / s->intensity[i / 3]);
+    if (prep_fit(p, NULL, rgb, &mat, e))
+        goto done;
+    memcpy(kd, pbr_material_of(&mat)->kd, 3 * sizeof(double));
+    rc = 0;
+done:
+    free(rgb);
+    material_free(&mat);
+    prep_release(b->c, p);
+    free(par);
+    return rc;
+}
+
 /* One method fitted to one material painted in the views of `use` under A;
  * its errors (OUT r).  0, or -1 with the reason printed. */
-static int run_one(bench *b, const method *m, truths *tr, const unsigned char *use,
-                   const unsigned char *rest, result *r)
+static int run_one(bench *b, const method *m, int kd_given, truths *tr,
+                   const unsigned char *use, const unsigned char *rest, result *r)
 {
     void *par = method_params_new(m);
     prep *p = NULL, *pn = NULL;
@@ -221,6 +263,15 @@ static int run_one(bench *b, const method *m, truths *tr, const unsigned char *u
     memset(&warm, 0, sizeof warm);
     if (!par || method_param_set_text(m, par, "env", b->envA, &e))
         goto done;
+    if (kd_given) {
+        double kd[3];
+        char txt[128];
+        if (pbr_env_kd(b, tr, use, kd, &e))
+            goto done;
+        snprintf(txt, sizeof txt, "%.17g,%.17g,%.17g", kd[0], kd[1], kd[2]);
+        if (method_param_set_text(m, par, "diffuse", txt, &e))
+            goto done;
+    }
     for (int k = 0; k < nsets; k++) {
         char name[64];
         const char *eq = strchr(sets[k], '=');
@@ -325,6 +376,8 @@ int main(int argc, char **argv)
     char path[1200], methods[256] = "srbf,pbr_env", viewsarg[32] = "3,1";
     const char *envA = "data:courtyard.exr", *envB = "data:sunset.exr";
     const method *ms[8];
+    int kdg[8] = {0};
+    char mnames[8][32];
     int env_given = 0, every = 4, w = 64, h = 48, nm = 0, nmat = 0, nvs[2], nnv = 0;
     measured_set set;
     measured_truth *mats;
@@ -365,11 +418,16 @@ int main(int argc, char **argv)
         fprintf(stderr, "bad --every or --size\n");
         return 2;
     }
-    for (char *tok = strtok(methods, ","); tok && nm < 8; tok = strtok(NULL, ","))
-        if (!(ms[nm++] = method_find(tok))) {
+    for (char *tok = strtok(methods, ","); tok && nm < 8; tok = strtok(NULL, ",")) {
+        /* srbf+kd: srbf given pbr_env's diffuse colour */
+        kdg[nm] = !strcmp(tok, "srbf+kd");
+        snprintf(mnames[nm], sizeof mnames[nm], "%s", tok);
+        ms[nm] = method_find(kdg[nm] ? "srbf" : tok);
+        if (!ms[nm++]) {
             fprintf(stderr, "unknown method %s\n", tok);
             return 2;
         }
+    }
     for (char *tok = strtok(viewsarg, ","); tok && nnv < 2; tok = strtok(NULL, ","))
         nvs[nnv++] = atoi(tok) == 1 ? 1 : 3;
     snprintf(path, sizeof path, "%s/measured/%s", DATA, MEASURED_FITS_FILE);
@@ -426,11 +484,11 @@ int main(int argc, char **argv)
             truths tr = {&mats[i], {NULL}};
             for (int mi = 0; mi < nm; mi++) {
                 result *r = &res[((size_t)vi * nm + mi) * nmat + i];
-                if (run_one(&b, ms[mi], &tr, use, rest, r))
+                if (run_one(&b, ms[mi], kdg[mi], &tr, use, rest, r))
                     continue;
                 r->ok = 1;
                 printf("  %-28s %-8s %d view%s: painted %.4f new %.4f rotated %.4f other %.4f "
-                       "(%.0f ms)\n", mats[i].name, ms[mi]->name, nvs[vi],
+                       "(%.0f ms)\n", mats[i].name, mnames[mi], nvs[vi],
                        nvs[vi] > 1 ? "s" : "", r->e[E_PAINTED], r->e[E_NEW], r->e[E_ROT],
                        r->e[E_OTHER], r->fit_ms);
                 fflush(stdout);
@@ -444,7 +502,7 @@ int main(int argc, char **argv)
     printf(" warm fit ms (median) |\n|---|---|---|---|---|---|---|\n");
     for (int vi = 0; vi < nnv; vi++)
         for (int mi = 0; mi < nm; mi++)
-            summary(ms[mi]->name, nvs[vi], res + ((size_t)vi * nm + mi) * nmat, mats, nmat);
+            summary(mnames[mi], nvs[vi], res + ((size_t)vi * nm + mi) * nmat, mats, nmat);
     free(res);
     cache_release(b.c, b.se);
     cache_close(b.c);

@@ -192,6 +192,55 @@ TEST(jacobian_matches_finite_differences)
     }
 }
 
+/* A sample with several lights (pbr_geom's terms): its value is the
+ * weighted sum of the terms' single-light values (pbr_eval), and its
+ * Jacobian (summed in pbr.c's sums, not per term) matches central
+ * differences, for every lobe count and Fresnel kind. */
+TEST(terms_sum_and_their_jacobian)
+{
+    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
+                               {2, PBR_CONDUCTOR}};
+    /* two samples: three terms, then one */
+    double ci[4] = {0.9, 0.3, 0.15, 0.6}, co[4] = {0.7, 0.7, 0.7, 0.4};
+    double ch[4] = {0.98, 0.7, 0.5, 0.9}, cd[4] = {0.95, 0.6, 0.3, 0.8};
+    int off[3] = {0, 3, 4};
+    float w[12] = {1.0f, 0.5f, 0.25f, 0.2f, 0.9f, 0.4f, 3.0f, 0.1f, 0.6f, 0.7f, 0.7f, 0.7f};
+    pbr_geom g = {2, ci, co, ch, cd, off, w};
+    ASSERT_EQ(pbr_geom_terms(&g), 4);
+    for (int t = 0; t < 4; t++) {
+        const pbr_spec *sp = &specs[t];
+        double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
+        int np = pbr_np(sp);
+        pbr_bounds(sp, lo, hi);
+        for (int k = 3; k < np; k++)
+            p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+        for (int i = 0; i < g.n; i++) {
+            double m[3], J[3][PBR_MAXP], sum[3] = {0, 0, 0};
+            pbr_sample_eval(sp, p, &g, i, m, J);
+            for (int q = off[i]; q < off[i + 1]; q++) {
+                double mq[3];
+                pbr_eval(sp, p, ci[q], co[q], ch[q], cd[q], mq, NULL);
+                for (int c = 0; c < 3; c++)
+                    sum[c] += w[3 * q + c] * mq[c];
+            }
+            for (int c = 0; c < 3; c++)
+                ASSERT_NEAR(m[c], sum[c], 1e-12 * (1.0 + fabs(sum[c])));
+            for (int k = 0; k < np; k++) {
+                double a[PBR_MAXP], b[PBR_MAXP], ma[3], mb[3], hk = 1e-6 * (hi[k] - lo[k]);
+                memcpy(a, p, sizeof a);
+                memcpy(b, p, sizeof b);
+                a[k] += hk;
+                b[k] -= hk;
+                pbr_sample_eval(sp, a, &g, i, ma, NULL);
+                pbr_sample_eval(sp, b, &g, i, mb, NULL);
+                for (int c = 0; c < 3; c++)
+                    ASSERT_NEAR(J[c][k], (ma[c] - mb[c]) / (2 * hk),
+                                1e-6 * (1.0 + fabs(J[c][k])));
+            }
+        }
+    }
+}
+
 /* Fit the model's own values; every parameter back within 1e-3. */
 static void check_self(const pbr_spec *sp, const double *p, const char *spec)
 {
@@ -437,6 +486,7 @@ TEST(material_files_round_trip_and_damage)
 
 TEST_LIST {
     TEST_ENTRY(jacobian_matches_finite_differences),
+    TEST_ENTRY(terms_sum_and_their_jacobian),
     TEST_ENTRY(recovers_its_own_parameters),
     TEST_ENTRY(ct_truth_close),
     TEST_ENTRY(lambert_roughness_undetermined),

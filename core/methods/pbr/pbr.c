@@ -176,28 +176,89 @@ long pbr_geom_terms(const pbr_geom *g)
     return g->off ? g->off[g->n] : g->n;
 }
 
+/* Sample i's terms summed in the few sums the model is linear in (OUT:
+ * S1[c] = sum w ci; per lobe l and channel c, A = sum w ci dv (1 - w5), B =
+ * sum w ci dv w5 and, with derivatives, Ad and Bd the same with ddv): as
+ * F = F0 (1 - w5) + w5, every value and derivative is a combination of
+ * them, so a term costs its D V (and derivative) and these sums, not a
+ * Jacobian of its own. */
+typedef struct term_sums {
+    double S1[3];
+    double A[PBR_MAX_LOBES][3], B[PBR_MAX_LOBES][3];
+    double Ad[PBR_MAX_LOBES][3], Bd[PBR_MAX_LOBES][3];
+} term_sums;
+
+static void sums_of(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, int deriv,
+                    term_sums *S)
+{
+    memset(S, 0, sizeof *S);
+    for (int t = g->off[i]; t < g->off[i + 1]; t++) {
+        const float *w = g->w + 3 * (size_t)t;
+        double ci = g->ci[t], w5 = 1.0 - g->cd[t];
+        double wc[3] = {w[0] * ci, w[1] * ci, w[2] * ci};
+        w5 = w5 * w5 * w5 * w5 * w5;
+        for (int c = 0; c < 3; c++)
+            S->S1[c] += wc[c];
+        for (int l = 0; l < sp->nlobes; l++) {
+            double dv, ddv = 0.0;
+            ggx_dv(p[3 + 5 * l], ci, g->co[t], g->ch[t], &dv, deriv ? &ddv : NULL);
+            for (int c = 0; c < 3; c++) {
+                double a = wc[c] * dv;
+                S->A[l][c] += a * (1.0 - w5);
+                S->B[l][c] += a * w5;
+                if (deriv) {
+                    double ad = wc[c] * ddv;
+                    S->Ad[l][c] += ad * (1.0 - w5);
+                    S->Bd[l][c] += ad * w5;
+                }
+            }
+        }
+    }
+}
+
 void pbr_sample_eval(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double m[3],
                      double J[3][PBR_MAXP])
 {
     int np = pbr_np(sp);
+    term_sums S;
     if (!g->off) {
         pbr_eval(sp, p, g->ci[i], g->co[i], g->ch[i], g->cd[i], m, J);
         return;
     }
-    m[0] = m[1] = m[2] = 0.0;
+    sums_of(sp, p, g, i, J != NULL, &S);
     if (J)
         for (int c = 0; c < 3; c++)
             memset(J[c], 0, sizeof(double) * (size_t)np);
-    for (int t = g->off[i]; t < g->off[i + 1]; t++) {
-        double mt[3], Jt[3][PBR_MAXP];
-        const float *w = g->w + 3 * (size_t)t;
-        pbr_eval(sp, p, g->ci[t], g->co[t], g->ch[t], g->cd[t], mt, J ? Jt : NULL);
-        for (int c = 0; c < 3; c++) {
-            double wc = w[c];
-            m[c] += wc * mt[c];
-            if (J)
-                for (int k = 0; k < np; k++)
-                    J[c][k] += wc * Jt[c][k];
+    for (int c = 0; c < 3; c++) {
+        m[c] = p[c] / M_PI * S.S1[c];
+        if (J)
+            J[c][c] = S.S1[c] / M_PI;
+    }
+    for (int l = 0; l < sp->nlobes; l++) {
+        int b = 3 + 5 * l;
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            double n = p[b + 4], r = (n - 1.0) / (n + 1.0), F0 = r * r;
+            double dF0 = 4.0 * r / ((n + 1.0) * (n + 1.0));
+            for (int c = 0; c < 3; c++) {
+                double ks = p[b + 1 + c], val = F0 * S.A[l][c] + S.B[l][c];
+                m[c] += ks * val;
+                if (J) {
+                    J[c][b] = ks * (F0 * S.Ad[l][c] + S.Bd[l][c]);
+                    J[c][b + 1 + c] = val;
+                    J[c][b + 4] = ks * S.A[l][c] * dF0;
+                }
+            }
+        } else {
+            double ks = p[b + 1];
+            for (int c = 0; c < 3; c++) {
+                double F0 = p[b + 2 + c], val = F0 * S.A[l][c] + S.B[l][c];
+                m[c] += ks * val;
+                if (J) {
+                    J[c][b] = ks * (F0 * S.Ad[l][c] + S.Bd[l][c]);
+                    J[c][b + 1] = val;
+                    J[c][b + 2 + c] = ks * S.A[l][c];
+                }
+            }
         }
     }
 }
