@@ -14,6 +14,7 @@ static const char *const method_small[][2] = {
     {"pbr", "starts=1,max_iter=20"},
     {"pbr_detail", "res=8,starts=1,max_iter=20"},
     {"srbf", "lights=8,basis_res=2,raster=full,grazing=0"},
+    {"pbr_env", "lights=8,starts=1,max_iter=20,raster=full"},
     {"hf4", "res=8,s_res=4"},
     {"hf2d", "res=8,res_2d=8"},
     {"maps", "res=8,components=2,map_res=16,rounds=2"},
