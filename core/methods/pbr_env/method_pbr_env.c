@@ -401,7 +401,8 @@ done:
 }
 
 /* The painted values the model gives the fitted pixels under the
- * environment (NaN elsewhere): what a held-out view is compared with. */
+ * environment (NaN elsewhere): radiance, what a held-out view's painting
+ * holds and is compared with (method.h: prep_predict). */
 static int pbr_env_predict(const method_fit_in *in, const material *m, float *rgb,
                            glint_err *err)
 {
@@ -420,7 +421,7 @@ static int pbr_env_predict(const method_fit_in *in, const material *m, float *rg
         double v[3];
         pbr_sample_eval(&pm->sp, pm->p, &x->g, i, v, NULL);
         for (int c = 0; c < 3; c++)
-            rgb[3 * (size_t)si + c] = (float)(v[c] * pp->env.env_intensity / s->intensity[si]);
+            rgb[3 * (size_t)si + c] = (float)(v[c] * pp->env.env_intensity);
     }
     return 0;
 }
