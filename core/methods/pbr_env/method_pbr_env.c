@@ -451,10 +451,13 @@ static size_t pbr_env_fit_bytes(const void *params, long nsamples)
 }
 
 /* A cold fit: the pattern, shadow rays (half the lights a row, 2 us each,
- * as srbf_fit_seconds), the terms, and the fit's passes: about 300 over the
- * starts' pixels, 200 over the refined ones and a few over every row, at
- * 100 ns a term (pbr_eval with its derivatives; measured on the sphere at
- * 48 x 48, 3 views, 256 lights: see BENCHMARKS.md). */
+ * as srbf_fit_seconds), the terms (50 ns a term), and the fit's passes at
+ * 40 ns a term: each start's iterations about three passes over its
+ * pixels, the refinement about 30 passes over its own and two over every
+ * row.  Checked on the 160x120 sphere, 3 views under the courtyard, 256
+ * lights (3,126 rows, 437,226 terms): the passes measured 200-208 ms on two
+ * threads of the development machine; the estimate, which counts every
+ * sample as a row (the raster's stride is not known here), says 0.8 s. */
 static double pbr_env_fit_seconds(const void *params, long nsamples)
 {
     const pbr_env_params *p = params;
@@ -465,7 +468,8 @@ static double pbr_env_fit_seconds(const void *params, long nsamples)
                     ? p->pbr.refine_samples
                     : rows;
     double s = (double)nsamples * METHOD_SECONDS_PER_SAMPLE + rows * half * 50e-9 +
-               (300.0 / 3.0 * p->pbr.starts * st + 200.0 * rf + 4.0 * rows) * half * 100e-9;
+               (3.0 * p->pbr.starts * p->pbr.start_iter * st + 30.0 * rf + 2.0 * rows) * half *
+                   40e-9;
     if (p->env.visibility != SRBF_VIS_OFF)
         s += rows * half * 2e-6;
     return s;
