@@ -48,7 +48,7 @@
 #include "prep.h"
 #include "samples.h"
 #include "scene.h"
-#include "test_paths.h"
+#include "bench_env.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -58,39 +58,9 @@
 #define MAXM 64
 #define MAXMAT MEASURED_MAX
 
-static char DATA[1024];
 static int eval_lights = 512; /* --lights */
 static const char *sets[8]; /* --set NAME=VALUE: a parameter of every method that has it */
 static int nsets;
-
-static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
-{
-    struct stat st;
-    if (strncmp(spec, "data:", 5) || strchr(spec + 5, '/'))
-        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment %s", spec);
-    snprintf(path, len, "%s/envmaps/%s", DATA, spec + 5);
-    if (stat(path, &st))
-        return glint_err_set(err, GLINT_ENOTFOUND, "%s: no such file", path);
-    return 0;
-}
-
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
-
-static int lights_of(const char *spec, double rot_deg, env_lights *l, glint_err *e)
-{
-    env_map m;
-    int rc = env_resolve(spec, &m, e);
-    if (!rc)
-        rc = env_compress(&m, ENV_CUT_MEDIAN, eval_lights, rot_deg * M_PI / 180.0, 1.0, l, e);
-    env_map_free(&m);
-    return rc;
-}
 
 /* What is rendered: a measured truth or a fitted material. */
 typedef struct shader {
@@ -206,6 +176,18 @@ static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
     return den > 0.0 ? sqrt(num / den) : NAN;
 }
 
+/* The painting of s's views under A: the truth's radiance over each
+ * sample's intensity, as a painting is given to a fit (malloc'ed, 3 n;
+ * NULL when out of memory). */
+static float *painting_of(bench *b, truths *tr, const samples *s)
+{
+    const float *t = truth_get(tr, E_PAINTED, s, &b->lA);
+    float *rgb = t ? malloc((size_t)3 * s->n * sizeof *rgb) : NULL;
+    for (long i = 0; rgb && i < 3L * s->n; i++)
+        rgb[i] = (float)(t[i] / s->intensity[i / 3]);
+    return rgb;
+}
+
 /* The diffuse colour pbr_env fits to the painting of the views of `use`
  * (OUT kd): what srbf is given with "srbf+kd" (its diffuse separated by
  * the parametric fit, the lobes fitted to the rest). */
@@ -227,12 +209,7 @@ static int pbr_env_kd(bench *b, truths *tr, const unsigned char *use, double kd[
             goto done;
     }
     s = prep_samples(p);
-    if (!(rgb = malloc((size_t)3 * s->n * sizeof *rgb)))
-        goto done;
-    memcpy(rgb, truth_get(tr, E_PAINTED, s, &b->lA), (size_t)3 * s->n * sizeof *rgb);
-    for (long i = 0; i < 3L * s->n; i++)
-        rgb[i] = (float)(rgb[i] / s->intensity[i / 3]);
-    if (prep_fit(p, NULL, rgb, &mat, e))
+    if (!(rgb = painting_of(b, tr, s)) || prep_fit(p, NULL, rgb, &mat, e))
         goto done;
     memcpy(kd, pbr_material_of(&mat)->kd, 3 * sizeof(double));
     rc = 0;
@@ -286,12 +263,7 @@ static int run_one(bench *b, const method *m, int kd_given, truths *tr,
             goto done;
     }
     s = prep_samples(p);
-    if (!(rgb = malloc((size_t)3 * s->n * sizeof *rgb)))
-        goto done;
-    memcpy(rgb, truth_get(tr, E_PAINTED, s, &b->lA), (size_t)3 * s->n * sizeof *rgb);
-    for (long i = 0; i < 3L * s->n; i++) /* a painting is radiance over its view's intensity */
-        rgb[i] = (float)(rgb[i] / s->intensity[i / 3]);
-    if (prep_fit(p, NULL, rgb, &warm, &e))
+    if (!(rgb = painting_of(b, tr, s)) || prep_fit(p, NULL, rgb, &warm, &e))
         goto done;
     t0 = glint_now();
     if (prep_fit(p, NULL, rgb, &mat, &e))
@@ -326,12 +298,18 @@ static int dcmp(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* The q-quantile of v[0..n), linear between order statistics (numpy's
+ * default: the median of an even count is the mean of the middle two). */
 static double pct(const double *v, int n, double q)
 {
-    double s[MAXMAT];
+    double s[MAXMAT], x, f;
+    int i;
     memcpy(s, v, (size_t)n * sizeof *s);
     qsort(s, (size_t)n, sizeof *s, dcmp);
-    return s[(int)fmin(n - 1, floor(q * (n - 1) + 0.5))];
+    x = q * (n - 1);
+    i = (int)floor(x);
+    f = x - i;
+    return i + 1 < n ? s[i] + f * (s[i + 1] - s[i]) : s[n - 1];
 }
 
 static void summary(const char *mname, int nv, const result *res, const measured_truth *mats,
@@ -386,7 +364,7 @@ int main(int argc, char **argv)
     glint_err e;
     struct stat st;
 
-    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
+    bench_env_data_default();
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--data") && i + 1 < argc)
             snprintf(DATA, sizeof DATA, "%s", argv[++i]);
@@ -461,8 +439,9 @@ int main(int argc, char **argv)
     }
     memset(&b, 0, sizeof b);
     b.envA = envA;
-    if (lights_of(envA, 0.0, &b.lA, &e) || lights_of(envA, 120.0, &b.lRot, &e) ||
-        lights_of(envB, 0.0, &b.lB, &e) || cache_open(NULL, (size_t)8 << 30, &b.c, &e)) {
+    if (lights_of(envA, eval_lights, 0.0, &b.lA, &e) ||
+        lights_of(envA, eval_lights, 120.0, &b.lRot, &e) ||
+        lights_of(envB, eval_lights, 0.0, &b.lB, &e) || cache_open(NULL, (size_t)8 << 30, &b.c, &e)) {
         fprintf(stderr, "%s\n", e.msg);
         return 1;
     }

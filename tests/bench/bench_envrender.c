@@ -19,7 +19,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#include "test_paths.h"
+#include "bench_env.h"
 #include "env.h"
 #include "material.h"
 #include "method_srbf.h"
@@ -29,19 +29,6 @@
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
-
-static char DATA[1024]; /* the shared data: ../shared/data beside the source tree, or --data */
-
-static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
-{
-    struct stat st;
-    if (strncmp(spec, "data:", 5) || strchr(spec + 5, '/'))
-        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment %s", spec);
-    snprintf(path, len, "%s/envmaps/%s", DATA, spec + 5);
-    if (stat(path, &st))
-        return glint_err_set(err, GLINT_ENOTFOUND, "%s: no such file", path);
-    return 0;
-}
 
 static double now(void)
 {
@@ -186,7 +173,7 @@ int main(int argc, char **argv)
     material mat;
     glint_err err;
 
-    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
+    bench_env_data_default();
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;

@@ -36,7 +36,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "test_paths.h"
+#include "bench_env.h"
 #include "brdf.h"
 #include "cache.h"
 #include "clock.h"
@@ -50,27 +50,6 @@
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
-
-static char DATA[1024]; /* the shared data: ../shared/data beside the source tree, or --data */
-
-static int data_resolver(const char *spec, char *path, size_t len, glint_err *err)
-{
-    struct stat st;
-    if (strncmp(spec, "data:", 5) || strchr(spec + 5, '/'))
-        return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment %s", spec);
-    snprintf(path, len, "%s/envmaps/%s", DATA, spec + 5);
-    if (stat(path, &st))
-        return glint_err_set(err, GLINT_ENOTFOUND, "%s: no such file", path);
-    return 0;
-}
-
-static int borrowed(void *cls, const char *id, const scene **out, glint_err *err)
-{
-    (void)id;
-    (void)err;
-    *out = cls;
-    return 0;
-}
 
 static int make_scene(const char *mesh_file, scene *sc, glint_err *e)
 {
@@ -132,16 +111,6 @@ static void render_mat(const samples *s, const env_lights *l, const srbf_materia
         for (int c = 0; c < 3; c++)
             rgb[3 * i + c] = (float)acc[c];
     }
-}
-
-static int lights_of(const char *spec, int k, double rot_deg, env_lights *l, glint_err *e)
-{
-    env_map m;
-    int rc = env_resolve(spec, &m, e);
-    if (!rc)
-        rc = env_compress(&m, ENV_CUT_MEDIAN, k, rot_deg * M_PI / 180.0, 1.0, l, e);
-    env_map_free(&m);
-    return rc;
 }
 
 static double seconds_of(const material *m, const char *what)
@@ -384,7 +353,7 @@ int main(int argc, char **argv)
     struct stat st;
     char probe[1200];
 
-    snprintf(DATA, sizeof DATA, "%s/../shared/data", glint_test_source_dir);
+    bench_env_data_default();
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;
