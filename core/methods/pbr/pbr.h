@@ -79,6 +79,13 @@ typedef struct pbr_geom {
 /* Terms of g (n without off). */
 long pbr_geom_terms(const pbr_geom *g);
 
+/* The samples of g where take[i] (n flags), with their terms, weights and
+ * values (y: 3 per sample), copied into arrays of their own (OUT: out,
+ * released by pbr_geom_free; *yout, free()).  GLINT_ENOMEM. */
+int pbr_geom_pick(const pbr_geom *g, const float *y, const unsigned char *take, pbr_geom *out,
+                  float **yout);
+void pbr_geom_free(pbr_geom *g);
+
 /* Number of direct parameters (3 + 5 nlobes). */
 int pbr_np(const pbr_spec *sp);
 

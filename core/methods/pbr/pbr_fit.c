@@ -486,71 +486,93 @@ static int subset_pick(const pbr_set *all, int m, float *lum, unsigned char *tak
     return k;
 }
 
-/* The subset of the starts (subset_pick), copied with its terms (OUT: sub,
- * released by set_free). */
-static int subset_make(const pbr_set *all, int m, pbr_set *sub)
+int pbr_geom_pick(const pbr_geom *g, const float *y, const unsigned char *take, pbr_geom *out,
+                  float **yout)
 {
-    const pbr_geom *g = &all->g;
-    int n = g->n, k;
+    int n = g->n, k = 0;
     long nt = 0;
-    float *lum = malloc(sizeof(float) * (size_t)n), *y = NULL, *w = NULL;
-    unsigned char *take = calloc((size_t)n, 1);
+    float *yo = NULL, *w = NULL;
     double *d = NULL;
     int *off = NULL;
-    if (!lum || !take)
-        goto oom;
-    k = subset_pick(all, m, lum, take);
     for (int i = 0; i < n; i++)
-        if (take[i])
+        if (take[i]) {
+            k++;
             nt += g->off ? g->off[i + 1] - g->off[i] : 1;
+        }
     d = malloc(4 * sizeof(double) * (size_t)(nt ? nt : 1));
-    y = malloc(3 * sizeof(float) * (size_t)(k ? k : 1));
-    if (!d || !y)
+    yo = malloc(3 * sizeof(float) * (size_t)(k ? k : 1));
+    if (!d || !yo)
         goto oom;
     if (g->off && (!(off = malloc(sizeof(int) * ((size_t)k + 1))) ||
                    !(w = malloc(3 * sizeof(float) * (size_t)(nt ? nt : 1)))))
         goto oom;
-    memset(sub, 0, sizeof *sub);
-    sub->g.n = k;
-    sub->g.ci = d;
-    sub->g.co = d + nt;
-    sub->g.ch = d + 2 * (size_t)nt;
-    sub->g.cd = d + 3 * (size_t)nt;
-    sub->g.off = off;
-    sub->g.w = w;
+    memset(out, 0, sizeof *out);
+    out->n = k;
+    out->ci = d;
+    out->co = d + nt;
+    out->ch = d + 2 * (size_t)nt;
+    out->cd = d + 3 * (size_t)nt;
+    out->off = off;
+    out->w = w;
+    if (off)
+        off[0] = 0;
     for (int i = 0, j = 0, t = 0; i < n; i++)
         if (take[i]) {
             int t0 = g->off ? g->off[i] : i, t1 = g->off ? g->off[i + 1] : i + 1;
-            if (off)
-                off[j] = t;
             for (int s = t0; s < t1; s++, t++) {
-                sub->g.ci[t] = g->ci[s];
-                sub->g.co[t] = g->co[s];
-                sub->g.ch[t] = g->ch[s];
-                sub->g.cd[t] = g->cd[s];
+                out->ci[t] = g->ci[s];
+                out->co[t] = g->co[s];
+                out->ch[t] = g->ch[s];
+                out->cd[t] = g->cd[s];
                 if (w)
                     memcpy(w + 3 * (size_t)t, g->w + 3 * (size_t)s, 3 * sizeof *w);
             }
             for (int c = 0; c < 3; c++)
-                y[3 * (size_t)j + c] = all->y[3 * (size_t)i + c];
+                yo[3 * (size_t)j + c] = y[3 * (size_t)i + c];
             j++;
             if (off)
                 off[j] = t;
         }
-    sub->y = y;
-    sub->own_d = d;
-    sub->own_y = y;
-    free(lum);
-    free(take);
+    *yout = yo;
     return 0;
 oom:
-    free(lum);
-    free(take);
     free(d);
-    free(y);
+    free(yo);
     free(off);
     free(w);
     return GLINT_ENOMEM;
+}
+
+void pbr_geom_free(pbr_geom *g)
+{
+    free(g->ci); /* co, ch and cd share its block */
+    free(g->off);
+    free(g->w);
+    memset(g, 0, sizeof *g);
+}
+
+/* The subset of the starts (subset_pick), copied with its terms (OUT: sub,
+ * released by set_free). */
+static int subset_make(const pbr_set *all, int m, pbr_set *sub)
+{
+    int n = all->g.n, rc;
+    float *lum = malloc(sizeof(float) * (size_t)n), *y = NULL;
+    unsigned char *take = calloc((size_t)n, 1);
+    if (!lum || !take) {
+        free(lum);
+        free(take);
+        return GLINT_ENOMEM;
+    }
+    subset_pick(all, m, lum, take);
+    memset(sub, 0, sizeof *sub);
+    rc = pbr_geom_pick(&all->g, all->y, take, &sub->g, &y);
+    if (!rc) {
+        sub->y = sub->own_y = y;
+        sub->own_d = sub->g.ci;
+    }
+    free(lum);
+    free(take);
+    return rc;
 }
 
 static gsl_multilarge_nlinear_workspace *lm_alloc(int n, int np)
@@ -758,7 +780,7 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     }
     out->nstarts = starts;
     for (int s = 0; s < starts; s++) {
-        double p[PBR_MAXP];
+        double p[PBR_MAXP] = {0};
         pbr_start_report *sr = &out->start[s];
         for (int l = 0; l < sp->nlobes; l++)
             p[3 + 5 * l] = l ? fmin(0.9, 5.0 * PBR_START_ALPHA[s]) : PBR_START_ALPHA[s];
