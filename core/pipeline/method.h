@@ -176,6 +176,12 @@ typedef struct method_fit_in {
      * may reuse what it kept for samples whose values did not change even
      * in a repainted view (a brush stroke changes a few spans). */
     const samples_change *values_change;
+    /* Optional (NULL: none), for methods with method.fits_held: per sample
+     * of s, 1 where the fit leaves the sample's value out (it is held out
+     * to judge the material on); its value is then never read, and the
+     * errors the fit reports are over the others.  The levels are those of
+     * every sample, so predict gives the held-out ones their values. */
+    const unsigned char *held;
 } method_fit_in;
 
 /* ---- the material ------------------------------------------------------------------------ */
@@ -279,6 +285,7 @@ typedef struct method {
      * coefficients.exr) and "spatial" (how a material's colour varies,
      * spatial.exr). */
     const char *const *surface;
+    int fits_held;                /* 1: fit honours method_fit_in.held */
     int chooses;                  /* 1: fits other methods and keeps the one the painting
                                      needs (the studio starts on it) */
     const char *reference;        /* the paper, or NULL */
@@ -316,7 +323,8 @@ typedef struct method {
                    glint_err *err);
     const material_ops *mat;
     /* Whether a held-out measurement (one precomputation per painted view,
-     * in the background) is affordable with these parameters (NULL: yes). */
+     * or one of every view with fits_held; in the background) is affordable
+     * with these parameters (NULL: yes). */
     int (*holdout_ok)(const void *params);
     /* An upper bound of the memory a fit with these parameters takes for
      * nsamples samples, every level built (pattern included), in bytes: what

@@ -714,6 +714,23 @@ int prep_fit(const prep *p, const img *paintings, const float *rgb, material *ou
     return prep_fit_reusing(p, paintings, rgb, NULL, NULL, out, NULL, err);
 }
 
+int prep_fit_held(const prep *p, const float *rgb, const unsigned char *held, material *out,
+                  glint_err *err)
+{
+    const void *levels[METHOD_MAX_LEVELS];
+    const char *keys[METHOD_MAX_LEVELS];
+    cache_disk disk[METHOD_MAX_LEVELS];
+    method_fit_in in;
+
+    memset(out, 0, sizeof *out);
+    if (!p->m->fits_held)
+        return glint_err_set(err, GLINT_EINVAL, "method %s cannot leave samples out of a fit",
+                             p->m->name);
+    fit_in_of(p, rgb, levels, keys, disk, &in);
+    in.held = held;
+    return p->m->fit(&in, out, err);
+}
+
 /* The most a memo keeps of a pattern's painted values (3 n floats): 16
  * MiB, 1.4 million samples (12 views of 256x256 of the built-in sphere
  * hold 393,512: 4.7 MB).  Larger patterns gather every view each fit. */

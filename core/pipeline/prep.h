@@ -113,6 +113,14 @@ int prep_try_samples(cache *c, const method *m, const void *params, const sample
 int prep_fit(const prep *p, const img *paintings, const float *rgb, material *out,
              glint_err *err);
 
+/* A fit of values rgb (3 n, as prep_fit's) that leaves the samples where
+ * held[i] out (method_fit_in.held: their values are not read), on the
+ * preparation of every sample, so that prep_predict then gives the held
+ * ones the material's values.  GLINT_EINVAL when the method does not
+ * honour it (method.fits_held). */
+int prep_fit_held(const prep *p, const float *rgb, const unsigned char *held, material *out,
+                  glint_err *err);
+
 /* What a fit reports, typed: the figures a service records and shows,
  * read here once from the preparation and from the method's info, and the
  * method's own JSON for the material document, which a service passes on
@@ -208,8 +216,9 @@ int prep_sample_counts(const scene *sc, long *per_view, long *total, glint_err *
  * samples of every painted view, e.g. prep_samples() of the fit being
  * measured), fit the other views' samples (samples_subset: the pattern
  * those views alone make; a precomputation of its own in a private cache,
- * nothing kept) and measure the RMS error on view k's samples against its
- * painting; the pooled RMS over all held-out pixels is the result.  Needs
+ * nothing kept; a method with fits_held fits them on one preparation of
+ * every sample with view k's left out, prep_fit_held) and measure the RMS
+ * error on view k's samples against its painting; the pooled RMS over all held-out pixels is the result.  Needs
  * 2 used views or more.  `cancelled` (may be NULL) is asked between views
  * (it may wait there, e.g. for a quiet moment), `cancel` (may be NULL) by
  * the views' builds (cancel.h); either stops it with GLINT_ECANCELLED;

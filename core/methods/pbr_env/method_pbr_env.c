@@ -302,25 +302,74 @@ static const method_level pbr_env_levels[LV_N] = {
 
 /* The rows' painted radiance over the environment's intensity (OUT y[3 n])
  * and views (OUT view[n]); GLINT_ENONFINITE names a painted value that is
- * not finite (any sample's, fitted or not). */
+ * not finite (any sample's, fitted or not, but those held out: their
+ * values are not read). */
 static int rows_target(const method_fit_in *in, float *y, int *view, glint_err *err)
 {
     const pbr_env_params *pp = in->params;
     const srbf_visdata *vd = in->levels[LV_ROWS];
     const samples *s = in->s;
     for (long i = 0; i < 3L * s->n; i++)
-        if (!isfinite(in->rgb[i]))
+        if ((!in->held || !in->held[i / 3]) && !isfinite(in->rgb[i]))
             return glint_err_set(err, GLINT_ENONFINITE, "pbr_env: painted value %ld is not finite",
                                  i / 3);
     for (int i = 0; i < vd->nrows; i++) {
         int si = vd->rows[i];
         for (int c = 0; c < 3; c++)
             y[3 * (size_t)i + c] =
-                (float)((double)in->rgb[3 * (size_t)si + c] * s->intensity[si] /
-                        pp->env.env_intensity);
+                in->held && in->held[si]
+                    ? 0.0f
+                    : (float)((double)in->rgb[3 * (size_t)si + c] * s->intensity[si] /
+                              pp->env.env_intensity);
         view[i] = s->view[si];
     }
     return 0;
+}
+
+/* The rows the fit reads: every one, or (in->held) those not held out,
+ * copied (OUT: *g, *y and *view point at the copies, kept in own, or at
+ * the callers' arrays). */
+typedef struct rows_kept {
+    pbr_geom g;
+    float *y;
+    int *view;
+} rows_kept;
+
+static int rows_keep(const method_fit_in *in, const pbr_env_terms *x, const float *y,
+                     const int *view, rows_kept *own, const pbr_geom **g, const float **yk,
+                     const int **vk)
+{
+    const srbf_visdata *vd = in->levels[LV_ROWS];
+    unsigned char *take;
+    int n = x->g.n, rc;
+    *g = &x->g;
+    *yk = y;
+    *vk = view;
+    if (!in->held)
+        return 0;
+    if (!(take = malloc((size_t)(n ? n : 1))) ||
+        !(own->view = malloc(sizeof(int) * (size_t)(n ? n : 1)))) {
+        free(take);
+        return GLINT_ENOMEM;
+    }
+    for (int i = 0, k = 0; i < n; i++)
+        if ((take[i] = !in->held[vd->rows[i]]))
+            own->view[k++] = view[i];
+    rc = pbr_geom_pick(&x->g, y, take, &own->g, &own->y);
+    free(take);
+    if (!rc) {
+        *g = &own->g;
+        *yk = own->y;
+        *vk = own->view;
+    }
+    return rc;
+}
+
+static void rows_kept_free(rows_kept *own)
+{
+    pbr_geom_free(&own->g);
+    free(own->y);
+    free(own->view);
 }
 
 /* The report: params, precomputation, seconds, errors in the painting's
@@ -369,6 +418,10 @@ static int pbr_env_fit(const method_fit_in *in, material *out, glint_err *err)
     pbr_fit_result *r = malloc(sizeof *r);
     pbr_material *pm = NULL;
     json_t *info = NULL;
+    rows_kept own = {0};
+    const pbr_geom *g;
+    const float *yk;
+    const int *vk;
 
     if (!y || !view || !r) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
@@ -376,12 +429,16 @@ static int pbr_env_fit(const method_fit_in *in, material *out, glint_err *err)
     }
     if ((rc = rows_target(in, y, view, err)))
         goto done;
+    if ((rc = rows_keep(in, x, y, view, &own, &g, &yk, &vk))) {
+        rc = glint_err_set(err, rc, "out of memory");
+        goto done;
+    }
     {
         pbr_fit_opts o = {.starts = pp->pbr.starts, .max_iter = pp->pbr.max_iter,
                           .start_iter = pp->pbr.start_iter,
                           .subset = pp->pbr.start_samples, .refine = pp->pbr.refine_samples,
-                          .view = view};
-        if ((rc = pbr_fit(&sp, &x->g, y, &o, r, err)))
+                          .view = vk};
+        if ((rc = pbr_fit(&sp, g, yk, &o, r, err)))
             goto done;
     }
     if (!(pm = calloc(1, sizeof *pm)) || !(info = fit_report(in, &sp, r, glint_now() - t0))) {
@@ -389,11 +446,14 @@ static int pbr_env_fit(const method_fit_in *in, material *out, glint_err *err)
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
+    if (in->held)
+        json_object_set_new(info, "rows_held_out", json_integer(n - g->n));
     pm->sp = sp;
     memcpy(pm->p, r->p, sizeof pm->p);
     pbr_material_sync(pm);
     material_init(out, &method_pbr_env, pm, info);
 done:
+    rows_kept_free(&own);
     free(y);
     free(view);
     free(r);
@@ -475,8 +535,9 @@ static double pbr_env_fit_seconds(const void *params, long nsamples)
     return s;
 }
 
-/* A held-out measurement makes the terms of each painted view and of the
- * others: affordable on a fit grid, not on every pixel. */
+/* A held-out measurement (prep_holdout) makes the terms of every painted
+ * view once and fits each view's leave-out on them (fits_held):
+ * affordable on a fit grid, not on every pixel. */
 static int pbr_env_holdout_ok(const void *params)
 {
     return ((const pbr_env_params *)params)->env.raster.w > 0;
@@ -491,6 +552,7 @@ const method method_pbr_env = {
         "material that holds up under other light and from other views.",
     .lighting = METHOD_LIGHT_ENV,
     .shows = METHOD_SHOWS_NONE,
+    .fits_held = 1,
     .title = "Physically based parametric BRDF (Lambert + GGX) fitted under environment light",
     .reference = "Walter, Marschner, Li & Torrance, Microfacet Models for Refraction through "
                  "Rough Surfaces, 2007; the environment's lights and visibility as in "

@@ -660,14 +660,10 @@ static const method_level srbf_levels[] = {
      .load = srbf_transfer_level_load, .save = srbf_transfer_level_save},
 };
 
-/* The leave-one-view-out measurement of prep.h predicts a held-out view
- * with the material under the view's point light; this method's views are
- * lit by the environment, so that measurement would not mean anything.
- * New views and rotations are measured by tests/unit/test_srbf_fit.c and
- * tests/bench/bench_srbf.c instead. */
-/* A held-out measurement precomputes two transfer levels per painted view
- * (the other views', and the view's own): affordable on a fit grid, not on
- * every pixel. */
+/* A held-out measurement (prep_holdout) prepares every painted sample
+ * once and fits each view's leave-out on it (fits_held), predicting the
+ * left-out view under the environment (srbf_predict): one transfer level
+ * of every painted view, affordable on a fit grid, not on every pixel. */
 static int srbf_holdout_ok(const void *params)
 {
     return ((const srbf_params *)params)->raster.w > 0;
@@ -727,6 +723,7 @@ const method method_srbf = {
     .when = "Use it when you paint how the object looks under an environment (sky, "
         "studio, an HDR map) rather than under a point light.",
     .lighting = METHOD_LIGHT_ENV,
+    .fits_held = 1,
     .shows = METHOD_SHOWS_LOBES,
     .title = "Spherical-Gaussian distribution BRDF under environment light",
     .reference = "Iwasaki, Dobashi, Yoshimoto & Nishita, Interactive BRDF Modeling under "

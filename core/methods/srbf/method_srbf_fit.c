@@ -89,13 +89,25 @@ static void chan_target(chan_job *j, double rho, double *ff)
 
     for (int i = 0; i < n; i++) {
         int si = vd->rows[i];
-        f[i] = (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
+        /* a held-out row is left out: b = 0 there adds nothing to T'b, E'b
+         * or b'b, and its T and E are taken out of H (chan_gram_held) */
+        f[i] = in->held && in->held[si]
+                   ? 0.0
+                   : (double)in->rgb[3 * (size_t)si + ch] * s->intensity[si] / p->env_intensity;
     }
     j->rep.tb_rows = srbf_painted_tb((srbf_transfer_data *)tr, ch, f, q);
     for (int a = 0; a < nr && rho != 0.0; a++)
         q[a] -= rho * TE[idx[a]];
+    for (int i = 0; i < n && rho != 0.0 && in->held; i++) /* T'E over the rows read */
+        if (in->held[vd->rows[i]]) {
+            const float *t = tr->T + ((size_t)ch * n + i) * J;
+            for (int a = 0; a < nr; a++)
+                q[a] += rho * t[idx[a]] * tr->E[3 * (size_t)i + ch];
+        }
     for (int i = 0; i < n; i++) {
         double b = f[i];
+        if (in->held && in->held[vd->rows[i]])
+            continue; /* f = 0: no residual there */
         f[i] = b - rho * tr->E[3 * (size_t)i + ch];
         sum += f[i] * f[i];
         j->ss_b += b * b;
@@ -104,7 +116,8 @@ static void chan_target(chan_job *j, double rho, double *ff)
 }
 
 /* The smoothness term's weight: the parameter times the mean diagonal of
- * the channel's Gram matrix over the reached lobes (0: no term). */
+ * the channel's Gram matrix over the reached lobes (of the rows the fit
+ * reads; 0: no term). */
 static double chan_smooth_weight(const chan_job *j)
 {
     const srbf_params *p = j->in->params;
@@ -114,7 +127,48 @@ static double chan_smooth_weight(const chan_job *j)
     double trace = 0.0;
     for (int a = 0; a < nr; a++)
         trace += Hc[(size_t)tr->idx[a] * J + tr->idx[a]];
+    if (j->in->held) { /* the Gram matrix of the rows read */
+        const srbf_visdata *vd = j->in->levels[2];
+        for (int i = 0; i < tr->nrows; i++)
+            if (j->in->held[vd->rows[i]]) {
+                const float *t = tr->T + ((size_t)j->ch * tr->nrows + i) * J;
+                for (int a = 0; a < nr; a++)
+                    trace -= (double)t[tr->idx[a]] * t[tr->idx[a]];
+            }
+    }
     return p->smooth > 0.0 ? p->smooth * trace / nr : 0.0;
+}
+
+/* H less the held-out rows' part (method_fit_in.held): each held row's
+ * t t' on the reached lobes, and when the diffuse albedo is fitted its
+ * t E and E^2, so that H is the Gram matrix of the rows the fit reads. */
+static void chan_gram_held(const chan_job *j, double *H)
+{
+    const srbf_params *p = j->in->params;
+    const srbf_visdata *vd = j->in->levels[2];
+    const srbf_transfer_data *tr = j->in->levels[3];
+    int J = tr->J, n = tr->nrows, nr = tr->nreach, ch = j->ch, nu = j->nu;
+    const int *idx = tr->idx;
+    for (int i = 0; i < n; i++) {
+        const float *t = tr->T + ((size_t)ch * n + i) * J;
+        double e = tr->E[3 * (size_t)i + ch];
+        if (!j->in->held[vd->rows[i]])
+            continue;
+        for (int a = 0; a < nr; a++) {
+            double ta = t[idx[a]];
+            if (ta == 0.0)
+                continue;
+            for (int b = 0; b < nr; b++)
+                H[(size_t)a * nu + b] -= ta * t[idx[b]];
+        }
+        if (p->diffuse.fit) {
+            for (int a = 0; a < nr; a++) {
+                H[(size_t)a * nu + nr] -= t[idx[a]] * e;
+                H[(size_t)nr * nu + a] -= t[idx[a]] * e;
+            }
+            H[(size_t)nr * nu + nr] -= e * e;
+        }
+    }
 }
 
 /* H over the unknowns.  It is the same for every painting with these
@@ -134,7 +188,7 @@ static const double *chan_gram(chan_job *j, double smu)
     const double *Hk;
     double *H;
 
-    if ((Hk = srbf_kept_gram((srbf_transfer_data *)tr, p->smooth, fitd, ch)))
+    if (!j->in->held && (Hk = srbf_kept_gram((srbf_transfer_data *)tr, p->smooth, fitd, ch)))
         return Hk;
     if (!(H = j->H = malloc((size_t)nu * nu * sizeof *H))) {
         j->rc = glint_err_set(&j->err, GLINT_ENOMEM, "out of memory for the fit (%d unknowns)",
@@ -152,6 +206,8 @@ static const double *chan_gram(chan_job *j, double smu)
             H[(size_t)a * nu + nr] = H[(size_t)nr * nu + a] = TE[idx[a]];
         H[(size_t)nr * nu + nr] = tr->EE[ch];
     }
+    if (j->in->held)
+        chan_gram_held(j, H);
     return H;
 }
 
@@ -189,7 +245,10 @@ static void chan_problem(chan_job *j, double rho, double ff, lsq_problem *pr)
     /* the level keeps the factor of this H (the same for every repaint with
      * these parameters); the level is shared and otherwise read-only, the
      * factors behind its own lock */
-    {
+    if (j->in->held) { /* H of the rows read: a factor of its own, not kept */
+        pr->R0 = NULL;
+        j->rep.factor = "none";
+    } else {
         int kept = 0;
         pr->R0 = srbf_kept_factor((srbf_transfer_data *)tr, p->smooth, fitd, ch, pr->H, nu, &kept);
         j->rep.factor = kept ? "kept" : pr->R0 ? "made" : "none";
@@ -251,7 +310,7 @@ static void chan_solve(chan_job *j)
     }
     if (j->rep.r.status == LSQ_INFEASIBLE)
         return;
-    if (j->rep.r.status == LSQ_OK && p->constraints != LSQ_NONE)
+    if (j->rep.r.status == LSQ_OK && p->constraints != LSQ_NONE && !j->in->held)
         srbf_kept_answer((srbf_transfer_data *)tr, p->smooth, fitd, ch, nu, c);
     for (int a = 0; a < nr; a++)
         j->csm[(size_t)ch * J + tr->idx[a]] = c[a];
@@ -415,12 +474,19 @@ static json_t *errors_json(const method_fit_in *in, const fit_sums *fs, json_t *
 {
     const srbf_params *p = in->params;
     const srbf_transfer_data *tr = in->levels[3];
-    int n = tr->nrows;
-    json_t *errs = json_pack("{s:f, s:f, s:f, s:o}", "rel_rms_painted",
+    const srbf_visdata *vd = in->levels[2];
+    int n = tr->nrows, held = 0;
+    json_t *errs;
+    for (int i = 0; i < tr->nrows && in->held; i++)
+        held += in->held[vd->rows[i]] != 0;
+    n -= held; /* the rows the fit read */
+    errs = json_pack("{s:f, s:f, s:f, s:o}", "rel_rms_painted",
                              fs->ss_b > 0.0 ? sqrt(fs->ss_res / fs->ss_b) : 0.0, "rms_painted",
-                             sqrt(fs->ss_res / (3.0 * n)), "albedo_max_rows", fs->max_albedo,
-                             "channels", chans);
+                             n ? sqrt(fs->ss_res / (3.0 * n)) : 0.0, "albedo_max_rows",
+                             fs->max_albedo, "channels", chans);
     json_t *bins = json_array(), *alb = json_array();
+    if (in->held)
+        json_object_set_new(errs, "rows_held_out", json_integer(held));
     for (int b = 0; b < NPROF; b++) {
         json_array_append_new(bins, json_pack("[f,f]", prof_edges[b], prof_edges[b + 1]));
         json_array_append_new(alb, fs->prof[b][0] < 0.0
