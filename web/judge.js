@@ -611,7 +611,7 @@ export class Judge extends EventTarget {
     const sm = document.createElement('summary'); sm.textContent = 'advanced';
     const body = document.createElement('div'); body.textContent = tech.join(' · ');
     if (mat.choice && mat.choice.candidates)
-      body.textContent += ' · candidates (held-out RMS): ' + mat.choice.candidates.map(x => `${x.method} ${fmtErr(x.held_out_rms)}`).join(', ');
+      body.textContent += ' · candidates (held-out RMS): ' + mat.choice.candidates.map(x => `${x.label || x.method} (${x.method}) ${fmtErr(x.held_out_rms)}`).join(', ');
     adv.append(sm, body);
     box.appendChild(adv);
     if (!(this.session.scene.width === this.session.scene.height)) box.append('per-view errors need a square raster (previews are square)');
@@ -623,10 +623,11 @@ export class Judge extends EventTarget {
     const div = document.createElement('div');
     div.id = 'auto-choice'; div.className = 'small';
     const name = x => (methodNamed(x) || { label: x }).label;
-    const b = document.createElement('b'); b.textContent = name(c.chosen);
+    // a candidate's own label first: one method may be tried in several forms
+    const b = document.createElement('b'); b.textContent = c.chosen_label || name(c.chosen);
     const on = c.held_out === 'views' ? 'views' : 'parts of the painting';
     div.append('Chose ', b, `: the error of each on ${on} it did not see — `,
-      c.candidates.map(x => `${name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
+      c.candidates.map(x => `${x.label || name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
     const why = document.createElement('span');
     why.className = 'muted'; why.title = c.rule || '';
     why.textContent = `(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)`;

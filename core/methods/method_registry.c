@@ -2,6 +2,7 @@
  * /api/v1/methods lists them (the first is the default).  Adding a method
  * is one line here (and its core file). */
 #include "method_auto.h"
+#include "method_auto_env.h"
 #include "method_hf2d.h"
 #include "method_hf3.h"
 #include "method_hf4.h"
@@ -25,5 +26,6 @@ const method *const method_builtin[] = {
     &method_maps,
     &method_hybrid,
     &method_auto,
+    &method_auto_env,
     NULL,
 };

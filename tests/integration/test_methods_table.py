@@ -113,7 +113,9 @@ def test_methods_say_what_they_are_for(d):
             if p["group"] == "basic":
                 assert not named.search(p["label"]), (m["name"], p["name"], p["label"])
     by = {m["name"]: m for m in api}
-    assert [m["name"] for m in api if m["chooses"]] == ["auto"]
+    # one method that chooses for each lighting
+    assert [(m["name"], m["lighting"]) for m in api if m["chooses"]] == [
+        ("auto", "point"), ("auto_env", "environment")]
     assert by["srbf"]["lighting"] == "environment" and by["srbf"]["shows"] == "lobes"
     assert by["hf3"]["lighting"] == "point" and by["hf3"]["shows"] == "factors"
     assert by["maps"]["surface"] == ["coefficients"] and by["hf4"]["surface"] == ["spatial"]

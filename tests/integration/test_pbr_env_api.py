@@ -5,7 +5,10 @@ manifest (a pbr material: diffuse, lobes, what the views determine), its
 levels (srbf's lights and rows, and its own terms), a warm refit, its
 evaluation, shader, preview and exports, the held-out error of each painted
 view rendered under the environment, the parameter checks, and the warning
-when the scene's base renders are lit by lamps."""
+when the scene's base renders are lit by lamps.  Then the choice among the
+methods lit by an environment (auto_env) on the same session: its
+candidates, the held-out view, the material it keeps, and the choice lit by
+lamps (auto) refused there, naming auto_env."""
 import json
 import os
 import subprocess
@@ -162,6 +165,37 @@ def test_06_lamp_lit_scene_gets_a_warning(d):
     assert r.status_code in (201, 202), r.text
     w = r.json().get("warnings")
     assert w and "point lights" in w[0], r.json()
+
+
+def test_07_auto_env_chooses_among_the_environment_methods(d):
+    r = post_fit(d, S["session"], S["paint"], {"method": "auto_env", "params": PARAMS})
+    assert "warnings" not in r.json(), r.json()
+    m = material_of(d, r)
+    c = m["choice"]
+    # the candidates: pbr_env in three forms and srbf, never a point-light method
+    assert [x["method"] for x in c["candidates"]] == ["pbr_env"] * 3 + ["srbf"], c
+    assert c["candidates"][0]["taken"] is True and c["held_out"] == "views"
+    # of the two painted views the second is held out whole
+    assert c["held_out_views"] == [5], c
+    held = [x["held_out_rms"] for x in c["candidates"]]
+    print("  auto_env held out: " + ", ".join("%s %.4g" % (x["label"], x["held_out_rms"])
+                                              for x in c["candidates"]))
+    assert all(h >= 0 and x["held_out_samples"] > 0 for h, x in zip(held, c["candidates"]))
+    chosen = [i for i, x in enumerate(c["candidates"]) if x["taken"]][-1]
+    assert held[chosen] <= held[0], held
+    assert c["chosen"] == c["candidates"][chosen]["method"]
+    assert c["chosen_label"] == c["candidates"][chosen]["label"]
+    man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=tok(S["view"]),
+                status=200).json()
+    assert man["method"] == c["chosen"], man["method"]
+    # every level under the key of a direct fit: pbr_env's were made above
+    lv = m["precomputation"]["cache"]["levels"]["pbr-env-terms"]
+    own = S["material"]["precomputation"]["cache"]["levels"]["pbr-env-terms"]
+    assert lv["key"] == own["key"] and lv["memory"] == "hit", (lv, own)
+    # the choice lit by lamps is refused on this scene, naming auto_env
+    r = post_fit(d, S["session"], S["paint"], {"method": "auto"})
+    assert r.status_code == 422 and "lighting-mismatch" in r.text and "auto_env" in r.text, \
+        r.text
 
 
 run_tests(globals())

@@ -20,6 +20,7 @@ static const char *const method_small[][2] = {
     {"maps", "res=8,components=2,map_res=16,rounds=2"},
     {"hybrid", "res=8,s_res=4,components=2,map_res=16,rounds=2"},
     {"auto", "res=8,s_res=4,res_2d=8,components=2"},
+    {"auto_env", "lights=8"},
 };
 #define METHOD_SMALL_N ((int)(sizeof method_small / sizeof *method_small))
 

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "internal/auto_split.h"
 #include "clock.h"
 #include "method_hf2d.h"
 #include "method_hf3.h"
@@ -145,12 +146,8 @@ typedef struct split {
     unsigned char held_view[SCENE_MAX_VIEWS];  /* HELD_* per view */
 } split;
 
-/* Held out by pixel (one view painted): tiles of HELD_TILE x HELD_TILE
- * pixels, one in `every` by a hash of the tile, so the split is the same
- * for every painting of a pattern and a spatial model cannot fill a held
- * pixel from painted neighbours a pixel away. */
 #define HELD_TILE 8
-static int pixel_held(int view, int pixel, int width, int every)
+int auto_pixel_held(int view, int pixel, int width, int every)
 {
     unsigned h = (unsigned)view << 24 ^ (unsigned)(pixel / width / HELD_TILE) << 12 ^
                  (unsigned)(pixel % width / HELD_TILE);
@@ -235,9 +232,9 @@ static int split_build(const method_build_in *in, cache_value *out, glint_err *e
     }
     x->by_views = held_views(s, p->every, x->held_view);
     for (int i = 0; i < s->n; i++) {
+        int px = auto_pixel_held(s->view[i], s->pixel[i], s->width, p->every);
         x->held[i] = x->by_views ? x->held_view[s->view[i]]
-                                 : (unsigned char)(pixel_held(s->view[i], s->pixel[i], s->width,
-                                                              p->every) ? HELD_NEW : HELD_NO);
+                                 : (unsigned char)(px ? HELD_NEW : HELD_NO);
         keep[i] = !x->held[i];
         x->nheld += !!x->held[i];
     }

@@ -1,0 +1,595 @@
+/* method_auto_env.c: "auto_env", the model a painting made under an
+ * environment requires (method_auto_env.h). */
+#include "method_auto_env.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clock.h"
+#include "internal/auto_split.h"
+#include "method_pbr_env.h"
+#include "method_srbf.h"
+#include "scene.h"
+
+#define ENVP(m) offsetof(auto_env_params, env.m)
+
+static const method_param auto_env_params_table[] = {
+    {.name = "env", .label = "environment", .type = METHOD_PARAM_TEXT,
+     .affects = "precomputation",
+     .description = "the environment lighting the painted views: a built-in (studio, sky, "
+                    "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID "
+                    "of POST /api/v1/environments; the command line reads a map by its path "
+                    "instead (file:PATH)",
+     .offset = ENVP(env), .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
+     .examples = srbf_env_examples, .parse = srbf_env_parse, .format = srbf_env_format},
+    {.name = "env_rotation", .label = "environment turned (degrees)",
+     .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
+     .description = "rotation of the environment about the up (+z) axis, degrees",
+     .offset = ENVP(env_rotation), .min = -360.0, .max = 360.0},
+    {.name = "env_intensity", .label = "environment brightness", .type = METHOD_PARAM_NUMBER,
+     .affects = "fit",
+     .description = "scale of the environment's radiance (the painting is divided by it)",
+     .offset = ENVP(env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
+     .max = SRBF_MAX_ENV_INTENSITY},
+    {.name = "lights", .label = "light samples of the environment",
+     .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
+     .description = "lights the environment is compressed into (median cut), for every "
+                    "candidate: a fit's time grows linearly with it",
+     .offset = ENVP(lights), .min = 1, .max = 4096},
+    {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED,
+     .type = METHOD_PARAM_ENUM, .affects = "precomputation",
+     .description = "shadows of the object on itself: auto casts rays unless the mesh is "
+                    "convex",
+     .offset = ENVP(visibility), .values = srbf_vis_values},
+    {.name = "threshold", .label = "how much better a richer model must be",
+     .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "a later candidate is taken only when it lowers the held-out RMS by more "
+                    "than this fraction of the current choice's",
+     .offset = offsetof(auto_env_params, threshold), .min = 0.0, .max = 1.0},
+    {.name = "floor", .label = "smallest gain that counts", .group = METHOD_GROUP_ADVANCED,
+     .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "nor by less than this (held-out RMS, the painting's units): below it a "
+                    "gain is within an 8-bit painting's quantization",
+     .offset = offsetof(auto_env_params, floor), .min = 0.0, .max = 1.0},
+    {.name = "every", .label = "views held out (one in)", .group = METHOD_GROUP_ADVANCED,
+     .type = METHOD_PARAM_INT, .affects = "fit",
+     .description = "one painted view in this many (one pixel tile, when one view is "
+                    "painted) is held out to judge the candidates, which are fitted to the "
+                    "rest",
+     .offset = offsetof(auto_env_params, every), .min = 2, .max = 64},
+};
+
+static const method_preset auto_env_presets[] = {
+    {"draft", "{\"lights\": 64}"},
+    {"default", "{\"lights\": 256}"},
+};
+
+static void auto_env_params_default(void *params)
+{
+    auto_env_params *p = params;
+    memset(p, 0, sizeof *p);
+    method_srbf.params_default(&p->env);
+    p->threshold = 0.1;
+    p->floor = 1.0 / 255.0 / 4.0;
+    /* with the usual 3 painted views, the third is held out and two kept */
+    p->every = 4;
+}
+
+static int auto_env_params_usable(const void *p, const method_source *src, const char **param,
+                                  glint_err *err)
+{
+    return method_srbf.params_usable(&((const auto_env_params *)p)->env, src, param, err);
+}
+
+/* ---- the candidates ------------------------------------------------------------------ */
+
+enum { C_PBR, C_PBR_METAL, C_PBR_TWO, C_SRBF, NCAND };
+
+typedef struct cands {
+    pbr_env_params pe[3];  /* C_PBR, C_PBR_METAL, C_PBR_TWO */
+    srbf_params sr;
+} cands;
+
+static const char *const cand_label[NCAND] = {
+    "Physically based, under an environment",
+    "Physically based metal, under an environment",
+    "Physically based with two highlights, under an environment",
+    "Environment lobes (SRBF)",
+};
+
+/* What auto_env gives every candidate: the light the views were painted
+ * under, the lights it is compressed into (every candidate's default is
+ * 256) and whether the object shadows itself. */
+static void env_give(const srbf_params *from, srbf_params *to)
+{
+    memcpy(to->env, from->env, sizeof to->env);
+    to->env_rotation = from->env_rotation;
+    to->env_intensity = from->env_intensity;
+    to->lights = from->lights;
+    to->visibility = from->visibility;
+}
+
+static void candidates(const auto_env_params *p, cands *c)
+{
+    for (int k = 0; k < 3; k++) {
+        method_pbr_env.params_default(&c->pe[k]);
+        env_give(&p->env, &c->pe[k].env);
+    }
+    c->pe[C_PBR_METAL].pbr.fresnel = PBR_CONDUCTOR;
+    c->pe[C_PBR_TWO].pbr.lobes = 2;
+    method_srbf.params_default(&c->sr);
+    env_give(&p->env, &c->sr);
+}
+
+static const method *cand_method(int c)
+{
+    return c == C_SRBF ? &method_srbf : &method_pbr_env;
+}
+
+static const void *cand_params(const cands *cs, int c)
+{
+    return c == C_SRBF ? (const void *)&cs->sr : (const void *)&cs->pe[c];
+}
+
+/* ---- levels: pbr_env's three, then srbf's four, each as a fit of its own keys it ----- */
+
+enum { LV_PE = 0, LV_SR = 3, LV_N = 7 };
+
+/* Level L of auto_env: its method, that method's level and its first
+ * level's index here (the candidate's levels lie in order from it). */
+static const method *lv_method(int L, int *k, int *first)
+{
+    *first = L < LV_SR ? LV_PE : LV_SR;
+    *k = L - *first;
+    return L < LV_SR ? &method_pbr_env : &method_srbf;
+}
+
+/* The key of level L: the candidate's own chain of keys from the pattern's
+ * hash (prev_key, auto_env's level before, is not the candidate's). */
+static void lv_key(int L, const void *params, const samples *s, char *key, size_t len)
+{
+    cands cs;
+    int k, first;
+    const method *m = lv_method(L, &k, &first);
+    const void *cp;
+    char prev[CACHE_KEY_MAX];
+    candidates(params, &cs);
+    cp = m == &method_srbf ? (const void *)&cs.sr : (const void *)&cs.pe[C_PBR];
+    snprintf(prev, sizeof prev, "%s", s->hash);
+    for (int j = 0; j <= k; j++) {
+        m->levels[j].key(cp, s, prev, key, len);
+        snprintf(prev, sizeof prev, "%s", key);
+    }
+}
+
+#define LV_KEY(L)                                                                             \
+    static void key_##L(const void *params, const samples *s, const char *prev_key, char *key,\
+                        size_t len)                                                           \
+    {                                                                                         \
+        (void)prev_key;                                                                       \
+        lv_key(L, params, s, key, len);                                                       \
+    }
+LV_KEY(0)
+LV_KEY(1)
+LV_KEY(2)
+LV_KEY(3)
+LV_KEY(4)
+LV_KEY(5)
+LV_KEY(6)
+
+/* A candidate's build reports its own stages; auto_env's caller hears them
+ * as auto_env's level, the fraction mapped between that level's start and
+ * the next's (method_auto.c does the same). */
+typedef struct relay {
+    const method_build_in *in;
+    double from, to;
+} relay;
+
+static void relay_progress(void *cls, const char *stage, double fraction)
+{
+    const relay *r = cls;
+    (void)stage;
+    fraction = fraction < 0.0 ? 0.0 : fraction > 1.0 ? 1.0 : fraction;
+    r->in->progress(r->in->progress_cls, method_auto_env.levels[r->in->level].name,
+                    r->from + (r->to - r->from) * fraction);
+}
+
+/* What the candidate's level sees: its parameters, its levels before, its
+ * own index (OUT: c, cs holding the parameters). */
+static const method *lv_in(const method_build_in *in, cands *cs, method_build_in *c, int *k)
+{
+    int first;
+    const method *m = lv_method(in->level, k, &first);
+    candidates(in->params, cs);
+    *c = *in;
+    c->params = m == &method_srbf ? (const void *)&cs->sr : (const void *)&cs->pe[C_PBR];
+    c->prev = in->prev ? in->prev + first : NULL;
+    c->level = *k;
+    return m;
+}
+
+static int lv_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    const method_level *lv = method_auto_env.levels;
+    relay r = {in, lv[in->level].progress,
+               in->level + 1 < LV_N ? lv[in->level + 1].progress : 0.9};
+    method_build_in c;
+    cands cs;
+    int k;
+    const method *m = lv_in(in, &cs, &c, &k);
+    if (in->progress) {
+        c.progress = relay_progress;
+        c.progress_cls = &r;
+    }
+    return m->levels[k].build(&c, out, err);
+}
+
+static int lv_load(const method_build_in *in, const char *dir, const char *key,
+                   cache_value *out, glint_err *err)
+{
+    method_build_in c;
+    cands cs;
+    int k;
+    const method *m = lv_in(in, &cs, &c, &k);
+    return m->levels[k].load(&c, dir, key, out, err);
+}
+
+static int lv_save(const method_build_in *in, const char *dir, const char *key,
+                   const cache_value *v, glint_err *err)
+{
+    method_build_in c;
+    cands cs;
+    int k;
+    const method *m = lv_in(in, &cs, &c, &k);
+    return m->levels[k].save(&c, dir, key, v, err);
+}
+
+/* srbf's energy and transfer levels have a disk layer; the others none. */
+static const method_level auto_env_levels[LV_N] = {
+    {.name = "lights", .progress = 0.03, .key = key_0, .build = lv_build},
+    {.name = "rows", .progress = 0.08, .key = key_1, .build = lv_build},
+    {.name = "pbr-env-terms", .progress = 0.12, .key = key_2, .build = lv_build},
+    {.name = "energy", .progress = 0.2, .key = key_3, .build = lv_build, .load = lv_load,
+     .save = lv_save},
+    {.name = "srbf lights", .progress = 0.25, .key = key_4, .build = lv_build},
+    {.name = "srbf rows", .progress = 0.3, .key = key_5, .build = lv_build},
+    {.name = "transfer", .progress = 0.4, .key = key_6, .build = lv_build, .load = lv_load,
+     .save = lv_save},
+};
+
+/* ---- the split ------------------------------------------------------------------------- */
+
+/* The held-out samples (OUT held[n], 1 where held): whole views when two
+ * or more views hold samples (one in `every` of them, at least one, at
+ * least one kept), else pixel tiles.  1 when views are held out, 0 when
+ * pixels are; OUT held_view[v].  GLINT_EINVAL when nothing or everything
+ * would be held. */
+static int env_split(const samples *s, int every, unsigned char *held,
+                     unsigned char held_view[SCENE_MAX_VIEWS], int *by_views, glint_err *err)
+{
+    long cnt[SCENE_MAX_VIEWS] = {0}, nheld = 0;
+    int used[SCENE_MAX_VIEWS], nu = 0;
+    memset(held_view, 0, SCENE_MAX_VIEWS);
+    for (int i = 0; i < s->n; i++)
+        if (s->view[i] >= 0 && s->view[i] < SCENE_MAX_VIEWS)
+            cnt[s->view[i]]++;
+    for (int v = 0; v < s->nviews && v < SCENE_MAX_VIEWS; v++)
+        if (s->used[v] && cnt[v] > 0)
+            used[nu++] = v;
+    *by_views = nu >= 2;
+    for (int k = 0, nh = 0; k < nu && *by_views; k++)
+        if (k % every == every / 2 || (nh == 0 && k == nu - 1)) {
+            held_view[used[k]] = 1;
+            nh++;
+        }
+    for (int i = 0; i < s->n; i++) {
+        held[i] = *by_views ? held_view[s->view[i]]
+                            : (unsigned char)auto_pixel_held(s->view[i], s->pixel[i], s->width,
+                                                             every);
+        nheld += held[i];
+    }
+    if (nheld < 1 || nheld == s->n)
+        return glint_err_set(err, GLINT_EINVAL,
+                             "%d painted samples are too few to hold one in %d out: paint more "
+                             "views or use a method directly", s->n, every);
+    return 0;
+}
+
+/* ---- the fit --------------------------------------------------------------------------- */
+
+/* Candidate c's fit on auto_env's levels (its own in order), held-out
+ * samples left out when held is not NULL. */
+static void cand_in(const method_fit_in *in, int c, const cands *cs, const unsigned char *held,
+                    method_fit_in *ci, const void **lv, const char **ky, cache_how *how,
+                    double *spent, cache_disk *disk)
+{
+    int first = c == C_SRBF ? LV_SR : LV_PE, nlv = cand_method(c)->nlevels;
+    for (int l = 0; l < nlv; l++) {
+        lv[l] = in->levels[first + l];
+        ky[l] = in->keys[first + l];
+        how[l] = in->how[first + l];
+        spent[l] = in->spent[first + l];
+        disk[l] = in->disk[first + l];
+    }
+    *ci = *in;
+    ci->params = cand_params(cs, c);
+    ci->memo = NULL; /* values held out are auto_env's choosing */
+    ci->view_tags = NULL;
+    ci->values_change = NULL;
+    ci->held = held;
+    ci->levels = lv;
+    ci->keys = ky;
+    ci->how = how;
+    ci->spent = spent;
+    ci->disk = disk;
+}
+
+/* What each candidate scored. */
+typedef struct scores {
+    double held[NCAND], painted[NCAND], secs[NCAND];
+    long nheld[NCAND];
+} scores;
+
+/* The RMS of candidate c's material m on the held-out samples it models
+ * (its prediction, against the painting, in the painting's units). */
+static int held_rms(const method_fit_in *ci, int c, const material *m,
+                    const unsigned char *held, double *rms, long *count, glint_err *err)
+{
+    const samples *s = ci->s;
+    float *pred = malloc((size_t)3 * (s->n ? s->n : 1) * sizeof *pred);
+    double ss = 0.0;
+    long cnt = 0;
+    int rc;
+    if (!pred)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    if (!(rc = cand_method(c)->predict(ci, m, pred, err)))
+        for (int i = 0; i < s->n; i++) {
+            if (!held[i] || isnan(pred[3 * (size_t)i]))
+                continue;
+            for (int ch = 0; ch < 3; ch++) {
+                double d = (double)pred[3 * (size_t)i + ch] -
+                           (double)ci->rgb[3 * (size_t)i + ch] * s->intensity[i];
+                ss += d * d;
+            }
+            cnt++;
+        }
+    free(pred);
+    *rms = cnt ? sqrt(ss / (3.0 * cnt)) : INFINITY;
+    *count = cnt;
+    return rc;
+}
+
+/* Fit candidate c (held: samples left out, NULL none) into out. */
+static int fit_cand(const method_fit_in *in, int c, const cands *cs, const unsigned char *held,
+                    material *out, glint_err *err)
+{
+    method_fit_in ci;
+    const void *lv[METHOD_MAX_LEVELS];
+    const char *ky[METHOD_MAX_LEVELS];
+    cache_how how[METHOD_MAX_LEVELS];
+    double spent[METHOD_MAX_LEVELS];
+    cache_disk disk[METHOD_MAX_LEVELS];
+    cand_in(in, c, cs, held, &ci, lv, ky, how, spent, disk);
+    return cand_method(c)->fit(&ci, out, err);
+}
+
+/* Fit every candidate with the held-out samples left out and measure it
+ * on them. */
+static int fit_candidates(const method_fit_in *in, const cands *cs, const unsigned char *held,
+                          material *cand, scores *sc, glint_err *err)
+{
+    for (int c = 0; c < NCAND; c++) {
+        method_fit_in ci;
+        const void *lv[METHOD_MAX_LEVELS];
+        const char *ky[METHOD_MAX_LEVELS];
+        cache_how how[METHOD_MAX_LEVELS];
+        double spent[METHOD_MAX_LEVELS];
+        cache_disk disk[METHOD_MAX_LEVELS];
+        double t = glint_now();
+        int rc;
+        cand_in(in, c, cs, held, &ci, lv, ky, how, spent, disk);
+        if ((rc = cand_method(c)->fit(&ci, &cand[c], err)) ||
+            (rc = held_rms(&ci, c, &cand[c], held, &sc->held[c], &sc->nheld[c], err))) {
+            glint_err_prefix(err, "auto_env, candidate %s", cand_label[c]);
+            return rc;
+        }
+        sc->secs[c] = glint_now() - t;
+        sc->painted[c] = json_number_value(
+            json_object_get(json_object_get(cand[c].info, "errors"), "rms_painted"));
+    }
+    return 0;
+}
+
+/* The rule: the first is the start; a later candidate is taken when its
+ * held-out RMS is below the current choice's by more than the threshold
+ * and the floor, so the choice is never worse on the held-out samples than
+ * the first.  Writes each candidate's figures into `list`; the chosen
+ * index. */
+static int choose(const auto_env_params *p, const cands *cs, const scores *sc, json_t *list)
+{
+    int chosen = 0;
+    for (int c = 0; c < NCAND; c++) {
+        int take = c > 0 && sc->held[c] < sc->held[chosen] * (1.0 - p->threshold) &&
+                   sc->held[chosen] - sc->held[c] > p->floor;
+        json_t *e = json_pack("{s:s, s:s, s:o, s:f, s:I, s:f, s:f, s:b}", "method",
+                              cand_method(c)->name, "label", cand_label[c], "params",
+                              method_params_to_json(cand_method(c), cand_params(cs, c)),
+                              "held_out_rms", isfinite(sc->held[c]) ? sc->held[c] : -1.0,
+                              "held_out_samples", (json_int_t)sc->nheld[c], "rms_painted",
+                              sc->painted[c], "fit_seconds", sc->secs[c], "taken",
+                              c == 0 || take);
+        json_array_append_new(list, e);
+        if (take)
+            chosen = c;
+    }
+    return chosen;
+}
+
+static json_t *choice_report(const auto_env_params *p, int by_views,
+                             const unsigned char *held_view, long nheld, int chosen,
+                             json_t *list)
+{
+    json_t *choice = json_pack(
+        "{s:s, s:s, s:o, s:f, s:f, s:s, s:i, s:I, s:s}", "chosen", cand_method(chosen)->name,
+        "chosen_label", cand_label[chosen], "candidates", list, "threshold", p->threshold,
+        "floor", p->floor, "held_out", by_views ? "views" : "pixels", "held_out_every",
+        p->every, "held_out_samples", (json_int_t)nheld, "rule",
+        "simplest first (pbr_env: one lobe, dielectric; conductor; two lobes; then srbf); a "
+        "later one is taken when its held-out RMS is below the current choice's by more than "
+        "the threshold (a fraction) and the floor, so the choice is never worse on the "
+        "held-out samples than the first; the material is the chosen candidate refitted to "
+        "every painted sample");
+    if (by_views) {
+        json_t *hv = json_array();
+        for (int v = 0; v < SCENE_MAX_VIEWS; v++)
+            if (held_view[v])
+                json_array_append_new(hv, json_integer(v));
+        json_object_set_new(choice, "held_out_views", hv);
+    }
+    return choice;
+}
+
+/* The chosen candidate refitted to every painted sample, its report
+ * carrying auto_env's parameters and the choice. */
+static int refit(const method_fit_in *in, const cands *cs, int chosen, json_t *choice,
+                 double t0, material *out, glint_err *err)
+{
+    double tf = glint_now();
+    int rc;
+    if ((rc = fit_cand(in, chosen, cs, NULL, out, err))) {
+        json_decref(choice);
+        glint_err_prefix(err, "auto_env, %s refitted to every sample", cand_label[chosen]);
+        return rc;
+    }
+    json_object_set_new(choice, "refit_seconds", json_real(glint_now() - tf));
+    if (!out->info)
+        out->info = json_object();
+    json_object_set(out->info, "chosen_params", json_object_get(out->info, "params"));
+    json_object_set_new(out->info, "params", method_params_to_json(&method_auto_env, in->params));
+    json_object_set_new(out->info, "choice", choice);
+    json_object_set_new(json_object_get(out->info, "seconds"), "auto",
+                        json_real(glint_now() - t0));
+    return 0;
+}
+
+static int auto_env_fit(const method_fit_in *in, material *out, glint_err *err)
+{
+    const auto_env_params *p = in->params;
+    const samples *s = in->s;
+    unsigned char held_view[SCENE_MAX_VIEWS], *held = malloc((size_t)(s->n ? s->n : 1));
+    material cand[NCAND];
+    scores sc;
+    cands cs;
+    double t0 = glint_now();
+    long nheld = 0;
+    int by_views = 0, chosen, rc;
+
+    memset(out, 0, sizeof *out);
+    memset(cand, 0, sizeof cand);
+    memset(&sc, 0, sizeof sc);
+    if (!held)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    candidates(p, &cs);
+    for (long i = 0; i < 3L * s->n; i++)
+        if (!isfinite(in->rgb[i])) {
+            rc = glint_err_set(err, GLINT_ENONFINITE,
+                               "auto_env: painted value %ld (view %d) is not finite", i / 3,
+                               s->view[i / 3]);
+            goto done;
+        }
+    if ((rc = env_split(s, p->every, held, held_view, &by_views, err)) ||
+        (rc = fit_candidates(in, &cs, held, cand, &sc, err)))
+        goto done;
+    for (int i = 0; i < s->n; i++)
+        nheld += held[i];
+    {
+        json_t *list = json_array();
+        chosen = choose(p, &cs, &sc, list);
+        rc = refit(in, &cs, chosen, choice_report(p, by_views, held_view, nheld, chosen, list),
+                   t0, out, err);
+    }
+done:
+    for (int c = 0; c < NCAND; c++)
+        material_free(&cand[c]);
+    free(held);
+    return rc;
+}
+
+/* ---- what a fit costs ------------------------------------------------------------------ */
+
+/* The candidates' levels are all held at once, and the largest fit's
+ * workspace on top. */
+static size_t auto_env_fit_bytes(const void *params, long nsamples)
+{
+    cands cs;
+    candidates(params, &cs);
+    return method_fit_bytes(&method_pbr_env, &cs.pe[C_PBR_TWO], nsamples) +
+           method_fit_bytes(&method_srbf, &cs.sr, nsamples);
+}
+
+/* Each candidate is fitted once on the kept samples and the chosen once
+ * more; the levels are built once (pbr_env's three variants share them):
+ * srbf's cold fit and three pbr_env fits, the chosen's refit at most the
+ * dearer of the two again less its levels, counted as a whole fit. */
+static double auto_env_fit_seconds(const void *params, long nsamples)
+{
+    cands cs;
+    double pe, sr;
+    candidates(params, &cs);
+    pe = method_fit_seconds(&method_pbr_env, &cs.pe[C_PBR_TWO], nsamples);
+    sr = method_fit_seconds(&method_srbf, &cs.sr, nsamples);
+    return sr + 4.0 * pe;
+}
+
+static int auto_env_holdout_ok(const void *params)
+{
+    (void)params;
+    return 0; /* it holds views out itself; a measurement of that would refit all of it */
+}
+
+const method method_auto_env = {
+    .name = "auto_env",
+    .label = "Choose for me, under an environment",
+    .summary = "Lets glint choose among the models fitted under an environment: a plastic "
+        "or paint, a metal, two highlights, or the environment lobes, whichever best "
+        "predicts a painted view it did not fit.",
+    .when = "Use it on a scene painted under an environment when unsure which model the "
+        "painting needs: it keeps the simplest unless another is clearly better, and says "
+        "what it chose and why.",
+    .lighting = METHOD_LIGHT_ENV,
+    .shows = METHOD_SHOWS_NONE,
+    .chooses = 1,
+    .title = "Automatic under an environment: the simplest model the painting needs",
+    .reference = "Iwasaki, Dobashi, Yoshimoto & Nishita 2009 and Walter et al. 2007 (the "
+                 "models); the choice is glint's",
+    .description =
+        "Fits the physically based model under the environment as a dielectric with one "
+        "lobe, as a metal, with two lobes, and the SRBF lobes of Iwasaki et al., each at its "
+        "own settings and on the same precomputation a fit of its own uses, to the painted "
+        "views but those held out (one view in `every`; one pixel tile in `every` when one "
+        "view is painted), and keeps the first whose error on the held-out views is not "
+        "beaten by a later one by more than `threshold`: never worse there than the first. "
+        "The material is the chosen model refitted to every painted view; info.choice lists "
+        "every candidate's held-out and painted RMS and why it was or was not taken.",
+    .held_out = "the candidates' own: one painted view in `every` held out whole, predicted "
+                "under the environment from the material fitted to the others",
+    .schema = "FitParamsAutoEnv.json",
+    .params_size = sizeof(auto_env_params),
+    .params = auto_env_params_table,
+    .nparams = (int)(sizeof auto_env_params_table / sizeof auto_env_params_table[0]),
+    .presets = auto_env_presets,
+    .npresets = (int)(sizeof auto_env_presets / sizeof auto_env_presets[0]),
+    .params_default = auto_env_params_default,
+    .params_usable = auto_env_params_usable,
+    .pattern_rule = SAMPLES_SEEN,
+    .levels = auto_env_levels,
+    .nlevels = LV_N,
+    .fit = auto_env_fit,
+    .mat = NULL,
+    .holdout_ok = auto_env_holdout_ok,
+    .fit_bytes = auto_env_fit_bytes,
+    .fit_seconds = auto_env_fit_seconds,
+};

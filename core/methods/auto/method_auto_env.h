@@ -1,0 +1,55 @@
+/* method_auto_env.h: "auto_env", the model a painting made under an
+ * environment requires: the choice of method_auto.h for the methods lit by
+ * an environment.
+ *
+ * The candidates, simplest first, each at the settings a fit of its own
+ * would have (the environment, its turn, brightness, the lights it is
+ * compressed into and self-shadowing are auto_env's, shared):
+ *   pbr_env             one lobe, a dielectric (method_pbr_env.h)
+ *   pbr_env conductor   one lobe, a metal's reflectance per channel
+ *   pbr_env two lobes   a sharp highlight over a broad sheen, dielectric
+ *   srbf                the SRBF lobes of Iwasaki et al. (method_srbf.h)
+ *
+ * Held out: one painted view in `every` (the views at every/2, every/2 +
+ * every, ... of the painted ones; at least one, at least one kept), whole;
+ * with one view painted, one tile of 8 x 8 pixels in `every` (a hash of
+ * the tile, as method_auto.h).  There are no lights beyond the painted
+ * range to hold out: the light is the environment, the same in every view.
+ *
+ * Every candidate reads the same levels as a fit of its own (the same
+ * cache keys, in memory and on disk): pbr_env's lights, rows and terms
+ * (shared by its three variants) and srbf's energy, lights (pbr_env's, the
+ * same key), rows and transfer, all on every sample.  A candidate is
+ * fitted with the held-out samples left out (method_fit_in.held: both
+ * methods honour it, so nothing is prepared twice), and measured on them
+ * with its own prediction (method.predict: the material under the
+ * environment's lights with the pixel's visibility), RMS in the
+ * painting's units over the held-out samples each method models (its own
+ * raster's pixels: pbr_env's 64 x 48 and srbf's 160 x 120 of each held
+ * view).  The choice starts at the first; a later one replaces it when
+ * its held-out RMS is below the current choice's by more than `threshold`
+ * (a fraction) and `floor`, so the answer is never worse on the held-out
+ * views than the simplest.  The material is the chosen candidate refitted
+ * to every painted sample; info.choice lists every candidate's held-out
+ * and painted RMS, fit time, its parameters and whether it was taken.
+ *
+ * The auto_env method makes no material of its own (method.mat is NULL).
+ * Thread-safety: as method.h. */
+#ifndef GLINT_METHOD_AUTO_ENV_H
+#define GLINT_METHOD_AUTO_ENV_H
+
+#include "method.h"
+#include "method_srbf.h"
+
+extern const method method_auto_env;
+
+typedef struct auto_env_params {
+    /* env, env_rotation, env_intensity, lights and visibility, given to
+     * every candidate (the rest of srbf's members unused) */
+    srbf_params env;
+    double threshold;  /* fraction a later candidate must gain on held-out samples */
+    double floor;      /* and at least this much (RMS, the painting's units) */
+    int every;         /* one view (or pixel tile) in this many held out */
+} auto_env_params;
+
+#endif
