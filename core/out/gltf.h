@@ -22,6 +22,18 @@
  * material loses in the glTF model (a painted highlight no GGX lobe has, a
  * fit's extrapolation, anisotropy).
  *
+ * pbr materials.  A material of pbr, pbr_env or pbr_detail (its base) is
+ * physically based already: its parameters are also mapped directly onto
+ * glTF with KHR_materials_ior, KHR_materials_specular and
+ * KHR_materials_clearcoat (gltf_direct.c: roughness sqrt(alpha), a
+ * dielectric's ior and ks, a conductor's ks F0, the sharper of two lobes as
+ * the coat), the KHR model evaluated as gltf_khr.c states it.  The mapping
+ * and the fit are both measured over the fit's pairs with the
+ * height-correlated Smith G (pbr's own, and what glTF viewers render;
+ * gltf_direct.c says why), and the closer is written: out->exact, the two
+ * errors and a note of what the mapping clamps or leaves out are reported
+ * with the file (its extras, extensionsUsed declaring each extension).
+ *
  * Textures.  A material that varies over the surface (material_spatial) is
  * also fitted per texel of a res x res grid over its texture coordinates
  * (gltf_bake_material): the average's fit first, then each texel's from
