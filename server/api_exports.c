@@ -22,6 +22,7 @@
  * relative RMS error against the material on the painted views each
  * states (X-Glint-Gltf / X-Glint-Fit and in the file); merl, brdf and the
  * package carry the material itself. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -196,15 +197,31 @@ static int export_fit(http_req *req, const char *mid, const export_src *x, gltf_
     return rc;
 }
 
+/* "; export=exact|fitted; rel_rms_exact=...; rel_rms_fitted=...;
+ * extensions=..." of the headers: which path the material took (its pbr
+ * parameters mapped, or the fit) and both errors (gltf.h). */
+static void path_info(const gltf_pbr *p, char *out, size_t cap)
+{
+    const char *names[3];
+    int n = gltf_khr_names(p, names), k;
+    k = snprintf(out, cap, "; export=%s; rel_rms_fitted=%.4f", p->exact ? "exact" : "fitted",
+                 p->rel_rms_fitted);
+    if (k > 0 && (size_t)k < cap && isfinite(p->rel_rms_exact))
+        k += snprintf(out + k, cap - (size_t)k, "; rel_rms_exact=%.4f", p->rel_rms_exact);
+    for (int i = 0; i < n && k > 0 && (size_t)k < cap; i++)
+        k += snprintf(out + k, cap - (size_t)k, "%s%s", i ? "," : "; extensions=", names[i]);
+}
+
 /* X-Glint-Fit: the fit a mtlx or usda file carries. */
 static void fit_header(http_resp *r, const gltf_pbr *p)
 {
-    char info[300];
-    snprintf(info, sizeof info,
-             "base_color=%.4f,%.4f,%.4f; metallic=%.4f; roughness=%.4f; fit_rel_rms=%.4f; "
-             "pairs=%d; spatial=%d; textures=0",
-             p->base[0], p->base[1], p->base[2], p->metallic, p->roughness, p->rel_rms,
-             p->pairs, p->spatial);
+    char info[500];
+    int k = snprintf(info, sizeof info,
+                     "base_color=%.4f,%.4f,%.4f; metallic=%.4f; roughness=%.4f; fit_rel_rms=%.4f; "
+                     "pairs=%d; spatial=%d; textures=0",
+                     p->base[0], p->base[1], p->base[2], p->metallic, p->roughness, p->rel_rms,
+                     p->pairs, p->spatial);
+    path_info(p, info + k, sizeof info - (size_t)k);
     http_header(r, "X-Glint-Fit", info);
 }
 
@@ -227,7 +244,7 @@ static http_resp glb_get(http_req *req)
     size_t len = 0, bytes = 0;
     http_resp r;
     glint_err e;
-    char info[400], fname[128];
+    char info[600], fname[128];
     int rc;
     admit_ticket ticket = {0};
 
@@ -250,6 +267,7 @@ static http_resp glb_get(http_req *req)
              "pairs=%d; spatial=%d; textures=%d",
              p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms, p.pairs,
              p.spatial, gi.baked ? gi.res : 0);
+    path_info(&p, info + strlen(info), sizeof info - strlen(info));
     if (gi.baked)
         snprintf(info + strlen(info), sizeof info - strlen(info),
                  "; texel_rel_rms_median=%.4f; texel_rel_rms_max=%.4f; bake_seconds=%.3f",
@@ -383,6 +401,10 @@ static json_t *export_how_close(const export_kind *k, const gltf_pbr *p, int spa
                              : "the material itself");
     if (!p)
         return json_pack("{s:n, s:b, s:s}", "rel_rms", "exact", 0, "note", why);
+    if (p->exact)
+        return json_pack("{s:f, s:b, s:s}", "rel_rms", p->rel_rms, "exact", 0, "note",
+                         "the pbr material's own parameters (with KHR extensions in the .glb), "
+                         "against the material on the painted views (relative RMS)");
     return json_pack("{s:f, s:b, s:s}", "rel_rms", p->rel_rms, "exact", 0, "note",
                      strcmp(k->format, "glb") == 0 && spatial
                          ? "the average's fit on the painted views; the baked textures come "
@@ -426,6 +448,30 @@ static const char *brdf_unavailable(app *a, const char *mid, char *buf, size_t c
     return buf;
 }
 
+/* The "fit" member of the exports list: what the metallic-roughness
+ * exports carry, which path made it and both errors (gltf.h). */
+static json_t *fit_json(const gltf_pbr *p)
+{
+    const char *names[3];
+    int n = gltf_khr_names(p, names);
+    json_t *o = json_pack("{s:[f,f,f], s:f, s:f, s:f, s:i, s:b, s:s, s:f, s:o, s:s, s:[]}",
+                          "base_color", p->base[0], p->base[1], p->base[2], "metallic",
+                          p->metallic, "roughness", p->roughness, "rel_rms", p->rel_rms,
+                          "pairs", p->pairs, "spatial", p->spatial, "export",
+                          p->exact ? "exact parameters" : "fitted", "rel_rms_fitted",
+                          p->rel_rms_fitted, "rel_rms_exact",
+                          isfinite(p->rel_rms_exact) ? json_real(p->rel_rms_exact) : json_null(),
+                          "smith", p->smith == GLTF_SMITH_CORRELATED ? "height-correlated"
+                                                                     : "separable",
+                          "extensions");
+    json_t *ext = json_object_get(o, "extensions");
+    for (int i = 0; i < n; i++)
+        json_array_append_new(ext, json_string(names[i]));
+    if (o && p->note[0])
+        json_object_set_new(o, "note", json_string(p->note));
+    return o;
+}
+
 /* Every format a material exports to, with how close each comes: the fit
  * is computed here (as the mtlx and usda downloads do: 0.1 to 1 s). */
 static http_resp exports_get(http_req *req)
@@ -459,11 +505,7 @@ static http_resp exports_get(http_req *req)
     out = json_pack("{s:s, s:[]}", "material_id", mid, "exports");
     list = json_object_get(out, "exports");
     if (out && have_fit)
-        json_object_set_new(out, "fit",
-                            json_pack("{s:[f,f,f], s:f, s:f, s:f, s:i, s:b}", "base_color",
-                                      p.base[0], p.base[1], p.base[2], "metallic", p.metallic,
-                                      "roughness", p.roughness, "rel_rms", p.rel_rms, "pairs",
-                                      p.pairs, "spatial", p.spatial));
+        json_object_set_new(out, "fit", fit_json(&p));
     for (size_t k = 0; out && k < sizeof export_kinds / sizeof export_kinds[0]; k++) {
         const export_kind *ek = &export_kinds[k];
         const char *un = ek->fitted ? (no_fit ? no_fit : have_fit ? NULL : why)

@@ -345,6 +345,27 @@ int cmd_export_brdf(int argc, char **argv)
     return rc;
 }
 
+/* ", \"export\": ..., \"rel_rms_fitted\": ..., \"rel_rms_exact\": ...,
+ * \"extensions\": [...]" of the printed JSON: which path the material took
+ * (its pbr parameters mapped, or the fit), both errors and the KHR
+ * extensions (gltf.h).  Returns buf. */
+static const char *path_json(const gltf_pbr *p, char *buf, size_t cap)
+{
+    const char *names[3];
+    int n = gltf_khr_names(p, names), k;
+    k = snprintf(buf, cap, ", \"export\": \"%s\", \"rel_rms_fitted\": %.4f",
+                 p->exact ? "exact parameters" : "fitted", p->rel_rms_fitted);
+    if (k > 0 && (size_t)k < cap && isfinite(p->rel_rms_exact))
+        k += snprintf(buf + k, cap - (size_t)k, ", \"rel_rms_exact\": %.4f", p->rel_rms_exact);
+    if (k > 0 && (size_t)k < cap)
+        k += snprintf(buf + k, cap - (size_t)k, ", \"extensions\": [");
+    for (int i = 0; i < n && k > 0 && (size_t)k < cap; i++)
+        k += snprintf(buf + k, cap - (size_t)k, "%s\"%s\"", i ? ", " : "", names[i]);
+    if (k > 0 && (size_t)k < cap)
+        snprintf(buf + k, cap - (size_t)k, "]");
+    return buf;
+}
+
 /* glint export-gltf MATDIR --scene scene.json [--paintings DIR]
  * [--bake-res N] -o FILE.glb: the scene's mesh with the glTF
  * metallic-roughness material fitted to MATDIR at the samples of the
@@ -366,6 +387,7 @@ int cmd_export_gltf(int argc, char **argv)
     scene sc;
     gltf_pbr p;
     gltf_export_info gi;
+    char pj[700];
     long bake_res = GLTF_BAKE_RES_DEFAULT;
     char *end;
     glint_err e;
@@ -402,17 +424,18 @@ int cmd_export_gltf(int argc, char **argv)
     else if (gi.baked)
         printf("{\"file\": \"%s\", \"bytes\": %zu, \"average\": {\"base_color\": [%.4f, "
                "%.4f, %.4f], \"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f}, "
-               "\"pairs\": %d, \"textures\": {\"res\": %d, \"pairs_per_texel\": %d, "
+               "\"pairs\": %d%s, \"textures\": {\"res\": %d, \"pairs_per_texel\": %d, "
                "\"texel_rel_rms_median\": %.4f, \"texel_rel_rms_max\": %.4f, "
                "\"seconds\": %.3f}}\n",
                out, len, p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms,
-               p.pairs, gi.res, gi.pairs, gi.rel_rms_median, gi.rel_rms_max, gi.seconds);
+               p.pairs, path_json(&p, pj, sizeof pj), gi.res, gi.pairs, gi.rel_rms_median,
+               gi.rel_rms_max, gi.seconds);
     else
         printf("{\"file\": \"%s\", \"bytes\": %zu, \"base_color\": [%.4f, %.4f, %.4f], "
                "\"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f, "
-               "\"pairs\": %d%s%s%s}\n",
+               "\"pairs\": %d%s%s%s%s}\n",
                out, len, p.base[0], p.base[1], p.base[2], p.metallic, p.roughness, p.rel_rms,
-               p.pairs, gi.note[0] ? ", \"textures_not_baked\": \"" : "", gi.note,
+               p.pairs, path_json(&p, pj, sizeof pj), gi.note[0] ? ", \"textures_not_baked\": \"" : "", gi.note,
                gi.note[0] ? "\"" : "");
     free(glb);
     scene_free(&sc);
@@ -439,7 +462,7 @@ static int export_fitted(int argc, char **argv, int usd)
     scene sc;
     gltf_pbr p;
     glint_err e;
-    char *text = NULL, path[4096];
+    char *text = NULL, path[4096], pj[700];
     size_t len = 0;
     int c, rc = 0, no_mesh = 0;
 
@@ -470,10 +493,10 @@ static int export_fitted(int argc, char **argv, int usd)
         rc = fail_err(&e);
     else
         printf("{\"file\": \"%s\", \"bytes\": %zu, \"base_color\": [%.4f, %.4f, %.4f], "
-               "\"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f, \"pairs\": %d, "
+               "\"metallic\": %.4f, \"roughness\": %.4f, \"fit_rel_rms\": %.4f, \"pairs\": %d%s, "
                "\"spatial_average\": %s}\n",
                out, strlen(text), p.base[0], p.base[1], p.base[2], p.metallic, p.roughness,
-               p.rel_rms, p.pairs, p.spatial ? "true" : "false");
+               p.rel_rms, p.pairs, path_json(&p, pj, sizeof pj), p.spatial ? "true" : "false");
     free(text);
     scene_free(&sc);
     material_free(&m);

@@ -50,6 +50,10 @@ void gltf_brdf(const gltf_pbr *p, const double n[3], const double wi[3], const d
 {
     double ci = n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2];
     double co = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2], S, s, A, B, C;
+    if (gltf_khr_any(p)) {
+        gltf_khr_brdf(p, n, wi, wo, rgb);
+        return;
+    }
     rgb[0] = rgb[1] = rgb[2] = 0.0;
     if (!(ci > 0.0) || !(co > 0.0))
         return;
@@ -200,9 +204,10 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
     memset(out, 0, sizeof *out);
     if (!m || !m->method)
         return glint_err_set(err, GLINT_EINVAL, "no material to fit");
-    rc = gltf_fit(material_fn, m, s, out, err);
+    if ((rc = gltf_fit(material_fn, m, s, out, err)))
+        return rc;
     out->spatial = material_spatial(m);
-    return rc;
+    return gltf_direct_choose(m, s, out, err);
 }
 
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, glint_err *err)
@@ -245,6 +250,8 @@ int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, gli
     out->metallic = bm;
     out->roughness = br;
     out->rel_rms = den > 0.0 ? sqrt(best / den) : 0.0;
+    out->rel_rms_fitted = out->rel_rms;
+    out->rel_rms_exact = NAN;
     out->pairs = P.n;
     gltf_pairs_free(&P);
     return 0;
@@ -262,6 +269,36 @@ static json_t *view_of(size_t off, size_t len, int target)
 {
     return json_pack("{s:i, s:I, s:I, s:i}", "buffer", 0, "byteOffset", (json_int_t)off,
                      "byteLength", (json_int_t)len, "target", target);
+}
+
+/* The material's KHR extensions (gltf_khr) and the document's
+ * extensionsUsed naming them; nothing when p uses none. */
+static int add_extensions(json_t *root, json_t *mat, const gltf_pbr *p)
+{
+    const gltf_khr *k = &p->khr;
+    const char *names[3];
+    json_t *ext, *used;
+    int n = gltf_khr_names(p, names), rc = 0;
+    if (!n)
+        return 0;
+    ext = json_object();
+    used = json_array();
+    for (int i = 0; i < n; i++)
+        rc |= json_array_append_new(used, json_string(names[i]));
+    if (k->ior_used)
+        rc |= json_object_set_new(ext, "KHR_materials_ior", json_pack("{s:f}", "ior", k->ior));
+    if (k->specular_used)
+        rc |= json_object_set_new(
+            ext, "KHR_materials_specular",
+            json_pack("{s:f, s:[f,f,f]}", "specularFactor", k->specular, "specularColorFactor",
+                      k->specular_color[0], k->specular_color[1], k->specular_color[2]));
+    if (k->clearcoat_used)
+        rc |= json_object_set_new(ext, "KHR_materials_clearcoat",
+                                  json_pack("{s:f, s:f}", "clearcoatFactor", k->clearcoat,
+                                            "clearcoatRoughnessFactor", k->clearcoat_roughness));
+    rc |= json_object_set_new(mat, "extensions", ext);
+    rc |= json_object_set_new(root, "extensionsUsed", used);
+    return rc ? -1 : 0;
 }
 
 /* The textures' part of the document: images in buffer views 4 and 5,
@@ -371,7 +408,8 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC3", "bufferView", 2,
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC2", "bufferView", 3,
         "componentType", 5125, "count", (json_int_t)(3 * nt), "type", "SCALAR");
-    if (root && bake && add_textures(root, mat, off_bc, len_bc, off_mr, len_mr)) {
+    if (root && (add_extensions(root, mat, p) ||
+                 (bake && add_textures(root, mat, off_bc, len_bc, off_mr, len_mr)))) {
         json_decref(root);
         root = NULL;
     }
@@ -423,12 +461,39 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
 
 /* ---- a material on its scene ------------------------------------------------------------ */
 
+/* Which path the material took (the pbr parameters mapped, or the fit),
+ * both errors and what the mapping leaves out, into the extras' object g. */
+static int extras_path(json_t *g, const gltf_pbr *p)
+{
+    int rc = 0;
+    rc |= json_object_set_new(g, "export", json_string(p->exact ? "exact parameters" : "fitted"));
+    rc |= json_object_set_new(g, "rel_rms_fitted", json_real(p->rel_rms_fitted));
+    rc |= json_object_set_new(g, "errors_smith",
+                              json_string(p->smith == GLTF_SMITH_CORRELATED
+                                              ? "height-correlated (as glTF-Sample-Viewer and "
+                                                "three.js render)"
+                                              : "separable (Appendix B's text)"));
+    rc |= json_object_set_new(g, "rel_rms_exact", isfinite(p->rel_rms_exact)
+                                                      ? json_real(p->rel_rms_exact)
+                                                      : json_null());
+    if (p->exact)
+        rc |= json_object_set_new(
+            g, "fit", json_string("the pbr material's own parameters mapped onto glTF with the "
+                                  "KHR extensions (closer than the fit: rel_rms_exact against "
+                                  "rel_rms_fitted at the painted views' samples)"));
+    if (p->note[0])
+        rc |= json_object_set_new(g, "exact_note", json_string(p->note));
+    return rc ? -1 : 0;
+}
+
 static char *extras_text(const material *m, const gltf_pbr *p, const gltf_bake *bake,
                          const char *note)
 {
     json_t *o = json_pack("{s:{s:s, s:s, s:f, s:i, s:s, s:b, s:s}}", "glint", "method",
                           material_method_name(m), "model",
-                          "glTF 2.0 metallic-roughness (Appendix B); alpha = roughness^2",
+                          p->exact ? "glTF 2.0 metallic-roughness (Appendix B) with the KHR extensions used; "
+                                     "alpha = roughness^2"
+                                   : "glTF 2.0 metallic-roughness (Appendix B); alpha = roughness^2",
                           "fit_rel_rms", p->rel_rms, "fit_pairs", p->pairs, "fit",
                           "least squares of f cos at the painted views' samples", "spatial_average",
                           p->spatial && !bake, "units",
@@ -436,6 +501,8 @@ static char *extras_text(const material *m, const gltf_pbr *p, const gltf_bake *
                           "light of intensity I (a white Lambertian facing it reads I)");
     json_t *g = json_object_get(o, "glint");
     char *t;
+    if (g && extras_path(g, p))
+        g = NULL;
     if (g && bake) {
         json_object_set_new(
             g, "textures",

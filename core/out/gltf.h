@@ -22,6 +22,18 @@
  * material loses in the glTF model (a painted highlight no GGX lobe has, a
  * fit's extrapolation, anisotropy).
  *
+ * pbr materials.  A material of pbr, pbr_env or pbr_detail (its base) is
+ * physically based already: its parameters are also mapped directly onto
+ * glTF with KHR_materials_ior, KHR_materials_specular and
+ * KHR_materials_clearcoat (gltf_direct.c: roughness sqrt(alpha), a
+ * dielectric's ior and ks, a conductor's ks F0, the sharper of two lobes as
+ * the coat), the KHR model evaluated as gltf_khr.c states it.  The mapping
+ * and the fit are both measured over the fit's pairs with the
+ * height-correlated Smith G (pbr's own, and what glTF viewers render;
+ * gltf_direct.c says why), and the closer is written: out->exact, the two
+ * errors and a note of what the mapping clamps or leaves out are reported
+ * with the file (its extras, extensionsUsed declaring each extension).
+ *
  * Textures.  A material that varies over the surface (material_spatial) is
  * also fitted per texel of a res x res grid over its texture coordinates
  * (gltf_bake_material): the average's fit first, then each texel's from
@@ -57,24 +69,80 @@
 #define GLTF_FIT_VIEWS 96
 #define GLTF_FIT_PAIRS (GLTF_FIT_LIGHTS * GLTF_FIT_VIEWS)
 
+/* The KHR material extensions a material uses (gltf_khr.c gives their
+ * model).  Each is written to the file, and evaluated, only when its flag
+ * is set; a zeroed struct is the core model alone. */
+typedef struct gltf_khr {
+    int ior_used;              /* KHR_materials_ior */
+    double ior;                /* >= 1 (the core model's: 1.5) */
+    int specular_used;         /* KHR_materials_specular */
+    double specular;           /* specularFactor, [0, 1] */
+    double specular_color[3];  /* specularColorFactor, >= 0 (may exceed 1) */
+    int clearcoat_used;        /* KHR_materials_clearcoat */
+    double clearcoat;          /* clearcoatFactor, [0, 1] */
+    double clearcoat_roughness; /* clearcoatRoughnessFactor, [0, 1]: alpha = its square */
+} gltf_khr;
+
+#define GLTF_NOTE_MAX 400
+
+enum { GLTF_SMITH_SEPARABLE = 0, GLTF_SMITH_CORRELATED = 1 };
+
 typedef struct gltf_pbr {
     double base[3];      /* baseColorFactor, linear, [0, 1] */
     double metallic;     /* [0, 1] */
     double roughness;    /* [0, 1]: alpha = roughness^2 */
-    double rel_rms;      /* of f cos over the fit's pairs, relative to the material's */
+    double rel_rms;      /* of f cos over the pairs, relative to the material's: the
+                            error of what is written (the fit's or the mapping's) */
     int pairs;           /* direction pairs with the light and the eye above the surface */
     int spatial;         /* the material varies over the surface: its average was fitted */
+    gltf_khr khr;        /* the extensions used (zero: none) */
+    int exact;           /* 1: a pbr material's own parameters, mapped (gltf_direct.c);
+                            0: the least-squares fit of the core model */
+    double rel_rms_exact;  /* the mapping's relative RMS over the same pairs (NaN: the
+                              material is not a pbr one: no mapping) */
+    double rel_rms_fitted; /* the fit's */
+    int smith;             /* the form of Smith's G the three errors were measured with:
+                              GLTF_SMITH_SEPARABLE (the fit's own, gltf_brdf) or, for a pbr
+                              material, GLTF_SMITH_CORRELATED (gltf_direct.c says why) */
+    char note[GLTF_NOTE_MAX]; /* what the mapping clamps or leaves out ("" when nothing or
+                                 when no mapping was made) */
 } gltf_pbr;
 
 /* f of the glTF model at unit n, wi (L), wo (V) (OUT: rgb, no cosine; 0
- * below either horizon). */
+ * below either horizon): the core model above, or with p's extensions the
+ * KHR model (gltf_khr_brdf). */
 void gltf_brdf(const gltf_pbr *p, const double n[3], const double wi[3], const double wo[3],
                double rgb[3]);
+
+/* The KHR model (gltf_khr.c's header states it) with p's extensions: the
+ * core model's dielectric-metal mix in its layered form (fresnel_mix,
+ * conductor_fresnel), KHR_materials_ior's and KHR_materials_specular's
+ * dielectric Fresnel, KHR_materials_clearcoat's coat.  OUT: rgb as
+ * gltf_brdf. */
+void gltf_khr_brdf(const gltf_pbr *p, const double n[3], const double wi[3], const double wo[3],
+                   double rgb[3]);
+
+/* The same with Smith's G in the form asked: GLTF_SMITH_SEPARABLE
+ * (Appendix B's text, gltf_brdf's) or GLTF_SMITH_CORRELATED (the
+ * height-correlated form Khronos's glTF-Sample-Viewer and three.js
+ * implement, and pbr's model uses). */
+void gltf_khr_brdf_smith(const gltf_pbr *p, int smith, const double n[3], const double wi[3],
+                         const double wo[3], double rgb[3]);
+
+/* Does p use an extension? */
+int gltf_khr_any(const gltf_pbr *p);
+
+/* The names of the extensions p uses, in order (OUT: up to 3 pointers to
+ * static strings); returns how many. */
+int gltf_khr_names(const gltf_pbr *p, const char *names[3]);
 
 /* Fit m at the painted directions: every (n / GLTF_FIT_MAX_SAMPLES)-th
  * sample of s (the material's own frame at each: n, wi, wo of the
  * sample), or, with s NULL, the GLTF_FIT_PAIRS pairs over the hemisphere
- * (OUT: *out). */
+ * (OUT: *out).  A pbr material (pbr, pbr_env; pbr_detail's base) is also
+ * mapped parameter by parameter onto the KHR model (gltf_direct.c) and
+ * measured over the same pairs: the mapping is kept (out->exact 1) unless
+ * its relative RMS is above the fit's; both figures are in *out. */
 #define GLTF_FIT_MAX_SAMPLES 4096
 int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_err *err);
 

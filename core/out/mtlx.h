@@ -4,12 +4,22 @@
  * it, which Houdini, Maya, 3ds Max, Substance and MaterialX's own viewer
  * read.
  *
- * What it carries: gltf.h's metallic-roughness fit (the same numbers the
- * .glb holds), mapped input by input:
+ * What it carries: the metallic-roughness material gltf.h makes (the same
+ * numbers the .glb holds: the fit, or a pbr material's own parameters with
+ * the KHR extensions), mapped input by input:
  *   base 1, base_color = baseColor (linear), metalness = metallic,
- *   specular 1, specular_color (1, 1, 1), specular_roughness = roughness
- *   (both models square it into the GGX alpha), specular_IOR 1.5 (the
- *   glTF model's dielectric f0 = 0.04 = ((1.5 - 1) / (1.5 + 1))^2).
+ *   specular_roughness = roughness (both models square it into the GGX
+ *   alpha);
+ *   the dielectric's reflectance: KHR's f0_c = min(F0(ior)
+ *   specularColor_c, 1) (F0(ior) = ((ior - 1) / (ior + 1))^2; ior 1.5 and
+ *   specularColor 1 without the extensions: f0 0.04) becomes specular_IOR
+ *   with F0 the largest channel's f0 (at most MTLX_F0_MAX) and
+ *   specular_color f0_c / that, specular = specularFactor (1 without
+ *   KHR_materials_specular; 0 where every f0 is 0).  Exact at normal
+ *   incidence; Standard Surface's specular_color tints the grazing
+ *   reflectance too, where KHR's is specularFactor in every channel;
+ *   KHR_materials_clearcoat: coat = clearcoatFactor, coat_roughness =
+ *   clearcoatRoughnessFactor, coat_IOR 1.5 (KHR's coat).
  * The average over the surface only: a material that varies over it is
  * written as its average's fit (the .glb bakes textures; this file names
  * none), and the document says so.  The error figure it states (fit_rel_rms)
@@ -28,12 +38,13 @@
 #include "gltf.h"
 
 #define MTLX_IOR 1.5 /* glTF 2.0's dielectric: f0 0.04 */
+#define MTLX_F0_MAX 0.9 /* specular_IOR 37.97 at most: a reflectance of 1 has no ior */
 
 /* The document for p (OUT: *text, NUL-terminated, malloc'ed: the caller
  * frees).  `name` names the nodes (NULL: "glint"); `note` (may be NULL) is
  * one more line of the leading comment (what was fitted to what).
- * GLINT_EINVAL for a p with a value outside [0, 1] or not finite,
- * GLINT_ENOMEM. */
+ * GLINT_EINVAL for a p with a value outside [0, 1] or not finite (an ior
+ * below 1, a negative specular colour), GLINT_ENOMEM. */
 int mtlx_write(const gltf_pbr *p, const char *name, const char *note, char **text,
                glint_err *err);
 

@@ -9,10 +9,21 @@
 
 static int pbr_valid(const gltf_pbr *p)
 {
-    double v[5] = {p->base[0], p->base[1], p->base[2], p->metallic, p->roughness};
-    for (int i = 0; i < 5; i++)
+    double v[7] = {p->base[0], p->base[1], p->base[2], p->metallic, p->roughness,
+                   p->khr.clearcoat_used ? p->khr.clearcoat : 0.0,
+                   p->khr.clearcoat_used ? p->khr.clearcoat_roughness : 0.0};
+    for (int i = 0; i < 7; i++)
         if (!(v[i] >= 0.0 && v[i] <= 1.0))
             return 0;
+    if (p->khr.ior_used && !(p->khr.ior >= 1.0 && isfinite(p->khr.ior)))
+        return 0;
+    if (p->khr.specular_used) {
+        if (!(p->khr.specular >= 0.0 && p->khr.specular <= 1.0))
+            return 0;
+        for (int c = 0; c < 3; c++)
+            if (!(p->khr.specular_color[c] >= 0.0 && isfinite(p->khr.specular_color[c])))
+                return 0;
+    }
     return isfinite(p->rel_rms) && p->rel_rms >= 0.0;
 }
 
@@ -32,11 +43,22 @@ static int header(glint_buf *b, const gltf_pbr *p, const char *note)
     int rc = glint_buf_printf(
         b,
         "#usda 1.0\n(\n    defaultPrim = \"glint\"\n    doc = \"\"\"glint: the material as a "
-        "UsdPreviewSurface (metallic workflow), from the glTF 2.0 metallic-roughness fit (the "
-        ".glb's numbers): least squares of f cos at the painted views' samples (%d pairs). "
-        "fit_rel_rms %.4f: the relative RMS error of that fit against the material on the "
-        "painted views.",
-        p->pairs, p->rel_rms);
+        "UsdPreviewSurface (%s workflow), from ",
+        p->khr.specular_used ? "specular" : "metallic");
+    if (p->exact)
+        rc |= glint_buf_printf(
+            b,
+            "the pbr material's own parameters as the .glb carries them (glTF metallic-roughness "
+            "with KHR ior, specular and clearcoat). rel_rms %.4f: the relative RMS error of the "
+            "glTF model against the material on the painted views (%d pairs; the fit's: %.4f).",
+            p->rel_rms, p->pairs, p->rel_rms_fitted);
+    else
+        rc |= glint_buf_printf(
+            b,
+            "the glTF 2.0 metallic-roughness fit (the .glb's numbers): least squares of f cos at "
+            "the painted views' samples (%d pairs). fit_rel_rms %.4f: the relative RMS error of "
+            "that fit against the material on the painted views.",
+            p->pairs, p->rel_rms);
     if (p->spatial)
         rc |= glint_buf_printf(b, " The material varies over the surface: this is its average "
                                   "(no textures; the .glb carries them).");
@@ -88,21 +110,46 @@ static int mesh_prim(glint_buf *b, const mesh *m)
     return rc | glint_buf_printf(b, "        uniform token subdivisionScheme = \"none\"\n    }\n\n");
 }
 
+/* KHR's dielectric f0 per channel: min(F0(ior) specularColor, 1) specular */
+static void dielectric_f0(const gltf_pbr *p, double f0[3])
+{
+    double r = p->khr.ior_used ? (p->khr.ior - 1.0) / (p->khr.ior + 1.0) : 0.2;
+    for (int c = 0; c < 3; c++) {
+        double f = r * r * (p->khr.specular_used ? p->khr.specular_color[c] : 1.0);
+        f0[c] = (f < 1.0 ? f : 1.0) * (p->khr.specular_used ? p->khr.specular : 1.0);
+    }
+}
+
 static int material_prim(glint_buf *b, const gltf_pbr *p)
 {
-    return glint_buf_printf(
+    double f0[3];
+    int rc;
+    dielectric_f0(p, f0);
+    rc = glint_buf_printf(
         b,
         "    def Material \"material\"\n    {\n"
         "        token outputs:surface.connect = </glint/material/surface.outputs:surface>\n\n"
         "        def Shader \"surface\"\n        {\n"
-        "            uniform token info:id = \"UsdPreviewSurface\"\n"
-        "            color3f inputs:diffuseColor = (%.6g, %.6g, %.6g)\n"
-        "            float inputs:ior = %.6g\n"
-        "            float inputs:metallic = %.6g\n"
-        "            float inputs:roughness = %.6g\n"
-        "            int inputs:useSpecularWorkflow = 0\n"
-        "            token outputs:surface\n        }\n    }\n}\n",
-        p->base[0], p->base[1], p->base[2], USDA_IOR, p->metallic, p->roughness);
+        "            uniform token info:id = \"UsdPreviewSurface\"\n");
+    if (p->khr.clearcoat_used)
+        rc |= glint_buf_printf(b,
+                               "            float inputs:clearcoat = %.6g\n"
+                               "            float inputs:clearcoatRoughness = %.6g\n",
+                               p->khr.clearcoat, p->khr.clearcoat_roughness);
+    rc |= glint_buf_printf(b,
+                           "            color3f inputs:diffuseColor = (%.6g, %.6g, %.6g)\n"
+                           "            float inputs:ior = %.6g\n"
+                           "            float inputs:metallic = %.6g\n"
+                           "            float inputs:roughness = %.6g\n",
+                           p->base[0], p->base[1], p->base[2],
+                           p->khr.ior_used ? p->khr.ior : USDA_IOR, p->metallic, p->roughness);
+    if (p->khr.specular_used)
+        rc |= glint_buf_printf(b, "            color3f inputs:specularColor = (%.6g, %.6g, %.6g)\n",
+                               f0[0], f0[1], f0[2]);
+    return rc | glint_buf_printf(b,
+                                 "            int inputs:useSpecularWorkflow = %d\n"
+                                 "            token outputs:surface\n        }\n    }\n}\n",
+                                 p->khr.specular_used ? 1 : 0);
 }
 
 int usda_write(const gltf_pbr *p, const mesh *msh, const char *note, char **text, size_t *len,

@@ -4,12 +4,21 @@
  * Omniverse, Houdini Solaris, Blender 4+, usdview, Apple's Quick Look),
  * and, when a mesh is given, the scene's mesh as a UsdGeomMesh bound to it.
  *
- * What it carries: gltf.h's metallic-roughness fit (the .glb's numbers),
- * in the preview surface's metallic workflow:
+ * What it carries: the metallic-roughness material gltf.h makes (the
+ * .glb's numbers: the fit, or a pbr material's own parameters with the
+ * KHR extensions):
  *   diffuseColor = baseColor (linear; "interpreted as albedo" there),
- *   metallic, roughness (squared into the GGX alpha, as glTF does),
- *   useSpecularWorkflow 0, ior 1.5 (its dielectric F0 ((1 - ior) /
- *   (1 + ior))^2 = 0.04, glTF's).
+ *   metallic, roughness (squared into the GGX alpha, as glTF does);
+ *   without KHR_materials_specular the metallic workflow
+ *   (useSpecularWorkflow 0) with ior = KHR_materials_ior's (1.5 without
+ *   it: the dielectric F0 ((1 - ior) / (1 + ior))^2 = 0.04, glTF's);
+ *   with it the specular workflow (useSpecularWorkflow 1; a pbr dielectric
+ *   maps there, metallic 0) with specularColor = KHR's dielectric f0_c =
+ *   min(F0(ior) specularColor_c, 1) specularFactor ("the color at 0
+ *   incidence"; its edge is white where KHR's is specularFactor);
+ *   KHR_materials_clearcoat: clearcoat = clearcoatFactor,
+ *   clearcoatRoughness = clearcoatRoughnessFactor (both white coats of
+ *   ior 1.5).
  * The average over the surface only (no textures: the .glb bakes them),
  * and the layer's doc string says so, with fit_rel_rms: the relative RMS
  * error of the glTF model's fit against the material on the painted views.

@@ -7,7 +7,9 @@
 // with glint's own render of that view (GET /materials/{id}/preview.exr); the
 // .mtlx and .usda by the checks against MaterialX's and UsdPreviewSurface's
 // node definitions (tests/integration/export_specs.py); the MERL table by its
-// header and size, the .brdf and the package by their formats.
+// header and size, the .brdf and the package by their formats.  Then a pbr
+// fit of the same paintings and a two-lobe pbr material made by the CLI:
+// their .glb files, with the KHR extensions, by the validator.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -176,5 +178,55 @@ run({
     assert(cmp.pixels > 0.3 * cmp.W * cmp.H, 'the object fills the view in both renders');
     assertLE(cmp.onlyOne, 0.03 * cmp.pixels, 'the silhouettes agree');
     assertLE(cmp.rel, REL_BOUND, 'three.js\'s render of the .glb against glint\'s render of the material');
+
+    // The same paintings fitted by the pbr method: its .glb carries the
+    // material's own parameters with the KHR extensions (or the fit, when
+    // that is closer) and the validator, which knows the extensions, finds
+    // no error.  Then a two-lobe pbr material made by the CLI, whose
+    // sharper lobe becomes KHR_materials_clearcoat.
+    const H = { 'X-Glint-Token': session.paint_token };
+    let fit = await t.daemon.api('POST', `/sessions/${session.id}/fits`, { method: 'pbr' }, H);
+    let pmid = fit.id;
+    for (let i = 0; !pmid && i < 600; i++) {
+      const j = (await t.daemon.api('GET', `/jobs/${fit.job.id}`, undefined, H)).job;
+      assert(j.state !== 'failed' && j.state !== 'cancelled', 'the pbr fit ran: ' + JSON.stringify(j));
+      if (j.state === 'done') pmid = j.material_id;
+      else await new Promise(r => setTimeout(r, 200));
+    }
+    assert(pmid, 'the pbr fit finished');
+    const plst = await t.daemon.api('GET', `/materials/${pmid}/exports`, undefined, H);
+    const pf = plst.fit;
+    t.log(`pbr material: export ${pf.export}, rel RMS ${pf.rel_rms.toFixed(4)} (mapped ${pf.rel_rms_exact.toFixed(4)}, ` +
+          `fitted ${pf.rel_rms_fitted.toFixed(4)}, ${pf.smith} G), extensions ${pf.extensions.join(', ') || 'none'}` +
+          (pf.note ? `; ${pf.note}` : ''));
+    assert(pf.export === 'exact parameters' || pf.export === 'fitted', 'the path is named');
+    assertEq(pf.export === 'exact parameters', pf.rel_rms_exact <= pf.rel_rms_fitted, 'the closer path is kept');
+    const r = await fetch(`${t.daemon.base}/api/v1/materials/${pmid}/material.glb`, { headers: H });
+    assertEq(r.status, 200, 'the pbr material\'s .glb');
+    assert(/export=(exact|fitted)/.test(r.headers.get('x-glint-gltf')), 'X-Glint-Gltf names the path');
+    const pglb = Buffer.from(await r.arrayBuffer());
+    const prep = await validateGlb(pglb);
+    t.log(`gltf-validator on the pbr .glb: ${prep.issues.numErrors} errors, ${prep.issues.numWarnings} warnings, ` +
+          `extensions used ${JSON.stringify(prep.info.extensionsUsed || [])}`);
+    if (prep.issues.numErrors) t.log(JSON.stringify(prep.issues.messages.slice(0, 5)));
+    assertEq(prep.issues.numErrors, 0, 'the glTF validator\'s errors on the pbr material\'s .glb');
+    assertEq(JSON.stringify(prep.info.extensionsUsed || []), JSON.stringify(pf.extensions), 'the extensions the exports list names');
+
+    const glint = path.join(process.env.GLINT_BUILD_DIR || path.join(SRC, 'build'), 'core', 'glint');
+    const cdir = fs.mkdtempSync(path.join(ARTIFACTS, 'coat-'));
+    fs.mkdirSync(path.join(cdir, 'mat'));
+    fs.writeFileSync(path.join(cdir, 'mat', 'material.json'), JSON.stringify({
+      format: 'glint-material', version: 1, method: 'pbr', fresnel: 'dielectric', diffuse: [0.3, 0.1, 0.05],
+      lobes: [{ alpha: 0.2, ks: [1, 1, 1], ior: 1.5 }, { alpha: 0.02, ks: [0.5, 0.5, 0.5], ior: 1.5 }], info: {} }));
+    execFileSync(glint, ['scene', 'create', '--size', '48', '-o', path.join(cdir, 'scene.json')]);
+    const out = JSON.parse(execFileSync(glint, ['export-gltf', path.join(cdir, 'mat'), '--scene', path.join(cdir, 'scene.json'),
+                                                '-o', path.join(cdir, 'coat.glb')], { encoding: 'utf8' }));
+    t.log(`two-lobe pbr material by the CLI: export ${out.export}, mapped ${out.rel_rms_exact}, fitted ${out.rel_rms_fitted}, ` +
+          `extensions ${out.extensions.join(', ')}`);
+    assert(out.extensions.includes('KHR_materials_clearcoat'), 'the sharper lobe is the clearcoat (closer than the fit)');
+    const crep = await validateGlb(fs.readFileSync(path.join(cdir, 'coat.glb')));
+    if (crep.issues.numErrors) t.log(JSON.stringify(crep.issues.messages.slice(0, 5)));
+    assertEq(crep.issues.numErrors, 0, 'the glTF validator\'s errors on the clearcoat .glb');
+    assertEq((crep.info.extensionsUsed || []).length, 3, 'ior, specular and clearcoat declared');
   },
 });

@@ -175,6 +175,26 @@ expect_ok "export-usda" "$G" export-usda "$T/mat" --scene "$T/scene.json" --pain
 grep -q 'def Mesh "mesh"' "$T/mat.usda" && grep -q 'rel material:binding = </glint/material>' "$T/mat.usda" && ok "export-usda: the mesh bound to the material" || bad "export-usda: the mesh bound to the material"
 expect_ok "export-usda --no-mesh" "$G" export-usda "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" --no-mesh -o "$T/nomesh.usda"
 ! grep -q 'def Mesh' "$T/nomesh.usda" && python3 "$SRC/tests/integration/export_specs.py" usda "$T/nomesh.usda" && ok "export-usda --no-mesh: the UsdPreviewSurface alone, as the specification has it" || bad "export-usda --no-mesh: the UsdPreviewSurface alone, as the specification has it"
+# a pbr material: its own parameters with KHR extensions where closer than the fit
+expect_ok "paint phong32" "$G" paint "$T/scene.json" --brdf phong32 -o "$T/paintph"
+expect_ok "fit pbr" "$G" fit "$T/scene.json" --paintings "$T/paintph" --method pbr -o "$T/matpbr" --no-cache -q
+expect_ok "export-gltf of a pbr material" "$G" export-gltf "$T/matpbr" --scene "$T/scene.json" --paintings "$T/paintph" -o "$T/pbr.glb"
+python3 - "$T/out" "$T/pbr.glb" <<'PY' && ok "export-gltf of a pbr material: the closer path, its extensions declared" || bad "export-gltf of a pbr material: the closer path, its extensions declared ($(cat "$T/out"))"
+import json, struct, sys
+o = json.load(open(sys.argv[1]))
+b = open(sys.argv[2], "rb").read()
+d = json.loads(b[20:20 + struct.unpack("<I", b[12:16])[0]])
+assert o["export"] in ("exact parameters", "fitted"), o
+assert (o["export"] == "exact parameters") == (o["rel_rms_exact"] <= o["rel_rms_fitted"]), o
+assert abs(o["fit_rel_rms"] - min(o["rel_rms_exact"], o["rel_rms_fitted"])) < 1e-4, o
+assert d.get("extensionsUsed", []) == o["extensions"], (d.get("extensionsUsed"), o)
+assert sorted(d["materials"][0].get("extensions", {})) == sorted(o["extensions"])
+assert d["materials"][0]["extras"]["glint"]["export"] == o["export"]
+PY
+expect_ok "export-usda of a pbr material" "$G" export-usda "$T/matpbr" --scene "$T/scene.json" --paintings "$T/paintph" --no-mesh -o "$T/pbr.usda"
+python3 "$SRC/tests/integration/export_specs.py" usda "$T/pbr.usda" >/dev/null && ok "export-usda of a pbr material conforms" || bad "export-usda of a pbr material conforms"
+expect_ok "export-mtlx of a pbr material" "$G" export-mtlx "$T/matpbr" --scene "$T/scene.json" --paintings "$T/paintph" -o "$T/pbr.mtlx"
+python3 "$SRC/tests/integration/export_specs.py" mtlx "$T/pbr.mtlx" >/dev/null && ok "export-mtlx of a pbr material conforms" || bad "export-mtlx of a pbr material conforms"
 expect_err "export-mtlx usage" 1 "usage" "$G" export-mtlx "$T/mat" -o "$T/x.mtlx"
 expect_err "export-mtlx --no-mesh is usda's" 1 "usage" "$G" export-mtlx "$T/mat" --scene "$T/scene.json" --no-mesh -o "$T/x.mtlx"
 head -1 "$T/mat.brdf" | grep -q '^analytic$' && grep -q 'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)' "$T/mat.brdf" && ok "export-brdf writes BRDF Explorer's format" || bad "export-brdf writes BRDF Explorer's format"

@@ -15,7 +15,8 @@ The tables below are copied from the specifications' own node definitions:
 What is checked: every input's name and type against the table, each value
 parses as its type and lies in the definition's range (uimin..uimax; for USD
 the documented range: metallic, roughness [0, 1], colours [0, 1] for a fitted
-albedo, ior > 0), the shader is connected as the specification says
+albedo, ior > 0; the metallic workflow, or the specular one with its
+specularColor), the shader is connected as the specification says
 (surfacematerial.surfaceshader names the standard_surface node; the
 Material's outputs:surface connects to the shader's outputs:surface), every
 file an input names exists next to the export (none is expected: the files
@@ -218,7 +219,10 @@ def check_usda(text, path=None):
         if m:
             need(PREVIEW_SURFACE_OUTPUTS.get(m.group(2)) == m.group(1), "output %s" % line)
     need(USD_FIT_INPUTS <= set(values), "missing %s" % (USD_FIT_INPUTS - set(values)))
-    need(values["useSpecularWorkflow"] == 0, "not the metallic workflow")
+    # the metallic workflow, or (a pbr material's dielectric with
+    # KHR_materials_specular) the specular one with its specularColor
+    need(values["useSpecularWorkflow"] == 0 or "specularColor" in values,
+         "the specular workflow without a specularColor")
     need(re.search(r"token outputs:surface\.connect = </glint/%s/%s\.outputs:surface>" % (mname, sname), mbody),
          "the Material's surface does not connect to the shader")
     meshes = [(n, b) for n, (k, b) in prims.items() if k == "Mesh"]

@@ -68,7 +68,7 @@ static void rad(const void *ctx, const double n[3], const double wi[3], const do
 
 TEST(a_metal_is_glints_cook_torrance_with_alpha_roughness_squared)
 {
-    gltf_pbr p = {{0.9, 0.6, 0.3}, 1.0, 0.4, 0, 0, 0};
+    gltf_pbr p = {.base = {0.9, 0.6, 0.3}, .metallic = 1.0, .roughness = 0.4};
     brdf b;
     glint_err e;
     double worst = 0.0;
@@ -93,8 +93,9 @@ TEST(a_metal_is_glints_cook_torrance_with_alpha_roughness_squared)
 
 TEST(the_fit_recovers_what_the_model_can_represent)
 {
-    static const gltf_pbr truths[2] = {{{0.9, 0.6, 0.3}, 1.0, 0.3, 0, 0, 0},
-                                       {{0.5, 0.3, 0.2}, 0.0, 0.5, 0, 0, 0}};
+    static const gltf_pbr truths[2] = {
+        {.base = {0.9, 0.6, 0.3}, .metallic = 1.0, .roughness = 0.3},
+        {.base = {0.5, 0.3, 0.2}, .metallic = 0.0, .roughness = 0.5}};
     for (int t = 0; t < 2; t++) {
         cosf_ctx x = {&truths[t], NULL};
         gltf_pbr got;
@@ -161,7 +162,8 @@ static uint32_t u32(const unsigned char *p)
 
 TEST(the_glb_file_holds_the_mesh_and_the_material)
 {
-    gltf_pbr p = {{0.5, 0.25, 0.125}, 0.25, 0.75, 0.01, 10, 0};
+    gltf_pbr p = {.base = {0.5, 0.25, 0.125}, .metallic = 0.25, .roughness = 0.75, .rel_rms = 0.01,
+                  .pairs = 10};
     void *glb;
     size_t len;
     glint_err e;
@@ -684,7 +686,7 @@ TEST(a_uniform_material_bakes_its_average)
 
 TEST(baking_refuses_what_it_cannot_do)
 {
-    gltf_pbr p = {{0.5, 0.5, 0.5}, 0.0, 0.5, 0, 0, 1};
+    gltf_pbr p = {.base = {0.5, 0.5, 0.5}, .metallic = 0.0, .roughness = 0.5, .spatial = 1};
     gltf_bake b;
     material none = {0};
     mesh bare;

@@ -6,6 +6,10 @@
  *   with GLINT_EINVAL, nothing written.
  * - Names and notes cannot break the documents: node names cut to
  *   identifiers, "--" kept out of an XML comment, quotes out of a USD doc.
+ * - A pbr material's mapping: KHR ior, specular and clearcoat as
+ *   specular_IOR, specular, specular_color, coat, coat_roughness
+ *   (MaterialX) and the specular workflow's specularColor, ior,
+ *   clearcoat, clearcoatRoughness (USD); refused outside their ranges.
  * - A mesh: one triangle with its points, normals, st and indices; without
  *   uv, no st.  The spec checks of whole files are tests/integration/
  *   export_specs.py's (run by the CLI and integration tests). */
@@ -143,10 +147,75 @@ TEST(usda_material_and_mesh)
     ASSERT(t == NULL);
 }
 
+/* a pbr material's mapping with the three KHR extensions (gltf_direct.c) */
+static gltf_pbr pbr_khr(void)
+{
+    gltf_pbr p = pbr(0.5, 0.25, 0.125, 0.0, 0.3);
+    p.exact = 1;
+    p.rel_rms_fitted = 0.05;
+    p.khr.ior_used = p.khr.specular_used = p.khr.clearcoat_used = 1;
+    p.khr.ior = 1.7;
+    p.khr.specular = 0.8;
+    p.khr.specular_color[0] = 1.0, p.khr.specular_color[1] = 0.5, p.khr.specular_color[2] = 0.25;
+    p.khr.clearcoat = 0.5, p.khr.clearcoat_roughness = 0.2;
+    return p;
+}
+
+TEST(the_khr_extensions_in_both_documents)
+{
+    gltf_pbr p = pbr_khr();
+    double f0 = pow(0.7 / 2.7, 2.0);
+    char *t = NULL, want[160];
+    size_t len;
+    glint_err e;
+    ASSERT_OK(mtlx_write(&p, "g", NULL, &t, &e));
+    /* F0 of the brightest channel (specularColor 1) is the ior's own */
+    ASSERT(strstr(t, "name=\"specular_IOR\" type=\"float\" value=\"1.7\""));
+    ASSERT(strstr(t, "name=\"specular\" type=\"float\" value=\"0.8\""));
+    ASSERT(strstr(t, "name=\"specular_color\" type=\"color3\" value=\"1, 0.5, 0.25\""));
+    ASSERT(strstr(t, "name=\"coat\" type=\"float\" value=\"0.5\""));
+    ASSERT(strstr(t, "name=\"coat_roughness\" type=\"float\" value=\"0.2\""));
+    ASSERT(strstr(t, "own parameters") && strstr(t, "the fit's: 0.0500"));
+    free(t);
+    ASSERT_OK(usda_write(&p, NULL, NULL, &t, &len, &e));
+    ASSERT(strstr(t, "int inputs:useSpecularWorkflow = 1"));
+    snprintf(want, sizeof want, "color3f inputs:specularColor = (%.6g, %.6g, %.6g)",
+             0.8 * f0, 0.8 * 0.5 * f0, 0.8 * 0.25 * f0);
+    ASSERT(strstr(t, want));
+    ASSERT(strstr(t, "float inputs:ior = 1.7\n"));
+    ASSERT(strstr(t, "float inputs:clearcoat = 0.5\n") &&
+           strstr(t, "float inputs:clearcoatRoughness = 0.2\n"));
+    free(t);
+    /* a specular colour above 1: the ior rises to hold its F0 */
+    p.khr.specular_color[0] = 2.0;
+    ASSERT_OK(mtlx_write(&p, "g", NULL, &t, &e));
+    {
+        double r = sqrt(2.0 * f0);
+        snprintf(want, sizeof want, "name=\"specular_IOR\" type=\"float\" value=\"%.6g\"",
+                 (1.0 + r) / (1.0 - r));
+        ASSERT(strstr(t, want));
+        ASSERT(strstr(t, "value=\"1, 0.25, 0.125\""));
+    }
+    free(t);
+    /* refused: an ior below 1, a negative specular colour, a coat above 1 */
+    p = pbr_khr();
+    p.khr.ior = 0.5;
+    ASSERT_EQ(mtlx_write(&p, "g", NULL, &t, &e), GLINT_EINVAL);
+    ASSERT_EQ(usda_write(&p, NULL, NULL, &t, &len, &e), GLINT_EINVAL);
+    p = pbr_khr();
+    p.khr.specular_color[1] = -0.1;
+    ASSERT_EQ(mtlx_write(&p, "g", NULL, &t, &e), GLINT_EINVAL);
+    p = pbr_khr();
+    p.khr.clearcoat = 1.5;
+    ASSERT_EQ(usda_write(&p, NULL, NULL, &t, &len, &e), GLINT_EINVAL);
+    ASSERT(t == NULL);
+}
+
 TEST_LIST{
     TEST_ENTRY(mtlx_carries_the_fit),
     TEST_ENTRY(mtlx_extremes_and_refusals),
     TEST_ENTRY(names_and_notes_cannot_break_the_documents),
     TEST_ENTRY(usda_material_and_mesh),
+    TEST_ENTRY(the_khr_extensions_in_both_documents),
 };
 TEST_MAIN()

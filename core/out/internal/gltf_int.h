@@ -13,6 +13,7 @@
 #define GLINT_GLTF_INT_H
 
 #include "gltf.h"
+#include "method_pbr.h"
 
 typedef struct gltf_pairs {
     int n;                                   /* pairs kept (ci, co > 0, finite y) */
@@ -42,5 +43,21 @@ void gltf_spec_terms(double alpha, const double n[3], const double wi[3], const 
  * for them (OUT: base).  y of P; S, s may be any arrays of P->n. */
 double gltf_pairs_error(const gltf_pairs *P, const double *S, const double *s, double m,
                         double base[3]);
+
+/* The relative RMS of p's f cos against y over P's pairs: by gltf_brdf
+ * (smith GLTF_SMITH_SEPARABLE) or gltf_khr_brdf_smith (the other form). */
+double gltf_pairs_rel_rms(const gltf_pairs *P, const gltf_pbr *p, int smith);
+
+/* pm's parameters as the KHR model's (gltf_direct.c says how): OUT
+ * out->base, metallic, roughness, khr and note (cleared first); the rest of
+ * *out untouched.  coat: with two lobes, the sharper as the clearcoat (1)
+ * or left out (0). */
+void gltf_direct_map(const pbr_material *pm, int coat, gltf_pbr *out);
+
+/* After the fit in *out: when m is a pbr material (pbr, pbr_env, or
+ * pbr_detail's base), its mapping, measured over the fit's pairs at smp,
+ * replaces the fit unless its relative RMS is above the fit's.  Sets
+ * out->rel_rms_fitted, rel_rms_exact (NaN: no mapping), exact, note. */
+int gltf_direct_choose(const material *m, const samples *smp, gltf_pbr *out, glint_err *err);
 
 #endif
