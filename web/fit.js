@@ -460,14 +460,18 @@ export class FitPanel extends EventTarget {
 
   // The first look while a choosing method works: the first method offered
   // for the same lighting that does not choose (the quickest the daemon
-  // lists first), at its own settings, shown only while the choice is still
-  // running and labelled as such.  Its failure is not the fit's: nothing is
-  // shown then.
+  // lists first), at its own settings but for the light the views were
+  // painted under (the environment, its turn and brightness, as setMethod
+  // fills them), shown only while the choice is still running and labelled
+  // as such.  Its failure is not the fit's: nothing is shown then.
   async firstLook(t0) {
     this.firstDone = false;
     const q = this.methods.find(x => !x.chooses && x.lighting === this.method.lighting);
     if (!q) return;
-    const r = await this.api.fit(this.session.id, { method: q.name });
+    const own = new Set(q.params.map(p => p.name)), v = this.values(), light = {};
+    for (const k of ['env', 'env_rotation', 'env_intensity'])
+      if (own.has(k) && v[k] !== undefined) light[k] = v[k];
+    const r = await this.api.fit(this.session.id, { method: q.name, params: light });
     let m = await r.json();
     if (r.status !== 201) {
       let j = m.job;

@@ -178,4 +178,42 @@ run({
     assert(await page.isHidden('#env-rot-l'), 'no turn slider for the point light');
     await t.shot(page, 'envlit.png');
   },
+  async 'choose for me under an environment: a first look under the scene light, then the choice'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 48, height: 48,
+                                                base: { env: { spec: 'sky', rotation: 30, lights: 32 } } });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.waitForSelector('#quality .q[data-preset]');
+    const opts = await page.evaluate(() => [...document.getElementById('fit-method').options]
+      .map(o => ({ v: o.value, off: o.disabled })));
+    const mine = (await t.daemon.api('GET', '/methods')).methods.filter(m => m.chooses);
+    const envChooser = mine.find(m => m.lighting === 'environment').name;
+    const lampChooser = mine.find(m => m.lighting === 'point').name;
+    assert(opts.some(o => o.v === envChooser && !o.off), 'the choice under an environment is offered: ' + JSON.stringify(opts));
+    assert(opts.some(o => o.v === lampChooser && o.off), 'the choice among lamp-lit models is not');
+    await setValue(page, 'fit-method', envChooser, 'change');
+    assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');
+    assertEq(await page.inputValue('#param-env_rotation'), '30', 'turned as the scene is');
+    await page.click('#quality .q[data-preset="draft"] input');
+    await drawStroke(page, [[18, 14], [30, 14]]);
+    await settled(page, 0);
+    const before = await page.evaluate(() => window.glint.lastFit && window.glint.lastFit.id);
+    await page.click('#fit-btn');
+    await page.waitForFunction(b => window.glint.lastFit && window.glint.lastFit.id !== b, before, { timeout: 240000 });
+    const mat = await page.evaluate(() => window.glint.state.judge.mat);
+    const first = await page.evaluate(() => window.glint.firstLook);
+    t.log(`first look ${JSON.stringify(first)}; chose ${mat.choice && mat.choice.chosen_label}`);
+    assert(mat.choice && mat.choice.candidates.length >= 2, 'the choice reports its candidates');
+    assertEq(mat.params.env, 'sky', 'the choice was made under the scene environment');
+    // the first look, shown while it chose, was fitted under the same light
+    assert(first && first.id, 'a first look was shown');
+    const fm = await page.evaluate(id => window.glint.api.material(id), first.id);
+    assertEq(fm.params.env, 'sky', 'the first look is fitted under the scene environment');
+    assertEq(fm.params.env_rotation, 30, 'turned as the scene is');
+    // the words name each candidate by its own label
+    await waitFor(() => page.evaluate(() => !!document.getElementById('auto-choice')), 60000, 'the choice is explained');
+    const said = await page.textContent('#auto-choice');
+    t.log('said: ' + said);
+    for (const c of mat.choice.candidates) assert(said.includes(c.label), 'names ' + c.label + ': ' + said);
+  },
 });
