@@ -111,6 +111,7 @@ typedef struct result {
     double e[E_N];
     double fit_ms;
     int ok;
+    char chose[96];  /* a method that chooses: the chosen candidate's label */
 } result;
 
 /* A material's truths over the views measured, rendered once for every
@@ -269,6 +270,11 @@ static int run_one(bench *b, const method *m, int kd_given, truths *tr,
     if (prep_fit(p, NULL, rgb, &mat, &e))
         goto done;
     r->fit_ms = (glint_now() - t0) * 1e3;
+    { /* a method that chooses: what it chose */
+        const char *ch = json_string_value(
+            json_object_get(json_object_get(mat.info, "choice"), "chosen_label"));
+        snprintf(r->chose, sizeof r->chose, "%s", ch ? ch : "");
+    }
     if (getenv("BENCH_ENV_DEBUG")) {
         char *txt = json_dumps(json_object_get(mat.info, "errors"), JSON_COMPACT);
         printf("    %s errors: %.600s\n", m->name, txt ? txt : "");
@@ -467,9 +473,9 @@ int main(int argc, char **argv)
                     continue;
                 r->ok = 1;
                 printf("  %-28s %-8s %d view%s: painted %.4f new %.4f rotated %.4f other %.4f "
-                       "(%.0f ms)\n", mats[i].name, mnames[mi], nvs[vi],
+                       "(%.0f ms)%s%s\n", mats[i].name, mnames[mi], nvs[vi],
                        nvs[vi] > 1 ? "s" : "", r->e[E_PAINTED], r->e[E_NEW], r->e[E_ROT],
-                       r->e[E_OTHER], r->fit_ms);
+                       r->e[E_OTHER], r->fit_ms, r->chose[0] ? " chose: " : "", r->chose);
                 fflush(stdout);
             }
             truths_free(&tr);
