@@ -13,13 +13,16 @@ set of views is the relative RMS over every covered pixel,
 and the worst materials, with the median fit time (wall clock of the
 command, warm precomputation).
 
-usage: bench_measured.py GLINT [--size N] [--every K] [--methods a,b,c]
-       [--data ../shared/data/measured]
-(every K-th material of the 56; default 4: 14 materials).  The radiance is
+usage: bench_measured.py GLINT [--size N] [--every K | --materials a,b]
+       [--methods a,b,c] [--data ../shared/data/measured]
+(every K-th material of the 56; default 4: 14 materials; or those named).
+A method that chooses prints what it chose.  GLINT is copied first, so a
+rebuild while it runs does not stop it.  The radiance is
 scene.h's: a point light of intensity 1 makes a white Lambertian read 1."""
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -61,6 +64,7 @@ def main():
     ap.add_argument("glint")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--every", type=int, default=4)
+    ap.add_argument("--materials", default="")
     ap.add_argument("--methods", default="hf3,pbr,pbr_detail,auto")
     ap.add_argument("--data", default=os.path.join(os.path.dirname(__file__), "..", "..", "..",
                                                    "shared", "data", "measured"))
@@ -70,11 +74,15 @@ def main():
         print("no %s: nothing to measure" % fits)
         return 0
     names = [m["name"] for m in json.load(open(fits))["materials"]][::a.every]
+    if a.materials:
+        names = a.materials.split(",")
     methods = a.methods.split(",")
     env = dict(os.environ, GLINT_MEASURED_DIR=os.path.abspath(a.data))
     os.environ.update(env)
     res = {m: [] for m in methods}
     with tempfile.TemporaryDirectory() as tmp:
+        shutil.copy(a.glint, os.path.join(tmp, "glint"))
+        a.glint = os.path.join(tmp, "glint")
         sc = {k: os.path.join(tmp, k + ".json") for k in ("painted", "new", "beyond")}
         size = ["--size", str(a.size)]
         run([a.glint, "scene", "create", "--mesh", "sphere"] + size + ["-o", sc["painted"]])
@@ -103,8 +111,11 @@ def main():
                 e_n = error(a.glint, mat, sc["new"], dirs["new"], 20, tmp)
                 e_b = error(a.glint, mat, sc["beyond"], dirs["beyond"], 20, tmp)
                 res[m].append((name, e_p, e_n, e_b, secs))
-                print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s"
-                      % (name, m, 100 * e_p, 100 * e_n, 100 * e_b, secs), flush=True)
+                with open(os.path.join(mat, "material.json")) as f:
+                    chose = json.load(f)["method"]
+                print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s%s"
+                      % (name, m, 100 * e_p, 100 * e_n, 100 * e_b, secs,
+                         "" if chose == m else "  chose " + chose), flush=True)
     print()
     print("| method | materials | painted median | new views median | p90 | beyond median | "
           "p90 | worst (new views) | fit s (median) |")

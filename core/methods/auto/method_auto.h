@@ -23,8 +23,11 @@
  *   hybrid  maps whose products are hf4's (method_hybrid.h)
  * and each is measured on the held-out pixels (RMS, per unit light, RGB,
  * the material evaluated at each pixel's texture coordinates; pooled, and
- * apart for the views inside the range and the one beyond it).  The choice
- * starts at hf3; a richer candidate replaces it only when its held-out RMS
+ * apart for the views inside the range and the one beyond it).  A
+ * candidate is judged by the geometric mean of those two parts when both
+ * are held out (so that the beyond view, whose error is the larger, does
+ * not hide a gain on new views), else by the pooled RMS.  The choice
+ * starts at hf3; a richer candidate replaces it only when its judged RMS
  * is below the current choice's by more than `threshold` (a fraction) and
  * by more than `floor` (a quarter of an 8-bit step by default: a smaller
  * gain is within a painting's quantization).  Held-out views are the
@@ -35,8 +38,8 @@
  * (tests/unit/test_auto.c prints every candidate).
  * pbr, pbr_detail, hf2d, hf4, maps and hybrid are alternatives, not steps of one
  * chain, so each is measured against the choice so far; every take lowers
- * the held-out RMS, so the answer is never worse on the held-out samples
- * than hf3, the simplest.  The material is the chosen
+ * the judged RMS, so the answer is never worse on the held-out samples, so
+ * judged, than hf3, the simplest.  The material is the chosen
  * method refitted to every painted sample, held-out ones included (its
  * manifest names that method); info.choice lists
  * every candidate's held-out and painted RMS, fit time and whether it was

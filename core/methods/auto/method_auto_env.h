@@ -12,8 +12,10 @@
  *
  * Held out: one painted view in `every` (the views at every/2, every/2 +
  * every, ... of the painted ones; at least one, at least one kept), whole;
- * with one view painted, one tile of 8 x 8 pixels in `every` (a hash of
- * the tile, as method_auto.h).  There are no lights beyond the painted
+ * with one view painted, its most grazing pixels, one in `every` by n.wo
+ * (scattered tiles, as method_auto.h holds out, measure interpolation: a
+ * band at grazing angles is what a new view shows that the painted one
+ * barely did).  There are no lights beyond the painted
  * range to hold out: the light is the environment, the same in every view.
  *
  * Every candidate reads the same levels as a fit of its own (the same
@@ -49,7 +51,7 @@ typedef struct auto_env_params {
     srbf_params env;
     double threshold;  /* fraction a later candidate must gain on held-out samples */
     double floor;      /* and at least this much (RMS, the painting's units) */
-    int every;         /* one view (or pixel tile) in this many held out */
+    int every;         /* one view (or pixel by n.wo) in this many held out */
 } auto_env_params;
 
 #endif
