@@ -18,8 +18,8 @@
  *     answers worse there than the first, and its material renders the
  *     truth on the held-out view;
  *   - a painting of two lobes takes the two-lobe candidate;
- *   - extremes: one view only (pixel tiles held out), all-black, a single
- *     painted pixel, NaN (refused, named). */
+ *   - extremes: one view only (its most grazing pixels held out, srbf not
+ *     tried), all-black, a single painted pixel, NaN (refused, named). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -423,6 +423,11 @@ TEST(extremes)
     one[4] = 1;
     ASSERT_OK(auto_fit(&truth, one, &m, &pp, &e));
     ASSERT(!strcmp(json_string_value(json_object_get(choice_of(&m), "held_out")), "pixels"));
+    /* srbf is not tried from one view, and says why */
+    ASSERT_EQ(json_array_size(json_object_get(choice_of(&m), "candidates")), 3);
+    ASSERT(!strcmp(json_string_value(json_object_get(
+                       json_array_get(json_object_get(choice_of(&m), "not_tried"), 0), "method")),
+                   "srbf"));
     printf("  one view: chose %s, kd %.4f\n",
            json_string_value(json_object_get(choice_of(&m), "chosen")),
            pbr_material_of(&m) ? pbr_material_of(&m)->kd[0] : -1.0);
