@@ -3,7 +3,7 @@
  *
  * Defaults (measured on the default scene's sphere and on measured MERL
  * materials, see the commit that set them): res_h 32, res_d 16 (512 nodes
- * a channel), lambda 1e-4. */
+ * a channel), lambda 1e-8. */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -45,7 +45,7 @@ static void tab_params_default(void *p)
     tab_params *tp = p;
     tp->res_h = 32;
     tp->res_d = 16;
-    tp->lambda = 1e-4;
+    tp->lambda = 1e-8;
     tp->nonneg = 1;
 }
 

@@ -203,13 +203,20 @@ static void solve_factored(const tab_operator *op, double *x)
                 op->nodes, x, 1);
 }
 
-/* One channel under t >= 0 (OUT: x[nodes]). */
+/* One channel under t >= 0 (OUT: x[nodes]; x0: nodes of scratch).  The
+ * active set starts from the unconstrained answer clipped at 0 (feasible,
+ * and most nodes of a painted table are positive: fewer steps than from 0). */
 static int solve_nonneg(const tab_operator *op, const double *q, double ff, lsq_work *w,
-                        double *x, tab_solve_report *rep, int c, glint_err *err)
+                        double *x, double *x0, tab_solve_report *rep, int c, glint_err *err)
 {
-    lsq_problem p = {.n = op->nodes, .H = op->H, .q = q, .ff = ff, .R0 = op->R};
+    lsq_problem p = {.n = op->nodes, .H = op->H, .q = q, .ff = ff, .R0 = op->R, .c0 = x0};
     lsq_result res;
-    int rc = lsq_solve(&p, LSQ_NONNEG, 0.0, w, x, &res, err);
+    int rc;
+    memcpy(x0, q, (size_t)op->nodes * sizeof *x0);
+    solve_factored(op, x0);
+    for (int k = 0; k < op->nodes; k++)
+        x0[k] = fmax(x0[k], 0.0);
+    rc = lsq_solve(&p, LSQ_NONNEG, 0.0, w, x, &res, err);
     if (rc)
         return rc;
     if (res.status != LSQ_OK)
@@ -225,7 +232,7 @@ int tab_solve(const tab_design *d, const tab_operator *op, const float *rgb, int
               double *t, tab_solve_report *rep, glint_err *err)
 {
     int nodes = tab_nodes(&d->g), rc = 0;
-    double *q = malloc(4 * (size_t)nodes * sizeof *q), *x, ff[3];
+    double *q = malloc(5 * (size_t)nodes * sizeof *q), *x, *x0, ff[3];
     lsq_work *w = nonneg ? lsq_work_new(nodes, 0) : NULL;
     tab_solve_report r;
     memset(&r, 0, sizeof r);
@@ -235,11 +242,12 @@ int tab_solve(const tab_design *d, const tab_operator *op, const float *rgb, int
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (tab solve, %d nodes)", nodes);
     }
     x = q + 3 * (size_t)nodes;
+    x0 = x + nodes;
     solve_rhs(d, rgb, q, ff);
     for (int c = 0; c < 3 && !rc; c++) {
         const double *qc = q + (size_t)c * nodes;
         if (nonneg) {
-            rc = solve_nonneg(op, qc, ff[c], w, x, &r, c, err);
+            rc = solve_nonneg(op, qc, ff[c], w, x, x0, &r, c, err);
         } else {
             memcpy(x, qc, (size_t)nodes * sizeof *x);
             solve_factored(op, x);
