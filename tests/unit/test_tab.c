@@ -6,8 +6,8 @@
  * constraint where it is inactive; the extremes: a black painting, a
  * single painted pixel, a painting brighter than physical (kept, noted), a
  * mirror-like highlight, NaN and infinity (GLINT_ENONFINITE), one view
- * only; the material read back exactly and damaged ones refused; the GPU
- * description.
+ * only; the material read back exactly and damaged ones refused; the GPU's
+ * render against the CPU's (skipped without EGL); the MERL export.
  *
  * The samples are those of the default scene (the sphere, 12 views) at 64 x
  * 64; values are f ci per unit light (scene.h), computed at the samples. */
@@ -19,7 +19,9 @@
 
 #include "brdf.h"
 #include "check.h"
+#include "glr.h"
 #include "material.h"
+#include "merl_material.h"
 #include "method_tab.h"
 #include "raster.h"
 #include "samples.h"
@@ -566,6 +568,78 @@ TEST(material_files_round_trip_and_damage)
     free(v);
 }
 
+/* The GPU's fragment stage (one float texture, texelFetch, bilinear in the
+ * shader) renders what eval does: mean |gl - cpu| under 1/255 of the
+ * brightest pixel on two views.  Without EGL it says so and passes. */
+TEST(gpu_render_matches_cpu)
+{
+    material m;
+    glint_err e;
+    float *v;
+    glr *g = NULL;
+    glr_mesh *gm = NULL;
+    ASSERT_OK(setup());
+    if (glr_open(&g, &e)) {
+        printf("  skipped: %s\n", e.msg);
+        return;
+    }
+    ASSERT((v = values_brdf("ct:rough=0.2,kd=0.3,f0=0.1", &S)) != NULL);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    ASSERT_OK(glr_mesh_upload(g, &SC.mesh, &gm, &e));
+    for (int k = 0; k < 12; k += 7) {
+        img ref, out;
+        double d = 0.0, mx = 0.0;
+        size_t np = (size_t)128 * 128 * 3;
+        ASSERT_OK(material_render(&m, &SC.mesh, &SC.views[k], 128, 128, &ref, NULL, &e));
+        ASSERT_OK(glr_preview(g, gm, &m, &SC.views[k], 128, 128, 0.0f, &out, &e));
+        for (size_t i = 0; i < np; i++) {
+            d += fabs(ref.px[i] - out.px[i]);
+            mx = fmax(mx, ref.px[i]);
+        }
+        d /= np;
+        printf("  view %d: mean |gl - cpu| = %.2e, max value %.3f\n", k, d, mx);
+        img_free(&ref);
+        img_free(&out);
+        ASSERT_MSG(mx > 0.1 && d < mx / 255, "view %d: mean |gl - cpu| %.3g, max %.3g", k, d,
+                   mx);
+    }
+    glr_mesh_free(g, gm);
+    glr_close(g);
+    material_free(&m);
+    free(v);
+}
+
+/* The MERL export works from eval: a Lambertian's table exports kd/pi in
+ * every bin above the horizon (within 1%), isotropic, nothing non-finite. */
+TEST(merl_export_of_a_lambertian)
+{
+    const double kd[3] = {0.6, 0.4, 0.2};
+    material m;
+    glint_err e;
+    float *v;
+    merl_table mt;
+    merl_stats st;
+    long above = 0;
+    ASSERT_OK(setup());
+    ASSERT((v = values_brdf("lambert:kd=0.6/0.4/0.2", &S)) != NULL);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    ASSERT_OK(merl_from_material(&m, 1, &mt, &st, &e));
+    ASSERT_EQ(st.anisotropic, 0);
+    ASSERT_EQ(st.nonfinite, 0);
+    for (long k = 0; k < MERL_N; k++) {
+        if (mt.f[k] == 0.0)
+            continue;
+        above++;
+        for (int c = 0; c < 3; c++)
+            ASSERT_MSG(fabs(mt.f[c * (long)MERL_N + k] - kd[c] / M_PI) <= 0.01 * kd[c] / M_PI,
+                       "bin %ld channel %d: %.6g", k, c, mt.f[c * (long)MERL_N + k]);
+    }
+    ASSERT_EQ(above + st.below_horizon, MERL_N);
+    merl_free(&mt);
+    material_free(&m);
+    free(v);
+}
+
 TEST_LIST {
     TEST_ENTRY(lambertian_comes_back),
     TEST_ENTRY(cook_torrance_fits_and_predicts_a_new_view),
@@ -579,6 +653,8 @@ TEST_LIST {
     TEST_ENTRY(one_view_only),
     TEST_ENTRY(bad_parameters_are_refused),
     TEST_ENTRY(material_files_round_trip_and_damage),
+    TEST_ENTRY(gpu_render_matches_cpu),
+    TEST_ENTRY(merl_export_of_a_lambertian),
 };
 
 TEST_MAIN()
