@@ -32,10 +32,13 @@
  * every resolution and sample count).  The prior fills the nodes no sample
  * reaches: its null space is spanned by 1, u, v and uv, so an unreached
  * node takes the value that continues its reached neighbours linearly
- * (then clamped at 0 by t >= 0).  ridge = TAB_RIDGE times the largest
- * diagonal entry makes the Gram matrix definite when neither the data nor
- * the prior determine a direction (a single sample, one theta_d): there
- * the table tends to 0.
+ * (then clamped at 0 by t >= 0).  The ridge makes the Gram matrix definite
+ * when neither the data nor the prior determine a direction (a single
+ * sample, one theta_d): there the table tends to 0.  It is TAB_RIDGE_PRIOR
+ * times the prior's weaker axis weight (far below what the prior asks of
+ * the nodes it alone sets: a Lambertian's table stays constant within
+ * 2e-4), or without a prior (lambda = 0) TAB_RIDGE_DATA times H's largest
+ * diagonal entry (the unreached nodes are then 0).
  *
  * Solved on the Gram form H = A'A/N + lambda L'L + ridge I (nodes x nodes,
  * independent of the painting, cached with its Cholesky factor), q = A'y/N:
@@ -56,7 +59,8 @@
 #define TAB_RES_D_MIN 2
 #define TAB_RES_D_MAX 64
 #define TAB_MAX_NODES 4096 /* lsq.h's LSQ_MAX_N */
-#define TAB_RIDGE 1e-9
+#define TAB_RIDGE_PRIOR 1e-6
+#define TAB_RIDGE_DATA 1e-9
 
 typedef struct tab_grid {
     int res_h, res_d;
@@ -109,10 +113,14 @@ void tab_design_weights(const tab_design *d, int i, double w[4]);
  * lsq_factor). */
 typedef struct tab_operator {
     int nodes;
-    double lambda, ridge; /* the ridge used (TAB_RIDGE of H's largest diagonal) */
+    double lambda, ridge; /* the ridge used (see the header) */
     double *H;            /* nodes x nodes, row-major */
     double *R;            /* nodes x nodes, upper, row-major */
 } tab_operator;
+
+/* The weights of the squared second differences along u and v (OUT: *wu,
+ * *wv): lambda du dv / du^4 and lambda du dv / dv^4. */
+void tab_prior_weights(const tab_grid *g, double lambda, double *wu, double *wv);
 
 /* Add lambda L'L (the prior of the header) to H (nodes x nodes). */
 void tab_prior_add(const tab_grid *g, double lambda, double *H);

@@ -108,14 +108,21 @@ static void add_second(double *H, int nodes, int a, int b, int e, double w)
             H[(size_t)k[x] * nodes + k[y]] += w * c[x] * c[y];
 }
 
+void tab_prior_weights(const tab_grid *g, double lambda, double *wu, double *wv)
+{
+    double hu = 1.0 / (g->res_h - 1), hv = 1.0 / (g->res_d - 1), area = hu * hv;
+    /* (t_uu)^2 du dv with t_uu = second difference / hu^2, and the same in v */
+    *wu = lambda * area / (hu * hu * hu * hu);
+    *wv = lambda * area / (hv * hv * hv * hv);
+}
+
 void tab_prior_add(const tab_grid *g, double lambda, double *H)
 {
     int rh = g->res_h, rd = g->res_d, nodes = tab_nodes(g);
-    double hu = 1.0 / (rh - 1), hv = 1.0 / (rd - 1), area = hu * hv;
-    /* (t_uu)^2 du dv with t_uu = second difference / hu^2, and the same in v */
-    double wu = lambda * area / (hu * hu * hu * hu), wv = lambda * area / (hv * hv * hv * hv);
+    double wu, wv;
     if (!(lambda > 0.0))
         return;
+    tab_prior_weights(g, lambda, &wu, &wv);
     for (int j = 0; j < rd; j++)
         for (int i = 1; i + 1 < rh; i++) {
             int k = j * rh + i;
@@ -126,6 +133,22 @@ void tab_prior_add(const tab_grid *g, double lambda, double *H)
             int k = j * rh + i;
             add_second(H, nodes, k - rh, k, k + rh, wv);
         }
+}
+
+/* The ridge: TAB_RIDGE_PRIOR of the prior's weakest weight (so that it
+ * never competes with the prior where the prior alone sets the nodes), or
+ * without a prior TAB_RIDGE_DATA of H's largest diagonal entry. */
+static double operator_ridge(const tab_grid *g, double lambda, const double *H)
+{
+    int nodes = tab_nodes(g);
+    double wu, wv, dmax = 0.0;
+    if (lambda > 0.0) {
+        tab_prior_weights(g, lambda, &wu, &wv);
+        return TAB_RIDGE_PRIOR * (g->res_d > 2 ? fmin(wu, wv) : wu);
+    }
+    for (int k = 0; k < nodes; k++)
+        dmax = fmax(dmax, H[(size_t)k * nodes + k]);
+    return TAB_RIDGE_DATA * (dmax > 0.0 ? dmax : 1.0);
 }
 
 void tab_operator_free(tab_operator *op)
@@ -141,7 +164,6 @@ int tab_operator_build(const tab_design *d, double lambda, tab_operator *out, gl
 {
     int nodes = tab_nodes(&d->g), rc;
     size_t nn = (size_t)nodes * nodes;
-    double dmax = 0.0;
     memset(out, 0, sizeof *out);
     if (!isfinite(lambda) || lambda < 0.0)
         return glint_err_set(err, GLINT_EINVAL, "tab: lambda %g must be finite and >= 0", lambda);
@@ -156,9 +178,7 @@ int tab_operator_build(const tab_design *d, double lambda, tab_operator *out, gl
     for (size_t k = 0; k < nn; k++)
         out->H[k] = d->gram[k] / d->n;
     tab_prior_add(&d->g, lambda, out->H);
-    for (int k = 0; k < nodes; k++)
-        dmax = fmax(dmax, out->H[(size_t)k * nodes + k]);
-    out->ridge = TAB_RIDGE * (dmax > 0.0 ? dmax : 1.0);
+    out->ridge = operator_ridge(&d->g, lambda, out->H);
     for (int k = 0; k < nodes; k++)
         out->H[(size_t)k * nodes + k] += out->ridge;
     if ((rc = lsq_factor(out->H, nodes, out->R, err))) {
