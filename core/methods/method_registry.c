@@ -12,6 +12,7 @@
 #include "method_pbr_detail.h"
 #include "method_pbr_env.h"
 #include "method_srbf.h"
+#include "method_tab.h"
 
 extern const method *const method_builtin[];
 
@@ -19,6 +20,7 @@ const method *const method_builtin[] = {
     &method_hf3,
     &method_pbr,
     &method_pbr_detail,
+    &method_tab,
     &method_pbr_env,
     &method_srbf,
     &method_hf4,
