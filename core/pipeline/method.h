@@ -113,7 +113,7 @@ typedef struct method_level {
                 const cache_value *v, glint_err *err);
 } method_level;
 
-#define METHOD_MAX_LEVELS 12
+#define METHOD_MAX_LEVELS 16
 
 /* ---- fit ------------------------------------------------------------------------------ */
 

@@ -15,6 +15,7 @@
 #include "method_maps.h"
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
+#include "method_tab.h"
 #include "scene.h"
 
 static const method_param auto_params_table[] = {
@@ -95,6 +96,7 @@ typedef struct cands {
     hybrid_params yp;
     pbr_params bp;
     pbr_detail_params xp;
+    tab_params tp;
 } cands;
 
 static void candidates(const auto_params *p, cands *c)
@@ -121,6 +123,7 @@ static void candidates(const auto_params *p, cands *c)
     if (p->components)
         c->yp.components = p->components;
     method_pbr.params_default(&c->bp);
+    method_tab.params_default(&c->tp);
     method_pbr_detail.params_default(&c->xp); /* hf3's levels and pbr's, shared */
     if (p->res)
         c->xp.hf.res = p->res;
@@ -132,7 +135,7 @@ static void candidates(const auto_params *p, cands *c)
  * hf3's two and hf4's one on every sample; hf2d's one on the kept pixels
  * and on every sample */
 enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_HF2D, LV_FULL_HF2D,
-       LV_PBR, LV_FULL_PBR, LV_N };
+       LV_PBR, LV_FULL_PBR, LV_TAB, LV_FULL_TAB = LV_TAB + 2, LV_N = LV_FULL_TAB + 2 };
 
 /* What a held-out sample measures. */
 enum { HELD_NO, HELD_NEW, HELD_BEYOND };
@@ -556,6 +559,64 @@ static int fpbrg_build(const method_build_in *in, cache_value *out, glint_err *e
     return full_build(in, &method_pbr, 0, NULL, &cs.bp, out, err);
 }
 
+/* tab's two levels (its design and operator) on the kept pixels, keyed
+ * from the split, and on every sample, keyed as a direct tab fit keys
+ * them. */
+static void tabd_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    cands cs;
+    char sk[CACHE_KEY_MAX];
+    candidates(params, &cs);
+    split_key(params, s, prev_key, sk, sizeof sk);
+    method_tab.levels[0].key(&cs.tp, s, sk, key, len);
+}
+
+static int tabd_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_tab, 0, NULL, &cs.tp, out, err);
+}
+
+static void tabo_key(const void *params, const samples *s, const char *prev_key, char *key,
+                     size_t len)
+{
+    cands cs;
+    candidates(params, &cs);
+    method_tab.levels[1].key(&cs.tp, s, prev_key, key, len);
+}
+
+static int tabo_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return candidate_build(in, &method_tab, 1, in->prev + LV_TAB, &cs.tp, out, err);
+}
+
+static void ftabd_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    (void)prev_key;
+    candidates(params, &cs);
+    method_tab.levels[0].key(&cs.tp, s, s->hash, key, len);
+}
+
+static int ftabd_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_tab, 0, NULL, &cs.tp, out, err);
+}
+
+static int ftabo_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    candidates(in->params, &cs);
+    return full_build(in, &method_tab, 1, in->prev + LV_FULL_TAB, &cs.tp, out, err);
+}
+
 static const method_level auto_levels[] = {
     {.name = "split", .progress = 0.05, .key = split_key, .build = split_build},
     {.name = "decomposition", .progress = 0.1, .key = hf3d_key, .build = hf3d_build},
@@ -572,6 +633,10 @@ static const method_level auto_levels[] = {
      .build = fhf2dd_build, .load = fhf2dd_load, .save = fhf2dd_save},
     {.name = "physical angles", .progress = 0.88, .key = pbrg_key, .build = pbrg_build},
     {.name = "full physical angles", .progress = 0.9, .key = fpbrg_key, .build = fpbrg_build},
+    {.name = "table design", .progress = 0.91, .key = tabd_key, .build = tabd_build},
+    {.name = "table operator", .progress = 0.92, .key = tabo_key, .build = tabo_build},
+    {.name = "full table design", .progress = 0.93, .key = ftabd_key, .build = ftabd_build},
+    {.name = "full table operator", .progress = 0.94, .key = tabo_key, .build = ftabo_build},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
@@ -590,6 +655,7 @@ static const cand_def CANDS[] = {
     {&method_pbr, offsetof(cands, bp), 1, {LV_PBR}, {LV_FULL_PBR}},
     {&method_pbr_detail, offsetof(cands, xp), 3, {LV_PBR, LV_HF3, LV_HF3 + 1},
      {LV_FULL_PBR, LV_FULL_HF3, LV_FULL_HF3 + 1}},
+    {&method_tab, offsetof(cands, tp), 2, {LV_TAB, LV_TAB + 1}, {LV_FULL_TAB, LV_FULL_TAB + 1}},
     {&method_hf2d, offsetof(cands, dp), 1, {LV_HF2D}, {LV_FULL_HF2D}},
     {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
     {&method_maps, offsetof(cands, mp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
@@ -749,7 +815,7 @@ static json_t *choice_report(const auto_params *p, const split *x, int chosen, j
         "candidates", list, "threshold", p->threshold, "floor", p->floor, "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
-        "cheapest first (hf3, pbr, pbr_detail, hf2d, hf4, maps, hybrid); a later one is "
+        "cheapest first (hf3, pbr, pbr_detail, tab, hf2d, hf4, maps, hybrid); a later one is "
         "taken when its judged RMS (the geometric mean of its held-out RMS on the new views "
         "and on the view beyond the painted range when both are held out, else its held-out "
         "RMS) is below the current choice's by more than the threshold (a fraction) and the "
@@ -859,7 +925,8 @@ const method method_auto = {
     .reference = "Jaroszkiewicz & McCool, GI 2003 (the models); the choice is glint's",
     .description =
         "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), the "
-        "same times a three-factor detail of what it leaves (pbr_detail), one "
+        "same times a three-factor detail of what it leaves (pbr_detail), one isotropic BRDF "
+        "tabulated over the half and difference angles (tab), one "
         "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
         "material maps (maps) and maps of textured materials (hybrid), each at its own "
         "settings, to the painted views but those held out (one in `every`, and the one whose "

@@ -15,6 +15,8 @@
  *         which extrapolates to new light by construction
  *   pbr_detail  pbr times a three-factor detail of what it leaves
  *         (method_pbr_detail.h; pbr's level and hf3's, shared)
+ *   tab   an isotropic BRDF tabulated over the half and difference angles
+ *         with a smoothness prior (method_tab.h)
  *   hf2d  one material whose q is 2D over the half vector's parabolic map:
  *         a highlight that depends on direction around the normal
  *         (method_hf2d.h)
@@ -36,7 +38,7 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * pbr, pbr_detail, hf2d, hf4, maps and hybrid are alternatives, not steps of one
+ * pbr, pbr_detail, tab, hf2d, hf4, maps and hybrid are alternatives, not steps of one
  * chain, so each is measured against the choice so far; every take lowers
  * the judged RMS, so the answer is never worse on the held-out samples, so
  * judged, than hf3, the simplest.  The material is the chosen
@@ -51,7 +53,8 @@
  * built as hf3 and hf4 key and build them (the same cache entries, on disk
  * too, as a direct fit of either), for the refit; hf2d's decomposition on
  * the kept pixels and on every sample likewise, and pbr's one level (its
- * per-sample angles) too.  The auto method makes
+ * per-sample angles) and tab's two (its design and operator) too.  The
+ * auto method makes
  * no material of its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
