@@ -16,33 +16,13 @@
 #define ENVP(m) offsetof(auto_env_params, env.m)
 
 static const method_param auto_env_params_table[] = {
-    {.name = "env", .label = "environment", .type = METHOD_PARAM_TEXT,
-     .affects = "precomputation",
-     .description = "the environment lighting the painted views: a built-in (studio, sky, "
-                    "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID "
-                    "of POST /api/v1/environments; the command line reads a map by its path "
-                    "instead (file:PATH)",
-     .offset = ENVP(env), .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
-     .examples = srbf_env_examples, .parse = srbf_env_parse, .format = srbf_env_format},
-    {.name = "env_rotation", .label = "environment turned (degrees)",
-     .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "rotation of the environment about the up (+z) axis, degrees",
-     .offset = ENVP(env_rotation), .min = -360.0, .max = 360.0},
-    {.name = "env_intensity", .label = "environment brightness", .type = METHOD_PARAM_NUMBER,
-     .affects = "fit",
-     .description = "scale of the environment's radiance (the painting is divided by it)",
-     .offset = ENVP(env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
-     .max = SRBF_MAX_ENV_INTENSITY},
+    SRBF_ENV_LIGHT_PARAMS(ENVP),
     {.name = "lights", .label = "light samples of the environment",
      .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "lights the environment is compressed into (median cut), for every "
                     "candidate: a fit's time grows linearly with it",
      .offset = ENVP(lights), .min = 1, .max = 4096},
-    {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED,
-     .type = METHOD_PARAM_ENUM, .affects = "precomputation",
-     .description = "shadows of the object on itself: auto casts rays unless the mesh is "
-                    "convex",
-     .offset = ENVP(visibility), .values = srbf_vis_values},
+    SRBF_VIS_PARAM(ENVP),
     {.name = "threshold", .label = "how much better a richer model must be",
      .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "a later candidate is taken only when it lowers the held-out RMS by more "

@@ -17,23 +17,7 @@ static const char *const fresnel_values[] = {"dielectric", "conductor", NULL};
 #define PBRP(m) offsetof(pbr_env_params, pbr.m)
 
 static const method_param pbr_env_params_table[] = {
-    {.name = "env", .label = "environment", .type = METHOD_PARAM_TEXT,
-     .affects = "precomputation",
-     .description = "the environment lighting the painted views: a built-in (studio, sky, "
-                    "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID "
-                    "of POST /api/v1/environments; the command line reads a map by its path "
-                    "instead (file:PATH)",
-     .offset = ENVP(env), .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",
-     .examples = srbf_env_examples, .parse = srbf_env_parse, .format = srbf_env_format},
-    {.name = "env_rotation", .label = "environment turned (degrees)",
-     .type = METHOD_PARAM_NUMBER, .affects = "precomputation",
-     .description = "rotation of the environment about the up (+z) axis, degrees",
-     .offset = ENVP(env_rotation), .min = -360.0, .max = 360.0},
-    {.name = "env_intensity", .label = "environment brightness", .type = METHOD_PARAM_NUMBER,
-     .affects = "fit",
-     .description = "scale of the environment's radiance (the painting is divided by it)",
-     .offset = ENVP(env_intensity), .min = SRBF_MIN_ENV_INTENSITY,
-     .max = SRBF_MAX_ENV_INTENSITY},
+    SRBF_ENV_LIGHT_PARAMS(ENVP),
     {.name = "lights", .label = "light samples of the environment", .type = METHOD_PARAM_INT,
      .affects = "precomputation",
      .description = "lights the environment is compressed into (median cut): each fitted "
@@ -48,11 +32,7 @@ static const method_param pbr_env_params_table[] = {
      .description = "dielectric (plastic, paint, wood: one index of refraction, a tinted "
                     "highlight weight) or conductor (metal: a reflectance per colour channel)",
      .offset = PBRP(fresnel), .values = fresnel_values},
-    {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED,
-     .type = METHOD_PARAM_ENUM, .affects = "precomputation",
-     .description = "shadows of the object on itself: auto casts rays unless the mesh is "
-                    "convex",
-     .offset = ENVP(visibility), .values = srbf_vis_values},
+    SRBF_VIS_PARAM(ENVP),
     {.name = "raster", .label = "pixels per view fitted", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_TEXT, .affects = "precomputation",
      .description = "grid of pixels per view that are fitted (each sums the lights it sees); "

@@ -102,6 +102,36 @@ extern const char *const srbf_env_examples[];
 extern const char *const srbf_raster_examples[];
 extern const char *const srbf_vis_values[];
 
+/* The parameter-table entries of the light the views were painted under
+ * (env, env_rotation, env_intensity) and of self-shadowing (visibility),
+ * for methods that keep srbf's environment in a member of their params:
+ * OFF(m) is the offset of srbf_params' member m there (pbr_env, auto_env;
+ * needs stddef.h). */
+#define SRBF_ENV_LIGHT_PARAMS(OFF)                                                            \
+    {.name = "env", .label = "environment", .type = METHOD_PARAM_TEXT,                        \
+     .affects = "precomputation",                                                             \
+     .description = "the environment lighting the painted views: a built-in (studio, sky, "   \
+                    "sunset, overcast, white), data:FILE of glintd's --env-dir or upload:ID " \
+                    "of POST /api/v1/environments; the command line reads a map by its path " \
+                    "instead (file:PATH)",                                                    \
+     .offset = OFF(env), .syntax = "NAME | builtin:NAME | data:FILE | upload:ID",             \
+     .examples = srbf_env_examples, .parse = srbf_env_parse, .format = srbf_env_format},      \
+    {.name = "env_rotation", .label = "environment turned (degrees)",                         \
+     .type = METHOD_PARAM_NUMBER, .affects = "precomputation",                                \
+     .description = "rotation of the environment about the up (+z) axis, degrees",            \
+     .offset = OFF(env_rotation), .min = -360.0, .max = 360.0},                               \
+    {.name = "env_intensity", .label = "environment brightness", .type = METHOD_PARAM_NUMBER, \
+     .affects = "fit",                                                                        \
+     .description = "scale of the environment's radiance (the painting is divided by it)",    \
+     .offset = OFF(env_intensity), .min = SRBF_MIN_ENV_INTENSITY,                             \
+     .max = SRBF_MAX_ENV_INTENSITY}
+#define SRBF_VIS_PARAM(OFF)                                                                   \
+    {.name = "visibility", .label = "self-shadowing", .group = METHOD_GROUP_ADVANCED,         \
+     .type = METHOD_PARAM_ENUM, .affects = "precomputation",                                  \
+     .description = "shadows of the object on itself: auto casts rays unless the mesh is "   \
+                    "convex",                                                                 \
+     .offset = OFF(visibility), .values = srbf_vis_values}
+
 /* ---- level data ---------------------------------------------------------------------- */
 
 typedef struct srbf_energy {
