@@ -11,7 +11,7 @@ method that fits point-lit paintings, through the command line:
   from the BRDF's formulas (brdf.h), within TOL;
   the fitted material rendered at a painted view (the ball) matches the
   finish's render of that view within BALL_TOL (relative RMS).
-The environment's methods (srbf, pbr_env) do the same for paintings under a sky.
+The environment's methods (srbf, pbr_env, auto_env) do the same for paintings under a sky.
 
 usage: test_radiance.py GLINT SOURCE_ROOT [--table]  (--table: print every
 figure and do not fail; the figures quoted in BENCHMARKS.md)."""
@@ -41,7 +41,7 @@ BALL_TOL = 0.12     # a painted view rendered from the fit: relative RMS (hf2d o
 MEAN_TOL = 0.02     # ... and its mean over the finish's: the scale itself
 COLOURS = ["0.5/0.5/0.5", "0.8/0.45/0.1", "0.1/0.3/0.7"]
 POINT_METHODS = ["hf3", "pbr", "pbr_detail", "tab", "hf4", "hf2d", "maps", "hybrid", "auto"]
-ENV_METHODS = ["srbf", "pbr_env"]
+ENV_METHODS = ["srbf", "pbr_env", "auto_env"]
 VIEW = 3
 # Which methods each finish is checked with: those that model it.  Metal
 # has no diffuse colour (its colour is in the highlight; the summary's base
