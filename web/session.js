@@ -392,7 +392,19 @@ export class Session extends EventTarget {
   canUndo(k) { return this.canPaint && this.views[k] && this.views[k].undo.length > 0; }
   canRedo(k) { return this.canPaint && this.views[k] && this.views[k].redo.length > 0; }
 
-  async undo(k) {
+  // Undo and redo run one after another: each takes the newest entry only
+  // once the one before has put its image and left the stack, so two quick
+  // presses take back two actions (taken at once, both read the same newest
+  // entry: it was undone twice and the one under it dropped from the stack).
+  undo(k) { return this.inTurn(() => this.undoNow(k)); }
+  redo(k) { return this.inTurn(() => this.redoNow(k)); }
+  inTurn(fn) {
+    const p = (this.turns || Promise.resolve()).then(fn, fn);
+    this.turns = p.catch(() => {});
+    return p;
+  }
+
+  async undoNow(k) {
     const v = this.views[k];
     if (!v.undo.length) return null;
     await this.settle(k);
@@ -453,7 +465,7 @@ export class Session extends EventTarget {
     await this.putImage(v.k, img, true);
   }
 
-  async redo(k) {
+  async redoNow(k) {
     const v = this.views[k];
     const entry = v.redo.pop();
     if (!entry) return null;

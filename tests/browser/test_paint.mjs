@@ -195,12 +195,22 @@ run({
     await waitFor(async () => maxDiff(await canvasPixels(page), before) <= 1, 60000, 'undo the 1st stroke');
     await settled(page, 1);
     assertLE(maxDiff(await serverPixels(page, 1), before), 1, 'both undone on the server');
+    // two presses at once take back two strokes (each waits for the one before)
+    await drawStroke(page, [[20, 20], [100, 40]]);
+    await settled(page, 1);
+    await drawStroke(page, [[20, 90], [100, 110]]);
+    await settled(page, 1);
+    await page.keyboard.press('Control+z');
+    await page.keyboard.press('Control+z');
+    await waitFor(async () => maxDiff(await canvasPixels(page), before) <= 1, 60000, 'two quick undos');
+    await settled(page, 1);
+    assertLE(maxDiff(await serverPixels(page, 1), before), 1, 'two quick undos on the server');
     // undo of my stroke keeps someone else's later stroke on top
     await drawStroke(page, [[30, 30], [100, 100]]);
     await settled(page, 1);
     const other = { mode: 'paint', color: [0.9, 0.1, 0.1], diameter: 24, kappa: 0.02, opacity: 1, points: [[20, 100], [100, 20]] };
     await t.daemon.api('POST', `/sessions/${session.id}/views/1/strokes`, { strokes: [other] }, { 'X-Glint-Token': session.paint_token });
-    await page.waitForFunction(() => window.glint.state.session.views[1].seq >= 8);
+    await page.waitForFunction(() => window.glint.state.session.views[1].seq >= 12);
     await page.click('#undo');
     await settled(page, 1);
     // expected: the base render with only the other person's stroke
