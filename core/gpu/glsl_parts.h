@@ -11,6 +11,11 @@
  *   GLSL_FACTOR(S)   glint_factor(row, u): row `row` of sampler S read with
  *                    hf.h's node hats (hf_hat)
  *   GLSL_NODES(S)    glint_nodes(r0, uv): a spatial factor's log nodes, bilinear
+ *   GLSL_PBR_LOBE    pbr_lobe(alpha, ks, f0, ci, co, ch, w5): one GGX lobe of
+ *                    pbr.h (height-correlated Smith, Schlick Fresnel); needs
+ *                    a constant PI
+ *   GLSL_TAB_LOOKUP  tab_lookup(u, v): tab.h's table, bilinear, from the
+ *                    sampler u_table with u_res_h x u_res_d nodes
  *   GLSL_MAIN        main(): glint_material(n, wi, wo) for the point light */
 #ifndef GLINT_GLSL_PARTS_H
 #define GLINT_GLSL_PARTS_H
@@ -73,6 +78,33 @@
     "    return (1.0 - t.y) * ((1.0 - t.x) * a + t.x * b) + t.y * ((1.0 - t.x) * c + t.x * d);\n" \
     "}\n"                                                                                       \
     "\n"
+
+#define GLSL_PBR_LOBE                                                                           \
+    "vec3 pbr_lobe(float alpha, vec3 ks, vec3 f0, float ci, float co, float ch, float w5)\n"   \
+    "{\n"                                                                                       \
+    "    float a2 = alpha * alpha, d = ch * ch * (a2 - 1.0) + 1.0;\n"                           \
+    "    float D = a2 / (PI * d * d);\n"                                                        \
+    "    float V = 0.5 / (co * sqrt(a2 + (1.0 - a2) * ci * ci) +\n"                             \
+    "                     ci * sqrt(a2 + (1.0 - a2) * co * co));\n"                             \
+    "    return ks * (D * V) * (f0 + (1.0 - f0) * w5);\n"                                       \
+    "}\n"
+
+/* tab_lookup(u, v): u = sqrt(theta_h / (pi/2)), v = theta_d / (pi/2); texel
+ * (i, j) of u_table holds the node at u = i / (u_res_h - 1), v = j /
+ * (u_res_d - 1) (texelFetch: no filtering needed). */
+#define GLSL_TAB_LOOKUP                                                                         \
+    "vec3 tab_lookup(float u, float v)\n"                                                       \
+    "{\n"                                                                                       \
+    "    float x = clamp(u, 0.0, 1.0) * float(u_res_h - 1);\n"                                  \
+    "    float y = clamp(v, 0.0, 1.0) * float(u_res_d - 1);\n"                                  \
+    "    int i = min(int(floor(x)), u_res_h - 2), j = min(int(floor(y)), u_res_d - 2);\n"      \
+    "    float fu = x - float(i), fv = y - float(j);\n"                                         \
+    "    vec3 a = texelFetch(u_table, ivec2(i, j), 0).rgb;\n"                                   \
+    "    vec3 b = texelFetch(u_table, ivec2(i + 1, j), 0).rgb;\n"                               \
+    "    vec3 c = texelFetch(u_table, ivec2(i, j + 1), 0).rgb;\n"                               \
+    "    vec3 d = texelFetch(u_table, ivec2(i + 1, j + 1), 0).rgb;\n"                           \
+    "    return mix(mix(a, b, fu), mix(c, d, fu), fv);\n"                                       \
+    "}\n"
 
 #define GLSL_MAIN                                                                               \
     "void main()\n"                                                                             \

@@ -25,9 +25,10 @@
  *     clearcoatFactor min(mean_c(ks_c F0_c) / 0.04, 1), the coat's normal
  *     reflectance (KHR's coat is white, ior 1.5, its Fresnel at N.V); or
  *     the sharper lobe left out.  Both are measured and the closer kept.
- *   pbr_detail: its pbr base is mapped; the detail (an hf3 factorization
- *     on top) has no glTF counterpart and is left out (the note says);
- *     the error is measured against the whole material, so it counts.
+ *   pbr_detail, pbr_tab: the pbr base is mapped; the detail (an hf3
+ *     factorization, or a table over half and difference angles, on top)
+ *     has no glTF counterpart and is left out (the note says); the error
+ *     is measured against the whole material, so it counts.
  *
  * Measured in which model.  Appendix B writes Smith's G in its separable
  * form (gltf_brdf, what the fit minimizes); Khronos's glTF-Sample-Viewer
@@ -55,6 +56,7 @@
 #include "internal/gltf_int.h"
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
+#include "method_pbr_tab.h"
 
 /* append a sentence to the note (cut at its size) */
 static void note_add(char *note, const char *fmt, ...)
@@ -203,13 +205,15 @@ static void material_fn(const void *ctx, const double n[3], const double wi[3],
     material_eval(ctx, n, wi, wo, rad);
 }
 
-/* The pbr parameters of m (pbr, pbr_env, or pbr_detail's base; NULL for
- * others), and whether a detail is on top (OUT: *detail). */
+/* The pbr parameters of m (pbr, pbr_env, or pbr_detail's or pbr_tab's
+ * base; NULL for others), and whether a detail is on top (OUT: *detail:
+ * 1 pbr_detail's factors, 2 pbr_tab's table). */
 static const pbr_material *pbr_of(const material *m, int *detail)
 {
     const pbr_detail_material *dm = pbr_detail_material_of(m);
-    *detail = dm != NULL;
-    return dm ? &dm->base : pbr_material_of(m);
+    const pbr_tab_material *tm = pbr_tab_material_of(m);
+    *detail = dm ? 1 : tm ? 2 : 0;
+    return dm ? &dm->base : tm ? &tm->base : pbr_material_of(m);
 }
 
 int gltf_direct_choose(const material *m, const samples *smp, gltf_pbr *out, glint_err *err)
@@ -239,12 +243,15 @@ int gltf_direct_choose(const material *m, const samples *smp, gltf_pbr *out, gli
             best = &cand[k];
     }
     gltf_pairs_free(&P);
-    if (detail) {
+    if (detail == 1) {
         const double *w = pbr_detail_material_of(m)->weight;
         note_add(best->note,
                  "The detail on top of the pbr base (weights %.3g, %.3g, %.3g) is left out: "
                  "the error counts it.",
                  w[0], w[1], w[2]);
+    } else if (detail == 2) {
+        note_add(best->note, "The correction table on the pbr base is left out: the error "
+                             "counts it.");
     }
     best->rel_rms_exact = best->rel_rms;
     if (!(best->rel_rms <= out->rel_rms_fitted)) { /* the fit is closer: keep it */

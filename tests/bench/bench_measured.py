@@ -14,7 +14,7 @@ and the worst materials, with the median fit time (wall clock of the
 command, warm precomputation).
 
 usage: bench_measured.py GLINT [--size N] [--every K | --materials a,b]
-       [--methods a,b,c] [--data ../shared/data/measured]
+       [--methods a,b:param=value,c] [--data ../shared/data/measured]
 (every K-th material of the 56; default 4: 14 materials; or those named).
 A method that chooses prints what it chose.  GLINT is copied first, so a
 rebuild while it runs does not stop it.  The radiance is
@@ -98,11 +98,14 @@ def main():
                 dirs[k] = os.path.join(tmp, "t_" + k)
                 run([a.glint, "paint", s, "--brdf", spec, "-o", dirs[k]])
             for m in methods:
-                mat = os.path.join(tmp, "m_" + m)
+                # METHOD[:param=value...]: a method at other settings than its defaults
+                meth, *kv = m.split(":")
+                extra = [x for p in kv for x in ("--" + p.split("=", 1)[0], p.split("=", 1)[1])]
+                mat = os.path.join(tmp, "m_" + str(methods.index(m)))
                 t0 = time.perf_counter()
                 try:
                     run([a.glint, "fit", sc["painted"], "--paintings", dirs["painted"], "-o", mat,
-                         "--method", m, "--cache-dir", cache])
+                         "--method", meth, "--cache-dir", cache] + extra)
                 except RuntimeError as e:
                     print("%-26s %-6s fit failed: %s" % (name, m, e), flush=True)
                     continue
@@ -115,7 +118,7 @@ def main():
                     chose = json.load(f)["method"]
                 print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s%s"
                       % (name, m, 100 * e_p, 100 * e_n, 100 * e_b, secs,
-                         "" if chose == m else "  chose " + chose), flush=True)
+                         "" if chose == meth else "  chose " + chose), flush=True)
     print()
     print("| method | materials | painted median | new views median | p90 | beyond median | "
           "p90 | worst (new views) | fit s (median) |")

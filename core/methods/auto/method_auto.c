@@ -15,6 +15,7 @@
 #include "method_maps.h"
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
+#include "method_pbr_tab.h"
 #include "method_tab.h"
 #include "scene.h"
 
@@ -97,6 +98,7 @@ typedef struct cands {
     pbr_params bp;
     pbr_detail_params xp;
     tab_params tp;
+    pbr_tab_params gp;
 } cands;
 
 static void candidates(const auto_params *p, cands *c)
@@ -124,6 +126,7 @@ static void candidates(const auto_params *p, cands *c)
         c->yp.components = p->components;
     method_pbr.params_default(&c->bp);
     method_tab.params_default(&c->tp);
+    method_pbr_tab.params_default(&c->gp); /* pbr's level and tab's design, shared */
     method_pbr_detail.params_default(&c->xp); /* hf3's levels and pbr's, shared */
     if (p->res)
         c->xp.hf.res = p->res;
@@ -656,6 +659,7 @@ static const cand_def CANDS[] = {
     {&method_pbr_detail, offsetof(cands, xp), 3, {LV_PBR, LV_HF3, LV_HF3 + 1},
      {LV_FULL_PBR, LV_FULL_HF3, LV_FULL_HF3 + 1}},
     {&method_tab, offsetof(cands, tp), 2, {LV_TAB, LV_TAB + 1}, {LV_FULL_TAB, LV_FULL_TAB + 1}},
+    {&method_pbr_tab, offsetof(cands, gp), 2, {LV_PBR, LV_TAB}, {LV_FULL_PBR, LV_FULL_TAB}},
     {&method_hf2d, offsetof(cands, dp), 1, {LV_HF2D}, {LV_FULL_HF2D}},
     {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
     {&method_maps, offsetof(cands, mp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
@@ -815,7 +819,8 @@ static json_t *choice_report(const auto_params *p, const split *x, int chosen, j
         "candidates", list, "threshold", p->threshold, "floor", p->floor, "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
-        "cheapest first (hf3, pbr, pbr_detail, tab, hf2d, hf4, maps, hybrid); a later one is "
+        "cheapest first (hf3, pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid); a later "
+        "one is "
         "taken when its judged RMS (the geometric mean of its held-out RMS on the new views "
         "and on the view beyond the painted range when both are held out, else its held-out "
         "RMS) is below the current choice's by more than the threshold (a fraction) and the "
@@ -926,7 +931,8 @@ const method method_auto = {
     .description =
         "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), the "
         "same times a three-factor detail of what it leaves (pbr_detail), one isotropic BRDF "
-        "tabulated over the half and difference angles (tab), one "
+        "tabulated over the half and difference angles (tab), pbr corrected by such a table "
+        "(pbr_tab), one "
         "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
         "material maps (maps) and maps of textured materials (hybrid), each at its own "
         "settings, to the painted views but those held out (one in `every`, and the one whose "

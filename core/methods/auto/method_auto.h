@@ -17,6 +17,9 @@
  *         (method_pbr_detail.h; pbr's level and hf3's, shared)
  *   tab   an isotropic BRDF tabulated over the half and difference angles
  *         with a smoothness prior (method_tab.h)
+ *   pbr_tab  pbr corrected by such a table, pulled back to pbr where no
+ *         painted sample reaches (method_pbr_tab.h; pbr's level and tab's
+ *         design, shared)
  *   hf2d  one material whose q is 2D over the half vector's parabolic map:
  *         a highlight that depends on direction around the normal
  *         (method_hf2d.h)
@@ -38,8 +41,8 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * pbr, pbr_detail, tab, hf2d, hf4, maps and hybrid are alternatives, not steps of one
- * chain, so each is measured against the choice so far; every take lowers
+ * pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps and hybrid are alternatives, not
+ * steps of one chain, so each is measured against the choice so far; every take lowers
  * the judged RMS, so the answer is never worse on the held-out samples, so
  * judged, than hf3, the simplest.  The material is the chosen
  * method refitted to every painted sample, held-out ones included (its

@@ -158,14 +158,7 @@ static const char frag[] =
     GLSL_STAGE_IO
     "const float PI = 3.14159265358979323846;\n"
     GLSL_UNIT
-    "vec3 pbr_lobe(float alpha, vec3 ks, vec3 f0, float ci, float co, float ch, float w5)\n"
-    "{\n"
-    "    float a2 = alpha * alpha, d = ch * ch * (a2 - 1.0) + 1.0;\n"
-    "    float D = a2 / (PI * d * d);\n"
-    "    float V = 0.5 / (co * sqrt(a2 + (1.0 - a2) * ci * ci) +\n"
-    "                     ci * sqrt(a2 + (1.0 - a2) * co * co));\n"
-    "    return ks * (D * V) * (f0 + (1.0 - f0) * w5);\n"
-    "}\n"
+    GLSL_PBR_LOBE
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
     "    float ci = dot(n, wi), co = dot(n, wo);\n"

@@ -153,18 +153,7 @@ static const char frag[] =
     GLSL_STAGE_IO
     "const float HALF_PI = 1.57079632679489662;\n"
     GLSL_UNIT
-    "vec3 tab_lookup(float u, float v)\n"
-    "{\n"
-    "    float x = clamp(u, 0.0, 1.0) * float(u_res_h - 1);\n"
-    "    float y = clamp(v, 0.0, 1.0) * float(u_res_d - 1);\n"
-    "    int i = min(int(floor(x)), u_res_h - 2), j = min(int(floor(y)), u_res_d - 2);\n"
-    "    float fu = x - float(i), fv = y - float(j);\n"
-    "    vec3 a = texelFetch(u_table, ivec2(i, j), 0).rgb;\n"
-    "    vec3 b = texelFetch(u_table, ivec2(i + 1, j), 0).rgb;\n"
-    "    vec3 c = texelFetch(u_table, ivec2(i, j + 1), 0).rgb;\n"
-    "    vec3 d = texelFetch(u_table, ivec2(i + 1, j + 1), 0).rgb;\n"
-    "    return mix(mix(a, b, fu), mix(c, d, fu), fv);\n"
-    "}\n"
+    GLSL_TAB_LOOKUP
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
     "    float ci = dot(n, wi), co = dot(n, wo);\n"

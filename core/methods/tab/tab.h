@@ -134,6 +134,7 @@ typedef struct tab_solve_report {
     int at_zero[3];      /* nodes held at 0 by t >= 0 */
     int negative[3];     /* nodes below 0 (without the constraint) */
     double kkt[3];       /* the active-set solver's KKT residual */
+    int scale_zero[3];   /* tab_solve_scaled: the scale is 0 on every sample (t = target) */
 } tab_solve_report;
 
 /* Fit the table to painted values rgb (3 n floats, finite) with the
@@ -141,5 +142,29 @@ typedef struct tab_solve_report {
  * for t >= 0. */
 int tab_solve(const tab_design *d, const tab_operator *op, const float *rgb, int nonneg,
               double *t, tab_solve_report *rep, glint_err *err);
+
+/* ---- a table that multiplies a known function ------------------------------------------- */
+
+/* A table r that multiplies a known function b: the painted value is
+ * y_c = b_c(sample) (w . r_c), w the sample's four weights (with n.wi).
+ * Per channel
+ *
+ *   minimize  (1/N) ||B A r - y||^2 / m_c + lambda ||L r||^2 + pull ||r - target||^2
+ *
+ * (r >= 0 when nonneg), B the diagonal of b_c over the samples and m_c =
+ * mean of (b_c cos_i)^2: the data term is normalized so that lambda and
+ * pull mean the same for a dark material and a bright one.  pull ties the
+ * nodes no sample reaches to target (a ratio to a base: 1), where
+ * lambda's linear continuation would run on; it is also the ridge (0: the
+ * ridge of tab_operator_build).  Where b_c is 0 on every sample, r_c =
+ * target and rep->scale_zero[c] = 1.  The Gram matrix depends on b, so it
+ * is built and factored per call (nodes^2 doubles twice). */
+typedef struct tab_scaled_opts {
+    double lambda, pull, target;
+    int nonneg;
+} tab_scaled_opts;
+
+int tab_solve_scaled(const tab_design *d, const tab_scaled_opts *o, const float *scale,
+                     const float *rgb, double *t, tab_solve_report *rep, glint_err *err);
 
 #endif

@@ -283,3 +283,112 @@ int tab_solve(const tab_design *d, const tab_operator *op, const float *rgb, int
         *rep = r;
     return rc;
 }
+
+/* ---- a table that multiplies a known function ----------------------------------------------- */
+
+/* Per channel c, the scaled design's Gram matrix and right-hand side
+ * (sums over the samples, OUT: H, q), the painted values' mean square
+ * (*ff) and the rows' scale's, scale ci (*msq). */
+static void scaled_normal(const tab_design *d, const float *scale, const float *rgb, int c,
+                          double *H, double *q, double *ff, double *msq)
+{
+    int nodes = tab_nodes(&d->g), rh = d->g.res_h;
+    const int off[4] = {0, 1, rh, rh + 1};
+    double m = 0.0, yy = 0.0;
+    memset(H, 0, (size_t)nodes * nodes * sizeof *H);
+    memset(q, 0, (size_t)nodes * sizeof *q);
+    for (int i = 0; i < d->n; i++) {
+        double w[4], sc = scale[3 * (size_t)i + c], y = rgb[3 * (size_t)i + c];
+        tab_design_weights(d, i, w);
+        for (int a = 0; a < 4; a++)
+            w[a] *= sc;
+        for (int a = 0; a < 4; a++) {
+            double *row = H + (size_t)(d->k0[i] + off[a]) * nodes + d->k0[i];
+            for (int b = 0; b < 4; b++)
+                row[off[b]] += w[a] * w[b];
+            q[d->k0[i] + off[a]] += w[a] * y;
+        }
+        m += sc * sc * d->ci[i] * d->ci[i];
+        yy += y * y;
+    }
+    *msq = m / d->n;
+    *ff = yy / d->n;
+}
+
+int tab_solve_scaled(const tab_design *d, const tab_scaled_opts *o, const float *scale,
+                     const float *rgb, double *t, tab_solve_report *rep, glint_err *err)
+{
+    int nodes = tab_nodes(&d->g), rc = 0;
+    size_t nn = (size_t)nodes * nodes;
+    double *H = malloc(2 * nn * sizeof *H), *q = malloc(3 * (size_t)nodes * sizeof *q);
+    lsq_work *w = o->nonneg ? lsq_work_new(nodes, 0) : NULL;
+    tab_solve_report r;
+    memset(&r, 0, sizeof r);
+    if (!isfinite(o->lambda) || o->lambda < 0.0 || !isfinite(o->pull) || o->pull < 0.0 ||
+        !isfinite(o->target)) {
+        rc = glint_err_set(err, GLINT_EINVAL,
+                           "tab: lambda %g and pull %g must be finite and >= 0, target %g finite",
+                           o->lambda, o->pull, o->target);
+        goto done;
+    }
+    if (!H || !q || (o->nonneg && !w)) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (tab scaled solve, %d nodes)", nodes);
+        goto done;
+    }
+    for (int c = 0; c < 3 && !rc; c++) {
+        double *R = H + nn, *x = q + nodes, *x0 = q + 2 * (size_t)nodes, ff, msq, ridge;
+        scaled_normal(d, scale, rgb, c, H, q, &ff, &msq);
+        if (!(msq > 0.0) || !isfinite(msq)) {
+            /* the known function is 0 on every sample: nothing to scale */
+            for (int k = 0; k < nodes; k++)
+                t[3 * (size_t)k + c] = o->target;
+            r.scale_zero[c] = 1;
+            continue;
+        }
+        for (size_t k = 0; k < nn; k++)
+            H[k] /= d->n * msq;
+        for (int k = 0; k < nodes; k++)
+            q[k] = q[k] / (d->n * msq) + o->pull * o->target;
+        ff /= msq;
+        tab_prior_add(&d->g, o->lambda, H);
+        ridge = o->pull > 0.0 ? o->pull : operator_ridge(&d->g, o->lambda, H);
+        for (int k = 0; k < nodes; k++)
+            H[(size_t)k * nodes + k] += ridge;
+        if ((rc = lsq_factor(H, nodes, R, err)))
+            break;
+        memcpy(x0, q, (size_t)nodes * sizeof *x0);
+        cblas_dtrsv(CblasRowMajor, CblasUpper, CblasTrans, CblasNonUnit, nodes, R, nodes, x0, 1);
+        cblas_dtrsv(CblasRowMajor, CblasUpper, CblasNoTrans, CblasNonUnit, nodes, R, nodes, x0,
+                    1);
+        if (o->nonneg) {
+            lsq_problem p = {.n = nodes, .H = H, .q = q, .ff = ff, .R0 = R, .c0 = x0};
+            lsq_result res;
+            for (int k = 0; k < nodes; k++)
+                x0[k] = fmax(x0[k], 0.0);
+            if ((rc = lsq_solve(&p, LSQ_NONNEG, 0.0, w, x, &res, err)))
+                break;
+            if (res.status != LSQ_OK) {
+                rc = glint_err_set(err, GLINT_ENUMERIC,
+                                   "tab: channel %d: the solver stopped (%s)", c,
+                                   lsq_status_name(res.status));
+                break;
+            }
+            r.iterations[c] = res.iterations;
+            r.at_zero[c] = nodes - res.free_vars;
+            r.kkt[c] = res.kkt_residual;
+        } else {
+            memcpy(x, x0, (size_t)nodes * sizeof *x);
+        }
+        for (int k = 0; k < nodes; k++) {
+            t[3 * (size_t)k + c] = x[k];
+            r.negative[c] += x[k] < 0.0;
+        }
+    }
+done:
+    free(H);
+    free(q);
+    lsq_work_free(w);
+    if (rep)
+        *rep = r;
+    return rc;
+}
