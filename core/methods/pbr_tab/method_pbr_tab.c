@@ -4,12 +4,12 @@
  * product's errors) and its report.
  *
  * Defaults, measured on seven measured materials' published fits painted
- * on the 64 x 64 sphere from 12 views (BENCHMARKS.md, "The pbr_tab
- * method"): pbr's single dielectric lobe, tab's 32 x 16 grid and lambda
- * 1e-10, the table added, pull 1e-10.  New views' median error by pull:
- * 1.9% at 1e-8 (beyond the painted range 24.2%), 1.4% at 1e-9 and 1e-10
- * (23.5%, 22.6%); 1e-6 and 1e-4 blunt the correction (painted error 0.7%
- * and 2-6% against 0.4%).  Multiplied, at 1e-8: 3.3% and 25.1%. */
+ * on the 64 x 64 sphere from 12 views (docs/methods.md, "The physical fit
+ * with a painted table"): pbr's single dielectric lobe, tab's 32 x 16 grid
+ * and lambda 1e-10, the table added, pull 1e-10.  New views' median error (and
+ * beyond the painted range) by pull: 3.0% (25.4%) at 1e-4, 1.6% (25.2%)
+ * at 1e-6, 1.5% (24.2%) at 1e-8, 1.4% (23.5%, 22.6%) at 1e-9 and 1e-10.
+ * Multiplied, at 1e-8: 3.3% (25.1%). */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>

@@ -21,11 +21,12 @@
  * base alone, which extrapolates by its physics.  An exact base leaves r
  * at its identity on every node.
  *
- * Why add is the default: multiplied, r must hold painted / f_base, which
- * varies within a cell by as much as f_base does where the base is dark (a
- * metal's kd near 0 off its lobe): on 7 measured materials the multiplied
- * table fitted the painted views to 0.4% and predicted new views at 6% to
- * 15%, the added one at 1% to 3% (BENCHMARKS.md, "The pbr_tab method").
+ * Why add is the default: on seven measured materials (docs/methods.md,
+ * "The physical fit with a painted table") the added table predicted new
+ * views at 1.4% median (2.4% at the 90th percentile), the multiplied one at
+ * 2.0% to 3.3% (3.2% to 7.4%).  Multiplied, r must hold painted / f_base,
+ * which varies within a cell by as much as f_base does where the base is
+ * dark (a metal's kd near 0 off its lobe).
  *
  * Levels, each keyed exactly as the method it comes from keys it, so a
  * direct pbr or tab fit of the same views shares the cache entries:
