@@ -11,10 +11,14 @@
 //     p50 and p99 over the strokes, alternating who paints;
 //   - a fit: the click on Fit to the preview shown (a frame of the judge),
 //     cold (the precomputation built by a job) and cached (answered in the
-//     request).
+//     request);
+//   - "choose for me" (the method that chooses among the lamp-lit models)
+//     on a finish painted over every view: the click on Fit to the first
+//     look shown (the quickest model, fitted beside the choice) and to the
+//     chosen material shown, cold and repeated (its levels cached).
 //
 // usage: node tests/bench/bench_studio.mjs [--loads N] [--strokes N] [--fits N]
-//   (defaults 5, 30, 3; GLINTD, GLINT_SOURCE_DIR as for the browser tests),
+//   [--choices N] (defaults 5, 30, 3, 2; GLINTD, GLINT_SOURCE_DIR as for the browser tests),
 //   or `meson test -C build --benchmark --verbose studio`.
 // Exits 77 (skipped) without Chromium or playwright-core, as the tests do.
 import { run, openStudio, drawStroke, settled, assert } from '../browser/harness.mjs';
@@ -22,6 +26,7 @@ import { run, openStudio, drawStroke, settled, assert } from '../browser/harness
 const argv = process.argv.slice(2);
 const opt = (name, dflt) => { const i = argv.indexOf('--' + name); return i >= 0 ? +argv[i + 1] : dflt; };
 const LOADS = opt('loads', 5), STROKES = opt('strokes', 30), FITS = opt('fits', 3);
+const CHOICES = opt('choices', 2);
 
 // nearest-rank percentile of a list of numbers
 function pct(xs, p) {
@@ -120,5 +125,38 @@ run({
     }
     say(`fit, click to the preview shown (96-112 px sphere, default quality): cold (job) ${fmt(cold)}`);
     say(`fit, click to the preview shown (96-112 px sphere, default quality): cached ${fmt(cached)}`);
+  },
+
+  async 'choose for me: the first look and the choice'(t) {
+    const first = [], chosen = [], again = [], picks = [];
+    for (let i = 0; i < CHOICES; i++) {
+      const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 96 + 8 * i, height: 96 + 8 * i });
+      const page = await t.page();
+      await openStudio(page, url);
+      await page.waitForSelector('#quality .q[data-preset]');
+      const chooser = await page.evaluate(() => {
+        const m = window.glint.state.fit.methods.find(x => x.chooses && x.lighting === 'point');
+        return m && m.name;
+      });
+      assert(chooser, 'a method that chooses among the lamp-lit models is offered');
+      await page.selectOption('#fit-method', chooser);
+      await page.selectOption('#preset-sel', 'plastic');
+      await page.click('#preset-apply');
+      await page.waitForFunction(() => !document.getElementById('preset-apply').disabled);
+      await page.waitForFunction(() => { const S = window.glint.state.session; return S.views.every(v => v.state === 'ready' && v.pending.length === 0) && S.puts.size === 0; });
+      for (const out of [null, again]) {
+        await page.evaluate(() => { window.glint.firstLook = null; });
+        const c = await clickFitUntilPreview(page);
+        const fl = await page.evaluate(() => window.glint.firstLook);
+        if (out) { out.push(c.ms); continue; }
+        chosen.push(c.ms);
+        if (fl) first.push(fl.ms);
+        picks.push(await page.evaluate(() => (window.glint.state.judge.mat.choice || {}).chosen));
+      }
+      await page.context().close();
+    }
+    say(`choose for me on the plastic finish (96-104 px sphere, 12 views): first look shown ${first.length ? fmt(first) : 'never (the choice came first)'}`);
+    say(`choose for me on the plastic finish: the choice shown, cold ${fmt(chosen)} (chose ${picks.join(', ')})`);
+    say(`choose for me on the plastic finish: the choice shown, repeated ${fmt(again)}`);
   },
 });

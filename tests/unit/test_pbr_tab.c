@@ -19,8 +19,10 @@
  *     damaged manifests are refused with a message;
  *   - the GPU binding holds the table's texture and both parts' uniforms;
  *   - extremes: an all-black painting, a single painted sample, a painting
- *     brighter than physical (fitted, the base's clamp said), NaN and inf
- *     (refused, named), one view only.
+ *     brighter than physical (fitted, the base's clamp said), a Lambertian
+ *     (the base's roughness undetermined, said; no correction), a mirror
+ *     (the base's roughness at its floor, said), NaN and inf (refused,
+ *     named), one view only.
  *
  * The scene is the default sphere (12 point-lit views) at 64 x 64; values
  * are f ci per unit light (scene.h), computed at the samples. */
@@ -421,6 +423,65 @@ TEST(one_view_only)
     material_free(&m);
 }
 
+/* Whether JSON array a holds a string containing word. */
+static int lists(const json_t *a, const char *word)
+{
+    for (size_t k = 0; k < json_array_size(a); k++) {
+        const json_t *v = json_array_get(a, k);
+        const char *t = json_is_string(v) ? json_string_value(v)
+                                          : json_string_value(json_object_get(v, "name"));
+        if (t && strstr(t, word))
+            return 1;
+    }
+    return 0;
+}
+
+TEST(lambertian_and_mirror)
+{
+    pbr_tab_params p;
+    pbr_material mirror;
+    brdf b;
+    material m = {0};
+    glint_err e;
+    const json_t *base;
+    const pbr_tab_material *x;
+    double worst = 0.0;
+
+    ASSERT(setup() == 0);
+    method_pbr_tab.params_default(&p);
+    /* a Lambertian: the base's roughness is undetermined, said so, and the
+     * table has nothing to add */
+    ASSERT_OK(brdf_parse("lambert:kd=0.6/0.4/0.2", &b, &e));
+    ASSERT_OK(fit_truth(&method_pbr_tab, &p, NULL, brdf_truth, &b, &m, &e));
+    base = json_object_get(m.info, "base");
+    ASSERT(lists(json_object_get(base, "undetermined"), "alpha"));
+    x = pbr_tab_material_of(&m);
+    for (int c = 0; c < 3; c++)
+        ASSERT_NEAR(x->base.kd[c], 0.6 - 0.2 * c, 0.01 * (0.6 - 0.2 * c));
+    for (int k = 0; k < 3 * tab_nodes(&x->table.g); k++)
+        worst = fmax(worst, fabs(x->table.t[k]));
+    printf("  lambertian: largest correction %.3g (f is %.3g..%.3g)\n", worst, 0.2 / M_PI,
+           0.6 / M_PI);
+    ASSERT_LT(worst, 1e-4);
+    material_free(&m);
+    /* a mirror-like highlight, sharper than the roughness's floor: the base's
+     * roughness at its lower bound, said so */
+    known_base(&mirror);
+    mirror.p[3] = 0.0005;
+    pbr_material_sync(&mirror);
+    ASSERT_OK(fit_truth(&method_pbr_tab, &p, NULL, pbr_truth, &mirror, &m, &e));
+    base = json_object_get(m.info, "base");
+    x = pbr_tab_material_of(&m);
+    printf("  mirror: base alpha %.4g (floor %.4g); base rms %.4g, product rms %.4g\n",
+           x->base.lobe[0].alpha, PBR_ALPHA_MIN, corr_num(&m, "rms_painted_base"),
+           corr_num(&m, "rms_painted"));
+    ASSERT_NEAR(x->base.lobe[0].alpha, PBR_ALPHA_MIN, 1e-9);
+    ASSERT(lists(json_object_get(base, "at_bound"), "alpha"));
+    ASSERT(eval_finite(&m));
+    ASSERT_LE(corr_num(&m, "rms_painted"), corr_num(&m, "rms_painted_base") + 1e-9);
+    material_free(&m);
+}
+
 TEST(bad_parameters_are_refused)
 {
     pbr_tab_params p;
@@ -445,6 +506,7 @@ TEST_LIST {
     TEST_ENTRY(gpu_binding_holds_both_parts),
     TEST_ENTRY(extremes),
     TEST_ENTRY(one_view_only),
+    TEST_ENTRY(lambertian_and_mirror),
     TEST_ENTRY(bad_parameters_are_refused),
 };
 
