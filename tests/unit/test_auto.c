@@ -90,17 +90,18 @@ static const char *choose(const char *spec, const unsigned char *use, material *
 }
 
 /* The choice follows the rule from the candidates it reports: cheapest
- * first, a richer one taken when it beats the choice so far by more than
- * the threshold (a fraction) and the floor. */
+ * first, a richer one taken when its judged RMS beats the choice so far by
+ * more than the threshold (a fraction) and the floor (in the painting's
+ * units: floor_value, the floor times the painting's RMS). */
 static void check_rule(const material *m)
 {
     json_t *choice = json_object_get(m->info, "choice"), *c;
     double thr = json_number_value(json_object_get(choice, "threshold")),
-           fl = json_number_value(json_object_get(choice, "floor")), cur = 0.0;
+           fl = json_number_value(json_object_get(choice, "floor_value")), cur = 0.0;
     const char *chosen = NULL;
     size_t i;
     json_array_foreach(json_object_get(choice, "candidates"), i, c) {
-        double h = json_number_value(json_object_get(c, "held_out_rms"));
+        double h = json_number_value(json_object_get(c, "judged_rms"));
         int take = i == 0 || (h < cur * (1.0 - thr) && cur - h > fl);
         ASSERT(isfinite(h) && h >= 0.0);
         ASSERT_EQ(json_is_true(json_object_get(c, "taken")), take);
@@ -191,7 +192,11 @@ TEST(a_brushed_highlight_is_anisotropic)
     material_free(&m);
 }
 
-/* One painted view: pixels are held out instead of views. */
+/* One painted view: pixels are held out instead of views.  The GGX
+ * painting lies in pbr's family, which predicts the held-out pixels three
+ * times better than hf3 (0.0001 against 0.0003 per unit light), so pbr is
+ * taken; under the floor of a quarter of an 8-bit step, before it was
+ * relative to the painting, hf3 was kept. */
 TEST(one_view_holds_out_pixels)
 {
     unsigned char one[SCENE_MAX_VIEWS] = {0};
@@ -205,7 +210,7 @@ TEST(one_view_holds_out_pixels)
     ASSERT_LT(0, json_integer_value(json_object_get(choice, "held_out_samples")));
     ASSERT_LT(json_integer_value(json_object_get(choice, "held_out_samples")),
               json_integer_value(json_object_get(choice, "candidate_samples")) / 2);
-    ASSERT(strcmp(material_method_name(&m), "hf3") == 0);
+    ASSERT(strcmp(material_method_name(&m), "pbr") == 0);
     check_rule(&m);
     material_free(&m);
 }

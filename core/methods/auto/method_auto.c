@@ -41,8 +41,8 @@ static const method_param auto_params_table[] = {
                     "than this fraction of the current choice's",
      .offset = offsetof(auto_params, threshold), .min = 0.0, .max = 1.0},
     {.name = "floor", .label = "smallest gain that counts", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
-     .description = "nor by less than this (held-out RMS, per unit light): below it a gain is "
-                    "within an 8-bit painting's quantization",
+     .description = "nor by less than this fraction of the painting's RMS: a smaller gain is "
+                    "noise, whatever the painting's brightness",
      .offset = offsetof(auto_params, floor), .min = 0.0, .max = 1.0},
     {.name = "every", .label = "views held out (one in)", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_INT, .affects = "precomputation",
      .description = "one painted view in this many (one pixel, when one view is painted) is "
@@ -68,7 +68,7 @@ static void auto_params_default(void *params)
     p->res_2d = 0;
     p->components = 0;
     p->threshold = 0.1;
-    p->floor = 1.0 / 255.0 / 4.0;
+    p->floor = 1e-3;
     p->every = 4;
 }
 
@@ -782,18 +782,32 @@ static double judged(const scores *sc, int c)
     return sc->held[c];
 }
 
+/* The floor in the painting's units: p->floor times the RMS of the
+ * painted values.  It was a quarter of an 8-bit step per unit light, which
+ * held every dark material at hf3: on fruitwood-241 (painted RMS about
+ * 0.01) pbr_tab's judged held-out RMS was 0.0002 against hf3's 0.0007, a
+ * gain below 0.001, and the 20 new views then showed 3.5% against 0.2%. */
+static double floor_value(const auto_params *p, const method_fit_in *in)
+{
+    double ss = 0.0;
+    for (long i = 0; i < 3L * in->s->n; i++)
+        ss += (double)in->rgb[i] * in->rgb[i];
+    return in->s->n ? p->floor * sqrt(ss / (3.0 * (double)in->s->n)) : 0.0;
+}
+
 /* The rule: cheapest first; a later candidate is taken when its judged
  * held-out RMS is below the current choice's by more than the threshold
- * (a fraction) and the floor.  Each take lowers it, so the choice is
- * never worse on the held-out samples, so judged, than the first, the
- * simplest.  Writes each candidate's figures into `list`; the chosen
- * index. */
-static int choose(const auto_params *p, const material *cand, const scores *sc, json_t *list)
+ * (a fraction) and the floor (fl, in the painting's units).  Each take
+ * lowers it, so the choice is never worse on the held-out samples, so
+ * judged, than the first, the simplest.  Writes each candidate's figures
+ * into `list`; the chosen index. */
+static int choose(const auto_params *p, double fl, const material *cand, const scores *sc,
+                  json_t *list)
 {
     int chosen = 0;
     for (int c = 0; c < NCAND; c++) {
         double jc = judged(sc, c), jk = judged(sc, chosen);
-        int take = c > 0 && jc < jk * (1.0 - p->threshold) && jk - jc > p->floor;
+        int take = c > 0 && jc < jk * (1.0 - p->threshold) && jk - jc > fl;
         json_t *e = json_pack(
             "{s:s, s:s, s:f, s:f, s:f, s:b}", "method", CANDS[c].m->name, "label",
             CANDS[c].m->label, "held_out_rms", sc->held[c], "rms_painted",
@@ -812,19 +826,22 @@ static int choose(const auto_params *p, const material *cand, const scores *sc, 
     return chosen;
 }
 
-static json_t *choice_report(const auto_params *p, const split *x, int chosen, json_t *list)
+static json_t *choice_report(const auto_params *p, double fl, const split *x, int chosen,
+                             json_t *list)
 {
     json_t *choice = json_pack(
-        "{s:s, s:o, s:f, s:f, s:s, s:i, s:i, s:i, s:s}", "chosen", CANDS[chosen].m->name,
-        "candidates", list, "threshold", p->threshold, "floor", p->floor, "held_out",
+        "{s:s, s:o, s:f, s:f, s:f, s:s, s:i, s:i, s:i, s:s}", "chosen", CANDS[chosen].m->name,
+        "candidates", list, "threshold", p->threshold, "floor", p->floor, "floor_value", fl,
+        "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
         "cheapest first (hf3, pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid); a later "
         "one is "
         "taken when its judged RMS (the geometric mean of its held-out RMS on the new views "
         "and on the view beyond the painted range when both are held out, else its held-out "
-        "RMS) is below the current choice's by more than the threshold (a fraction) and the "
-        "floor, so the choice is never worse so judged than hf3; the material is the chosen "
+        "RMS) is below the current choice's by more than the threshold (a fraction) and "
+        "floor_value (the floor times the painting's RMS), so the choice is never worse so "
+        "judged than hf3; the material is the chosen "
         "method refitted to every painted sample");
     if (x->by_views) {
         json_t *hv = json_array(), *hb = json_array();
@@ -863,8 +880,9 @@ static int auto_fit(const method_fit_in *in, material *out, glint_err *err)
         goto done;
     {
         json_t *list = json_array();
-        chosen = choose(p, cand, &sc, list);
-        choice = choice_report(p, x, chosen, list);
+        double fl = floor_value(p, in);
+        chosen = choose(p, fl, cand, &sc, list);
+        choice = choice_report(p, fl, x, chosen, list);
     }
     /* the chosen model refitted to every painted sample: the candidates saw
      * all but the held-out ones */

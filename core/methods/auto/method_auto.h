@@ -34,8 +34,9 @@
  * not hide a gain on new views), else by the pooled RMS.  The choice
  * starts at hf3; a richer candidate replaces it only when its judged RMS
  * is below the current choice's by more than `threshold` (a fraction) and
- * by more than `floor` (a quarter of an 8-bit step by default: a smaller
- * gain is within a painting's quantization).  Held-out views are the
+ * by more than `floor` times the painting's RMS (1e-3 by default: a
+ * smaller gain is noise; an absolute floor, a quarter of an 8-bit step per
+ * unit light, held every dark measured material at hf3).  Held-out views are the
  * measure that matters: on held-out pixels of painted views a spatial
  * model fills a pixel from its painted neighbours, and on a uniform
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
@@ -72,7 +73,7 @@ typedef struct auto_params {
     int res_2d;        /* hf2d's q nodes per side */
     int components;    /* maps' and hybrid's most products */
     double threshold;  /* fraction a richer model must gain on held-out pixels */
-    double floor;      /* and at least this much (RMS per unit light) */
+    double floor;      /* and at least this fraction of the painting's RMS */
     int every;         /* one pixel in this many held out */
 } auto_params;
 
