@@ -14,6 +14,17 @@ async function named(t, name) {
 }
 const seqOf = page => page.evaluate(() => window.glint.state.session.appliedSeq);
 const statsOf = page => page.evaluate(() => Object.assign({}, window.glint.state.session.stats));
+// Wait until the page has applied the session's events up to #n, view 0
+// ready; then it must have applied #n and nothing after it (the caller
+// knows there is no later event: one more would be a stroke counted twice
+// or one nobody drew).
+async function appliedUpTo(page, n) {
+  await page.waitForFunction(n => {
+    const S = window.glint.state.session;
+    return S.appliedSeq >= n && S.views[0].state === 'ready';
+  }, n, { timeout: 60000 });
+  assertEq(await seqOf(page), n, 'the events applied');
+}
 
 run({
   async 'two people in one session see each other\'s strokes live'(t) {
@@ -27,10 +38,29 @@ run({
     assertEq(who.join(','), 'ana,bo', 'presence');
     const connects = p => p.evaluate(() => window.glint.state.session.stream.connects);
     const c0 = [await connects(ana), await connects(bo)];
+    // One stroke at a time.  Before each, both screens hold every stroke so
+    // far (the painter's own echo included: it may come after the other
+    // screen has shown the stroke, and a count read before it would be one
+    // short), so the new stroke is the session's event #n and nothing else
+    // can come; the other screen must apply it as #n, drawn by the painter,
+    // once.  (An exact wait for "last count + 1" could be overshot: on a
+    // busy machine the echo and the next stroke may be applied in one task,
+    // and the count never shows the value in between.)
+    let n = 0;
     for (const [from, to, pts] of [[ana, bo, [[20, 30], [100, 50]]], [bo, ana, [[30, 100], [90, 20]]], [ana, bo, [[64, 10], [64, 118]]]]) {
-      const s0 = await seqOf(to);
+      for (const p of [from, to]) await appliedUpTo(p, n);
       await drawStroke(from, pts, 4);
-      await to.waitForFunction(s => window.glint.state.session.appliedSeq === s + 1 && window.glint.state.session.views[0].state === 'ready', s0, { timeout: 60000 });
+      n++;
+      await appliedUpTo(to, n);
+      const painter = await from.evaluate(() => window.glint.state.session.client);
+      const got = await to.evaluate(n => {
+        const S = window.glint.state.session, h = S.views[0].history.find(e => e.seq === n);
+        const tag = h && h.tag;
+        return { tag, times: S.views[0].history.filter(e => e.tag === tag).length, strokes: S.stats.strokes };
+      }, n);
+      assert(typeof got.tag === 'string' && got.tag.startsWith(painter + '-'), `stroke #${n} on view 0 is the painter's: ${JSON.stringify(got.tag)}`);
+      assertEq(got.times, 1, `stroke #${n} applied once`);
+      assertEq(got.strokes, n, 'strokes applied on the receiving screen');
     }
     // over the streams that were open: none of it came by reconnecting
     assertEq(JSON.stringify([await connects(ana), await connects(bo)]), JSON.stringify(c0), 'stream connections while painting');
