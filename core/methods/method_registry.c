@@ -11,6 +11,7 @@
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
 #include "method_pbr_env.h"
+#include "method_pbr_maps.h"
 #include "method_pbr_tab.h"
 #include "method_srbf.h"
 #include "method_tab.h"
@@ -23,6 +24,7 @@ const method *const method_builtin[] = {
     &method_pbr_detail,
     &method_tab,
     &method_pbr_tab,
+    &method_pbr_maps,
     &method_pbr_env,
     &method_srbf,
     &method_hf4,

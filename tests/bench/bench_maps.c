@@ -3,7 +3,7 @@
  * with the four-factor product, with material maps of 1 to 5 products and
  * with the hybrid (maps of 1 to 5 four-factor products).
  *
- *   bench_maps [--data DIR] [--size N] [--res R] [--map-res M]
+ *   bench_maps [--data DIR] [--size N] [--res R] [--map-res M] [--only pbr]
  *
  * The mesh: DIR/meshes/triceratops.off (default DIR ../shared/data; the
  * benchmark says so and exits 0 when it is absent); its texture
@@ -14,6 +14,9 @@
  * 12 steps).  New views: the 20 icosahedron face directions, lights at the
  * midpoints of 20 steps over 20-70 degrees (directions and light angles
  * never painted), the truth painted on them for reference.
+ * Then the physically based fits: pbr (one material) and pbr_maps (its
+ * lobes with maps of colour and lobe strength) at a few settings; --only
+ * pbr measures those alone.
  * For each fit: the seconds of the fit (the precomputation is shared and
  * timed once), RMS and max |fitted - truth| on the painted views' samples
  * and on the new views' samples (material_error_views: radiance, RGB), and
@@ -32,6 +35,8 @@
 #include "method_hf4.h"
 #include "method_hybrid.h"
 #include "method_maps.h"
+#include "method_pbr.h"
+#include "method_pbr_maps.h"
 #include "paint.h"
 #include "prep.h"
 #include "raster.h"
@@ -110,11 +115,67 @@ static void row(const char *name, const material *m, double seconds, const views
            mx[0], r[0] / pv->truth_rms, r[1], mx[1], r[1] / nv->truth_rms);
 }
 
+/* One method's fit of the painted views (prepared, fitted, timed: the fit
+ * alone) as a row named `name`. */
+static int method_row(cache *c, cache_entry *se, const unsigned char *all, const method *m,
+                      const void *params, const float *rgb, const char *name, const views *pv,
+                      const views *nv, glint_err *e)
+{
+    prep_request rq = {m, params, se, all, NULL};
+    prep *p = NULL;
+    material mat;
+    double t0;
+    if (prep_acquire(c, &rq, NULL, NULL, &p, e))
+        return -1;
+    t0 = glint_now();
+    if (prep_fit(p, NULL, rgb, &mat, e)) {
+        prep_release(c, p);
+        return -1;
+    }
+    row(name, &mat, glint_now() - t0, pv, nv);
+    material_free(&mat);
+    prep_release(c, p);
+    return 0;
+}
+
+/* pbr and pbr_maps at a few settings. */
+static int pbr_rows(cache *c, cache_entry *se, const unsigned char *all, const float *rgb,
+                    const views *pv, const views *nv, glint_err *e)
+{
+    static const struct {
+        int lobes, fresnel, components, map_res;
+    } set[] = {
+        {1, PBR_DIELECTRIC, 3, 128}, {1, PBR_DIELECTRIC, 2, 128}, {1, PBR_DIELECTRIC, 5, 128},
+        {1, PBR_CONDUCTOR, 3, 128}, {2, PBR_DIELECTRIC, 3, 128}, {1, PBR_DIELECTRIC, 3, 64},
+        {1, PBR_DIELECTRIC, 3, 256},
+    };
+    pbr_params bp;
+    method_pbr.params_default(&bp);
+    if (method_row(c, se, all, &method_pbr, &bp, rgb, "pbr (one material)", pv, nv, e))
+        return -1;
+    for (size_t k = 0; k < sizeof set / sizeof set[0]; k++) {
+        pbr_maps_params mp;
+        char name[128];
+        method_pbr_maps.params_default(&mp);
+        mp.pbr.lobes = set[k].lobes;
+        mp.pbr.fresnel = set[k].fresnel;
+        mp.components = set[k].components;
+        mp.map_res = set[k].map_res;
+        snprintf(name, sizeof name, "pbr_maps, %d product%s of %d %s lobe%s, map_res %d",
+                 mp.components, mp.components > 1 ? "s" : "", mp.pbr.lobes,
+                 mp.pbr.fresnel == PBR_CONDUCTOR ? "conductor" : "dielectric",
+                 mp.pbr.lobes > 1 ? "s" : "", mp.map_res);
+        if (method_row(c, se, all, &method_pbr_maps, &mp, rgb, name, pv, nv, e))
+            return -1;
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *data = "../shared/data";
     char path[4096];
-    int size = 128, res = 64, map_res = 128;
+    int size = 128, res = 64, map_res = 128, only_pbr = 0;
     views pv, nv;
     paint_sv sv;
     cache *c = NULL;
@@ -137,9 +198,12 @@ int main(int argc, char **argv)
             res = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--map-res") && i + 1 < argc && atoi(argv[i + 1]) >= 2)
             map_res = atoi(argv[++i]);
-        else {
+        else if (!strcmp(argv[i], "--only") && i + 1 < argc && !strcmp(argv[i + 1], "pbr")) {
+            only_pbr = 1;
+            i++;
+        } else {
             fprintf(stderr, "usage: bench_maps [--data DIR] [--size N] [--res R] "
-                            "[--map-res M]\n");
+                            "[--map-res M] [--only pbr]\n");
             return 2;
         }
     }
@@ -183,6 +247,15 @@ int main(int argc, char **argv)
     printf("| model | fit seconds | painted RMS | painted max | painted RMS / truth RMS | new "
            "views RMS | new views max | new RMS / truth RMS |\n");
     printf("|---|---|---|---|---|---|---|---|\n");
+    if (only_pbr) {
+        if (pbr_rows(c, se, all, rgb, &pv, &nv, &e))
+            goto fail;
+        prep_release(c, p);
+        free(rgb);
+        cache_release(c, se);
+        cache_close(c);
+        return 0;
+    }
     {
         material m;
         t0 = glint_now();
@@ -256,6 +329,8 @@ int main(int argc, char **argv)
         prep_release(c, p);
         p = NULL;
     }
+    if (pbr_rows(c, se, all, rgb, &pv, &nv, &e))
+        goto fail;
     free(rgb);
     cache_release(c, se);
     cache_close(c);

@@ -40,7 +40,7 @@ BALL_TOL = 0.12     # a painted view rendered from the fit: relative RMS (hf2d o
                     # glossy: 8.0-9.4%)
 MEAN_TOL = 0.02     # ... and its mean over the finish's: the scale itself
 COLOURS = ["0.5/0.5/0.5", "0.8/0.45/0.1", "0.1/0.3/0.7"]
-POINT_METHODS = ["hf3", "pbr", "pbr_detail", "tab", "pbr_tab", "hf4", "hf2d", "maps", "hybrid", "auto"]
+POINT_METHODS = ["hf3", "pbr", "pbr_detail", "tab", "pbr_tab", "pbr_maps", "hf4", "hf2d", "maps", "hybrid", "auto"]
 ENV_METHODS = ["srbf", "pbr_env", "auto_env"]
 VIEW = 3
 # Which methods each finish is checked with: those that model it.  Metal

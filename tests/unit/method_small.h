@@ -15,6 +15,7 @@ static const char *const method_small[][2] = {
     {"pbr_detail", "res=8,starts=1,max_iter=20"},
     {"tab", "res_h=8,res_d=4"},
     {"pbr_tab", "res_h=8,res_d=4,starts=1"},
+    {"pbr_maps", "starts=1,components=2,map_res=16,rounds=2"},
     {"srbf", "lights=8,basis_res=2,raster=full,grazing=0"},
     {"pbr_env", "lights=8,starts=1,max_iter=20,raster=full"},
     {"hf4", "res=8,s_res=4"},

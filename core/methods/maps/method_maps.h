@@ -65,16 +65,17 @@ typedef struct maps_params {
 } maps_params;
 
 typedef struct maps_material {
-    matmap mm;                   /* products (hf3 or hf4 materials) and coefficient textures */
+    matmap mm;                   /* products (hf3, hf4 or pbr materials) and coefficient
+                                    textures */
     const method *product;       /* the products' method */
     double mean[MATMAP_MAX];     /* each texture's mean: the coefficients without uv */
 } maps_material;
 
-/* The maps of a material of maps (method maps or hybrid; NULL for another
- * method's). */
+/* The maps of a material of maps (method maps, hybrid or pbr_maps; NULL
+ * for another method's). */
 const matmap *maps_matmap(const material *m);
 
-/* A material of method `self` (maps or hybrid) from a fitted matmap
+/* A material of method `self` (maps, hybrid or pbr_maps) from a fitted matmap
  * (moved: *mm is zeroed; its products all of one method) and info (one
  * reference stolen; may be NULL).  GLINT_ENOMEM leaves *m empty. */
 int maps_material_init(material *m, const method *self, matmap *mm, json_t *info,

@@ -194,7 +194,7 @@ size_t maps_kind_fit_bytes(const maps_kind *k, const void *params, long nsamples
 {
     matmap_params q;
     k->knobs(params, &q);
-    return k->product->fit_bytes(params, nsamples) + (size_t)nsamples * 64 +
+    return method_fit_bytes(k->product, params, nsamples) + (size_t)nsamples * 64 +
            (size_t)(q.components + 2) * q.res * q.res * 8;
 }
 
@@ -204,6 +204,6 @@ double maps_kind_fit_seconds(const maps_kind *k, const void *params, long nsampl
 {
     matmap_params q;
     k->knobs(params, &q);
-    return k->product->fit_seconds(params, nsamples) +
+    return method_fit_seconds(k->product, params, nsamples) +
            (double)(q.components + 1) * nsamples * METHOD_SECONDS_PER_SAMPLE;
 }

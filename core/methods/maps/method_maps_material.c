@@ -9,6 +9,7 @@
 #include "img.h"
 #include "method_hf3_parts.h"
 #include "method_hf4_parts.h"
+#include "method_pbr.h"
 #include "internal/method_maps_int.h"
 #include "uvtex.h"
 
@@ -139,6 +140,9 @@ static int maps_to_json(const void *data, json_t *root, glint_err *err)
                         json_string(x->product == &method_hf4
                                         ? "sum over k of coefficient_k(uv) x product_k(uv, wi, "
                                           "wo), each product a four-factor one (p q r s(u, v))"
+                                    : x->product == &method_pbr
+                                        ? "sum over k of coefficient_k(uv) x product_k(wi, wo), "
+                                          "each product a pbr material (kd / pi + GGX lobes)"
                                         : "sum over k of coefficient_k(uv) x product_k(wi, wo)"));
     return 0;
 fail:
@@ -222,8 +226,10 @@ static int maps_from_json(const json_t *root, const char *file, void **data, gli
         x->product = &method_hf3;
     } else if (json_is_string(v) && strcmp(json_string_value(v), "hf4") == 0) {
         x->product = &method_hf4;
+    } else if (json_is_string(v) && strcmp(json_string_value(v), "pbr") == 0) {
+        x->product = &method_pbr;
     } else {
-        glint_err_set(err, rc, "%s: product must be \"hf3\" or \"hf4\"", file);
+        glint_err_set(err, rc, "%s: product must be \"hf3\", \"hf4\" or \"pbr\"", file);
         goto fail;
     }
     if (!json_is_array(prods) || json_array_size(prods) < 1 ||
@@ -308,9 +314,8 @@ done:
  * product's linear factors, 3 rows each (p, q, r), res wide; the PNG's rows
  * over their maximum as hf3 writes them (png_scale per product); spatial
  * factors of hf4 products as save_spatial writes them. */
-static int maps_save_files(const void *data, const char *dir, json_t *root, glint_err *err)
+static int save_hf_files(const maps_material *x, const char *dir, json_t *root, glint_err *err)
 {
-    const maps_material *x = data;
     int K = x->mm.k, M = x->mm.res, R = 0, rc;
     size_t nt = (size_t)M * M;
     img c = {0}, lin = {0}, png = {0};
@@ -366,11 +371,34 @@ done:
     return rc;
 }
 
+/* coefficients.exr / .png alone: pbr products are whole in the manifest. */
+static int save_coefficients(const maps_material *x, const char *dir, glint_err *err)
+{
+    img c = {0};
+    int rc = img_alloc(&c, x->mm.res, x->mm.k * x->mm.res, 1, err);
+    if (!rc) {
+        memcpy(c.px, x->mm.coef, (size_t)x->mm.k * x->mm.res * x->mm.res * sizeof *c.px);
+        rc = img_write_pair(dir, "coefficients", &c, &c, err);
+    }
+    img_free(&c);
+    return rc;
+}
+
+static int maps_save_files(const void *data, const char *dir, json_t *root, glint_err *err)
+{
+    const maps_material *x = data;
+    return x->product == &method_pbr ? save_coefficients(x, dir, err)
+                                     : save_hf_files(x, dir, root, err);
+}
+
 static json_t *maps_summary(const void *data)
 {
     const maps_material *x = data;
-    prod_view f = x->mm.k ? view_of(x, 0) : (prod_view){0};
-    json_t *o = json_pack("{s:i, s:i, s:i, s:s, s:s}", "res", f.res, "components", x->mm.k,
+    prod_view f = x->mm.k && x->product != &method_pbr ? view_of(x, 0) : (prod_view){0};
+    json_t *o;
+    if (x->product == &method_pbr)
+        return maps_pbr_summary(x);
+    o = json_pack("{s:i, s:i, s:i, s:s, s:s}", "res", f.res, "components", x->mm.k,
                           "map_res", x->mm.res, "stop", x->mm.stop ? x->mm.stop : "components",
                           "product", x->product->name);
     if (o && f.sres > 0)
@@ -394,6 +422,8 @@ static int maps_gpu(const void *data, material_gpu *g, glint_err *err)
     memset(g, 0, sizeof *g);
     if (K < 1 || !x->mm.coef)
         return glint_err_set(err, GLINT_EINVAL, "material has no products");
+    if (x->product == &method_pbr)
+        return maps_pbr_gpu(x, g, err);
     f0 = view_of(x, 0);
     R = f0.res;
     S = f0.sres;

@@ -101,4 +101,12 @@ double maps_kind_fit_seconds(const maps_kind *k, const void *params, long nsampl
 
 extern const material_ops maps_material_ops;
 
+/* A maps material whose products are pbr materials (method_maps_pbr.c):
+ * its GPU binding (material_ops.gpu) and its summary. */
+int maps_pbr_gpu(const maps_material *x, material_gpu *g, glint_err *err);
+json_t *maps_pbr_summary(const maps_material *x);
+
+/* The pbr_maps method's fit (method_pbr_maps_fit.c). */
+int pbr_maps_fit_in(const method_fit_in *in, material *out, glint_err *err);
+
 #endif
