@@ -15,6 +15,7 @@
 #include "method_maps.h"
 #include "method_pbr.h"
 #include "method_pbr_detail.h"
+#include "method_pbr_maps.h"
 #include "method_pbr_tab.h"
 #include "method_tab.h"
 #include "scene.h"
@@ -34,7 +35,7 @@ static const method_param auto_params_table[] = {
      .offset = offsetof(auto_params, res_2d), .min = 0, .max = HF2D_SRES_MAX},
     {.name = "components", .label = "materials, at most", .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "at most this many products in the material-maps candidates (maps, "
-                    "hybrid); 0: their own (5 and 4)",
+                    "hybrid, pbr_maps); 0: their own (5, 4 and 3)",
      .offset = offsetof(auto_params, components), .min = 0, .max = MATMAP_MAX},
     {.name = "threshold", .label = "how much better a richer model must be", .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_NUMBER, .affects = "fit",
      .description = "a richer model is taken only when it lowers the held-out RMS by more "
@@ -99,6 +100,7 @@ typedef struct cands {
     pbr_detail_params xp;
     tab_params tp;
     pbr_tab_params gp;
+    pbr_maps_params qp;
 } cands;
 
 static void candidates(const auto_params *p, cands *c)
@@ -127,6 +129,9 @@ static void candidates(const auto_params *p, cands *c)
     method_pbr.params_default(&c->bp);
     method_tab.params_default(&c->tp);
     method_pbr_tab.params_default(&c->gp); /* pbr's level and tab's design, shared */
+    method_pbr_maps.params_default(&c->qp); /* pbr's level, shared */
+    if (p->components)
+        c->qp.components = p->components;
     method_pbr_detail.params_default(&c->xp); /* hf3's levels and pbr's, shared */
     if (p->res)
         c->xp.hf.res = p->res;
@@ -664,6 +669,7 @@ static const cand_def CANDS[] = {
     {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
     {&method_maps, offsetof(cands, mp), 2, {LV_HF3, LV_HF3 + 1}, {LV_FULL_HF3, LV_FULL_HF3 + 1}},
     {&method_hybrid, offsetof(cands, yp), 1, {LV_HF4}, {LV_FULL_HF4}},
+    {&method_pbr_maps, offsetof(cands, qp), 1, {LV_PBR}, {LV_FULL_PBR}},
 };
 #define NCAND ((int)(sizeof CANDS / sizeof CANDS[0]))
 
@@ -835,7 +841,8 @@ static json_t *choice_report(const auto_params *p, double fl, const split *x, in
         "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
-        "cheapest first (hf3, pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid); a later "
+        "cheapest first (hf3, pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid, "
+        "pbr_maps); a later "
         "one is "
         "taken when its judged RMS (the geometric mean of its held-out RMS on the new views "
         "and on the view beyond the painted range when both are held out, else its held-out "
@@ -952,7 +959,8 @@ const method method_auto = {
         "tabulated over the half and difference angles (tab), pbr corrected by such a table "
         "(pbr_tab), one "
         "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
-        "material maps (maps) and maps of textured materials (hybrid), each at its own "
+        "material maps (maps), maps of textured materials (hybrid) and maps of physically "
+        "based materials (pbr_maps), each at its own "
         "settings, to the painted views but those held out (one in `every`, and the one whose "
         "light is farthest from its eye: a light beyond the painted range; one pixel tile in "
         "`every` when one view is painted), and keeps the cheapest whose error on the "

@@ -26,6 +26,8 @@
  *   hf4   one material times a spatial factor s(u, v) (method_hf4.h)
  *   maps  a sum of products weighted by coefficient textures (method_maps.h)
  *   hybrid  maps whose products are hf4's (method_hybrid.h)
+ *   pbr_maps  maps whose products are pbr materials, one holding at each
+ *         texel (method_pbr_maps.h; pbr's level, shared)
  * and each is measured on the held-out pixels (RMS, per unit light, RGB,
  * the material evaluated at each pixel's texture coordinates; pooled, and
  * apart for the views inside the range and the one beyond it).  A
@@ -42,7 +44,7 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps and hybrid are alternatives, not
+ * pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid and pbr_maps are alternatives, not
  * steps of one chain, so each is measured against the choice so far; every take lowers
  * the judged RMS, so the answer is never worse on the held-out samples, so
  * judged, than hf3, the simplest.  The material is the chosen
