@@ -212,4 +212,30 @@ def test_06_hybrid_maps_of_four_factor_products(d):
     assert r.status_code == 422 and "s_res" in r.json()["detail"], r.text
 
 
+def test_07_pbr_maps_of_physical_products(d):
+    params = {"map_res": 32, "components": 2, "starts": 1}
+    m = material(d, {"method": "pbr_maps", "params": params})
+    h = tok(S["view"])
+    assert m["method"] == "pbr_maps" and m["product"] == "pbr", m
+    assert 1 <= m["components"] <= 2 and m["map_res"] == 32
+    assert len(m["diffuse"]) == 3 and m["fresnel"] == "dielectric"
+    # pbr's level is the one a pbr fit of the same views keys
+    kind, one = fit(d, {"method": "pbr", "params": {"starts": 1}}, expect=(201,))
+    assert one["precomputation"]["cache"]["memory"] == "hit"
+    print("  rms painted: pbr %.4f, pbr_maps (%d products) %.4f" % (
+        one["errors"]["rms_painted"], m["components"], m["errors"]["rms_painted"]))
+    assert m["errors"]["rms_painted"] < one["errors"]["rms_painted"]
+    png = d.get("/api/v1/materials/%s/coefficients.png" % m["id"], headers=h, status=200)
+    assert struct.unpack(">II", png.content[16:24]) == (32, m["components"] * 32)
+    d.get("/api/v1/materials/%s/spatial.png" % m["id"], headers=h, status=404)
+    man = d.get("/api/v1/materials/%s/material.json" % m["id"], headers=h, status=200).json()
+    assert man["product"] == "pbr" and all("lobes" in p for p in man["products"])
+    r = d.get("/api/v1/materials/%s/preview.png?view=2" % m["id"], headers=h, status=200)
+    assert r.content[:8] == b"\x89PNG\r\n\x1a\n"
+    r = d.post("/api/v1/sessions/%s/fits" % S["session"],
+               headers=dict(tok(S["paint"]), **{"Content-Type": "application/json"}),
+               data=json.dumps({"method": "pbr_maps", "params": {"rounds": 99}}))
+    assert r.status_code == 422 and "rounds" in r.json()["detail"], r.text
+
+
 run_tests(globals())
