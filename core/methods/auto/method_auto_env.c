@@ -30,8 +30,8 @@ static const method_param auto_env_params_table[] = {
      .offset = offsetof(auto_env_params, threshold), .min = 0.0, .max = 1.0},
     {.name = "floor", .label = "smallest gain that counts", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_NUMBER, .affects = "fit",
-     .description = "nor by less than this (held-out RMS, the painting's units): below it a "
-                    "gain is within an 8-bit painting's quantization",
+     .description = "nor by less than this fraction of the painting's RMS: a smaller gain is "
+                    "noise, whatever the painting's brightness",
      .offset = offsetof(auto_env_params, floor), .min = 0.0, .max = 1.0},
     {.name = "every", .label = "views held out (one in)", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
@@ -52,7 +52,7 @@ static void auto_env_params_default(void *params)
     memset(p, 0, sizeof *p);
     method_srbf.params_default(&p->env);
     p->threshold = 0.1;
-    p->floor = 1.0 / 255.0 / 4.0;
+    p->floor = 1e-3;
     /* with the usual 3 painted views, the third is held out and two kept */
     p->every = 4;
 }
@@ -435,13 +435,24 @@ static int fit_candidates(const method_fit_in *in, const cands *cs, const unsign
     return 0;
 }
 
+/* The floor in the painting's units: p->floor times the RMS of the
+ * painted values (as auto's: an absolute floor, a quarter of an 8-bit step,
+ * held every dark painting at its first candidate). */
+static double floor_value(const auto_env_params *p, const method_fit_in *in)
+{
+    double ss = 0.0;
+    for (long i = 0; i < 3L * in->s->n; i++)
+        ss += (double)in->rgb[i] * in->rgb[i];
+    return in->s->n ? p->floor * sqrt(ss / (3.0 * (double)in->s->n)) : 0.0;
+}
+
 /* The rule: the first is the start; a later candidate is taken when its
  * held-out RMS is below the current choice's by more than the threshold
- * and the floor, so the choice is never worse on the held-out samples than
- * the first.  Writes each candidate's figures into `list`; the chosen
- * index. */
-static int choose(const auto_env_params *p, const cands *cs, const scores *sc, json_t *list,
-                  json_t *skipped)
+ * and the floor (fl, in the painting's units), so the choice is never worse
+ * on the held-out samples than the first.  Writes each candidate's figures
+ * into `list`; the chosen index. */
+static int choose(const auto_env_params *p, double fl, const cands *cs, const scores *sc,
+                  json_t *list, json_t *skipped)
 {
     int chosen = 0;
     for (int c = 0; c < NCAND; c++) {
@@ -454,7 +465,7 @@ static int choose(const auto_env_params *p, const cands *cs, const scores *sc, j
             continue;
         }
         take = c > 0 && sc->held[c] < sc->held[chosen] * (1.0 - p->threshold) &&
-                   sc->held[chosen] - sc->held[c] > p->floor;
+                   sc->held[chosen] - sc->held[c] > fl;
         e = json_pack("{s:s, s:s, s:o, s:f, s:I, s:f, s:f, s:b}", "method",
                       cand_method(c)->name, "label", cand_label[c], "params",
                       method_params_to_json(cand_method(c), cand_params(cs, c)),
@@ -469,18 +480,20 @@ static int choose(const auto_env_params *p, const cands *cs, const scores *sc, j
     return chosen;
 }
 
-static json_t *choice_report(const auto_env_params *p, int by_views,
+static json_t *choice_report(const auto_env_params *p, double fl, int by_views,
                              const unsigned char *held_view, long nheld, int chosen,
                              json_t *list)
 {
     json_t *choice = json_pack(
-        "{s:s, s:s, s:o, s:f, s:f, s:s, s:i, s:I, s:s}", "chosen", cand_method(chosen)->name,
-        "chosen_label", cand_label[chosen], "candidates", list, "threshold", p->threshold,
-        "floor", p->floor, "held_out", by_views ? "views" : "pixels", "held_out_every",
+        "{s:s, s:s, s:o, s:f, s:f, s:f, s:s, s:i, s:I, s:s}", "chosen",
+        cand_method(chosen)->name, "chosen_label", cand_label[chosen], "candidates", list,
+        "threshold", p->threshold, "floor", p->floor, "floor_value", fl, "held_out",
+        by_views ? "views" : "pixels", "held_out_every",
         p->every, "held_out_samples", (json_int_t)nheld, "rule",
         "simplest first (pbr_env: one lobe, dielectric; conductor; two lobes; then srbf); a "
         "later one is taken when its held-out RMS is below the current choice's by more than "
-        "the threshold (a fraction) and the floor, so the choice is never worse on the "
+        "the threshold (a fraction) and floor_value (the floor times the painting's RMS), so "
+        "the choice is never worse on the "
         "held-out samples than the first; the material is the chosen candidate refitted to "
         "every painted sample");
     if (by_views) {
@@ -548,8 +561,9 @@ static int auto_env_fit(const method_fit_in *in, material *out, glint_err *err)
         nheld += held[i];
     {
         json_t *list = json_array(), *skipped = json_array(), *choice;
-        chosen = choose(p, &cs, &sc, list, skipped);
-        choice = choice_report(p, by_views, held_view, nheld, chosen, list);
+        double fl = floor_value(p, in);
+        chosen = choose(p, fl, &cs, &sc, list, skipped);
+        choice = choice_report(p, fl, by_views, held_view, nheld, chosen, list);
         if (json_array_size(skipped))
             json_object_set(choice, "not_tried", skipped);
         json_decref(skipped);

@@ -30,7 +30,8 @@
  * raster's pixels: pbr_env's 64 x 48 and srbf's 160 x 120 of each held
  * view).  The choice starts at the first; a later one replaces it when
  * its held-out RMS is below the current choice's by more than `threshold`
- * (a fraction) and `floor`, so the answer is never worse on the held-out
+ * (a fraction) and `floor` times the painting's RMS (1e-3; reported as
+ * floor_value), so the answer is never worse on the held-out
  * views than the simplest.  The material is the chosen candidate refitted
  * to every painted sample; info.choice lists every candidate's held-out
  * and painted RMS, fit time, its parameters and whether it was taken.
@@ -50,7 +51,7 @@ typedef struct auto_env_params {
      * every candidate (the rest of srbf's members unused) */
     srbf_params env;
     double threshold;  /* fraction a later candidate must gain on held-out samples */
-    double floor;      /* and at least this much (RMS, the painting's units) */
+    double floor;      /* and at least this fraction of the painting's RMS */
     int every;         /* one view (or pixel by n.wo) in this many held out */
 } auto_env_params;
 
