@@ -11,6 +11,9 @@
  *                                             (mtlx.h)
  *   GET /api/v1/materials/{id}/material.usda  that fit as a UsdPreviewSurface with
  *                                             the scene's mesh (usda.h)
+ *   GET /api/v1/materials/{id}/material.usdz  the same in a USDZ package with the
+ *                                             .glb's textures where it varies
+ *                                             (usdz.h; ?bake_res=N)
  *   GET /api/v1/materials/{id}/exports        the list of them: file name, what
  *                                             each carries, how close it comes
  *
@@ -40,6 +43,7 @@
 #include "prep.h"
 #include "scene.h"
 #include "usda.h"
+#include "usdz.h"
 
 /* The material as a MERL table (merl.h): 35 MB, computed on request
  * (about 0.5 s for hf3 on two cores, eight times that for an anisotropic
@@ -225,12 +229,13 @@ static void fit_header(http_resp *r, const gltf_pbr *p)
     http_header(r, "X-Glint-Fit", info);
 }
 
-/* The glTF 2.0 file: the scene's mesh with the metallic-roughness material
- * fitted at the samples of the views the material was fitted to
- * (views_used), and baked into textures of bake_res x bake_res texels
- * (query, 0..GLTF_BAKE_RES_MAX, default GLTF_BAKE_RES_DEFAULT; 0: the
- * average only) where the material varies over the surface. */
-static http_resp glb_get(http_req *req)
+/* The glTF 2.0 file (usdz 0) or the USDZ package (usdz 1): the scene's
+ * mesh with the metallic-roughness material fitted at the samples of the
+ * views the material was fitted to (views_used), and baked into textures
+ * of bake_res x bake_res texels (query, 0..GLTF_BAKE_RES_MAX, default
+ * GLTF_BAKE_RES_DEFAULT; 0: the average only) where the material varies
+ * over the surface; the package's USD layer reads the same textures. */
+static http_resp baked_get(http_req *req, int usdz)
 {
     app *a = req->app;
     const char *mid = req->param[0];
@@ -255,13 +260,19 @@ static http_resp glb_get(http_req *req)
     if ((rc = export_src_open(req, mid, &x, &e)))
         goto done;
     bytes = export_bytes(x.sc, bake_res);
+    if (usdz) /* the layer's text (about 80 bytes a vertex, 24 a triangle), then its copy */
+        bytes += 2 * ((size_t)x.sc->mesh.nverts * 80 + (size_t)x.sc->mesh.ntris * 24);
     api_work_ticket(req, bytes, 1, &ticket);
-    if ((rc = admit_take(a->work, &ticket, "a glTF export", 0, &e)))
+    if ((rc = admit_take(a->work, &ticket, usdz ? "a USDZ export" : "a glTF export", 0, &e)))
         goto done;
+    snprintf(info, sizeof info, "glint material %s.", mid);
     if ((rc = api_material_load(a, mid, &m, &e)) ||
-        (rc = gltf_export_scene(&m, x.sc, x.use, (int)bake_res, &glb, &len, &p, &gi, &e)))
+        (rc = usdz ? usdz_export_scene(&m, x.sc, x.use, (int)bake_res, info, &glb, &len, &p,
+                                       &gi, &e)
+                   : gltf_export_scene(&m, x.sc, x.use, (int)bake_res, &glb, &len, &p, &gi,
+                                       &e)))
         goto done;
-    r = http_bytes_owned(200, "model/gltf-binary", glb, len);
+    r = http_bytes_owned(200, usdz ? "model/vnd.usdz+zip" : "model/gltf-binary", glb, len);
     snprintf(info, sizeof info,
              "base_color=%.4f,%.4f,%.4f; metallic=%.4f; roughness=%.4f; fit_rel_rms=%.4f; "
              "pairs=%d; spatial=%d; textures=%d",
@@ -272,8 +283,8 @@ static http_resp glb_get(http_req *req)
         snprintf(info + strlen(info), sizeof info - strlen(info),
                  "; texel_rel_rms_median=%.4f; texel_rel_rms_max=%.4f; bake_seconds=%.3f",
                  gi.rel_rms_median, gi.rel_rms_max, gi.seconds);
-    http_header(&r, "X-Glint-Gltf", info);
-    api_export_filename(a, mid, x.doc.scene, "glb", fname, sizeof fname);
+    http_header(&r, usdz ? "X-Glint-Fit" : "X-Glint-Gltf", info);
+    api_export_filename(a, mid, x.doc.scene, usdz ? "usdz" : "glb", fname, sizeof fname);
     api_attachment(&r, fname);
 done:
     if (rc)
@@ -283,6 +294,9 @@ done:
     export_src_close(a, &x);
     return r;
 }
+
+static http_resp glb_get(http_req *req) { return baked_get(req, 0); }
+static http_resp usdz_get(http_req *req) { return baked_get(req, 1); }
 
 /* The MaterialX document of the same fit (the average over the surface). */
 static http_resp mtlx_get(http_req *req)
@@ -378,6 +392,10 @@ static const export_kind export_kinds[] = {
      "a USD layer: the mesh bound to a UsdPreviewSurface with the same fit, its average over "
      "the surface (no textures)",
      "USD: Omniverse, Houdini, Blender 4+", 1, 0},
+    {"usdz", "usdz", "material.usdz",
+     "a USDZ package: the same USD layer with the .glb's baked textures where the material "
+     "varies over the surface",
+     "USD: Omniverse, Houdini, Blender 4+, Apple Quick Look", 1, 2},
     {"merl", "binary", "merl.binary",
      "the material tabulated as a MERL BRDF table (its average over the surface where it "
      "varies, over half-vector azimuths where it is anisotropic)",
@@ -406,9 +424,11 @@ static json_t *export_how_close(const export_kind *k, const gltf_pbr *p, int spa
                          "the pbr material's own parameters (with KHR extensions in the .glb), "
                          "against the material on the painted views (relative RMS)");
     return json_pack("{s:f, s:b, s:s}", "rel_rms", p->rel_rms, "exact", 0, "note",
-                     strcmp(k->format, "glb") == 0 && spatial
+                     (strcmp(k->format, "glb") == 0 || strcmp(k->format, "usdz") == 0) &&
+                             spatial
                          ? "the average's fit on the painted views; the baked textures come "
-                           "closer (their figures come with the download, X-Glint-Gltf)"
+                           "closer (their figures come with the download: X-Glint-Gltf, "
+                           "X-Glint-Fit)"
                          : "the metallic-roughness fit against the material on the painted "
                            "views (relative RMS)");
 }
@@ -526,6 +546,7 @@ const http_route api_exports_routes[] = {
     {"GET", "/api/v1/materials/{id}/material.glb", glb_get},
     {"GET", "/api/v1/materials/{id}/material.mtlx", mtlx_get},
     {"GET", "/api/v1/materials/{id}/material.usda", usda_get},
+    {"GET", "/api/v1/materials/{id}/material.usdz", usdz_get},
     {"GET", "/api/v1/materials/{id}/exports", exports_get},
 };
 const int api_exports_nroutes = sizeof api_exports_routes / sizeof api_exports_routes[0];

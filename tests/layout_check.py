@@ -30,7 +30,7 @@ SERVER_ALLOWED = {
     # the pipeline: methods, precomputations, materials, G-buffer fits
     "method.h", "prep.h", "cache.h", "material.h", "gbfit.h",
     # what leaves: renders, exports, readable summaries
-    "render.h", "readable.h", "gltf.h", "mtlx.h", "usda.h", "brdfx.h", "merl_material.h",
+    "render.h", "readable.h", "gltf.h", "mtlx.h", "usda.h", "usdz.h", "brdfx.h", "merl_material.h",
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)

@@ -556,23 +556,15 @@ int gltf_fit_scene(const material *m, const scene *sc, const unsigned char *use,
     return rc;
 }
 
-int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
-                      int bake_res, void **glb, size_t *len, gltf_pbr *out,
-                      gltf_export_info *info, glint_err *err)
+int gltf_bake_scene(const material *m, const scene *sc, const unsigned char *use, int bake_res,
+                    gltf_pbr *out, gltf_bake *bake, gltf_export_info *info, glint_err *err)
 {
     samples s;
-    gltf_bake bake;
-    gltf_export_info dummy;
-    char *extras = NULL;
-    int rc, baked = 0;
+    int rc;
 
-    *glb = NULL;
-    *len = 0;
-    if (!info)
-        info = &dummy;
     memset(info, 0, sizeof *info);
     memset(&s, 0, sizeof s);
-    memset(&bake, 0, sizeof bake);
+    memset(bake, 0, sizeof *bake);
     if (bake_res < 0 || bake_res > GLTF_BAKE_RES_MAX)
         return glint_err_set(err, GLINT_ERANGE, "texture size %d outside 0..%d (0: no textures)",
                              bake_res, GLTF_BAKE_RES_MAX);
@@ -584,25 +576,43 @@ int gltf_export_scene(const material *m, const scene *sc, const unsigned char *u
         snprintf(info->note, sizeof info->note,
                  "the mesh has no texture coordinates: the average only");
     else if (out->spatial) {
-        if ((rc = gltf_bake_material(m, &s, out, bake_res, &bake, err)))
+        if ((rc = gltf_bake_material(m, &s, out, bake_res, bake, err)))
             goto done;
-        baked = 1;
         info->baked = 1;
-        info->res = bake.res;
-        info->pairs = bake.pairs;
-        info->rel_rms_median = bake.rel_rms_median;
-        info->rel_rms_max = bake.rel_rms_max;
-        info->seconds = bake.seconds;
+        info->res = bake->res;
+        info->pairs = bake->pairs;
+        info->rel_rms_median = bake->rel_rms_median;
+        info->rel_rms_max = bake->rel_rms_max;
+        info->seconds = bake->seconds;
     }
-    if (!(extras = extras_text(m, out, baked ? &bake : NULL, info->note))) {
+done:
+    samples_free(&s);
+    return rc;
+}
+
+int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
+                      int bake_res, void **glb, size_t *len, gltf_pbr *out,
+                      gltf_export_info *info, glint_err *err)
+{
+    gltf_bake bake;
+    gltf_export_info dummy;
+    char *extras = NULL;
+    int rc;
+
+    *glb = NULL;
+    *len = 0;
+    if (!info)
+        info = &dummy;
+    if ((rc = gltf_bake_scene(m, sc, use, bake_res, out, &bake, info, err)))
+        goto done;
+    if (!(extras = extras_text(m, out, info->baked ? &bake : NULL, info->note))) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory");
         goto done;
     }
-    rc = gltf_write_glb(&sc->mesh, out, baked ? &bake : NULL, "glint material", extras, glb, len,
-                        err);
+    rc = gltf_write_glb(&sc->mesh, out, info->baked ? &bake : NULL, "glint material", extras,
+                        glb, len, err);
 done:
     free(extras);
     gltf_bake_free(&bake);
-    samples_free(&s);
     return rc;
 }

@@ -215,6 +215,16 @@ typedef struct gltf_export_info {
     char note[160];              /* why not baked ("" when baked or not spatial) */
 } gltf_export_info;
 
+/* The fit and the textures of an export, without the file: m fitted at
+ * the samples of the views flagged in `use` (NULL: all) of scene sc (OUT:
+ * *out) and, when it varies over the surface and sc's mesh has texture
+ * coordinates, baked at bake_res x bake_res texels (bake_res 0: the
+ * average only) into *bake (gltf_bake_free; info->baked says whether, and
+ * info->note why not).  What the .glb, and the USDZ package (usdz.h),
+ * carry. */
+int gltf_bake_scene(const material *m, const scene *sc, const unsigned char *use, int bake_res,
+                    gltf_pbr *out, gltf_bake *bake, gltf_export_info *info, glint_err *err);
+
 /* The whole export: the material fitted at the samples of the views
  * flagged in `use` (NULL: all) of scene sc, and baked at bake_res x
  * bake_res texels when it varies over the surface (bake_res 0: the average

@@ -38,13 +38,13 @@ static int doc_text(glint_buf *b, const char *s)
     return rc;
 }
 
-static int header(glint_buf *b, const gltf_pbr *p, const char *note)
+static int header(glint_buf *b, const gltf_pbr *p, int textured, const char *note)
 {
     int rc = glint_buf_printf(
         b,
         "#usda 1.0\n(\n    defaultPrim = \"glint\"\n    doc = \"\"\"glint: the material as a "
         "UsdPreviewSurface (%s workflow), from ",
-        p->khr.specular_used ? "specular" : "metallic");
+        p->khr.specular_used && !textured ? "specular" : "metallic");
     if (p->exact)
         rc |= glint_buf_printf(
             b,
@@ -59,9 +59,14 @@ static int header(glint_buf *b, const gltf_pbr *p, const char *note)
             "the painted views' samples (%d pairs). fit_rel_rms %.4f: the relative RMS error of "
             "that fit against the material on the painted views.",
             p->pairs, p->rel_rms);
-    if (p->spatial)
+    if (p->spatial && textured)
+        rc |= glint_buf_printf(b, " The material varies over the surface: its base colour, "
+                                  "metallic and roughness are the baked textures of the .glb "
+                                  "(glTF's core model, without the KHR extensions of the "
+                                  "average), read at primvars:st.");
+    else if (p->spatial)
         rc |= glint_buf_printf(b, " The material varies over the surface: this is its average "
-                                  "(no textures; the .glb carries them).");
+                                  "(no textures; the .glb and the .usdz carry them).");
     if (note && *note) {
         rc |= glint_buf_printf(b, " ");
         rc |= doc_text(b, note);
@@ -120,7 +125,49 @@ static void dielectric_f0(const gltf_pbr *p, double f0[3])
     }
 }
 
-static int material_prim(glint_buf *b, const gltf_pbr *p)
+/* The texture readers: primvars:st, then one UsdUVTexture per image. */
+static int texture_prims(glint_buf *b, const usda_textures *t)
+{
+    static const char *const fmt =
+        "        def Shader \"%s\"\n        {\n"
+        "            uniform token info:id = \"UsdUVTexture\"\n"
+        "            asset inputs:file = @%s@\n"
+        "            token inputs:sourceColorSpace = \"%s\"\n"
+        "            float2 inputs:st.connect = </glint/material/st.outputs:result>\n"
+        "            token inputs:wrapS = \"clamp\"\n"
+        "            token inputs:wrapT = \"clamp\"\n"
+        "%s        }\n\n";
+    int rc = glint_buf_printf(b, "        def Shader \"st\"\n        {\n"
+                                 "            uniform token info:id = \"UsdPrimvarReader_float2\"\n"
+                                 "            string inputs:varname = \"st\"\n"
+                                 "            float2 outputs:result\n        }\n\n");
+    rc |= glint_buf_printf(b, fmt, "base_color", t->base_color, "sRGB",
+                           "            float3 outputs:rgb\n");
+    rc |= glint_buf_printf(b, fmt, "metallic_roughness", t->metallic_roughness, "raw",
+                           "            float outputs:b\n            float outputs:g\n");
+    return rc;
+}
+
+/* The surface reading the textures (metallic workflow, ior 1.5). */
+static int textured_surface(glint_buf *b)
+{
+    return glint_buf_printf(
+        b,
+        "        def Shader \"surface\"\n        {\n"
+        "            uniform token info:id = \"UsdPreviewSurface\"\n"
+        "            color3f inputs:diffuseColor.connect = "
+        "</glint/material/base_color.outputs:rgb>\n"
+        "            float inputs:ior = %.6g\n"
+        "            float inputs:metallic.connect = "
+        "</glint/material/metallic_roughness.outputs:b>\n"
+        "            float inputs:roughness.connect = "
+        "</glint/material/metallic_roughness.outputs:g>\n"
+        "            int inputs:useSpecularWorkflow = 0\n"
+        "            token outputs:surface\n        }\n    }\n}\n",
+        USDA_IOR);
+}
+
+static int material_prim(glint_buf *b, const gltf_pbr *p, const usda_textures *tex)
 {
     double f0[3];
     int rc;
@@ -128,9 +175,11 @@ static int material_prim(glint_buf *b, const gltf_pbr *p)
     rc = glint_buf_printf(
         b,
         "    def Material \"material\"\n    {\n"
-        "        token outputs:surface.connect = </glint/material/surface.outputs:surface>\n\n"
-        "        def Shader \"surface\"\n        {\n"
-        "            uniform token info:id = \"UsdPreviewSurface\"\n");
+        "        token outputs:surface.connect = </glint/material/surface.outputs:surface>\n\n");
+    if (tex)
+        return rc | texture_prims(b, tex) | textured_surface(b);
+    rc |= glint_buf_printf(b, "        def Shader \"surface\"\n        {\n"
+                              "            uniform token info:id = \"UsdPreviewSurface\"\n");
     if (p->khr.clearcoat_used)
         rc |= glint_buf_printf(b,
                                "            float inputs:clearcoat = %.6g\n"
@@ -152,8 +201,25 @@ static int material_prim(glint_buf *b, const gltf_pbr *p)
                                  p->khr.specular_used ? 1 : 0);
 }
 
+/* an asset path USD reads between @ signs: no '@', no control bytes */
+static int asset_ok(const char *s)
+{
+    if (!s || !*s)
+        return 0;
+    for (; *s; s++)
+        if (*s == '@' || (unsigned char)*s < 32)
+            return 0;
+    return 1;
+}
+
 int usda_write(const gltf_pbr *p, const mesh *msh, const char *note, char **text, size_t *len,
                glint_err *err)
+{
+    return usda_write_textured(p, msh, NULL, note, text, len, err);
+}
+
+int usda_write_textured(const gltf_pbr *p, const mesh *msh, const usda_textures *tex,
+                        const char *note, char **text, size_t *len, glint_err *err)
 {
     glint_buf b = {0};
     int rc;
@@ -165,11 +231,16 @@ int usda_write(const gltf_pbr *p, const mesh *msh, const char *note, char **text
                              "a metallic-roughness material with a value outside [0, 1]");
     if (msh && (msh->nverts < 3 || msh->ntris < 1 || !msh->pos || !msh->nrm || !msh->tri))
         return glint_err_set(err, GLINT_EINVAL, "no mesh to write");
-    rc = header(&b, p, note);
+    if (tex && (!msh || !msh->uv || !asset_ok(tex->base_color) ||
+                !asset_ok(tex->metallic_roughness)))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "textures need the mesh with texture coordinates and two asset "
+                             "paths");
+    rc = header(&b, p, tex != NULL, note);
     if (!rc && msh)
         rc = mesh_prim(&b, msh);
     if (!rc)
-        rc = material_prim(&b, p);
+        rc = material_prim(&b, p, tex);
     if (rc || !b.data) {
         glint_buf_free(&b);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory for a USD layer");

@@ -19,9 +19,18 @@
  *   KHR_materials_clearcoat: clearcoat = clearcoatFactor,
  *   clearcoatRoughness = clearcoatRoughnessFactor (both white coats of
  *   ior 1.5).
- * The average over the surface only (no textures: the .glb bakes them),
- * and the layer's doc string says so, with fit_rel_rms: the relative RMS
- * error of the glTF model's fit against the material on the painted views.
+ * Without textures, the average over the surface only, and the layer's
+ * doc string says so, with fit_rel_rms: the relative RMS error of the glTF
+ * model's fit against the material on the painted views.  With textures
+ * (usda_textures: what a USDZ package holds beside the layer, usdz.h) the
+ * baked base colour and metallic-roughness of the .glb: UsdUVTexture
+ * shaders (sourceColorSpace sRGB and raw; wrap clamp) read at the mesh's
+ * primvars:st by a UsdPrimvarReader_float2, connected to diffuseColor,
+ * metallic (the texture's B) and roughness (its G), in the metallic
+ * workflow with ior 1.5 (the bake fits glTF's core model: the KHR
+ * extensions of the average are left out, and the doc says so).  The
+ * images' first row is st's t = 1, as USD reads an image (and glTF,
+ * whose v is 1 - t).
  *
  * The layer: upAxis "Z" (glint's world up), metersPerUnit 1, defaultPrim
  * "glint" (an Xform) holding Mesh "mesh" (points, normals and primvars:st
@@ -46,5 +55,17 @@
  * positions, normals or triangles, GLINT_ENOMEM. */
 int usda_write(const gltf_pbr *p, const mesh *msh, const char *note, char **text, size_t *len,
                glint_err *err);
+
+/* Asset paths of the baked textures, relative to the layer (inside a
+ * package): base colour (sRGB) and metallic-roughness (G roughness, B
+ * metallic, linear). */
+typedef struct usda_textures {
+    const char *base_color, *metallic_roughness;
+} usda_textures;
+
+/* usda_write with the textures tex (NULL: none) connected; they need msh
+ * with texture coordinates (GLINT_EINVAL otherwise). */
+int usda_write_textured(const gltf_pbr *p, const mesh *msh, const usda_textures *tex,
+                        const char *note, char **text, size_t *len, glint_err *err);
 
 #endif

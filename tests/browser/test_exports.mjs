@@ -5,8 +5,9 @@
 // (gltf-validator, validateBytes: no error) and by three.js in Chromium,
 // rendered with the camera and the light of one of glint's views and compared
 // with glint's own render of that view (GET /materials/{id}/preview.exr); the
-// .mtlx and .usda by the checks against MaterialX's and UsdPreviewSurface's
-// node definitions (tests/integration/export_specs.py); the MERL table by its
+// .mtlx, .usda and .usdz by the checks against MaterialX's and
+// UsdPreviewSurface's node definitions and the USDZ package format
+// (tests/integration/export_specs.py); the MERL table by its
 // header and size, the .brdf and the package by their formats.  Then a pbr
 // fit of the same paintings and a two-lobe pbr material made by the CLI:
 // their .glb files, with the KHR extensions, by the validator.
@@ -18,7 +19,7 @@ import { run, openStudio, settled, assert, assertLE, assertEq, ARTIFACTS, SRC } 
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 const THREE_DIR = path.join(HERE, 'node_modules', 'three');
-const EXT = { glb: 'glb', mtlx: 'mtlx', usda: 'usda', merl: 'binary', brdf: 'brdf', package: 'tar' };
+const EXT = { glb: 'glb', mtlx: 'mtlx', usda: 'usda', usdz: 'usdz', merl: 'binary', brdf: 'brdf', package: 'tar' };
 // three.js's render of the .glb against glint's of the fitted material, the
 // relative mean absolute difference on the object: 1.1% measured on the
 // plastic finish (view 0, 96 x 96); the bound leaves room for other finishes
@@ -153,8 +154,8 @@ run({
     if (rep.issues.numErrors) t.log(JSON.stringify(rep.issues.messages.slice(0, 5)));
     assertEq(rep.issues.numErrors, 0, 'the glTF validator\'s errors');
     assert(rep.info.materialCount === 1 && rep.info.totalVertexCount > 1000, 'one material on the mesh');
-    // the .mtlx and .usda against their node definitions
-    for (const f of ['mtlx', 'usda']) {
+    // the .mtlx, .usda and .usdz against their node definitions (and the package's format)
+    for (const f of ['mtlx', 'usda', 'usdz']) {
       const out = execFileSync(PY, [path.join(SRC, 'tests', 'integration', 'export_specs.py'), f, files[f]], { encoding: 'utf8' });
       t.log(`${f} conforms: ${out.trim().slice(0, 200)}`);
     }

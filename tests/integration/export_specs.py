@@ -1,14 +1,15 @@
-"""Checks of glint's MaterialX (.mtlx) and USD (.usda) exports against the
-node definitions of their specifications (no MaterialX or USD reader is
-packaged where the tests run).
+"""Checks of glint's MaterialX (.mtlx), USD (.usda) and USDZ (.usdz)
+exports against the node definitions of their specifications (no MaterialX
+or USD reader is packaged where the tests run).
 
 The tables below are copied from the specifications' own node definitions:
   - MaterialX, libraries/bxdf/standard_surface.mtlx (nodedef
     ND_standard_surface_surfaceshader_100, which ND_standard_surface_surfaceshader
     1.0.1 inherits) and libraries/stdlib/stdlib_defs.mtlx (ND_surfacematerial),
     AcademySoftwareFoundation/MaterialX at 4177b2cbd48b579ca1e8f7d9901584d811c63b68;
-  - UsdPreviewSurface, pxr/usdImaging/plugin/usdShaders/shaders/shaderDefs.usda
-    (def Shader "UsdPreviewSurface"), PixarAnimationStudios/OpenUSD at
+  - UsdPreviewSurface, UsdUVTexture and UsdPrimvarReader_float2,
+    pxr/usdImaging/plugin/usdShaders/shaders/shaderDefs.usda (their def
+    Shader blocks), PixarAnimationStudios/OpenUSD at
     59992d2178afcebd89273759f2bddfe730e59aa8, and the UsdGeomMesh / UsdGeomPointBased
     attribute types of pxr/usd/usdGeom/schema.usda there.
 
@@ -21,9 +22,15 @@ specularColor), the shader is connected as the specification says
 Material's outputs:surface connects to the shader's outputs:surface), every
 file an input names exists next to the export (none is expected: the files
 carry the average), and for USD the mesh's arrays agree (3 indices per face,
-indices in range, one normal and st per point).
+indices in range, one normal and st per point).  A texture reader's inputs
+and outputs against its definition too, and every connection names an
+output of a shader of the Material.  A USDZ package (the "Usdz File Format
+Specification" of OpenUSD's documentation): a zip whose files are stored
+(not compressed), each one's data at a multiple of 64 bytes, the first a
+USD layer, which is then checked as above with the files it names looked
+up in the package (PNG images).
 
-usage: export_specs.py mtlx|usda FILE   (exit status 0 when it conforms)
+usage: export_specs.py mtlx|usda|usdz FILE   (exit status 0 when it conforms)
 """
 import math
 import os
@@ -76,6 +83,21 @@ PREVIEW_SURFACE = {
     "displacement": ("float", None, None), "occlusion": ("float", 0.0, 1.0),
 }
 PREVIEW_SURFACE_OUTPUTS = {"surface": "token", "displacement": "token"}
+# UsdUVTexture (shaderDefs.usda): inputs name: (type, allowed tokens or None).
+UV_TEXTURE = {
+    "file": ("asset", None), "st": ("float2", None),
+    "wrapS": ("token", {"black", "clamp", "repeat", "mirror", "useMetadata"}),
+    "wrapT": ("token", {"black", "clamp", "repeat", "mirror", "useMetadata"}),
+    "fallback": ("float4", None), "scale": ("float4", None), "bias": ("float4", None),
+    "sourceColorSpace": ("token", {"raw", "sRGB", "auto"}),
+}
+UV_TEXTURE_OUTPUTS = {"r": "float", "g": "float", "b": "float", "a": "float", "rgb": "float3"}
+# UsdPrimvarReader_float2 (shaderDefs.usda)
+PRIMVAR_READER_FLOAT2 = {"varname": ("string", None), "fallback": ("float2", None)}
+PRIMVAR_READER_FLOAT2_OUTPUTS = {"result": "float2"}
+# what a connection may feed: an input's type from an output's (USD connects
+# float3 to color3f: both are three floats)
+FEEDS = {"color3f": {"float3", "color3f"}, "float": {"float"}, "float2": {"float2"}}
 USD_FIT_INPUTS = {"diffuseColor", "metallic", "roughness", "useSpecularWorkflow", "ior"}
 # UsdGeomMesh / UsdGeomPointBased attributes glint writes, with their schema types.
 USD_MESH_ATTRS = {
@@ -191,23 +213,36 @@ def check_usda(text, path=None):
     need(re.search(r'upAxis = "Z"', text), "upAxis is not Z")
     prims = {name: (kind, body) for kind, name, _, body in usd_prims(text)}
     meta = {name: md for _, name, md, _ in usd_prims(text)}
-    shaders = [(n, b) for n, (k, b) in prims.items() if k == "Shader"]
+    shaders = {n: b for n, (k, b) in prims.items() if k == "Shader"}
     mats = [(n, b) for n, (k, b) in prims.items() if k == "Material"]
-    need(len(shaders) == 1 and len(mats) == 1, "one Material and one Shader")
-    sname, sbody = shaders[0]
+    surfaces = [n for n, b in shaders.items() if 'uniform token info:id = "UsdPreviewSurface"' in b]
+    need(len(surfaces) == 1 and len(mats) == 1, "one Material and one UsdPreviewSurface")
+    sname, sbody = surfaces[0], shaders[surfaces[0]]
     mname, mbody = mats[0]
-    need('uniform token info:id = "UsdPreviewSurface"' in sbody, "the shader is not a UsdPreviewSurface")
+    outputs = {}     # shader name: {output: type}
+    for n, b in shaders.items():
+        if n != sname:
+            outputs[n] = check_reader(n, b)
+    outputs[sname] = {}
     values, files = {}, []
     for line in own_lines(sbody):
+        m = re.match(r"(\w+) inputs:(\w+)\.connect = <(/[\w/]+)\.outputs:(\w+)>$", line)
+        if m:
+            t, n, target, out = m.groups()
+            need(n in PREVIEW_SURFACE, "UsdPreviewSurface has no input %r" % n)
+            need(t == PREVIEW_SURFACE[n][0], "%s is %s in shaderDefs.usda, %s here" % (n, PREVIEW_SURFACE[n][0], t))
+            src = target.rsplit("/", 1)[-1]
+            need(target == "/glint/%s/%s" % (mname, src) and src in outputs and out in outputs[src],
+                 "%s connects to %s.outputs:%s, no output of the Material's shaders" % (n, target, out))
+            need(outputs[src][out] in FEEDS.get(t, {t}), "%s (%s) fed by a %s" % (n, t, outputs[src][out]))
+            values[n] = "connected"
+            continue
         m = re.match(r"(\w+) inputs:(\w+) = (.+)$", line)
         if m:
             t, n, v = m.groups()
             need(n in PREVIEW_SURFACE, "UsdPreviewSurface has no input %r" % n)
             want, lo, hi = PREVIEW_SURFACE[n]
             need(t == want, "%s is %s in shaderDefs.usda, %s here" % (n, want, t))
-            if t == "asset":
-                files.append(v.strip("@"))
-                continue
             vals = parse_tuple_values(v)
             need(len(vals) == COMPONENTS[t], "%s: %d components for %s" % (n, len(vals), t))
             if t == "int":
@@ -230,9 +265,72 @@ def check_usda(text, path=None):
         check_usd_mesh(body, meta[n], mname)
     for m in re.finditer(r"@([^@]+)@", text):
         files.append(m.group(1))
-    if path:
+    if callable(path):
+        path(files)
+    elif path:
         check_files(path, files)
     return values, len(meshes)
+
+
+def check_reader(name, body):
+    """A texture reader of the Material (UsdUVTexture, UsdPrimvarReader_float2)
+    against its definition; returns its outputs {name: type}."""
+    m = re.search(r'uniform token info:id = "(\w+)"', body)
+    need(m, "shader %s has no info:id" % name)
+    kind = m.group(1)
+    defs = {"UsdUVTexture": (UV_TEXTURE, UV_TEXTURE_OUTPUTS),
+            "UsdPrimvarReader_float2": (PRIMVAR_READER_FLOAT2, PRIMVAR_READER_FLOAT2_OUTPUTS)}
+    need(kind in defs, "shader %s is a %s, not a UsdPreviewSurface's reader" % (name, kind))
+    inputs, outs = defs[kind]
+    found = {}
+    for line in own_lines(body):
+        m = re.match(r"(\w+) inputs:(\w+)(\.connect)? = (.+)$", line)
+        if m:
+            t, n, conn, v = m.groups()
+            need(n in inputs, "%s has no input %r" % (kind, n))
+            need(t == inputs[n][0], "%s.%s is %s in shaderDefs.usda, %s here" % (kind, n, inputs[n][0], t))
+            if inputs[n][1] is not None:
+                need(v.strip('"') in inputs[n][1], "%s.%s: %s is not one of %s" % (kind, n, v, sorted(inputs[n][1])))
+            found[n] = v
+            continue
+        m = re.match(r"(\w+) outputs:(\w+)$", line)
+        if m:
+            need(outs.get(m.group(2)) == m.group(1), "%s has no output %s" % (kind, line))
+            found["outputs:" + m.group(2)] = m.group(1)
+    if kind == "UsdUVTexture":
+        need("file" in found and "st" in found, "%s reads no file at no st" % name)
+    else:
+        need(found.get("varname") == '"st"', "%s reads %s, not st" % (name, found.get("varname")))
+    return {k[8:]: v for k, v in found.items() if k.startswith("outputs:")}
+
+
+def check_usdz(path):
+    """The package's layout, then its layer with the files it names in it."""
+    import struct
+    import zipfile
+    with open(path, "rb") as f:
+        raw = f.read()
+    z = zipfile.ZipFile(path)
+    infos = z.infolist()
+    need(infos and infos[0].filename.endswith((".usda", ".usdc")), "the package does not start with a USD layer")
+    for i in infos:
+        need(i.compress_type == zipfile.ZIP_STORED, "%s is compressed" % i.filename)
+        need(not i.flag_bits & 1, "%s is encrypted" % i.filename)
+        h = i.header_offset
+        need(raw[h:h + 4] == b"PK\x03\x04", "no local header for %s" % i.filename)
+        nl, el = struct.unpack("<HH", raw[h + 26:h + 30])
+        need((h + 30 + nl + el) % 64 == 0, "%s's data is not 64-byte aligned" % i.filename)
+    need(z.testzip() is None, "a file's CRC does not match")
+    names = set(z.namelist())
+
+    def in_package(files):
+        for n in files:
+            need(n in names, "names a file not in the package: %s" % n)
+            need(z.read(n)[:8] == b"\x89PNG\r\n\x1a\n", "%s is not a PNG image" % n)
+
+    layer = z.read(infos[0].filename).decode("utf-8")
+    values, meshes = check_usda(layer, in_package)
+    return values, meshes, sorted(names)
 
 
 def check_usd_mesh(body, meta, mname):
@@ -265,11 +363,14 @@ def check_usd_mesh(body, meta, mname):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] not in ("mtlx", "usda"):
-        sys.exit("usage: export_specs.py mtlx|usda FILE")
-    with open(sys.argv[2], encoding="utf-8") as f:
-        t = f.read()
+    if len(sys.argv) != 3 or sys.argv[1] not in ("mtlx", "usda", "usdz"):
+        sys.exit("usage: export_specs.py mtlx|usda|usdz FILE")
     try:
+        if sys.argv[1] == "usdz":
+            print(check_usdz(sys.argv[2]))
+            sys.exit(0)
+        with open(sys.argv[2], encoding="utf-8") as f:
+            t = f.read()
         print(check_mtlx(t, sys.argv[2]) if sys.argv[1] == "mtlx" else check_usda(t, sys.argv[2]))
-    except (Bad, ET.ParseError, ValueError) as e:
+    except (Bad, ET.ParseError, ValueError, KeyError) as e:
         sys.exit("%s: %s" % (sys.argv[2], e))

@@ -16,11 +16,13 @@ import json
 import math
 import os
 import random
+import re
 import shutil
 import struct
 import subprocess
 import sys
 import tempfile
+import zipfile
 import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -33,6 +35,7 @@ except ImportError:  # the table checks need Debian's python3-numpy
 
 SIZE = 48
 S = {}
+SPECS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "export_specs.py")
 CT = "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"
 
 # measured materials offered by the daemon: a table of CT made by the CLI,
@@ -370,6 +373,44 @@ def test_05_a_spatial_material_bakes_textures(d):
     assert "textures_not_baked" in doc["materials"][0]["extras"]["glint"]
     for bad in ("257", "-1", "x", "1e3"):
         d.get(url + "?bake_res=" + bad, headers=h, status=400)
+    # the USDZ package: the USD layer reading the same textures, checked against
+    # the node definitions and the package format (export_specs.py)
+    glb_pngs = []
+    r = d.get(url + "?bake_res=16", headers=h, status=200)
+    doc, binary = glb_chunks(r.content)
+    for im in doc["images"]:
+        bv = doc["bufferViews"][im["bufferView"]]
+        glb_pngs.append(binary[bv["byteOffset"]:bv["byteOffset"] + bv["byteLength"]])
+    r = d.get("/api/v1/materials/%s/material.usdz?bake_res=16" % mid, headers=h, status=200)
+    assert r.headers["Content-Type"].startswith("model/vnd.usdz+zip")
+    assert "textures=16" in r.headers["X-Glint-Fit"], r.headers["X-Glint-Fit"]
+    assert re.search(r'filename="sphere-[0-9a-f]{8}\.usdz"', r.headers["Content-Disposition"])
+    pkg = os.path.join(tmp, "m.usdz")
+    with open(pkg, "wb") as f:
+        f.write(r.content)
+    out = subprocess.run([sys.executable, SPECS, "usdz", pkg], capture_output=True, text=True)
+    print("usdz:", out.stdout.strip()[:300], out.stderr.strip())
+    assert out.returncode == 0, out.stderr
+    z = zipfile.ZipFile(pkg)
+    assert z.namelist() == ["glint.usda", "textures/base_color.png",
+                            "textures/metallic_roughness.png"], z.namelist()
+    # the same textures as the .glb's, byte for byte (the bake is deterministic)
+    assert [z.read("textures/base_color.png"), z.read("textures/metallic_roughness.png")] == \
+        glb_pngs
+    # a package whose files are compressed is not a USDZ: the check says so
+    bad = os.path.join(tmp, "bad.usdz")
+    with zipfile.ZipFile(bad, "w", zipfile.ZIP_DEFLATED) as w:
+        for n in z.namelist():
+            w.writestr(n, z.read(n))
+    out = subprocess.run([sys.executable, SPECS, "usdz", bad], capture_output=True, text=True)
+    assert out.returncode != 0 and "compressed" in out.stderr, out.stderr
+    # without textures: the layer alone, the average
+    r = d.get("/api/v1/materials/%s/material.usdz?bake_res=0" % mid, headers=h, status=200)
+    with open(pkg, "wb") as f:
+        f.write(r.content)
+    assert zipfile.ZipFile(pkg).namelist() == ["glint.usda"]
+    assert subprocess.run([sys.executable, SPECS, "usdz", pkg]).returncode == 0
+    d.get("/api/v1/materials/%s/material.usdz?bake_res=x" % mid, headers=h, status=400)
 
 
 run_tests(globals(), daemon_args=("--measured-dir", MDIR))

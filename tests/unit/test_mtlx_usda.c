@@ -1,4 +1,4 @@
-/* test_mtlx_usda.c: the MaterialX and USD writers (mtlx.h, usda.h).
+/* test_mtlx_usda.c: the MaterialX and USD writers (mtlx.h, usda.h, usdz.h).
  * - The numbers written are the fit's, in the inputs the specifications
  *   name, at the extremes of their range (0 and 1) too.
  * - What is not a material (a value outside [0, 1], NaN, a negative
@@ -11,7 +11,14 @@
  *   (MaterialX) and the specular workflow's specularColor, ior,
  *   clearcoat, clearcoatRoughness (USD); refused outside their ranges.
  * - A mesh: one triangle with its points, normals, st and indices; without
- *   uv, no st.  The spec checks of whole files are tests/integration/
+ *   uv, no st.
+ * - Textures: the readers (primvars:st, two UsdUVTexture) connected to
+ *   diffuseColor, metallic and roughness in the metallic workflow; refused
+ *   without texture coordinates or with an asset path USD cannot read.
+ * - A USDZ package: stored files whose data start at multiples of 64
+ *   bytes, in order, the central directory after them; refused when the
+ *   first file is no USD layer, for a path outside the package, and for
+ *   0 or too many files.  The spec checks of whole files are tests/integration/
  *   export_specs.py's (run by the CLI and integration tests). */
 #include <math.h>
 #include <stdio.h>
@@ -21,6 +28,7 @@
 #include "check.h"
 #include "mtlx.h"
 #include "usda.h"
+#include "usdz.h"
 
 static gltf_pbr pbr(double r, double g, double b, double m, double rough)
 {
@@ -147,6 +155,97 @@ TEST(usda_material_and_mesh)
     ASSERT(t == NULL);
 }
 
+TEST(usda_textures_connected)
+{
+    static const usda_textures tex = {"textures/base_color.png", "textures/metallic_roughness.png"};
+    usda_textures bad = {"a@b.png", "mr.png"};
+    gltf_pbr p = pbr(0.2, 0.4, 0.6, 1, 0.3);
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, nrm[] = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+    float uv[] = {0, 0, 1, 0, 0, 1};
+    uint32_t tri[] = {0, 1, 2};
+    mesh m = {3, 1, pos, nrm, uv, tri};
+    char *t = NULL;
+    size_t n;
+    glint_err e;
+    p.spatial = 1;
+    p.khr.specular_used = 1; /* the bake is glTF's core model: the metallic workflow */
+    p.khr.specular = 1.0;
+    p.khr.specular_color[0] = p.khr.specular_color[1] = p.khr.specular_color[2] = 1.0;
+    ASSERT_OK(usda_write_textured(&p, &m, &tex, NULL, &t, &n, &e));
+    ASSERT(strstr(t, "uniform token info:id = \"UsdPrimvarReader_float2\""));
+    ASSERT(strstr(t, "asset inputs:file = @textures/base_color.png@"));
+    ASSERT(strstr(t, "asset inputs:file = @textures/metallic_roughness.png@"));
+    ASSERT(strstr(t, "token inputs:sourceColorSpace = \"sRGB\""));
+    ASSERT(strstr(t, "token inputs:sourceColorSpace = \"raw\""));
+    ASSERT(strstr(t, "color3f inputs:diffuseColor.connect = </glint/material/base_color.outputs:rgb>"));
+    ASSERT(strstr(t, "float inputs:metallic.connect = </glint/material/metallic_roughness.outputs:b>"));
+    ASSERT(strstr(t, "float inputs:roughness.connect = </glint/material/metallic_roughness.outputs:g>"));
+    ASSERT(strstr(t, "int inputs:useSpecularWorkflow = 0") && !strstr(t, "specularColor"));
+    ASSERT(strstr(t, "baked textures") && strstr(t, "metallic workflow"));
+    free(t);
+    /* textures need texture coordinates, and asset paths USD can read */
+    ASSERT_EQ(usda_write_textured(&p, NULL, &tex, NULL, &t, &n, &e), GLINT_EINVAL);
+    m.uv = NULL;
+    ASSERT_EQ(usda_write_textured(&p, &m, &tex, NULL, &t, &n, &e), GLINT_EINVAL);
+    m.uv = uv;
+    ASSERT_EQ(usda_write_textured(&p, &m, &bad, NULL, &t, &n, &e), GLINT_EINVAL);
+    ASSERT(t == NULL);
+}
+
+/* Read a little-endian integer of k bytes at p. */
+static unsigned long le(const unsigned char *p, int k)
+{
+    unsigned long v = 0;
+    for (int i = k - 1; i >= 0; i--)
+        v = v << 8 | p[i];
+    return v;
+}
+
+TEST(usdz_packages_are_stored_and_aligned)
+{
+    static const char layer[] = "#usda 1.0\n", png[] = "\x89PNG\r\n\x1a\n....";
+    usdz_file f[3] = {{"glint.usda", layer, sizeof layer - 1},
+                      {"textures/base_color.png", png, sizeof png - 1},
+                      {"t.png", png, 3}};
+    unsigned char *z = NULL;
+    void *out;
+    size_t len, at = 0;
+    glint_err e;
+    ASSERT_OK(usdz_pack(f, 3, &out, &len, &e));
+    z = out;
+    for (int i = 0; i < 3; i++) { /* each local header's data at a multiple of 64 */
+        unsigned long nl, el, sz;
+        ASSERT_EQ(le(z + at, 4), 0x04034b50UL);
+        ASSERT_EQ(le(z + at + 8, 2), 0UL); /* stored */
+        sz = le(z + at + 18, 4);
+        ASSERT_EQ(sz, (unsigned long)f[i].len);
+        ASSERT_EQ(le(z + at + 22, 4), sz);
+        nl = le(z + at + 26, 2);
+        el = le(z + at + 28, 2);
+        ASSERT(memcmp(z + at + 30, f[i].path, nl) == 0);
+        ASSERT_EQ((at + 30 + nl + el) % USDZ_ALIGN, 0UL);
+        ASSERT(memcmp(z + at + 30 + nl + el, f[i].data, f[i].len) == 0);
+        at += 30 + nl + el + sz;
+    }
+    ASSERT_EQ(le(z + at, 4), 0x02014b50UL); /* the central directory follows */
+    ASSERT_EQ(le(z + len - 22, 4), 0x06054b50UL);
+    ASSERT_EQ(le(z + len - 22 + 10, 2), 3UL);
+    ASSERT_EQ(le(z + len - 22 + 16, 4), (unsigned long)at);
+    free(out);
+    /* refused: a first file that is no layer, bad paths, too many files */
+    f[0].path = "a.png";
+    ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
+    f[0].path = "glint.usda";
+    f[1].path = "../x.png";
+    ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
+    f[1].path = "/abs.png";
+    ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
+    f[1].path = "ok.png";
+    ASSERT_EQ(usdz_pack(f, 0, &out, &len, &e), GLINT_ERANGE);
+    ASSERT_EQ(usdz_pack(f, USDZ_MAX_FILES + 1, &out, &len, &e), GLINT_ERANGE);
+    ASSERT(out == NULL);
+}
+
 /* a pbr material's mapping with the three KHR extensions (gltf_direct.c) */
 static gltf_pbr pbr_khr(void)
 {
@@ -217,5 +316,7 @@ TEST_LIST{
     TEST_ENTRY(names_and_notes_cannot_break_the_documents),
     TEST_ENTRY(usda_material_and_mesh),
     TEST_ENTRY(the_khr_extensions_in_both_documents),
+    TEST_ENTRY(usda_textures_connected),
+    TEST_ENTRY(usdz_packages_are_stored_and_aligned),
 };
 TEST_MAIN()
