@@ -133,7 +133,7 @@ run({
     const rows = await page.locator('#exports li').allInnerTexts();
     t.log('Export tab: ' + rows.map(r => r.replace(/\s+/g, ' ')).join(' | '));
     await t.shot(page, '30-export-tab.png');
-    assertEq(rows.length, 6, 'six formats');
+    assertEq(rows.length, 7, 'seven formats');
     assert(rows.every(r => /%|[Ee]xactly/.test(r)), 'each says how close it comes');
     const lst = await t.daemon.api('GET', `/materials/${mid}/exports`, undefined, { 'X-Glint-Token': session.view_token });
     const dir = fs.mkdtempSync(path.join(ARTIFACTS, 'exports-'));
