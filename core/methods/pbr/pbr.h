@@ -136,6 +136,9 @@ typedef struct pbr_fit_opts {
                       on every sample whatever it is */
     const int *view; /* n: each sample's view (< PBR_MAX_VIEWS), for the errors by view in
                         the result; NULL: none */
+    const double *p0; /* a start of its own (pbr_np direct parameters, inside the bounds),
+                         tried first: a refit from a previous answer; then `starts` of the
+                         roughness starts, 0 allowed with p0.  NULL: none */
 } pbr_fit_opts;
 
 #define PBR_MAX_VIEWS 256 /* scene.h's SCENE_MAX_VIEWS */

@@ -761,7 +761,9 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
                              "pbr: %d lit sample%s, the model's %d parameters need at least %d",
                              g->n, g->n == 1 ? "" : "s", np, np);
     pthread_once(&gsl_handler_once, gsl_handler_off);
-    starts = o->starts < 1 ? 1 : o->starts > PBR_MAX_STARTS ? PBR_MAX_STARTS : o->starts;
+    starts = o->starts < (o->p0 ? 0 : 1) ? (o->p0 ? 0 : 1) : o->starts;
+    starts = starts > PBR_MAX_STARTS - (o->p0 != NULL) ? PBR_MAX_STARTS - (o->p0 != NULL) : starts;
+    starts += o->p0 != NULL;
     memset(&cx, 0, sizeof cx);
     cx.sp = sp;
     cx.np = np;
@@ -782,10 +784,21 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     for (int s = 0; s < starts; s++) {
         double p[PBR_MAXP] = {0};
         pbr_start_report *sr = &out->start[s];
-        for (int l = 0; l < sp->nlobes; l++)
-            p[3 + 5 * l] = l ? fmin(0.9, 5.0 * PBR_START_ALPHA[s]) : PBR_START_ALPHA[s];
-        linear_start(&cx, p);
-        sr->alpha0 = PBR_START_ALPHA[s];
+        int k = s - (o->p0 != NULL); /* the roughness start; -1: p0 */
+        if (k < 0) {
+            for (int j = 0; j < np; j++) { /* a thousandth of the range inside the bounds:
+                                              at a bound the sigmoid's slope is 0 */
+                double t = (o->p0[j] - cx.lo[j]) / (cx.hi[j] - cx.lo[j]);
+                t = isfinite(t) ? fmin(fmax(t, 1e-3), 1.0 - 1e-3) : 0.5;
+                p[j] = cx.lo[j] + t * (cx.hi[j] - cx.lo[j]);
+            }
+            sr->alpha0 = p[3];
+        } else {
+            for (int l = 0; l < sp->nlobes; l++)
+                p[3 + 5 * l] = l ? fmin(0.9, 5.0 * PBR_START_ALPHA[k]) : PBR_START_ALPHA[k];
+            linear_start(&cx, p);
+            sr->alpha0 = PBR_START_ALPHA[k];
+        }
         if (lit) {
             lm_run(&cx, w, use_sub && o->max_iter > cap ? cap : o->max_iter, p, sr);
         } else { /* a black painting: the start (kd = ks = 0 within 1e-4) is the answer */
