@@ -540,8 +540,10 @@ export class Judge extends EventTarget {
       tb.appendChild(tr);
     }
     if (!square) return;
-    await Promise.all(used.map(async k => {
-      let fitted = await this.fittedFor(k, mat);
+    // one view's row from a render of the material (full, or coarse: a
+    // quarter of the size, upsampled, shown at once under an environment,
+    // where a full reference render takes seconds to minutes)
+    const measure = async (k, fitted, coarse) => {
       if (mat !== this.mat) return;
       const v = S.views[k];
       if (!v.conf) await S.loadViews([k]);
@@ -564,14 +566,23 @@ export class Judge extends EventTarget {
       }
       const rms = n ? Math.sqrt(s2 / (3 * n)) : 0;
       const stale = snap.has(k) && now.has(k) && snap.get(k) !== now.get(k);
-      this.rows.set(k, { rms, max: mx, n, fitted, painted, diff, stale, level: lv });
+      if (coarse && this.rows.has(k)) return;   // the full render came first
+      this.rows.set(k, { rms, max: mx, n, fitted, painted, diff, stale, level: lv, coarse });
       const tr = tb.querySelector(`tr[data-view="${k}"]`);
       if (tr) {
-        const L = lv.level();
-        tr.innerHTML = `<td>${k}${stale ? ' <span title="painted again since this fit">*</span>' : ''}</td><td title="${errorMeaning(relError(rms, L))} (advanced: RMS ${fmtErr(rms)})"><span class="meter"></span>${pct(relError(rms, L))}</td>` +
-          `<td title="advanced: ${fmtErr(mx)} in the painting's units">${pct(relError(mx, L))}</td><td>${n}</td>`;
+        const L = lv.level(), about = coarse ? '≈ ' : '';
+        tr.classList.toggle('coarse', coarse);
+        tr.title = coarse ? 'from a quick, coarse render; the full one follows' : '';
+        tr.innerHTML = `<td>${k}${stale ? ' <span title="painted again since this fit">*</span>' : ''}</td><td title="${errorMeaning(relError(rms, L))} (advanced: RMS ${fmtErr(rms)})"><span class="meter"></span>${about}${pct(relError(rms, L))}</td>` +
+          `<td title="advanced: ${fmtErr(mx)} in the painting's units">${about}${pct(relError(mx, L))}</td><td>${n}</td>`;
       }
-    }));
+      if (coarse && this.errView === k) this.showDiff(k);
+    };
+    // every view's coarse render queued before any full one: the reference
+    // renders run one at a time, so each view shows a figure in a second
+    const coarse = env ? used.map(k => this.fittedFor(k, mat, 4).then(f => measure(k, f, true), () => {})) : [];
+    await Promise.all(used.map(async k => measure(k, await this.fittedFor(k, mat), false)));
+    await Promise.all(coarse);
     if (mat !== this.mat) return;
     this.level = [...this.rows.values()].reduce((a, r) => a.merge(r.level), new Level()).level();
     this.renderErrSummary(mat, this.level);
@@ -637,16 +648,16 @@ export class Judge extends EventTarget {
   }
 
   // The material rendered for view k as the fit saw it: the CPU renderer at
-  // the painting's size, under the fit's environment for a material fitted
-  // under one (linear RGB).
-  async fittedFor(k, mat = this.mat) {
-    const sc = this.session.scene;
-    const q = { view: String(k), renderer: 'cpu', size: String(sc.paint_width || sc.width) };
+  // the painting's size (over `div`: a coarse render), under the fit's
+  // environment for a material fitted under one (linear RGB).
+  async fittedFor(k, mat = this.mat, div = 1) {
+    const sc = this.session.scene, full = sc.paint_width || sc.width;
+    const q = { view: String(k), renderer: 'cpu', size: String(div > 1 ? Math.max(16, Math.round(full / div)) : full) };
     if (underEnv(mat)) Object.assign(q, { env: mat.params.env, env_rotation: String(mat.params.env_rotation), env_intensity: String(mat.params.env_intensity),
                                           lights: String(Math.min(1024, mat.params.lights)), shadows: mat.params.visibility === 'off' ? '0' : '1', background: '0' });
     // a reference render: after the studio's other requests, and in the
     // daemon after interactive work; dropped once another material is shown
-    const r = await this.api.images.run(`reference:view${k}`, (signal, h) => this.api.materialFile(mat.id, 'preview.exr', q, signal, h),
+    const r = await this.api.images.run(`reference:view${k}${div > 1 ? ':coarse' : ''}`, (signal, h) => this.api.materialFile(mat.id, 'preview.exr', q, signal, h),
       { cls: CLASS.reference, current: () => this.mat === mat });
     return decodeImage(await r.arrayBuffer());
   }

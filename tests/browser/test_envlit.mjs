@@ -82,6 +82,12 @@ run({
     const { url } = await t.daemon.newSession({ mesh: 'torus', width: 96, height: 96,
                                                 base: { env: { spec: 'sky', lights: 32 } } });
     const page = await t.page();
+    const refs = [];   // the reference renders the studio asks for (the error table's)
+    page.on('request', r => {
+      const u = new URL(r.url());
+      if (u.pathname.endsWith('/preview.exr') && u.searchParams.get('renderer') === 'cpu')
+        refs.push({ view: +u.searchParams.get('view'), size: +u.searchParams.get('size') });
+    });
     await openStudio(page, url);
     await page.waitForSelector('#quality .q[data-preset]');
     const methods = await page.evaluate(() => [...document.getElementById('fit-method').options].map(o => o.value));
@@ -156,12 +162,24 @@ run({
       return s;
     });
     assert(lobePx > 0, 'the lobe image is not black');
-    // the error per view, against a render under the environment
+    // the error per view, against a render under the environment: a coarse
+    // render of each view first (a quarter of the size, shown with "≈"), then
+    // the full one, which replaces it
     await page.click('.tabs button[data-tab="errors"]');
     await waitFor(() => page.evaluate(() => {
-      const td = document.querySelector('#err-table tbody tr td:nth-child(2)');
-      return td && /\d/.test(td.textContent);
-    }), 60000, 'per-view errors');
+      const rows = [...document.querySelectorAll('#err-table tbody tr')];
+      return rows.length && rows.every(tr => /\d/.test(tr.querySelector('td:nth-child(2)').textContent) &&
+                                         !tr.classList.contains('coarse'));
+    }), 120000, 'per-view errors from the full renders');
+    const full = await page.evaluate(() => window.glint.state.session.scene.paint_width || window.glint.state.session.scene.width);
+    t.log('reference renders requested (view:size): ' + refs.map(r => `${r.view}:${r.size}`).join(' '));
+    for (const v of new Set(refs.map(r => r.view))) {
+      const sizes = refs.filter(r => r.view === v).map(r => r.size);
+      assertEq(sizes.join(','), `${Math.max(16, Math.round(full / 4))},${full}`, `view ${v}: a coarse render, then the full one`);
+    }
+    assert(refs.length >= 2, 'reference renders were requested');
+    assert(await page.evaluate(() => [...window.glint.state.judge.rows.values()].every(r => !r.coarse)),
+      'every row is the full render\'s');
     // shown as a percentage of the painting's brightness; the RMS behind it
     const { rms, level, shown } = await page.evaluate(() => {
       const tr = document.querySelector('#err-table tbody tr'), r = window.glint.state.judge.rows.get(+tr.dataset.view);
