@@ -277,6 +277,72 @@ TEST(recovers_its_own_parameters)
     check_self(&d2, pd2, "lobes=2,starts=4");
 }
 
+/* pbr_fit on the samples of s directly (pbr_geom's cosines as the pbr-geom
+ * level computes them), from a start of the caller's own. */
+static int fit_from(const pbr_spec *sp, const samples *s, const float *v, const double *p0,
+                    int starts, pbr_fit_result *r, glint_err *e)
+{
+    pbr_geom g = {s->n, NULL, NULL, NULL, NULL, NULL, NULL};
+    pbr_fit_opts o = {.starts = starts, .max_iter = 100, .p0 = p0};
+    double *d = malloc(4 * sizeof *d * (size_t)s->n);
+    int rc;
+    if (!d)
+        return GLINT_ENOMEM;
+    g.ci = d, g.co = d + s->n, g.ch = d + 2 * (size_t)s->n, g.cd = d + 3 * (size_t)s->n;
+    for (int i = 0; i < s->n; i++) {
+        double n[3], wi[3], wo[3], h[3], hl;
+        dirs_of(s, i, n, wi, wo);
+        for (int a = 0; a < 3; a++)
+            h[a] = wi[a] + wo[a];
+        hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+        g.ci[i] = s->cos_i[i];
+        g.co[i] = n[0] * wo[0] + n[1] * wo[1] + n[2] * wo[2];
+        g.ch[i] = (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / hl;
+        g.cd[i] = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / hl;
+    }
+    rc = pbr_fit(sp, &g, v, &o, r, e);
+    free(d);
+    return rc;
+}
+
+/* A start of the caller's own (pbr_fit_opts.p0, what pbr_maps refits
+ * from): from the answer itself the fit stays there; from a start with the
+ * highlight at its bound (ks 0: a bound the sigmoid cannot leave) it is
+ * moved inside and the highlight is found; beside roughness starts it is
+ * tried first. */
+TEST(a_start_of_its_own)
+{
+    const pbr_spec d1 = {1, PBR_DIELECTRIC};
+    const double truth[8] = {0.4, 0.3, 0.2, 0.25, 0.9, 0.8, 0.7, 1.6};
+    double off[8] = {0.4, 0.3, 0.2, 0.25, 0.0, 0.0, 0.0, 1.6};
+    pbr_fit_result *r = malloc(sizeof *r);
+    float *v;
+    glint_err e;
+    ASSERT_OK(setup());
+    ASSERT(r != NULL);
+    v = values_pbr(&d1, truth, &S);
+    ASSERT_OK(fit_from(&d1, &S, v, truth, 0, r, &e));
+    printf("  from the answer: %d start, %d iterations, rms %.3g\n", r->nstarts, r->iters, r->rms);
+    ASSERT_EQ(r->nstarts, 1);
+    ASSERT_NEAR(r->start[0].alpha0, 0.25, 1e-12);
+    for (int k = 0; k < 8; k++)
+        ASSERT_NEAR(r->p[k], truth[k], 1e-4);
+    ASSERT_LT(r->rms, 1e-6);
+    ASSERT_OK(fit_from(&d1, &S, v, off, 0, r, &e));
+    printf("  from ks at its bound: %d iterations, rms %.3g, ks %.4f %.4f %.4f\n", r->iters,
+           r->rms, r->p[4], r->p[5], r->p[6]);
+    for (int k = 0; k < 8; k++)
+        ASSERT_NEAR(r->p[k], truth[k], 1e-3);
+    ASSERT_OK(fit_from(&d1, &S, v, off, 2, r, &e));
+    ASSERT_EQ(r->nstarts, 3);
+    ASSERT_NEAR(r->start[0].alpha0, 0.25, 1e-3); /* the caller's start first */
+    ASSERT_NEAR(r->start[1].alpha0, 0.05, 1e-12);
+    ASSERT_OK(fit_from(&d1, &S, v, off, PBR_MAX_STARTS, r, &e));
+    ASSERT_EQ(r->nstarts, PBR_MAX_STARTS); /* the roughness starts make room for it */
+    free(v);
+    free(r);
+}
+
 /* brdf.h's ct (separable Smith): close to its parameters. */
 TEST(ct_truth_close)
 {
@@ -488,6 +554,7 @@ TEST_LIST {
     TEST_ENTRY(jacobian_matches_finite_differences),
     TEST_ENTRY(terms_sum_and_their_jacobian),
     TEST_ENTRY(recovers_its_own_parameters),
+    TEST_ENTRY(a_start_of_its_own),
     TEST_ENTRY(ct_truth_close),
     TEST_ENTRY(lambert_roughness_undetermined),
     TEST_ENTRY(mirror_like_alpha_at_lower_bound),
