@@ -11,6 +11,14 @@
  *   GLSL_FACTOR(S)   glint_factor(row, u): row `row` of sampler S read with
  *                    hf.h's node hats (hf_hat)
  *   GLSL_NODES(S)    glint_nodes(r0, uv): a spatial factor's log nodes, bilinear
+ *   GLSL_PBR_ANGLES  the opening of a glint_material(n, wi, wo) of pbr.h's
+ *                    angles: ci, co (0 returned unless both are above 0),
+ *                    the half vector h, ch = n.h, cd = wi.h and w5 = (1 -
+ *                    cd)^5
+ *   GLSL_MAP_COEFS(R0) glint_coefs(b, uv): the coefficients of material-map
+ *                    products 3b..3b+2 (R, G, B) at uv, bilinear between
+ *                    texel centres, clamped; block b's rows from R0 + b
+ *                    u_map_res of the sampler u_maps
  *   GLSL_PBR_LOBE    pbr_lobe(alpha, ks, f0, ci, co, ch, w5): one GGX lobe of
  *                    pbr.h (height-correlated Smith, Schlick Fresnel); needs
  *                    a constant PI
@@ -77,6 +85,32 @@
     "    vec3 d = texelFetch(" S ", ivec2(i + 1, j + 1), 0).rgb;\n"                              \
     "    return (1.0 - t.y) * ((1.0 - t.x) * a + t.x * b) + t.y * ((1.0 - t.x) * c + t.x * d);\n" \
     "}\n"                                                                                       \
+    "\n"
+
+#define GLSL_PBR_ANGLES                                                                         \
+    "    float ci = dot(n, wi), co = dot(n, wo);\n"                                              \
+    "    if (!(ci > 0.0) || !(co > 0.0))\n"                                                      \
+    "        return vec3(0.0);\n"                                                                \
+    "    vec3 h = glint_unit(wi + wo);\n"                                                        \
+    "    float ch = dot(n, h), cd = dot(wi, h), w = 1.0 - cd;\n"                                 \
+    "    float w5 = w * w * w * w * w;\n"
+
+#define GLSL_MAP_COEFS(R0)                                                                      \
+    "vec3 glint_coefs(int b, vec2 uv)\n"                                                         \
+    "{\n"                                                                                        \
+    "    float m = float(u_map_res);\n"                                                          \
+    "    float x = clamp(uv.x * m - 0.5, 0.0, m - 1.0);\n"                                       \
+    "    float y = clamp(uv.y * m - 0.5, 0.0, m - 1.0);\n"                                       \
+    "    int i0 = int(floor(x)), j0 = int(floor(y));\n"                                          \
+    "    int i1 = min(i0 + 1, u_map_res - 1), j1 = min(j0 + 1, u_map_res - 1);\n"                \
+    "    float fx = x - float(i0), fy = y - float(j0);\n"                                        \
+    "    int r0 = " R0 " + b * u_map_res;\n"                                                     \
+    "    vec3 a = texelFetch(u_maps, ivec2(i0, r0 + j0), 0).rgb;\n"                              \
+    "    vec3 c = texelFetch(u_maps, ivec2(i1, r0 + j0), 0).rgb;\n"                              \
+    "    vec3 d = texelFetch(u_maps, ivec2(i0, r0 + j1), 0).rgb;\n"                              \
+    "    vec3 e = texelFetch(u_maps, ivec2(i1, r0 + j1), 0).rgb;\n"                              \
+    "    return (1.0 - fy) * ((1.0 - fx) * a + fx * c) + fy * ((1.0 - fx) * d + fx * e);\n"      \
+    "}\n"                                                                                        \
     "\n"
 
 #define GLSL_PBR_LOBE                                                                           \

@@ -29,22 +29,7 @@ const char maps_glsl_frag[] =
     GLSL_FACTOR("u_maps")
     "// The coefficients of products 3b..3b+2 at uv (bilinear between texel\n"
     "// centres, clamped at the border).\n"
-    "vec3 glint_coefs(int b, vec2 uv)\n"
-    "{\n"
-    "    float m = float(u_map_res);\n"
-    "    float x = clamp(uv.x * m - 0.5, 0.0, m - 1.0);\n"
-    "    float y = clamp(uv.y * m - 0.5, 0.0, m - 1.0);\n"
-    "    int i0 = int(floor(x)), j0 = int(floor(y));\n"
-    "    int i1 = min(i0 + 1, u_map_res - 1), j1 = min(j0 + 1, u_map_res - 1);\n"
-    "    float fx = x - float(i0), fy = y - float(j0);\n"
-    "    int r0 = 3 * u_k + 1 + b * u_map_res;\n"
-    "    vec3 a = texelFetch(u_maps, ivec2(i0, r0 + j0), 0).rgb;\n"
-    "    vec3 c = texelFetch(u_maps, ivec2(i1, r0 + j0), 0).rgb;\n"
-    "    vec3 d = texelFetch(u_maps, ivec2(i0, r0 + j1), 0).rgb;\n"
-    "    vec3 e = texelFetch(u_maps, ivec2(i1, r0 + j1), 0).rgb;\n"
-    "    return (1.0 - fy) * ((1.0 - fx) * a + fx * c) + fy * ((1.0 - fx) * d + fx * e);\n"
-    "}\n"
-    "\n"
+    GLSL_MAP_COEFS("3 * u_k + 1")
     GLSL_NODES("u_maps")
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"

@@ -161,12 +161,7 @@ static const char frag[] =
     GLSL_PBR_LOBE
     "vec3 glint_material(vec3 n, vec3 wi, vec3 wo)\n"
     "{\n"
-    "    float ci = dot(n, wi), co = dot(n, wo);\n"
-    "    if (!(ci > 0.0) || !(co > 0.0))\n"
-    "        return vec3(0.0);\n"
-    "    vec3 h = glint_unit(wi + wo);\n"
-    "    float ch = dot(n, h), w = 1.0 - dot(wi, h);\n"
-    "    float w5 = w * w * w * w * w;\n"
+    GLSL_PBR_ANGLES
     "    vec3 f = u_kd / PI + pbr_lobe(u_alpha1, u_ks1, u_f01, ci, co, ch, w5) +\n"
     "             pbr_lobe(u_alpha2, u_ks2, u_f02, ci, co, ch, w5);\n"
     "    return f * ci;\n"
