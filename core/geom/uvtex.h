@@ -65,6 +65,32 @@ static inline void uvtex_bilinear(const float *t, int n, int ch, double x, doubl
 }
 double uvtex_lookup(const float *t, int res, double u, double v);
 
+/* The four texels (OUT t[4], row-major indices) and weights (OUT w[4],
+ * summing to 1) that uvtex_lookup reads at texture coordinates (u, v) of
+ * a res x res texture: bilinear between texel centres, clamped at the
+ * border (a coordinate that is not a number reads the first texel). */
+static inline void uvtex_footprint(double u, double v, int res, size_t t[4], double w[4])
+{
+    double x = u * res - 0.5, y = v * res - 0.5, fx, fy;
+    int i0, j0, i1, j1;
+    x = !(x > 0.0) ? 0.0 : x > res - 1 ? res - 1 : x;
+    y = !(y > 0.0) ? 0.0 : y > res - 1 ? res - 1 : y;
+    i0 = (int)x;
+    j0 = (int)y;
+    i1 = i0 + 1 < res ? i0 + 1 : i0;
+    j1 = j0 + 1 < res ? j0 + 1 : j0;
+    fx = x - i0;
+    fy = y - j0;
+    t[0] = (size_t)j0 * res + i0;
+    t[1] = (size_t)j0 * res + i1;
+    t[2] = (size_t)j1 * res + i0;
+    t[3] = (size_t)j1 * res + i1;
+    w[0] = (1.0 - fx) * (1.0 - fy);
+    w[1] = fx * (1.0 - fy);
+    w[2] = (1.0 - fx) * fy;
+    w[3] = fx * fy;
+}
+
 /* The two steps of uvtex_from_samples, for callers that merge before
  * filling: uvtex_splat writes the means into reached texels (0 elsewhere)
  * and the sample count of every texel into hits (both res x res); uvtex_fill

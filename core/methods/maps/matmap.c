@@ -138,30 +138,18 @@ static void texel_lists_make(const samples *s, int res, texel_lists *tl)
     size_t n = (size_t)s->n, nt = (size_t)res * res, *start = tl->start;
     for (int pass = 0; pass < 2; pass++) {
         for (size_t i = 0; i < n; i++) {
-            double x = s->uv[2 * i] * res - 0.5, y = s->uv[2 * i + 1] * res - 0.5, fx, fy;
-            int i0, j0, i1, j1;
-            x = x < 0.0 ? 0.0 : x > res - 1 ? res - 1 : x;
-            y = y < 0.0 ? 0.0 : y > res - 1 ? res - 1 : y;
-            i0 = (int)x;
-            j0 = (int)y;
-            i1 = i0 + 1 < res ? i0 + 1 : i0;
-            j1 = j0 + 1 < res ? j0 + 1 : j0;
-            fx = x - i0;
-            fy = y - j0;
-            {
-                size_t t[4] = {(size_t)j0 * res + i0, (size_t)j0 * res + i1,
-                               (size_t)j1 * res + i0, (size_t)j1 * res + i1};
-                double w[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-                for (int c = 0; c < 4; c++) {
-                    if (!(w[c] > 0.0))
-                        continue;
-                    if (pass == 0) {
-                        start[t[c] + 1]++;
-                    } else {
-                        size_t e = start[t[c]]++;
-                        tl->idx[e] = (int)i;
-                        tl->wt[e] = (float)w[c];
-                    }
+            size_t t[4];
+            double w[4];
+            uvtex_footprint(s->uv[2 * i], s->uv[2 * i + 1], res, t, w);
+            for (int c = 0; c < 4; c++) {
+                if (!(w[c] > 0.0))
+                    continue;
+                if (pass == 0) {
+                    start[t[c] + 1]++;
+                } else {
+                    size_t e = start[t[c]]++;
+                    tl->idx[e] = (int)i;
+                    tl->wt[e] = (float)w[c];
                 }
             }
         }

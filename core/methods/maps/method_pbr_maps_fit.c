@@ -84,31 +84,6 @@ static void em_free(em *e)
         json_decref(e->info[k]);
 }
 
-/* The four texels (OUT t[4]) and weights (OUT w[4]) a renderer reads at
- * (u, v): bilinear between texel centres, clamped at the border (as
- * uvtex_lookup). */
-static void footprint(double u, double v, int M, int *t, float *w)
-{
-    double x = u * M - 0.5, y = v * M - 0.5, fx, fy;
-    int i0, j0, i1, j1;
-    x = !(x > 0.0) ? 0.0 : x > M - 1 ? M - 1 : x;
-    y = !(y > 0.0) ? 0.0 : y > M - 1 ? M - 1 : y;
-    i0 = (int)x;
-    j0 = (int)y;
-    i1 = i0 + 1 < M ? i0 + 1 : i0;
-    j1 = j0 + 1 < M ? j0 + 1 : j0;
-    fx = x - i0;
-    fy = y - j0;
-    t[0] = j0 * M + i0;
-    t[1] = j0 * M + i1;
-    t[2] = j1 * M + i0;
-    t[3] = j1 * M + i1;
-    w[0] = (float)((1.0 - fx) * (1.0 - fy));
-    w[1] = (float)(fx * (1.0 - fy));
-    w[2] = (float)((1.0 - fx) * fy);
-    w[3] = (float)(fx * fy);
-}
-
 static int em_alloc(em *e, glint_err *err)
 {
     const samples *s = e->in->s;
@@ -127,15 +102,20 @@ static int em_alloc(em *e, glint_err *err)
                              e->M);
     for (long i = 0; i < e->n; i++) {
         int a = (int)(s->uv[2 * i] * e->M), b = (int)(s->uv[2 * i + 1] * e->M);
+        size_t t[4];
+        double w[4];
         a = a < 0 ? 0 : a >= e->M ? e->M - 1 : a; /* u = 1 in the last column */
         b = b < 0 ? 0 : b >= e->M ? e->M - 1 : b;
         e->tex[i] = b * e->M + a;
-        footprint(s->uv[2 * i], s->uv[2 * i + 1], e->M, e->t4 + 4 * i, e->w4 + 4 * i);
-        for (int k = 0; k < 4; k++)
-            if (e->w4[4 * i + k] > 0.0f) {
-                e->hits[e->t4[4 * i + k]]++;
-                e->wsum[e->t4[4 * i + k]] += e->w4[4 * i + k];
+        uvtex_footprint(s->uv[2 * i], s->uv[2 * i + 1], e->M, t, w);
+        for (int k = 0; k < 4; k++) {
+            e->t4[4 * i + k] = (int)t[k];
+            e->w4[4 * i + k] = (float)w[k];
+            if (w[k] > 0.0) {
+                e->hits[t[k]]++;
+                e->wsum[t[k]] += w[k];
             }
+        }
     }
     for (long t = 0; t < e->T; t++)
         e->assign[t] = e->hits[t] ? 0 : -1;
