@@ -14,9 +14,10 @@
  *           its errors under each texel's product: the assignment lowers a
  *           bound on the rendered error, so no texel takes a product whose
  *           highlight its neighbours' samples contradict
- *   refit   each product is fitted anew (pbr_fit, from its starts) to the
- *           samples of its texels but the tenth it fits worst (samples on a
- *           border between materials hold some of both)
+ *   refit   each product is fitted again (pbr_fit, from the product as it
+ *           is and one roughness start) to the samples that fall in its
+ *           texels but the tenth it fits worst (samples on a border between
+ *           materials hold some of both)
  *
  * until no texel changes or `rounds` rounds.  A product left with fewer
  * samples than pbr_fit needs is dropped.  The coefficient textures are
