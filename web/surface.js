@@ -67,6 +67,12 @@ export class SurfacePanel {
     this.product = 0;
     this.coef = null;
     this.spatial = null;
+    // nothing of the previous material stays drawn while this one's load
+    this.shownOn = null;
+    this.draw();
+    const over = $('surface-view');
+    over.width = over.width;
+    $('surface-caption').textContent = '';
     const kind = surfaceKind(mat);
     $('surface-wrap').classList.toggle('hidden', !kind);
     if (!kind) return;
@@ -169,7 +175,7 @@ export class SurfacePanel {
       im.data[4 * i] = col[0]; im.data[4 * i + 1] = col[1]; im.data[4 * i + 2] = col[2]; im.data[4 * i + 3] = 255;
     }
     g.putImageData(im, 0, 0);
-    this.shownOn = { view: this.view, what, product: p, covered, mean: covered ? sum / covered : 0 };
+    this.shownOn = { material: this.mat.id, view: this.view, what, product: p, covered, mean: covered ? sum / covered : 0 };
     $('surface-caption').textContent = `view ${this.view}: ` + (what === 'coef'
       ? `material ${p + 1}'s weight over the object (mean ${(covered ? sum / covered : 0).toFixed(2)} over ${covered} pixels)`
       : `material ${p + 1}'s spatial factor over the object (each channel over its maximum, ${this.scaleSpatial.toPrecision(3)})`);

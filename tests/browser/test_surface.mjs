@@ -93,7 +93,8 @@ run({
     assertEq(m.method, 'maps', 'a maps material');
     await page.click('.tabs button[data-tab="factors"]');
     await page.waitForFunction(() => !document.getElementById('surface-wrap').classList.contains('hidden'));
-    await page.waitForFunction(() => window.glint.state.judge.surface.shownOn);
+    // the maps' own textures (the automatic choice's material may have had some)
+    await page.waitForFunction(id => (window.glint.state.judge.surface.shownOn || {}).material === id, m.id);
     const opts = await page.evaluate(() => [...document.getElementById('surface-product').options].map(o => o.value));
     assertEq(opts.length, m.components, 'one entry per product');
     assert(await page.evaluate(() => document.getElementById('surface-spatial-label').classList.contains('hidden')), 'maps have no spatial factor');
@@ -133,7 +134,7 @@ run({
     const m = await fit(page);
     assertEq(m.method, 'hybrid', 'a hybrid material');
     await page.click('.tabs button[data-tab="factors"]');
-    await page.waitForFunction(() => window.glint.state.judge.surface.shownOn);
+    await page.waitForFunction(id => (window.glint.state.judge.surface.shownOn || {}).material === id, m.id);
     const shows = await page.evaluate(() => [...document.getElementById('surface-show').options].map(o => o.value));
     assertEq(shows.join(','), 'coef,spatial', 'both textures offered');
     await setValue(page, 'surface-show', 'spatial');
