@@ -162,8 +162,8 @@ TEST(every_method_renders_as_the_material)
         const method *meth = method_find(method_small[i][0]);
         void *params = calloc(1, meth->params_size);
         material m;
-        int spatial_method = !strcmp(meth->name, "maps") || !strcmp(meth->name, "hf4") ||
-                             !strcmp(meth->name, "hybrid");
+        /* the methods whose materials vary over the surface paint stripes */
+        int spatial_method = meth->mat && meth->mat->spatial;
         ASSERT(params);
         meth->params_default(params);
         ASSERT_OK(method_small_set(meth, params, method_small[i][1], &e));
