@@ -65,11 +65,17 @@ async function applyPreset() {
   const p = presetChosen(), spec = p.spec(kdOf($('preset-colour').value));
   const btn = $('preset-apply');
   btn.disabled = true;
+  // The next view renders in glintd while this one is decoded and stored:
+  // one render ahead, two requests at most.
+  const render = v => api.request('GET', `/scenes/${S.scene.id}/views/${v.k}/base.png`, { query: presetQuery(S.scene, spec), raw: true, what: `Rendering ${p.name} for view ${v.k}` })
+    .then(r => r.arrayBuffer());
+  const ahead = v => { const x = render(v); x.catch(() => {}); return x; };   // its failure is read where it is awaited
   try {
-    let n = 0;
-    for (const v of S.views) {
-      const r = await api.request('GET', `/scenes/${S.scene.id}/views/${v.k}/base.png`, { query: presetQuery(S.scene, spec), raw: true, what: `Rendering ${p.name} for view ${v.k}` });
-      await S.uploadImage(v.k, await decodeImage(await r.arrayBuffer()));
+    let n = 0, next = S.views.length ? ahead(S.views[0]) : null;
+    for (let i = 0; i < S.views.length; i++) {
+      const bytes = await next;
+      next = i + 1 < S.views.length ? ahead(S.views[i + 1]) : null;
+      await S.uploadImage(S.views[i].k, await decodeImage(bytes));
       btn.textContent = `${++n} of ${S.views.length}…`;
     }
     toast('Every view painted', `${n} views now show ${p.name}; edit them, then fit`);

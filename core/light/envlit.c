@@ -8,6 +8,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "par.h"
 #include "scene.h"
 #include "vis.h"
 
@@ -241,11 +242,63 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
     return 0;
 }
 
+/* Pixels shaded per task of envlit_gbuf's par_run: each writes its own. */
+#define ENVLIT_CHUNK 1024
+
+typedef struct pjob {
+    const gbuf *g;
+    const env_lights *l;
+    const int *pix;            /* the covered pixels */
+    const uint64_t *bits;      /* their visibility words, or NULL */
+    int words;
+    envlit_fn fn;
+    const void *ctx;
+    double scale;
+    img *out;
+    size_t n;
+    const glint_cancel *cancel;
+    int stopped;               /* set once a task was told to stop */
+} pjob;
+
+static void pixel_chunk(void *arg, int task)
+{
+    pjob *x = arg;
+    const gbuf *g = x->g;
+    size_t lo = (size_t)task * ENVLIT_CHUNK, hi = lo + ENVLIT_CHUNK;
+    size_t every = (size_t)glint_cancel_every(x->l->k);
+    if (hi > x->n)
+        hi = x->n;
+    for (size_t i = lo; i < hi; i++) {
+        size_t p = (size_t)x->pix[i];
+        if ((i - lo) % every == 0) {
+            if (__atomic_load_n(&x->stopped, __ATOMIC_RELAXED))
+                return;
+            if (glint_cancelled(x->cancel)) {
+                __atomic_store_n(&x->stopped, 1, __ATOMIC_RELAXED);
+                return;
+            }
+        }
+        double nn[3], wo[3], acc[3], uv[2] = {0.0, 0.0};
+        for (int e = 0; e < 3; e++) {
+            nn[e] = g->nrm[3 * p + e];
+            wo[e] = g->wo[3 * p + e];
+        }
+        if (g->uv) {
+            uv[0] = g->uv[2 * p];
+            uv[1] = g->uv[2 * p + 1];
+        }
+        shade_point(x->l, x->bits ? x->bits + i * (size_t)x->words : NULL, x->fn, x->ctx,
+                    g->uv ? uv : NULL, nn, wo, acc);
+        for (int e = 0; e < 3; e++)
+            x->out->px[3 * p + e] = (float)(x->scale * acc[e]);
+    }
+}
+
 int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
                 const void *ctx, double scale, img *out, const glint_cancel *cancel,
                 glint_err *err)
 {
-    size_t np = (size_t)g->width * g->height, n = 0, every;
+    size_t np = (size_t)g->width * g->height, n = 0;
     int *pix = NULL, words = l ? VIS_WORDS(l->k) : 1, rc;
     uint64_t *bits = NULL;
     float *pos = NULL, *nrm = NULL;
@@ -281,26 +334,11 @@ int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, 
             (rc = vis_compute(vs, (int)n, pos, nrm, l->k, l->dir, bits, 0, NULL, cancel, err)))
             goto done;
     }
-    every = (size_t)glint_cancel_every(l->k);
-    for (size_t i = 0; i < n; i++) {
-        size_t p = (size_t)pix[i];
-        if (i % every == 0 && glint_cancelled(cancel)) {
+    {
+        pjob x = {g, l, pix, bits, words, fn, ctx, scale, out, n, cancel, 0};
+        par_run((int)((n + ENVLIT_CHUNK - 1) / ENVLIT_CHUNK), pixel_chunk, &x);
+        if (x.stopped)
             rc = glint_cancel_err(err, "shading the pixels");
-            goto done;
-        }
-        double nn[3], wo[3], acc[3], uv[2] = {0.0, 0.0};
-        for (int e = 0; e < 3; e++) {
-            nn[e] = g->nrm[3 * p + e];
-            wo[e] = g->wo[3 * p + e];
-        }
-        if (g->uv) {
-            uv[0] = g->uv[2 * p];
-            uv[1] = g->uv[2 * p + 1];
-        }
-        shade_point(l, bits ? bits + i * (size_t)words : NULL, fn, ctx, g->uv ? uv : NULL, nn,
-                    wo, acc);
-        for (int e = 0; e < 3; e++)
-            out->px[3 * p + e] = (float)(scale * acc[e]);
     }
 done:
     vis_close(vs);

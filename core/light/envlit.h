@@ -75,6 +75,9 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
 
 /* B at every covered pixel of a G-buffer of mesh m, shadow rays cast per
  * pixel when `shadows` is set (and the mesh is not convex); 0 elsewhere.
+ * The pixels are shaded in blocks on par.h's pool (each pixel's value is
+ * the same whichever thread shades it): fn is called from several threads
+ * at once, as envlit_vertices calls it.
  * OUT: *out (RGB, allocated here; freed when cancelled, as on any error).
  * cancel: as envlit_vertices'. */
 int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,

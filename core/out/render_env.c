@@ -229,9 +229,10 @@ static int env_draw_cpu(const mesh *m, const shader *s, const env_entry *x, cons
     int rc;
     if ((rc = raster_view(m, v, w, h, &g, err)))
         return rc;
+    /* (a convex mesh casts no shadows: envlit_gbuf is told so, not asked to find it again) */
     info->convex = e->shadows && vis_mesh_convex(m, ENVLIT_CONVEX_TOL);
-    rc = envlit_gbuf(&g, m, &x->lights, e->shadows, s->fn, s->ctx, s->scale, out, s->cancel,
-                     err);
+    rc = envlit_gbuf(&g, m, &x->lights, e->shadows && !info->convex, s->fn, s->ctx, s->scale,
+                     out, s->cancel, err);
     if (!rc && e->background)
         envlit_background(&x->map, e->rotation_deg * M_PI / 180.0, e->intensity, v, g.mask, out);
     gbuf_free(&g);

@@ -62,7 +62,7 @@ void brdf_eval(const brdf *b, const double n[3], const double wi[3],
         double g1i = 2.0 * cip / (cip + sqrt(a2 + (1.0 - a2) * cip * cip));
         double g1o = 2.0 * cop / (cop + sqrt(a2 + (1.0 - a2) * cop * cop));
         double common = D * g1i * g1o / (4.0 * cip * cop);
-        double s5 = pow(1.0 - hi, 5.0);
+        double m = 1.0 - hi, s5 = m * m * m * m * m;
         for (int c = 0; c < 3; c++)
             spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
         break;
