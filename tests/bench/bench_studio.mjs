@@ -269,7 +269,8 @@ async function busyStudio(t, d) {
     })();
   }, fit.id);
   await waitFor(async () => (await metric(d, 'glintd_work_running_by_class', '{class="background"}')) === 1, 60000, 'a reference render running');
-  const busy = async () => (await metric(d, 'glintd_work_running_by_class', '{class="background"}')) === 1;
+  // (the second artist's studio asks for its own reference renders after its fits: at times two run)
+  const busy = async () => (await metric(d, 'glintd_work_running_by_class', '{class="background"}')) >= 1;
   let whileBusy = 0, measured = 0;
   const note = async () => { measured++; if (await busy()) whileBusy++; };
   // strokes, alternating who paints
@@ -305,14 +306,20 @@ async function busyStudio(t, d) {
   await note();
   const ch = await chooseForMe(bo);
   await note();
+  // the choice's own account: each candidate's fit seconds, the refit
+  const chSteps = await bo.evaluate(() => {
+    const c = window.glint.state.judge.mat.choice || {};
+    return (c.candidates || []).map(x => `${x.method} ${(+x.fit_seconds).toFixed(2)} s`).join(', ') +
+      (c.refit_seconds != null ? `, refit ${(+c.refit_seconds).toFixed(2)} s` : '');
+  });
   const done = await ana.evaluate(() => { window.__refStop = true; window.glint.api.images.abortPrefix('reference:'); return window.__refs; });
   await ana.evaluate(() => window.__refLoop);
   // closed before their daemon stops: nothing of theirs asks it again
   for (const p of [ana, bo]) await p.context().close();
   const ms = x => `${x.toFixed(0)} ms`;
-  say(`with a reference render running (${done} finished meanwhile; one running at ${whileBusy} of ${measured} measurements): 160 px sphere painted at 480, two artists`);
+  say(`with a reference render running (${done} finished meanwhile; reference work running at ${whileBusy} of ${measured} measurements): 160 px sphere painted at 480, two artists`);
   say(`  stroke, mouse up in one browser to applied in the other: p50 ${pct(lag, 50)} ms, p95 ${pct(lag, 95)} ms (min ${Math.min(...lag)}, max ${Math.max(...lag)}, n=${lag.length})`);
   say(`  fit, click to the preview shown (cached): ${fmt(fits)}`);
   say(`  the fit request, waiting in the browser before it was sent: max ${ms(Math.max(...stalled))}; sent to the answer's first byte: ${fmt(server)} (glintd's steps, the last: ${steps})`);
-  say(`  "Paint all views" (satin plastic): ${ms(paint)}; choose for me: first look ${ch.first ? ms(ch.first) : 'never (the choice came first)'}, the choice (${ch.pick}) shown ${ms(ch.ms)}`);
+  say(`  "Paint all views" (satin plastic): ${ms(paint)}; choose for me: first look ${ch.first ? ms(ch.first) : 'never (the choice came first)'}, the choice (${ch.pick}) shown ${ms(ch.ms)} (its candidates: ${chSteps})`);
 }

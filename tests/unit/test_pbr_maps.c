@@ -6,8 +6,10 @@
  *     on a view left out of the painting the maps' error is below half of
  *     one pbr material's; each stripe's product is the truth's material
  *     (red's kd within 10%, gold's highlight in the gold texels);
- *   - one material painted: no worse on the left-out view than pbr alone
- *     (within 10% and 1e-3);
+ *   - one material painted: one product (stopped at the tolerance: pbr
+ *     leaves far less than 0.2% of the painting's RMS), the pbr fit itself;
+ *     with the tolerance at 0 it goes on to more products, and is no worse
+ *     on the left-out view than pbr alone (within 10% and 1e-3);
  *   - the level is pbr's own cache entry;
  *   - the material saved and read back evaluates as the fitted one;
  *     damaged manifests and coefficient files are refused with a message;
@@ -159,6 +161,13 @@ static double err_num(const material *m, const char *key)
     return json_number_value(json_object_get(json_object_get(m->info, "errors"), key));
 }
 
+/* Why the fit stopped adding products ("" when the info does not say). */
+static const char *stop_of(const material *m)
+{
+    const char *s = json_string_value(json_object_get(json_object_get(m->info, "maps"), "stop"));
+    return s ? s : "";
+}
+
 /* The pbr material of product k. */
 static const pbr_material *product(const material *m, int k)
 {
@@ -206,6 +215,7 @@ TEST(stripes_beat_one_material_on_a_new_view)
             gold = k;
     }
     ASSERT_MSG(red >= 0 && gold >= 0 && red != gold, "red %d gold %d", red, gold);
+    ASSERT_MSG(!strcmp(stop_of(&m), "components"), "stop %s", stop_of(&m));
     material_free(&m);
     material_free(&one);
 }
@@ -219,6 +229,7 @@ TEST(one_material_no_worse_than_pbr)
     material m = {0}, one = {0};
     glint_err e;
     double em, eo;
+    json_t *maps;
 
     ASSERT(setup() == 0);
     all_but_held(use);
@@ -228,8 +239,25 @@ TEST(one_material_no_worse_than_pbr)
     ASSERT_OK(fit_spec(&method_pbr, &bp, use, spec, &one, &e));
     em = view_rms(&m, HELD, spec);
     eo = view_rms(&one, HELD, spec);
-    printf("  one material, view %d left out: pbr_maps %.5f (%d products), pbr %.5f\n", HELD,
-           em, maps_matmap(&m)->k, eo);
+    maps = json_object_get(m.info, "maps");
+    printf("  one material, view %d left out: pbr_maps %.6f (%d products, stop %s, one "
+           "product's relative RMS %.2e), pbr %.6f\n",
+           HELD, em, maps_matmap(&m)->k, stop_of(&m),
+           json_number_value(json_object_get(maps, "one_product_rel_rms")), eo);
+    ASSERT_EQ(maps_matmap(&m)->k, 1);
+    ASSERT_MSG(!strcmp(stop_of(&m), "tolerance"), "stop %s", stop_of(&m));
+    ASSERT_LT(json_number_value(json_object_get(maps, "one_product_rel_rms")), p.tol);
+    ASSERT_LE(fabs(em - eo), 1e-9 + 1e-6 * eo); /* pbr's own fit */
+    ASSERT(eval_finite(&m));
+    material_free(&m);
+    /* no tolerance: products split the one material among them */
+    p.tol = 0.0;
+    ASSERT_OK(fit_spec(&method_pbr_maps, &p, use, spec, &m, &e));
+    em = view_rms(&m, HELD, spec);
+    printf("  tolerance 0: pbr_maps %.6f (%d products, stop %s)\n", em, maps_matmap(&m)->k,
+           stop_of(&m));
+    ASSERT_LT(1, maps_matmap(&m)->k);
+    ASSERT_MSG(!strcmp(stop_of(&m), "components"), "stop %s", stop_of(&m));
     ASSERT_LE(em, 1.1 * eo + 1e-3);
     ASSERT(eval_finite(&m));
     material_free(&m);
@@ -571,6 +599,9 @@ TEST(bad_parameters_are_refused)
     ASSERT(method_param_set_text(&method_pbr_maps, &p, "components", "0", &e) == GLINT_EINVAL);
     ASSERT(method_param_set_text(&method_pbr_maps, &p, "rounds", "51", &e) == GLINT_EINVAL);
     ASSERT(method_param_set_text(&method_pbr_maps, &p, "map_res", "1", &e) == GLINT_EINVAL);
+    ASSERT(method_param_set_text(&method_pbr_maps, &p, "tolerance", "-0.1", &e) == GLINT_EINVAL);
+    ASSERT(method_param_set_text(&method_pbr_maps, &p, "tolerance", "nan", &e) == GLINT_EINVAL);
+    ASSERT(method_param_set_text(&method_pbr_maps, &p, "tolerance", "1.5", &e) == GLINT_EINVAL);
     ASSERT_OK(method_param_set_text(&method_pbr_maps, &p, "components", "32", &e));
     ASSERT_OK(method_param_set_text(&method_pbr_maps, &p, "map_res", "1024", &e));
     ASSERT(method_pbr_maps.params_check(&p, &e) == GLINT_EINVAL);

@@ -44,6 +44,11 @@ static const method_param pbr_maps_params_table[] = {
      .description = "rounds of giving each texel its best material and refitting every "
                     "material to its texels; stops earlier when no texel changes",
      .offset = offsetof(pbr_maps_params, rounds), .min = 0, .max = PBR_MAPS_ROUNDS_MAX},
+    {.name = "tolerance", .label = "one finish below this error", .group = METHOD_GROUP_ADVANCED,
+     .type = METHOD_PARAM_NUMBER, .affects = "fit",
+     .description = "no second finish when one leaves an RMS of at most this fraction of the "
+                    "painting's",
+     .offset = offsetof(pbr_maps_params, tol), .min = 0.0, .max = 1.0},
 };
 
 static void pbr_maps_params_default(void *p)
@@ -54,6 +59,7 @@ static void pbr_maps_params_default(void *p)
     pp->components = 3;
     pp->map_res = 128;
     pp->rounds = 10;
+    pp->tol = 0.002;
 }
 
 /* ---- the level: pbr's, on the params' first member -------------------------------------- */

@@ -69,6 +69,8 @@ typedef struct em {
     json_t *info[MATMAP_MAX];
     int changes[PBR_MAPS_ROUNDS_MAX + 1];
     int rounds;
+    double rel0;       /* product 0's RMS over the painting's (0 for a black painting) */
+    const char *stop;  /* "tolerance" (one product) or "components" */
 } em;
 
 static void em_free(em *e)
@@ -281,10 +283,33 @@ static long take_product(em *e, int k, double *scratch)
     return taken;
 }
 
+/* The RMS of the painting (every sample, every channel). */
+static double painting_rms(const em *e)
+{
+    double ss = 0.0;
+    for (long i = 0; i < 3 * e->n; i++)
+        ss += (double)e->in->rgb[i] * e->in->rgb[i];
+    return e->n ? sqrt(ss / (3.0 * (double)e->n)) : 0.0;
+}
+
+/* The RMS of product k over every sample. */
+static double product_rms(const em *e, int k)
+{
+    double ss = 0.0;
+    for (long i = 0; i < e->n; i++) {
+        double m[3];
+        product_at(e, k, i, m);
+        for (int c = 0; c < 3; c++)
+            ss += (m[c] - e->in->rgb[3 * i + c]) * (m[c] - e->in->rgb[3 * i + c]);
+    }
+    return e->n ? sqrt(ss / (3.0 * (double)e->n)) : 0.0;
+}
+
 /* The start: product 0 on everything, each next one where the others fail
- * (fewer if a fit has too few samples).  Returns the products made (OUT
+ * (fewer if a fit has too few samples; none when product 0 leaves at most
+ * tol of the painting's RMS: one material).  Returns the products made (OUT
  * *K) or an error. */
-static int start(em *e, int *K, glint_err *err)
+static int start(em *e, int *K, double tol, glint_err *err)
 {
     double *scratch = malloc(2 * (size_t)e->T * sizeof *scratch);
     int rc = 0, np = 3 + 5 * e->pp->lobes;
@@ -294,6 +319,12 @@ static int start(em *e, int *K, glint_err *err)
     if ((rc = fit_product(e, 0, 0, err)))
         goto done;
     *K = 1;
+    e->stop = "components";
+    e->rel0 = painting_rms(e) > 0.0 ? product_rms(e, 0) / painting_rms(e) : 0.0;
+    if (e->rel0 <= tol) {
+        e->stop = "tolerance";
+        goto done;
+    }
     for (int k = 1; k < e->K; k++) {
         glint_err ignored;
         if (take_worst(e, k, scratch) < 2 * np || fit_product(e, k, 0, &ignored))
@@ -384,7 +415,7 @@ static int make_matmap(em *e, int K, float *coef, matmap *mm, glint_err *err)
     mm->k = K;
     mm->res = e->M;
     mm->coef = coef;
-    mm->stop = "components";
+    mm->stop = e->stop;
     mm->refine = "off";
     for (int k = 0; k < K; k++) {
         pbr_material *pm = malloc(sizeof *pm);
@@ -442,13 +473,14 @@ static json_t *report(const method_fit_in *in, const em *e, int K, double t0)
     }
     for (int r = 0; r <= e->rounds; r++)
         json_array_append_new(ch, json_integer(e->changes[r]));
-    return json_pack("{s:o, s:{s:s, s:s, s:i}, s:{s:f, s:f}, s:{s:i, s:i, s:o, s:o, s:s}, "
-                     "s:s}",
+    return json_pack("{s:o, s:{s:s, s:s, s:i}, s:{s:f, s:f}, s:{s:i, s:i, s:o, s:o, s:s, s:f, "
+                     "s:s}, s:s}",
                      "params", method_params_to_json(&method_pbr_maps, in->params),
                      "precomputation", "pattern_hash", in->s->hash, "cache_key", in->keys[0],
                      "samples", in->s->n, "seconds", "samples", in->pattern_seconds, "fit",
                      glint_now() - t0, "maps", "components", K, "rounds", e->rounds,
-                     "texels_changed", ch, "products", prods, "rule",
+                     "texels_changed", ch, "products", prods, "stop", e->stop,
+                     "one_product_rel_rms", e->rel0, "rule",
                      "each reached texel holds the product with the least squared error over "
                      "the samples that read it, weighted as they read it (bilinearly); "
                      "products refitted to their texels' samples until no texel changes; "
@@ -493,8 +525,10 @@ int pbr_maps_fit_in(const method_fit_in *in, material *out, glint_err *err)
     e.K = p->components;
     e.M = p->map_res;
     e.T = (long)e.M * e.M;
-    if ((rc = em_alloc(&e, err)) || (rc = start(&e, &K, err)) ||
-        (rc = alternate(&e, &K, p->rounds, err)) || (rc = coefficients(&e, K, &coef, err)))
+    /* (one material: its pbr fit as it is, nothing to regroup) */
+    if ((rc = em_alloc(&e, err)) || (rc = start(&e, &K, p->tol, err)) ||
+        (strcmp(e.stop, "tolerance") && (rc = alternate(&e, &K, p->rounds, err))) ||
+        (rc = coefficients(&e, K, &coef, err)))
         goto done;
     info = report(in, &e, K, t0);
     if ((rc = make_matmap(&e, K, coef, &mm, err)))
