@@ -94,6 +94,26 @@ function lastFitTiming(page) {
   });
 }
 
+// n strokes between pages a and b, alternating who paints (stroke i along
+// line(i)): each one's lag from mouse up in one to applied in the other.
+// after(): called once each stroke has arrived.
+async function strokeLags(a, b, n, line, after) {
+  await instrument(a);
+  await instrument(b);
+  const lag = [];
+  for (let i = 0; i < n; i++) {
+    const [from, to] = i % 2 ? [b, a] : [a, b];
+    const s0 = await to.evaluate(() => window.glint.state.session.appliedSeq);
+    await drawStroke(from, line(i), 4);
+    await to.waitForFunction(s => window.__appliedAt[s + 1] !== undefined, s0);
+    const up = await from.evaluate(() => window.__upAt), at = await to.evaluate(s => window.__appliedAt[s + 1], s0);
+    lag.push(at - up);
+    if (after) await after();
+    await settled(from, 0);
+  }
+  return lag;
+}
+
 async function clickFitUntilPreview(page) {
   const before = await page.evaluate(() => [window.glint.lastFit && window.glint.lastFit.id, window.glint.state.judge.frames]);
   await page.waitForFunction(() => !document.getElementById('fit-btn').disabled);
@@ -132,19 +152,7 @@ run({
     await openStudio(ana, url);
     await openStudio(bo, url);
     for (const p of [ana, bo]) await p.waitForFunction(() => window.glint.state.session.presence.length === 2);
-    await instrument(ana);
-    await instrument(bo);
-    const lag = [];
-    for (let i = 0; i < STROKES; i++) {
-      const [from, to] = i % 2 ? [bo, ana] : [ana, bo];
-      const y = 10 + (i * 97) % 108;
-      const s0 = await to.evaluate(() => window.glint.state.session.appliedSeq);
-      await drawStroke(from, [[15, y], [110, 128 - y]], 4);
-      await to.waitForFunction(s => window.__appliedAt[s + 1] !== undefined, s0);
-      const up = await from.evaluate(() => window.__upAt), at = await to.evaluate(s => window.__appliedAt[s + 1], s0);
-      lag.push(at - up);
-      await settled(from, 0);
-    }
+    const lag = await strokeLags(ana, bo, STROKES, i => { const y = 10 + (i * 97) % 108; return [[15, y], [110, 128 - y]]; });
     const st = await ana.evaluate(() => window.glint.state.session.stats);
     assert(st.duplicates + st.gaps === 0, 'no duplicates or gaps');
     say(`stroke, mouse up in one browser to applied in the other (128x128 torus): p50 ${pct(lag, 50)} ms, p99 ${pct(lag, 99)} ms (min ${Math.min(...lag)}, max ${Math.max(...lag)}, n=${lag.length})`);
@@ -273,20 +281,7 @@ async function busyStudio(t, d) {
   const busy = async () => (await metric(d, 'glintd_work_running_by_class', '{class="background"}')) >= 1;
   let whileBusy = 0, measured = 0;
   const note = async () => { measured++; if (await busy()) whileBusy++; };
-  // strokes, alternating who paints
-  for (const p of [ana, bo]) await instrument(p);
-  const lag = [];
-  for (let i = 0; i < BUSY_STROKES; i++) {
-    const [from, to] = i % 2 ? [bo, ana] : [ana, bo];
-    const y = 40 + (i * 131) % 400;
-    const s0 = await to.evaluate(() => window.glint.state.session.appliedSeq);
-    await drawStroke(from, [[60, y], [420, 480 - y]], 4);
-    await to.waitForFunction(s => window.__appliedAt[s + 1] !== undefined, s0);
-    const up = await from.evaluate(() => window.__upAt), at = await to.evaluate(s => window.__appliedAt[s + 1], s0);
-    lag.push(at - up);
-    await note();
-    await settled(from, 0);
-  }
+  const lag = await strokeLags(ana, bo, BUSY_STROKES, i => { const y = 40 + (i * 131) % 400; return [[60, y], [420, 480 - y]]; }, note);
   // fits by the other artist (cached: the scene's precomputation is built)
   const fits = [], stalled = [], server = [];
   let steps = '';
