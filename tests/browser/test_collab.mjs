@@ -212,6 +212,9 @@ run({
     await openStudio(page, url);
     await drawStroke(page, [[20, 20], [60, 30]]);
     await settled(page, 0);
+    // every view loaded first: a base render still running when glintd stops
+    // is cancelled (503), which is not what this test is about
+    await page.waitForFunction(() => window.glint.state.session.views.every(v => v.state === 'ready'), null, { timeout: 60000 });
     await t.daemon.restart();
     await t.daemon.api('POST', `/sessions/${session.id}/views/0/strokes`, { strokes: [{ color: [0, 0, 1], diameter: 20, points: [[10, 70], [80, 70]] }] }, H);
     await page.waitForFunction(() => window.glint.state.session.appliedSeq === 2 && window.glint.state.session.stream.state === 'open', null, { timeout: 60000 });

@@ -408,7 +408,8 @@ static int coefficients(const em *e, int K, float **coef, glint_err *err)
     return rc;
 }
 
-/* The matmap of the products (moved into mm, the infos with them). */
+/* The matmap of the products (moved into mm, the infos with them; coef
+ * moves in only on success). */
 static int make_matmap(em *e, int K, float *coef, matmap *mm, glint_err *err)
 {
     memset(mm, 0, sizeof *mm);
@@ -420,6 +421,7 @@ static int make_matmap(em *e, int K, float *coef, matmap *mm, glint_err *err)
     for (int k = 0; k < K; k++) {
         pbr_material *pm = malloc(sizeof *pm);
         if (!pm) {
+            mm->coef = NULL; /* still the caller's, who frees it */
             matmap_free(mm);
             return glint_err_set(err, GLINT_ENOMEM, "out of memory");
         }
