@@ -251,7 +251,8 @@ typedef struct pjob {
     const int *pix;            /* the covered pixels */
     const uint64_t *bits;      /* their visibility words, or NULL */
     int words;
-    envlit_fn fn;
+    envlit_fn fn;              /* a light at a time, or */
+    envlit_sum_fn sum;         /* every light at once */
     const void *ctx;
     double scale;
     img *out;
@@ -287,16 +288,20 @@ static void pixel_chunk(void *arg, int task)
             uv[0] = g->uv[2 * p];
             uv[1] = g->uv[2 * p + 1];
         }
-        shade_point(x->l, x->bits ? x->bits + i * (size_t)x->words : NULL, x->fn, x->ctx,
-                    g->uv ? uv : NULL, nn, wo, acc);
+        if (x->sum)
+            x->sum(x->ctx, x->l, x->bits ? x->bits + i * (size_t)x->words : NULL,
+                   g->uv ? uv : NULL, nn, wo, acc);
+        else
+            shade_point(x->l, x->bits ? x->bits + i * (size_t)x->words : NULL, x->fn, x->ctx,
+                        g->uv ? uv : NULL, nn, wo, acc);
         for (int e = 0; e < 3; e++)
             x->out->px[3 * p + e] = (float)(x->scale * acc[e]);
     }
 }
 
-int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
-                const void *ctx, double scale, img *out, const glint_cancel *cancel,
-                glint_err *err)
+static int gbuf_shade(const gbuf *g, const mesh *m, const env_lights *l, int shadows,
+                      envlit_fn fn, envlit_sum_fn sum, const void *ctx, double scale, img *out,
+                      const glint_cancel *cancel, glint_err *err)
 {
     size_t np = (size_t)g->width * g->height, n = 0;
     int *pix = NULL, words = l ? VIS_WORDS(l->k) : 1, rc;
@@ -335,7 +340,7 @@ int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, 
             goto done;
     }
     {
-        pjob x = {g, l, pix, bits, words, fn, ctx, scale, out, n, cancel, 0};
+        pjob x = {g, l, pix, bits, words, fn, sum, ctx, scale, out, n, cancel, 0};
         par_run((int)((n + ENVLIT_CHUNK - 1) / ENVLIT_CHUNK), pixel_chunk, &x);
         if (x.stopped)
             rc = glint_cancel_err(err, "shading the pixels");
@@ -349,6 +354,28 @@ done:
     if (rc)
         img_free(out);
     return rc;
+}
+
+int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
+                const void *ctx, double scale, img *out, const glint_cancel *cancel,
+                glint_err *err)
+{
+    if (!fn) {
+        memset(out, 0, sizeof *out);
+        return glint_err_set(err, GLINT_EINVAL, "no shader");
+    }
+    return gbuf_shade(g, m, l, shadows, fn, NULL, ctx, scale, out, cancel, err);
+}
+
+int envlit_gbuf_summed(const gbuf *g, const mesh *m, const env_lights *l, int shadows,
+                       envlit_sum_fn sum, const void *ctx, double scale, img *out,
+                       const glint_cancel *cancel, glint_err *err)
+{
+    if (!sum) {
+        memset(out, 0, sizeof *out);
+        return glint_err_set(err, GLINT_EINVAL, "no shader");
+    }
+    return gbuf_shade(g, m, l, shadows, NULL, sum, ctx, scale, out, cancel, err);
 }
 
 void envlit_background(const env_map *map, double psi, double intensity,

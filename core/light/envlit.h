@@ -50,6 +50,15 @@ typedef void (*envlit_fn)(const void *ctx, const double uv[2], const double n[3]
  * merl_envlit (merl.h), material_envlit and material_envlit_preview
  * (material.h). */
 
+/* The whole sum at one point (OUT: acc): over the lights k above n's
+ * horizon (n . dir_k > 0) and visible (bits NULL, or bit k set in vis.h's
+ * packing), power_k times R(uv, n, dir_k, wo), as envlit_gbuf sums an
+ * envlit_fn.  For a shader that computes it in one pass faster than a call
+ * a light (brdf_envlit_sum, brdf.h). */
+typedef void (*envlit_sum_fn)(const void *ctx, const env_lights *l, const uint64_t *bits,
+                              const double uv[2], const double n[3], const double wo[3],
+                              double acc[3]);
+
 /* Visibility of every light from every vertex of a mesh. */
 typedef struct envlit_vis {
     int nverts, k, words;
@@ -83,6 +92,10 @@ int envlit_vertices(const mesh *m, const env_lights *l, const envlit_vis *vis, e
 int envlit_gbuf(const gbuf *g, const mesh *m, const env_lights *l, int shadows, envlit_fn fn,
                 const void *ctx, double scale, img *out, const glint_cancel *cancel,
                 glint_err *err);
+/* The same with each pixel's sum taken by sum (ctx is its) instead. */
+int envlit_gbuf_summed(const gbuf *g, const mesh *m, const env_lights *l, int shadows,
+                       envlit_sum_fn sum, const void *ctx, double scale, img *out,
+                       const glint_cancel *cancel, glint_err *err);
 
 /* Fill the pixels of `out` where mask is 0 (all when mask is NULL) with
  * the map's radiance along the camera ray of view v (scene.h's pixel

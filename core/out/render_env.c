@@ -175,6 +175,7 @@ typedef struct shader {
     const void *ctx;
     double scale;
     const glint_cancel *cancel;
+    envlit_sum_fn sum;     /* fn summed over the lights in one call, or NULL */
 } shader;
 
 static int env_draw_gl(render *r, const char *key, const mesh *m, const shader *s,
@@ -231,8 +232,10 @@ static int env_draw_cpu(const mesh *m, const shader *s, const env_entry *x, cons
         return rc;
     /* (a convex mesh casts no shadows: envlit_gbuf is told so, not asked to find it again) */
     info->convex = e->shadows && vis_mesh_convex(m, ENVLIT_CONVEX_TOL);
-    rc = envlit_gbuf(&g, m, &x->lights, e->shadows && !info->convex, s->fn, s->ctx, s->scale,
-                     out, s->cancel, err);
+    rc = s->sum ? envlit_gbuf_summed(&g, m, &x->lights, e->shadows && !info->convex, s->sum,
+                                     s->ctx, s->scale, out, s->cancel, err)
+                : envlit_gbuf(&g, m, &x->lights, e->shadows && !info->convex, s->fn, s->ctx,
+                              s->scale, out, s->cancel, err);
     if (!rc && e->background)
         envlit_background(&x->map, e->rotation_deg * M_PI / 180.0, e->intensity, v, g.mask, out);
     gbuf_free(&g);
@@ -293,7 +296,7 @@ int render_material_env(render *r, render_engine eng, const char *mesh_key, cons
                         int width, int height, img *out, render_env_info *info,
                         render_used *used, const glint_cancel *cancel, glint_err *err)
 {
-    shader s = {material_envlit, material_envlit_preview, mat, 1.0, cancel};
+    shader s = {material_envlit, material_envlit_preview, mat, 1.0, cancel, NULL};
     if (!mat || !mat->method) {
         memset(out, 0, sizeof *out);
         return glint_err_set(err, GLINT_EINVAL, "no material to render");
@@ -308,7 +311,7 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
                     glint_err *err)
 {
     brdf b;
-    shader s = {brdf_envlit, brdf_envlit, &b, scale, cancel};
+    shader s = {brdf_envlit, brdf_envlit, &b, scale, cancel, NULL};
     int rc;
     memset(out, 0, sizeof *out);
     if (!(scale > 0.0) || !isfinite(scale))
@@ -333,6 +336,7 @@ int render_base_env(render *r, render_engine eng, const char *mesh_key, const me
     }
     if ((rc = brdf_parse(brdf_spec, &b, err)))
         return rc;
+    s.sum = brdf_envlit_sum;
     return env_any(r, eng, mesh_key, m, &s, env, v, width, height, out, info, used, err);
 }
 

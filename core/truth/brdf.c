@@ -435,3 +435,74 @@ void brdf_envlit(const void *ctx, const double uv[2], const double n[3], const d
     for (int e = 0; e < 3; e++)
         rgb[e] *= c > 0.0 ? c : 0.0;
 }
+
+/* Light k of l above n's horizon and not shadowed (bits). */
+static int lit(const env_lights *l, const uint64_t *bits, const double n[3], int k)
+{
+    const double *d = l->dir + 3 * k;
+    return n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0 &&
+           (!bits || ((bits[k >> 6] >> (k & 63)) & 1));
+}
+
+/* brdf_eval's ct and lambert cases times n.wi, summed with the lights'
+ * powers: its expressions, in its order. */
+static void sum_ct(const brdf *b, const env_lights *l, const uint64_t *bits, const double n[3],
+                   const double wo[3], double acc[3])
+{
+    v3 N = v3_load(n), O = v3_load(wo);
+    double co = v3_dot(N, O), kdpi[3];
+    int ct = b->kind == BRDF_CT;
+    double a = b->roughness, a2 = a * a, cop = co > 1e-12 ? co : 1e-12, g1o = 0.0;
+    if (!(co > 0.0))
+        return;
+    if (ct)
+        g1o = 2.0 * cop / (cop + sqrt(a2 + (1.0 - a2) * cop * cop));
+    for (int c = 0; c < 3; c++)
+        kdpi[c] = b->kd[c] / M_PI;
+    for (int k = 0; k < l->k; k++) {
+        const double *d = l->dir + 3 * k, *pw = l->power + 3 * k;
+        v3 I;
+        double ci, spec[3] = {0.0, 0.0, 0.0};
+        if (!lit(l, bits, n, k))
+            continue;
+        I = v3_load(d);
+        ci = v3_dot(N, I);
+        if (!(ci > 0.0))
+            continue;
+        if (ct) {
+            v3 h = v3_normalize(v3_add(I, O));
+            double ch = v3_dot(N, h), hi = v3_dot(h, I);
+            ch = ch < 0.0 ? 0.0 : (ch > 1.0 ? 1.0 : ch);
+            hi = hi < 0.0 ? 0.0 : (hi > 1.0 ? 1.0 : hi);
+            double t = ch * ch * (a2 - 1.0) + 1.0;
+            double D = a2 / (M_PI * t * t);
+            double cip = ci > 1e-12 ? ci : 1e-12;
+            double g1i = 2.0 * cip / (cip + sqrt(a2 + (1.0 - a2) * cip * cip));
+            double common = D * g1i * g1o / (4.0 * cip * cop);
+            double m = 1.0 - hi, s5 = m * m * m * m * m;
+            for (int c = 0; c < 3; c++)
+                spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
+        }
+        for (int c = 0; c < 3; c++)
+            acc[c] += pw[c] * ((kdpi[c] + spec[c]) * ci);
+    }
+}
+
+void brdf_envlit_sum(const void *ctx, const env_lights *l, const uint64_t *bits,
+                     const double uv[2], const double n[3], const double wo[3], double acc[3])
+{
+    const brdf *b = ctx;
+    acc[0] = acc[1] = acc[2] = 0.0;
+    if (b->kind == BRDF_CT || b->kind == BRDF_LAMBERT) {
+        sum_ct(b, l, bits, n, wo, acc);
+        return;
+    }
+    for (int k = 0; k < l->k; k++) {
+        double r[3];
+        if (!lit(l, bits, n, k))
+            continue;
+        brdf_envlit(b, uv, n, l->dir + 3 * k, wo, r);
+        for (int c = 0; c < 3; c++)
+            acc[c] += l->power[3 * k + c] * r[c];
+    }
+}

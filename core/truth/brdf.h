@@ -21,6 +21,9 @@
 #ifndef GLINT_BRDF_H
 #define GLINT_BRDF_H
 
+#include <stdint.h>
+
+#include "env.h"
 #include "err.h"
 
 typedef enum {
@@ -61,5 +64,14 @@ void brdf_eval(const brdf *b, const double n[3], const double wi[3],
  * envlit_fn; ctx: a const brdf *; uv unused): brdf_eval() x n.wi. */
 void brdf_envlit(const void *ctx, const double uv[2], const double n[3], const double wi[3],
                  const double wo[3], double rgb[3]);
+
+/* brdf_envlit summed over an environment's lights (envlit.h's
+ * envlit_sum_fn; ctx: a const brdf *): the same sum, term for term and in
+ * the same order (the same digits), without a call a light, and with what
+ * holds for every light of a point (the view's cosine and its GGX G1, the
+ * diffuse kd / pi) taken once: ct and lambert; the other models a call a
+ * light. */
+void brdf_envlit_sum(const void *ctx, const env_lights *l, const uint64_t *bits,
+                     const double uv[2], const double n[3], const double wo[3], double acc[3]);
 
 #endif

@@ -15,7 +15,8 @@ int paint_views_env(const brdf *b, const gbuf *g, int nviews, const mesh *m,
     for (int v = 0; v < nviews; v++)
         memset(&out[v], 0, sizeof out[v]);
     for (int v = 0; v < nviews && !rc; v++)
-        rc = envlit_gbuf(&g[v], m, l, shadows, brdf_envlit, b, scale, &out[v], NULL, err);
+        rc = envlit_gbuf_summed(&g[v], m, l, shadows, brdf_envlit_sum, b, scale, &out[v], NULL,
+                                err);
     return rc;
 }
 
