@@ -42,8 +42,9 @@
  *
  * The info: "params", "precomputation", "seconds", "maps" (components,
  * stop: "tolerance" or "components", one_product_rel_rms: the first
- * product's RMS over the painting's, rounds, texels_changed per round, per product its texels and its pbr
- * fit's report: samples, rms, determined and undetermined parameters),
+ * product's RMS over the painting's, rounds, texels_changed per round, per
+ * product its texels and its pbr fit's report: samples, rms, determined and
+ * undetermined parameters),
  * "errors" (rms_painted, max_abs_painted, rms_by_view: the material as it
  * renders, coefficients read bilinearly). */
 #ifndef GLINT_METHOD_PBR_MAPS_H
