@@ -17,6 +17,37 @@
 
 /* ---- evaluation ------------------------------------------------------- */
 
+/* The reference clamps the cosines at 1e-12 before dividing. */
+static inline double clamp_cos(double c)
+{
+    return c > 1e-12 ? c : 1e-12;
+}
+
+/* GGX's separable Smith G1 at a clamped cosine c. */
+static inline double ct_g1(double a2, double c)
+{
+    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
+}
+
+/* The ct model's specular term (OUT spec[3]) for unit N, I, O with
+ * ci = N.I > 0; cop the clamped N.O and g1o its G1 (the same for every
+ * light of a point: brdf_envlit_sum takes them once). */
+static inline void ct_spec(const brdf *b, double a2, v3 N, v3 I, v3 O, double ci, double cop,
+                           double g1o, double spec[3])
+{
+    v3 h = v3_normalize(v3_add(I, O));
+    double ch = v3_dot(N, h), hi = v3_dot(h, I);
+    ch = ch < 0.0 ? 0.0 : (ch > 1.0 ? 1.0 : ch);
+    hi = hi < 0.0 ? 0.0 : (hi > 1.0 ? 1.0 : hi);
+    double t = ch * ch * (a2 - 1.0) + 1.0;
+    double D = a2 / (M_PI * t * t);
+    double cip = clamp_cos(ci);
+    double common = D * ct_g1(a2, cip) * g1o / (4.0 * cip * cop);
+    double m = 1.0 - hi, s5 = m * m * m * m * m;
+    for (int c = 0; c < 3; c++)
+        spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
+}
+
 void brdf_eval(const brdf *b, const double n[3], const double wi[3],
                const double wo[3], double rgb[3])
 {
@@ -50,21 +81,8 @@ void brdf_eval(const brdf *b, const double n[3], const double wi[3],
         break;
     }
     case BRDF_CT: {
-        double a = b->roughness, a2 = a * a;
-        v3 h = v3_normalize(v3_add(I, O));
-        double ch = v3_dot(N, h), hi = v3_dot(h, I);
-        ch = ch < 0.0 ? 0.0 : (ch > 1.0 ? 1.0 : ch);
-        hi = hi < 0.0 ? 0.0 : (hi > 1.0 ? 1.0 : hi);
-        double t = ch * ch * (a2 - 1.0) + 1.0;
-        double D = a2 / (M_PI * t * t);
-        /* the reference clamps the cosines at 1e-12 before dividing */
-        double cip = ci > 1e-12 ? ci : 1e-12, cop = co > 1e-12 ? co : 1e-12;
-        double g1i = 2.0 * cip / (cip + sqrt(a2 + (1.0 - a2) * cip * cip));
-        double g1o = 2.0 * cop / (cop + sqrt(a2 + (1.0 - a2) * cop * cop));
-        double common = D * g1i * g1o / (4.0 * cip * cop);
-        double m = 1.0 - hi, s5 = m * m * m * m * m;
-        for (int c = 0; c < 3; c++)
-            spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
+        double a2 = b->roughness * b->roughness, cop = clamp_cos(co);
+        ct_spec(b, a2, N, I, O, ci, cop, ct_g1(a2, cop), spec);
         break;
     }
     case BRDF_WARD: {
@@ -452,11 +470,11 @@ static void sum_ct(const brdf *b, const env_lights *l, const uint64_t *bits, con
     v3 N = v3_load(n), O = v3_load(wo);
     double co = v3_dot(N, O), kdpi[3];
     int ct = b->kind == BRDF_CT;
-    double a = b->roughness, a2 = a * a, cop = co > 1e-12 ? co : 1e-12, g1o = 0.0;
+    double a2 = b->roughness * b->roughness, cop = clamp_cos(co), g1o = 0.0;
     if (!(co > 0.0))
         return;
     if (ct)
-        g1o = 2.0 * cop / (cop + sqrt(a2 + (1.0 - a2) * cop * cop));
+        g1o = ct_g1(a2, cop);
     for (int c = 0; c < 3; c++)
         kdpi[c] = b->kd[c] / M_PI;
     for (int k = 0; k < l->k; k++) {
@@ -469,20 +487,8 @@ static void sum_ct(const brdf *b, const env_lights *l, const uint64_t *bits, con
         ci = v3_dot(N, I);
         if (!(ci > 0.0))
             continue;
-        if (ct) {
-            v3 h = v3_normalize(v3_add(I, O));
-            double ch = v3_dot(N, h), hi = v3_dot(h, I);
-            ch = ch < 0.0 ? 0.0 : (ch > 1.0 ? 1.0 : ch);
-            hi = hi < 0.0 ? 0.0 : (hi > 1.0 ? 1.0 : hi);
-            double t = ch * ch * (a2 - 1.0) + 1.0;
-            double D = a2 / (M_PI * t * t);
-            double cip = ci > 1e-12 ? ci : 1e-12;
-            double g1i = 2.0 * cip / (cip + sqrt(a2 + (1.0 - a2) * cip * cip));
-            double common = D * g1i * g1o / (4.0 * cip * cop);
-            double m = 1.0 - hi, s5 = m * m * m * m * m;
-            for (int c = 0; c < 3; c++)
-                spec[c] = common * (b->f0[c] + (1.0 - b->f0[c]) * s5);
-        }
+        if (ct)
+            ct_spec(b, a2, N, I, O, ci, cop, g1o, spec);
         for (int c = 0; c < 3; c++)
             acc[c] += pw[c] * ((kdpi[c] + spec[c]) * ci);
     }
