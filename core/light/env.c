@@ -2,10 +2,12 @@
  * resolver and radiance lookup (env.h).  Compression is in env_cut.c. */
 #include "env.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "img.h"
 
@@ -380,6 +382,34 @@ int env_resolve(const char *spec, env_map *out, glint_err *err)
     if ((rc = env_load(path, out, err)))
         return rc;
     snprintf(out->name, sizeof out->name, "%s", spec);
+    return 0;
+}
+
+int env_identity(const char *spec, char *out, size_t len, glint_err *err)
+{
+    char path[4096];
+    const char *name = spec;
+    struct stat st;
+    int rc;
+    if ((rc = env_spec_check(spec, err)))
+        return rc;
+    if (!strncmp(spec, "builtin:", 8))
+        name = spec + 8;
+    for (int i = 0; builtins[i]; i++)
+        if (!strcmp(name, builtins[i])) {
+            snprintf(out, len, "builtin:%s", name);
+            return 0;
+        }
+    if (name != spec || !resolver)
+        return env_spec_lookup(spec, err); /* its error */
+    if ((rc = resolver(spec, path, sizeof path, err)))
+        return rc;
+    if (stat(path, &st))
+        return glint_err_set(err, GLINT_ENOTFOUND, "environment '%s': %s", spec, strerror(errno));
+    if (snprintf(out, len, "file:%llu:%llu:%lld:%lld.%09ld:%s", (unsigned long long)st.st_dev,
+                 (unsigned long long)st.st_ino, (long long)st.st_size,
+                 (long long)st.st_mtim.tv_sec, (long)st.st_mtim.tv_nsec, path) >= (int)len)
+        return glint_err_set(err, GLINT_ERANGE, "environment '%s': its path is too long", spec);
     return 0;
 }
 

@@ -86,6 +86,12 @@ int env_spec_lookup(const char *spec, glint_err *err);
  * beyond that is the resolver's to check). */
 int env_spec_check(const char *spec, glint_err *err);
 
+/* What env_resolve would read for spec, as a string that changes when it
+ * does (OUT: out, at most len bytes): "builtin:NAME", or for a file the
+ * resolver's path with its device, inode, size and modification time.
+ * 0, or env_resolve's error. */
+int env_identity(const char *spec, char *out, size_t len, glint_err *err);
+
 /* Radiance in direction d (unit) of the map rotated by psi and scaled by
  * intensity, bilinear (OUT: rgb). */
 void env_radiance(const env_map *m, const double d[3], double psi, double intensity,
@@ -122,6 +128,15 @@ typedef enum {
  * k in 1..ENV_MAX_LIGHTS (GLINT_ERANGE otherwise). */
 int env_compress(const env_map *m, env_cut how, int k, double psi, double intensity,
                  env_lights *out, glint_err *err);
+
+/* env_resolve then env_compress, kept for the next call with the same
+ * spec and settings (env_cache.c): copies of the map and its lights (OUT:
+ * map, lights; the caller frees them), the same as the two calls give.
+ * A file behind spec that changes on disk is read again.  Thread-safe. */
+int env_prepare(const char *spec, env_cut how, int k, double psi, double intensity,
+                env_map *map, env_lights *lights, glint_err *err);
+/* Drop everything env_prepare keeps (tests; a host freeing memory). */
+void env_cache_clear(void);
 
 /* Rotate lights by psi about +z (in place). */
 void env_lights_rotate(env_lights *l, double psi);

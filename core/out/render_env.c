@@ -140,9 +140,8 @@ static int entry_get(render *r, const char *mesh_key, const mesh *m, const rende
         if (!(x = calloc(1, sizeof *x)))
             return glint_err_set(err, GLINT_ENOMEM, "out of memory");
         snprintf(x->key, sizeof x->key, "%s", key);
-        if ((rc = env_resolve(e->spec, &x->map, err)) ||
-            (rc = env_compress(&x->map, ENV_CUT_MEDIAN, e->lights, e->rotation_deg * M_PI / 180.0,
-                               e->intensity, &x->lights, err))) {
+        if ((rc = env_prepare(e->spec, ENV_CUT_MEDIAN, e->lights, e->rotation_deg * M_PI / 180.0,
+                              e->intensity, &x->map, &x->lights, err))) {
             entry_free(x);
             return rc;
         }

@@ -1,6 +1,6 @@
 /* test_env.c: environment maps (env.h): solid angles, built-ins, reading
  * and clamping, cube crosses, median cut and lat-long compression,
- * rotation, the compression error, and bad input. */
+ * rotation, the compression error, bad input, and env_prepare's cache. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -246,6 +246,96 @@ TEST(the_cc0_courtyard_when_present)
     env_map_free(&m);
 }
 
+/* env_prepare against env_resolve + env_compress: the same lights and map
+ * from the cache as computed; a map file rewritten behind the same spec is
+ * read again; other settings are other entries; bad specs keep their
+ * errors. */
+static char prep_path[256];
+static int prep_resolver(const char *spec, char *path, size_t len, glint_err *err)
+{
+    if (strcmp(spec, "upload:x"))
+        return glint_err_set(err, GLINT_ENOTFOUND, "no environment '%s'", spec);
+    snprintf(path, len, "%s", prep_path);
+    return 0;
+}
+
+static int same_lights(const env_lights *a, const env_lights *b)
+{
+    return a->k == b->k && !memcmp(a->dir, b->dir, (size_t)a->k * 3 * sizeof(double)) &&
+           !memcmp(a->power, b->power, (size_t)a->k * 3 * sizeof(double));
+}
+
+static void write_flat(const char *path, float v, glint_err *e)
+{
+    img im;
+    ASSERT_OK(img_alloc(&im, 64, 32, 3, e));
+    for (int i = 0; i < 64 * 32 * 3; i++)
+        im.px[i] = v * (1.0f + (float)(i % 5));
+    ASSERT_OK(img_write(path, &im, e));
+    img_free(&im);
+}
+
+TEST(prepare_keeps_what_it_computed_and_reads_a_changed_file)
+{
+    char dir[] = "/tmp/glint-envprep-XXXXXX";
+    env_map m, ref, m2;
+    env_lights l, lref, l2;
+    glint_err e;
+    env_cache_clear();
+    /* a built-in, twice (computed, then kept): both equal the direct calls */
+    ASSERT_OK(env_resolve("sky", &ref, &e));
+    ASSERT_OK(env_compress(&ref, ENV_CUT_MEDIAN, 64, 0.7, 2.0, &lref, &e));
+    for (int pass = 0; pass < 2; pass++) {
+        ASSERT_OK(env_prepare("sky", ENV_CUT_MEDIAN, 64, 0.7, 2.0, &m, &l, &e));
+        ASSERT(same_lights(&l, &lref));
+        ASSERT(m.width == ref.width && m.height == ref.height && !strcmp(m.name, ref.name));
+        ASSERT(!memcmp(m.rgb, ref.rgb, (size_t)m.width * m.height * 3 * sizeof(float)));
+        env_map_free(&m); /* the copies are the caller's */
+        env_lights_free(&l);
+    }
+    /* another rotation, count or cut is another entry */
+    ASSERT_OK(env_prepare("sky", ENV_CUT_MEDIAN, 64, 0.8, 2.0, &m, &l, &e));
+    ASSERT(!same_lights(&l, &lref));
+    env_map_free(&m);
+    env_lights_free(&l);
+    ASSERT_OK(env_prepare("sky", ENV_CUT_MEDIAN, 32, 0.7, 2.0, &m, &l, &e));
+    ASSERT_EQ(l.k, 32);
+    env_map_free(&m);
+    env_lights_free(&l);
+    env_map_free(&ref);
+    env_lights_free(&lref);
+    /* a file behind a spec: kept, and read again once it changes */
+    ASSERT(mkdtemp(dir) != NULL);
+    snprintf(prep_path, sizeof prep_path, "%s/map.exr", dir);
+    write_flat(prep_path, 1.0f, &e);
+    env_set_resolver(prep_resolver);
+    ASSERT_OK(env_prepare("upload:x", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m, &l, &e));
+    ASSERT(!strcmp(m.name, "upload:x"));
+    ASSERT_OK(env_prepare("upload:x", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m2, &l2, &e));
+    ASSERT(same_lights(&l, &l2));
+    env_map_free(&m2);
+    env_lights_free(&l2);
+    unlink(prep_path);
+    write_flat(prep_path, 3.0f, &e); /* a new file (another inode, or size and time) */
+    ASSERT_OK(env_prepare("upload:x", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m2, &l2, &e));
+    ASSERT_NEAR(l2.total[0], 3.0 * l.total[0], 1e-6 * l2.total[0]);
+    ASSERT_NEAR(m2.rgb[0], 3.0 * m.rgb[0], 1e-6);
+    env_map_free(&m);
+    env_lights_free(&l);
+    env_map_free(&m2);
+    env_lights_free(&l2);
+    /* gone: the resolver's path no longer reads; nothing stale is answered */
+    unlink(prep_path);
+    ASSERT_EQ(env_prepare("upload:x", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m, &l, &e), GLINT_ENOTFOUND);
+    ASSERT(m.rgb == NULL && l.dir == NULL);
+    ASSERT_EQ(env_prepare("nosuch", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m, &l, &e), GLINT_ENOTFOUND);
+    ASSERT_EQ(env_prepare("bad spec", ENV_CUT_MEDIAN, 16, 0.0, 1.0, &m, &l, &e), GLINT_EINVAL);
+    ASSERT_EQ(env_prepare("sky", ENV_CUT_MEDIAN, 0, 0.0, 1.0, &m, &l, &e), GLINT_ERANGE);
+    env_set_resolver(NULL);
+    env_cache_clear();
+    rmdir(dir);
+}
+
 TEST_LIST{
     TEST_ENTRY(white_furnace_total_power_and_irradiance),
     TEST_ENTRY(median_cut_keeps_power_and_error_falls_with_more_lights),
@@ -253,6 +343,7 @@ TEST_LIST{
     TEST_ENTRY(files_clamp_negatives_and_crosses_resample),
     TEST_ENTRY(bad_specs_sizes_and_counts),
     TEST_ENTRY(the_cc0_courtyard_when_present),
+    TEST_ENTRY(prepare_keeps_what_it_computed_and_reads_a_changed_file),
 };
 
 TEST_MAIN()
