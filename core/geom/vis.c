@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <xxhash.h>
 
 struct vis_scene {
     RTCDevice dev;
@@ -241,7 +242,8 @@ static int find(int *par, int i)
     return i;
 }
 
-int vis_mesh_convex(const mesh *m, double tol)
+/* vis_mesh_convex's answer, worked out; -1 when out of memory. */
+static int convex_compute(const mesh *m, double tol)
 {
     int nv = m ? m->nverts : 0, nt = m ? m->ntris : 0, ne = 0, ok = 0, ntri = 0;
     double r = 0.0, cell;
@@ -262,8 +264,10 @@ int vis_mesh_convex(const mesh *m, double tol)
     E = malloc((size_t)3 * nt * sizeof *E);
     par = malloc((size_t)nt * sizeof *par);
     keep = malloc((size_t)nt * 3 * sizeof *keep);
-    if (!keys || !rep || !E || !par || !keep)
+    if (!keys || !rep || !E || !par || !keep) {
+        ok = -1;
         goto done;
+    }
     for (int t = 0; t < nt; t++)
         par[t] = t;
     for (int i = 0; i < nv; i++) {
@@ -351,4 +355,67 @@ done:
     free(par);
     free(keep);
     return ok;
+}
+
+/* The answers for the last few meshes, by a hash of their positions and
+ * triangles (a mesh is read-only once made, and the same scene's mesh is
+ * asked about by every render under an environment: 85 ms for the
+ * studio's 131,839-vertex sphere, against 0.5 ms to hash it). */
+#define CONVEX_MEMO 8
+
+typedef struct convex_memo {
+    uint64_t hash;
+    int nverts, ntris, answer;
+    double tol;
+    unsigned long used; /* 0: empty */
+} convex_memo;
+
+static pthread_mutex_t memo_lock = PTHREAD_MUTEX_INITIALIZER;
+static convex_memo memo[CONVEX_MEMO];
+static unsigned long memo_tick;
+
+static uint64_t mesh_hash(const mesh *m)
+{
+    XXH3_state_t *st = XXH3_createState();
+    uint64_t h;
+    if (!st)
+        return 0;
+    XXH3_64bits_reset(st);
+    XXH3_64bits_update(st, m->pos, (size_t)m->nverts * 3 * sizeof *m->pos);
+    XXH3_64bits_update(st, m->tri, (size_t)m->ntris * 3 * sizeof *m->tri);
+    h = XXH3_64bits_digest(st);
+    XXH3_freeState(st);
+    return h;
+}
+
+int vis_mesh_convex(const mesh *m, double tol)
+{
+    uint64_t h;
+    int answer = -1;
+    convex_memo *slot = NULL;
+    if (!m || m->nverts < 4 || m->ntris < 4)
+        return 0;
+    if (!(h = mesh_hash(m)))
+        return convex_compute(m, tol) == 1;
+    pthread_mutex_lock(&memo_lock);
+    for (int i = 0; i < CONVEX_MEMO; i++) {
+        convex_memo *c = &memo[i];
+        if (c->used && c->hash == h && c->nverts == m->nverts && c->ntris == m->ntris &&
+            c->tol == tol) {
+            c->used = ++memo_tick;
+            answer = c->answer;
+        }
+    }
+    pthread_mutex_unlock(&memo_lock);
+    if (answer >= 0)
+        return answer;
+    if ((answer = convex_compute(m, tol)) < 0)
+        return 0; /* out of memory: not known to be convex, and not kept */
+    pthread_mutex_lock(&memo_lock);
+    for (int i = 0; i < CONVEX_MEMO; i++)
+        if (!slot || memo[i].used < slot->used)
+            slot = &memo[i];
+    *slot = (convex_memo){h, m->nverts, m->ntris, answer, tol, ++memo_tick};
+    pthread_mutex_unlock(&memo_lock);
+    return answer;
 }

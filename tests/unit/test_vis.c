@@ -132,6 +132,31 @@ TEST(convexity_of_the_built_ins)
     mesh_free(&m);
 }
 
+/* The answers are kept by the mesh's contents: asked again, the same; a
+ * mesh that differs by one vertex (a dent) gets its own answer, and the
+ * original's is still right after it; another tolerance is asked anew. */
+TEST(convexity_is_kept_by_content)
+{
+    mesh m, dent;
+    glint_err e;
+    ASSERT_OK(mesh_sphere(&m, 24, 48, &e));
+    ASSERT_OK(mesh_sphere(&dent, 24, 48, &e));
+    for (int c = 0; c < 3; c++)
+        dent.pos[3 * (dent.nverts / 2) + c] *= 0.5f; /* a vertex on the equator pulled in */
+    for (int pass = 0; pass < 2; pass++) {
+        ASSERT_EQ(vis_mesh_convex(&m, 1e-6), 1);
+        ASSERT_EQ(vis_mesh_convex(&dent, 1e-6), 0);
+    }
+    ASSERT_EQ(vis_mesh_convex(&dent, 10.0), 1); /* a dihedral tolerance that lets it pass */
+    ASSERT_EQ(vis_mesh_convex(&dent, 1e-6), 0);
+    /* changed in place after an answer (meshes are read-only once made, but
+     * the answer must follow the contents, not the address) */
+    memcpy(m.pos, dent.pos, (size_t)m.nverts * 3 * sizeof *m.pos);
+    ASSERT_EQ(vis_mesh_convex(&m, 1e-6), 0);
+    mesh_free(&m);
+    mesh_free(&dent);
+}
+
 TEST(the_bunny_when_present)
 {
     mesh m;
@@ -240,6 +265,7 @@ TEST_LIST{
     TEST_ENTRY(an_occluder_blocks_what_is_behind_it),
     TEST_ENTRY(a_sphere_never_shadows_itself_and_threads_agree),
     TEST_ENTRY(convexity_of_the_built_ins),
+    TEST_ENTRY(convexity_is_kept_by_content),
     TEST_ENTRY(the_bunny_when_present),
     TEST_ENTRY(a_cancelled_computation_stops),
     TEST_ENTRY(bad_input),
