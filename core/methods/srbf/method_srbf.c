@@ -524,14 +524,14 @@ static int lights_build(const method_build_in *in, cache_value *out, glint_err *
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     memset(&m, 0, sizeof m);
     progress(in, "environment", 0.1);
-    if ((rc = env_resolve(p->env, &m, err))) {
+    /* (kept by env_prepare: the scene's base renders under the same map at
+     * the same settings cut it already) */
+    if ((rc = env_prepare(p->env, ENV_CUT_MEDIAN, p->lights, psi, 1.0, &m, &x->l, err))) {
         glint_err_prefix(err, "params.env '%s'", p->env);
         free(x);
         return rc;
     }
-    rc = env_compress(&m, ENV_CUT_MEDIAN, p->lights, psi, 1.0, &x->l, err);
-    if (!rc)
-        rc = env_compress_error(&m, &x->l, psi, 1.0, &x->e, err);
+    rc = env_compress_error(&m, &x->l, psi, 1.0, &x->e, err);
     snprintf(x->name, sizeof x->name, "%s", m.name);
     x->clamped = m.clamped;
     x->nonfinite = m.nonfinite;
