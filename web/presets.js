@@ -75,7 +75,8 @@ async function applyPreset() {
     for (let i = 0; i < S.views.length; i++) {
       const bytes = await next;
       next = i + 1 < S.views.length ? ahead(S.views[i + 1]) : null;
-      await S.uploadImage(S.views[i].k, await decodeImage(bytes));
+      // glintd's own file goes back as it came: decoded for the canvas, not encoded again
+      await S.uploadImage(S.views[i].k, await decodeImage(bytes), new Uint8Array(bytes));
       btn.textContent = `${++n} of ${S.views.length}…`;
     }
     toast('Every view painted', `${n} views now show ${p.name}; edit them, then fit`);

@@ -357,9 +357,10 @@ export class Session extends EventTarget {
   }
 
   // PUT an image as view k's painting; the echo is recognized by its seq.
-  async putImage(k, image, undo) {
+  // (encoded: the image's OpenEXR file when the caller has it already)
+  async putImage(k, image, undo, encoded) {
     const v = this.views[k];
-    const bytes = encodeEXR(image);
+    const bytes = encoded || encodeEXR(image);
     return this.chain(async () => {
       v.state = 'putting';              // events for the view wait until we know our seq
       try {
@@ -375,12 +376,13 @@ export class Session extends EventTarget {
     });
   }
 
-  // A dropped photo (already at the raster size) becomes the painting.
-  async uploadImage(k, image) {
+  // A dropped photo (already at the raster size) becomes the painting;
+  // encoded: its OpenEXR file, sent as it is (a finish glintd rendered).
+  async uploadImage(k, image, encoded) {
     const v = this.views[k];
     await this.settle(k);
     const entry = { kind: 'painting', image, before: cloneImage(v.conf), seq: null };
-    const r = await this.putImage(k, image, false);
+    const r = await this.putImage(k, image, false, encoded);
     entry.seq = r.seq;
     v.undo.push(entry);
     if (v.undo.length > UNDO_DEPTH) v.undo.shift();
