@@ -192,6 +192,62 @@ TEST(jacobian_matches_finite_differences)
     }
 }
 
+/* pbr_eval_chunk (the fit's passes under point lights) gives pbr_eval's
+ * values and derivatives to the last digit, sample by sample, for every
+ * lobe count and Fresnel kind, chunks full and partial, at grazing and
+ * near-normal cosines and at the roughness floor; entries pbr_eval leaves
+ * zero are never written. */
+TEST(chunk_is_pbr_eval_to_the_digit)
+{
+    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
+                               {2, PBR_CONDUCTOR}};
+    static double ci[PBR_CHUNK], co[PBR_CHUNK], ch[PBR_CHUNK], cd[PBR_CHUNK];
+    static double m[3][PBR_CHUNK], J[3][PBR_MAXP][PBR_CHUNK];
+    long compared = 0;
+    for (int i = 0; i < PBR_CHUNK; i++) { /* cosines from 1e-6 to 1 */
+        double t = (i + 0.5) / PBR_CHUNK;
+        ci[i] = i == 0 ? 1e-6 : t;
+        co[i] = i == 1 ? 1e-6 : 1.0 - 0.9 * t;
+        ch[i] = fmod(0.37 + 0.61 * i / PBR_CHUNK, 1.0);
+        cd[i] = fmod(0.11 + 0.83 * i / PBR_CHUNK, 1.0);
+    }
+    for (int t = 0; t < 4; t++)
+        for (int a = 0; a < 2; a++)
+            for (int n = PBR_CHUNK; n >= 1; n -= PBR_CHUNK - 1) {
+                const pbr_spec *sp = &specs[t];
+                double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
+                int np = pbr_np(sp);
+                pbr_bounds(sp, lo, hi);
+                for (int k = 3; k < np; k++)
+                    p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+                if (a)
+                    p[3] = PBR_ALPHA_MIN;
+                for (int c = 0; c < 3; c++)
+                    for (int k = 0; k < PBR_MAXP; k++)
+                        for (int i = 0; i < PBR_CHUNK; i++)
+                            J[c][k][i] = 0.0;
+                pbr_eval_chunk(sp, p, ci, co, ch, cd, n, m, J);
+                for (int i = 0; i < n; i++) {
+                    double m1[3], J1[3][PBR_MAXP];
+                    pbr_eval(sp, p, ci[i], co[i], ch[i], cd[i], m1, J1);
+                    for (int c = 0; c < 3; c++) {
+                        ASSERT(memcmp(&m[c][i], &m1[c], sizeof(double)) == 0);
+                        for (int k = 0; k < np; k++)
+                            ASSERT(memcmp(&J[c][k][i], &J1[c][k], sizeof(double)) == 0);
+                        compared += 1 + np;
+                    }
+                }
+                pbr_eval_chunk(sp, p, ci, co, ch, cd, n, m, NULL); /* values alone */
+                for (int i = 0; i < n; i++) {
+                    double m1[3];
+                    pbr_eval(sp, p, ci[i], co[i], ch[i], cd[i], m1, NULL);
+                    for (int c = 0; c < 3; c++)
+                        ASSERT(memcmp(&m[c][i], &m1[c], sizeof(double)) == 0);
+                }
+            }
+    printf("  %ld values and derivatives compared: equal to the last bit\n", compared);
+}
+
 /* A sample with several lights (pbr_geom's terms): its value is the
  * weighted sum of the terms' single-light values (pbr_eval), and its
  * Jacobian (summed in pbr.c's sums, not per term) matches central
@@ -552,6 +608,7 @@ TEST(material_files_round_trip_and_damage)
 
 TEST_LIST {
     TEST_ENTRY(jacobian_matches_finite_differences),
+    TEST_ENTRY(chunk_is_pbr_eval_to_the_digit),
     TEST_ENTRY(terms_sum_and_their_jacobian),
     TEST_ENTRY(recovers_its_own_parameters),
     TEST_ENTRY(a_start_of_its_own),

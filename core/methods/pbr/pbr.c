@@ -139,6 +139,98 @@ void pbr_eval(const pbr_spec *sp, const double *p, double ci, double co, double 
         m[c] = f[c] * ci;
 }
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define PBR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define PBR_CLONES
+#endif
+
+/* One lobe's D V (and d(D V)/d alpha when ddv is not NULL) across n
+ * samples: ggx_dv's expressions. */
+PBR_CLONES static void dv_chunk(double alpha, const double *restrict ci, const double *restrict co,
+                                const double *restrict ch, int n, double *restrict dv,
+                                double *restrict ddv)
+{
+    const double a2 = alpha * alpha;
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        double ch2 = ch[i] * ch[i], d = ch2 * (a2 - 1.0) + 1.0;
+        double D = a2 / (M_PI * d * d);
+        double si = sqrt(a2 + (1.0 - a2) * ci[i] * ci[i]),
+               so = sqrt(a2 + (1.0 - a2) * co[i] * co[i]);
+        double Q = co[i] * si + ci[i] * so, V = 0.5 / Q;
+        dv[i] = D * V;
+        if (ddv) {
+            double dD = (d - 2.0 * a2 * ch2) / (M_PI * d * d * d);
+            double dQ = co[i] * (1.0 - ci[i] * ci[i]) / (2.0 * si) +
+                        ci[i] * (1.0 - co[i] * co[i]) / (2.0 * so);
+            double dV = -0.5 * dQ / (Q * Q);
+            ddv[i] = (dD * V + D * dV) * 2.0 * alpha;
+        }
+    }
+}
+
+PBR_CLONES void pbr_eval_chunk(const pbr_spec *sp, const double *p, const double *ci,
+                               const double *co, const double *ch, const double *cd, int n,
+                               double m[3][PBR_CHUNK], double (*J)[PBR_MAXP][PBR_CHUNK])
+{
+    double w5[PBR_CHUNK], f[3][PBR_CHUNK], dv[PBR_CHUNK], ddv[PBR_CHUNK];
+#pragma omp simd
+    for (int i = 0; i < n; i++) {
+        double w = 1.0 - cd[i];
+        w5[i] = w * w * w * w * w;
+    }
+    for (int c = 0; c < 3; c++) {
+        const double kd = p[c] / M_PI;
+#pragma omp simd
+        for (int i = 0; i < n; i++) {
+            f[c][i] = kd;
+            if (J)
+                J[c][c][i] = ci[i] / M_PI;
+        }
+    }
+    for (int l = 0; l < sp->nlobes; l++) {
+        int b = 3 + 5 * l;
+        dv_chunk(p[b], ci, co, ch, n, dv, J ? ddv : NULL);
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            const double nr = p[b + 4], r = (nr - 1.0) / (nr + 1.0), F0 = r * r;
+            const double dF0 = 4.0 * r / ((nr + 1.0) * (nr + 1.0));
+            for (int c = 0; c < 3; c++) {
+                const double ks = p[b + 1 + c];
+#pragma omp simd
+                for (int i = 0; i < n; i++) {
+                    double F = F0 + (1.0 - F0) * w5[i];
+                    f[c][i] += ks * dv[i] * F;
+                    if (J) {
+                        J[c][b][i] = ci[i] * ks * ddv[i] * F;
+                        J[c][b + 1 + c][i] = ci[i] * dv[i] * F;
+                        J[c][b + 4][i] = ci[i] * ks * dv[i] * (1.0 - w5[i]) * dF0;
+                    }
+                }
+            }
+        } else {
+            const double ks = p[b + 1];
+            for (int c = 0; c < 3; c++) {
+                const double F0 = p[b + 2 + c];
+#pragma omp simd
+                for (int i = 0; i < n; i++) {
+                    double F = F0 + (1.0 - F0) * w5[i];
+                    f[c][i] += ks * dv[i] * F;
+                    if (J) {
+                        J[c][b][i] = ci[i] * ks * ddv[i] * F;
+                        J[c][b + 1][i] = ci[i] * dv[i] * F;
+                        J[c][b + 2 + c][i] = ci[i] * ks * dv[i] * (1.0 - w5[i]);
+                    }
+                }
+            }
+        }
+    }
+    for (int c = 0; c < 3; c++)
+#pragma omp simd
+        for (int i = 0; i < n; i++)
+            m[c][i] = f[c][i] * ci[i];
+}
+
 void pbr_lobes_of(const pbr_spec *sp, const double *p, pbr_lobe *lobes)
 {
     for (int l = 0; l < sp->nlobes; l++) {

@@ -102,6 +102,17 @@ void pbr_bounds(const pbr_spec *sp, double *lo, double *hi);
 void pbr_eval(const pbr_spec *sp, const double *p, double ci, double co, double ch, double cd,
               double m[3], double J[3][PBR_MAXP]);
 
+/* pbr_eval over n <= PBR_CHUNK point-lit samples at once, their cosines
+ * ci[0..n-1] and so on: OUT m[c][i] and, when J is not NULL, J[c][k][i]
+ * for the k pbr_eval sets (the caller zeroes J once: the others are never
+ * written).  pbr_eval's expressions in its order, sample by sample, so the
+ * values are its to the last digit; the samples are taken with vector
+ * instructions. */
+#define PBR_CHUNK 64
+void pbr_eval_chunk(const pbr_spec *sp, const double *p, const double *ci, const double *co,
+                    const double *ch, const double *cd, int n, double m[3][PBR_CHUNK],
+                    double (*J)[PBR_MAXP][PBR_CHUNK]);
+
 /* The value of sample i of g (OUT m[3]) and, when J is not NULL, its
  * derivatives (OUT J[c][k]): pbr_eval at its one light, or the weighted sum
  * over its terms. */

@@ -167,6 +167,22 @@ static void f_block(void *ctx, int b)
     double ss = 0.0;
     int i0, i1;
     block_range(g->n, b, &i0, &i1);
+    if (!g->off) { /* point lights: the values a chunk at a time, summed as below */
+        double mc[3][PBR_CHUNK];
+        for (int i = i0; i < i1; i += PBR_CHUNK) {
+            int n = i1 - i < PBR_CHUNK ? i1 - i : PBR_CHUNK;
+            pbr_eval_chunk(cx->sp, ps->p, g->ci + i, g->co + i, g->ch + i, g->cd + i, n, mc, NULL);
+            for (int j = 0; j < n; j++)
+                for (int c = 0; c < 3; c++) {
+                    size_t o = 3 * (size_t)(i + j) + c;
+                    double r = mc[c][j] - cx->s->y[o];
+                    ps->v->data[o] = r;
+                    ss += r * r;
+                }
+        }
+        ps->ss[b] = ss;
+        return;
+    }
     for (int i = i0; i < i1; i++) {
         double m[3];
         pbr_sample_eval(cx->sp, ps->p, g, i, m, NULL);
@@ -197,6 +213,36 @@ static int lm_f(const gsl_vector *x, void *data, gsl_vector *f)
     return isfinite(ss) ? GSL_SUCCESS : GSL_EDOM;
 }
 
+/* Sample i's rows of J (times dp/du, in place) into J'u or Ju, and J'J. */
+static void df_sample(const pass *ps, int i, double J[3][PBR_MAXP], double (*A)[PBR_MAXP],
+                      double *jtu)
+{
+    int np = ps->cx->np;
+    for (int c = 0; c < 3; c++) {
+        double *row = J[c];
+        size_t r = 3 * (size_t)i + c;
+        for (int k = 0; k < np; k++)
+            row[k] *= ps->dpdu[k];
+        if (ps->u && ps->v) {
+            if (ps->trans) {
+                double ur = gsl_vector_get(ps->u, r);
+                for (int k = 0; k < np; k++)
+                    jtu[k] += row[k] * ur;
+            } else {
+                double sv = 0.0;
+                for (int k = 0; k < np; k++)
+                    sv += row[k] * gsl_vector_get(ps->u, (size_t)k);
+                gsl_vector_set(ps->v, r, sv);
+            }
+        }
+        if (ps->want_jtj)
+            for (int a = 0; a < np; a++)
+                if (row[a] != 0.0)
+                    for (int q = 0; q <= a; q++)
+                        A[a][q] += row[a] * row[q];
+    }
+}
+
 static void df_block(void *ctx, int b)
 {
     pass *ps = ctx;
@@ -207,32 +253,29 @@ static void df_block(void *ctx, int b)
     memset(ps->A[b], 0, sizeof ps->A[b]);
     memset(ps->jtu[b], 0, sizeof ps->jtu[b]);
     block_range(g->n, b, &i0, &i1);
+    if (!g->off) {
+        /* point lights: J a chunk at a time (zeroed once: pbr_eval_chunk
+         * writes the same entries every time), each sample's rows then
+         * taken in order as below */
+        double mc[3][PBR_CHUNK], Jc[3][PBR_MAXP][PBR_CHUNK];
+        memset(Jc, 0, sizeof Jc);
+        for (int i = i0; i < i1; i += PBR_CHUNK) {
+            int n = i1 - i < PBR_CHUNK ? i1 - i : PBR_CHUNK;
+            pbr_eval_chunk(cx->sp, ps->p, g->ci + i, g->co + i, g->ch + i, g->cd + i, n, mc, Jc);
+            for (int j = 0; j < n; j++) {
+                double J[3][PBR_MAXP];
+                for (int c = 0; c < 3; c++)
+                    for (int k = 0; k < np; k++)
+                        J[c][k] = Jc[c][k][j];
+                df_sample(ps, i + j, J, A, jtu);
+            }
+        }
+        return;
+    }
     for (int i = i0; i < i1; i++) {
         double m[3], J[3][PBR_MAXP];
         pbr_sample_eval(cx->sp, ps->p, g, i, m, J);
-        for (int c = 0; c < 3; c++) {
-            double *row = J[c];
-            size_t r = 3 * (size_t)i + c;
-            for (int k = 0; k < np; k++)
-                row[k] *= ps->dpdu[k];
-            if (ps->u && ps->v) {
-                if (ps->trans) {
-                    double ur = gsl_vector_get(ps->u, r);
-                    for (int k = 0; k < np; k++)
-                        jtu[k] += row[k] * ur;
-                } else {
-                    double sv = 0.0;
-                    for (int k = 0; k < np; k++)
-                        sv += row[k] * gsl_vector_get(ps->u, (size_t)k);
-                    gsl_vector_set(ps->v, r, sv);
-                }
-            }
-            if (ps->want_jtj)
-                for (int a = 0; a < np; a++)
-                    if (row[a] != 0.0)
-                        for (int q = 0; q <= a; q++)
-                            A[a][q] += row[a] * row[q];
-        }
+        df_sample(ps, i, J, A, jtu);
     }
 }
 
