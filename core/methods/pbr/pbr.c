@@ -283,27 +283,37 @@ typedef struct term_sums {
 static void sums_of(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, int deriv,
                     term_sums *S)
 {
+    /* each lobe's D V (and its derivative) for a chunk of terms at once
+     * (dv_chunk: ggx_dv's expressions), then the sums term by term in
+     * order, as one term at a time would make them */
+    double w5[PBR_CHUNK], dv[PBR_MAX_LOBES][PBR_CHUNK], ddv[PBR_MAX_LOBES][PBR_CHUNK];
     memset(S, 0, sizeof *S);
-    for (int t = g->off[i]; t < g->off[i + 1]; t++) {
-        const float *w = g->w + 3 * (size_t)t;
-        double ci = g->ci[t], w5 = 1.0 - g->cd[t];
-        double wc[3] = {w[0] * ci, w[1] * ci, w[2] * ci};
-        w5 = w5 * w5 * w5 * w5 * w5;
-        for (int c = 0; c < 3; c++)
-            S->S1[c] += wc[c];
-        for (int l = 0; l < sp->nlobes; l++) {
-            double dv, ddv = 0.0;
-            ggx_dv(p[3 + 5 * l], ci, g->co[t], g->ch[t], &dv, deriv ? &ddv : NULL);
-            for (int c = 0; c < 3; c++) {
-                double a = wc[c] * dv;
-                S->A[l][c] += a * (1.0 - w5);
-                S->B[l][c] += a * w5;
-                if (deriv) {
-                    double ad = wc[c] * ddv;
-                    S->Ad[l][c] += ad * (1.0 - w5);
-                    S->Bd[l][c] += ad * w5;
+    for (int t0 = g->off[i]; t0 < g->off[i + 1]; t0 += PBR_CHUNK) {
+        int n = g->off[i + 1] - t0 < PBR_CHUNK ? g->off[i + 1] - t0 : PBR_CHUNK;
+        for (int j = 0; j < n; j++) {
+            double w = 1.0 - g->cd[t0 + j];
+            w5[j] = w * w * w * w * w;
+        }
+        for (int l = 0; l < sp->nlobes; l++)
+            dv_chunk(p[3 + 5 * l], g->ci + t0, g->co + t0, g->ch + t0, n, dv[l],
+                     deriv ? ddv[l] : NULL);
+        for (int j = 0; j < n; j++) {
+            const float *w = g->w + 3 * (size_t)(t0 + j);
+            double ci = g->ci[t0 + j];
+            double wc[3] = {w[0] * ci, w[1] * ci, w[2] * ci};
+            for (int c = 0; c < 3; c++)
+                S->S1[c] += wc[c];
+            for (int l = 0; l < sp->nlobes; l++)
+                for (int c = 0; c < 3; c++) {
+                    double a = wc[c] * dv[l][j];
+                    S->A[l][c] += a * (1.0 - w5[j]);
+                    S->B[l][c] += a * w5[j];
+                    if (deriv) {
+                        double ad = wc[c] * ddv[l][j];
+                        S->Ad[l][c] += ad * (1.0 - w5[j]);
+                        S->Bd[l][c] += ad * w5[j];
+                    }
                 }
-            }
         }
     }
 }
