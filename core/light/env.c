@@ -338,18 +338,26 @@ int env_spec_check(const char *spec, glint_err *err)
     return 0;
 }
 
+/* Whether spec names a built-in ("NAME" or "builtin:NAME"); OUT *name:
+ * spec without its "builtin:" (spec itself when it has none). */
+static int is_builtin(const char *spec, const char **name)
+{
+    *name = strncmp(spec, "builtin:", 8) ? spec : spec + 8;
+    for (int i = 0; builtins[i]; i++)
+        if (!strcmp(*name, builtins[i]))
+            return 1;
+    return 0;
+}
+
 int env_spec_lookup(const char *spec, glint_err *err)
 {
     char path[4096];
-    const char *name = spec;
+    const char *name;
     int rc;
     if ((rc = env_spec_check(spec, err)))
         return rc;
-    if (!strncmp(spec, "builtin:", 8))
-        name = spec + 8;
-    for (int i = 0; builtins[i]; i++)
-        if (!strcmp(name, builtins[i]))
-            return 0;
+    if (is_builtin(spec, &name))
+        return 0;
     if (name != spec)
         return glint_err_set(err, GLINT_ENOTFOUND, "no built-in environment '%s' (built-ins: %s)",
                              name, env_builtin_names());
@@ -362,18 +370,13 @@ int env_spec_lookup(const char *spec, glint_err *err)
 int env_resolve(const char *spec, env_map *out, glint_err *err)
 {
     char path[4096];
-    const char *name = spec;
+    const char *name;
     int rc;
     memset(out, 0, sizeof *out);
     if ((rc = env_spec_check(spec, err)))
         return rc;
-    if (!strncmp(spec, "builtin:", 8))
-        name = spec + 8;
-    for (int i = 0; builtins[i]; i++)
-        if (!strcmp(name, builtins[i]))
-            return env_builtin(name, 512, 256, out, err);
-    if (name != spec)
-        return env_builtin(name, 512, 256, out, err); /* the error names the built-ins */
+    if (is_builtin(spec, &name) || name != spec) /* (an unknown one: the error names them) */
+        return env_builtin(name, 512, 256, out, err);
     if (!resolver)
         return glint_err_set(err, GLINT_ENOTFOUND, "unknown environment '%s' (built-ins: %s)",
                              spec, env_builtin_names());
@@ -388,18 +391,15 @@ int env_resolve(const char *spec, env_map *out, glint_err *err)
 int env_identity(const char *spec, char *out, size_t len, glint_err *err)
 {
     char path[4096];
-    const char *name = spec;
+    const char *name;
     struct stat st;
     int rc;
     if ((rc = env_spec_check(spec, err)))
         return rc;
-    if (!strncmp(spec, "builtin:", 8))
-        name = spec + 8;
-    for (int i = 0; builtins[i]; i++)
-        if (!strcmp(name, builtins[i])) {
-            snprintf(out, len, "builtin:%s", name);
-            return 0;
-        }
+    if (is_builtin(spec, &name)) {
+        snprintf(out, len, "builtin:%s", name);
+        return 0;
+    }
     if (name != spec || !resolver)
         return env_spec_lookup(spec, err); /* its error */
     if ((rc = resolver(spec, path, sizeof path, err)))

@@ -160,18 +160,29 @@ static int info_finite(const json_t *j)
     return ok;
 }
 
+/* Every lobe count and Fresnel kind, and parameters inside their bounds
+ * for each (OUT p, lo, hi; returns pbr_np). */
+static const pbr_spec SPECS[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
+                                  {2, PBR_CONDUCTOR}};
+static int params_inside(const pbr_spec *sp, double *p, double *lo, double *hi)
+{
+    int np = pbr_np(sp);
+    pbr_bounds(sp, lo, hi);
+    p[0] = 0.3;
+    p[1] = 0.5;
+    p[2] = 0.2;
+    for (int k = 3; k < np; k++)
+        p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+    return np;
+}
+
 TEST(jacobian_matches_finite_differences)
 {
-    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
-                               {2, PBR_CONDUCTOR}};
     const double geo[3][4] = {{0.9, 0.7, 0.98, 0.95}, {0.3, 0.8, 0.7, 0.6}, {0.15, 0.2, 0.5, 0.3}};
     for (int t = 0; t < 4; t++) {
-        const pbr_spec *sp = &specs[t];
-        double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
-        int np = pbr_np(sp);
-        pbr_bounds(sp, lo, hi);
-        for (int k = 3; k < np; k++)
-            p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+        const pbr_spec *sp = &SPECS[t];
+        double p[PBR_MAXP] = {0}, lo[PBR_MAXP], hi[PBR_MAXP];
+        int np = params_inside(sp, p, lo, hi);
         for (int gi = 0; gi < 3; gi++) {
             double m[3], J[3][PBR_MAXP];
             const double *q = geo[gi];
@@ -199,8 +210,6 @@ TEST(jacobian_matches_finite_differences)
  * zero are never written. */
 TEST(chunk_is_pbr_eval_to_the_digit)
 {
-    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
-                               {2, PBR_CONDUCTOR}};
     static double ci[PBR_CHUNK], co[PBR_CHUNK], ch[PBR_CHUNK], cd[PBR_CHUNK];
     static double m[3][PBR_CHUNK], J[3][PBR_MAXP][PBR_CHUNK];
     long compared = 0;
@@ -214,12 +223,9 @@ TEST(chunk_is_pbr_eval_to_the_digit)
     for (int t = 0; t < 4; t++)
         for (int a = 0; a < 2; a++)
             for (int n = PBR_CHUNK; n >= 1; n -= PBR_CHUNK - 1) {
-                const pbr_spec *sp = &specs[t];
-                double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
-                int np = pbr_np(sp);
-                pbr_bounds(sp, lo, hi);
-                for (int k = 3; k < np; k++)
-                    p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+                const pbr_spec *sp = &SPECS[t];
+                double p[PBR_MAXP] = {0}, lo[PBR_MAXP], hi[PBR_MAXP];
+                int np = params_inside(sp, p, lo, hi);
                 if (a)
                     p[3] = PBR_ALPHA_MIN;
                 for (int c = 0; c < 3; c++)
@@ -254,8 +260,6 @@ TEST(chunk_is_pbr_eval_to_the_digit)
  * differences, for every lobe count and Fresnel kind. */
 TEST(terms_sum_and_their_jacobian)
 {
-    const pbr_spec specs[4] = {{1, PBR_DIELECTRIC}, {1, PBR_CONDUCTOR}, {2, PBR_DIELECTRIC},
-                               {2, PBR_CONDUCTOR}};
     /* two samples: three terms, then one */
     double ci[4] = {0.9, 0.3, 0.15, 0.6}, co[4] = {0.7, 0.7, 0.7, 0.4};
     double ch[4] = {0.98, 0.7, 0.5, 0.9}, cd[4] = {0.95, 0.6, 0.3, 0.8};
@@ -264,12 +268,9 @@ TEST(terms_sum_and_their_jacobian)
     pbr_geom g = {2, ci, co, ch, cd, off, w};
     ASSERT_EQ(pbr_geom_terms(&g), 4);
     for (int t = 0; t < 4; t++) {
-        const pbr_spec *sp = &specs[t];
-        double p[PBR_MAXP] = {0.3, 0.5, 0.2}, lo[PBR_MAXP], hi[PBR_MAXP];
-        int np = pbr_np(sp);
-        pbr_bounds(sp, lo, hi);
-        for (int k = 3; k < np; k++)
-            p[k] = lo[k] + (hi[k] - lo[k]) * (0.1 + 0.05 * k) / (k < 8 ? 1.0 : 10.0);
+        const pbr_spec *sp = &SPECS[t];
+        double p[PBR_MAXP] = {0}, lo[PBR_MAXP], hi[PBR_MAXP];
+        int np = params_inside(sp, p, lo, hi);
         for (int i = 0; i < g.n; i++) {
             double m[3], J[3][PBR_MAXP], sum[3] = {0, 0, 0};
             pbr_sample_eval(sp, p, &g, i, m, J);

@@ -190,37 +190,23 @@ PBR_CLONES void pbr_eval_chunk(const pbr_spec *sp, const double *p, const double
         }
     }
     for (int l = 0; l < sp->nlobes; l++) {
-        int b = 3 + 5 * l;
+        /* dielectric: ks per channel, F0 of the ior (dF0/dior); conductor:
+         * one ks, F0 per channel (d/dF0: the same with a factor 1, exact) */
+        const int b = 3 + 5 * l, die = sp->fresnel == PBR_DIELECTRIC;
+        const double nr = p[b + 4], r = (nr - 1.0) / (nr + 1.0);
+        const double dF0 = die ? 4.0 * r / ((nr + 1.0) * (nr + 1.0)) : 1.0;
         dv_chunk(p[b], ci, co, ch, n, dv, J ? ddv : NULL);
-        if (sp->fresnel == PBR_DIELECTRIC) {
-            const double nr = p[b + 4], r = (nr - 1.0) / (nr + 1.0), F0 = r * r;
-            const double dF0 = 4.0 * r / ((nr + 1.0) * (nr + 1.0));
-            for (int c = 0; c < 3; c++) {
-                const double ks = p[b + 1 + c];
+        for (int c = 0; c < 3; c++) {
+            const double ks = die ? p[b + 1 + c] : p[b + 1], F0 = die ? r * r : p[b + 2 + c];
+            const int kk = die ? b + 1 + c : b + 1, kf = die ? b + 4 : b + 2 + c;
 #pragma omp simd
-                for (int i = 0; i < n; i++) {
-                    double F = F0 + (1.0 - F0) * w5[i];
-                    f[c][i] += ks * dv[i] * F;
-                    if (J) {
-                        J[c][b][i] = ci[i] * ks * ddv[i] * F;
-                        J[c][b + 1 + c][i] = ci[i] * dv[i] * F;
-                        J[c][b + 4][i] = ci[i] * ks * dv[i] * (1.0 - w5[i]) * dF0;
-                    }
-                }
-            }
-        } else {
-            const double ks = p[b + 1];
-            for (int c = 0; c < 3; c++) {
-                const double F0 = p[b + 2 + c];
-#pragma omp simd
-                for (int i = 0; i < n; i++) {
-                    double F = F0 + (1.0 - F0) * w5[i];
-                    f[c][i] += ks * dv[i] * F;
-                    if (J) {
-                        J[c][b][i] = ci[i] * ks * ddv[i] * F;
-                        J[c][b + 1][i] = ci[i] * dv[i] * F;
-                        J[c][b + 2 + c][i] = ci[i] * ks * dv[i] * (1.0 - w5[i]);
-                    }
+            for (int i = 0; i < n; i++) {
+                double F = F0 + (1.0 - F0) * w5[i];
+                f[c][i] += ks * dv[i] * F;
+                if (J) {
+                    J[c][b][i] = ci[i] * ks * ddv[i] * F;
+                    J[c][kk][i] = ci[i] * dv[i] * F;
+                    J[c][kf][i] = ci[i] * ks * dv[i] * (1.0 - w5[i]) * dF0;
                 }
             }
         }
