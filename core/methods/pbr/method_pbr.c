@@ -124,6 +124,48 @@ static const method_level pbr_levels[] = {
 
 /* ---- the report ----------------------------------------------------------------------- */
 
+/* The view angles the highlight's energy is checked at (degrees). */
+static const double ENERGY_DEG[] = {0.0, 30.0, 60.0, 75.0, 85.0};
+
+/* How much light the fitted highlight reflects (pbr_spec_albedo at the
+ * angles above): its largest directional albedo, where, in which channel;
+ * above 1 (with 2% for the sampling) a note says so (ks is bounded only
+ * by PBR_KS_MAX: the fit follows the painting rather than clamp it, and
+ * where no grazing view was painted, ks and F0 trade against each other:
+ * sgd:nickel from 12 point-lit views comes back at 401% at 85 degrees,
+ * dielectric or conductor). */
+static json_t *energy_report(const pbr_spec *sp, const double *p, json_t *notes)
+{
+    static const char *const ch = "rgb";
+    pbr_lobe lobes[PBR_MAX_LOBES];
+    double mx = 0.0, at = 0.0;
+    int mc = 0;
+    pbr_lobes_of(sp, p, lobes);
+    for (size_t a = 0; a < sizeof ENERGY_DEG / sizeof *ENERGY_DEG; a++) {
+        double e[3];
+        pbr_spec_albedo(lobes, sp->nlobes, cos(ENERGY_DEG[a] * M_PI / 180.0), e);
+        for (int c = 0; c < 3; c++)
+            if (e[c] > mx) {
+                mx = e[c];
+                at = ENERGY_DEG[a];
+                mc = c;
+            }
+    }
+    if (mx > 1.02) {
+        char buf[400];
+        snprintf(buf, sizeof buf,
+                 "the highlight reflects more light than arrives: %.0f%% in %c for a view %.0f "
+                 "degrees from the normal, where a physical one reflects at most 100%%. The "
+                 "painting asks for a brighter highlight than a physical material has, or no "
+                 "painted view shows those angles and the fit's highlight strength and Fresnel "
+                 "term trade against each other there",
+                 100.0 * mx, ch[mc], at);
+        json_array_append_new(notes, json_string(buf));
+    }
+    return json_pack("{s:f, s:f, s:s#}", "specular_albedo_max", mx, "view_deg", at, "channel",
+                     ch + mc, 1);
+}
+
 json_t *pbr_report_determination(const pbr_spec *sp, const pbr_fit_result *r, int black)
 {
     json_t *det = json_object(), *und = json_array(), *bnd = json_array(), *notes = json_array();
@@ -162,8 +204,8 @@ json_t *pbr_report_determination(const pbr_spec *sp, const pbr_fit_result *r, in
         json_array_append_new(notes, json_string(
             "the views do not determine the parameters listed in undetermined (no highlight, "
             "or no grazing view for the Fresnel term): their values are arbitrary"));
-    return json_pack("{s:o, s:o, s:o, s:o}", "determined", det, "undetermined", und,
-                     "at_bound", bnd, "notes", notes);
+    return json_pack("{s:o, s:o, s:o, s:o, s:o}", "determined", det, "undetermined", und,
+                     "at_bound", bnd, "energy", energy_report(sp, r->p, notes), "notes", notes);
 }
 
 json_t *pbr_report_fit(const pbr_fit_result *r)

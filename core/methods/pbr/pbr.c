@@ -249,6 +249,49 @@ void pbr_brdf(const double kd[3], const pbr_lobe *lobes, int nlobes, double ci, 
     }
 }
 
+/* The GGX lobe's two halves of the white-furnace integral at a view cos_o
+ * (OUT A: times 1 - w5, B: times w5), by importance sampling of D: h
+ * drawn with density D (n.h), wi its mirror of wo, each sample weighing
+ * f ci / pdf(wi) = 4 V ci (wo.h) / (n.h). */
+#define ALBEDO_N 4096
+static void lobe_split(double alpha, double cos_o, double *A, double *B)
+{
+    double a2 = alpha * alpha, so = sqrt(fmax(0.0, 1.0 - cos_o * cos_o)), sa = 0.0, sb = 0.0;
+    double sqo = sqrt(a2 + (1.0 - a2) * cos_o * cos_o);
+    for (unsigned k = 0; k < ALBEDO_N; k++) {
+        unsigned r = k; /* the radical inverse of k in base 2 */
+        double u1 = (k + 0.5) / ALBEDO_N, u2;
+        r = (r << 16) | (r >> 16);
+        r = ((r & 0x00ff00ffu) << 8) | ((r & 0xff00ff00u) >> 8);
+        r = ((r & 0x0f0f0f0fu) << 4) | ((r & 0xf0f0f0f0u) >> 4);
+        r = ((r & 0x33333333u) << 2) | ((r & 0xccccccccu) >> 2);
+        r = ((r & 0x55555555u) << 1) | ((r & 0xaaaaaaaau) >> 1);
+        u2 = r * 2.3283064365386963e-10;
+        double ch = sqrt((1.0 - u1) / (1.0 + (a2 - 1.0) * u1)), sh = sqrt(fmax(0.0, 1.0 - ch * ch));
+        double hx = sh * cos(2.0 * M_PI * u2), hz = ch;
+        double voh = so * hx + cos_o * hz, ci = 2.0 * voh * hz - cos_o;
+        if (!(ci > 0.0 && voh > 0.0))
+            continue;
+        double si = sqrt(a2 + (1.0 - a2) * ci * ci), V = 0.5 / (cos_o * si + ci * sqo);
+        double w = 4.0 * V * ci * voh / ch, m = 1.0 - voh, w5 = m * m * m * m * m;
+        sa += w * (1.0 - w5);
+        sb += w * w5;
+    }
+    *A = sa / ALBEDO_N;
+    *B = sb / ALBEDO_N;
+}
+
+void pbr_spec_albedo(const pbr_lobe *lobes, int nlobes, double cos_o, double spec[3])
+{
+    spec[0] = spec[1] = spec[2] = 0.0;
+    for (int l = 0; l < nlobes; l++) {
+        double A, B;
+        lobe_split(lobes[l].alpha, cos_o, &A, &B);
+        for (int c = 0; c < 3; c++)
+            spec[c] += lobes[l].ks[c] * (lobes[l].f0[c] * A + B);
+    }
+}
+
 long pbr_geom_terms(const pbr_geom *g)
 {
     return g->off ? g->off[g->n] : g->n;

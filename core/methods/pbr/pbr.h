@@ -132,6 +132,18 @@ void pbr_brdf(const double kd[3], const pbr_lobe *lobes, int nlobes, double ci, 
 /* F0 of a dielectric of index ior. */
 double pbr_f0_of_ior(double ior);
 
+/* The directional albedo of the lobes at a view cos_o from the normal
+ * (OUT spec[3]): the fraction of light arriving from everywhere (a white
+ * furnace) that the lobes reflect toward it, the integral of the specular
+ * part of f times n.wi over the hemisphere, by reciprocity also what they
+ * reflect of light arriving from that direction.  Per lobe ks (F0 A + B),
+ * A and B the GGX lobe's Schlick split (B the part weighted by w5),
+ * integrated by importance sampling of D (4,096 Hammersley points; within
+ * 0.5% of a quadrature of 2.9 million cells at alpha 0.1..1, test_pbr).  The
+ * lobes of a physical material stay at or below 1 (F <= 1, and one GGX
+ * lobe with Smith shadowing loses energy); the Lambert term adds kd. */
+void pbr_spec_albedo(const pbr_lobe *lobes, int nlobes, double cos_o, double spec[3]);
+
 /* ---- the fit ----------------------------------------------------------------------- */
 
 typedef struct pbr_fit_opts {
