@@ -894,7 +894,7 @@ typedef struct start_job {
     pbr_fit_result *out;
     int lit, max_iter;
     double p[PBR_MAX_STARTS][PBR_MAXP];
-    int nomem;
+    int nomem[PBR_MAX_STARTS]; /* each start's own: tasks write only theirs */
 } start_job;
 
 static void start_task(void *ctx, int s)
@@ -929,7 +929,7 @@ static void start_task(void *ctx, int s)
     }
     if (!(w = lm_alloc(cx->s->g.n, np))) {
         sr->cost = INFINITY;
-        job->nomem = 1; /* (one task per start: no other writes it but to 1) */
+        job->nomem[s] = 1;
         return;
     }
     lm_run(cx, w, job->max_iter, p, sr);
@@ -973,12 +973,16 @@ int pbr_fit(const pbr_spec *sp, const pbr_geom *g, const float *y, const pbr_fit
     cx.s = use_sub ? &sub : &all;
     out->nstarts = starts;
     {
-        start_job job = {&cx, o, out, lit, use_sub && o->max_iter > cap ? cap : o->max_iter, {{0}}, 0};
+        start_job job = {&cx, o, out, lit, use_sub && o->max_iter > cap ? cap : o->max_iter,
+                         {{0}}, {0}};
+        int nomem = 0;
         /* the starts are independent: run side by side on the pool (their
          * passes then serial), each in its own workspace; the best is taken
          * in start order, as one after another would */
         par_run(starts, start_task, &job);
-        if (job.nomem) {
+        for (int s = 0; s < starts; s++)
+            nomem |= job.nomem[s];
+        if (nomem) {
             rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
             goto done;
         }
