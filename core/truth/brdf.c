@@ -487,7 +487,8 @@ typedef struct ct_point {
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 /* no-trapping-math: the clamps become selects (the values are the same) */
-#define CT_CLONES __attribute__((target_clones("avx512f", "avx2", "default"), optimize("no-trapping-math")))
+#define CT_CLONES                                                                          \
+    __attribute__((target_clones("avx512f", "avx2", "default"), optimize("no-trapping-math")))
 #else
 #define CT_CLONES
 #endif
