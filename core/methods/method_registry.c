@@ -13,6 +13,7 @@
 #include "method_pbr_env.h"
 #include "method_pbr_maps.h"
 #include "method_pbr_tab.h"
+#include "method_pbr_tab_env.h"
 #include "method_srbf.h"
 #include "method_tab.h"
 
@@ -26,6 +27,7 @@ const method *const method_builtin[] = {
     &method_pbr_tab,
     &method_pbr_maps,
     &method_pbr_env,
+    &method_pbr_tab_env,
     &method_srbf,
     &method_hf4,
     &method_hf2d,

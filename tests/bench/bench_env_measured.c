@@ -21,10 +21,13 @@
  *   rotated  those views under A turned 120 degrees about the up axis;
  *   other    those views under environment B.
  * A = DIR/envmaps/courtyard.exr, B = DIR/envmaps/sunset.exr (the built-in
- * sky and sunset when absent).  Truths and renders sum 512 median-cut
- * lights of the map (the fits' own 256 are their precomputation: the
- * compression's error is part of what is measured).  The sphere is convex:
- * no shadows.  The error of a set of views is the relative RMS over their
+ * sky and sunset when absent).  Truths and renders sum 256 median-cut
+ * lights of the map (--lights): the lights `glint paint --env`, glintd's
+ * base renders and the fits' precomputation use, so a painting is what an
+ * artist paints over glint's own render of the scene.  With more (512,
+ * 4096) the truths are lit more finely than a fit compresses the map, and
+ * that compression's error is part of what is measured.  The sphere is
+ * convex: no shadows.  The error of a set of views is the relative RMS over their
  * pixels, |render - truth| / |truth|, the material evaluated as previews
  * are (material_eval_preview: srbf's tabulated p(h), within 0.5%).
  * Printed per material the errors, then per method and view count the
@@ -58,7 +61,7 @@
 #define MAXM 64
 #define MAXMAT MEASURED_MAX
 
-static int eval_lights = 512; /* --lights */
+static int eval_lights = 256; /* --lights */
 static const char *sets[8]; /* --set NAME=VALUE: a parameter of every method that has it */
 static int nsets;
 

@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cache.h"
 #include "env.h"
@@ -139,6 +140,68 @@ static inline double rel_diff(const float *a, const float *b, long n)
         den += (double)b[i] * b[i];
     }
     return den > 0.0 ? sqrt(num / den) : sqrt(num);
+}
+
+/* The relative difference between a method's prediction of its fitted
+ * pixels (prep_predict) and the independent render of material m under l
+ * there (OUT *fitted: the values predicted); -1 when out of memory or when
+ * the prediction fails. */
+static inline double predicted_vs_render(const prep *pp, const material *m,
+                                         const env_lights *l, long *fitted)
+{
+    const samples *s = prep_samples(pp);
+    float *pred = malloc(3 * sizeof(float) * (size_t)(s->n ? s->n : 1)), *ref = paint(m, s, l);
+    double num = 0.0, den = 0.0;
+    glint_err e;
+    *fitted = 0;
+    if (!pred || !ref || prep_predict(pp, m, pred, &e)) {
+        free(pred);
+        free(ref);
+        return -1.0;
+    }
+    for (long i = 0; i < 3L * s->n; i++) {
+        double r = ref[i] * s->intensity[i / 3]; /* a prediction is radiance */
+        if (isnan(pred[i]))
+            continue;
+        num += ((double)pred[i] - r) * ((double)pred[i] - r);
+        den += r * r;
+        (*fitted)++;
+    }
+    free(pred);
+    free(ref);
+    *fitted /= 3;
+    return den > 0.0 ? sqrt(num / den) : sqrt(num);
+}
+
+/* m saved into a directory of its own and read back into *back (the
+ * directory removed): the largest relative difference of the two
+ * materials' evaluations at a few direction pairs, or -1 when saving or
+ * reading failed (*back then empty). */
+static inline double saved_and_read_back(const material *m, material *back)
+{
+    char dir[] = "/tmp/glint-env-material-XXXXXX", cmd[128];
+    const double n[3] = {0, 0, 1}, pairs[3][2][3] = {
+        {{0.3, 0.1, 0.948683}, {-0.2, 0.1, 0.974679}},
+        {{0.0, 0.6, 0.8}, {0.0, -0.6, 0.8}},
+        {{0.9, 0.0, 0.43589}, {-0.5, 0.5, 0.707107}}};
+    double worst = 0.0;
+    glint_err e;
+    int rc;
+    memset(back, 0, sizeof *back);
+    if (!mkdtemp(dir))
+        return -1.0;
+    rc = material_save(m, dir, &e) || material_load(dir, back, &e);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    if (system(cmd) != 0 || rc)
+        return -1.0;
+    for (int k = 0; k < 3; k++) {
+        double fa[3], fb[3];
+        material_eval(m, n, pairs[k][0], pairs[k][1], fa);
+        material_eval(back, n, pairs[k][0], pairs[k][1], fb);
+        for (int c = 0; c < 3; c++)
+            worst = fmax(worst, fabs(fa[c] - fb[c]) / (fabs(fa[c]) + 1e-300));
+    }
+    return worst;
 }
 
 #endif

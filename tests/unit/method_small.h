@@ -18,6 +18,7 @@ static const char *const method_small[][2] = {
     {"pbr_maps", "starts=1,components=2,map_res=16,rounds=2"},
     {"srbf", "lights=8,basis_res=2,raster=full,grazing=0"},
     {"pbr_env", "lights=8,starts=1,max_iter=20,raster=full"},
+    {"pbr_tab_env", "lights=8,starts=1,raster=full,res_h=8,res_d=4"},
     {"hf4", "res=8,s_res=4"},
     {"hf2d", "res=8,res_2d=8"},
     {"maps", "res=8,components=2,map_res=16,rounds=2"},

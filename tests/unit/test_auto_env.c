@@ -13,7 +13,7 @@
  *     the held rows' part, summed in another order);
  *   - prep_holdout on one preparation gives for each view the error that
  *     the fold's own preparation and a prediction of the view alone give;
- *   - auto_env reports its four candidates, each measured on the held-out
+ *   - auto_env reports its six candidates, each measured on the held-out
  *     view, takes the first unless a later one gains the threshold, never
  *     answers worse there than the first, and its material renders the
  *     truth on the held-out view;
@@ -361,11 +361,11 @@ TEST(auto_env_chooses_and_reports)
     ASSERT_OK(auto_fit(&truth, NULL, &m, &pp, &e));
     ch = choice_of(&m);
     ASSERT(ch != NULL);
-    ASSERT_EQ(json_array_size(json_object_get(ch, "candidates")), 4);
+    ASSERT_EQ(json_array_size(json_object_get(ch, "candidates")), 6);
     ASSERT(!strcmp(json_string_value(json_object_get(ch, "held_out")), "views"));
     ASSERT_EQ(json_integer_value(json_array_get(json_object_get(ch, "held_out_views"), 0)), 8);
     k = chosen_index(&m);
-    for (int c = 0; c < 4; c++) {
+    for (int c = 0; c < 6; c++) {
         printf("  %-58s held out %.5g painted %.5g %s\n",
                json_string_value(json_object_get(
                    json_array_get(json_object_get(ch, "candidates"), c), "label")),
@@ -377,7 +377,8 @@ TEST(auto_env_chooses_and_reports)
     ASSERT(json_is_true(json_object_get(json_array_get(json_object_get(ch, "candidates"), 0),
                                         "taken")));
     ASSERT(cand_num(&m, k, "held_out_rms") <= cand_num(&m, 0, "held_out_rms"));
-    ASSERT(!strcmp(json_string_value(json_object_get(ch, "chosen")), k == 3 ? "srbf" : "pbr_env"));
+    ASSERT(!strcmp(json_string_value(json_object_get(ch, "chosen")),
+                   k == 5 ? "srbf" : k >= 3 ? "pbr_tab_env" : "pbr_env"));
     ASSERT(json_object_get(m.info, "chosen_params") != NULL);
     /* the truth is pbr_env's model: a pbr material, its diffuse back */
     ASSERT(pbr_material_of(&m) != NULL);
@@ -397,7 +398,7 @@ TEST(two_lobes_take_the_two_lobe_candidate)
     two_lobes(&truth);
     ASSERT(setup() == 0);
     ASSERT_OK(auto_fit(&truth, NULL, &m, &pp, &e));
-    for (int c = 0; c < 4; c++)
+    for (int c = 0; c < 6; c++)
         printf("  candidate %d held out %.5g painted %.5g\n", c, cand_num(&m, c, "held_out_rms"), cand_num(&m, c, "rms_painted"));
     ASSERT_EQ(chosen_index(&m), 2);
     ASSERT_EQ(pbr_material_of(&m)->sp.nlobes, 2);
@@ -424,7 +425,7 @@ TEST(extremes)
     ASSERT_OK(auto_fit(&truth, one, &m, &pp, &e));
     ASSERT(!strcmp(json_string_value(json_object_get(choice_of(&m), "held_out")), "pixels"));
     /* srbf is not tried from one view, and says why */
-    ASSERT_EQ(json_array_size(json_object_get(choice_of(&m), "candidates")), 3);
+    ASSERT_EQ(json_array_size(json_object_get(choice_of(&m), "candidates")), 5);
     ASSERT(!strcmp(json_string_value(json_object_get(
                        json_array_get(json_object_get(choice_of(&m), "not_tried"), 0), "method")),
                    "srbf"));

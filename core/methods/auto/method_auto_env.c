@@ -10,6 +10,7 @@
 
 #include "clock.h"
 #include "method_pbr_env.h"
+#include "method_pbr_tab_env.h"
 #include "method_srbf.h"
 #include "scene.h"
 
@@ -65,10 +66,11 @@ static int auto_env_params_usable(const void *p, const method_source *src, const
 
 /* ---- the candidates ------------------------------------------------------------------ */
 
-enum { C_PBR, C_PBR_METAL, C_PBR_TWO, C_SRBF, NCAND };
+enum { C_PBR, C_PBR_METAL, C_PBR_TWO, C_PBR_TAB, C_PBR_TAB_TWO, C_SRBF, NCAND };
 
 typedef struct cands {
     pbr_env_params pe[3];  /* C_PBR, C_PBR_METAL, C_PBR_TWO */
+    pbr_tab_env_params pt[2]; /* C_PBR_TAB, C_PBR_TAB_TWO */
     srbf_params sr;
 } cands;
 
@@ -76,6 +78,8 @@ static const char *const cand_label[NCAND] = {
     "Physically based, under an environment",
     "Physically based metal, under an environment",
     "Physically based with two highlights, under an environment",
+    "Physical with a painted correction, under an environment",
+    "Physical with two highlights and a painted correction, under an environment",
     "Environment lobes (SRBF)",
 };
 
@@ -99,18 +103,25 @@ static void candidates(const auto_env_params *p, cands *c)
     }
     c->pe[C_PBR_METAL].pbr.fresnel = PBR_CONDUCTOR;
     c->pe[C_PBR_TWO].pbr.lobes = 2;
+    for (int k = 0; k < 2; k++) {
+        method_pbr_tab_env.params_default(&c->pt[k]);
+        env_give(&p->env, &c->pt[k].base.env);
+    }
+    c->pt[1].base.pbr.lobes = 2;
     method_srbf.params_default(&c->sr);
     env_give(&p->env, &c->sr);
 }
 
 static const method *cand_method(int c)
 {
-    return c == C_SRBF ? &method_srbf : &method_pbr_env;
+    return c == C_SRBF ? &method_srbf : c >= C_PBR_TAB ? &method_pbr_tab_env : &method_pbr_env;
 }
 
 static const void *cand_params(const cands *cs, int c)
 {
-    return c == C_SRBF ? (const void *)&cs->sr : (const void *)&cs->pe[c];
+    return c == C_SRBF      ? (const void *)&cs->sr
+           : c >= C_PBR_TAB ? (const void *)&cs->pt[c - C_PBR_TAB]
+                            : (const void *)&cs->pe[c];
 }
 
 /* ---- levels: pbr_env's three, then srbf's four, each as a fit of its own keys it ----- */
@@ -584,8 +595,9 @@ static size_t auto_env_fit_bytes(const void *params, long nsamples)
 {
     cands cs;
     candidates(params, &cs);
-    return method_fit_bytes(&method_pbr_env, &cs.pe[C_PBR_TWO], nsamples) +
-           method_fit_bytes(&method_srbf, &cs.sr, nsamples);
+    size_t a = method_fit_bytes(&method_pbr_env, &cs.pe[C_PBR_TWO], nsamples),
+           b = method_fit_bytes(&method_pbr_tab_env, &cs.pt[1], nsamples);
+    return (a > b ? a : b) + method_fit_bytes(&method_srbf, &cs.sr, nsamples);
 }
 
 /* Each candidate is fitted once on the kept samples and the chosen once
@@ -599,7 +611,7 @@ static double auto_env_fit_seconds(const void *params, long nsamples)
     candidates(params, &cs);
     pe = method_fit_seconds(&method_pbr_env, &cs.pe[C_PBR_TWO], nsamples);
     sr = method_fit_seconds(&method_srbf, &cs.sr, nsamples);
-    return sr + 4.0 * pe;
+    return sr + 4.0 * pe + 4.0 * method_fit_seconds(&method_pbr_tab_env, &cs.pt[1], nsamples);
 }
 
 static int auto_env_holdout_ok(const void *params)
@@ -612,7 +624,8 @@ const method method_auto_env = {
     .name = "auto_env",
     .label = "Choose for me, under an environment",
     .summary = "Lets glint choose among the models fitted under an environment: a plastic "
-        "or paint, a metal, two highlights, or the environment lobes, whichever best "
+        "or paint, a metal, two highlights, a physical fit with a painted correction, or the "
+        "environment lobes, whichever best "
         "predicts a painted view it did not fit.",
     .when = "Use it on a scene painted under an environment when unsure which model the "
         "painting needs: it keeps the simplest unless another is clearly better, and says "
@@ -625,8 +638,9 @@ const method method_auto_env = {
                  "models); the choice is glint's",
     .description =
         "Fits the physically based model under the environment as a dielectric with one "
-        "lobe, as a metal, with two lobes, and the SRBF lobes of Iwasaki et al., each at its "
-        "own settings and on the same precomputation a fit of its own uses, to the painted "
+        "lobe, as a metal, with two lobes, times a painted table over half and difference "
+        "angles on one lobe and on two (pbr_tab_env), and the SRBF lobes of Iwasaki et al., "
+        "each at its own settings and on the same precomputation a fit of its own uses, to the painted "
         "views but those held out (one view in `every`; when one view is painted, its most "
         "grazing pixels, one in `every`), and keeps the first whose error on the held-out "
         "samples is not beaten by a later one by more than `threshold`: never worse there "

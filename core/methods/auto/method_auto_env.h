@@ -8,6 +8,9 @@
  *   pbr_env             one lobe, a dielectric (method_pbr_env.h)
  *   pbr_env conductor   one lobe, a metal's reflectance per channel
  *   pbr_env two lobes   a sharp highlight over a broad sheen, dielectric
+ *   pbr_tab_env         pbr_env times a painted table over half and
+ *                       difference angles (method_pbr_tab_env.h)
+ *   pbr_tab_env two     the same on a two-lobe base
  *   srbf                the SRBF lobes of Iwasaki et al. (method_srbf.h)
  *
  * Held out: one painted view in `every` (the views at every/2, every/2 +
@@ -20,7 +23,7 @@
  *
  * Every candidate reads the same levels as a fit of its own (the same
  * cache keys, in memory and on disk): pbr_env's lights, rows and terms
- * (shared by its three variants) and srbf's energy, lights (pbr_env's, the
+ * (shared by its three variants and pbr_tab_env's two) and srbf's energy, lights (pbr_env's, the
  * same key), rows and transfer, all on every sample.  A candidate is
  * fitted with the held-out samples left out (method_fit_in.held: both
  * methods honour it, so nothing is prepared twice), and measured on them

@@ -11,34 +11,13 @@
 #include "method_pbr_env.h"
 #include "vis.h"
 
-static const char *const fresnel_values[] = {"dielectric", "conductor", NULL};
+const char *const pbr_env_fresnel_values[] = {"dielectric", "conductor", NULL};
 
 #define ENVP(m) offsetof(pbr_env_params, env.m)
 #define PBRP(m) offsetof(pbr_env_params, pbr.m)
 
 static const method_param pbr_env_params_table[] = {
-    SRBF_ENV_LIGHT_PARAMS(ENVP),
-    {.name = "lights", .label = "light samples of the environment", .type = METHOD_PARAM_INT,
-     .affects = "precomputation",
-     .description = "lights the environment is compressed into (median cut): each fitted "
-                    "pixel sums about half of them, so a fit's time grows linearly with it",
-     .offset = ENVP(lights), .min = 1, .max = 4096},
-    {.name = "lobes", .label = "highlight layers", .group = METHOD_GROUP_BASIC,
-     .type = METHOD_PARAM_INT, .affects = "fit",
-     .description = "GGX lobes: 1 (one highlight) or 2 (a sharp highlight over a broad sheen)",
-     .offset = PBRP(lobes), .min = 1, .max = PBR_MAX_LOBES},
-    {.name = "fresnel", .label = "kind of surface", .group = METHOD_GROUP_BASIC,
-     .type = METHOD_PARAM_ENUM, .affects = "fit",
-     .description = "dielectric (plastic, paint, wood: one index of refraction, a tinted "
-                    "highlight weight) or conductor (metal: a reflectance per colour channel)",
-     .offset = PBRP(fresnel), .values = fresnel_values},
-    SRBF_VIS_PARAM(ENVP),
-    {.name = "raster", .label = "pixels per view fitted", .group = METHOD_GROUP_ADVANCED,
-     .type = METHOD_PARAM_TEXT, .affects = "precomputation",
-     .description = "grid of pixels per view that are fitted (each sums the lights it sees); "
-                    "full: every painted pixel",
-     .offset = ENVP(raster), .syntax = "WxH | full", .examples = srbf_raster_examples,
-     .parse = srbf_raster_parse, .format = srbf_raster_format},
+    PBR_ENV_PARAMS(ENVP, PBRP),
     {.name = "starts", .label = "roughnesses tried", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "starting roughnesses of the search (0.05, 0.15, 0.4, then 0.01, 0.7, "

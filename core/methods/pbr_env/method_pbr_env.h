@@ -56,4 +56,35 @@ typedef struct pbr_env_terms {
     double seconds;
 } pbr_env_terms;
 
+/* The parameters of the environment and the model every method fitted on
+ * pbr_env's levels takes (env, env_rotation, env_intensity, lights, lobes,
+ * fresnel, visibility, raster), at offsets ENVP(member of srbf_params) and
+ * PBRP(member of pbr_params) of its own params. */
+extern const char *const pbr_env_fresnel_values[];
+#define PBR_ENV_PARAMS(ENVP, PBRP)                                                            \
+    SRBF_ENV_LIGHT_PARAMS(ENVP),                                                              \
+    {.name = "lights", .label = "light samples of the environment", .type = METHOD_PARAM_INT, \
+     .affects = "precomputation",                                                             \
+     .description = "lights the environment is compressed into (median cut): each fitted "   \
+                    "pixel sums about half of them, so a fit's time grows linearly with it",  \
+     .offset = ENVP(lights), .min = 1, .max = 4096},                                          \
+    {.name = "lobes", .label = "highlight layers", .group = METHOD_GROUP_BASIC,               \
+     .type = METHOD_PARAM_INT, .affects = "fit",                                              \
+     .description = "GGX lobes: 1 (one highlight) or 2 (a sharp highlight over a broad "      \
+                    "sheen)",                                                                 \
+     .offset = PBRP(lobes), .min = 1, .max = PBR_MAX_LOBES},                                  \
+    {.name = "fresnel", .label = "kind of surface", .group = METHOD_GROUP_BASIC,              \
+     .type = METHOD_PARAM_ENUM, .affects = "fit",                                             \
+     .description = "dielectric (plastic, paint, wood: one index of refraction, a tinted "    \
+                    "highlight weight) or conductor (metal: a reflectance per colour "        \
+                    "channel)",                                                               \
+     .offset = PBRP(fresnel), .values = pbr_env_fresnel_values},                              \
+    SRBF_VIS_PARAM(ENVP),                                                                     \
+    {.name = "raster", .label = "pixels per view fitted", .group = METHOD_GROUP_ADVANCED,     \
+     .type = METHOD_PARAM_TEXT, .affects = "precomputation",                                  \
+     .description = "grid of pixels per view that are fitted (each sums the lights it "       \
+                    "sees); full: every painted pixel",                                       \
+     .offset = ENVP(raster), .syntax = "WxH | full", .examples = srbf_raster_examples,        \
+     .parse = srbf_raster_parse, .format = srbf_raster_format}
+
 #endif

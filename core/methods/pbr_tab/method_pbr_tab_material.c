@@ -15,7 +15,7 @@ static const char *const combine_names[] = {"add", "multiply"};
 
 const pbr_tab_material *pbr_tab_material_of(const material *m)
 {
-    return m && m->method == &method_pbr_tab ? m->data : NULL;
+    return m && m->method && m->method->mat == &pbr_tab_material_ops ? m->data : NULL;
 }
 
 static void pbr_tab_free(void *data)

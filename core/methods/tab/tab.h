@@ -167,4 +167,26 @@ typedef struct tab_scaled_opts {
 int tab_solve_scaled(const tab_design *d, const tab_scaled_opts *o, const float *scale,
                      const float *rgb, double *t, tab_solve_report *rep, glint_err *err);
 
+/* ---- a table whose rows are sums ------------------------------------------------------------ */
+
+/* Rows that are not one cell each: a pixel lit by an environment sums its
+ * lights, each with its own cell (and a known function b_c and the
+ * light's power as its scale).  fill writes rows i0 .. i0 + m - 1: A holds
+ * three m x nodes blocks, channel-major and zeroed before the call, with
+ * the row's weight of every node (row i of channel c at A[(c m + i - i0)
+ * nodes]), y[3 (i - i0) + c] the painted value.  Returns 0 or an error. */
+typedef int (*tab_rows_fill)(void *cls, int i0, int m, double *A, float *y, glint_err *err);
+
+/* tab_solve_scaled's problem on such rows: per channel
+ *
+ *   minimize  (1/N) ||A r - y||^2 / m_c + lambda ||L r||^2 + pull ||r - target||^2
+ *
+ * m_c the mean square of the rows' sums (each row's sum of weights: its
+ * scale, as b_c ci is a sample's).  Where every row's weights are 0 in a
+ * channel, r_c = target and rep->scale_zero[c] = 1.  The Gram matrices are
+ * summed a block of rows at a time (BLAS dsyrk: N nodes^2 per channel);
+ * memory 4 nodes^2 doubles and three blocks of rows. */
+int tab_solve_rows(const tab_grid *g, int n, const tab_scaled_opts *o, tab_rows_fill fill,
+                   void *cls, double *t, tab_solve_report *rep, glint_err *err);
+
 #endif

@@ -315,6 +315,73 @@ static void scaled_normal(const tab_design *d, const float *scale, const float *
     *ff = yy / d->n;
 }
 
+/* One channel's solve from its normal equations: H (nodes x nodes) and q
+ * hold the sums over the samples of the design and its products with the
+ * painting, ff the painting's mean square and msq the mean square of the
+ * rows' scale; the data term is divided by n msq, the prior and the pull
+ * added, the result in x (R, x0: nodes^2 and nodes of scratch). */
+static int solve_channel(const tab_grid *g, const tab_scaled_opts *o, int n, double msq,
+                         double ff, double *H, double *q, double *R, double *x, double *x0,
+                         lsq_work *w, tab_solve_report *r, int c, glint_err *err)
+{
+    int nodes = tab_nodes(g), rc;
+    size_t nn = (size_t)nodes * nodes;
+    double ridge;
+    for (size_t k = 0; k < nn; k++)
+        H[k] /= n * msq;
+    for (int k = 0; k < nodes; k++)
+        q[k] = q[k] / (n * msq) + o->pull * o->target;
+    ff /= msq;
+    tab_prior_add(g, o->lambda, H);
+    ridge = o->pull > 0.0 ? o->pull : operator_ridge(g, o->lambda, H);
+    for (int k = 0; k < nodes; k++)
+        H[(size_t)k * nodes + k] += ridge;
+    if ((rc = lsq_factor(H, nodes, R, err)))
+        return rc;
+    memcpy(x0, q, (size_t)nodes * sizeof *x0);
+    cblas_dtrsv(CblasRowMajor, CblasUpper, CblasTrans, CblasNonUnit, nodes, R, nodes, x0, 1);
+    cblas_dtrsv(CblasRowMajor, CblasUpper, CblasNoTrans, CblasNonUnit, nodes, R, nodes, x0, 1);
+    if (o->nonneg) {
+        lsq_problem p = {.n = nodes, .H = H, .q = q, .ff = ff, .R0 = R, .c0 = x0};
+        lsq_result res;
+        for (int k = 0; k < nodes; k++)
+            x0[k] = fmax(x0[k], 0.0);
+        if ((rc = lsq_solve(&p, LSQ_NONNEG, 0.0, w, x, &res, err)))
+            return rc;
+        if (res.status != LSQ_OK)
+            return glint_err_set(err, GLINT_ENUMERIC, "tab: channel %d: the solver stopped (%s)",
+                                 c, lsq_status_name(res.status));
+        r->iterations[c] = res.iterations;
+        r->at_zero[c] = nodes - res.free_vars;
+        r->kkt[c] = res.kkt_residual;
+    } else {
+        memcpy(x, x0, (size_t)nodes * sizeof *x);
+    }
+    for (int k = 0; k < nodes; k++)
+        r->negative[c] += x[k] < 0.0;
+    return 0;
+}
+
+static int scaled_opts_check(const tab_scaled_opts *o, glint_err *err)
+{
+    if (!isfinite(o->lambda) || o->lambda < 0.0 || !isfinite(o->pull) || o->pull < 0.0 ||
+        !isfinite(o->target))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "tab: lambda %g and pull %g must be finite and >= 0, target %g "
+                             "finite",
+                             o->lambda, o->pull, o->target);
+    return 0;
+}
+
+/* Channel c's table is the target everywhere: the rows' scale is 0. */
+static void scale_zero(int nodes, const tab_scaled_opts *o, int c, double *t,
+                       tab_solve_report *r)
+{
+    for (int k = 0; k < nodes; k++)
+        t[3 * (size_t)k + c] = o->target;
+    r->scale_zero[c] = 1;
+}
+
 int tab_solve_scaled(const tab_design *d, const tab_scaled_opts *o, const float *scale,
                      const float *rgb, double *t, tab_solve_report *rep, glint_err *err)
 {
@@ -324,69 +391,117 @@ int tab_solve_scaled(const tab_design *d, const tab_scaled_opts *o, const float 
     lsq_work *w = o->nonneg ? lsq_work_new(nodes, 0) : NULL;
     tab_solve_report r;
     memset(&r, 0, sizeof r);
-    if (!isfinite(o->lambda) || o->lambda < 0.0 || !isfinite(o->pull) || o->pull < 0.0 ||
-        !isfinite(o->target)) {
-        rc = glint_err_set(err, GLINT_EINVAL,
-                           "tab: lambda %g and pull %g must be finite and >= 0, target %g finite",
-                           o->lambda, o->pull, o->target);
+    if ((rc = scaled_opts_check(o, err)))
         goto done;
-    }
     if (!H || !q || (o->nonneg && !w)) {
         rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (tab scaled solve, %d nodes)", nodes);
         goto done;
     }
     for (int c = 0; c < 3 && !rc; c++) {
-        double *R = H + nn, *x = q + nodes, *x0 = q + 2 * (size_t)nodes, ff, msq, ridge;
+        double *x = q + nodes, ff, msq;
         scaled_normal(d, scale, rgb, c, H, q, &ff, &msq);
         if (!(msq > 0.0) || !isfinite(msq)) {
             /* the known function is 0 on every sample: nothing to scale */
-            for (int k = 0; k < nodes; k++)
-                t[3 * (size_t)k + c] = o->target;
-            r.scale_zero[c] = 1;
+            scale_zero(nodes, o, c, t, &r);
             continue;
         }
-        for (size_t k = 0; k < nn; k++)
-            H[k] /= d->n * msq;
-        for (int k = 0; k < nodes; k++)
-            q[k] = q[k] / (d->n * msq) + o->pull * o->target;
-        ff /= msq;
-        tab_prior_add(&d->g, o->lambda, H);
-        ridge = o->pull > 0.0 ? o->pull : operator_ridge(&d->g, o->lambda, H);
-        for (int k = 0; k < nodes; k++)
-            H[(size_t)k * nodes + k] += ridge;
-        if ((rc = lsq_factor(H, nodes, R, err)))
-            break;
-        memcpy(x0, q, (size_t)nodes * sizeof *x0);
-        cblas_dtrsv(CblasRowMajor, CblasUpper, CblasTrans, CblasNonUnit, nodes, R, nodes, x0, 1);
-        cblas_dtrsv(CblasRowMajor, CblasUpper, CblasNoTrans, CblasNonUnit, nodes, R, nodes, x0,
-                    1);
-        if (o->nonneg) {
-            lsq_problem p = {.n = nodes, .H = H, .q = q, .ff = ff, .R0 = R, .c0 = x0};
-            lsq_result res;
-            for (int k = 0; k < nodes; k++)
-                x0[k] = fmax(x0[k], 0.0);
-            if ((rc = lsq_solve(&p, LSQ_NONNEG, 0.0, w, x, &res, err)))
-                break;
-            if (res.status != LSQ_OK) {
-                rc = glint_err_set(err, GLINT_ENUMERIC,
-                                   "tab: channel %d: the solver stopped (%s)", c,
-                                   lsq_status_name(res.status));
-                break;
-            }
-            r.iterations[c] = res.iterations;
-            r.at_zero[c] = nodes - res.free_vars;
-            r.kkt[c] = res.kkt_residual;
-        } else {
-            memcpy(x, x0, (size_t)nodes * sizeof *x);
-        }
-        for (int k = 0; k < nodes; k++) {
+        rc = solve_channel(&d->g, o, d->n, msq, ff, H, q, H + nn, x, q + 2 * (size_t)nodes, w,
+                           &r, c, err);
+        for (int k = 0; k < nodes && !rc; k++)
             t[3 * (size_t)k + c] = x[k];
-            r.negative[c] += x[k] < 0.0;
-        }
     }
 done:
     free(H);
     free(q);
+    lsq_work_free(w);
+    if (rep)
+        *rep = r;
+    return rc;
+}
+
+/* ---- a table whose rows are sums -------------------------------------------------------- */
+
+#define ROWS_BLOCK 128 /* rows filled and added to the Gram matrices at a time */
+
+/* The three channels' normal equations of every row (OUT H: 3 nodes^2,
+ * q: 3 nodes, ff[3], msq[3]: sums, not means), a block of rows at a time. */
+static int rows_normal(const tab_grid *g, int n, tab_rows_fill fill, void *cls, double *A,
+                       float *y, double *H, double *q, double ff[3], double msq[3],
+                       glint_err *err)
+{
+    int nodes = tab_nodes(g), rc;
+    size_t nn = (size_t)nodes * nodes;
+    memset(H, 0, 3 * nn * sizeof *H);
+    memset(q, 0, 3 * (size_t)nodes * sizeof *q);
+    for (int c = 0; c < 3; c++)
+        ff[c] = msq[c] = 0.0;
+    for (int i0 = 0; i0 < n; i0 += ROWS_BLOCK) {
+        int m = n - i0 < ROWS_BLOCK ? n - i0 : ROWS_BLOCK;
+        memset(A, 0, 3 * (size_t)m * nodes * sizeof *A);
+        if ((rc = fill(cls, i0, m, A, y, err)))
+            return rc;
+        for (int c = 0; c < 3; c++) {
+            const double *Ac = A + (size_t)c * m * nodes;
+            for (int i = 0; i < m; i++) {
+                double s = 0.0, yi = y[3 * (size_t)i + c];
+                const double *row = Ac + (size_t)i * nodes;
+                for (int k = 0; k < nodes; k++)
+                    s += row[k];
+                cblas_daxpy(nodes, yi, row, 1, q + (size_t)c * nodes, 1);
+                msq[c] += s * s;
+                ff[c] += yi * yi;
+            }
+            cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, nodes, m, 1.0, Ac, nodes, 1.0,
+                        H + c * nn, nodes);
+        }
+    }
+    for (int c = 0; c < 3; c++) /* dsyrk wrote the upper triangle */
+        for (int a = 0; a < nodes; a++)
+            for (int b = 0; b < a; b++)
+                H[c * nn + (size_t)a * nodes + b] = H[c * nn + (size_t)b * nodes + a];
+    return 0;
+}
+
+int tab_solve_rows(const tab_grid *g, int n, const tab_scaled_opts *o, tab_rows_fill fill,
+                   void *cls, double *t, tab_solve_report *rep, glint_err *err)
+{
+    int nodes = tab_nodes(g), rc = 0;
+    size_t nn = (size_t)nodes * nodes;
+    double *H = malloc(4 * nn * sizeof *H), *q = malloc(5 * (size_t)nodes * sizeof *q);
+    double *A = malloc(3 * (size_t)ROWS_BLOCK * nodes * sizeof *A), ff[3], msq[3];
+    float *y = malloc(3 * (size_t)ROWS_BLOCK * sizeof *y);
+    lsq_work *w = o->nonneg ? lsq_work_new(nodes, 0) : NULL;
+    tab_solve_report r;
+    memset(&r, 0, sizeof r);
+    if ((rc = scaled_opts_check(o, err)))
+        goto done;
+    if (n < 1) {
+        rc = glint_err_set(err, GLINT_EINVAL, "tab: no rows");
+        goto done;
+    }
+    if (!H || !q || !A || !y || (o->nonneg && !w)) {
+        rc = glint_err_set(err, GLINT_ENOMEM, "out of memory (tab solve, %d rows, %d nodes)", n,
+                           nodes);
+        goto done;
+    }
+    if ((rc = rows_normal(g, n, fill, cls, A, y, H, q, ff, msq, err)))
+        goto done;
+    for (int c = 0; c < 3 && !rc; c++) {
+        double *x = q + 3 * (size_t)nodes, m = msq[c] / n;
+        if (!(m > 0.0) || !isfinite(m)) {
+            scale_zero(nodes, o, c, t, &r);
+            continue;
+        }
+        rc = solve_channel(g, o, n, m, ff[c] / n, H + c * nn, q + (size_t)c * nodes, H + 3 * nn,
+                           x, x + nodes, w, &r, c, err);
+        for (int k = 0; k < nodes && !rc; k++)
+            t[3 * (size_t)k + c] = x[k];
+    }
+done:
+    free(H);
+    free(q);
+    free(A);
+    free(y);
     lsq_work_free(w);
     if (rep)
         *rep = r;
