@@ -210,7 +210,7 @@ run({
     t.log(`dpr ${a.dpr}: zoom ${a.zoom}, ${a.w} image px shown ${a.cssW} CSS px = ${k} device px each, at (${a.left}, ${a.top}); ${a.rendering}`);
     assertEq(a.dpr, 2.5, 'the page\'s device pixel ratio');
     assertLE(Math.abs(k - Math.round(k)), 1e-6, 'whole device pixels per image pixel');
-    assert(k >= 1, 'at least one device pixel per image pixel');
+    assert(Math.round(k) >= 1, 'at least one device pixel per image pixel');
     for (const v of [a.left, a.top]) assertLE(Math.abs(v * a.dpr - Math.round(v * a.dpr)), 1e-3, 'the canvas starts on a device pixel');
     assertEq(a.rendering, 'pixelated', 'drawn as equal blocks');
     assertLE(Math.abs(a.cursorW - Math.round(a.vpW * a.dpr)), 1, 'the brush cursor\'s canvas is in device pixels');

@@ -8,7 +8,9 @@ view rendered under the environment, the parameter checks, and the warning
 when the scene's base renders are lit by lamps.  Then the choice among the
 methods lit by an environment (auto_env) on the same session: its
 candidates, the held-out view, the material it keeps, and the choice lit by
-lamps (auto) refused there, naming auto_env."""
+lamps (auto) refused there, naming auto_env.  Last, pbr_env's fit times a
+painted table (pbr_tab_env) on the same levels: its manifest, evaluation,
+preview and glTF export."""
 import json
 import os
 import subprocess
@@ -172,8 +174,10 @@ def test_07_auto_env_chooses_among_the_environment_methods(d):
     assert "warnings" not in r.json(), r.json()
     m = material_of(d, r)
     c = m["choice"]
-    # the candidates: pbr_env in three forms and srbf, never a point-light method
-    assert [x["method"] for x in c["candidates"]] == ["pbr_env"] * 3 + ["srbf"], c
+    # the candidates: pbr_env in three forms, pbr_tab_env in two and srbf, never a
+    # point-light method
+    assert [x["method"] for x in c["candidates"]] == \
+        ["pbr_env"] * 3 + ["pbr_tab_env"] * 2 + ["srbf"], c
     assert c["candidates"][0]["taken"] is True and c["held_out"] == "views"
     # of the two painted views the second is held out whole
     assert c["held_out_views"] == [5], c
@@ -196,6 +200,37 @@ def test_07_auto_env_chooses_among_the_environment_methods(d):
     r = post_fit(d, S["session"], S["paint"], {"method": "auto"})
     assert r.status_code == 422 and "lighting-mismatch" in r.text and "auto_env" in r.text, \
         r.text
+
+
+def test_08_pbr_tab_env_through_the_api(d):
+    """pbr_tab_env on the same session: its levels are pbr_env's (all in
+    memory), the material is a multiplied pbr_tab material that the API
+    evaluates, previews and exports, and it fits the painting no worse than
+    pbr_env's own fit."""
+    r = post_fit(d, S["session"], S["paint"], {"method": "pbr_tab_env", "params": PARAMS})
+    assert "warnings" not in r.json(), r.json()
+    m = material_of(d, r)
+    assert m["method"] == "pbr_tab_env", m["method"]
+    assert m["precomputation"]["cache"]["memory"] == "hit", m["precomputation"]["cache"]
+    mid, h = m["id"], tok(S["view"])
+    man = d.get("/api/v1/materials/%s/material.json" % mid, headers=h, status=200).json()
+    assert man["method"] == "pbr_tab_env" and man["combine"] == "multiply", man.keys()
+    cor = man["info"]["correction"]
+    print("  pbr_tab_env: rms %.4g (its base %.4g, pbr_env %.4g), %d of %d nodes reached" % (
+        m["errors"]["rms_painted"], cor["rms_painted_base"],
+        S["material"]["errors"]["rms_painted"], cor["reached"], cor["nodes"]))
+    assert cor["combine"] == "multiply" and 0 < cor["reached"] <= cor["nodes"], cor
+    assert m["errors"]["rms_painted"] <= S["material"]["errors"]["rms_painted"] + 1e-9, m
+    v = d.post("/api/v1/materials/%s/eval" % mid,
+               headers=dict(h, **{"Content-Type": "application/json"}),
+               data=json.dumps({"pairs": [{"n": [0, 0, 1], "wi": [0, 0.6, 0.8],
+                                           "wo": [0, -0.6, 0.8]}]}),
+               status=200, schema="EvalResponse.json").json()["values"][0]
+    assert all(x > 0 for x in v), v
+    exr = d.get("/api/v1/materials/%s/preview.exr?view=0" % mid, headers=h, status=200)
+    assert exr.content[:4] == b"\x76\x2f\x31\x01"
+    glb = d.get("/api/v1/materials/%s/material.glb" % mid, headers=h, status=200)
+    assert glb.content[:4] == b"glTF", glb.content[:8]
 
 
 run_tests(globals())

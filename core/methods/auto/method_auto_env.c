@@ -107,6 +107,7 @@ static void candidates(const auto_env_params *p, cands *c)
         method_pbr_tab_env.params_default(&c->pt[k]);
         env_give(&p->env, &c->pt[k].base.env);
     }
+    c->pt[0].base.pbr.lobes = 1;
     c->pt[1].base.pbr.lobes = 2;
     method_srbf.params_default(&c->sr);
     env_give(&p->env, &c->sr);
@@ -286,6 +287,21 @@ static int grazing_held(const samples *s, int every, unsigned char *held)
     return 0;
 }
 
+/* EXPERIMENT: the view's rightmost columns, one in `every`. */
+static int side_held(const samples *s, int every, unsigned char *held)
+{
+    int lo = s->width, hi = -1, cut;
+    for (int i = 0; i < s->n; i++) {
+        int x = s->pixel[i] % s->width;
+        lo = x < lo ? x : lo;
+        hi = x > hi ? x : hi;
+    }
+    cut = hi - (hi - lo + 1) / every;
+    for (int i = 0; i < s->n; i++)
+        held[i] = s->pixel[i] % s->width > cut;
+    return 0;
+}
+
 /* The held-out samples (OUT held[n], 1 where held): whole views when two
  * or more views hold samples (one in `every` of them, at least one, at
  * least one kept), else the view's most grazing pixels (grazing_held).
@@ -312,7 +328,7 @@ static int env_split(const samples *s, int every, unsigned char *held,
     if (*by_views)
         for (int i = 0; i < s->n; i++)
             held[i] = held_view[s->view[i]];
-    else if (grazing_held(s, every, held))
+    else if (getenv("GLINT_EXP_SIDE") ? side_held(s, every, held) : grazing_held(s, every, held))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory");
     for (int i = 0; i < s->n; i++)
         nheld += held[i];
