@@ -15,10 +15,12 @@
  *
  * Held out: one painted view in `every` (the views at every/2, every/2 +
  * every, ... of the painted ones; at least one, at least one kept), whole;
- * with one view painted, its most grazing pixels, one in `every` by n.wo
- * (scattered tiles, as method_auto.h holds out, measure interpolation: a
- * band at grazing angles is what a new view shows that the painted one
- * barely did).  There are no lights beyond the painted
+ * with one view painted, the band of its covered columns farthest to the
+ * right, one in `every` (normals the kept pixels lack, as a new view shows
+ * them; scattered tiles, as method_auto.h holds out, measure
+ * interpolation, and a band of grazing pixels asked the table candidates
+ * for difference angles beyond the fitted ones: method_auto_env.c says
+ * what each chose).  There are no lights beyond the painted
  * range to hold out: the light is the environment, the same in every view.
  *
  * Every candidate reads the same levels as a fit of its own (the same
