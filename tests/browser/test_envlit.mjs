@@ -2,7 +2,8 @@
 // from those glintd offers, a fit, the preview under the fit's environment
 // (turned by a slider or a drag), the lobe p(h) and the energy profile, the
 // error per view against a render under the environment, and the point
-// light still available for any material.
+// light still available for any material; pbr_tab_env chosen, fitted,
+// previewed and shown on the ball.
 import {
   run, openStudio, drawStroke, settled, assert, assertLE, assertEq, waitFor, pageArray,
 } from './harness.mjs';
@@ -195,6 +196,42 @@ run({
     assertEq(await page.evaluate(() => window.glint.state.judge.lastEnv), '', 'point-light preview');
     assert(await page.isHidden('#env-rot-l'), 'no turn slider for the point light');
     await t.shot(page, 'envlit.png');
+  },
+  async 'a physical fit with a painted correction under an environment: chosen, fitted, shown'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64,
+                                                base: { env: { spec: 'sky', lights: 32 } } });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.waitForSelector('#fit-method option[value="pbr_tab_env"]', { state: 'attached' });
+    assert(!(await page.evaluate(() => document.querySelector('#fit-method option[value="pbr_tab_env"]').disabled)),
+      'offered on a scene painted under an environment');
+    await setValue(page, 'fit-method', 'pbr_tab_env', 'change');
+    const note = await page.textContent('#method-note');
+    assert(/environment/.test(note) && /correction/.test(note), 'the method says what it represents: ' + note);
+    assertEq(await page.inputValue('#param-env'), 'sky', 'under the scene environment');
+    await setValue(page, 'param-lights', 32, 'change');
+    await drawStroke(page, [[24, 18], [40, 18]]);
+    await settled(page, 0);
+    const before = await page.evaluate(() => window.glint.lastFit && window.glint.lastFit.id);
+    await page.click('#fit-btn');
+    await page.waitForFunction(b => window.glint.lastFit && window.glint.lastFit.id !== b, before, { timeout: 120000 });
+    const mat = await page.evaluate(() => window.glint.state.judge.mat);
+    assertEq(mat.method, 'pbr_tab_env', 'a pbr_tab_env material');
+    assertEq(mat.params.env, 'sky', 'fitted under the scene environment');
+    // previewed under the fit's environment, and the ball drawn
+    await page.waitForFunction(() => window.glint.state.judge.frames > 0 && /lights=/.test(window.glint.state.judge.lastEnv || ''),
+      null, { timeout: 60000 });
+    const px = await previewBytes(page);
+    let centre = 0;   // the object's middle: 16 x 16 pixels about the preview's centre
+    for (let y = 120; y < 136; y++)
+      for (let x = 120; x < 136; x++) centre += (px[4 * (256 * y + x)] + px[4 * (256 * y + x) + 1] + px[4 * (256 * y + x) + 2]) / 3;
+    centre /= 256;
+    t.log(`preview under ${await page.evaluate(() => window.glint.state.judge.lastEnv)}: centre ${centre.toFixed(1)} of 255`);
+    assert(centre > 8, 'the preview shows the material lit');
+    await page.waitForFunction(id => window.glint.state.judge.ball.frames > 0 &&
+      (window.glint.state.judge.ball.last.query || {}).object === 'ball', mat.id, { timeout: 60000 });
+    t.log('ball: ' + JSON.stringify(await page.evaluate(() => window.glint.state.judge.ball.last.env)));
+    await t.shot(page, 'envlit-pbr-tab-env.png');
   },
   async 'choose for me under an environment: a first look under the scene light, then the choice'(t) {
     const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 48, height: 48,
