@@ -61,6 +61,15 @@ def material_of(d, r):
                  schema="Material.json").json()
 
 
+def eval_pair(d, mid, h):
+    """The material's value at one pair of directions (POST .../eval)."""
+    return d.post("/api/v1/materials/%s/eval" % mid,
+                  headers=dict(h, **{"Content-Type": "application/json"}),
+                  data=json.dumps({"pairs": [{"n": [0, 0, 1], "wi": [0, 0.6, 0.8],
+                                              "wo": [0, -0.6, 0.8]}]}),
+                  status=200, schema="EvalResponse.json").json()["values"][0]
+
+
 def session_with(d, base, paint_dir, views):
     sc = d.post("/api/v1/scenes", json=dict({"width": SIZE, "height": SIZE}, **base),
                 status=201, schema="Scene.json").json()
@@ -114,11 +123,7 @@ def test_02_fit_levels_and_warm_refit(d):
 
 def test_03_evaluates_renders_and_exports(d):
     mid, h = S["material"]["id"], tok(S["view"])
-    v = d.post("/api/v1/materials/%s/eval" % mid,
-               headers=dict(h, **{"Content-Type": "application/json"}),
-               data=json.dumps({"pairs": [{"n": [0, 0, 1], "wi": [0, 0.6, 0.8],
-                                           "wo": [0, -0.6, 0.8]}]}),
-               status=200, schema="EvalResponse.json").json()["values"][0]
+    v = eval_pair(d, mid, h)
     assert all(x > 0 for x in v), v
     sh = d.get("/api/v1/materials/%s/shader" % mid, headers=h, status=200,
                schema="Shader.json").json()
@@ -221,11 +226,7 @@ def test_08_pbr_tab_env_through_the_api(d):
         S["material"]["errors"]["rms_painted"], cor["reached"], cor["nodes"]))
     assert cor["combine"] == "multiply" and 0 < cor["reached"] <= cor["nodes"], cor
     assert m["errors"]["rms_painted"] <= S["material"]["errors"]["rms_painted"] + 1e-9, m
-    v = d.post("/api/v1/materials/%s/eval" % mid,
-               headers=dict(h, **{"Content-Type": "application/json"}),
-               data=json.dumps({"pairs": [{"n": [0, 0, 1], "wi": [0, 0.6, 0.8],
-                                           "wo": [0, -0.6, 0.8]}]}),
-               status=200, schema="EvalResponse.json").json()["values"][0]
+    v = eval_pair(d, mid, h)
     assert all(x > 0 for x in v), v
     exr = d.get("/api/v1/materials/%s/preview.exr?view=0" % mid, headers=h, status=200)
     assert exr.content[:4] == b"\x76\x2f\x31\x01"
