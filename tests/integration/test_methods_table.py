@@ -2,7 +2,8 @@
 the JSON Schema of each method's parameters in proto/schemas is exactly
 what `glint methods --schema NAME` generates from the table, FitRequest.json
 lists exactly the registered methods, and GET /api/v1/methods describes
-them exactly as the table does (`glint methods --json`)."""
+them exactly as the table does (`glint methods --json`); the material of each
+method lit by lamps, fitted through the API, is what Material.json describes."""
 import json
 import os
 import re
@@ -10,7 +11,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
-from harness import GLINTD, SRC, run_tests  # noqa: E402
+from harness import GLINTD, SRC, fit_material, run_tests  # noqa: E402
 
 CLI = os.environ.get("GLINT_CLI") or os.path.join(
     os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
@@ -121,6 +122,38 @@ def test_methods_say_what_they_are_for(d):
     assert by["maps"]["surface"] == ["coefficients"] and by["hf4"]["surface"] == ["spatial"]
     assert by["hybrid"]["surface"] == ["coefficients", "spatial"]
     assert by["hf3"]["surface"] == [] and not by["hf3"]["varies"]
+
+
+# small parameters of each method lit by lamps (tests/unit/method_small.h's)
+SMALL = {"hf3": {"res": 8}, "pbr": {"starts": 1, "max_iter": 20},
+         "pbr_detail": {"res": 8, "starts": 1, "max_iter": 20},
+         "tab": {"res_h": 8, "res_d": 4}, "pbr_tab": {"res_h": 8, "res_d": 4, "starts": 1},
+         "pbr_maps": {"starts": 1, "components": 2, "map_res": 16, "rounds": 2},
+         "hf4": {"res": 8, "s_res": 4}, "hf2d": {"res": 8, "res_2d": 8},
+         "maps": {"res": 8, "components": 2, "map_res": 16, "rounds": 2},
+         "hybrid": {"res": 8, "s_res": 4, "components": 2, "map_res": 16, "rounds": 2}}
+
+
+def test_every_lamp_lit_methods_material_is_described_by_material_json(d):
+    """Each method lit by lamps fitted through the API to one painting: the
+    material glintd answers is what Material.json describes (its report's
+    precomputation names the cache key, whatever the method's levels)."""
+    methods = [m["name"] for m in table() if m["lighting"] == "point" and not m["chooses"]]
+    assert sorted(methods) == sorted(SMALL), methods
+    sc = d.post("/api/v1/scenes", json={"width": 32, "height": 32}, status=201).json()
+    s = d.post("/api/v1/sessions", json={"scene_id": sc["id"]}, status=201).json()
+    for k in range(len(sc["views"])):
+        img = d.get("/api/v1/scenes/%s/views/%d/base.png?format=exr&scale=1&brdf=%s"
+                    % (sc["id"], k, "ct:kd=0.4/0.3/0.2,f0=0.2,rough=0.3"), status=200).content
+        d.put("/api/v1/sessions/%s/views/%d/painting" % (s["id"], k),
+              headers={"X-Glint-Token": s["paint_token"], "Content-Type": "image/x-exr"},
+              data=img, status=200)
+    for name in methods:
+        mid = fit_material(d, s, {"method": name, "params": SMALL[name]})
+        m = d.get("/api/v1/materials/" + mid, headers={"X-Glint-Token": s["view_token"]},
+                  status=200, schema="Material.json").json()
+        assert m["method"] == name, (name, m["method"])
+        print("  %-10s precomputation key %s" % (name, m["precomputation"]["cache_key"][:40]))
 
 
 run_tests(globals())

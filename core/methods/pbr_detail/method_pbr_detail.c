@@ -338,12 +338,13 @@ static json_t *report(const method_fit_in *in, json_t *base_info, json_t *detail
 {
     int nv = in->s->nviews < SCENE_MAX_VIEWS ? in->s->nviews : SCENE_MAX_VIEWS;
     return json_pack(
-        "{s:o, s:o*, s:o*, s:o, s:o, s:{s:s, s:[s, s, s], s:i}, s:{s:f, s:f, s:f, s:f}, "
+        "{s:o, s:o*, s:o*, s:o, s:o, s:{s:s, s:s, s:[s, s, s], s:i}, s:{s:f, s:f, s:f, s:f}, "
         "s:{s:f, s:f, s:o}}",
         "params", method_params_to_json(&method_pbr_detail, in->params), "base", base_info,
         "detail", detail_info, "floor", report_floor(w), "blend", report_weight(w),
         "precomputation", "pattern_hash",
-        in->s->hash, "cache_keys", in->keys[LV_GEOM], in->keys[LV_DECOMP], in->keys[LV_OP],
+        in->s->hash, "cache_key", in->keys[LV_OP], "cache_keys", in->keys[LV_GEOM],
+        in->keys[LV_DECOMP], in->keys[LV_OP],
         "samples", in->s->n, "seconds", "samples", in->pattern_seconds, "base", t_base,
         "detail", t_detail, "fit", glint_now() - t0, "errors", "rms_painted", w->rms,
         "max_abs_painted", w->max_abs, "rms_by_view",

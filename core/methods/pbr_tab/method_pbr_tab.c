@@ -272,10 +272,11 @@ static json_t *report(const method_fit_in *in, json_t *base_info, const tab_desi
     int nv = in->s->nviews < SCENE_MAX_VIEWS ? in->s->nviews : SCENE_MAX_VIEWS;
     const pbr_tab_params *p = in->params;
     return json_pack(
-        "{s:o, s:o*, s:o, s:{s:s, s:[s, s], s:i}, s:{s:f, s:f, s:f}, s:{s:f, s:f, s:o}}",
+        "{s:o, s:o*, s:o, s:{s:s, s:s, s:[s, s], s:i}, s:{s:f, s:f, s:f}, s:{s:f, s:f, s:o}}",
         "params", method_params_to_json(&method_pbr_tab, in->params), "base", base_info,
         "correction", report_correction(d, t, sr, e, p->combine), "precomputation",
-        "pattern_hash", in->s->hash, "cache_keys", in->keys[LV_GEOM], in->keys[LV_DESIGN],
+        "pattern_hash", in->s->hash, "cache_key", in->keys[LV_DESIGN], "cache_keys",
+        in->keys[LV_GEOM], in->keys[LV_DESIGN],
         "samples", in->s->n, "seconds", "samples", in->pattern_seconds, "base", t_base, "fit",
         glint_now() - t0, "errors", "rms_painted", e->rms, "max_abs_painted", e->max_abs,
         "rms_by_view", method_rms_by_view(e->view_se, e->view_n, nv));

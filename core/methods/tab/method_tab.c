@@ -219,10 +219,11 @@ static json_t *report(const method_fit_in *in, const tab_design *d, const tab_op
         fit_errors(d, in->s, in->rgb, tm->t, se, n, &rms);
         albedo_normal(tm, alb);
         info = json_pack(
-            "{s:o, s:{s:s, s:s, s:s, s:i, s:f}, s:{s:f, s:f}, s:{s:f, s:o}, s:{s:i, s:i, s:i},"
+            "{s:o, s:{s:s, s:s, s:s, s:s, s:i, s:f}, s:{s:f, s:f}, s:{s:f, s:o}, s:{s:i, s:i, s:i},"
             " s:o, s:[f,f,f], s:o}",
             "params", method_params_to_json(&method_tab, tp), "precomputation", "pattern_hash",
-            in->s->hash, "design_key", in->keys[0], "operator_key", in->keys[1], "samples",
+            in->s->hash, "cache_key", in->keys[1], "design_key", in->keys[0], "operator_key",
+            in->keys[1], "samples",
             in->s->n, "ridge", op->ridge, "seconds", "samples", in->pattern_seconds, "fit",
             seconds, "errors", "rms_painted", rms, "rms_by_view", method_rms_by_view(se, n, nv),
             "cells", "nodes", nodes, "reached", d->reached, "filled", nodes - d->reached,
