@@ -9,6 +9,9 @@
  *                                             the surface (?bake_res=N)
  *   GET /api/v1/materials/{id}/material.mtlx  that fit as MaterialX standard_surface
  *                                             (mtlx.h)
+ *   GET /api/v1/materials/{id}/material.mtlx.zip  the same in a zip with the .glb's
+ *                                             textures, read by the document, where
+ *                                             it varies (mtlx.h; ?bake_res=N)
  *   GET /api/v1/materials/{id}/material.usda  that fit as a UsdPreviewSurface with
  *                                             the scene's mesh (usda.h)
  *   GET /api/v1/materials/{id}/material.usdz  the same in a USDZ package with the
@@ -229,13 +232,27 @@ static void fit_header(http_resp *r, const gltf_pbr *p)
     http_header(r, "X-Glint-Fit", info);
 }
 
-/* The glTF 2.0 file (usdz 0) or the USDZ package (usdz 1): the scene's
- * mesh with the metallic-roughness material fitted at the samples of the
- * views the material was fitted to (views_used), and baked into textures
- * of bake_res x bake_res texels (query, 0..GLTF_BAKE_RES_MAX, default
+/* What baked_get answers: its file name's extension, media type, what the
+ * work budget calls it, and the header its figures go in. */
+typedef struct baked_kind {
+    const char *ext, *type, *what, *header;
+} baked_kind;
+
+static const baked_kind baked_glb = {"glb", "model/gltf-binary", "a glTF export",
+                                     "X-Glint-Gltf"};
+static const baked_kind baked_usdz = {"usdz", "model/vnd.usdz+zip", "a USDZ export",
+                                      "X-Glint-Fit"};
+static const baked_kind baked_mtlx = {"mtlx.zip", "application/zip", "a MaterialX export",
+                                      "X-Glint-Fit"};
+
+/* The glTF 2.0 file, the USDZ package or the MaterialX package (kind):
+ * the metallic-roughness material fitted at the samples of the views the
+ * material was fitted to (views_used), and baked into textures of bake_res
+ * x bake_res texels (query, 0..GLTF_BAKE_RES_MAX, default
  * GLTF_BAKE_RES_DEFAULT; 0: the average only) where the material varies
- * over the surface; the package's USD layer reads the same textures. */
-static http_resp baked_get(http_req *req, int usdz)
+ * over the surface; the .glb and the USD layer with the scene's mesh, the
+ * packages' USD layer and MaterialX document reading the same textures. */
+static http_resp baked_get(http_req *req, const baked_kind *kind)
 {
     app *a = req->app;
     const char *mid = req->param[0];
@@ -249,8 +266,8 @@ static http_resp baked_get(http_req *req, int usdz)
     size_t len = 0, bytes = 0;
     http_resp r;
     glint_err e;
-    char info[600], fname[128];
-    int rc;
+    char info[600], fname[128], name[64];
+    int rc, usdz = kind == &baked_usdz;
     admit_ticket ticket = {0};
 
     if (bq && (api_parse_count(bq, &bake_res) || bake_res > GLTF_BAKE_RES_MAX))
@@ -263,16 +280,19 @@ static http_resp baked_get(http_req *req, int usdz)
     if (usdz) /* the layer's text (about 80 bytes a vertex, 24 a triangle), then its copy */
         bytes += 2 * ((size_t)x.sc->mesh.nverts * 80 + (size_t)x.sc->mesh.ntris * 24);
     api_work_ticket(req, bytes, 1, &ticket);
-    if ((rc = admit_take(a->work, &ticket, usdz ? "a USDZ export" : "a glTF export", 0, &e)))
+    if ((rc = admit_take(a->work, &ticket, kind->what, 0, &e)))
         goto done;
     snprintf(info, sizeof info, "glint material %s.", mid);
+    snprintf(name, sizeof name, "glint_%.8s", mid);
     if ((rc = api_material_load(a, mid, &m, &e)) ||
         (rc = usdz ? usdz_export_scene(&m, x.sc, x.use, (int)bake_res, info, &glb, &len, &p,
                                        &gi, &e)
-                   : gltf_export_scene(&m, x.sc, x.use, (int)bake_res, &glb, &len, &p, &gi,
-                                       &e)))
+         : kind == &baked_mtlx ? mtlx_export_scene(&m, x.sc, x.use, (int)bake_res, name, info,
+                                                   &glb, &len, &p, &gi, &e)
+                               : gltf_export_scene(&m, x.sc, x.use, (int)bake_res, &glb, &len,
+                                                   &p, &gi, &e)))
         goto done;
-    r = http_bytes_owned(200, usdz ? "model/vnd.usdz+zip" : "model/gltf-binary", glb, len);
+    r = http_bytes_owned(200, kind->type, glb, len);
     snprintf(info, sizeof info,
              "base_color=%.4f,%.4f,%.4f; metallic=%.4f; roughness=%.4f; fit_rel_rms=%.4f; "
              "pairs=%d; spatial=%d; textures=%d",
@@ -283,8 +303,8 @@ static http_resp baked_get(http_req *req, int usdz)
         snprintf(info + strlen(info), sizeof info - strlen(info),
                  "; texel_rel_rms_median=%.4f; texel_rel_rms_max=%.4f; bake_seconds=%.3f",
                  gi.rel_rms_median, gi.rel_rms_max, gi.seconds);
-    http_header(&r, usdz ? "X-Glint-Fit" : "X-Glint-Gltf", info);
-    api_export_filename(a, mid, x.doc.scene, usdz ? "usdz" : "glb", fname, sizeof fname);
+    http_header(&r, kind->header, info);
+    api_export_filename(a, mid, x.doc.scene, kind->ext, fname, sizeof fname);
     api_attachment(&r, fname);
 done:
     if (rc)
@@ -295,8 +315,9 @@ done:
     return r;
 }
 
-static http_resp glb_get(http_req *req) { return baked_get(req, 0); }
-static http_resp usdz_get(http_req *req) { return baked_get(req, 1); }
+static http_resp glb_get(http_req *req) { return baked_get(req, &baked_glb); }
+static http_resp usdz_get(http_req *req) { return baked_get(req, &baked_usdz); }
+static http_resp mtlx_zip_get(http_req *req) { return baked_get(req, &baked_mtlx); }
 
 /* The MaterialX document of the same fit (the average over the surface). */
 static http_resp mtlx_get(http_req *req)
@@ -388,6 +409,10 @@ static const export_kind export_kinds[] = {
      "a MaterialX standard_surface with its surfacematerial: the same fit, its average over the "
      "surface (no textures)",
      "MaterialX: Houdini, Maya, Substance", 1, 0},
+    {"mtlx_zip", "mtlx.zip", "material.mtlx.zip",
+     "a zip of the same MaterialX document and, where the material varies over the surface, "
+     "the .glb's baked textures, which it reads",
+     "MaterialX: Houdini, Maya, Substance, MaterialX Viewer", 1, 2},
     {"usda", "usda", "material.usda",
      "a USD layer: the mesh bound to a UsdPreviewSurface with the same fit, its average over "
      "the surface (no textures)",
@@ -424,8 +449,7 @@ static json_t *export_how_close(const export_kind *k, const gltf_pbr *p, int spa
                          "the pbr material's own parameters (with KHR extensions in the .glb), "
                          "against the material on the painted views (relative RMS)");
     return json_pack("{s:f, s:b, s:s}", "rel_rms", p->rel_rms, "exact", 0, "note",
-                     (strcmp(k->format, "glb") == 0 || strcmp(k->format, "usdz") == 0) &&
-                             spatial
+                     k->expensive == 2 && spatial
                          ? "the average's fit on the painted views; the baked textures come "
                            "closer (their figures come with the download: X-Glint-Gltf, "
                            "X-Glint-Fit)"
@@ -545,6 +569,7 @@ const http_route api_exports_routes[] = {
     {"GET", "/api/v1/materials/{id}/material.brdf", brdf_get},
     {"GET", "/api/v1/materials/{id}/material.glb", glb_get},
     {"GET", "/api/v1/materials/{id}/material.mtlx", mtlx_get},
+    {"GET", "/api/v1/materials/{id}/material.mtlx.zip", mtlx_zip_get},
     {"GET", "/api/v1/materials/{id}/material.usda", usda_get},
     {"GET", "/api/v1/materials/{id}/material.usdz", usdz_get},
     {"GET", "/api/v1/materials/{id}/exports", exports_get},

@@ -28,7 +28,8 @@ function fromSph(s) { const c = Math.cos(s.el); return [s.r * c * Math.cos(s.az)
 
 // The export formats by the names artists know them by.
 const EXPORT_NAMES = {
-  glb: 'glTF (.glb)', mtlx: 'MaterialX (.mtlx)', usda: 'USD (.usda)', usdz: 'USD with textures (.usdz)',
+  glb: 'glTF (.glb)', mtlx: 'MaterialX (.mtlx)', mtlx_zip: 'MaterialX with textures (.zip)',
+  usda: 'USD (.usda)', usdz: 'USD with textures (.usdz)',
   merl: 'MERL table (.binary)',
   brdf: 'BRDF Explorer (.brdf)', package: 'glint package (.tar)',
 };

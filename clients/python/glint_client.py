@@ -509,6 +509,44 @@ class GlintClient:
         return self._call("GET", self._mat(material_id, "/material.glb"), q, raw=True,
                           token=token)
 
+    def exports(self, material_id, token=None):
+        """GET /api/v1/materials/{id}/exports: ExportList, every format the
+        material exports to with its file name, URL, what it carries and how
+        close it comes to the material (the metallic-roughness fit)."""
+        return self._call("GET", self._mat(material_id, "/exports"), token=token)
+
+    def materialx(self, material_id, textures=False, bake_res=None, token=None):
+        """GET /api/v1/materials/{id}/material.mtlx: the fit as a MaterialX
+        standard_surface (Blob, text; X-Glint-Fit gives the fit and its
+        error). textures=True: material.mtlx.zip, the document in a zip with
+        the .glb's baked textures, which it reads, where the material varies
+        over the surface (bake_res as gltf()'s)."""
+        if not textures:
+            if bake_res is not None:
+                raise ValueError("bake_res needs textures=True")
+            return self._call("GET", self._mat(material_id, "/material.mtlx"), raw=True,
+                              token=token)
+        q = {"bake_res": None if bake_res is None else _index(bake_res, "bake_res")}
+        return self._call("GET", self._mat(material_id, "/material.mtlx.zip"), q, raw=True,
+                          token=token)
+
+    def usd(self, material_id, package=False, mesh=True, bake_res=None, token=None):
+        """GET /api/v1/materials/{id}/material.usda: the fit as a
+        UsdPreviewSurface bound to the scene's mesh (mesh=False: the
+        material alone) (Blob, text). package=True: material.usdz, the layer
+        with the .glb's baked textures where the material varies (bake_res
+        as gltf()'s)."""
+        if not package:
+            if bake_res is not None:
+                raise ValueError("bake_res needs package=True")
+            return self._call("GET", self._mat(material_id, "/material.usda"),
+                              {"mesh": None if mesh else 0}, raw=True, token=token)
+        if not mesh:
+            raise ValueError("a USDZ package always holds the mesh")
+        q = {"bake_res": None if bake_res is None else _index(bake_res, "bake_res")}
+        return self._call("GET", self._mat(material_id, "/material.usdz"), q, raw=True,
+                          token=token)
+
     def preview(self, material_id, format="png", view=None, eye=None, light=None, target=None,
                 fov=None, intensity=None, size=None, renderer=None, object=None, env=None,
                 env_rotation=None, env_intensity=None, lights=None, shadows=None,

@@ -148,6 +148,7 @@ int cmd_export_gltf(int argc, char **argv);
 int cmd_export_mtlx(int argc, char **argv);
 int cmd_export_usda(int argc, char **argv);
 int cmd_export_usdz(int argc, char **argv);
+int cmd_export_mtlx_zip(int argc, char **argv);
 int cmd_demo(int argc, char **argv);          /* cmd_demo.c */
 int cmd_methods(int argc, char **argv);       /* cmd_methods.c */
 

@@ -367,25 +367,33 @@ static const char *path_json(const gltf_pbr *p, char *buf, size_t cap)
     return buf;
 }
 
-/* glint export-gltf | export-usdz MATDIR --scene scene.json [--paintings
- * DIR] [--bake-res N] -o FILE: the scene's mesh with the glTF
- * metallic-roughness material fitted to MATDIR at the samples of the
- * painted views (those with a file in DIR; every view without it), baked
- * into N x N textures (default GLTF_BAKE_RES_DEFAULT, 0: the average only)
- * where the material varies over the surface (gltf.h), as a .glb or as a
- * USDZ package: a USD layer with a UsdPreviewSurface reading the same
- * textures (usdz.h). */
-static int export_baked(int argc, char **argv, int usdz)
+/* What export_baked writes. */
+enum { BAKED_GLB, BAKED_USDZ, BAKED_MTLX };
+
+/* glint export-gltf | export-usdz | export-mtlx-zip MATDIR --scene
+ * scene.json [--paintings DIR] [--bake-res N] -o FILE: the scene's mesh
+ * with the glTF metallic-roughness material fitted to MATDIR at the
+ * samples of the painted views (those with a file in DIR; every view
+ * without it), baked into N x N textures (default GLTF_BAKE_RES_DEFAULT,
+ * 0: the average only) where the material varies over the surface
+ * (gltf.h), as a .glb, as a USDZ package: a USD layer with a
+ * UsdPreviewSurface reading the same textures (usdz.h), or as a MaterialX
+ * package: a standard_surface reading them (mtlx.h). */
+static int export_baked(int argc, char **argv, int kind)
 {
+    static const char *const usages[] = {
+        "usage: glint export-gltf MATDIR --scene scene.json [--paintings DIR] [--bake-res N] "
+        "-o FILE.glb",
+        "usage: glint export-usdz MATDIR --scene scene.json [--paintings DIR] [--bake-res N] "
+        "-o FILE.usdz",
+        "usage: glint export-mtlx-zip MATDIR --scene scene.json [--paintings DIR] "
+        "[--bake-res N] -o FILE.zip"};
     static const struct option lo[] = {{"scene", required_argument, 0, 's'},
                                        {"paintings", required_argument, 0, 'p'},
                                        {"out", required_argument, 0, 'o'},
                                        {"bake-res", required_argument, 0, 'b'},
                                        {0, 0, 0, 0}};
-    const char *usage = usdz ? "usage: glint export-usdz MATDIR --scene scene.json "
-                               "[--paintings DIR] [--bake-res N] -o FILE.usdz"
-                             : "usage: glint export-gltf MATDIR --scene scene.json "
-                               "[--paintings DIR] [--bake-res N] -o FILE.glb";
+    const char *usage = usages[kind];
     const char *scn = NULL, *pdir = NULL, *out = NULL;
     unsigned char use[SCENE_MAX_VIEWS];
     material m;
@@ -423,8 +431,12 @@ static int export_baked(int argc, char **argv, int usdz)
     }
     for (int v = 0; v < sc.nviews; v++)
         use[v] = !pdir || find_painting(pdir, v, path, sizeof path);
-    if ((usdz ? usdz_export_scene(&m, &sc, use, (int)bake_res, NULL, &glb, &len, &p, &gi, &e)
-              : gltf_export_scene(&m, &sc, use, (int)bake_res, &glb, &len, &p, &gi, &e)) ||
+    if ((kind == BAKED_USDZ
+             ? usdz_export_scene(&m, &sc, use, (int)bake_res, NULL, &glb, &len, &p, &gi, &e)
+         : kind == BAKED_MTLX ? mtlx_export_scene(&m, &sc, use, (int)bake_res, "glint", NULL,
+                                                  &glb, &len, &p, &gi, &e)
+                              : gltf_export_scene(&m, &sc, use, (int)bake_res, &glb, &len, &p,
+                                                  &gi, &e)) ||
         fsio_write_atomic(out, glb, len, &e))
         rc = fail_err(&e);
     else if (gi.baked)
@@ -449,15 +461,16 @@ static int export_baked(int argc, char **argv, int usdz)
     return rc;
 }
 
-int cmd_export_gltf(int argc, char **argv) { return export_baked(argc, argv, 0); }
-int cmd_export_usdz(int argc, char **argv) { return export_baked(argc, argv, 1); }
+int cmd_export_gltf(int argc, char **argv) { return export_baked(argc, argv, BAKED_GLB); }
+int cmd_export_usdz(int argc, char **argv) { return export_baked(argc, argv, BAKED_USDZ); }
+int cmd_export_mtlx_zip(int argc, char **argv) { return export_baked(argc, argv, BAKED_MTLX); }
 
 /* glint export-mtlx | export-usda MATDIR --scene scene.json [--paintings DIR]
  * [--no-mesh] -o FILE: the metallic-roughness fit export-gltf makes (the
  * samples of the painted views), as a MaterialX standard_surface (mtlx.h)
  * or a USD layer with a UsdPreviewSurface and the scene's mesh (usda.h;
  * --no-mesh: the material alone).  Both carry the average over the
- * surface (no textures: export-usdz carries them).  Prints the fit and its
+ * surface (no textures: export-usdz and export-mtlx-zip carry them).  Prints the fit and its
  * relative RMS as JSON. */
 static int export_fitted(int argc, char **argv, int usd)
 {

@@ -62,6 +62,9 @@ static void usage(FILE *f)
     fputs("  export-usdz MATDIR --scene scene.json [--bake-res N] -o FILE.usdz\n"
           "                                      the same in a USDZ package, with the .glb's\n"
           "                                      textures where the material varies\n"
+          "  export-mtlx-zip MATDIR --scene scene.json [--bake-res N] -o FILE.zip\n"
+          "                                      the MaterialX document in a zip, reading\n"
+          "                                      those textures where the material varies\n"
           "  export-merl (MATDIR | --brdf SPEC) -o FILE.binary\n"
           "                                      a material (or an analytic truth) as a MERL\n"
           "                                      table (90x90x180 bins, isotropic; BRDF\n"
@@ -128,7 +131,7 @@ int main(int argc, char **argv)
         {"export-shader", cmd_export_shader}, {"export-merl", cmd_export_merl},
         {"export-brdf", cmd_export_brdf}, {"export-gltf", cmd_export_gltf},
         {"export-mtlx", cmd_export_mtlx}, {"export-usda", cmd_export_usda},
-        {"export-usdz", cmd_export_usdz},
+        {"export-usdz", cmd_export_usdz}, {"export-mtlx-zip", cmd_export_mtlx_zip},
         {"methods", cmd_methods}};
     static char name[64];
 

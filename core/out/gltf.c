@@ -590,6 +590,28 @@ done:
     return rc;
 }
 
+int gltf_bake_scene_png(const material *m, const scene *sc, const unsigned char *use,
+                        int bake_res, gltf_pbr *out, gltf_pngs *png, gltf_export_info *info,
+                        glint_err *err)
+{
+    gltf_bake bake;
+    int rc;
+    memset(png, 0, sizeof *png);
+    if (!(rc = gltf_bake_scene(m, sc, use, bake_res, out, &bake, info, err)) && info->baked)
+        rc = gltf_bake_png(&bake, &png->base, &png->base_len, &png->mr, &png->mr_len, err);
+    gltf_bake_free(&bake);
+    return rc;
+}
+
+void gltf_pngs_free(gltf_pngs *png)
+{
+    if (!png)
+        return;
+    free(png->base);
+    free(png->mr);
+    memset(png, 0, sizeof *png);
+}
+
 int gltf_export_scene(const material *m, const scene *sc, const unsigned char *use,
                       int bake_res, void **glb, size_t *len, gltf_pbr *out,
                       gltf_export_info *info, glint_err *err)

@@ -225,6 +225,20 @@ typedef struct gltf_export_info {
 int gltf_bake_scene(const material *m, const scene *sc, const unsigned char *use, int bake_res,
                     gltf_pbr *out, gltf_bake *bake, gltf_export_info *info, glint_err *err);
 
+/* The two textures of a package (the USDZ and MaterialX ones), as PNG
+ * bytes (gltf_bake_png), NULL where not baked. */
+typedef struct gltf_pngs {
+    void *base, *mr;
+    size_t base_len, mr_len;
+} gltf_pngs;
+
+/* gltf_bake_scene, then, where it baked (info->baked), the textures as PNG
+ * (OUT: *out, *png: gltf_pngs_free, also after a failure; *info). */
+int gltf_bake_scene_png(const material *m, const scene *sc, const unsigned char *use,
+                        int bake_res, gltf_pbr *out, gltf_pngs *png, gltf_export_info *info,
+                        glint_err *err);
+void gltf_pngs_free(gltf_pngs *png);
+
 /* The whole export: the material fitted at the samples of the views
  * flagged in `use` (NULL: all) of scene sc, and baked at bake_res x
  * bake_res texels when it varies over the surface (bake_res 0: the average

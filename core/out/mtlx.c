@@ -105,34 +105,69 @@ static int origin_text(glint_buf *b, const gltf_pbr *p)
                             p->pairs, p->rel_rms);
 }
 
-int mtlx_write(const gltf_pbr *p, const char *name, const char *note, char **text,
-               glint_err *err)
+/* An image node of graph nm reading `file` (colour space cs, NULL: raw
+ * data), clamped at the edges. */
+static int image_node(glint_buf *b, const char *node, const char *type, const char *file,
+                      const char *cs)
 {
-    glint_buf b = {0};
-    char nm[64];
-    double ior, col[3], weight;
-    int rc = 0;
+    return glint_buf_printf(
+        b,
+        "    <image name=\"%s\" type=\"%s\">\n"
+        "      <input name=\"file\" type=\"filename\" value=\"%s\"%s%s%s />\n"
+        "      <input name=\"uaddressmode\" type=\"string\" value=\"clamp\" />\n"
+        "      <input name=\"vaddressmode\" type=\"string\" value=\"clamp\" />\n"
+        "    </image>\n",
+        node, type, file, cs ? " colorspace=\"" : "", cs ? cs : "", cs ? "\"" : "");
+}
 
-    *text = NULL;
-    if (!p || !pbr_valid(p))
-        return glint_err_set(err, GLINT_EINVAL,
-                             "a metallic-roughness material with a value outside its range");
-    node_name(name, nm, sizeof nm);
-    specular_of(p, &ior, col, &weight);
-    rc |= glint_buf_printf(&b, "<?xml version=\"1.0\"?>\n<materialx version=\"1.38\">\n  <!--\n");
-    rc |= origin_text(&b, p);
-    if (p->spatial)
-        rc |= glint_buf_printf(&b, "    The material varies over the surface: this is its average\n"
-                                   "    (no textures; the .glb carries them).\n");
-    if (note && *note) {
-        rc |= glint_buf_printf(&b, "    ");
-        rc |= comment_text(&b, note);
-        rc |= glint_buf_printf(&b, "\n");
-    }
+/* The node graph reading the baked textures: base_color (sRGB), and the
+ * metallic-roughness image's G (roughness) and B (metalness). */
+static int texture_graph(glint_buf *b, const char *nm, const mtlx_textures *t)
+{
+    int rc = glint_buf_printf(b, "  <nodegraph name=\"NG_%s\">\n", nm);
+    rc |= image_node(b, "base_color_image", "color3", t->base_color, "srgb_texture");
+    rc |= image_node(b, "metallic_roughness_image", "vector3", t->metallic_roughness, NULL);
     rc |= glint_buf_printf(
-        &b,
-        "  -->\n"
-        "  <standard_surface name=\"SR_%s\" type=\"surfaceshader\">\n"
+        b,
+        "    <extract name=\"roughness\" type=\"float\">\n"
+        "      <input name=\"in\" type=\"vector3\" nodename=\"metallic_roughness_image\" />\n"
+        "      <input name=\"index\" type=\"integer\" value=\"1\" />\n"
+        "    </extract>\n"
+        "    <extract name=\"metalness\" type=\"float\">\n"
+        "      <input name=\"in\" type=\"vector3\" nodename=\"metallic_roughness_image\" />\n"
+        "      <input name=\"index\" type=\"integer\" value=\"2\" />\n"
+        "    </extract>\n"
+        "    <output name=\"base_color_out\" type=\"color3\" nodename=\"base_color_image\" />\n"
+        "    <output name=\"roughness_out\" type=\"float\" nodename=\"roughness\" />\n"
+        "    <output name=\"metalness_out\" type=\"float\" nodename=\"metalness\" />\n"
+        "  </nodegraph>\n");
+    return rc;
+}
+
+/* The standard_surface's inputs that carry the average's values, or with
+ * tex its textures (the bake's glTF core model: specular_IOR 1.5, no coat). */
+static int surface_inputs(glint_buf *b, const gltf_pbr *p, const char *nm,
+                          const mtlx_textures *tex)
+{
+    double ior, col[3], weight;
+    int rc;
+    if (tex)
+        return glint_buf_printf(
+            b,
+            "    <input name=\"base\" type=\"float\" value=\"1\" />\n"
+            "    <input name=\"base_color\" type=\"color3\" nodegraph=\"NG_%s\" "
+            "output=\"base_color_out\" />\n"
+            "    <input name=\"metalness\" type=\"float\" nodegraph=\"NG_%s\" "
+            "output=\"metalness_out\" />\n"
+            "    <input name=\"specular\" type=\"float\" value=\"1\" />\n"
+            "    <input name=\"specular_color\" type=\"color3\" value=\"1, 1, 1\" />\n"
+            "    <input name=\"specular_roughness\" type=\"float\" nodegraph=\"NG_%s\" "
+            "output=\"roughness_out\" />\n"
+            "    <input name=\"specular_IOR\" type=\"float\" value=\"%.6g\" />\n",
+            nm, nm, nm, MTLX_IOR);
+    specular_of(p, &ior, col, &weight);
+    rc = glint_buf_printf(
+        b,
         "    <input name=\"base\" type=\"float\" value=\"1\" />\n"
         "    <input name=\"base_color\" type=\"color3\" value=\"%.6g, %.6g, %.6g\" />\n"
         "    <input name=\"metalness\" type=\"float\" value=\"%.6g\" />\n"
@@ -140,15 +175,68 @@ int mtlx_write(const gltf_pbr *p, const char *name, const char *note, char **tex
         "    <input name=\"specular_color\" type=\"color3\" value=\"%.6g, %.6g, %.6g\" />\n"
         "    <input name=\"specular_roughness\" type=\"float\" value=\"%.6g\" />\n"
         "    <input name=\"specular_IOR\" type=\"float\" value=\"%.6g\" />\n",
-        nm, p->base[0], p->base[1], p->base[2], p->metallic, weight, col[0], col[1], col[2],
+        p->base[0], p->base[1], p->base[2], p->metallic, weight, col[0], col[1], col[2],
         p->roughness, ior);
     if (p->khr.clearcoat_used)
         rc |= glint_buf_printf(
-            &b,
+            b,
             "    <input name=\"coat\" type=\"float\" value=\"%.6g\" />\n"
             "    <input name=\"coat_roughness\" type=\"float\" value=\"%.6g\" />\n"
             "    <input name=\"coat_IOR\" type=\"float\" value=\"1.5\" />\n",
             p->khr.clearcoat, p->khr.clearcoat_roughness);
+    return rc;
+}
+
+/* a texture's name as a filename value: relative, printable, no XML
+ * metacharacters, no ".." */
+static int tex_path_ok(const char *s)
+{
+    if (!s || !*s || *s == '/' || strstr(s, ".."))
+        return 0;
+    for (; *s; s++)
+        if ((unsigned char)*s < 32 || (unsigned char)*s > 126 || strchr("<>&\"'\\", *s))
+            return 0;
+    return 1;
+}
+
+int mtlx_write_textured(const gltf_pbr *p, const char *name, const char *note,
+                        const mtlx_textures *tex, char **text, glint_err *err)
+{
+    glint_buf b = {0};
+    char nm[64];
+    int rc = 0;
+
+    *text = NULL;
+    if (!p || !pbr_valid(p))
+        return glint_err_set(err, GLINT_EINVAL,
+                             "a metallic-roughness material with a value outside its range");
+    if (tex && !(tex_path_ok(tex->base_color) && tex_path_ok(tex->metallic_roughness)))
+        return glint_err_set(err, GLINT_EINVAL, "a texture path MaterialX cannot name");
+    node_name(name, nm, sizeof nm);
+    rc |= glint_buf_printf(&b, "<?xml version=\"1.0\"?>\n<materialx version=\"1.38\" "
+                               "colorspace=\"lin_rec709\">\n  <!--\n");
+    rc |= origin_text(&b, p);
+    if (tex)
+        rc |= glint_buf_printf(
+            &b,
+            "    The material varies over the surface: base_color, metalness and\n"
+            "    specular_roughness are read from the .glb's baked textures, one\n"
+            "    fit per texel over the mesh's texture coordinates (the image's\n"
+            "    lower-left corner at uv (0, 0)); the numbers above are the average's.\n");
+    else if (p->spatial)
+        rc |= glint_buf_printf(&b, "    The material varies over the surface: this is its average\n"
+                                   "    (no textures; the package and the .glb carry them).\n");
+    if (note && *note) {
+        rc |= glint_buf_printf(&b, "    ");
+        rc |= comment_text(&b, note);
+        rc |= glint_buf_printf(&b, "\n");
+    }
+    rc |= glint_buf_printf(&b, "  -->\n");
+    if (tex)
+        rc |= texture_graph(&b, nm, tex);
+    rc |= glint_buf_printf(&b, "  <standard_surface name=\"SR_%s\" type=\"surfaceshader\">\n",
+                           nm);
+    rc |= surface_inputs(&b, p, nm, tex);
     rc |= glint_buf_printf(
         &b,
         "  </standard_surface>\n"
@@ -166,4 +254,10 @@ int mtlx_write(const gltf_pbr *p, const char *name, const char *note, char **tex
         *text = glint_buf_steal(&b, &len);
     }
     return 0;
+}
+
+int mtlx_write(const gltf_pbr *p, const char *name, const char *note, char **text,
+               glint_err *err)
+{
+    return mtlx_write_textured(p, name, note, NULL, text, err);
 }

@@ -3,13 +3,9 @@
  *
  * The format (OpenUSD's "Usdz File Format Specification"): a zip archive
  * whose files are stored, not compressed nor encrypted, each file's data
- * starting at a multiple of 64 bytes from the start of the archive (the
- * local headers' extra field pads to it), the first file a USD layer
- * (.usda or .usdc); paths relative, in the archive's own namespace.  The
- * writer makes exactly that: local file headers, the data, the central
- * directory and its end record (no ZIP64: at most 65,535 files and 4 GiB,
- * refused beyond), CRC-32 by libdeflate, times set to 1980-01-01 so that
- * a package is a function of its files.
+ * starting at a multiple of 64 bytes from the start of the archive, the
+ * first file a USD layer (.usda or .usdc); paths relative, in the
+ * archive's own namespace.  zip.h writes exactly that.
  *
  * Thread-safety: no state. */
 #ifndef GLINT_USDZ_H
@@ -21,21 +17,12 @@
 #include "gltf.h"
 #include "material.h"
 #include "scene.h"
-
-#define USDZ_ALIGN 64
-#define USDZ_MAX_FILES 64
-
-typedef struct usdz_file {
-    const char *path;   /* relative, '/'-separated, no "..", at most 255 bytes */
-    const void *data;
-    size_t len;
-} usdz_file;
+#include "zip.h"
 
 /* The package of files[0..n-1] (files[0] a .usda or .usdc layer).  OUT:
- * *out (malloc'ed: the caller frees), *len.  GLINT_EINVAL for a bad path
- * or a first file that is no USD layer, GLINT_ERANGE beyond the sizes
- * above, GLINT_ENOMEM. */
-int usdz_pack(const usdz_file *files, int n, void **out, size_t *len, glint_err *err);
+ * *out (malloc'ed: the caller frees), *len.  GLINT_EINVAL for a first
+ * file that is no USD layer; otherwise zip_pack's errors. */
+int usdz_pack(const zip_entry *files, int n, void **out, size_t *len, glint_err *err);
 
 /* A material as a USDZ package (usdz_export.c): glint.usda (usda.h: the
  * scene's mesh bound to a UsdPreviewSurface) and, where the material

@@ -5,12 +5,16 @@
 // (gltf-validator, validateBytes: no error) and by three.js in Chromium,
 // rendered with the camera and the light of one of glint's views and compared
 // with glint's own render of that view (GET /materials/{id}/preview.exr); the
-// .mtlx, .usda and .usdz by the checks against MaterialX's and
+// .mtlx, .mtlx.zip, .usda and .usdz by the checks against MaterialX's and
 // UsdPreviewSurface's node definitions and the USDZ package format
 // (tests/integration/export_specs.py); the MERL table by its
 // header and size, the .brdf and the package by their formats.  Then a pbr
 // fit of the same paintings and a two-lobe pbr material made by the CLI:
-// their .glb files, with the KHR extensions, by the validator.
+// their .glb files, with the KHR extensions, by the validator.  Last, a
+// material that varies over the surface (maps of a checker of gold and red
+// plastic): its MaterialX package read by three.js's own MaterialX reader
+// (MaterialXLoader: the document and its textures from the .mtlx.zip) and
+// rendered beside the .glb, both against glint's render.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -19,13 +23,28 @@ import { run, openStudio, settled, assert, assertLE, assertEq, ARTIFACTS, SRC } 
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 const THREE_DIR = path.join(HERE, 'node_modules', 'three');
-const EXT = { glb: 'glb', mtlx: 'mtlx', usda: 'usda', usdz: 'usdz', merl: 'binary', brdf: 'brdf', package: 'tar' };
+const EXT = { glb: 'glb', mtlx: 'mtlx', mtlx_zip: 'mtlx\\.zip', usda: 'usda', usdz: 'usdz', merl: 'binary', brdf: 'brdf', package: 'tar' };
 // three.js's render of the .glb against glint's of the fitted material, the
 // relative mean absolute difference on the object: 1.1% measured on the
 // plastic finish (view 0, 96 x 96); the bound leaves room for other finishes
 // and for three.js's own light model (its diffuse is not glTF's (1 - F) one).
 const REL_BOUND = 0.05;
 const PY = fs.existsSync('/usr/bin/python3') ? '/usr/bin/python3' : 'python3';
+// red plastic and gold in a checker of two squares across u and across v: a
+// material of maps that varies over the surface both ways (a texture read
+// upside down puts the gold where the plastic is)
+const CHECKER = 'checker:freq=1,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|ct:kd=0,f0=0.9/0.7/0.3,rough=0.25';
+// three.js's render of the MaterialX package against its render of the .glb
+// (the same textures through two readers and two material models): 1.9%
+// measured on the checker at 96 x 96 (0.5-0.9% on stripes across u, bake_res
+// 32 to 128); the .glb's textures turned upside down differ from it by 28%.
+// Against glint's render of the material: 23.9%, as the .glb's own render
+// (and the WebGL renderer's of it): three.js widens a highlight by its
+// normals' change across a pixel (its specular antialiasing), so the figure
+// falls with the size (a uniform gold: 20.9% at 64 x 64, 13.5% at 160 x 160;
+// a plastic 1.9%), and the bake's texels straddle the squares' edges.
+const MTLX_GLB_BOUND = 0.05;
+const MTLX_GLINT_BOUND = 0.30;
 
 // glTF validator (npm gltf-validator): the issues of a .glb
 async function validateGlb(bytes) {
@@ -40,6 +59,29 @@ async function download(page, fmt, dir) {
   const file = path.join(dir, dl.suggestedFilename());
   await dl.saveAs(file);
   return { file, name: dl.suggestedFilename() };
+}
+
+// glint's view in three.js (either build, passed as THREE), installed in a
+// page before it loads: the object in a scene with glint's camera (eye,
+// target, vertical half field of view, up +z; +y looking along z) and its
+// point light (no fall-off: a white Lambertian facing it reads I, f cos
+// times pi I; three's light of intensity L gives f cos L with decay 0).
+function installViewRig(page) {
+  return page.addInitScript(() => {
+    window.glintViewRig = (THREE, object, v, W, H) => {
+      const scene = new THREE.Scene();
+      scene.add(object);
+      const cam = new THREE.PerspectiveCamera(2 * v.half_fov * 180 / Math.PI, W / H, 0.05, 100);
+      const f = new THREE.Vector3(...v.target).sub(new THREE.Vector3(...v.eye)).normalize();
+      cam.up.set(0, Math.abs(f.z) > 0.99 ? 1 : 0, Math.abs(f.z) > 0.99 ? 0 : 1);
+      cam.position.set(...v.eye);
+      cam.lookAt(...v.target);
+      const light = new THREE.PointLight(0xffffff, Math.PI * v.light_intensity, 0, 0);
+      light.position.set(...v.light);
+      scene.add(light);
+      return { scene, cam };
+    };
+  });
 }
 
 // The .glb in three.js with the camera and light of view v of the scene,
@@ -59,6 +101,7 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
     if (!f.startsWith(THREE_DIR + path.sep) || !fs.existsSync(f)) return route.fulfill({ status: 404, body: 'no ' + rel });
     return route.fulfill({ body: fs.readFileSync(f), contentType: 'text/javascript' });
   });
+  await installViewRig(page);
   await page.goto(`${base}/three-test/index.html`);
   return page.evaluate(async ([v, k, mid, token]) => {
     const THREE = await import('three');
@@ -69,19 +112,7 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
     const ref = await decodeEXR(await r.arrayBuffer());
     const W = ref.w, H = ref.h;
     const gltf = await new GLTFLoader().loadAsync('/three-test/model.glb');
-    const scene = new THREE.Scene();
-    scene.add(gltf.scene);
-    // glint's camera: eye, target, vertical half field of view, up +z (+y looking along z)
-    const cam = new THREE.PerspectiveCamera(2 * v.half_fov * 180 / Math.PI, W / H, 0.05, 100);
-    const f = new THREE.Vector3(...v.target).sub(new THREE.Vector3(...v.eye)).normalize();
-    cam.up.set(0, Math.abs(f.z) > 0.99 ? 1 : 0, Math.abs(f.z) > 0.99 ? 0 : 1);
-    cam.position.set(...v.eye);
-    cam.lookAt(...v.target);
-    // glint's point light: no fall-off, a white Lambertian facing it reads I
-    // (f cos times pi I); three's light of intensity L gives f cos L with decay 0
-    const light = new THREE.PointLight(0xffffff, Math.PI * v.light_intensity, 0, 0);
-    light.position.set(...v.light);
-    scene.add(light);
+    const { scene, cam } = window.glintViewRig(THREE, gltf.scene, v, W, H);
     const gl = new THREE.WebGLRenderer({ antialias: false });
     gl.setSize(W, H);
     const rt = new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType });
@@ -110,6 +141,97 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
   }, [v, k, mid, session.view_token]);
 }
 
+
+// A page of the daemon's origin with three.js's WebGPU build (its WebGL 2
+// backend: forceWebGL) and addons served from node_modules, and the two
+// files of `bytes` ({name: Buffer}) under /mx-test/.
+async function threeWebgpuPage(t, base, bytes) {
+  const page = await t.page();
+  await page.route(`${base}/mx-test/**`, route => {
+    const rel = new URL(route.request().url()).pathname.replace(/^\/mx-test\//, '');
+    if (bytes[rel]) return route.fulfill({ body: bytes[rel], contentType: 'application/octet-stream' });
+    if (rel === 'index.html') {
+      return route.fulfill({ contentType: 'text/html', body: '<!doctype html><script type="importmap">' +
+        '{"imports": {"three": "/mx-test/build/three.webgpu.js", "three/webgpu": "/mx-test/build/three.webgpu.js", ' +
+        '"three/tsl": "/mx-test/build/three.tsl.js", "three/addons/": "/mx-test/examples/jsm/"}}</script><body></body>' });
+    }
+    const f = path.join(THREE_DIR, rel);
+    if (!f.startsWith(THREE_DIR + path.sep) || !fs.existsSync(f)) return route.fulfill({ status: 404, body: 'no ' + rel });
+    return route.fulfill({ body: fs.readFileSync(f), contentType: 'text/javascript' });
+  });
+  await installViewRig(page);
+  await page.goto(`${base}/mx-test/index.html`);
+  return page;
+}
+
+// The .glb's mesh rendered by three.js twice, with the .glb's own material
+// and with the material three's MaterialXLoader makes of the .mtlx.zip (its
+// uvSpace top-left: the mesh's texture coordinates are glTF's), with the
+// camera and light of view v, each against glint's preview.exr of that view
+// and against each other (relative mean absolute difference where both show
+// the object).
+async function mtlxVersusGlb(page, v, k, mid, token) {
+  return page.evaluate(async ([v, k, mid, token]) => {
+    const THREE = await import('three');
+    const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+    const { MaterialXLoader } = await import('three/addons/loaders/MaterialXLoader.js');
+    const { decodeEXR } = await import('/exr.js');
+    const r = await fetch(`/api/v1/materials/${mid}/preview.exr?view=${k}`, { headers: { 'X-Glint-Token': token } });
+    if (!r.ok) throw new Error('preview.exr: ' + r.status);
+    const ref = await decodeEXR(await r.arrayBuffer());
+    const W = ref.w, H = ref.h;
+    const gltf = await new GLTFLoader().loadAsync('/mx-test/model.glb');
+    let mesh = null;
+    gltf.scene.traverse(o => { if (o.isMesh && !mesh) mesh = o; });
+    // a relative URL: the loader prefixes its textures' blob URLs with the
+    // package's folder.  uvSpace top-left: the .glb's texture coordinates are
+    // glTF's (three.js 0.187 applies it to texcoord values; an image node
+    // samples the same either way: measured, identical renders)
+    const mx = await new MaterialXLoader().loadAsync('material.mtlx.zip', { uvSpace: 'top-left' });
+    const names = Object.keys(mx.materials);
+    if (names.length !== 1) throw new Error('MaterialXLoader made ' + names.length + ' materials');
+    const mxMat = mx.materials[names[0]];
+    const { scene, cam } = window.glintViewRig(THREE, gltf.scene, v, W, H);
+    const gl = new THREE.WebGPURenderer({ antialias: false, forceWebGL: true });
+    await gl.init();
+    gl.setSize(W, H);
+    gl.setClearColor(0x000000, 0);
+    const rt = new THREE.RenderTarget(W, H, { type: THREE.FloatType });
+    const draw = async mat => {
+      mesh.material = mat;
+      gl.setRenderTarget(rt);
+      gl.render(scene, cam);
+      return new Float32Array(await gl.readRenderTargetPixelsAsync(rt, 0, 0, W, H));
+    };
+    const glbMat = mesh.material;
+    const pxGlb = await draw(glbMat), pxMx = await draw(mxMat);
+    // image rows: the WebGL backend reads bottom-first, glint's EXR top-first
+    const at = (px, x, y) => 4 * ((H - 1 - y) * W + x);
+    const cmp = (a, b) => { // a, b: functions (x, y, c) -> value or null (not on the object)
+      let n = 0, sumAbs = 0, sumRef = 0, onlyOne = 0;
+      for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
+        const va = a(x, y, 0), vb = b(x, y, 0);
+        if ((va === null) !== (vb === null)) { onlyOne++; continue; }
+        if (va === null) continue;
+        n++;
+        for (let c = 0; c < 3; c++) { sumAbs += Math.abs(a(x, y, c) - b(x, y, c)); sumRef += Math.abs(b(x, y, c)); }
+      }
+      return { pixels: n, onlyOne, rel: sumAbs / sumRef };
+    };
+    const three = px => (x, y, c) => { const o = at(px, x, y); return px[o + 3] > 0.5 ? px[o + c] : null; };
+    const glint = (x, y, c) => {
+      const g = 3 * (y * W + x), o = at(pxGlb, x, y);
+      const lit = ref.data[g] + ref.data[g + 1] + ref.data[g + 2] > 0 || pxGlb[o + 3] > 0.5;
+      return lit ? ref.data[g + c] : null;
+    };
+    const map = glbMat.map ? glbMat.map.image : null;
+    return { W, H, material: names[0], warnings: mx.warnings.map(w => w.message || String(w)),
+             mxType: mxMat.type, glbHasMaps: !!(glbMat.map && glbMat.metalnessMap && glbMat.roughnessMap),
+             glbVsGlint: cmp(three(pxGlb), glint), mxVsGlint: cmp(three(pxMx), glint),
+             mxVsGlb: cmp(three(pxMx), three(pxGlb)), mapSize: map ? [map.width, map.height] : null };
+  }, [v, k, mid, token]);
+}
+
 run({
   async 'every export downloaded from the Export tab and opened by its reader'(t) {
     let haveValidator = true;
@@ -133,7 +255,7 @@ run({
     const rows = await page.locator('#exports li').allInnerTexts();
     t.log('Export tab: ' + rows.map(r => r.replace(/\s+/g, ' ')).join(' | '));
     await t.shot(page, '30-export-tab.png');
-    assertEq(rows.length, 7, 'seven formats');
+    assertEq(rows.length, 8, 'eight formats');
     assert(rows.every(r => /%|[Ee]xactly/.test(r)), 'each says how close it comes');
     const lst = await t.daemon.api('GET', `/materials/${mid}/exports`, undefined, { 'X-Glint-Token': session.view_token });
     const dir = fs.mkdtempSync(path.join(ARTIFACTS, 'exports-'));
@@ -154,9 +276,9 @@ run({
     if (rep.issues.numErrors) t.log(JSON.stringify(rep.issues.messages.slice(0, 5)));
     assertEq(rep.issues.numErrors, 0, 'the glTF validator\'s errors');
     assert(rep.info.materialCount === 1 && rep.info.totalVertexCount > 1000, 'one material on the mesh');
-    // the .mtlx, .usda and .usdz against their node definitions (and the package's format)
-    for (const f of ['mtlx', 'usda', 'usdz']) {
-      const out = execFileSync(PY, [path.join(SRC, 'tests', 'integration', 'export_specs.py'), f, files[f]], { encoding: 'utf8' });
+    // the .mtlx, .mtlx.zip, .usda and .usdz against their node definitions (and the packages' formats)
+    for (const f of ['mtlx', 'mtlx_zip', 'usda', 'usdz']) {
+      const out = execFileSync(PY, [path.join(SRC, 'tests', 'integration', 'export_specs.py'), f.replace('_', '.'), files[f]], { encoding: 'utf8' });
       t.log(`${f} conforms: ${out.trim().slice(0, 200)}`);
     }
     // MERL: three int32 dimensions 90 90 180, then 3 x 90 x 90 x 180 doubles
@@ -229,5 +351,61 @@ run({
     if (crep.issues.numErrors) t.log(JSON.stringify(crep.issues.messages.slice(0, 5)));
     assertEq(crep.issues.numErrors, 0, 'the glTF validator\'s errors on the clearcoat .glb');
     assertEq((crep.info.extensionsUsed || []).length, 3, 'ior, specular and clearcoat declared');
+  },
+  async 'a material that varies: its MaterialX package rendered by three.js as its .glb is'(t) {
+    // a checker of gold and red plastic painted by the CLI, fitted as maps: the
+    // exports bake textures; three.js reads the .mtlx.zip with its own
+    // MaterialX reader and renders it beside the .glb, both against glint
+    assert(fs.existsSync(path.join(THREE_DIR, 'examples', 'jsm', 'loaders', 'MaterialXLoader.js')),
+           'three.js with its MaterialXLoader is installed (npm ci --prefix tests/browser)');
+    const glint = path.join(process.env.GLINT_BUILD_DIR || path.join(SRC, 'build'), 'core', 'glint');
+    const dir = fs.mkdtempSync(path.join(ARTIFACTS, 'mtlx-'));
+    const SIZE = 96;
+    execFileSync(glint, ['scene', 'create', '--size', String(SIZE), '-o', path.join(dir, 'scene.json')]);
+    execFileSync(glint, ['paint', path.join(dir, 'scene.json'), '--brdf', CHECKER, '-o', path.join(dir, 'paint')]);
+    const { session, scene } = await t.daemon.newSession({ mesh: 'sphere', width: SIZE, height: SIZE });
+    const H = { 'X-Glint-Token': session.paint_token };
+    for (let k = 0; k < scene.views.length; k++) {
+      const exr = fs.readFileSync(path.join(dir, 'paint', `view_${String(k).padStart(2, '0')}.exr`));
+      await t.daemon.api('PUT', `/sessions/${session.id}/views/${k}/painting`, exr, Object.assign({ 'Content-Type': 'image/x-exr' }, H));
+    }
+    const fit = await t.daemon.api('POST', `/sessions/${session.id}/fits`,
+                                   { method: 'maps', params: { res: 32, map_res: 32, components: 3 } }, H);
+    let mid = fit.id;
+    for (let i = 0; !mid && i < 600; i++) {
+      const j = (await t.daemon.api('GET', `/jobs/${fit.job.id}`, undefined, H)).job;
+      assert(j.state !== 'failed' && j.state !== 'cancelled', 'the maps fit ran: ' + JSON.stringify(j));
+      if (j.state === 'done') mid = j.material_id;
+      else await new Promise(r => setTimeout(r, 200));
+    }
+    assert(mid, 'the maps fit finished');
+    const get = async p => {
+      const r = await fetch(`${t.daemon.base}/api/v1/materials/${mid}/${p}`, { headers: H });
+      assertEq(r.status, 200, p);
+      return { bytes: Buffer.from(await r.arrayBuffer()), fit: r.headers.get('x-glint-fit') || r.headers.get('x-glint-gltf') };
+    };
+    const glb = await get('material.glb'), pkg = await get('material.mtlx.zip');
+    t.log(`.glb: ${glb.fit}`);
+    t.log(`.mtlx.zip: ${pkg.fit}`);
+    assert(/textures=32/.test(pkg.fit), 'the package carries 32 x 32 textures');
+    fs.writeFileSync(path.join(dir, 'material.mtlx.zip'), pkg.bytes);
+    execFileSync(PY, [path.join(SRC, 'tests', 'integration', 'export_specs.py'), 'mtlx.zip', path.join(dir, 'material.mtlx.zip')]);
+    const k = scene.views.findIndex(v => {
+      const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
+      return Math.abs(f[2] / l) < 0.9;
+    });
+    const page = await threeWebgpuPage(t, t.daemon.base, { 'model.glb': glb.bytes, 'material.mtlx.zip': pkg.bytes });
+    const c = await mtlxVersusGlb(page, scene.views[k], k, mid, session.view_token);
+    const pct = x => (100 * x.rel).toFixed(1) + '%';
+    t.log(`three.js ${JSON.parse(fs.readFileSync(path.join(THREE_DIR, 'package.json'), 'utf8')).version}, WebGPURenderer ` +
+          `(WebGL 2), view ${k}, ${c.W}x${c.H}: MaterialXLoader made ${c.material} (${c.mxType}), ` +
+          `${c.warnings.length} warnings${c.warnings.length ? ' (' + c.warnings.slice(0, 3).join('; ') + ')' : ''}; ` +
+          `relative mean absolute difference: MaterialX vs .glb ${pct(c.mxVsGlb)} (${c.mxVsGlb.pixels} pixels, ` +
+          `${c.mxVsGlb.onlyOne} on one only), .glb vs glint ${pct(c.glbVsGlint)}, MaterialX vs glint ${pct(c.mxVsGlint)}`);
+    assert(c.glbHasMaps, 'the .glb carries base colour and metallic-roughness textures');
+    assert(c.mxVsGlb.pixels > 0.3 * c.W * c.H, 'the object fills the view');
+    assertLE(c.mxVsGlb.onlyOne, 0.01 * c.mxVsGlb.pixels, 'the silhouettes agree');
+    assertLE(c.mxVsGlb.rel, MTLX_GLB_BOUND, 'three.js\'s render of the MaterialX package against its render of the .glb');
+    assertLE(c.mxVsGlint.rel, MTLX_GLINT_BOUND, 'three.js\'s render of the MaterialX package against glint\'s render of the material');
   },
 });

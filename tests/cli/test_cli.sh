@@ -196,6 +196,12 @@ python3 "$SRC/tests/integration/export_specs.py" usda "$T/pbr.usda" >/dev/null &
 expect_ok "export-mtlx of a pbr material" "$G" export-mtlx "$T/matpbr" --scene "$T/scene.json" --paintings "$T/paintph" -o "$T/pbr.mtlx"
 python3 "$SRC/tests/integration/export_specs.py" mtlx "$T/pbr.mtlx" >/dev/null && ok "export-mtlx of a pbr material conforms" || bad "export-mtlx of a pbr material conforms"
 expect_err "export-mtlx usage" 1 "usage" "$G" export-mtlx "$T/mat" -o "$T/x.mtlx"
+expect_ok "export-mtlx-zip of maps" "$G" export-mtlx-zip "$T/matsv" --scene "$T/scene.json" --paintings "$T/paintsv" --bake-res 8 -o "$T/sv.mtlx.zip"
+grep -q '"res": 8' "$T/out" && python3 "$SRC/tests/integration/export_specs.py" mtlx.zip "$T/sv.mtlx.zip" >/dev/null && [ "$(python3 -c 'import sys, zipfile; print(len(zipfile.ZipFile(sys.argv[1]).namelist()))' "$T/sv.mtlx.zip")" = 3 ] && ok "export-mtlx-zip: the document and the two textures it reads" || bad "export-mtlx-zip: the document and the two textures it reads"
+expect_ok "export-mtlx-zip of a uniform material" "$G" export-mtlx-zip "$T/mat" --scene "$T/scene.json" --paintings "$T/paint" -o "$T/u.mtlx.zip"
+python3 "$SRC/tests/integration/export_specs.py" mtlx.zip "$T/u.mtlx.zip" >/dev/null && ok "export-mtlx-zip of a uniform material conforms" || bad "export-mtlx-zip of a uniform material conforms"
+expect_err "export-mtlx-zip --bake-res range" 1 "bake-res" "$G" export-mtlx-zip "$T/mat" --scene "$T/scene.json" --bake-res 5000 -o "$T/x.zip"
+expect_err "export-mtlx-zip usage" 1 "usage" "$G" export-mtlx-zip "$T/mat" -o "$T/x.zip"
 expect_err "export-mtlx --no-mesh is usda's" 1 "usage" "$G" export-mtlx "$T/mat" --scene "$T/scene.json" --no-mesh -o "$T/x.mtlx"
 head -1 "$T/mat.brdf" | grep -q '^analytic$' && grep -q 'vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)' "$T/mat.brdf" && ok "export-brdf writes BRDF Explorer's format" || bad "export-brdf writes BRDF Explorer's format"
 

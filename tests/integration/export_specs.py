@@ -5,8 +5,9 @@ or USD reader is packaged where the tests run).
 The tables below are copied from the specifications' own node definitions:
   - MaterialX, libraries/bxdf/standard_surface.mtlx (nodedef
     ND_standard_surface_surfaceshader_100, which ND_standard_surface_surfaceshader
-    1.0.1 inherits) and libraries/stdlib/stdlib_defs.mtlx (ND_surfacematerial),
-    AcademySoftwareFoundation/MaterialX at 4177b2cbd48b579ca1e8f7d9901584d811c63b68;
+    1.0.1 inherits) and libraries/stdlib/stdlib_defs.mtlx (ND_surfacematerial,
+    ND_image_<type>, ND_extract_<type>), AcademySoftwareFoundation/MaterialX at
+    4177b2cbd48b579ca1e8f7d9901584d811c63b68;
   - UsdPreviewSurface, UsdUVTexture and UsdPrimvarReader_float2,
     pxr/usdImaging/plugin/usdShaders/shaders/shaderDefs.usda (their def
     Shader blocks), PixarAnimationStudios/OpenUSD at
@@ -20,23 +21,31 @@ albedo, ior > 0; the metallic workflow, or the specular one with its
 specularColor), the shader is connected as the specification says
 (surfacematerial.surfaceshader names the standard_surface node; the
 Material's outputs:surface connects to the shader's outputs:surface), every
-file an input names exists next to the export (none is expected: the files
-carry the average), and for USD the mesh's arrays agree (3 indices per face,
+file an input names exists next to the export (or in its package), and for USD the mesh's arrays agree (3 indices per face,
 indices in range, one normal and st per point).  A texture reader's inputs
 and outputs against its definition too, and every connection names an
 output of a shader of the Material.  A USDZ package (the "Usdz File Format
 Specification" of OpenUSD's documentation): a zip whose files are stored
 (not compressed), each one's data at a multiple of 64 bytes, the first a
 USD layer, which is then checked as above with the files it names looked
-up in the package (PNG images).
+up in the package (PNG images).  A MaterialX package (.mtlx.zip, as
+three.js's MaterialXLoader reads it): a zip whose first file is the document, checked as above with the files it
+names looked up in the package; a standard_surface input connected to a
+nodegraph names one of its outputs, of the input's type, and the graph's
+image and extract nodes are checked against their definitions (input
+names and types, the address modes' enum, extract's index within
+uimin..uimax, each connection to a node of the graph of the type the
+input has).
 
-usage: export_specs.py mtlx|usda|usdz FILE   (exit status 0 when it conforms)
+usage: export_specs.py mtlx|mtlx.zip|usda|usdz FILE   (exit status 0 when it conforms)
 """
 import math
 import os
 import re
+import struct
 import sys
 import xml.etree.ElementTree as ET
+import zipfile
 
 # name: (type, min, max) of ND_standard_surface_surfaceshader_100 (uimin, uimax;
 # uisoftmin/uisoftmax where only those are given: not a hard range, so None).
@@ -69,6 +78,17 @@ STANDARD_SURFACE_OUTPUT = "surfaceshader"
 SURFACEMATERIAL = {"surfaceshader": "surfaceshader", "backsurfaceshader": "surfaceshader",
                    "displacementshader": "displacementshader"}
 SURFACEMATERIAL_OUTPUT = "material"
+# ND_image_<type> (stdlib_defs.mtlx): its inputs, "default" of the node's own type.
+IMAGE_INPUTS = {"file": "filename", "layer": "string", "default": None, "texcoord": "vector2",
+                "uaddressmode": "string", "vaddressmode": "string", "filtertype": "string",
+                "framerange": "string", "frameoffset": "integer", "frameendaction": "string"}
+IMAGE_TYPES = {"float", "color3", "color4", "vector2", "vector3", "vector4"}
+IMAGE_ENUMS = {"uaddressmode": {"constant", "clamp", "periodic", "mirror"},
+               "vaddressmode": {"constant", "clamp", "periodic", "mirror"},
+               "filtertype": {"closest", "linear", "cubic"},
+               "frameendaction": {"constant", "clamp", "periodic", "mirror"}}
+# ND_extract_<type>: the type of its "in" and the uimax of its "index" (uimin 0); out float.
+EXTRACT_IN = {"color3": 2, "color4": 3, "vector2": 1, "vector3": 2, "vector4": 3}
 # What glint writes: the inputs that carry the fit (the rest keep their defaults).
 MTLX_FIT_INPUTS = {"base_color", "metalness", "specular_roughness", "specular_IOR"}
 
@@ -131,9 +151,56 @@ def check_files(path, names):
         need(os.path.exists(os.path.join(base, n)), "names a file not in the export: %s" % n)
 
 
-def check_mtlx(text, path=None):
+def check_graph(g):
+    """A nodegraph's image, extract and output elements against their node
+    definitions; returns ({output name: type}, [file names])."""
+    nodes, outputs, files = {}, {}, []
+    for el in g:
+        n = el.get("name")
+        need(n and n not in nodes and n not in outputs, "nodegraph %s: a missing or repeated name" % g.get("name"))
+        if el.tag == "output":
+            outputs[n] = el
+        else:
+            nodes[n] = el
+    for n, el in nodes.items():
+        t = el.get("type")
+        if el.tag == "image":
+            need(t in IMAGE_TYPES, "image %s of type %s has no nodedef" % (n, t))
+            ins = {}
+            for inp in el.findall("input"):
+                k, it = inp.get("name"), inp.get("type")
+                need(k in IMAGE_INPUTS, "image has no input %r" % k)
+                need(it == (IMAGE_INPUTS[k] or t), "image.%s is %s in the nodedef, %s here" % (k, IMAGE_INPUTS[k] or t, it))
+                if k in IMAGE_ENUMS:
+                    need(inp.get("value") in IMAGE_ENUMS[k], "image.%s: %r is not one of %s" % (k, inp.get("value"), sorted(IMAGE_ENUMS[k])))
+                ins[k] = inp
+            need("file" in ins and ins["file"].get("value"), "image %s reads no file" % n)
+            files.append(ins["file"].get("value"))
+        elif el.tag == "extract":
+            need(t == "float", "extract %s is %s, not float" % (n, t))
+            ins = {inp.get("name"): inp for inp in el.findall("input")}
+            need(set(ins) <= {"in", "index"} and "in" in ins, "extract %s: inputs %s" % (n, sorted(ins)))
+            it = ins["in"].get("type")
+            need(it in EXTRACT_IN, "extract has no nodedef for an input of type %s" % it)
+            src = nodes.get(ins["in"].get("nodename"))
+            need(src is not None and src.get("type") == it,
+                 "extract %s reads %r, not a %s node of the graph" % (n, ins["in"].get("nodename"), it))
+            if "index" in ins:
+                need(ins["index"].get("type") == "integer", "extract.index is integer in the nodedef")
+                k = int(ins["index"].get("value"))
+                need(0 <= k <= EXTRACT_IN[it], "extract.index %d outside 0..%d" % (k, EXTRACT_IN[it]))
+        else:
+            need(False, "nodegraph %s holds a %s node, which these checks do not know" % (g.get("name"), el.tag))
+    for n, el in outputs.items():
+        src = nodes.get(el.get("nodename"))
+        need(src is not None, "output %s names no node of the graph" % n)
+        need(el.get("type") == src.get("type"), "output %s is %s, its node %s" % (n, el.get("type"), src.get("type")))
+    return {n: el.get("type") for n, el in outputs.items()}, files
+
+
+def check_mtlx(text, path=None, in_package=None):
     """The MaterialX document's nodes against the node definitions; returns
-    {input: value} of the standard_surface."""
+    {input: value} of the standard_surface (a connected input: "<graph>.<output>")."""
     root = ET.fromstring(text)
     need(root.tag == "materialx", "root element is %s, not materialx" % root.tag)
     need(re.fullmatch(r"1\.3[89]", root.get("version", "")), "materialx version %r" % root.get("version"))
@@ -143,15 +210,24 @@ def check_mtlx(text, path=None):
     s, m = surfs[0], mats[0]
     need(s.get("type") == STANDARD_SURFACE_OUTPUT, "standard_surface type %r" % s.get("type"))
     need(m.get("type") == SURFACEMATERIAL_OUTPUT, "surfacematerial type %r" % m.get("type"))
-    values, files = {}, []
+    values, files, graphs = {}, [], {}
+    for g in root.findall("nodegraph"):
+        outs, gf = check_graph(g)
+        graphs[g.get("name")] = outs
+        files += gf
     for inp in s.findall("input"):
         n, t = inp.get("name"), inp.get("type")
         need(n in STANDARD_SURFACE, "standard_surface has no input %r" % n)
         want, lo, hi = STANDARD_SURFACE[n]
         need(t == want, "%s is %s in the nodedef, %s here" % (n, want, t))
         need(n not in values, "input %s given twice" % n)
-        if inp.get("nodename") or inp.get("nodegraph"):
+        if inp.get("nodegraph"):
+            g, o = inp.get("nodegraph"), inp.get("output")
+            need(g in graphs and o in graphs[g], "%s names %s.%s, which does not exist" % (n, g, o))
+            need(graphs[g][o] == t, "%s (%s) is fed a %s" % (n, t, graphs[g][o]))
+            values[n] = "%s.%s" % (g, o)
             continue
+        need(not inp.get("nodename"), "%s names a node outside a nodegraph" % n)
         if t == "filename":
             files.append(inp.get("value"))
             continue
@@ -168,11 +244,50 @@ def check_mtlx(text, path=None):
          "surfacematerial.surfaceshader does not name the standard_surface")
     for img in root.iter("image"):
         for inp in img.findall("input"):
-            if inp.get("type") == "filename":
+            if inp.get("type") == "filename" and inp.get("value") not in files:
                 files.append(inp.get("value"))
-    if path:
+    if in_package:
+        in_package(files)
+    elif path:
         check_files(path, files)
     return values
+
+
+def open_package(path, first, usdz):
+    """A zip's layout (the CRCs right, nothing encrypted, the first file's
+    name ending in one of `first`; for USDZ every file stored and its data
+    64-byte aligned); returns (ZipFile, infos, in_package: the check that
+    the files a document names are PNG images in the package)."""
+    with open(path, "rb") as f:
+        raw = f.read()
+    z = zipfile.ZipFile(path)
+    infos = z.infolist()
+    need(infos and infos[0].filename.endswith(first), "the package does not start with a %s file" % "/".join(first))
+    for i in infos:
+        need(not i.flag_bits & 1, "%s is encrypted" % i.filename)
+        if not usdz:
+            continue
+        need(i.compress_type == zipfile.ZIP_STORED, "%s is compressed" % i.filename)
+        h = i.header_offset
+        need(raw[h:h + 4] == b"PK\x03\x04", "no local header for %s" % i.filename)
+        nl, el = struct.unpack("<HH", raw[h + 26:h + 30])
+        need((h + 30 + nl + el) % 64 == 0, "%s's data is not 64-byte aligned" % i.filename)
+    need(z.testzip() is None, "a file's CRC does not match")
+    names = set(z.namelist())
+
+    def in_package(files):
+        for n in files:
+            need(n in names, "names a file not in the package: %s" % n)
+            need(z.read(n)[:8] == b"\x89PNG\r\n\x1a\n", "%s is not a PNG image" % n)
+    return z, infos, in_package
+
+
+def check_mtlx_zip(path):
+    """The MaterialX package: its layout, then its document with the files
+    it names in it; returns (values, sorted names)."""
+    z, infos, in_package = open_package(path, (".mtlx",), False)
+    values = check_mtlx(z.read(infos[0].filename).decode("utf-8"), in_package=in_package)
+    return values, sorted(z.namelist())
 
 
 def usd_prims(text):
@@ -306,31 +421,10 @@ def check_reader(name, body):
 
 def check_usdz(path):
     """The package's layout, then its layer with the files it names in it."""
-    import struct
-    import zipfile
-    with open(path, "rb") as f:
-        raw = f.read()
-    z = zipfile.ZipFile(path)
-    infos = z.infolist()
-    need(infos and infos[0].filename.endswith((".usda", ".usdc")), "the package does not start with a USD layer")
-    for i in infos:
-        need(i.compress_type == zipfile.ZIP_STORED, "%s is compressed" % i.filename)
-        need(not i.flag_bits & 1, "%s is encrypted" % i.filename)
-        h = i.header_offset
-        need(raw[h:h + 4] == b"PK\x03\x04", "no local header for %s" % i.filename)
-        nl, el = struct.unpack("<HH", raw[h + 26:h + 30])
-        need((h + 30 + nl + el) % 64 == 0, "%s's data is not 64-byte aligned" % i.filename)
-    need(z.testzip() is None, "a file's CRC does not match")
-    names = set(z.namelist())
-
-    def in_package(files):
-        for n in files:
-            need(n in names, "names a file not in the package: %s" % n)
-            need(z.read(n)[:8] == b"\x89PNG\r\n\x1a\n", "%s is not a PNG image" % n)
-
+    z, infos, in_package = open_package(path, (".usda", ".usdc"), True)
     layer = z.read(infos[0].filename).decode("utf-8")
     values, meshes = check_usda(layer, in_package)
-    return values, meshes, sorted(names)
+    return values, meshes, sorted(z.namelist())
 
 
 def check_usd_mesh(body, meta, mname):
@@ -363,14 +457,14 @@ def check_usd_mesh(body, meta, mname):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] not in ("mtlx", "usda", "usdz"):
-        sys.exit("usage: export_specs.py mtlx|usda|usdz FILE")
+    if len(sys.argv) != 3 or sys.argv[1] not in ("mtlx", "mtlx.zip", "usda", "usdz"):
+        sys.exit("usage: export_specs.py mtlx|mtlx.zip|usda|usdz FILE")
     try:
-        if sys.argv[1] == "usdz":
-            print(check_usdz(sys.argv[2]))
+        if sys.argv[1] in ("usdz", "mtlx.zip"):
+            print(check_usdz(sys.argv[2]) if sys.argv[1] == "usdz" else check_mtlx_zip(sys.argv[2]))
             sys.exit(0)
         with open(sys.argv[2], encoding="utf-8") as f:
             t = f.read()
         print(check_mtlx(t, sys.argv[2]) if sys.argv[1] == "mtlx" else check_usda(t, sys.argv[2]))
-    except (Bad, ET.ParseError, ValueError, KeyError) as e:
+    except (Bad, ET.ParseError, ValueError, KeyError, zipfile.BadZipFile) as e:
         sys.exit("%s: %s" % (sys.argv[2], e))

@@ -27,8 +27,8 @@ CLI = os.environ.get("GLINT_CLI") or os.path.join(
 # red plastic with gold stripes (test_exports.py's): a material of maps varies over the surface
 STRIPES = ("stripes:freq=3,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|"
            "ct:kd=0,f0=0.9/0.7/0.3,rough=0.25")
-EXTS = {"glb": "glb", "mtlx": "mtlx", "usda": "usda", "usdz": "usdz", "merl": "binary",
-        "brdf": "brdf", "package": "tar"}
+EXTS = {"glb": "glb", "mtlx": "mtlx", "mtlx_zip": "mtlx.zip", "usda": "usda", "usdz": "usdz",
+        "merl": "binary", "brdf": "brdf", "package": "tar"}
 
 
 def tok(t):
@@ -83,12 +83,12 @@ def test_01_the_list_says_how_close_each_comes(d):
         assert e["available"], e
         assert re.fullmatch(r"sphere-%s\.%s" % (S["material"][:8], EXTS[e["format"]]), e["file_name"]), e
         assert e["url"].startswith("/api/v1/materials/%s/" % S["material"]), e
-        if e["format"] in ("glb", "mtlx", "usda", "usdz"):
+        if e["format"] in ("glb", "mtlx", "mtlx_zip", "usda", "usdz"):
             assert e["how_close"]["rel_rms"] == fit["rel_rms"] and not e["how_close"]["exact"], e
         else:
             assert e["how_close"]["exact"] and e["how_close"]["rel_rms"] is None, e
-    assert [e["expensive"] for e in lst["exports"]] == [False, False, False, False, True, False,
-                                                        False]
+    assert [e["expensive"] for e in lst["exports"]] == [False, False, False, False, False, True,
+                                                        False, False]
     # ct rough 0.3 is glTF roughness sqrt(0.3); the fit is close on the painted views
     assert abs(fit["roughness"] - math.sqrt(0.3)) < 0.1 and 0 < fit["rel_rms"] < 0.1, fit
     S["fit"] = fit
@@ -152,7 +152,8 @@ def test_03_usda_as_the_preview_surface_spec_has_it(d):
 
 def test_04_every_download_is_an_attachment_with_a_name(d):
     setup(d)
-    paths = {"glb": "material.glb", "mtlx": "material.mtlx", "usda": "material.usda",
+    paths = {"glb": "material.glb", "mtlx": "material.mtlx", "mtlx_zip": "material.mtlx.zip",
+             "usda": "material.usda",
              "usdz": "material.usdz", "merl": "merl.binary", "brdf": "material.brdf",
              "package": "package"}
     for fmt, p in paths.items():
@@ -164,7 +165,7 @@ def test_04_every_download_is_an_attachment_with_a_name(d):
 def test_05_access_and_errors(d):
     setup(d)
     mid = S["material"]
-    for p in ("material.mtlx", "material.usda", "material.usdz", "exports"):
+    for p in ("material.mtlx", "material.mtlx.zip", "material.usda", "material.usdz", "exports"):
         d.get("/api/v1/materials/%s/%s" % (mid, p), status=401)
         d.get("/api/v1/materials/%s/%s" % (mid, p), headers=tok("x" * 40), status=403)
         d.get("/api/v1/materials/%s/%s" % ("0" * 32, p), headers=tok(S["session"]["view_token"]),
@@ -193,7 +194,7 @@ def test_06_a_material_that_varies_exports_its_average_and_says_so(d):
     print("maps:", json.dumps(lst["fit"]), [(e["format"], e["how_close"]["rel_rms"], e["expensive"])
                                             for e in lst["exports"]])
     assert lst["fit"]["spatial"], lst["fit"]
-    for fmt in ("glb", "usdz"):
+    for fmt in ("glb", "mtlx_zip", "usdz"):
         x = [e for e in lst["exports"] if e["format"] == fmt][0]
         assert x["expensive"] and "textures come closer" in x["how_close"]["note"], x
     # the average of gold and red plastic is further from either than a plain plastic's fit

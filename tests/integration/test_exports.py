@@ -11,7 +11,8 @@ reading the truth's colour; the published fits of the directory's
 merl56_fits.json offered as sgd:<name> and abc:<name> (here one material whose
 fits are Lambertian, painting as the analytic Lambert does); the glTF file of a material that varies over
 the surface (maps of gold stripes on red plastic) with its two PNG textures,
-parsed here (the GLB's chunks, the PNGs decoded with zlib)."""
+parsed here (the GLB's chunks, the PNGs decoded with zlib), and the USDZ and
+MaterialX packages holding the same textures (export_specs.py)."""
 import json
 import math
 import os
@@ -27,6 +28,7 @@ import zlib
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import fit_material, png_unfilter, run_tests  # noqa: E402
+import export_specs  # noqa: E402
 
 try:
     import numpy as np
@@ -411,6 +413,46 @@ def test_05_a_spatial_material_bakes_textures(d):
     assert zipfile.ZipFile(pkg).namelist() == ["glint.usda"]
     assert subprocess.run([sys.executable, SPECS, "usdz", pkg]).returncode == 0
     d.get("/api/v1/materials/%s/material.usdz?bake_res=x" % mid, headers=h, status=400)
+    # the MaterialX package: the document reading the same textures, checked against
+    # the node definitions (image, extract, nodegraph outputs) with its files in it
+    r = d.get("/api/v1/materials/%s/material.mtlx.zip?bake_res=16" % mid, headers=h, status=200)
+    assert r.headers["Content-Type"] == "application/zip", r.headers["Content-Type"]
+    assert "textures=16" in r.headers["X-Glint-Fit"], r.headers["X-Glint-Fit"]
+    assert re.search(r'filename="sphere-[0-9a-f]{8}\.mtlx\.zip"', r.headers["Content-Disposition"])
+    pkg = os.path.join(tmp, "m.mtlx.zip")
+    with open(pkg, "wb") as f:
+        f.write(r.content)
+    out = subprocess.run([sys.executable, SPECS, "mtlx.zip", pkg], capture_output=True, text=True)
+    print("mtlx.zip:", out.stdout.strip()[:300], out.stderr.strip())
+    assert out.returncode == 0, out.stderr
+    z = zipfile.ZipFile(pkg)
+    assert z.namelist() == ["glint.mtlx", "textures/base_color.png",
+                            "textures/metallic_roughness.png"], z.namelist()
+    assert [z.read("textures/base_color.png"), z.read("textures/metallic_roughness.png")] == \
+        glb_pngs
+    doc = z.read("glint.mtlx").decode()
+    assert 'nodegraph="NG_glint_%s" output="base_color_out"' % mid[:8] in doc, doc
+    # a document naming a texture the package lacks: the check says so
+    bad = os.path.join(tmp, "bad.mtlx.zip")
+    with zipfile.ZipFile(bad, "w", zipfile.ZIP_STORED) as w:
+        w.writestr("glint.mtlx", doc)
+        w.writestr("textures/base_color.png", z.read("textures/base_color.png"))
+    out = subprocess.run([sys.executable, SPECS, "mtlx.zip", bad], capture_output=True, text=True)
+    assert out.returncode != 0 and "not in the package" in out.stderr, out.stderr
+    # an extract index outside the nodedef's uimin..uimax: the check says so
+    try:
+        export_specs.check_mtlx(doc.replace('type="integer" value="2"', 'type="integer" value="3"'))
+        raise AssertionError("an extract index of 3 on a vector3 passed")
+    except export_specs.Bad as e:
+        assert "outside 0..2" in str(e), e
+    # without textures: the document alone, the average's values
+    r = d.get("/api/v1/materials/%s/material.mtlx.zip?bake_res=0" % mid, headers=h, status=200)
+    with open(pkg, "wb") as f:
+        f.write(r.content)
+    z = zipfile.ZipFile(pkg)
+    assert z.namelist() == ["glint.mtlx"] and "this is its average" in z.read("glint.mtlx").decode()
+    assert subprocess.run([sys.executable, SPECS, "mtlx.zip", pkg]).returncode == 0
+    d.get("/api/v1/materials/%s/material.mtlx.zip?bake_res=x" % mid, headers=h, status=400)
 
 
 run_tests(globals(), daemon_args=("--measured-dir", MDIR))

@@ -329,6 +329,22 @@ def test_07_material_files(d):
     validate(summ, "MaterialSummary.json")
     glb = v.gltf(mid)
     assert glb[:4] == b"glTF" and "roughness=" in glb.header("X-Glint-Gltf", ""), glb.headers
+    lst = v.exports(mid)
+    validate(lst, "ExportList.json")
+    assert "mtlx_zip" in [e["format"] for e in lst["exports"]], lst
+    mx = v.materialx(mid)
+    assert b"<standard_surface" in mx and "fit_rel_rms=" in mx.header("X-Glint-Fit", "")
+    mz = v.materialx(mid, textures=True, bake_res=8)
+    assert mz[:2] == b"PK" and "textures=0" in mz.header("X-Glint-Fit", ""), mz.headers
+    assert b"#usda 1.0" in v.usd(mid, mesh=False)[:20]
+    assert v.usd(mid, package=True, bake_res=0)[:2] == b"PK"
+    for bad in (lambda: v.materialx(mid, bake_res=8), lambda: v.usd(mid, bake_res=8),
+                lambda: v.usd(mid, package=True, mesh=False)):
+        try:
+            bad()
+            raise AssertionError("a contradictory export request was sent")
+        except ValueError:
+            pass
     brdf = v.brdf_explorer(mid)
     assert brdf.startswith(b"analytic\n") and b"vec3 BRDF(" in brdf
     merl = v.merl(mid)

@@ -1,4 +1,5 @@
-/* test_mtlx_usda.c: the MaterialX and USD writers (mtlx.h, usda.h, usdz.h).
+/* test_mtlx_usda.c: the MaterialX and USD writers and their packages
+ * (mtlx.h, usda.h, usdz.h, zip.h).
  * - The numbers written are the fit's, in the inputs the specifications
  *   name, at the extremes of their range (0 and 1) too.
  * - What is not a material (a value outside [0, 1], NaN, a negative
@@ -15,10 +16,15 @@
  * - Textures: the readers (primvars:st, two UsdUVTexture) connected to
  *   diffuseColor, metallic and roughness in the metallic workflow; refused
  *   without texture coordinates or with an asset path USD cannot read.
+ * - MaterialX textures: a nodegraph whose image nodes read the two
+ *   files (the base colour as srgb_texture, the other raw) and whose
+ *   extract nodes take roughness (G) and metalness (B), its outputs
+ *   connected to base_color, specular_roughness and metalness; specular_IOR
+ *   1.5 (glTF's core model); refused for a path the document cannot name.
  * - A USDZ package: stored files whose data start at multiples of 64
  *   bytes, in order, the central directory after them; refused when the
  *   first file is no USD layer, for a path outside the package, and for
- *   0 or too many files.  The spec checks of whole files are tests/integration/
+ *   0 or too many files.  The plain zip (zip.h) takes any first file.  The spec checks of whole files are tests/integration/
  *   export_specs.py's (run by the CLI and integration tests). */
 #include <math.h>
 #include <stdio.h>
@@ -192,6 +198,46 @@ TEST(usda_textures_connected)
     ASSERT(t == NULL);
 }
 
+TEST(mtlx_textures_connected)
+{
+    static const mtlx_textures tex = {"textures/base_color.png", "textures/metallic_roughness.png"};
+    static const char *const bad_paths[] = {"a<b.png", "../x.png", "/abs.png", "q\"x.png", ""};
+    gltf_pbr p = pbr(0.2, 0.4, 0.6, 1, 0.3);
+    char *t = NULL;
+    glint_err e;
+    p.spatial = 1;
+    ASSERT_OK(mtlx_write_textured(&p, "glint_ab", NULL, &tex, &t, &e));
+    ASSERT(strstr(t, "<nodegraph name=\"NG_glint_ab\">"));
+    ASSERT(strstr(t, "<image name=\"base_color_image\" type=\"color3\">"));
+    ASSERT(strstr(t, "value=\"textures/base_color.png\" colorspace=\"srgb_texture\""));
+    ASSERT(strstr(t, "<image name=\"metallic_roughness_image\" type=\"vector3\">"));
+    ASSERT(strstr(t, "value=\"textures/metallic_roughness.png\" />"));
+    ASSERT(strstr(t, "<extract name=\"roughness\" type=\"float\">\n"
+                     "      <input name=\"in\" type=\"vector3\" nodename=\"metallic_roughness_image\" />\n"
+                     "      <input name=\"index\" type=\"integer\" value=\"1\" />"));
+    ASSERT(strstr(t, "<extract name=\"metalness\" type=\"float\">\n"
+                     "      <input name=\"in\" type=\"vector3\" nodename=\"metallic_roughness_image\" />\n"
+                     "      <input name=\"index\" type=\"integer\" value=\"2\" />"));
+    ASSERT(strstr(t, "<input name=\"base_color\" type=\"color3\" nodegraph=\"NG_glint_ab\" "
+                     "output=\"base_color_out\" />"));
+    ASSERT(strstr(t, "<input name=\"metalness\" type=\"float\" nodegraph=\"NG_glint_ab\" "
+                     "output=\"metalness_out\" />"));
+    ASSERT(strstr(t, "<input name=\"specular_roughness\" type=\"float\" nodegraph=\"NG_glint_ab\" "
+                     "output=\"roughness_out\" />"));
+    ASSERT(strstr(t, "name=\"specular_IOR\" type=\"float\" value=\"1.5\""));
+    ASSERT(strstr(t, "<output name=\"roughness_out\" type=\"float\" nodename=\"roughness\" />"));
+    ASSERT(strstr(t, "read from the .glb's baked textures") && !strstr(t, "this is its average"));
+    ASSERT(!strstr(t, "value=\"0.2, 0.4, 0.6\"")); /* the average is not an input */
+    free(t);
+    for (size_t i = 0; i < sizeof bad_paths / sizeof bad_paths[0]; i++) {
+        mtlx_textures b = {bad_paths[i], "mr.png"};
+        ASSERT_EQ(mtlx_write_textured(&p, "g", NULL, &b, &t, &e), GLINT_EINVAL);
+        b.base_color = "bc.png", b.metallic_roughness = bad_paths[i];
+        ASSERT_EQ(mtlx_write_textured(&p, "g", NULL, &b, &t, &e), GLINT_EINVAL);
+    }
+    ASSERT(t == NULL);
+}
+
 /* Read a little-endian integer of k bytes at p. */
 static unsigned long le(const unsigned char *p, int k)
 {
@@ -204,7 +250,7 @@ static unsigned long le(const unsigned char *p, int k)
 TEST(usdz_packages_are_stored_and_aligned)
 {
     static const char layer[] = "#usda 1.0\n", png[] = "\x89PNG\r\n\x1a\n....";
-    usdz_file f[3] = {{"glint.usda", layer, sizeof layer - 1},
+    zip_entry f[3] = {{"glint.usda", layer, sizeof layer - 1},
                       {"textures/base_color.png", png, sizeof png - 1},
                       {"t.png", png, 3}};
     unsigned char *z = NULL;
@@ -223,7 +269,7 @@ TEST(usdz_packages_are_stored_and_aligned)
         nl = le(z + at + 26, 2);
         el = le(z + at + 28, 2);
         ASSERT(memcmp(z + at + 30, f[i].path, nl) == 0);
-        ASSERT_EQ((at + 30 + nl + el) % USDZ_ALIGN, 0UL);
+        ASSERT_EQ((at + 30 + nl + el) % ZIP_ALIGN, 0UL);
         ASSERT(memcmp(z + at + 30 + nl + el, f[i].data, f[i].len) == 0);
         at += 30 + nl + el + sz;
     }
@@ -235,6 +281,11 @@ TEST(usdz_packages_are_stored_and_aligned)
     /* refused: a first file that is no layer, bad paths, too many files */
     f[0].path = "a.png";
     ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
+    f[0].path = "glint.mtlx"; /* a plain zip takes any first file */
+    ASSERT_OK(zip_pack(f, 3, &out, &len, &e));
+    ASSERT_EQ(le((unsigned char *)out + 26, 2), 10UL);
+    ASSERT(memcmp((unsigned char *)out + 30, "glint.mtlx", 10) == 0);
+    free(out);
     f[0].path = "glint.usda";
     f[1].path = "../x.png";
     ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
@@ -242,7 +293,7 @@ TEST(usdz_packages_are_stored_and_aligned)
     ASSERT_EQ(usdz_pack(f, 3, &out, &len, &e), GLINT_EINVAL);
     f[1].path = "ok.png";
     ASSERT_EQ(usdz_pack(f, 0, &out, &len, &e), GLINT_ERANGE);
-    ASSERT_EQ(usdz_pack(f, USDZ_MAX_FILES + 1, &out, &len, &e), GLINT_ERANGE);
+    ASSERT_EQ(usdz_pack(f, ZIP_MAX_FILES + 1, &out, &len, &e), GLINT_ERANGE);
     ASSERT(out == NULL);
 }
 
@@ -317,6 +368,7 @@ TEST_LIST{
     TEST_ENTRY(usda_material_and_mesh),
     TEST_ENTRY(the_khr_extensions_in_both_documents),
     TEST_ENTRY(usda_textures_connected),
+    TEST_ENTRY(mtlx_textures_connected),
     TEST_ENTRY(usdz_packages_are_stored_and_aligned),
 };
 TEST_MAIN()

@@ -1,5 +1,5 @@
-/* usdz.c: USDZ packages (usdz.h): a stored zip with 64-byte aligned data. */
-#include "usdz.h"
+/* zip.c: stored zip archives with aligned data (zip.h). */
+#include "zip.h"
 
 #include <libdeflate.h>
 #include <stdint.h>
@@ -9,7 +9,7 @@
 #define LOCAL_HEADER 30
 #define CENTRAL_HEADER 46
 #define END_RECORD 22
-#define PAD_ID 0x1986 /* a private extra-field id for the padding (as OpenUSD's writer pads) */
+#define PAD_ID 0x1986 /* a private extra-field id for the padding (as OpenUSD's USDZ writer pads) */
 
 static void put16(unsigned char *p, unsigned v)
 {
@@ -34,38 +34,29 @@ static int path_ok(const char *p)
     return 1;
 }
 
-static int is_layer(const char *p)
-{
-    size_t n = strlen(p);
-    return n > 5 && (strcmp(p + n - 5, ".usda") == 0 || strcmp(p + n - 5, ".usdc") == 0);
-}
-
 /* The padding a local header needs so that its data starts aligned: the
  * extra field (4 bytes of id and size, then zeros), 0 when none is needed. */
 static size_t pad_for(size_t header_at, size_t name_len)
 {
     size_t data_at = header_at + LOCAL_HEADER + name_len, pad;
-    if (data_at % USDZ_ALIGN == 0)
+    if (data_at % ZIP_ALIGN == 0)
         return 0;
-    pad = USDZ_ALIGN - data_at % USDZ_ALIGN;
-    return pad < 4 ? pad + USDZ_ALIGN : pad; /* room for the field's own 4 bytes */
+    pad = ZIP_ALIGN - data_at % ZIP_ALIGN;
+    return pad < 4 ? pad + ZIP_ALIGN : pad; /* room for the field's own 4 bytes */
 }
 
-int usdz_pack(const usdz_file *files, int n, void **out, size_t *len, glint_err *err)
+int zip_pack(const zip_entry *files, int n, void **out, size_t *len, glint_err *err)
 {
     size_t total = 0, central = 0, at = 0, cd_at;
-    uint32_t crc[USDZ_MAX_FILES];
-    size_t offset[USDZ_MAX_FILES], pad[USDZ_MAX_FILES];
+    uint32_t crc[ZIP_MAX_FILES];
+    size_t offset[ZIP_MAX_FILES], pad[ZIP_MAX_FILES];
     unsigned char *b;
 
     *out = NULL;
     *len = 0;
-    if (n < 1 || n > USDZ_MAX_FILES)
+    if (n < 1 || n > ZIP_MAX_FILES)
         return glint_err_set(err, GLINT_ERANGE, "a package of %d files (1..%d)", n,
-                             USDZ_MAX_FILES);
-    if (!is_layer(files[0].path ? files[0].path : ""))
-        return glint_err_set(err, GLINT_EINVAL, "a USDZ package starts with a USD layer, not %s",
-                             files[0].path ? files[0].path : "(none)");
+                             ZIP_MAX_FILES);
     for (int i = 0; i < n; i++) {
         size_t nl;
         if (!path_ok(files[i].path) || (!files[i].data && files[i].len))
