@@ -511,6 +511,8 @@ static json_t *fit_json(const gltf_pbr *p)
     json_t *ext = json_object_get(o, "extensions");
     for (int i = 0; i < n; i++)
         json_array_append_new(ext, json_string(names[i]));
+    if (o)
+        json_object_set_new(o, "anisotropy", json_real(p->anisotropy));
     if (o && p->note[0])
         json_object_set_new(o, "note", json_string(p->note));
     return o;

@@ -200,6 +200,7 @@ static void material_fn(const void *ctx, const double n[3], const double wi[3],
 
 int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_err *err)
 {
+    double aniso;
     int rc;
     memset(out, 0, sizeof *out);
     if (!m || !m->method)
@@ -207,7 +208,44 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
     if ((rc = gltf_fit(material_fn, m, s, out, err)))
         return rc;
     out->spatial = material_spatial(m);
-    return gltf_direct_choose(m, s, out, err);
+    aniso = out->anisotropy;
+    if ((rc = gltf_direct_choose(m, s, out, err)))
+        return rc;
+    out->anisotropy = aniso;
+    if (aniso > GLTF_ANISO_NOTE) {
+        size_t k = strlen(out->note);
+        snprintf(out->note + k, sizeof out->note - k,
+                 "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
+                 "changes by %.0f%%): the glTF material is its isotropic fit "
+                 "(KHR_materials_anisotropy is not written).",
+                 k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso);
+    }
+    return 0;
+}
+
+/* How much fn changes over P's pairs when both directions turn
+ * GLTF_ANISO_TURN about the normal (Rodrigues' rotation): the relative RMS
+ * of the change of f cos (its cosine unchanged by the turn). */
+static double anisotropy_of(gltf_fn fn, const void *ctx, const gltf_pairs *P, double den)
+{
+    double c = cos(GLTF_ANISO_TURN), sn = sin(GLTF_ANISO_TURN), num = 0.0;
+    for (int k = 0; k < P->n; k++) {
+        const double *n = P->nn[k];
+        double d[2][3], y[3];
+        for (int w = 0; w < 2; w++) {
+            const double *v = w ? P->wo[k] : P->wi[k];
+            double nv = n[0] * v[0] + n[1] * v[1] + n[2] * v[2];
+            double x[3] = {n[1] * v[2] - n[2] * v[1], n[2] * v[0] - n[0] * v[2],
+                           n[0] * v[1] - n[1] * v[0]};
+            for (int e = 0; e < 3; e++)
+                d[w][e] = v[e] * c + x[e] * sn + n[e] * nv * (1.0 - c);
+        }
+        fn(ctx, n, d[0], d[1], y);
+        for (int e = 0; e < 3; e++)
+            if (isfinite(y[e]))
+                num += (y[e] - P->y[k][e]) * (y[e] - P->y[k][e]);
+    }
+    return den > 0.0 ? sqrt(num / den) : 0.0;
 }
 
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, glint_err *err)
@@ -253,6 +291,7 @@ int gltf_fit(gltf_fn fn, const void *ctx, const samples *smp, gltf_pbr *out, gli
     out->rel_rms_fitted = out->rel_rms;
     out->rel_rms_exact = NAN;
     out->pairs = P.n;
+    out->anisotropy = anisotropy_of(fn, ctx, &P, den);
     gltf_pairs_free(&P);
     return 0;
 }
@@ -481,8 +520,9 @@ static int extras_path(json_t *g, const gltf_pbr *p)
             g, "fit", json_string("the pbr material's own parameters mapped onto glTF with the "
                                   "KHR extensions (closer than the fit: rel_rms_exact against "
                                   "rel_rms_fitted at the painted views' samples)"));
+    rc |= json_object_set_new(g, "anisotropy", json_real(p->anisotropy));
     if (p->note[0])
-        rc |= json_object_set_new(g, "exact_note", json_string(p->note));
+        rc |= json_object_set_new(g, "note", json_string(p->note));
     return rc ? -1 : 0;
 }
 

@@ -20,7 +20,10 @@
  * minimized exactly on [0, 1]; metallic and roughness are searched on a
  * grid and refined.  The relative RMS of the best fit is reported: what the
  * material loses in the glTF model (a painted highlight no GGX lobe has, a
- * fit's extrapolation, anisotropy).
+ * fit's extrapolation, anisotropy).  So is how anisotropic the material is
+ * (out->anisotropy: its change when the pairs turn about the normal); the
+ * core model is isotropic and no anisotropy extension is written, so above
+ * GLTF_ANISO_NOTE the note says the file holds its isotropic fit.
  *
  * pbr materials.  A material of pbr, pbr_env or pbr_detail (its base) is
  * physically based already: its parameters are also mapped directly onto
@@ -104,9 +107,18 @@ typedef struct gltf_pbr {
     int smith;             /* the form of Smith's G the three errors were measured with:
                               GLTF_SMITH_SEPARABLE (the fit's own, gltf_brdf) or, for a pbr
                               material, GLTF_SMITH_CORRELATED (gltf_direct.c says why) */
-    char note[GLTF_NOTE_MAX]; /* what the mapping clamps or leaves out ("" when nothing or
-                                 when no mapping was made) */
+    double anisotropy;     /* how much the material turns with the surface: the relative
+                              RMS change of its f cos over the fit's pairs when both
+                              directions turn GLTF_ANISO_TURN about the normal (0: it is
+                              isotropic); the glTF material is isotropic */
+    char note[GLTF_NOTE_MAX]; /* what the mapping clamps or leaves out, and an anisotropic
+                                 material's isotropic export ("" when nothing) */
 } gltf_pbr;
+
+/* The turn (radians: 75 degrees, which no symmetry of a lobe undoes), and the
+ * change above which the note says the glTF material is isotropic. */
+#define GLTF_ANISO_TURN 1.3089969389957472
+#define GLTF_ANISO_NOTE 0.02
 
 /* f of the glTF model at unit n, wi (L), wo (V) (OUT: rgb, no cosine; 0
  * below either horizon): the core model above, or with p's extensions the

@@ -14,7 +14,9 @@
 // material that varies over the surface (maps of a checker of gold and red
 // plastic): its MaterialX package read by three.js's own MaterialX reader
 // (MaterialXLoader: the document and its textures from the .mtlx.zip) and
-// rendered beside the .glb, both against glint's render.
+// rendered beside the .glb, both against glint's render.  And a brushed
+// finish fitted as brushed: the Export tab says glTF, MaterialX and USD carry
+// its unbrushed look.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -407,5 +409,26 @@ run({
     assertLE(c.mxVsGlb.onlyOne, 0.01 * c.mxVsGlb.pixels, 'the silhouettes agree');
     assertLE(c.mxVsGlb.rel, MTLX_GLB_BOUND, 'three.js\'s render of the MaterialX package against its render of the .glb');
     assertLE(c.mxVsGlint.rel, MTLX_GLINT_BOUND, 'three.js\'s render of the MaterialX package against glint\'s render of the material');
+  },
+  async 'a brushed finish: the Export tab says the shared formats carry its unbrushed look'(t) {
+    const { url, session } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const page = await t.page();
+    await openStudio(page, url);
+    await page.selectOption('#preset-sel', 'satin');
+    await page.click('#preset-apply');
+    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
+                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await settled(page, 0);
+    await page.selectOption('#fit-method', 'hf2d');
+    await page.click('#fit-btn');
+    await page.waitForFunction(() => window.glint.lastFit && window.glint.lastFit.id, null, { timeout: 120000 });
+    const mid = await page.evaluate(() => window.glint.lastFit.id);
+    await page.click('.tabs button[data-tab="export"]');
+    await page.waitForSelector('#dl-glb:not([disabled])', { timeout: 120000 });
+    const rows = await page.locator('#exports li').allInnerTexts();
+    const lst = await t.daemon.api('GET', `/materials/${mid}/exports`, undefined, { 'X-Glint-Token': session.view_token });
+    t.log(`hf2d on the brushed satin: anisotropy ${lst.fit.anisotropy.toFixed(3)}; the tab's last line: ${rows[rows.length - 1]}`);
+    assert(lst.fit.anisotropy > 0.02, 'the fit measures the brushed look');
+    assert(rows.some(r => /brushed/.test(r) && /unbrushed look/.test(r)), 'the Export tab says what the shared formats carry');
   },
 });

@@ -180,6 +180,13 @@ def test_02_an_anisotropic_material_is_averaged(d):
     print("X-Glint-Merl:", info)
     assert "anisotropic=1" in info and "azimuths=8" in info, info
     assert len(r.content) == 34992012
+    # the glTF, MaterialX and USD exports are isotropic: the fit measures how much the
+    # material turns with the surface and the note says what the files hold
+    lst = d.get("/api/v1/materials/%s/exports" % mid, headers=tok(s["view_token"]), status=200,
+                schema="ExportList.json").json()
+    print("anisotropy:", lst["fit"]["anisotropy"], lst["fit"].get("note"))
+    assert lst["fit"]["anisotropy"] > 0.1, lst["fit"]
+    assert "anisotropic" in lst["fit"]["note"] and "isotropic fit" in lst["fit"]["note"], lst["fit"]
     # BRDF Explorer's file for hf2d: its 2D factors embedded, no texture bound
     r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(s["view_token"]), status=200)
     text = r.text

@@ -122,7 +122,32 @@ TEST(the_fit_recovers_what_the_model_can_represent)
         printf("  a Phong lobe: relative RMS %.4f (what the glTF model cannot hold)\n",
                got.rel_rms);
         ASSERT_LT(0.01, got.rel_rms);
+        ASSERT_LT(got.anisotropy, 1e-9); /* isotropic: the same when the pairs turn */
     }
+}
+
+/* An anisotropic material is measured as one (the glTF model is isotropic):
+ * Ward's lobe 0.1 along the tangent and 0.4 along the bitangent changes by
+ * far more than GLTF_ANISO_NOTE when the pairs turn about the normal; the
+ * same lobe at 0.2 both ways does not change at all. */
+TEST(anisotropy_is_measured)
+{
+    static const char *const specs[2] = {"ward:kd=0.2,ks=0.5,rough=0.1,rough_y=0.4",
+                                         "ward:kd=0.2,ks=0.5,rough=0.2,rough_y=0.2"};
+    double got_a[2];
+    for (int t = 0; t < 2; t++) {
+        brdf b;
+        cosf_ctx x = {NULL, &b};
+        gltf_pbr got;
+        glint_err e;
+        ASSERT_OK(brdf_parse(specs[t], &b, &e));
+        ASSERT_OK(gltf_fit(rad, &x, NULL, &got, &e));
+        got_a[t] = got.anisotropy;
+        printf("  %s: anisotropy %.4f, fit relative RMS %.4f\n", specs[t], got.anisotropy,
+               got.rel_rms);
+    }
+    ASSERT_LT(GLTF_ANISO_NOTE * 5, got_a[0]);
+    ASSERT_LT(got_a[1], 1e-9);
 }
 
 TEST(a_fitted_material_at_its_painted_samples)
@@ -718,6 +743,7 @@ TEST(baking_refuses_what_it_cannot_do)
 TEST_LIST{
     TEST_ENTRY(a_metal_is_glints_cook_torrance_with_alpha_roughness_squared),
     TEST_ENTRY(the_fit_recovers_what_the_model_can_represent),
+    TEST_ENTRY(anisotropy_is_measured),
     TEST_ENTRY(a_fitted_material_at_its_painted_samples),
     TEST_ENTRY(the_glb_file_holds_the_mesh_and_the_material),
     TEST_ENTRY(the_roughness_convention_by_rendering_both),
