@@ -209,7 +209,7 @@ static int export_fit(http_req *req, const char *mid, const export_src *x, gltf_
  * parameters mapped, or the fit) and both errors (gltf.h). */
 static void path_info(const gltf_pbr *p, char *out, size_t cap)
 {
-    const char *names[3];
+    const char *names[GLTF_KHR_MAX];
     int n = gltf_khr_names(p, names), k;
     k = snprintf(out, cap, "; export=%s; rel_rms_fitted=%.4f", p->exact ? "exact" : "fitted",
                  p->rel_rms_fitted);
@@ -444,6 +444,10 @@ static json_t *export_how_close(const export_kind *k, const gltf_pbr *p, int spa
                              : "the material itself");
     if (!p)
         return json_pack("{s:n, s:b, s:s}", "rel_rms", "exact", 0, "note", why);
+    if (p->aniso.used && strcmp(k->format, "glb") == 0)
+        return json_pack("{s:f, s:b, s:s}", "rel_rms", p->aniso.rel_rms, "exact", 0, "note",
+                         "the anisotropic fit (KHR_materials_anisotropy) against the material "
+                         "on the painted views (relative RMS)");
     if (p->exact)
         return json_pack("{s:f, s:b, s:s}", "rel_rms", p->rel_rms, "exact", 0, "note",
                          "the pbr material's own parameters (with KHR extensions in the .glb), "
@@ -496,7 +500,7 @@ static const char *brdf_unavailable(app *a, const char *mid, char *buf, size_t c
  * exports carry, which path made it and both errors (gltf.h). */
 static json_t *fit_json(const gltf_pbr *p)
 {
-    const char *names[3];
+    const char *names[GLTF_KHR_MAX];
     int n = gltf_khr_names(p, names);
     json_t *o = json_pack("{s:[f,f,f], s:f, s:f, s:f, s:i, s:b, s:s, s:f, s:o, s:s, s:[]}",
                           "base_color", p->base[0], p->base[1], p->base[2], "metallic",
@@ -513,6 +517,13 @@ static json_t *fit_json(const gltf_pbr *p)
         json_array_append_new(ext, json_string(names[i]));
     if (o)
         json_object_set_new(o, "anisotropy", json_real(p->anisotropy));
+    if (o && p->aniso.used)
+        json_object_set_new(
+            o, "anisotropic_fit",
+            json_pack("{s:f, s:f, s:[f,f,f], s:f, s:f, s:f}", "strength", p->aniso.strength,
+                      "rotation", p->aniso.rotation, "base_color", p->aniso.base[0],
+                      p->aniso.base[1], p->aniso.base[2], "metallic", p->aniso.metallic,
+                      "roughness", p->aniso.roughness, "rel_rms", p->aniso.rel_rms));
     if (o && p->note[0])
         json_object_set_new(o, "note", json_string(p->note));
     return o;

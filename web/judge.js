@@ -192,7 +192,11 @@ export class Judge extends EventTarget {
     this.api.get(`/materials/${m.id}/exports`, { what: 'Listing the exports' }).then(lst => {
       if (m !== this.mat) return;
       ul.replaceChildren(...lst.exports.map(x => this.exportRow(m, x)));
-      if (lst.fit && lst.fit.anisotropy > 0.02) {
+      if (lst.fit && lst.fit.anisotropic_fit) {
+        ul.appendChild(exportNote('This finish is brushed (its highlight turns with the surface): the glTF file ' +
+          'carries the brushing (KHR_materials_anisotropy); MaterialX and USD carry its closest unbrushed look; ' +
+          'the .brdf file and the glint package keep it exactly.'));
+      } else if (lst.fit && lst.fit.anisotropy > 0.02) {
         ul.appendChild(exportNote('This finish is brushed (its highlight turns with the surface): glTF, ' +
           'MaterialX and USD carry its closest unbrushed look; the .brdf file and the glint package keep it.'));
       }

@@ -349,10 +349,10 @@ int cmd_export_brdf(int argc, char **argv)
 /* ", \"export\": ..., \"rel_rms_fitted\": ..., \"rel_rms_exact\": ...,
  * \"extensions\": [...]" of the printed JSON: which path the material took
  * (its pbr parameters mapped, or the fit), both errors and the KHR
- * extensions (gltf.h).  Returns buf. */
+ * extensions (gltf.h), and an anisotropic material's fit.  Returns buf. */
 static const char *path_json(const gltf_pbr *p, char *buf, size_t cap)
 {
-    const char *names[3];
+    const char *names[GLTF_KHR_MAX];
     int n = gltf_khr_names(p, names), k;
     k = snprintf(buf, cap, ", \"export\": \"%s\", \"rel_rms_fitted\": %.4f",
                  p->exact ? "exact parameters" : "fitted", p->rel_rms_fitted);
@@ -363,7 +363,14 @@ static const char *path_json(const gltf_pbr *p, char *buf, size_t cap)
     for (int i = 0; i < n && k > 0 && (size_t)k < cap; i++)
         k += snprintf(buf + k, cap - (size_t)k, "%s\"%s\"", i ? ", " : "", names[i]);
     if (k > 0 && (size_t)k < cap)
-        snprintf(buf + k, cap - (size_t)k, "]");
+        k += snprintf(buf + k, cap - (size_t)k, "]");
+    if (k > 0 && (size_t)k < cap && p->aniso.used) /* the .glb's, in place of the numbers above */
+        snprintf(buf + k, cap - (size_t)k,
+                 ", \"anisotropic_fit\": {\"strength\": %.4f, \"rotation\": %.4f, "
+                 "\"base_color\": [%.4f, %.4f, %.4f], \"metallic\": %.4f, \"roughness\": %.4f, "
+                 "\"rel_rms\": %.4f}",
+                 p->aniso.strength, p->aniso.rotation, p->aniso.base[0], p->aniso.base[1],
+                 p->aniso.base[2], p->aniso.metallic, p->aniso.roughness, p->aniso.rel_rms);
     return buf;
 }
 

@@ -11,6 +11,7 @@
 
 #include "internal/gltf_int.h"
 #include "raster.h"
+#include "vec3.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -212,13 +213,29 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
     if ((rc = gltf_direct_choose(m, s, out, err)))
         return rc;
     out->anisotropy = aniso;
+    if (aniso > GLTF_ANISO_NOTE && !out->spatial && !out->exact &&
+        (rc = gltf_fit_aniso(material_fn, m, s, out, err)))
+        return rc;
     if (aniso > GLTF_ANISO_NOTE) {
         size_t k = strlen(out->note);
-        snprintf(out->note + k, sizeof out->note - k,
-                 "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
-                 "changes by %.0f%%): the glTF material is its isotropic fit "
-                 "(KHR_materials_anisotropy is not written).",
-                 k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso);
+        if (out->aniso.used)
+            snprintf(out->note + k, sizeof out->note - k,
+                     "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
+                     "changes by %.0f%%): the .glb carries it with KHR_materials_anisotropy "
+                     "(strength %.2f, rotation %.0f degrees from glint's tangent; relative RMS "
+                     "%.4f against the isotropic fit's %.4f); MaterialX and USD hold the "
+                     "isotropic fit.",
+                     k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso,
+                     out->aniso.strength, out->aniso.rotation * 180.0 / M_PI, out->aniso.rel_rms,
+                     out->rel_rms);
+        else
+            snprintf(out->note + k, sizeof out->note - k,
+                     "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
+                     "changes by %.0f%%): the glTF material is its isotropic fit%s.",
+                     k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso,
+                     out->spatial ? " (KHR_materials_anisotropy is written for a material "
+                                    "uniform over the surface only)"
+                                  : "");
     }
     return 0;
 }
@@ -315,7 +332,7 @@ static json_t *view_of(size_t off, size_t len, int target)
 static int add_extensions(json_t *root, json_t *mat, const gltf_pbr *p)
 {
     const gltf_khr *k = &p->khr;
-    const char *names[3];
+    const char *names[GLTF_KHR_MAX];
     json_t *ext, *used;
     int n = gltf_khr_names(p, names), rc = 0;
     if (!n)
@@ -335,8 +352,30 @@ static int add_extensions(json_t *root, json_t *mat, const gltf_pbr *p)
         rc |= json_object_set_new(ext, "KHR_materials_clearcoat",
                                   json_pack("{s:f, s:f}", "clearcoatFactor", k->clearcoat,
                                             "clearcoatRoughnessFactor", k->clearcoat_roughness));
+    if (p->aniso.used)
+        rc |= json_object_set_new(ext, "KHR_materials_anisotropy",
+                                  json_pack("{s:f, s:f}", "anisotropyStrength", p->aniso.strength,
+                                            "anisotropyRotation", p->aniso.rotation));
     rc |= json_object_set_new(mat, "extensions", ext);
     rc |= json_object_set_new(root, "extensionsUsed", used);
+    return rc ? -1 : 0;
+}
+
+/* The mesh's TANGENT (glint's frame, KHR_materials_anisotropy's direction
+ * before its rotation): buffer view and accessor 4, VEC4 floats. */
+static int add_tangents(json_t *root, size_t off_tan, size_t nv)
+{
+    json_t *prim = json_array_get(
+        json_object_get(json_array_get(json_object_get(root, "meshes"), 0), "primitives"), 0);
+    int rc = 0;
+    rc |= json_array_append_new(json_object_get(root, "bufferViews"),
+                                view_of(off_tan, 16 * nv, 34962));
+    rc |= json_array_append_new(json_object_get(root, "accessors"),
+                                json_pack("{s:i, s:i, s:I, s:s}", "bufferView", 4,
+                                          "componentType", 5126, "count", (json_int_t)nv,
+                                          "type", "VEC4"));
+    rc |= json_object_set_new(json_object_get(prim, "attributes"), "TANGENT",
+                              json_integer(4));
     return rc ? -1 : 0;
 }
 
@@ -379,7 +418,10 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
                    const char *extras_json, void **glb, size_t *len, glint_err *err)
 {
     size_t nv, nt, off_pos, off_nrm, off_uv, off_idx, off_bc = 0, off_mr = 0, bin_len, json_len,
-                                                      json_pad, bin_pad, total;
+                                                      json_pad, bin_pad, total, off_tan = 0;
+    int aniso = p && p->aniso.used && !bake;
+    gltf_pbr core_p;
+    const gltf_pbr *core = &core_p;
     size_t len_bc = 0, len_mr = 0;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     json_t *root, *extras = NULL, *mat;
@@ -394,6 +436,13 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
         return glint_err_set(err, GLINT_EINVAL, "no mesh to write");
     if (!p)
         return glint_err_set(err, GLINT_EINVAL, "no glTF material to write");
+    core_p = *p; /* the core parameters written: the anisotropic fit's where it is kept */
+    if (aniso) {
+        memcpy(core_p.base, p->aniso.base, sizeof core_p.base);
+        core_p.metallic = p->aniso.metallic;
+        core_p.roughness = p->aniso.roughness;
+    } else
+        core_p.aniso.used = 0;
     if (bake && !msh->uv)
         return glint_err_set(err, GLINT_EINVAL,
                              "the mesh has no texture coordinates to map baked textures with");
@@ -410,6 +459,10 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
     off_uv = off_nrm + 12 * nv;
     off_idx = off_uv + 8 * nv;
     bin_len = off_idx + 12 * nt;
+    if (aniso) { /* the tangents after the indices (an anisotropic material has no bake) */
+        off_tan = bin_len;
+        bin_len = off_tan + 16 * nv;
+    }
     if (bake) { /* the images after the indices, each at a multiple of 4 */
         off_bc = bin_len;
         off_mr = off_bc + len_bc + (4 - len_bc % 4) % 4;
@@ -422,9 +475,9 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
             hi[e] = v > hi[e] ? v : hi[e];
         }
     mat = json_pack("{s:s, s:{s:[f,f,f,f], s:f, s:f}}", "name", name ? name : "glint",
-                    "pbrMetallicRoughness", "baseColorFactor", p->base[0], p->base[1],
-                    p->base[2], 1.0, "metallicFactor", p->metallic, "roughnessFactor",
-                    p->roughness);
+                    "pbrMetallicRoughness", "baseColorFactor", core->base[0], core->base[1],
+                    core->base[2], 1.0, "metallicFactor", core->metallic, "roughnessFactor",
+                    core->roughness);
     if (!mat)
         json_decref(extras);
     else if (extras)
@@ -447,7 +500,7 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC3", "bufferView", 2,
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC2", "bufferView", 3,
         "componentType", 5125, "count", (json_int_t)(3 * nt), "type", "SCALAR");
-    if (root && (add_extensions(root, mat, p) ||
+    if (root && (add_extensions(root, mat, p) || (aniso && add_tangents(root, off_tan, nv)) ||
                  (bake && add_textures(root, mat, off_bc, len_bc, off_mr, len_mr)))) {
         json_decref(root);
         root = NULL;
@@ -486,6 +539,13 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
         memcpy(bin + off_uv + 8 * i, uv, 8);
     }
     memcpy(bin + off_idx, msh->tri, 12 * nt);
+    for (size_t i = 0; aniso && i < nv; i++) { /* glint's tangent frame, w 1: b = n x t */
+        v3 t, b;
+        float tw[4];
+        v3_frame(v3_make(msh->nrm[3 * i], msh->nrm[3 * i + 1], msh->nrm[3 * i + 2]), &t, &b);
+        tw[0] = (float)t.x, tw[1] = (float)t.y, tw[2] = (float)t.z, tw[3] = 1.0f;
+        memcpy(bin + off_tan + 16 * i, tw, 16);
+    }
     if (bake) {
         memcpy(bin + off_bc, png_bc, len_bc);
         memset(bin + off_bc + len_bc, 0, off_mr - off_bc - len_bc);
@@ -521,6 +581,14 @@ static int extras_path(json_t *g, const gltf_pbr *p)
                                   "KHR extensions (closer than the fit: rel_rms_exact against "
                                   "rel_rms_fitted at the painted views' samples)"));
     rc |= json_object_set_new(g, "anisotropy", json_real(p->anisotropy));
+    if (p->aniso.used)
+        rc |= json_object_set_new(
+            g, "anisotropic_fit",
+            json_pack("{s:f, s:f, s:[f,f,f], s:f, s:f, s:f, s:s}", "strength", p->aniso.strength,
+                      "rotation", p->aniso.rotation, "base_color", p->aniso.base[0],
+                      p->aniso.base[1], p->aniso.base[2], "metallic", p->aniso.metallic,
+                      "roughness", p->aniso.roughness, "rel_rms", p->aniso.rel_rms, "tangent",
+                      "glint's: normalize(Z x n), +X at the poles; TANGENT w 1 (b = n x t)"));
     if (p->note[0])
         rc |= json_object_set_new(g, "note", json_string(p->note));
     return rc ? -1 : 0;

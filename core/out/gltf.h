@@ -21,9 +21,11 @@
  * grid and refined.  The relative RMS of the best fit is reported: what the
  * material loses in the glTF model (a painted highlight no GGX lobe has, a
  * fit's extrapolation, anisotropy).  So is how anisotropic the material is
- * (out->anisotropy: its change when the pairs turn about the normal); the
- * core model is isotropic and no anisotropy extension is written, so above
- * GLTF_ANISO_NOTE the note says the file holds its isotropic fit.
+ * (out->anisotropy: its change when the pairs turn about the normal).  Above
+ * GLTF_ANISO_NOTE a material uniform over the surface is also fitted with
+ * KHR_materials_anisotropy (out->aniso, gltf_aniso.c), which the .glb
+ * carries with the mesh's TANGENT when it is the closer; MaterialX and USD
+ * keep the isotropic fit, and the note says which file holds what.
  *
  * pbr materials.  A material of pbr, pbr_env or pbr_detail (its base) is
  * physically based already: its parameters are also mapped directly onto
@@ -88,6 +90,20 @@ typedef struct gltf_khr {
 
 #define GLTF_NOTE_MAX 400
 
+/* An anisotropic material's fit with KHR_materials_anisotropy (gltf_aniso.c,
+ * the .glb only): the core model with the extension's lobe (gltf_aniso_brdf).
+ * The tangent is glint's (vec3.h's v3_frame: t = normalize(Z x n), +X at
+ * the poles), written as the mesh's TANGENT (w 1: bitangent n x t). */
+typedef struct gltf_aniso {
+    int used;          /* the .glb carries it: closer than the isotropic fit */
+    double strength;   /* anisotropyStrength, [0, 1]: alpha along the direction is
+                          mix(roughness^2, 1, strength^2) */
+    double rotation;   /* anisotropyRotation, radians in [0, pi): the direction, from
+                          the tangent towards the bitangent */
+    double base[3], metallic, roughness; /* the core parameters fitted with it */
+    double rel_rms;    /* of f cos over the fit's pairs, relative to the material's */
+} gltf_aniso;
+
 enum { GLTF_SMITH_SEPARABLE = 0, GLTF_SMITH_CORRELATED = 1 };
 
 typedef struct gltf_pbr {
@@ -111,8 +127,10 @@ typedef struct gltf_pbr {
                               RMS change of its f cos over the fit's pairs when both
                               directions turn GLTF_ANISO_TURN about the normal (0: it is
                               isotropic); the glTF material is isotropic */
-    char note[GLTF_NOTE_MAX]; /* what the mapping clamps or leaves out, and an anisotropic
-                                 material's isotropic export ("" when nothing) */
+    gltf_aniso aniso;      /* with anisotropy above GLTF_ANISO_NOTE (a uniform material
+                              that is no pbr one): the .glb's anisotropic fit */
+    char note[GLTF_NOTE_MAX]; /* what the mapping clamps or leaves out, and what the files
+                                 do with an anisotropic material ("" when nothing) */
 } gltf_pbr;
 
 /* The turn (radians: 75 degrees, which no symmetry of a lobe undoes), and the
@@ -141,12 +159,23 @@ void gltf_khr_brdf(const gltf_pbr *p, const double n[3], const double wi[3], con
 void gltf_khr_brdf_smith(const gltf_pbr *p, int smith, const double n[3], const double wi[3],
                          const double wo[3], double rgb[3]);
 
+/* f of an anisotropic fit (OUT: rgb as gltf_brdf): the core model in its
+ * layered form (gltf_khr.c) with KHR_materials_anisotropy's lobe: along the
+ * direction T (the tangent of v3_frame(n) turned by a->rotation) alpha_t =
+ * mix(alpha, 1, strength^2), across it alpha_b = alpha = roughness^2, the
+ * anisotropic GGX D and the height-correlated V the extension states (V
+ * clamped to [0, 1]). */
+void gltf_aniso_brdf(const gltf_aniso *a, const double n[3], const double wi[3],
+                     const double wo[3], double rgb[3]);
+
 /* Does p use an extension? */
 int gltf_khr_any(const gltf_pbr *p);
 
-/* The names of the extensions p uses, in order (OUT: up to 3 pointers to
- * static strings); returns how many. */
-int gltf_khr_names(const gltf_pbr *p, const char *names[3]);
+/* The names of the extensions the .glb of p uses, in order (OUT: up to
+ * GLTF_KHR_MAX pointers to static strings: ior, specular, clearcoat, and
+ * anisotropy for p->aniso.used); returns how many. */
+#define GLTF_KHR_MAX 4
+int gltf_khr_names(const gltf_pbr *p, const char *names[GLTF_KHR_MAX]);
 
 /* Fit m at the painted directions: every (n / GLTF_FIT_MAX_SAMPLES)-th
  * sample of s (the material's own frame at each: n, wi, wo of the
@@ -163,6 +192,15 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
 typedef void (*gltf_fn)(const void *ctx, const double n[3], const double wi[3],
                         const double wo[3], double rad[3]);
 int gltf_fit(gltf_fn fn, const void *ctx, const samples *s, gltf_pbr *out, glint_err *err);
+
+/* Fit the anisotropic model to fn at the pairs of gltf_fit (OUT: out->aniso;
+ * used 1 when its relative RMS is below out->rel_rms, the isotropic fit's):
+ * a grid over rotation, strength and roughness at the isotropic metallic on
+ * a quarter of the pairs, then a finer one around its best, with metallic,
+ * on all of them, then each in turn with halving steps; the base colour
+ * exact for each (least squares in the layered form, linear in it). */
+int gltf_fit_aniso(gltf_fn fn, const void *ctx, const samples *s, gltf_pbr *out,
+                   glint_err *err);
 
 /* The fit alone, as gltf_export_scene makes it: m fitted at the samples of
  * the views flagged in `use` (NULL: all) of scene sc (OUT: *out).  What

@@ -46,7 +46,7 @@ int gltf_khr_any(const gltf_pbr *p)
     return p->khr.ior_used || p->khr.specular_used || p->khr.clearcoat_used;
 }
 
-int gltf_khr_names(const gltf_pbr *p, const char *names[3])
+int gltf_khr_names(const gltf_pbr *p, const char *names[GLTF_KHR_MAX])
 {
     int k = 0;
     if (p->khr.ior_used)
@@ -55,6 +55,8 @@ int gltf_khr_names(const gltf_pbr *p, const char *names[3])
         names[k++] = "KHR_materials_specular";
     if (p->khr.clearcoat_used)
         names[k++] = "KHR_materials_clearcoat";
+    if (p->aniso.used)
+        names[k++] = "KHR_materials_anisotropy";
     return k;
 }
 

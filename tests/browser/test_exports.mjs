@@ -15,8 +15,9 @@
 // plastic): its MaterialX package read by three.js's own MaterialX reader
 // (MaterialXLoader: the document and its textures from the .mtlx.zip) and
 // rendered beside the .glb, both against glint's render.  And a brushed
-// finish fitted as brushed: the Export tab says glTF, MaterialX and USD carry
-// its unbrushed look.
+// finish fitted as brushed: its .glb carries KHR_materials_anisotropy (the
+// validator; three.js's render against glint's, with the anisotropy and
+// without), and the Export tab says what each format holds.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -90,7 +91,7 @@ function installViewRig(page) {
 // into a float render target (linear, as glint's EXR), against glint's
 // preview.exr of the same view; both read in a page of the daemon's origin
 // (three's module build served from node_modules through page.route).
-async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
+async function threeVersusGlint(t, base, session, mid, v, k, glbBytes, aniso = 'as written') {
   const page = await t.page();
   await page.route(`${base}/three-test/**`, route => {
     const rel = new URL(route.request().url()).pathname.replace(/^\/three-test\//, '');
@@ -105,7 +106,7 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
   });
   await installViewRig(page);
   await page.goto(`${base}/three-test/index.html`);
-  return page.evaluate(async ([v, k, mid, token]) => {
+  return page.evaluate(async ([v, k, mid, token, aniso]) => {
     const THREE = await import('three');
     const { GLTFLoader } = await import('/three-test/examples/jsm/loaders/GLTFLoader.js');
     const { decodeEXR } = await import('/exr.js');
@@ -114,6 +115,12 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
     const ref = await decodeEXR(await r.arrayBuffer());
     const W = ref.w, H = ref.h;
     const gltf = await new GLTFLoader().loadAsync('/three-test/model.glb');
+    // a check of the anisotropy's reading: set to 0, or its direction turned a quarter
+    gltf.scene.traverse(o => {
+      if (!o.isMesh) return;
+      if (aniso === 'off') o.material.anisotropy = 0;
+      if (aniso === 'turned') o.material.anisotropyRotation += Math.PI / 2;
+    });
     const { scene, cam } = window.glintViewRig(THREE, gltf.scene, v, W, H);
     const gl = new THREE.WebGLRenderer({ antialias: false });
     gl.setSize(W, H);
@@ -140,7 +147,7 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes) {
     }
     return { W, H, pixels: n, onlyOne, mae: sumAbs / (3 * n), rel: sumAbs / sumRef,
              meanThree: meanThree / (3 * n), meanGlint: meanGlint / (3 * n) };
-  }, [v, k, mid, session.view_token]);
+  }, [v, k, mid, session.view_token, aniso]);
 }
 
 
@@ -410,8 +417,8 @@ run({
     assertLE(c.mxVsGlb.rel, MTLX_GLB_BOUND, 'three.js\'s render of the MaterialX package against its render of the .glb');
     assertLE(c.mxVsGlint.rel, MTLX_GLINT_BOUND, 'three.js\'s render of the MaterialX package against glint\'s render of the material');
   },
-  async 'a brushed finish: the Export tab says the shared formats carry its unbrushed look'(t) {
-    const { url, session } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+  async 'a brushed finish: the .glb carries its anisotropy, the Export tab says what each format holds'(t) {
+    const { url, session, scene } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
     const page = await t.page();
     await openStudio(page, url);
     await page.selectOption('#preset-sel', 'satin');
@@ -429,6 +436,37 @@ run({
     const lst = await t.daemon.api('GET', `/materials/${mid}/exports`, undefined, { 'X-Glint-Token': session.view_token });
     t.log(`hf2d on the brushed satin: anisotropy ${lst.fit.anisotropy.toFixed(3)}; the tab's last line: ${rows[rows.length - 1]}`);
     assert(lst.fit.anisotropy > 0.02, 'the fit measures the brushed look');
-    assert(rows.some(r => /brushed/.test(r) && /unbrushed look/.test(r)), 'the Export tab says what the shared formats carry');
+    assert(rows.some(r => /brushed/.test(r) && /KHR_materials_anisotropy/.test(r) && /unbrushed look/.test(r)),
+           'the Export tab says what each format carries');
+    const af = lst.fit.anisotropic_fit;
+    assert(af, 'the .glb carries an anisotropic fit');
+    const glbRow = lst.exports.find(x => x.format === 'glb');
+    t.log(`anisotropic fit: strength ${af.strength.toFixed(3)}, rotation ${(af.rotation * 180 / Math.PI).toFixed(1)} degrees, ` +
+          `relative RMS ${af.rel_rms.toFixed(4)} against the isotropic fit's ${lst.fit.rel_rms.toFixed(4)}; the list's glb figure ${glbRow.how_close.rel_rms.toFixed(4)}`);
+    assertLE(af.rel_rms, lst.fit.rel_rms, 'the anisotropic fit is the closer');
+    assertEq(glbRow.how_close.rel_rms, af.rel_rms, 'the list states the .glb\'s own figure');
+    // the .glb downloaded from the tab: Khronos's validator, then three.js's
+    // render (its MeshPhysicalMaterial's anisotropy) against glint's, with
+    // the extension and with its anisotropy set to 0
+    const dir = fs.mkdtempSync(path.join(ARTIFACTS, 'aniso-'));
+    const { file } = await download(page, 'glb', dir);
+    const glb = fs.readFileSync(file);
+    const rep = await validateGlb(glb);
+    if (rep.issues.numErrors) t.log(JSON.stringify(rep.issues.messages.slice(0, 5)));
+    assertEq(rep.issues.numErrors, 0, 'the glTF validator\'s errors on the anisotropic .glb');
+    assertEq(JSON.stringify(rep.info.extensionsUsed || []), '["KHR_materials_anisotropy"]', 'the extension declared');
+    const k = scene.views.findIndex(v => {
+      const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
+      return Math.abs(f[2] / l) < 0.9;
+    });
+    const withA = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb);
+    const noA = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb, 'off');
+    const turned = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb, 'turned');
+    t.log(`three.js vs glint, view ${k} (${withA.W}x${withA.H}): relative mean absolute difference ${(100 * withA.rel).toFixed(1)}% ` +
+          `with the extension as written, ${(100 * noA.rel).toFixed(1)}% with its anisotropy set to 0, ` +
+          `${(100 * turned.rel).toFixed(1)}% with its direction turned 90 degrees`);
+    assertLE(withA.onlyOne, 0.03 * withA.pixels, 'the silhouettes agree');
+    assertLE(withA.rel, noA.rel, 'the anisotropy brings three.js\'s render closer to glint\'s');
+    assertLE(withA.rel, turned.rel, 'three.js reads the direction as glint wrote it (tangent and rotation)');
   },
 });

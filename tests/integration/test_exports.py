@@ -180,13 +180,41 @@ def test_02_an_anisotropic_material_is_averaged(d):
     print("X-Glint-Merl:", info)
     assert "anisotropic=1" in info and "azimuths=8" in info, info
     assert len(r.content) == 34992012
-    # the glTF, MaterialX and USD exports are isotropic: the fit measures how much the
-    # material turns with the surface and the note says what the files hold
+    # the fit measures how much the material turns with the surface; the .glb carries
+    # an anisotropic fit (KHR_materials_anisotropy, with the mesh's TANGENT) where it is
+    # the closer, MaterialX and USD the isotropic one, and the note says so
     lst = d.get("/api/v1/materials/%s/exports" % mid, headers=tok(s["view_token"]), status=200,
                 schema="ExportList.json").json()
-    print("anisotropy:", lst["fit"]["anisotropy"], lst["fit"].get("note"))
-    assert lst["fit"]["anisotropy"] > 0.1, lst["fit"]
-    assert "anisotropic" in lst["fit"]["note"] and "isotropic fit" in lst["fit"]["note"], lst["fit"]
+    fit = lst["fit"]
+    print("anisotropy:", fit["anisotropy"], fit.get("anisotropic_fit"), fit.get("note"))
+    assert fit["anisotropy"] > 0.1, fit
+    af = fit["anisotropic_fit"]
+    assert af["rel_rms"] < fit["rel_rms"] and 0 < af["strength"] <= 1, fit
+    assert "KHR_materials_anisotropy" in fit["extensions"], fit
+    assert "KHR_materials_anisotropy" in fit["note"] and "MaterialX and USD hold the isotropic" \
+        in fit["note"], fit
+    glb = [e for e in lst["exports"] if e["format"] == "glb"][0]
+    assert glb["how_close"]["rel_rms"] == af["rel_rms"], glb
+    r = d.get("/api/v1/materials/%s/material.glb" % mid, headers=tok(s["view_token"]), status=200)
+    doc, binary = glb_chunks(r.content)
+    ext = doc["materials"][0]["extensions"]["KHR_materials_anisotropy"]
+    assert abs(ext["anisotropyStrength"] - af["strength"]) < 1e-6, (ext, af)
+    assert doc["extensionsUsed"] == ["KHR_materials_anisotropy"], doc["extensionsUsed"]
+    prim = doc["meshes"][0]["primitives"][0]
+    tan = doc["accessors"][prim["attributes"]["TANGENT"]]
+    assert tan["type"] == "VEC4" and tan["count"] == doc["accessors"][prim["attributes"]["NORMAL"]]["count"]
+    bv = doc["bufferViews"][tan["bufferView"]]
+    t = struct.unpack_from("<%df" % (4 * tan["count"]), binary, bv["byteOffset"])
+    nv = doc["bufferViews"][doc["accessors"][prim["attributes"]["NORMAL"]]["bufferView"]]
+    nrm = struct.unpack_from("<%df" % (3 * tan["count"]), binary, nv["byteOffset"])
+    for i in range(0, tan["count"], 97):  # unit, w 1, at right angles to the normal
+        tx, ty, tz, tw = t[4 * i:4 * i + 4]
+        nx, ny, nz = nrm[3 * i:3 * i + 3]
+        assert abs(tx * tx + ty * ty + tz * tz - 1) < 1e-5 and tw == 1.0, (i, t[4 * i:4 * i + 4])
+        assert abs(tx * nx + ty * ny + tz * nz) < 1e-5, i
+    mtlx = d.get("/api/v1/materials/%s/material.mtlx" % mid, headers=tok(s["view_token"]),
+                 status=200).text
+    assert "specular_anisotropy" not in mtlx
     # BRDF Explorer's file for hf2d: its 2D factors embedded, no texture bound
     r = d.get("/api/v1/materials/%s/material.brdf" % mid, headers=tok(s["view_token"]), status=200)
     text = r.text
