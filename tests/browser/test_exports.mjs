@@ -41,7 +41,7 @@ const CHECKER = 'checker:freq=1,duty=0.5|ct:kd=0.6/0.1/0.08,f0=0.04,rough=0.3|ct
 // (the same textures through two readers and two material models): 1.9%
 // measured on the checker at 96 x 96 (0.5-0.9% on stripes across u, bake_res
 // 32 to 128); the .glb's textures turned upside down differ from it by 28%.
-// Against glint's render of the material: 23.9%, as the .glb's own render
+// Against glint's render of the material: 23.8%, as the .glb's own render
 // (and the WebGL renderer's of it): three.js widens a highlight by its
 // normals' change across a pixel (its specular antialiasing), so the figure
 // falls with the size (a uniform gold: 20.9% at 64 x 64, 13.5% at 160 x 160;
@@ -64,12 +64,21 @@ async function download(page, fmt, dir) {
   return { file, name: dl.suggestedFilename() };
 }
 
-// glint's view in three.js (either build, passed as THREE), installed in a
-// page before it loads: the object in a scene with glint's camera (eye,
-// target, vertical half field of view, up +z; +y looking along z) and its
-// point light (no fall-off: a white Lambertian facing it reads I, f cos
-// times pi I; three's light of intensity L gives f cos L with decay 0).
-function installViewRig(page) {
+// What the pages below share, installed before each loads:
+//   glintViewRig(THREE, object, v, W, H): the object in a scene with glint's
+//     camera of view v (eye, target, vertical half field of view, up +z; +y
+//     looking along z) and its point light (no fall-off: a white Lambertian
+//     facing it reads I, f cos times pi I; three's light of intensity L gives
+//     f cos L with decay 0); THREE is either build;
+//   glintReference(mid, k, token): glint's render of view k (preview.exr, linear);
+//   glintThree(px, W, H): a three.js render read back (RGBA floats, rows
+//     bottom-first) as a sampler (x, y, c) -> value, null off the object;
+//   glintImage(ref, px, W, H): glint's render as a sampler, on the object where
+//     lit or where the render px shows it black (unlit in both);
+//   glintCompare(a, b, W, H): where both samplers show the object, the mean
+//     absolute difference (mae), relative to b's (rel), and each one's mean;
+//     pixels on one only (onlyOne).
+function installThreeHelpers(page) {
   return page.addInitScript(() => {
     window.glintViewRig = (THREE, object, v, W, H) => {
       const scene = new THREE.Scene();
@@ -84,38 +93,78 @@ function installViewRig(page) {
       scene.add(light);
       return { scene, cam };
     };
+    window.glintReference = async (mid, k, token) => {
+      const { decodeEXR } = await import('/exr.js');
+      const r = await fetch(`/api/v1/materials/${mid}/preview.exr?view=${k}`, { headers: { 'X-Glint-Token': token } });
+      if (!r.ok) throw new Error('preview.exr: ' + r.status);
+      return decodeEXR(await r.arrayBuffer());
+    };
+    window.glintThree = (px, W, H) => (x, y, c) => {
+      const o = 4 * ((H - 1 - y) * W + x);
+      return px[o + 3] > 0.5 ? px[o + c] : null;
+    };
+    window.glintImage = (ref, px, W, H) => (x, y, c) => {
+      const g = 3 * (y * W + x), o = 4 * ((H - 1 - y) * W + x);
+      const on = ref.data[g] + ref.data[g + 1] + ref.data[g + 2] > 0 ||
+                 (px[o + 3] > 0.5 && px[o] + px[o + 1] + px[o + 2] < 1e-4);
+      return on ? ref.data[g + c] : null;
+    };
+    window.glintCompare = (a, b, W, H) => {
+      let n = 0, sumAbs = 0, sumRef = 0, onlyOne = 0, meanA = 0, meanB = 0;
+      for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
+        const va = a(x, y, 0), vb = b(x, y, 0);
+        if ((va === null) !== (vb === null)) { onlyOne++; continue; }
+        if (va === null) continue;
+        n++;
+        for (let c = 0; c < 3; c++) {
+          const p = a(x, y, c), q = b(x, y, c);
+          sumAbs += Math.abs(p - q); sumRef += Math.abs(q); meanA += p; meanB += q;
+        }
+      }
+      return { W, H, pixels: n, onlyOne, mae: sumAbs / (3 * n), rel: sumAbs / sumRef,
+               meanA: meanA / (3 * n), meanB: meanB / (3 * n) };
+    };
   });
 }
 
-// The .glb in three.js with the camera and light of view v of the scene,
-// into a float render target (linear, as glint's EXR), against glint's
-// preview.exr of the same view; both read in a page of the daemon's origin
-// (three's module build served from node_modules through page.route).
-async function threeVersusGlint(t, base, session, mid, v, k, glbBytes, aniso = 'as written') {
+// A page of the daemon's origin with three.js served from node_modules
+// under /three-test/ (build 'webgl': three.module.js; 'webgpu': the WebGPU
+// build, its renderer on its WebGL 2 backend), the addons at three/addons/,
+// the files of `bytes` ({name: Buffer}) and the helpers above.
+async function threePage(t, base, bytes, build) {
   const page = await t.page();
+  const imports = build === 'webgpu'
+    ? { three: '/three-test/build/three.webgpu.js', 'three/webgpu': '/three-test/build/three.webgpu.js',
+        'three/tsl': '/three-test/build/three.tsl.js', 'three/addons/': '/three-test/examples/jsm/' }
+    : { three: '/three-test/build/three.module.js', 'three/addons/': '/three-test/examples/jsm/' };
   await page.route(`${base}/three-test/**`, route => {
     const rel = new URL(route.request().url()).pathname.replace(/^\/three-test\//, '');
-    if (rel === 'model.glb') return route.fulfill({ body: glbBytes, contentType: 'model/gltf-binary' });
+    if (bytes[rel]) return route.fulfill({ body: bytes[rel], contentType: 'application/octet-stream' });
     if (rel === 'index.html') {
       return route.fulfill({ contentType: 'text/html', body: '<!doctype html><script type="importmap">' +
-        '{"imports": {"three": "/three-test/build/three.module.js"}}</script><body></body>' });
+        JSON.stringify({ imports }) + '</script><body></body>' });
     }
     const f = path.join(THREE_DIR, rel);
     if (!f.startsWith(THREE_DIR + path.sep) || !fs.existsSync(f)) return route.fulfill({ status: 404, body: 'no ' + rel });
     return route.fulfill({ body: fs.readFileSync(f), contentType: 'text/javascript' });
   });
-  await installViewRig(page);
+  await installThreeHelpers(page);
   await page.goto(`${base}/three-test/index.html`);
-  return page.evaluate(async ([v, k, mid, token, aniso]) => {
+  return page;
+}
+
+// The .glb in three.js with the camera and light of view v of the scene,
+// into a float render target (linear, as glint's EXR), against glint's
+// preview.exr of the same view.  aniso: 'as written', or a check of how the
+// anisotropy is read: 'off' (set to 0) or 'turned' (its direction a quarter).
+async function threeVersusGlint(t, base, session, mid, v, k, glbBytes, aniso = 'as written') {
+  const page = await threePage(t, base, { 'model.glb': glbBytes }, 'webgl');
+  const c = await page.evaluate(async ([v, k, mid, token, aniso]) => {
     const THREE = await import('three');
-    const { GLTFLoader } = await import('/three-test/examples/jsm/loaders/GLTFLoader.js');
-    const { decodeEXR } = await import('/exr.js');
-    const r = await fetch(`/api/v1/materials/${mid}/preview.exr?view=${k}`, { headers: { 'X-Glint-Token': token } });
-    if (!r.ok) throw new Error('preview.exr: ' + r.status);
-    const ref = await decodeEXR(await r.arrayBuffer());
+    const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
+    const ref = await window.glintReference(mid, k, token);
     const W = ref.w, H = ref.h;
     const gltf = await new GLTFLoader().loadAsync('/three-test/model.glb');
-    // a check of the anisotropy's reading: set to 0, or its direction turned a quarter
     gltf.scene.traverse(o => {
       if (!o.isMesh) return;
       if (aniso === 'off') o.material.anisotropy = 0;
@@ -130,66 +179,25 @@ async function threeVersusGlint(t, base, session, mid, v, k, glbBytes, aniso = '
     gl.render(scene, cam);
     const px = new Float32Array(4 * W * H);
     gl.readRenderTargetPixels(rt, 0, 0, W, H, px);
-    // compare where both show the object (three's alpha; glint's non-zero), rows flipped
-    let n = 0, sumAbs = 0, sumRef = 0, onlyOne = 0, meanThree = 0, meanGlint = 0;
-    for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
-      const o = 4 * ((H - 1 - y) * W + x), g = 3 * (y * W + x);
-      const a = px[o + 3] > 0.5, dark = px[o] + px[o + 1] + px[o + 2] < 1e-4;
-      const b = ref.data[g] + ref.data[g + 1] + ref.data[g + 2] > 0 || (a && dark); // unlit: black in both
-      if (a !== b) { onlyOne++; continue; }
-      if (!a) continue;
-      n++;
-      for (let c = 0; c < 3; c++) {
-        sumAbs += Math.abs(px[o + c] - ref.data[g + c]);
-        sumRef += Math.abs(ref.data[g + c]);
-        meanThree += px[o + c]; meanGlint += ref.data[g + c];
-      }
-    }
-    return { W, H, pixels: n, onlyOne, mae: sumAbs / (3 * n), rel: sumAbs / sumRef,
-             meanThree: meanThree / (3 * n), meanGlint: meanGlint / (3 * n) };
+    return window.glintCompare(window.glintThree(px, W, H), window.glintImage(ref, px, W, H), W, H);
   }, [v, k, mid, session.view_token, aniso]);
+  return Object.assign(c, { meanThree: c.meanA, meanGlint: c.meanB });
 }
 
-
-// A page of the daemon's origin with three.js's WebGPU build (its WebGL 2
-// backend: forceWebGL) and addons served from node_modules, and the two
-// files of `bytes` ({name: Buffer}) under /mx-test/.
-async function threeWebgpuPage(t, base, bytes) {
-  const page = await t.page();
-  await page.route(`${base}/mx-test/**`, route => {
-    const rel = new URL(route.request().url()).pathname.replace(/^\/mx-test\//, '');
-    if (bytes[rel]) return route.fulfill({ body: bytes[rel], contentType: 'application/octet-stream' });
-    if (rel === 'index.html') {
-      return route.fulfill({ contentType: 'text/html', body: '<!doctype html><script type="importmap">' +
-        '{"imports": {"three": "/mx-test/build/three.webgpu.js", "three/webgpu": "/mx-test/build/three.webgpu.js", ' +
-        '"three/tsl": "/mx-test/build/three.tsl.js", "three/addons/": "/mx-test/examples/jsm/"}}</script><body></body>' });
-    }
-    const f = path.join(THREE_DIR, rel);
-    if (!f.startsWith(THREE_DIR + path.sep) || !fs.existsSync(f)) return route.fulfill({ status: 404, body: 'no ' + rel });
-    return route.fulfill({ body: fs.readFileSync(f), contentType: 'text/javascript' });
-  });
-  await installViewRig(page);
-  await page.goto(`${base}/mx-test/index.html`);
-  return page;
-}
-
-// The .glb's mesh rendered by three.js twice, with the .glb's own material
-// and with the material three's MaterialXLoader makes of the .mtlx.zip (its
-// uvSpace top-left: the mesh's texture coordinates are glTF's), with the
-// camera and light of view v, each against glint's preview.exr of that view
-// and against each other (relative mean absolute difference where both show
-// the object).
-async function mtlxVersusGlb(page, v, k, mid, token) {
+// The .glb's mesh rendered by three.js twice (its WebGPU build), with the
+// .glb's own material and with the material three's MaterialXLoader makes
+// of the .mtlx.zip (its uvSpace top-left: the mesh's texture coordinates
+// are glTF's), with the camera and light of view v, each against glint's
+// preview.exr of that view and against each other.
+async function mtlxVersusGlb(t, base, v, k, mid, token, bytes) {
+  const page = await threePage(t, base, bytes, 'webgpu');
   return page.evaluate(async ([v, k, mid, token]) => {
     const THREE = await import('three');
     const { GLTFLoader } = await import('three/addons/loaders/GLTFLoader.js');
     const { MaterialXLoader } = await import('three/addons/loaders/MaterialXLoader.js');
-    const { decodeEXR } = await import('/exr.js');
-    const r = await fetch(`/api/v1/materials/${mid}/preview.exr?view=${k}`, { headers: { 'X-Glint-Token': token } });
-    if (!r.ok) throw new Error('preview.exr: ' + r.status);
-    const ref = await decodeEXR(await r.arrayBuffer());
+    const ref = await window.glintReference(mid, k, token);
     const W = ref.w, H = ref.h;
-    const gltf = await new GLTFLoader().loadAsync('/mx-test/model.glb');
+    const gltf = await new GLTFLoader().loadAsync('/three-test/model.glb');
     let mesh = null;
     gltf.scene.traverse(o => { if (o.isMesh && !mesh) mesh = o; });
     // a relative URL: the loader prefixes its textures' blob URLs with the
@@ -214,30 +222,12 @@ async function mtlxVersusGlb(page, v, k, mid, token) {
     };
     const glbMat = mesh.material;
     const pxGlb = await draw(glbMat), pxMx = await draw(mxMat);
-    // image rows: the WebGL backend reads bottom-first, glint's EXR top-first
-    const at = (px, x, y) => 4 * ((H - 1 - y) * W + x);
-    const cmp = (a, b) => { // a, b: functions (x, y, c) -> value or null (not on the object)
-      let n = 0, sumAbs = 0, sumRef = 0, onlyOne = 0;
-      for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
-        const va = a(x, y, 0), vb = b(x, y, 0);
-        if ((va === null) !== (vb === null)) { onlyOne++; continue; }
-        if (va === null) continue;
-        n++;
-        for (let c = 0; c < 3; c++) { sumAbs += Math.abs(a(x, y, c) - b(x, y, c)); sumRef += Math.abs(b(x, y, c)); }
-      }
-      return { pixels: n, onlyOne, rel: sumAbs / sumRef };
-    };
-    const three = px => (x, y, c) => { const o = at(px, x, y); return px[o + 3] > 0.5 ? px[o + c] : null; };
-    const glint = (x, y, c) => {
-      const g = 3 * (y * W + x), o = at(pxGlb, x, y);
-      const lit = ref.data[g] + ref.data[g + 1] + ref.data[g + 2] > 0 || pxGlb[o + 3] > 0.5;
-      return lit ? ref.data[g + c] : null;
-    };
-    const map = glbMat.map ? glbMat.map.image : null;
+    const three = px => window.glintThree(px, W, H), glint = window.glintImage(ref, pxGlb, W, H);
     return { W, H, material: names[0], warnings: mx.warnings.map(w => w.message || String(w)),
              mxType: mxMat.type, glbHasMaps: !!(glbMat.map && glbMat.metalnessMap && glbMat.roughnessMap),
-             glbVsGlint: cmp(three(pxGlb), glint), mxVsGlint: cmp(three(pxMx), glint),
-             mxVsGlb: cmp(three(pxMx), three(pxGlb)), mapSize: map ? [map.width, map.height] : null };
+             glbVsGlint: window.glintCompare(three(pxGlb), glint, W, H),
+             mxVsGlint: window.glintCompare(three(pxMx), glint, W, H),
+             mxVsGlb: window.glintCompare(three(pxMx), three(pxGlb), W, H) };
   }, [v, k, mid, token]);
 }
 
@@ -403,8 +393,8 @@ run({
       const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
       return Math.abs(f[2] / l) < 0.9;
     });
-    const page = await threeWebgpuPage(t, t.daemon.base, { 'model.glb': glb.bytes, 'material.mtlx.zip': pkg.bytes });
-    const c = await mtlxVersusGlb(page, scene.views[k], k, mid, session.view_token);
+    const c = await mtlxVersusGlb(t, t.daemon.base, scene.views[k], k, mid, session.view_token,
+                                  { 'model.glb': glb.bytes, 'material.mtlx.zip': pkg.bytes });
     const pct = x => (100 * x.rel).toFixed(1) + '%';
     t.log(`three.js ${JSON.parse(fs.readFileSync(path.join(THREE_DIR, 'package.json'), 'utf8')).version}, WebGPURenderer ` +
           `(WebGL 2), view ${k}, ${c.W}x${c.H}: MaterialXLoader made ${c.material} (${c.mxType}), ` +
