@@ -199,6 +199,31 @@ static void material_fn(const void *ctx, const double n[3], const double wi[3],
     material_eval(ctx, n, wi, wo, rad);
 }
 
+/* The note of an anisotropic material (out->anisotropy above
+ * GLTF_ANISO_NOTE): what the .glb and the other files hold of it. */
+static void aniso_note(gltf_pbr *out)
+{
+    size_t k = strlen(out->note);
+    if (out->aniso.used)
+        snprintf(out->note + k, sizeof out->note - k,
+                 "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
+                 "changes by %.0f%%): the .glb carries it with KHR_materials_anisotropy "
+                 "(strength %.2f, rotation %.0f degrees from glint's tangent; relative RMS "
+                 "%.4f against the isotropic fit's %.4f); MaterialX and USD hold the "
+                 "isotropic fit.",
+                 k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * out->anisotropy,
+                 out->aniso.strength, out->aniso.rotation * 180.0 / M_PI, out->aniso.rel_rms,
+                 out->rel_rms);
+    else
+        snprintf(out->note + k, sizeof out->note - k,
+                 "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
+                 "changes by %.0f%%): the glTF material is its isotropic fit%s.",
+                 k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * out->anisotropy,
+                 out->spatial ? " (KHR_materials_anisotropy is written for a material "
+                                "uniform over the surface only)"
+                              : "");
+}
+
 int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_err *err)
 {
     double aniso;
@@ -216,27 +241,8 @@ int gltf_fit_material(const material *m, const samples *s, gltf_pbr *out, glint_
     if (aniso > GLTF_ANISO_NOTE && !out->spatial && !out->exact &&
         (rc = gltf_fit_aniso(material_fn, m, s, out, err)))
         return rc;
-    if (aniso > GLTF_ANISO_NOTE) {
-        size_t k = strlen(out->note);
-        if (out->aniso.used)
-            snprintf(out->note + k, sizeof out->note - k,
-                     "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
-                     "changes by %.0f%%): the .glb carries it with KHR_materials_anisotropy "
-                     "(strength %.2f, rotation %.0f degrees from glint's tangent; relative RMS "
-                     "%.4f against the isotropic fit's %.4f); MaterialX and USD hold the "
-                     "isotropic fit.",
-                     k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso,
-                     out->aniso.strength, out->aniso.rotation * 180.0 / M_PI, out->aniso.rel_rms,
-                     out->rel_rms);
-        else
-            snprintf(out->note + k, sizeof out->note - k,
-                     "%sThe material is anisotropic (turned %.0f degrees about the normal, it "
-                     "changes by %.0f%%): the glTF material is its isotropic fit%s.",
-                     k ? " " : "", GLTF_ANISO_TURN * 180.0 / M_PI, 100.0 * aniso,
-                     out->spatial ? " (KHR_materials_anisotropy is written for a material "
-                                    "uniform over the surface only)"
-                                  : "");
-    }
+    if (aniso > GLTF_ANISO_NOTE)
+        aniso_note(out);
     return 0;
 }
 
@@ -500,7 +506,7 @@ int gltf_write_glb(const mesh *msh, const gltf_pbr *p, const gltf_bake *bake, co
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC3", "bufferView", 2,
         "componentType", 5126, "count", (json_int_t)nv, "type", "VEC2", "bufferView", 3,
         "componentType", 5125, "count", (json_int_t)(3 * nt), "type", "SCALAR");
-    if (root && (add_extensions(root, mat, p) || (aniso && add_tangents(root, off_tan, nv)) ||
+    if (root && (add_extensions(root, mat, core) || (aniso && add_tangents(root, off_tan, nv)) ||
                  (bake && add_textures(root, mat, off_bc, len_bc, off_mr, len_mr)))) {
         json_decref(root);
         root = NULL;
