@@ -231,6 +231,29 @@ async function mtlxVersusGlb(t, base, v, k, mid, token, bytes) {
   }, [v, k, mid, token]);
 }
 
+// A fit through the API (the paint token's), waited for when it runs as a
+// job; the material's id.
+async function fitMaterial(t, session, body, H) {
+  const fit = await t.daemon.api('POST', `/sessions/${session.id}/fits`, body, H);
+  let mid = fit.id;
+  for (let i = 0; !mid && i < 600; i++) {
+    const j = (await t.daemon.api('GET', `/jobs/${fit.job.id}`, undefined, H)).job;
+    assert(j.state !== 'failed' && j.state !== 'cancelled', `the ${body.method} fit ran: ` + JSON.stringify(j));
+    if (j.state === 'done') mid = j.material_id;
+    else await new Promise(r => setTimeout(r, 200));
+  }
+  assert(mid, `the ${body.method} fit finished`);
+  return mid;
+}
+
+// The first view of the scene that does not look along the vertical axis.
+function sideView(scene) {
+  return scene.views.findIndex(v => {
+    const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
+    return Math.abs(f[2] / l) < 0.9;
+  });
+}
+
 run({
   async 'every export downloaded from the Export tab and opened by its reader'(t) {
     let haveValidator = true;
@@ -287,10 +310,7 @@ run({
     assert(fs.readFileSync(files.brdf, 'utf8').startsWith('analytic\n'), 'a BRDF Explorer analytic file');
     assertEq(fs.readFileSync(files.package).subarray(257, 262).toString(), 'ustar', 'the package is a tar file');
     // three.js renders the .glb as glint renders the material, view by view
-    const k = scene.views.findIndex(v => {
-      const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
-      return Math.abs(f[2] / l) < 0.9;
-    });
+    const k = sideView(scene);
     const cmp = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb);
     t.log(`three.js ${JSON.parse(fs.readFileSync(path.join(THREE_DIR, 'package.json'), 'utf8')).version} vs glint, view ${k} ` +
           `(${cmp.W}x${cmp.H}, ${cmp.pixels} pixels on the object in both, ${cmp.onlyOne} on one only): ` +
@@ -307,15 +327,7 @@ run({
     // no error.  Then a two-lobe pbr material made by the CLI, whose
     // sharper lobe becomes KHR_materials_clearcoat.
     const H = { 'X-Glint-Token': session.paint_token };
-    let fit = await t.daemon.api('POST', `/sessions/${session.id}/fits`, { method: 'pbr' }, H);
-    let pmid = fit.id;
-    for (let i = 0; !pmid && i < 600; i++) {
-      const j = (await t.daemon.api('GET', `/jobs/${fit.job.id}`, undefined, H)).job;
-      assert(j.state !== 'failed' && j.state !== 'cancelled', 'the pbr fit ran: ' + JSON.stringify(j));
-      if (j.state === 'done') pmid = j.material_id;
-      else await new Promise(r => setTimeout(r, 200));
-    }
-    assert(pmid, 'the pbr fit finished');
+    const pmid = await fitMaterial(t, session, { method: 'pbr' }, H);
     const plst = await t.daemon.api('GET', `/materials/${pmid}/exports`, undefined, H);
     const pf = plst.fit;
     t.log(`pbr material: export ${pf.export}, rel RMS ${pf.rel_rms.toFixed(4)} (mapped ${pf.rel_rms_exact.toFixed(4)}, ` +
@@ -368,16 +380,7 @@ run({
       const exr = fs.readFileSync(path.join(dir, 'paint', `view_${String(k).padStart(2, '0')}.exr`));
       await t.daemon.api('PUT', `/sessions/${session.id}/views/${k}/painting`, exr, Object.assign({ 'Content-Type': 'image/x-exr' }, H));
     }
-    const fit = await t.daemon.api('POST', `/sessions/${session.id}/fits`,
-                                   { method: 'maps', params: { res: 32, map_res: 32, components: 3 } }, H);
-    let mid = fit.id;
-    for (let i = 0; !mid && i < 600; i++) {
-      const j = (await t.daemon.api('GET', `/jobs/${fit.job.id}`, undefined, H)).job;
-      assert(j.state !== 'failed' && j.state !== 'cancelled', 'the maps fit ran: ' + JSON.stringify(j));
-      if (j.state === 'done') mid = j.material_id;
-      else await new Promise(r => setTimeout(r, 200));
-    }
-    assert(mid, 'the maps fit finished');
+    const mid = await fitMaterial(t, session, { method: 'maps', params: { res: 32, map_res: 32, components: 3 } }, H);
     const get = async p => {
       const r = await fetch(`${t.daemon.base}/api/v1/materials/${mid}/${p}`, { headers: H });
       assertEq(r.status, 200, p);
@@ -389,10 +392,7 @@ run({
     assert(/textures=32/.test(pkg.fit), 'the package carries 32 x 32 textures');
     fs.writeFileSync(path.join(dir, 'material.mtlx.zip'), pkg.bytes);
     execFileSync(PY, [path.join(SRC, 'tests', 'integration', 'export_specs.py'), 'mtlx.zip', path.join(dir, 'material.mtlx.zip')]);
-    const k = scene.views.findIndex(v => {
-      const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
-      return Math.abs(f[2] / l) < 0.9;
-    });
+    const k = sideView(scene);
     const c = await mtlxVersusGlb(t, t.daemon.base, scene.views[k], k, mid, session.view_token,
                                   { 'model.glb': glb.bytes, 'material.mtlx.zip': pkg.bytes });
     const pct = x => (100 * x.rel).toFixed(1) + '%';
@@ -445,10 +445,7 @@ run({
     if (rep.issues.numErrors) t.log(JSON.stringify(rep.issues.messages.slice(0, 5)));
     assertEq(rep.issues.numErrors, 0, 'the glTF validator\'s errors on the anisotropic .glb');
     assertEq(JSON.stringify(rep.info.extensionsUsed || []), '["KHR_materials_anisotropy"]', 'the extension declared');
-    const k = scene.views.findIndex(v => {
-      const f = v.target.map((x, i) => x - v.eye[i]), l = Math.hypot(...f);
-      return Math.abs(f[2] / l) < 0.9;
-    });
+    const k = sideView(scene);
     const withA = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb);
     const noA = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb, 'off');
     const turned = await threeVersusGlint(t, t.daemon.base, session, mid, scene.views[k], k, glb, 'turned');
