@@ -3,7 +3,8 @@
  * and conductor, one and two lobes) within 1e-3; the ct truth of brdf.h
  * (separable Smith there, height-correlated here: close, not exact); and
  * the extremes: a Lambertian (roughness undetermined), a mirror-like
- * highlight (roughness at its floor, reported), a black painting (kd = 0,
+ * highlight (roughness at its floor, reported), weights and an ior on
+ * their bounds met by a converged refinement, a black painting (kd = 0,
  * finite report), a single sample (GLINT_EINVAL), a painting brighter than
  * physical (kd clamped at 1, reported), one view only; the material's
  * files read back and damaged ones refused.
@@ -489,6 +490,58 @@ TEST(mirror_like_alpha_at_lower_bound)
     free(v);
 }
 
+/* The fit's solver report (info.fit): its iterations and whether it
+ * converged. */
+static void fit_report(const material *m, int *iters, int *converged)
+{
+    json_t *fit = json_object_get(m->info, "fit");
+    *iters = (int)json_integer_value(json_object_get(fit, "iterations"));
+    *converged = json_is_true(json_object_get(fit, "converged")) ||
+                 json_integer_value(json_object_get(fit, "converged")) == 1;
+}
+
+/* Weights on their bounds are met, not crawled to: a metal with kd 0 and a
+ * red F0 of 1, in the model, comes back with both on their bounds and the
+ * rest within 1e-3, the refinement converged well inside its 100
+ * iterations (the sigmoid alone crawled kd to 3e-13 in 100 and stopped at
+ * the limit); the same metal fitted as a dielectric holds its ior at the
+ * upper bound (F0 above ior 3's 0.25) and converges too. */
+TEST(bounds_are_met_not_crawled_to)
+{
+    const pbr_spec c1 = {1, PBR_CONDUCTOR};
+    const double p[8] = {0.0, 0.0, 0.0, 0.3, 0.9, 1.0, 0.6, 0.3};
+    material m;
+    glint_err e;
+    float *v;
+    const pbr_material *pm;
+    int iters, conv;
+    ASSERT_OK(setup());
+    v = values_pbr(&c1, p, &S);
+    ASSERT_OK(fit_values("fresnel=conductor", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    fit_report(&m, &iters, &conv);
+    printf("  conductor: %d iterations, converged %d, kd %.3g %.3g %.3g, F0_r %.9f\n", iters,
+           conv, pm->p[0], pm->p[1], pm->p[2], pm->p[5]);
+    ASSERT(conv);
+    ASSERT_LT(iters, 50);
+    for (int k = 0; k < 8; k++)
+        ASSERT_MSG(fabs(pm->p[k] - p[k]) <= 1e-3, "parameter %d: %.6g vs %.6g", k, pm->p[k], p[k]);
+    ASSERT(lists(json_object_get(m.info, "at_bound"), "kd_r"));
+    ASSERT(lists(json_object_get(m.info, "at_bound"), "f0_r"));
+    material_free(&m);
+    ASSERT_OK(fit_values("", &S, v, &m, &e));
+    pm = pbr_material_of(&m);
+    fit_report(&m, &iters, &conv);
+    printf("  as a dielectric: %d iterations, converged %d, ior %.6g\n", iters, conv, pm->p[7]);
+    ASSERT(conv);
+    ASSERT_LT(iters, 50);
+    ASSERT_NEAR(pm->p[7], PBR_IOR_MAX, 1e-12);
+    ASSERT(lists(json_object_get(m.info, "at_bound"), "ior"));
+    ASSERT(info_finite(m.info));
+    material_free(&m);
+    free(v);
+}
+
 TEST(black_painting)
 {
     material m;
@@ -698,6 +751,7 @@ TEST_LIST {
     TEST_ENTRY(ct_truth_close),
     TEST_ENTRY(lambert_roughness_undetermined),
     TEST_ENTRY(mirror_like_alpha_at_lower_bound),
+    TEST_ENTRY(bounds_are_met_not_crawled_to),
     TEST_ENTRY(black_painting),
     TEST_ENTRY(single_sample_is_refused),
     TEST_ENTRY(brighter_than_physical_is_clamped),

@@ -393,3 +393,29 @@ void pbr_sample_eval(const pbr_spec *sp, const double *p, const pbr_geom *g, int
         }
     }
 }
+
+void pbr_sample_sums(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double d[3],
+                     double A[PBR_MAX_LOBES][3], double B[PBR_MAX_LOBES][3])
+{
+    if (g->off) {
+        term_sums S;
+        sums_of(sp, p, g, i, 0, &S);
+        memcpy(d, S.S1, sizeof S.S1);
+        memcpy(A, S.A, sizeof S.A);
+        memcpy(B, S.B, sizeof S.B);
+        return;
+    }
+    {
+        double w = 1.0 - g->cd[i], w5 = w * w * w * w * w, ci = g->ci[i];
+        for (int c = 0; c < 3; c++)
+            d[c] = ci;
+        for (int l = 0; l < sp->nlobes; l++) {
+            double dv;
+            dv_chunk(p[3 + 5 * l], g->ci + i, g->co + i, g->ch + i, 1, &dv, NULL);
+            for (int c = 0; c < 3; c++) {
+                A[l][c] = ci * dv * (1.0 - w5);
+                B[l][c] = ci * dv * w5;
+            }
+        }
+    }
+}

@@ -119,6 +119,14 @@ void pbr_eval_chunk(const pbr_spec *sp, const double *p, const double *ci, const
 void pbr_sample_eval(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double m[3],
                      double J[3][PBR_MAXP]);
 
+/* The sums sample i's value is linear in at p's roughnesses: OUT d[c] =
+ * sum over its terms of w_tc ci, and per lobe l A[l][c] = sum of w_tc ci
+ * D V (1 - w5) and B[l][c] = sum of w_tc ci D V w5, w5 = (1 - wi.h)^5 (w
+ * = 1 for a point light).  The value is then kd_c d_c / pi + sum over the
+ * lobes of ks_c (F0_c A + B): the weights kd, ks and F0 enter only there. */
+void pbr_sample_sums(const pbr_spec *sp, const double *p, const pbr_geom *g, int i, double d[3],
+                     double A[PBR_MAX_LOBES][3], double B[PBR_MAX_LOBES][3]);
+
 /* The same per lobe in one common form, for materials: per lobe alpha,
  * ks[3] and F0[3] (dielectric: F0 from the ior; conductor: ks the same in
  * every channel).  OUT f[3] (f itself, not times ci). */

@@ -19,7 +19,11 @@
  *   2. the start of least cost refined on o->refine samples drawn as the
  *      starts' are (16,384 by default: one pass over 98,434 samples costs
  *      about 20 ms, and 8 parameters are well measured by a sixth of them),
- *      or on every sample;
+ *      or on every sample, with the bounds as an active set: after
+ *      PBR_PIN_AFTER iterations the weights (kd, ks, F0), in which the
+ *      model is linear at a given roughness and ior, are solved exactly
+ *      with their bounds, and the parameters the answer puts on a bound
+ *      are held there while the search goes on (refine_pinned; one lobe);
  *   3. parameters within PBR_BOUND_TOL of a bound (in the sigmoid) set to
  *      it; the cost, J'J and the residual variance s^2 computed on every
  *      sample;
@@ -42,6 +46,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lsq.h"
 #include "par.h"
 #include "pbr.h"
 
@@ -61,6 +66,17 @@
 #define PBR_GTOL 1e-8
 #define PBR_FTOL 1e-8
 #define PBR_START_ITER 25
+/* The refinement's active set (refine_pinned): after PBR_PIN_AFTER
+ * iterations, a weight (kd, ks, F0) within PBR_PIN_WEIGHT of a bound (of
+ * its range) is held there, and a roughness within PBR_PROBE_ALPHA or an
+ * ior within PBR_PROBE_IOR of one is tried on it (the weights solved anew)
+ * and held there when the cost is no higher; a pin the cost does not hold
+ * is released.  A roughness of 0.0147 tried on the floor (0.002) cost a
+ * plastic 15% of its fit for nothing; an ior at 2.9 went on to 3. */
+#define PBR_PIN_AFTER 10
+#define PBR_PIN_WEIGHT 1e-4
+#define PBR_PROBE_ALPHA 0.01
+#define PBR_PROBE_IOR 0.1
 
 static const double PBR_START_ALPHA[PBR_MAX_STARTS] = {0.05, 0.15, 0.4, 0.01, 0.7,
                                                        0.1,  0.25, 0.03};
@@ -92,6 +108,9 @@ typedef struct lm_ctx {
     double lo[PBR_MAXP], hi[PBR_MAXP];
     int np;
     const int *view; /* every sample's view (pbr_fit_opts), NULL: none */
+    /* the refinement's pins (refine_pinned): -1 or +1 holds parameter k at
+     * its lower or upper bound, out of the search (dp/du 0); 0 free */
+    int pin[PBR_MAXP];
 } lm_ctx;
 
 static pthread_once_t gsl_handler_once = PTHREAD_ONCE_INIT;
@@ -110,6 +129,12 @@ static void u_to_p(const lm_ctx *cx, const double *u, double *p, double *dpdu)
 {
     for (int k = 0; k < cx->np; k++) {
         double s = sigm(u[k]), r = cx->hi[k] - cx->lo[k];
+        if (cx->pin[k]) {
+            p[k] = cx->pin[k] < 0 ? cx->lo[k] : cx->hi[k];
+            if (dpdu)
+                dpdu[k] = 0.0;
+            continue;
+        }
         p[k] = cx->lo[k] + r * s;
         if (dpdu)
             dpdu[k] = r * s * (1.0 - s);
@@ -858,6 +883,336 @@ static int is_weight(const pbr_spec *sp, int k)
     return sp->fresnel == PBR_CONDUCTOR ? j == 1 : j >= 1 && j <= 3;
 }
 
+/* 0.5 sum of squared residuals at p on cx's samples (r: 3 n, scratch). */
+static double set_cost(const lm_ctx *cx, const double *p, gsl_vector *r)
+{
+    pass *ps = malloc(sizeof *ps);
+    double ss = 0.0;
+    if (!ps)
+        return NAN;
+    ps->cx = cx;
+    ps->p = p;
+    ps->v = r;
+    pass_run(ps, f_block);
+    for (int b = 0; b < PBR_BLOCKS; b++)
+        ss += ps->ss[b];
+    free(ps);
+    return 0.5 * ss;
+}
+
+/* 1 for a parameter the model is nonlinear in: a lobe's roughness, a
+ * dielectric's ior (the others are lin_project's). */
+static int is_shape(const pbr_spec *sp, int k)
+{
+    int j = (k - 3) % 5;
+    return k >= 3 && (j == 0 || (sp->fresnel == PBR_DIELECTRIC && j == 4));
+}
+
+/* Pin the weights of p within PBR_PIN_WEIGHT of a bound at it (cx->pin,
+ * p; those pinned already stay); returns how many. */
+static int pins_set(lm_ctx *cx, double *p)
+{
+    int n = 0;
+    for (int k = 0; k < cx->np; k++) {
+        double t = (p[k] - cx->lo[k]) / (cx->hi[k] - cx->lo[k]);
+        if (cx->pin[k] || is_shape(cx->sp, k))
+            continue; /* lin_project's, pins_probe's */
+        cx->pin[k] = t <= PBR_PIN_WEIGHT ? -1 : t >= 1.0 - PBR_PIN_WEIGHT ? 1 : 0;
+        if (cx->pin[k]) {
+            p[k] = cx->pin[k] < 0 ? cx->lo[k] : cx->hi[k];
+            n++;
+        }
+    }
+    return n;
+}
+
+/* Release the pins the cost does not hold at their bounds: where a step of
+ * a millionth of the range inward lowers it (the gradient points in).
+ * Returns how many were released, -1 when out of memory. */
+static int pins_check(lm_ctx *cx, const double *p)
+{
+    gsl_vector *r = gsl_vector_alloc(3 * (size_t)cx->s->g.n);
+    double q[PBR_MAXP], c0;
+    int pins[PBR_MAXP], rel = 0;
+    if (!r)
+        return -1;
+    memcpy(pins, cx->pin, sizeof pins);
+    memset(cx->pin, 0, sizeof cx->pin); /* p itself holds the bounds */
+    c0 = set_cost(cx, p, r);
+    for (int k = 0; k < cx->np; k++) {
+        if (!pins[k])
+            continue;
+        memcpy(q, p, sizeof q);
+        q[k] -= pins[k] * 1e-6 * (cx->hi[k] - cx->lo[k]);
+        if (!(set_cost(cx, q, r) >= c0)) {
+            pins[k] = 0;
+            rel++;
+        }
+    }
+    memcpy(cx->pin, pins, sizeof pins);
+    gsl_vector_free(r);
+    return rel;
+}
+
+/* ---- the linear parameters at a given shape (refine_pinned) ---------------------------- */
+
+/* At a given roughness (and ior) the model is linear in its weights.  Per
+ * sample and channel the columns are the diffuse term ci / pi and per lobe
+ *   dielectric: g = D V F(ior) ci                  (weight ks_c)
+ *   conductor:  a = D V (1 - w5) ci, b = D V w5 ci (weights s_c = ks F0_c
+ *               and e = ks: ks F = s_c (1 - w5) + e w5)
+ * summed over the sample's terms with their weights.  The conductor's
+ * s_c <= e is F0 <= 1, so its ks and F0 trade along no valley here. */
+#define LIN_MAXC (1 + 2 * PBR_MAX_LOBES)      /* columns a channel */
+#define LIN_MAXU (3 + 4 * PBR_MAX_LOBES)      /* unknowns, all channels */
+
+static int lin_ncols(const pbr_spec *sp)
+{
+    return 1 + (sp->fresnel == PBR_CONDUCTOR ? 2 : 1) * sp->nlobes;
+}
+
+/* Sample i's columns per channel at p's shape (OUT X[c][a]). */
+static void lin_sample(const lm_ctx *cx, const double *p, int i, double X[3][LIN_MAXC])
+{
+    const pbr_spec *sp = cx->sp;
+    double d[3], A[PBR_MAX_LOBES][3], B[PBR_MAX_LOBES][3];
+    pbr_sample_sums(sp, p, &cx->s->g, i, d, A, B);
+    for (int c = 0; c < 3; c++) {
+        X[c][0] = d[c] / M_PI;
+        for (int l = 0; l < sp->nlobes; l++) {
+            if (sp->fresnel == PBR_CONDUCTOR) {
+                X[c][1 + 2 * l] = A[l][c];
+                X[c][2 + 2 * l] = B[l][c];
+            } else {
+                X[c][1 + l] = pbr_f0_of_ior(p[3 + 5 * l + 4]) * A[l][c] + B[l][c];
+            }
+        }
+    }
+}
+
+/* Where column a of channel c goes among the unknowns: kd_c, then per lobe
+ * (dielectric) ks_lc, or (conductor) s_lc and e_l. */
+static int lin_unknown(const pbr_spec *sp, int c, int a)
+{
+    if (a == 0)
+        return c;
+    if (sp->fresnel == PBR_DIELECTRIC)
+        return 3 + 3 * (a - 1) + c;
+    return 3 + 4 * ((a - 1) / 2) + ((a - 1) % 2 ? 3 : c);
+}
+
+/* The unknowns' bounds as rows G z <= u (lsq.h; z >= 0 is its own):
+ * kd_c <= 1, ks <= PBR_KS_MAX, and a conductor's s_lc - e_l <= 0.
+ * Returns the number of rows. */
+static int lin_rows(const pbr_spec *sp, int nu, double *G, double *u)
+{
+    int m = 0;
+    memset(G, 0, sizeof(double) * (size_t)nu * (3 + 4 * PBR_MAX_LOBES));
+    for (int c = 0; c < 3; c++, m++) {
+        G[(size_t)m * nu + c] = 1.0;
+        u[m] = 1.0;
+    }
+    for (int l = 0; l < sp->nlobes; l++) {
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            for (int c = 0; c < 3; c++, m++) {
+                G[(size_t)m * nu + 3 + 3 * l + c] = 1.0;
+                u[m] = PBR_KS_MAX;
+            }
+        } else {
+            int e = 3 + 4 * l + 3;
+            for (int c = 0; c < 3; c++, m++) {
+                G[(size_t)m * nu + 3 + 4 * l + c] = 1.0;
+                G[(size_t)m * nu + e] = -1.0;
+                u[m] = 0.0;
+            }
+            G[(size_t)m * nu + e] = 1.0;
+            u[m++] = PBR_KS_MAX;
+        }
+    }
+    return m;
+}
+
+/* The weights of p's shape solved exactly on cx's samples (lsq.h's
+ * active set: the bounds are met, not approached as the sigmoid does),
+ * written into p; those the solve puts on a bound are pinned there
+ * (cx->pin).  Kept only when the cost at p does not rise, or whatever it
+ * was when `any` (p is a trial: its cost is not computed); OUT: *cost, the
+ * cost at the p returned (infinite when `any` and the solve failed).
+ * Returns 1 when kept, 0 when not, -1 when out of memory. */
+static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
+{
+    const pbr_spec *sp = cx->sp;
+    const pbr_geom *g = &cx->s->g;
+    int nc = lin_ncols(sp), nu = 3 + (sp->fresnel == PBR_CONDUCTOR ? 4 : 3) * sp->nlobes;
+    int m, keep = 0, pin0[PBR_MAXP];
+    double Gc[3][LIN_MAXC][LIN_MAXC] = {{{0}}}, qc[3][LIN_MAXC] = {{0}}, yy = 0.0;
+    double H[LIN_MAXU * LIN_MAXU] = {0}, q[LIN_MAXU] = {0}, z[LIN_MAXU];
+    double G[(3 + 4 * PBR_MAX_LOBES) * LIN_MAXU], u[3 + 4 * PBR_MAX_LOBES];
+    double np_[PBR_MAXP], c0, c1;
+    lsq_problem pr;
+    lsq_result res;
+    gsl_vector *r = gsl_vector_alloc(3 * (size_t)g->n);
+
+    if (!r)
+        return -1;
+    for (int i = 0; i < g->n; i++) {
+        double X[3][LIN_MAXC];
+        lin_sample(cx, p, i, X);
+        for (int c = 0; c < 3; c++) {
+            double y = cx->s->y[3 * (size_t)i + c];
+            yy += y * y;
+            for (int a = 0; a < nc; a++) {
+                qc[c][a] += X[c][a] * y;
+                for (int b = 0; b < nc; b++)
+                    Gc[c][a][b] += X[c][a] * X[c][b];
+            }
+        }
+    }
+    for (int c = 0; c < 3; c++)
+        for (int a = 0; a < nc; a++) {
+            int ia = lin_unknown(sp, c, a);
+            q[ia] += qc[c][a];
+            for (int b = 0; b < nc; b++)
+                H[ia * nu + lin_unknown(sp, c, b)] += Gc[c][a][b];
+        }
+    m = lin_rows(sp, nu, G, u);
+    memset(&pr, 0, sizeof pr);
+    pr.n = nu;
+    pr.H = H;
+    pr.q = q;
+    pr.ff = yy;
+    pr.m = m;
+    pr.G = G;
+    pr.u = u;
+    memcpy(pin0, cx->pin, sizeof pin0);
+    memset(cx->pin, 0, sizeof cx->pin);
+    c0 = any ? INFINITY : set_cost(cx, p, r);
+    if (lsq_solve(&pr, LSQ_ENERGY, 0.0, NULL, z, &res, NULL) || res.status != LSQ_OK) {
+        memcpy(cx->pin, pin0, sizeof pin0);
+        gsl_vector_free(r);
+        *cost = c0;
+        return 0;
+    }
+    memcpy(np_, p, sizeof np_);
+    for (int c = 0; c < 3; c++)
+        np_[c] = fmin(z[c], 1.0);
+    for (int l = 0; l < sp->nlobes; l++) {
+        int o = 3 + 5 * l;
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            for (int c = 0; c < 3; c++)
+                np_[o + 1 + c] = fmin(z[3 + 3 * l + c], PBR_KS_MAX);
+        } else {
+            double e = fmin(z[3 + 4 * l + 3], PBR_KS_MAX);
+            np_[o + 1] = e;
+            for (int c = 0; c < 3 && e > 0.0; c++)
+                np_[o + 2 + c] = fmin(1.0, z[3 + 4 * l + c] / e);
+        }
+    }
+    c1 = set_cost(cx, np_, r);
+    if (c1 <= c0) {
+        memcpy(p, np_, sizeof np_);
+        keep = 1;
+    }
+    gsl_vector_free(r);
+    *cost = keep ? c1 : c0;
+    /* the pins: the shape's as they were, the weights where the solve put a
+     * bound (a conductor's F0 at 1: its s_c met e) */
+    memcpy(cx->pin, pin0, sizeof pin0);
+    for (int k = 0; k < cx->np && keep; k++) {
+        double span = cx->hi[k] - cx->lo[k];
+        if (is_shape(sp, k))
+            continue;
+        cx->pin[k] = p[k] <= cx->lo[k] + 1e-12 * span ? -1 : p[k] >= cx->hi[k] - 1e-12 * span ? 1 : 0;
+        if (cx->pin[k])
+            p[k] = cx->pin[k] < 0 ? cx->lo[k] : cx->hi[k];
+    }
+    return keep;
+}
+
+/* Try each roughness and ior of p near a bound (PBR_PROBE_ALPHA,
+ * PBR_PROBE_IOR of the range) on it, the weights solved anew there
+ * (lin_project): where the cost (*cost, at p in and out) is no higher, p
+ * moves there and the parameter is pinned.  The sigmoid approaches a bound
+ * only in the limit: an ior at 2.9 took 76 iterations to reach 3.  Returns
+ * how many were pinned, -1 when out of memory. */
+static int pins_probe(lm_ctx *cx, double *p, double *cost)
+{
+    int n = 0;
+    for (int k = 0; k < cx->np; k++) {
+        double t = (p[k] - cx->lo[k]) / (cx->hi[k] - cx->lo[k]), q[PBR_MAXP], cq;
+        double near = (k - 3) % 5 ? PBR_PROBE_IOR : PBR_PROBE_ALPHA;
+        int pin0[PBR_MAXP], side = t <= near ? -1 : t >= 1.0 - near ? 1 : 0;
+        if (!is_shape(cx->sp, k) || !side || cx->pin[k])
+            continue;
+        memcpy(q, p, sizeof q);
+        memcpy(pin0, cx->pin, sizeof pin0);
+        q[k] = side < 0 ? cx->lo[k] : cx->hi[k];
+        cx->pin[k] = side;
+        if (lin_project(cx, q, &cq, 1) < 0)
+            return -1;
+        if (cq <= *cost) {
+            memcpy(p, q, sizeof q);
+            *cost = cq;
+            n++;
+        } else {
+            memcpy(cx->pin, pin0, sizeof pin0);
+        }
+    }
+    return n;
+}
+
+/* The refinement's Levenberg-Marquardt with the bounds as an active set.
+ * After PBR_PIN_AFTER iterations without convergence: the weights solved
+ * exactly at the shape reached (lin_project: a conductor's ks and F0 then
+ * sit where a search would crawl along their valley), the roughnesses and
+ * iors near a bound tried on it (pins_probe), the parameters on a bound or
+ * near one held there (pins_set), the others searched on (the sigmoid
+ * reaches a bound only in the limit: a metal's kd crawled to 3e-13 in 100
+ * iterations); a pin the cost does not hold there is released (pins_check)
+ * and the search resumed.  The iterations add up to max_iter at most.
+ * One lobe only: with two, the pins led 4 of 28 environment-lit fits of
+ * measured materials (bench_env_measured, pbr_tab_env) to other minima,
+ * three with a painted error 1-6% higher (the one-view median on new views
+ * 15.8% against 15.2%), one 22% lower, so two lobes keep the plain search.  p in and out;
+ * cx->pin cleared on return; -1 when out of memory. */
+static int refine_pinned(lm_ctx *cx, gsl_multilarge_nlinear_workspace *w, int max_iter,
+                         double *p, pbr_start_report *rep)
+{
+    int used, rel;
+    double cost;
+    pbr_start_report more;
+    memset(cx->pin, 0, sizeof cx->pin);
+    if (cx->sp->nlobes > 1) { /* the plain search (see above) */
+        lm_run(cx, w, max_iter, p, rep);
+        return 0;
+    }
+    lm_run(cx, w, max_iter < PBR_PIN_AFTER ? max_iter : PBR_PIN_AFTER, p, rep);
+    used = rep->iters;
+    if (rep->converged || used >= max_iter)
+        return 0;
+    if (lin_project(cx, p, &cost, 0) < 0 || pins_probe(cx, p, &cost) < 0) {
+        memset(cx->pin, 0, sizeof cx->pin);
+        return -1;
+    }
+    pins_set(cx, p);
+    lm_run(cx, w, max_iter - used, p, &more);
+    used += more.iters;
+    if ((rel = pins_check(cx, p)) < 0) {
+        memset(cx->pin, 0, sizeof cx->pin);
+        return -1;
+    }
+    if (rel > 0 && used < max_iter) {
+        pbr_start_report last;
+        lm_run(cx, w, max_iter - used, p, &last);
+        used += last.iters;
+        more = last;
+    }
+    memset(cx->pin, 0, sizeof cx->pin);
+    *rep = more;
+    rep->iters = used;
+    return 0;
+}
+
 /* Step 2: the best start refined on o->refine samples (drawn as the
  * starts' subset is, more of them) or on every sample.  *w: the starts'
  * workspace, replaced. */
@@ -877,7 +1232,10 @@ static int refine(lm_ctx *cx, const pbr_set *all, const pbr_fit_opts *o,
         set_free(&ref);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (GSL workspace)");
     }
-    lm_run(cx, *w, o->max_iter, out->p, &fin);
+    if (refine_pinned(cx, *w, o->max_iter, out->p, &fin)) {
+        set_free(&ref);
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    }
     out->iters = fin.iters;
     out->converged = fin.converged;
     out->refine_samples = cx->s->g.n;
