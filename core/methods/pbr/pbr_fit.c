@@ -1032,6 +1032,61 @@ static int lin_rows(const pbr_spec *sp, int nu, double *G, double *u)
     return m;
 }
 
+/* The weights' normal equations at p's shape on cx's samples: OUT H (nu x
+ * nu), q (nu) and *yy, the painting's sum of squares. */
+static void lin_normal(const lm_ctx *cx, const double *p, int nu, double *H, double *q,
+                       double *yy)
+{
+    const pbr_spec *sp = cx->sp;
+    const pbr_geom *g = &cx->s->g;
+    int nc = lin_ncols(sp);
+    double Gc[3][LIN_MAXC][LIN_MAXC] = {{{0}}}, qc[3][LIN_MAXC] = {{0}};
+    *yy = 0.0;
+    for (int i = 0; i < g->n; i++) {
+        double X[3][LIN_MAXC];
+        lin_sample(cx, p, i, X);
+        for (int c = 0; c < 3; c++) {
+            double y = cx->s->y[3 * (size_t)i + c];
+            *yy += y * y;
+            for (int a = 0; a < nc; a++) {
+                qc[c][a] += X[c][a] * y;
+                for (int b = 0; b < nc; b++)
+                    Gc[c][a][b] += X[c][a] * X[c][b];
+            }
+        }
+    }
+    memset(H, 0, sizeof(double) * (size_t)nu * nu);
+    memset(q, 0, sizeof(double) * (size_t)nu);
+    for (int c = 0; c < 3; c++)
+        for (int a = 0; a < nc; a++) {
+            int ia = lin_unknown(sp, c, a);
+            q[ia] += qc[c][a];
+            for (int b = 0; b < nc; b++)
+                H[ia * nu + lin_unknown(sp, c, b)] += Gc[c][a][b];
+        }
+}
+
+/* The weights z (lin_unknown's order) as parameters: p with its kd, ks and
+ * F0 from z, within their bounds (OUT: out). */
+static void lin_to_params(const pbr_spec *sp, const double *z, const double *p, double *out)
+{
+    memcpy(out, p, sizeof(double) * PBR_MAXP);
+    for (int c = 0; c < 3; c++)
+        out[c] = fmin(z[c], 1.0);
+    for (int l = 0; l < sp->nlobes; l++) {
+        int o = 3 + 5 * l;
+        if (sp->fresnel == PBR_DIELECTRIC) {
+            for (int c = 0; c < 3; c++)
+                out[o + 1 + c] = fmin(z[3 + 3 * l + c], PBR_KS_MAX);
+        } else {
+            double e = fmin(z[3 + 4 * l + 3], PBR_KS_MAX);
+            out[o + 1] = e;
+            for (int c = 0; c < 3 && e > 0.0; c++)
+                out[o + 2 + c] = fmin(1.0, z[3 + 4 * l + c] / e);
+        }
+    }
+}
+
 /* The weights of p's shape solved exactly on cx's samples (lsq.h's
  * active set: the bounds are met, not approached as the sigmoid does),
  * written into p; those the solve puts on a bound are pinned there
@@ -1042,50 +1097,21 @@ static int lin_rows(const pbr_spec *sp, int nu, double *G, double *u)
 static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
 {
     const pbr_spec *sp = cx->sp;
-    const pbr_geom *g = &cx->s->g;
-    int nc = lin_ncols(sp), nu = 3 + (sp->fresnel == PBR_CONDUCTOR ? 4 : 3) * sp->nlobes;
-    int m, keep = 0, pin0[PBR_MAXP];
-    double Gc[3][LIN_MAXC][LIN_MAXC] = {{{0}}}, qc[3][LIN_MAXC] = {{0}}, yy = 0.0;
-    double H[LIN_MAXU * LIN_MAXU] = {0}, q[LIN_MAXU] = {0}, z[LIN_MAXU];
+    int nu = 3 + (sp->fresnel == PBR_CONDUCTOR ? 4 : 3) * sp->nlobes, keep = 0, pin0[PBR_MAXP];
+    double H[LIN_MAXU * LIN_MAXU], q[LIN_MAXU], z[LIN_MAXU], yy;
     double G[(3 + 4 * PBR_MAX_LOBES) * LIN_MAXU], u[3 + 4 * PBR_MAX_LOBES];
-    double np_[PBR_MAXP], c0, c1;
+    double pn[PBR_MAXP], c0, c1;
     lsq_problem pr;
     lsq_result res;
-    gsl_vector *r = gsl_vector_alloc(3 * (size_t)g->n);
+    gsl_vector *r = gsl_vector_alloc(3 * (size_t)cx->s->g.n);
 
     if (!r)
         return -1;
-    for (int i = 0; i < g->n; i++) {
-        double X[3][LIN_MAXC];
-        lin_sample(cx, p, i, X);
-        for (int c = 0; c < 3; c++) {
-            double y = cx->s->y[3 * (size_t)i + c];
-            yy += y * y;
-            for (int a = 0; a < nc; a++) {
-                qc[c][a] += X[c][a] * y;
-                for (int b = 0; b < nc; b++)
-                    Gc[c][a][b] += X[c][a] * X[c][b];
-            }
-        }
-    }
-    for (int c = 0; c < 3; c++)
-        for (int a = 0; a < nc; a++) {
-            int ia = lin_unknown(sp, c, a);
-            q[ia] += qc[c][a];
-            for (int b = 0; b < nc; b++)
-                H[ia * nu + lin_unknown(sp, c, b)] += Gc[c][a][b];
-        }
-    m = lin_rows(sp, nu, G, u);
-    memset(&pr, 0, sizeof pr);
-    pr.n = nu;
-    pr.H = H;
-    pr.q = q;
-    pr.ff = yy;
-    pr.m = m;
-    pr.G = G;
-    pr.u = u;
+    lin_normal(cx, p, nu, H, q, &yy);
+    pr = (lsq_problem){.n = nu, .H = H, .q = q, .ff = yy, .G = G, .u = u};
+    pr.m = lin_rows(sp, nu, G, u);
     memcpy(pin0, cx->pin, sizeof pin0);
-    memset(cx->pin, 0, sizeof cx->pin);
+    memset(cx->pin, 0, sizeof cx->pin); /* the costs at p as it stands */
     c0 = any ? INFINITY : set_cost(cx, p, r);
     if (lsq_solve(&pr, LSQ_ENERGY, 0.0, NULL, z, &res, NULL) || res.status != LSQ_OK) {
         memcpy(cx->pin, pin0, sizeof pin0);
@@ -1093,24 +1119,10 @@ static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
         *cost = c0;
         return 0;
     }
-    memcpy(np_, p, sizeof np_);
-    for (int c = 0; c < 3; c++)
-        np_[c] = fmin(z[c], 1.0);
-    for (int l = 0; l < sp->nlobes; l++) {
-        int o = 3 + 5 * l;
-        if (sp->fresnel == PBR_DIELECTRIC) {
-            for (int c = 0; c < 3; c++)
-                np_[o + 1 + c] = fmin(z[3 + 3 * l + c], PBR_KS_MAX);
-        } else {
-            double e = fmin(z[3 + 4 * l + 3], PBR_KS_MAX);
-            np_[o + 1] = e;
-            for (int c = 0; c < 3 && e > 0.0; c++)
-                np_[o + 2 + c] = fmin(1.0, z[3 + 4 * l + c] / e);
-        }
-    }
-    c1 = set_cost(cx, np_, r);
+    lin_to_params(sp, z, p, pn);
+    c1 = set_cost(cx, pn, r);
     if (c1 <= c0) {
-        memcpy(p, np_, sizeof np_);
+        memcpy(p, pn, sizeof pn);
         keep = 1;
     }
     gsl_vector_free(r);
@@ -1122,7 +1134,9 @@ static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
         double span = cx->hi[k] - cx->lo[k];
         if (is_shape(sp, k))
             continue;
-        cx->pin[k] = p[k] <= cx->lo[k] + 1e-12 * span ? -1 : p[k] >= cx->hi[k] - 1e-12 * span ? 1 : 0;
+        cx->pin[k] = p[k] <= cx->lo[k] + 1e-12 * span   ? -1
+                     : p[k] >= cx->hi[k] - 1e-12 * span ? 1
+                                                        : 0;
         if (cx->pin[k])
             p[k] = cx->pin[k] < 0 ? cx->lo[k] : cx->hi[k];
     }
