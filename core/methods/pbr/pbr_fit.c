@@ -1090,17 +1090,17 @@ static void lin_to_params(const pbr_spec *sp, const double *z, const double *p, 
 /* The weights of p's shape solved exactly on cx's samples (lsq.h's
  * active set: the bounds are met, not approached as the sigmoid does),
  * written into p; those the solve puts on a bound are pinned there
- * (cx->pin).  Kept only when the cost at p does not rise, or whatever it
- * was when `any` (p is a trial: its cost is not computed); OUT: *cost, the
- * cost at the p returned (infinite when `any` and the solve failed).
+ * (cx->pin).  Kept only when the cost does not rise above c0, the cost at
+ * p (the search's own; infinite for a trial, which is kept whatever it
+ * costs); OUT: *cost, the cost at the p returned (c0 when not kept).
  * Returns 1 when kept, 0 when not, -1 when out of memory. */
-static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
+static int lin_project(lm_ctx *cx, double *p, double c0, double *cost)
 {
     const pbr_spec *sp = cx->sp;
     int nu = 3 + (sp->fresnel == PBR_CONDUCTOR ? 4 : 3) * sp->nlobes, keep = 0, pin0[PBR_MAXP];
     double H[LIN_MAXU * LIN_MAXU], q[LIN_MAXU], z[LIN_MAXU], yy;
     double G[(3 + 4 * PBR_MAX_LOBES) * LIN_MAXU], u[3 + 4 * PBR_MAX_LOBES];
-    double pn[PBR_MAXP], c0, c1;
+    double pn[PBR_MAXP], c1;
     lsq_problem pr;
     lsq_result res;
     gsl_vector *r = gsl_vector_alloc(3 * (size_t)cx->s->g.n);
@@ -1111,8 +1111,7 @@ static int lin_project(lm_ctx *cx, double *p, double *cost, int any)
     pr = (lsq_problem){.n = nu, .H = H, .q = q, .ff = yy, .G = G, .u = u};
     pr.m = lin_rows(sp, nu, G, u);
     memcpy(pin0, cx->pin, sizeof pin0);
-    memset(cx->pin, 0, sizeof cx->pin); /* the costs at p as it stands */
-    c0 = any ? INFINITY : set_cost(cx, p, r);
+    memset(cx->pin, 0, sizeof cx->pin); /* the cost at pn as it stands */
     if (lsq_solve(&pr, LSQ_ENERGY, 0.0, NULL, z, &res, NULL) || res.status != LSQ_OK) {
         memcpy(cx->pin, pin0, sizeof pin0);
         gsl_vector_free(r);
@@ -1162,7 +1161,7 @@ static int pins_probe(lm_ctx *cx, double *p, double *cost)
         memcpy(pin0, cx->pin, sizeof pin0);
         q[k] = side < 0 ? cx->lo[k] : cx->hi[k];
         cx->pin[k] = side;
-        if (lin_project(cx, q, &cq, 1) < 0)
+        if (lin_project(cx, q, INFINITY, &cq) < 0)
             return -1;
         if (cq <= *cost) {
             memcpy(p, q, sizeof q);
@@ -1204,7 +1203,7 @@ static int refine_pinned(lm_ctx *cx, gsl_multilarge_nlinear_workspace *w, int ma
     used = rep->iters;
     if (rep->converged || used >= max_iter)
         return 0;
-    if (lin_project(cx, p, &cost, 0) < 0 || pins_probe(cx, p, &cost) < 0) {
+    if (lin_project(cx, p, rep->cost, &cost) < 0 || pins_probe(cx, p, &cost) < 0) {
         memset(cx->pin, 0, sizeof cx->pin);
         return -1;
     }
