@@ -186,6 +186,14 @@ export async function drawStroke(page, pts, steps) {
   await page.mouse.up();
 }
 
+// Paint the chosen finish on every view (the Finish panel's button) and wait
+// until the button is back: every view painted.
+export async function paintAllViews(page) {
+  await page.click('#preset-apply');
+  await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
+                             !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+}
+
 // Wait until this page's strokes on view k are confirmed by the server.
 export async function settled(page, k) {
   await page.waitForFunction(k => {

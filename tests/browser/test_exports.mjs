@@ -22,7 +22,7 @@ import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { run, openStudio, settled, assert, assertLE, assertEq, ARTIFACTS, SRC } from './harness.mjs';
+import { run, openStudio, settled, paintAllViews, assert, assertLE, assertEq, ARTIFACTS, SRC } from './harness.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 const THREE_DIR = path.join(HERE, 'node_modules', 'three');
@@ -264,9 +264,7 @@ run({
     const page = await t.page();
     await openStudio(page, url);
     await page.selectOption('#preset-sel', 'plastic');
-    await page.click('#preset-apply');
-    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await paintAllViews(page);
     await settled(page, 0);
     await page.waitForSelector('#quality .q[data-preset]');
     await page.click('#fit-btn');
@@ -412,9 +410,7 @@ run({
     const page = await t.page();
     await openStudio(page, url);
     await page.selectOption('#preset-sel', 'satin');
-    await page.click('#preset-apply');
-    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await paintAllViews(page);
     await settled(page, 0);
     await page.selectOption('#fit-method', 'hf2d');
     await page.click('#fit-btn');

@@ -11,7 +11,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import {
-  run, openStudio, drawStroke, settled, assert, assertLE, assertGE, assertEq, pageArray,
+  run, openStudio, drawStroke, settled, paintAllViews, assert, assertLE, assertGE, assertEq, pageArray,
 } from './harness.mjs';
 
 // a measured material for the server to offer: a MERL table of a
@@ -62,9 +62,7 @@ run({
     assert(/one finish, lit by lamps/.test(guideText) && /varies over the surface/.test(guideText), 'the guide says what the methods can represent');
     // start from the plastic finish on every view, then paint a highlight on view 3
     await page.selectOption('#preset-sel', 'plastic');
-    await page.click('#preset-apply');
-    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await paintAllViews(page);
     await settled(page, 0);
     await setRange(page, 'diameter', 26);
     await page.keyboard.press('4');
@@ -209,9 +207,7 @@ run({
     await page.selectOption('#preset-sel', 'measured: red-ct');
     assert(/Measured/.test(await page.textContent('#preset-note')), 'the measured finish is described');
     assert(await page.isDisabled('#preset-colour'), 'its colour is what was measured');
-    await page.click('#preset-apply');
-    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await paintAllViews(page);
     await settled(page, 0);
     const d = await page.evaluate(async ([sid, tok]) => {
       const { decodeImage } = await import('/image.js');

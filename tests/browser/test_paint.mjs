@@ -5,7 +5,7 @@
 // the surface through every view's texture coordinates), readable errors.
 import {
   run, openStudio, drawStroke, settled, canvasPixels, serverPixels, floatDiff, maxDiff, pageArray, MUST_MS,
-  assert, assertLE, assertGE, assertEq, waitFor, sleep,
+  assert, assertLE, assertGE, assertEq, waitFor, sleep, paintAllViews,
 } from './harness.mjs';
 
 async function setRange(page, id, v) {
@@ -477,9 +477,7 @@ run({
     await page.evaluate(() => { const c = document.getElementById('preset-colour'); c.value = '#336699'; c.dispatchEvent(new Event('input', { bubbles: true })); });
     const note = await page.textContent('#preset-note');
     assert(/stretched/.test(note), 'the finish is described: ' + note);
-    await page.click('#preset-apply');
-    await page.waitForFunction(() => document.getElementById('preset-apply').textContent === 'Paint all views' &&
-                               !document.getElementById('preset-apply').disabled, null, { timeout: 60000 });
+    await paintAllViews(page);
     await t.shot(page, '06c-finish-satin.png');
     const nviews = await page.evaluate(() => window.glint.state.session.views.length);
     for (const k of [0, nviews - 1]) {
