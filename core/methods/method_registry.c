@@ -16,6 +16,7 @@
 #include "method_pbr_tab_env.h"
 #include "method_srbf.h"
 #include "method_tab.h"
+#include "method_tab_prior.h"
 
 extern const method *const method_builtin[];
 
@@ -24,6 +25,7 @@ const method *const method_builtin[] = {
     &method_pbr,
     &method_pbr_detail,
     &method_tab,
+    &method_tab_prior,
     &method_pbr_tab,
     &method_pbr_maps,
     &method_pbr_env,

@@ -404,6 +404,7 @@ const measured_material *measured_find(const measured_set *s, const char *name)
 static pthread_mutex_t lock_ = PTHREAD_MUTEX_INITIALIZER;
 static char path_[4096], hint_[256];
 static measured_set set_;
+static unsigned generation_;   /* calls of measured_set_file */
 static int loaded_;
 
 void measured_set_file(const char *path, const char *hint)
@@ -411,9 +412,19 @@ void measured_set_file(const char *path, const char *hint)
     pthread_mutex_lock(&lock_);
     measured_free(&set_);
     loaded_ = 0;
+    generation_++;
     snprintf(path_, sizeof path_, "%s", path ? path : "");
     snprintf(hint_, sizeof hint_, "%s", hint ? hint : "");
     pthread_mutex_unlock(&lock_);
+}
+
+unsigned measured_generation(void)
+{
+    unsigned g;
+    pthread_mutex_lock(&lock_);
+    g = generation_;
+    pthread_mutex_unlock(&lock_);
+    return g;
 }
 
 int measured_current(const measured_set **out, glint_err *err)

@@ -124,6 +124,10 @@ void measured_envlit(const void *ctx, const double uv[2], const double n[3], con
  * Call before threads start; a new file drops the one read. */
 void measured_set_file(const char *path, const char *hint);
 
+/* How many times measured_set_file was called: what a cache of something
+ * made from the process's set keys on. */
+unsigned measured_generation(void);
+
 /* The process's set (OUT: *out, valid until measured_set_file): read on
  * first use; GLINT_ENOTFOUND when no file is set, the file's error
  * otherwise (a later call reads it again). */

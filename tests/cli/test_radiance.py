@@ -40,7 +40,11 @@ BALL_TOL = 0.12     # a painted view rendered from the fit: relative RMS (hf2d o
                     # glossy: 8.0-9.4%)
 MEAN_TOL = 0.02     # ... and its mean over the finish's: the scale itself
 COLOURS = ["0.5/0.5/0.5", "0.8/0.45/0.1", "0.1/0.3/0.7"]
-POINT_METHODS = ["hf3", "pbr", "pbr_detail", "tab", "pbr_tab", "pbr_maps", "hf4", "hf2d", "maps", "hybrid", "auto"]
+POINT_METHODS = ["hf3", "pbr", "pbr_detail", "tab", "tab_prior", "pbr_tab", "pbr_maps", "hf4", "hf2d",
+                 "maps", "hybrid", "auto"]
+# tab_prior learns from the measured materials' fits: ../shared/data/measured
+# ($GLINT_MEASURED_DIR), or the method is left out (said so)
+NEEDS_MEASURED = {"tab_prior"}
 ENV_METHODS = ["srbf", "pbr_env", "auto_env"]
 VIEW = 3
 # Which methods each finish is checked with: those that model it.  Metal
@@ -139,6 +143,13 @@ def main():
     glint, root = sys.argv[1], sys.argv[2]
     table = "--table" in sys.argv
     fails = []
+    mdir = os.environ.get("GLINT_MEASURED_DIR") or os.path.join(root, "..", "shared", "data",
+                                                                 "measured")
+    if os.path.exists(os.path.join(mdir, "merl56_fits.json")):
+        os.environ["GLINT_MEASURED_DIR"] = os.path.abspath(mdir)
+    else:
+        print("no measured materials' fits (%s): %s left out" % (mdir, ", ".join(NEEDS_MEASURED)))
+        POINT_METHODS[:] = [m for m in POINT_METHODS if m not in NEEDS_MEASURED]
     with tempfile.TemporaryDirectory() as tmp:
         scene = os.path.join(tmp, "s.json")
         cache = os.path.join(tmp, "cache")

@@ -3,12 +3,17 @@ the JSON Schema of each method's parameters in proto/schemas is exactly
 what `glint methods --schema NAME` generates from the table, FitRequest.json
 lists exactly the registered methods, and GET /api/v1/methods describes
 them exactly as the table does (`glint methods --json`); the material of each
-method lit by lamps, fitted through the API, is what Material.json describes."""
+method lit by lamps, fitted through the API, is what Material.json describes
+(glintd offers four measured materials' fits, written here, for the methods
+that learn from them)."""
+import atexit
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.dirname(__file__))
 from harness import GLINTD, SRC, fit_material, run_tests  # noqa: E402
@@ -16,6 +21,21 @@ from harness import GLINTD, SRC, fit_material, run_tests  # noqa: E402
 CLI = os.environ.get("GLINT_CLI") or os.path.join(
     os.path.dirname(os.path.dirname(os.path.abspath(GLINTD))), "core", "glint")
 SCHEMAS = os.path.join(SRC, "proto", "schemas")
+
+# a fits file of four materials (sgd: a diffuse part and a highlight of
+# several widths; abc alike) for tab_prior to learn from
+MDIR = tempfile.mkdtemp(prefix="glint-measured-")
+atexit.register(shutil.rmtree, MDIR, True)
+with open(os.path.join(MDIR, "merl56_fits.json"), "w") as f:
+    json.dump({"materials": [
+        {"name": "fit-%d" % i,
+         "abc": {"kD": [kd] * 3, "A": [1, 1, 1], "B": 10.0, "C": 1.0, "ior": 1.5},
+         "sgd": dict({k: [v] * 3 for k, v in (("p", 0.5), ("f0", 0.04), ("f1", 0.0),
+                                              ("kap", 0.3), ("lambda", 0.0), ("c", 1.0),
+                                              ("k", 1.0), ("theta0", 0.0))},
+                     rhoD=[kd, 0.8 * kd, 0.6 * kd], rhoS=[ks] * 3, alpha=[a] * 3)}
+        for i, (kd, ks, a) in enumerate(((0.1, 0.5, 0.02), (0.3, 0.2, 0.05),
+                                         (0.5, 0.1, 0.1), (0.2, 0.8, 0.03)))]}, f)
 
 
 _cli_out = {}
@@ -128,6 +148,7 @@ def test_methods_say_what_they_are_for(d):
 SMALL = {"hf3": {"res": 8}, "pbr": {"starts": 1, "max_iter": 20},
          "pbr_detail": {"res": 8, "starts": 1, "max_iter": 20},
          "tab": {"res_h": 8, "res_d": 4}, "pbr_tab": {"res_h": 8, "res_d": 4, "starts": 1},
+         "tab_prior": {"res_h": 8, "res_d": 4, "components": 2},
          "pbr_maps": {"starts": 1, "components": 2, "map_res": 16, "rounds": 2},
          "hf4": {"res": 8, "s_res": 4}, "hf2d": {"res": 8, "res_2d": 8},
          "maps": {"res": 8, "components": 2, "map_res": 16, "rounds": 2},
@@ -156,4 +177,4 @@ def test_every_lamp_lit_methods_material_is_described_by_material_json(d):
         print("  %-10s precomputation key %s" % (name, m["precomputation"]["cache_key"][:40]))
 
 
-run_tests(globals())
+run_tests(globals(), daemon_args=("--measured-dir", MDIR))

@@ -64,7 +64,8 @@ static int tab_params_check(const void *p, glint_err *err)
 
 /* ---- the levels ------------------------------------------------------------------------- */
 
-static void design_key(const void *p, const samples *s, const char *prev, char *key, size_t len)
+void tab_level_design_key(const void *p, const samples *s, const char *prev, char *key,
+                          size_t len)
 {
     const tab_params *tp = p;
     (void)s;
@@ -77,7 +78,7 @@ static void design_free(void *data)
     free(data);
 }
 
-static int design_build(const method_build_in *in, cache_value *out, glint_err *err)
+int tab_level_design_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
     const tab_params *tp = in->params;
     tab_grid g = {tp->res_h, tp->res_d};
@@ -97,8 +98,8 @@ static int design_build(const method_build_in *in, cache_value *out, glint_err *
     return 0;
 }
 
-static void operator_key(const void *p, const samples *s, const char *prev, char *key,
-                         size_t len)
+void tab_level_operator_key(const void *p, const samples *s, const char *prev, char *key,
+                            size_t len)
 {
     const tab_params *tp = p;
     (void)s;
@@ -111,7 +112,7 @@ static void operator_free(void *data)
     free(data);
 }
 
-static int operator_build(const method_build_in *in, cache_value *out, glint_err *err)
+int tab_level_operator_build(const method_build_in *in, cache_value *out, glint_err *err)
 {
     const tab_params *tp = in->params;
     const tab_design *d = in->prev[0];
@@ -132,8 +133,10 @@ static int operator_build(const method_build_in *in, cache_value *out, glint_err
 }
 
 static const method_level tab_levels[] = {
-    {.name = "tab-design", .progress = 0.4, .key = design_key, .build = design_build},
-    {.name = "tab-operator", .progress = 0.7, .key = operator_key, .build = operator_build},
+    {.name = "tab-design", .progress = 0.4, .key = tab_level_design_key,
+     .build = tab_level_design_build},
+    {.name = "tab-operator", .progress = 0.7, .key = tab_level_operator_key,
+     .build = tab_level_operator_build},
 };
 
 /* ---- the report ------------------------------------------------------------------------------ */
@@ -207,8 +210,9 @@ static json_t *report_solve(const tab_solve_report *r, int nonneg)
 }
 
 /* The material's info (a new object, NULL when out of memory). */
-static json_t *report(const method_fit_in *in, const tab_design *d, const tab_operator *op,
-                      const tab_material *tm, const tab_solve_report *sr, double seconds)
+static json_t *report(const method *m, const method_fit_in *in, const tab_design *d,
+                      const tab_operator *op, const tab_material *tm,
+                      const tab_solve_report *sr, double seconds)
 {
     const tab_params *tp = in->params;
     int nv = in->s->nviews, nodes = tab_nodes(&d->g);
@@ -221,7 +225,7 @@ static json_t *report(const method_fit_in *in, const tab_design *d, const tab_op
         info = json_pack(
             "{s:o, s:{s:s, s:s, s:s, s:s, s:i, s:f}, s:{s:f, s:f}, s:{s:f, s:o}, s:{s:i, s:i, s:i},"
             " s:o, s:[f,f,f], s:o}",
-            "params", method_params_to_json(&method_tab, tp), "precomputation", "pattern_hash",
+            "params", method_params_to_json(m, in->params), "precomputation", "pattern_hash",
             in->s->hash, "cache_key", in->keys[1], "design_key", in->keys[0], "operator_key",
             in->keys[1], "samples",
             in->s->n, "ridge", op->ridge, "seconds", "samples", in->pattern_seconds, "fit",
@@ -237,7 +241,8 @@ static json_t *report(const method_fit_in *in, const tab_design *d, const tab_op
 
 /* ---- the fit ---------------------------------------------------------------------------------- */
 
-static int tab_method_fit(const method_fit_in *in, material *out, glint_err *err)
+int tab_fit_as(const method *m, const method_fit_in *in, tab_adjust_fn adjust,
+               const char *adjust_name, material *out, glint_err *err)
 {
     const tab_params *tp = in->params;
     const tab_design *d = in->levels[0];
@@ -245,31 +250,41 @@ static int tab_method_fit(const method_fit_in *in, material *out, glint_err *err
     double t0 = glint_now();
     tab_solve_report sr;
     tab_material *tm;
-    json_t *info;
+    json_t *info, *more = NULL;
     int rc;
 
     for (long i = 0; i < 3L * in->s->n; i++)
         if (!isfinite(in->rgb[i]))
-            return glint_err_set(err, GLINT_ENONFINITE, "tab: painted value %ld is not finite",
-                                 i / 3);
+            return glint_err_set(err, GLINT_ENONFINITE, "%s: painted value %ld is not finite",
+                                 m->name, i / 3);
     if (d->n != in->s->n || op->nodes != tab_nodes(&d->g))
-        return glint_err_set(err, GLINT_EINTERNAL, "tab: levels of another pattern");
+        return glint_err_set(err, GLINT_EINTERNAL, "%s: levels of another pattern", m->name);
     if (!(tm = calloc(1, sizeof *tm)) ||
         !(tm->t = malloc(3 * (size_t)op->nodes * sizeof *tm->t))) {
         tab_material_free(tm);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (tab table)");
     }
     tm->g = d->g;
-    if ((rc = tab_solve(d, op, in->rgb, tp->nonneg, tm->t, &sr, err))) {
+    if ((rc = tab_solve(d, op, in->rgb, tp->nonneg, tm->t, &sr, err)) ||
+        (adjust && (rc = adjust(in, tm, &more, err)))) {
         tab_material_free(tm);
         return rc;
     }
-    if (!(info = report(in, d, op, tm, &sr, glint_now() - t0))) {
+    if (!(info = report(m, in, d, op, tm, &sr, glint_now() - t0)) ||
+        (more && json_object_set_new(info, adjust_name, more))) {
+        if (!info)
+            json_decref(more);
+        json_decref(info);
         tab_material_free(tm);
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (tab report)");
     }
-    material_init(out, &method_tab, tm, info);
+    material_init(out, m, tm, info);
     return 0;
+}
+
+static int tab_method_fit(const method_fit_in *in, material *out, glint_err *err)
+{
+    return tab_fit_as(&method_tab, in, NULL, NULL, out, err);
 }
 
 static size_t tab_fit_bytes(const void *params, long nsamples)

@@ -42,6 +42,27 @@ typedef struct tab_material {
     double *t;
 } tab_material;
 
+/* ---- for methods built on tab (their params begin with a tab_params) -------------------- */
+
+/* The levels tab-design and tab-operator (method_level's key and build). */
+void tab_level_design_key(const void *p, const samples *s, const char *prev, char *key,
+                          size_t len);
+int tab_level_design_build(const method_build_in *in, cache_value *out, glint_err *err);
+void tab_level_operator_key(const void *p, const samples *s, const char *prev, char *key,
+                            size_t len);
+int tab_level_operator_build(const method_build_in *in, cache_value *out, glint_err *err);
+
+/* Changes a fitted table; OUT *more: what it reports (a new object, or
+ * NULL).  Returns 0 or an error. */
+typedef int (*tab_adjust_fn)(const method_fit_in *in, tab_material *tm, json_t **more,
+                             glint_err *err);
+
+/* tab's fit as method m (in->levels[0..1] tab's levels): the table, then
+ * adjust (may be NULL) on it, then tab's report of the result with adjust's
+ * report as member adjust_name. */
+int tab_fit_as(const method *m, const method_fit_in *in, tab_adjust_fn adjust,
+               const char *adjust_name, material *out, glint_err *err);
+
 /* The data of a tab material, or NULL for another method's. */
 const tab_material *tab_material_of(const material *m);
 
