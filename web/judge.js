@@ -632,7 +632,7 @@ export class Judge extends EventTarget {
     const sm = document.createElement('summary'); sm.textContent = 'advanced';
     const body = document.createElement('div'); body.textContent = tech.join(' · ');
     if (mat.choice && mat.choice.candidates)
-      body.textContent += ' · candidates (held-out RMS): ' + mat.choice.candidates.map(x => `${x.label || x.method} (${x.method}) ${fmtErr(x.held_out_rms)}`).join(', ');
+      body.textContent += ' · candidates (held-out RMS): ' + mat.choice.candidates.map(x => `${x.label || x.method} (${x.method}) ${x.skipped ? 'not tried: ' + x.skipped : fmtErr(x.held_out_rms)}`).join(', ');
     adv.append(sm, body);
     box.appendChild(adv);
     if (!(this.session.scene.width === this.session.scene.height)) box.append('per-view errors need a square raster (previews are square)');
@@ -648,7 +648,15 @@ export class Judge extends EventTarget {
     const b = document.createElement('b'); b.textContent = c.chosen_label || name(c.chosen);
     const on = c.held_out === 'views' ? 'views' : 'parts of the painting';
     div.append('Chose ', b, `: the error of each on ${on} it did not see — `,
-      c.candidates.map(x => `${x.label || name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
+      c.candidates.filter(x => !x.skipped).map(x => `${x.label || name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
+    // a candidate this host cannot fit (a method that learns from data it
+    // lacks): named, the reason on hover
+    for (const x of c.candidates.filter(x => x.skipped)) {
+      const sk = document.createElement('span');
+      sk.className = 'muted'; sk.title = x.skipped;
+      sk.textContent = `${x.label || name(x.method)}: not tried here. `;
+      div.appendChild(sk);
+    }
     const why = document.createElement('span');
     why.className = 'muted'; why.title = c.rule || '';
     why.textContent = `(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)`;

@@ -82,7 +82,15 @@ run({
     const labels = new Map(methods.map(m => [m.name, m.label]));
     assert(said.includes(labels.get(a.choice.chosen)) && point.every(m => said.includes(labels.get(m))), 'every candidate by its label');
     assert(!point.some(m => new RegExp(`\\b${m}\\b`).test(said)), 'no method names: ' + said);
-    assertEq((said.match(/\d%/g) || []).length >= point.length, true, 'each candidate\'s error as a percentage: ' + said);
+    // ... but one this glintd cannot fit (it lacks the measured materials'
+    // fits the learned prior needs), named as not tried, the reason on hover
+    const fitted = a.choice.candidates.filter(x => !x.skipped);
+    assertEq((said.match(/\d%/g) || []).length >= fitted.length, true, 'each candidate\'s error as a percentage: ' + said);
+    const skipped = a.choice.candidates.filter(x => x.skipped).map(x => x.method);
+    assertEq(skipped.join(','), 'tab_prior', 'the learned prior is not tried without measured fits');
+    assert(said.includes(`${labels.get('tab_prior')}: not tried here`), 'said so: ' + said);
+    const why = await page.evaluate(() => [...document.querySelectorAll('#auto-choice span[title]')].map(e => e.title).join(' | '));
+    assert(/measured/.test(why), 'the reason on hover: ' + why);
 
     // material maps of 3 products
     await setValue(page, 'fit-method', 'maps');

@@ -5,7 +5,9 @@
  * plastic, one finish whose colour varies (a spatial model), a brushed
  * highlight (the anisotropic candidate); every choice
  * is checked against the rule from the candidates it reports; one painted
- * view is judged on held-out pixels; a material loaded from a file naming
+ * view is judged on held-out pixels; the learned prior's candidate is
+ * fitted where the process has measured materials' fits and skipped, with
+ * the reason, where it has none; a material loaded from a file naming
  * "auto" is refused. */
 #include <math.h>
 #include <stdio.h>
@@ -16,6 +18,7 @@
 #include "cache.h"
 #include "check.h"
 #include "fsio.h"
+#include "measured.h"
 #include "method_auto.h"
 #include "paint.h"
 #include "prep.h"
@@ -78,7 +81,10 @@ static const char *choose(const char *spec, const unsigned char *use, material *
         json_t *c;
         size_t i;
         json_array_foreach(json_object_get(choice, "candidates"), i, c)
-            printf(" %s held-out %.4f painted %.4f%s;",
+            if (json_object_get(c, "skipped"))
+                printf(" %s skipped;", json_string_value(json_object_get(c, "method")));
+            else
+                printf(" %s held-out %.4f painted %.4f%s;",
                    json_string_value(json_object_get(c, "method")),
                    json_number_value(json_object_get(c, "held_out_rms")),
                    json_number_value(json_object_get(c, "rms_painted")),
@@ -92,7 +98,8 @@ static const char *choose(const char *spec, const unsigned char *use, material *
 /* The choice follows the rule from the candidates it reports: cheapest
  * first, a richer one taken when its judged RMS beats the choice so far by
  * more than the threshold (a fraction) and the floor (in the painting's
- * units: floor_value, the floor times the painting's RMS). */
+ * units: floor_value, the floor times the painting's RMS); one skipped (a
+ * reason given) is never taken. */
 static void check_rule(const material *m)
 {
     json_t *choice = json_object_get(m->info, "choice"), *c;
@@ -102,7 +109,14 @@ static void check_rule(const material *m)
     size_t i;
     json_array_foreach(json_object_get(choice, "candidates"), i, c) {
         double h = json_number_value(json_object_get(c, "judged_rms"));
-        int take = i == 0 || (h < cur * (1.0 - thr) && cur - h > fl);
+        int take;
+        if (json_object_get(c, "skipped")) {
+            ASSERT(i > 0 && strlen(json_string_value(json_object_get(c, "skipped"))) > 0);
+            ASSERT(json_is_false(json_object_get(c, "taken")));
+            ASSERT(!json_object_get(c, "judged_rms"));
+            continue;
+        }
+        take = i == 0 || (h < cur * (1.0 - thr) && cur - h > fl);
         ASSERT(isfinite(h) && h >= 0.0);
         ASSERT_EQ(json_is_true(json_object_get(c, "taken")), take);
         if (take) {
@@ -138,6 +152,8 @@ TEST(one_material_stays_one_material)
         double hn = json_number_value(json_object_get(e, "held_out_rms_new_views")),
                hb = json_number_value(json_object_get(e, "held_out_rms_beyond")),
                h = json_number_value(json_object_get(e, "held_out_rms"));
+        if (json_object_get(e, "skipped"))
+            continue;
         ASSERT(json_object_get(e, "held_out_rms_new_views") &&
                json_object_get(e, "held_out_rms_beyond"));
         /* the pooled error lies between its two parts */
@@ -215,6 +231,65 @@ TEST(one_view_holds_out_pixels)
     material_free(&m);
 }
 
+/* The candidate of the learned prior (tab_prior) where the process has a
+ * fits file (four materials written here), and skipped with the reason
+ * where it has none: the choice is made from the others either way. */
+static const char FITS[] =
+    "{\"materials\": ["
+    "{\"name\": \"a\", \"abc\": {\"kD\": [0.1, 0.1, 0.1], \"A\": [1, 1, 1], \"B\": 10, "
+    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.1, 0.08, 0.06], \"rhoS\": [0.5, 0.5, 0.5], "
+    "\"alpha\": [0.02, 0.02, 0.02], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
+    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
+    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}},"
+    "{\"name\": \"b\", \"abc\": {\"kD\": [0.3, 0.3, 0.3], \"A\": [1, 1, 1], \"B\": 10, "
+    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.3, 0.2, 0.1], \"rhoS\": [0.2, 0.2, 0.2], "
+    "\"alpha\": [0.05, 0.05, 0.05], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
+    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
+    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}},"
+    "{\"name\": \"c\", \"abc\": {\"kD\": [0.5, 0.5, 0.5], \"A\": [1, 1, 1], \"B\": 10, "
+    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.5, 0.4, 0.3], \"rhoS\": [0.1, 0.1, 0.1], "
+    "\"alpha\": [0.1, 0.1, 0.1], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
+    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
+    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}}]}";
+
+static json_t *candidate_named(const material *m, const char *name)
+{
+    json_t *e;
+    size_t i;
+    json_array_foreach(json_object_get(json_object_get(m->info, "choice"), "candidates"), i, e)
+        if (strcmp(json_string_value(json_object_get(e, "method")), name) == 0)
+            return e;
+    return NULL;
+}
+
+TEST(the_learned_prior_is_a_candidate_where_the_host_has_fits)
+{
+    char path[64];
+    material m;
+    json_t *e;
+    FILE *f;
+    ASSERT_OK(setup());
+    snprintf(path, sizeof path, "/tmp/glint-test-auto-%d.json", (int)getpid());
+    ASSERT((f = fopen(path, "w")) != NULL);
+    fputs(FITS, f);
+    fclose(f);
+    measured_set_file(path, NULL);
+    ASSERT(choose("ct:rough=0.25,kd=0.5/0.3/0.2,f0=0.3", NULL, &m));
+    check_rule(&m);
+    ASSERT((e = candidate_named(&m, "tab_prior")) != NULL);
+    ASSERT(!json_object_get(e, "skipped"));
+    ASSERT(isfinite(json_number_value(json_object_get(e, "judged_rms"))));
+    material_free(&m);
+    unlink(path);
+    /* no fits file: skipped, the reason said, the choice made from the rest */
+    measured_set_file(NULL, "glintd --measured-dir");
+    ASSERT(choose("ct:rough=0.25,kd=0.5/0.3/0.2,f0=0.3", NULL, &m));
+    check_rule(&m);
+    ASSERT((e = candidate_named(&m, "tab_prior")) != NULL);
+    ASSERT(strstr(json_string_value(json_object_get(e, "skipped")), "--measured-dir") != NULL);
+    material_free(&m);
+}
+
 TEST(a_manifest_naming_auto_is_refused)
 {
     char dir[] = "/tmp/glint_test_auto_XXXXXX", path[128];
@@ -238,6 +313,7 @@ TEST_LIST{
     TEST_ENTRY(a_varying_colour_is_spatial),
     TEST_ENTRY(a_brushed_highlight_is_anisotropic),
     TEST_ENTRY(one_view_holds_out_pixels),
+    TEST_ENTRY(the_learned_prior_is_a_candidate_where_the_host_has_fits),
     TEST_ENTRY(a_manifest_naming_auto_is_refused),
 };
 

@@ -18,7 +18,10 @@
 #include "method_pbr_maps.h"
 #include "method_pbr_tab.h"
 #include "method_tab.h"
+#include "method_tab_prior.h"
 #include "scene.h"
+
+static const char *const learn_exclude_examples[] = {"", "every/4", NULL};
 
 static const method_param auto_params_table[] = {
     {.name = "res", .label = "detail", .type = METHOD_PARAM_INT, .affects = "precomputation",
@@ -49,6 +52,14 @@ static const method_param auto_params_table[] = {
      .description = "one painted view in this many (one pixel, when one view is painted) is "
                     "held out to judge the candidates, which are fitted to the rest",
      .offset = offsetof(auto_params, every), .min = 2, .max = 64},
+    {.name = "learn_exclude", .label = "measured materials not learned from",
+     .group = METHOD_GROUP_ADVANCED, .type = METHOD_PARAM_TEXT, .affects = "precomputation",
+     .description = "measured materials the learned-prior candidate does not learn from: "
+                    "names joined by '+', or every/N for materials 0, N, 2N, ... of the fits "
+                    "file (the ones a benchmark run with --every N judges); empty: none",
+     .offset = offsetof(auto_params, learn_exclude),
+     .syntax = "\"\" | every/N | NAME[+NAME...]", .examples = learn_exclude_examples,
+     .parse = tab_prior_exclude_parse, .format = tab_prior_exclude_format},
 };
 
 static const method_preset auto_presets[] = {
@@ -99,6 +110,7 @@ typedef struct cands {
     pbr_params bp;
     pbr_detail_params xp;
     tab_params tp;
+    tab_prior_params rp;
     pbr_tab_params gp;
     pbr_maps_params qp;
 } cands;
@@ -128,6 +140,9 @@ static void candidates(const auto_params *p, cands *c)
         c->yp.components = p->components;
     method_pbr.params_default(&c->bp);
     method_tab.params_default(&c->tp);
+    method_tab_prior.params_default(&c->rp);
+    c->rp.tab = c->tp; /* tab's levels, shared */
+    snprintf(c->rp.exclude, sizeof c->rp.exclude, "%s", p->learn_exclude);
     method_pbr_tab.params_default(&c->gp); /* pbr's level and tab's design, shared */
     method_pbr_maps.params_default(&c->qp); /* pbr's level, shared */
     if (p->components)
@@ -143,7 +158,8 @@ static void candidates(const auto_params *p, cands *c)
  * hf3's two and hf4's one on every sample; hf2d's one on the kept pixels
  * and on every sample */
 enum { LV_SPLIT, LV_HF3, LV_HF4 = 3, LV_FULL_HF3, LV_FULL_HF4 = 6, LV_HF2D, LV_FULL_HF2D,
-       LV_PBR, LV_FULL_PBR, LV_TAB, LV_FULL_TAB = LV_TAB + 2, LV_N = LV_FULL_TAB + 2 };
+       LV_PBR, LV_FULL_PBR, LV_TAB, LV_FULL_TAB = LV_TAB + 2, LV_PRIOR = LV_FULL_TAB + 2,
+       LV_N };
 
 /* What a held-out sample measures. */
 enum { HELD_NO, HELD_NEW, HELD_BEYOND };
@@ -625,6 +641,59 @@ static int ftabo_build(const method_build_in *in, cache_value *out, glint_err *e
     return full_build(in, &method_tab, 1, in->prev + LV_FULL_TAB, &cs.tp, out, err);
 }
 
+/* tab_prior's learned prior, or why there is none (no fits file on this
+ * host, or a broken one): the candidate is then skipped, not the choice. */
+typedef struct auto_prior {
+    tab_prior *p;
+    char why[GLINT_ERR_MSG_MAX];
+} auto_prior;
+
+static void prior_key(const void *params, const samples *s, const char *prev_key, char *key,
+                      size_t len)
+{
+    cands cs;
+    (void)prev_key;
+    candidates(params, &cs);
+    tab_prior_level_key(&cs.rp, s, "measured", key, len);
+}
+
+static void prior_free(void *data)
+{
+    auto_prior *a = data;
+    if (a && a->p) {
+        tab_prior_free(a->p);
+        free(a->p);
+    }
+    free(a);
+}
+
+static int prior_build(const method_build_in *in, cache_value *out, glint_err *err)
+{
+    cands cs;
+    method_build_in c = *in;
+    cache_value v = {0};
+    auto_prior *a = calloc(1, sizeof *a);
+    int rc;
+    if (!a)
+        return glint_err_set(err, GLINT_ENOMEM, "out of memory");
+    candidates(in->params, &cs);
+    c.params = &cs.rp;
+    c.prev = NULL;
+    if ((rc = tab_prior_level_build(&c, &v, err))) {
+        if (rc == GLINT_ENOMEM || rc == GLINT_ECANCELLED) {
+            free(a);
+            return rc;
+        }
+        snprintf(a->why, sizeof a->why, "%s", err->msg);
+    } else {
+        a->p = v.data;
+    }
+    out->data = a;
+    out->bytes = sizeof *a + v.bytes;
+    out->free = prior_free;
+    return 0;
+}
+
 static const method_level auto_levels[] = {
     {.name = "split", .progress = 0.05, .key = split_key, .build = split_build},
     {.name = "decomposition", .progress = 0.1, .key = hf3d_key, .build = hf3d_build},
@@ -645,6 +714,7 @@ static const method_level auto_levels[] = {
     {.name = "table operator", .progress = 0.92, .key = tabo_key, .build = tabo_build},
     {.name = "full table design", .progress = 0.93, .key = ftabd_key, .build = ftabd_build},
     {.name = "full table operator", .progress = 0.94, .key = tabo_key, .build = ftabo_build},
+    {.name = "learned prior", .progress = 0.95, .key = prior_key, .build = prior_build},
 };
 
 /* ---- the fit ------------------------------------------------------------------------ */
@@ -664,6 +734,8 @@ static const cand_def CANDS[] = {
     {&method_pbr_detail, offsetof(cands, xp), 3, {LV_PBR, LV_HF3, LV_HF3 + 1},
      {LV_FULL_PBR, LV_FULL_HF3, LV_FULL_HF3 + 1}},
     {&method_tab, offsetof(cands, tp), 2, {LV_TAB, LV_TAB + 1}, {LV_FULL_TAB, LV_FULL_TAB + 1}},
+    {&method_tab_prior, offsetof(cands, rp), 3, {LV_TAB, LV_TAB + 1, LV_PRIOR},
+     {LV_FULL_TAB, LV_FULL_TAB + 1, LV_PRIOR}},
     {&method_pbr_tab, offsetof(cands, gp), 2, {LV_PBR, LV_TAB}, {LV_FULL_PBR, LV_FULL_TAB}},
     {&method_hf2d, offsetof(cands, dp), 1, {LV_HF2D}, {LV_FULL_HF2D}},
     {&method_hf4, offsetof(cands, hp), 1, {LV_HF4}, {LV_FULL_HF4}},
@@ -720,7 +792,8 @@ static int fit_on(const method_fit_in *in, int c, const cands *cs, const samples
     double spent[3];
     cache_disk disk[3];
     for (int l = 0; l < CANDS[c].nlv; l++) {
-        lv[l] = in->levels[lvi[l]];
+        lv[l] = lvi[l] == LV_PRIOR ? ((const auto_prior *)in->levels[LV_PRIOR])->p
+                                   : in->levels[lvi[l]];
         ky[l] = in->keys[lvi[l]];
         how[l] = in->how[lvi[l]];
         spent[l] = in->spent[lvi[l]];
@@ -743,6 +816,7 @@ static int fit_on(const method_fit_in *in, int c, const cands *cs, const samples
 /* What each candidate scored. */
 typedef struct scores {
     double held[NCAND], held_new[NCAND], held_beyond[NCAND], secs[NCAND];
+    const char *skipped[NCAND];   /* why a candidate was not fitted, or NULL */
 } scores;
 
 /* Fit every candidate to the kept samples and measure it on the held-out
@@ -763,6 +837,11 @@ static int fit_candidates(const method_fit_in *in, const cands *cs, material *ca
         }
     for (int c = 0; c < NCAND && !rc; c++) {
         double t = glint_now();
+        const auto_prior *ap = in->levels[LV_PRIOR];
+        if (CANDS[c].m == &method_tab_prior && !ap->p) {
+            sc->skipped[c] = ap->why;
+            continue;
+        }
         if ((rc = fit_on(in, c, cs, tr, trgb, CANDS[c].train_lv, &cand[c], err))) {
             glint_err_prefix(err, "auto, candidate %s", CANDS[c].m->name);
             break;
@@ -814,7 +893,14 @@ static int choose(const auto_params *p, double fl, const material *cand, const s
     for (int c = 0; c < NCAND; c++) {
         double jc = judged(sc, c), jk = judged(sc, chosen);
         int take = c > 0 && jc < jk * (1.0 - p->threshold) && jk - jc > fl;
-        json_t *e = json_pack(
+        json_t *e;
+        if (sc->skipped[c]) {
+            json_array_append_new(list, json_pack("{s:s, s:s, s:s, s:b}", "method",
+                                                  CANDS[c].m->name, "label", CANDS[c].m->label,
+                                                  "skipped", sc->skipped[c], "taken", 0));
+            continue;
+        }
+        e = json_pack(
             "{s:s, s:s, s:f, s:f, s:f, s:b}", "method", CANDS[c].m->name, "label",
             CANDS[c].m->label, "held_out_rms", sc->held[c], "rms_painted",
             json_number_value(json_object_get(json_object_get(cand[c].info, "errors"),
@@ -841,8 +927,8 @@ static json_t *choice_report(const auto_params *p, double fl, const split *x, in
         "held_out",
         x->by_views ? "views" : "pixels", "held_out_every", p->every, "held_out_samples",
         x->nheld, "candidate_samples", x->train.n, "rule",
-        "cheapest first (hf3, pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid, "
-        "pbr_maps); a later "
+        "cheapest first (hf3, pbr, pbr_detail, tab, tab_prior, pbr_tab, hf2d, hf4, maps, "
+        "hybrid, pbr_maps; one the host cannot fit is skipped, with the reason); a later "
         "one is "
         "taken when its judged RMS (the geometric mean of its held-out RMS on the new views "
         "and on the view beyond the painted range when both are held out, else its held-out "
@@ -956,8 +1042,9 @@ const method method_auto = {
     .description =
         "Fits one material (hf3), one physically based material (pbr: Lambert + GGX), the "
         "same times a three-factor detail of what it leaves (pbr_detail), one isotropic BRDF "
-        "tabulated over the half and difference angles (tab), pbr corrected by such a table "
-        "(pbr_tab), one "
+        "tabulated over the half and difference angles (tab), that table continued as "
+        "measured materials go on (tab_prior, where the host has their fits; learn_exclude "
+        "leaves some out of its learning), pbr corrected by such a table (pbr_tab), one "
         "anisotropic material (hf2d: a 2D q), one material with a colour texture (hf4), "
         "material maps (maps), maps of textured materials (hybrid) and maps of physically "
         "based materials (pbr_maps), each at its own "

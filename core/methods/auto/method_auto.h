@@ -17,6 +17,11 @@
  *         (method_pbr_detail.h; pbr's level and hf3's, shared)
  *   tab   an isotropic BRDF tabulated over the half and difference angles
  *         with a smoothness prior (method_tab.h)
+ *   tab_prior  that table continued along theta_d as measured materials go
+ *         on (method_tab_prior.h; tab's levels shared): a candidate only
+ *         where the host has the measured materials' fits, otherwise listed
+ *         with "skipped" and the reason (learning from the materials
+ *         params.learn_exclude names left out)
  *   pbr_tab  pbr corrected by such a table, pulled back to pbr where no
  *         painted sample reaches (method_pbr_tab.h; pbr's level and tab's
  *         design, shared)
@@ -44,7 +49,7 @@
  * painting of 12 views hf4 and maps fit the painted views 2-5 times
  * better than hf3 and the held-out views worse or barely better
  * (tests/unit/test_auto.c prints every candidate).
- * pbr, pbr_detail, tab, pbr_tab, hf2d, hf4, maps, hybrid and pbr_maps are alternatives, not
+ * pbr, pbr_detail, tab, tab_prior, pbr_tab, hf2d, hf4, maps, hybrid and pbr_maps are alternatives, not
  * steps of one chain, so each is measured against the choice so far; every take lowers
  * the judged RMS, so the answer is never worse on the held-out samples, so
  * judged, than hf3, the simplest.  The material is the chosen
@@ -59,13 +64,15 @@
  * built as hf3 and hf4 key and build them (the same cache entries, on disk
  * too, as a direct fit of either), for the refit; hf2d's decomposition on
  * the kept pixels and on every sample likewise, and pbr's one level (its
- * per-sample angles) and tab's two (its design and operator) too.  The
+ * per-sample angles) and tab's two (its design and operator) too, and
+ * tab_prior's learned prior (one level: it depends on no pattern).  The
  * auto method makes
  * no material of its own (method.mat is NULL). */
 #ifndef GLINT_METHOD_AUTO_H
 #define GLINT_METHOD_AUTO_H
 
 #include "method.h"
+#include "method_tab_prior.h"
 
 extern const method method_auto;
 
@@ -77,6 +84,7 @@ typedef struct auto_params {
     double threshold;  /* fraction a richer model must gain on held-out pixels */
     double floor;      /* and at least this fraction of the painting's RMS */
     int every;         /* one pixel in this many held out */
+    char learn_exclude[TAB_PRIOR_EXCLUDE_MAX]; /* tab_prior's params.exclude */
 } auto_params;
 
 #endif
