@@ -354,6 +354,7 @@ TEST(every_method_through_the_cache)
     ASSERT_OK(raster_scene(&fit_scene, &g, &e));
     ASSERT_OK(brdf_parse("ct:rough=0.3,kd=0.5", &b, &e));
     ASSERT_OK(paint_views(&b, g, fit_scene.views, fit_scene.nviews, 0, method_paint, NULL, &e));
+    ASSERT_OK(method_small_measured());
     snprintf(fit_dir, sizeof fit_dir, "/tmp/glint-allocfail-XXXXXX");
     ASSERT(mkdtemp(fit_dir) != NULL);
     sweep_all = 64; /* eight methods: fewer runs each */

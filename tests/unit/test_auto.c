@@ -20,6 +20,7 @@
 #include "fsio.h"
 #include "measured.h"
 #include "method_auto.h"
+#include "method_small.h"
 #include "paint.h"
 #include "prep.h"
 #include "raster.h"
@@ -232,26 +233,8 @@ TEST(one_view_holds_out_pixels)
 }
 
 /* The candidate of the learned prior (tab_prior) where the process has a
- * fits file (four materials written here), and skipped with the reason
+ * fits file (method_small.h's three materials), and skipped with the reason
  * where it has none: the choice is made from the others either way. */
-static const char FITS[] =
-    "{\"materials\": ["
-    "{\"name\": \"a\", \"abc\": {\"kD\": [0.1, 0.1, 0.1], \"A\": [1, 1, 1], \"B\": 10, "
-    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.1, 0.08, 0.06], \"rhoS\": [0.5, 0.5, 0.5], "
-    "\"alpha\": [0.02, 0.02, 0.02], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
-    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
-    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}},"
-    "{\"name\": \"b\", \"abc\": {\"kD\": [0.3, 0.3, 0.3], \"A\": [1, 1, 1], \"B\": 10, "
-    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.3, 0.2, 0.1], \"rhoS\": [0.2, 0.2, 0.2], "
-    "\"alpha\": [0.05, 0.05, 0.05], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
-    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
-    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}},"
-    "{\"name\": \"c\", \"abc\": {\"kD\": [0.5, 0.5, 0.5], \"A\": [1, 1, 1], \"B\": 10, "
-    "\"C\": 1, \"ior\": 1.5}, \"sgd\": {\"rhoD\": [0.5, 0.4, 0.3], \"rhoS\": [0.1, 0.1, 0.1], "
-    "\"alpha\": [0.1, 0.1, 0.1], \"p\": [0.5, 0.5, 0.5], \"f0\": [0.04, 0.04, 0.04], "
-    "\"f1\": [0, 0, 0], \"kap\": [0.3, 0.3, 0.3], \"lambda\": [0, 0, 0], \"c\": [1, 1, 1], "
-    "\"k\": [1, 1, 1], \"theta0\": [0, 0, 0]}}]}";
-
 static json_t *candidate_named(const material *m, const char *name)
 {
     json_t *e;
@@ -264,23 +247,16 @@ static json_t *candidate_named(const material *m, const char *name)
 
 TEST(the_learned_prior_is_a_candidate_where_the_host_has_fits)
 {
-    char path[64];
     material m;
     json_t *e;
-    FILE *f;
     ASSERT_OK(setup());
-    snprintf(path, sizeof path, "/tmp/glint-test-auto-%d.json", (int)getpid());
-    ASSERT((f = fopen(path, "w")) != NULL);
-    fputs(FITS, f);
-    fclose(f);
-    measured_set_file(path, NULL);
+    ASSERT_OK(method_small_measured());
     ASSERT(choose("ct:rough=0.25,kd=0.5/0.3/0.2,f0=0.3", NULL, &m));
     check_rule(&m);
     ASSERT((e = candidate_named(&m, "tab_prior")) != NULL);
     ASSERT(!json_object_get(e, "skipped"));
     ASSERT(isfinite(json_number_value(json_object_get(e, "judged_rms"))));
     material_free(&m);
-    unlink(path);
     /* no fits file: skipped, the reason said, the choice made from the rest */
     measured_set_file(NULL, "glintd --measured-dir");
     ASSERT(choose("ct:rough=0.25,kd=0.5/0.3/0.2,f0=0.3", NULL, &m));

@@ -200,7 +200,7 @@ static int setup(void)
     glint_err e;
     if (done++)
         return 0;
-    if (sv_setup(16, &sc, &gb, &cc, &se))
+    if (method_small_measured() || sv_setup(16, &sc, &gb, &cc, &se))
         return -1;
     if (sv_paint("ct:rough=0.3,kd=0.5,f0=0.3", &sc, gb, paint_ct, &e)) {
         fprintf(stderr, "painting: %s\n", e.msg);
