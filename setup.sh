@@ -103,6 +103,9 @@ run_daemon() {
   envs=()
   # the CC0 environment maps beside the checkout, offered as data:<file>
   [ -d ../shared/data/envmaps ] && envs=(--env-dir ../shared/data/envmaps)
+  # the measured materials' published fits: finishes to paint with, and what
+  # the learned-prior method learns from
+  [ -f ../shared/data/measured/merl56_fits.json ] && envs+=(--measured-dir ../shared/data/measured)
   demo="$data/demo-session.json"
   ./build/server/glintd --port "$port" --data-dir "$data" --web-dir web "${envs[@]}" \
     --demo-session "$demo" &
