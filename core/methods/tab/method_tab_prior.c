@@ -265,13 +265,17 @@ static int tab_prior_fit(const method_fit_in *in, material *out, glint_err *err)
     return tab_fit_as(&method_tab_prior, in, complete, "prior", out, err);
 }
 
+#define PRIOR_BYTES_MATERIALS 128
+
 static size_t tab_prior_fit_bytes(const void *params, long nsamples)
 {
     const tab_prior_params *tp = params;
     size_t nodes = (size_t)tp->tab.res_h * tp->tab.res_d;
-    /* tab's, and the learning tables (3 per material) with their SVD */
+    /* tab's, and learning: the samples' rows (3 a material), U and VT of
+     * their SVD, for a fits file of up to PRIOR_BYTES_MATERIALS materials
+     * (../shared's holds 56) */
     return (size_t)nsamples * 160 + 6 * nodes * nodes * sizeof(double) +
-           4 * 3 * MEASURED_MAX * nodes * sizeof(double) / 8;
+           3 * 3 * PRIOR_BYTES_MATERIALS * nodes * sizeof(double);
 }
 
 static double tab_prior_fit_seconds(const void *params, long nsamples)
