@@ -16,7 +16,7 @@ import { envLabels, errorMeaning, pct, relError, sessionLevel } from './words.js
 const $ = id => document.getElementById(id);
 const api = new Api();
 const state = { session: null, painter: null, fit: null, judge: null, k: 0, tool: 'paint', photo: null };
-window.glint = { state, api };     // for the tests and the curious
+window.glint = { state, api, closeStudio };     // for the tests and the curious
 
 // ---- toasts ---------------------------------------------------------------------------
 
@@ -258,7 +258,7 @@ async function openStudio(route) {
   document.body.dataset.ready = '1';
   // everything else follows
   S.connect();
-  S.loadRest().then(() => { for (const v of S.views) drawThumb(v.k); }).catch(showError);
+  S.loadRest().then(() => { if (!S.closed) for (const v of S.views) drawThumb(v.k); }).catch(e => { if (!S.closed) showError(e); });
   loadFitAndMaterials(S).catch(showError);
 }
 
@@ -419,7 +419,9 @@ function scheduleThumb(k) {
   thumbDirty.add(k);
 }
 function drawThumb(k) {
-  const v = state.session.views[k];
+  const S = state.session;
+  if (!S) return;                    // closed meanwhile (a redraw was due)
+  const v = S.views[k];
   const bt = $('thumbs').children[k];
   if (!bt || !v.disp) return;
   blit(bt.querySelector('canvas').getContext('2d'), v.disp, null, state.painter ? state.painter.exposure : 1);
@@ -624,6 +626,7 @@ async function loadFitAndMaterials(S) {
 // as a percentage of the painting's brightness (the meaning and the RMS in
 // the tooltip).
 function showFitResult(m, ms, cached) {
+  if (!state.session) return;
   const frac = relError(m.errors.rms_painted, sessionLevel(state.session, m.views_used || []));
   const el = $('fit-result');
   el.textContent = '';
@@ -810,6 +813,15 @@ function onKey(e) {
 
 // ---- routing ----------------------------------------------------------------------------------------
 
+// Close the open session: its stream stops and nothing it still has in
+// flight reaches the studio (the page reloads to open another; until the
+// new page commits, the old one runs on).
+function closeStudio() {
+  if (!state.session) return;
+  state.session.close();
+  state.session = null;
+}
+
 let current = null;
 function route() {
   const r = parseRoute(location.hash);
@@ -819,7 +831,7 @@ function route() {
     return;
   }
   current = key;
-  if (state.session) { state.session.close(); state.session = null; location.reload(); return; }
+  if (state.session) { closeStudio(); location.reload(); return; }
   if (r.name === 'session') openStudio(r).catch(showError);
   else showStart().catch(showError);
 }

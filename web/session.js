@@ -61,9 +61,12 @@ export class Session extends EventTarget {
     this.presence = [];
     this.puts = new Map();           // seq -> image of our own PUTs
     this.stats = { strokes: 0, paintings: 0, duplicates: 0, gaps: 0, reloads: 0 };
+    this.closed = false;
   }
 
-  emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+  // A closed session tells nobody anything: reads still in flight when the
+  // studio closes it (a reload on new links) finish without a listener.
+  emit(type, detail) { if (!this.closed) this.dispatchEvent(new CustomEvent(type, { detail })); }
 
   get canPaint() { return this.doc && this.doc.access === 'paint'; }
 
@@ -482,5 +485,5 @@ export class Session extends EventTarget {
     return r;
   }
 
-  close() { if (this.stream) this.stream.stop(); }
+  close() { this.closed = true; if (this.stream) this.stream.stop(); }
 }

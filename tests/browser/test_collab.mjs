@@ -226,6 +226,32 @@ run({
     t.log(`reconnected after the restart (${await page.evaluate(() => window.glint.state.session.stream.connects)} connections in all)`);
   },
 
+  // The studio reopens on new links by closing the session and reloading the
+  // page; until the new page commits, the old one runs what it had in
+  // flight.  Views still loading then (a busy machine) used to finish into a
+  // studio with no session and throw "Cannot read properties of null".
+  // Here the other views' base renders are held, the studio closes as it
+  // does before that reload, and then they arrive.
+  async 'views that arrive after the studio closed its session change nothing and throw nothing'(t) {
+    const { url } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
+    const ana = await named(t, 'ana');
+    const held = [];
+    let bases = 0, served = 0;
+    let hold = true;
+    await ana.route('**/base.png*', r => { if (bases++ === 0 || !hold) r.continue(); else held.push(r); });
+    await openStudio(ana, url);
+    await waitFor(() => held.length > 0, null, 'the other views are loading');
+    const before = await ana.evaluate(() => window.glint.state.session.views.filter(v => v.state === 'ready').length);
+    await ana.evaluate(() => { window.__closed = window.glint.state.session; window.glint.closeStudio(); });
+    hold = false;
+    for (const r of held.splice(0)) { await r.continue(); served++; }
+    // they are read and installed in the closed session, and go no further
+    await ana.waitForFunction(n => window.__closed.views.filter(v => v.state === 'ready').length > n, before, { timeout: 60000 });
+    await sleep(500);                    // a frame's thumbnail redraws, had any been scheduled
+    t.log(`${served} held reads arrived after closing; the studio stayed quiet`);
+    assertEq(await ana.evaluate(() => window.glint.state.session), null, 'no session open');
+  },
+
   async 'replacing the share links: the old view link stops, the studio reopens on the new one'(t) {
     const { url, viewUrl, session } = await t.daemon.newSession({ mesh: 'sphere', width: 64, height: 64 });
     const ana = await named(t, 'ana'), viewer = await named(t, 'viewer');
