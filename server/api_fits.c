@@ -54,6 +54,9 @@ int api_fit_body(const json_t *body, int has_mesh, const method **m, void **para
                               "method '%.64s' is not available (available: %s)",
                               json_string_value(v), names);
     }
+    if (method_available(*m, e))
+        return api_reject(e, GLINT_EINVAL, "method-unavailable",
+                          "%s cannot fit on this host: %s", (*m)->name, e->msg);
     if (!(*params = method_params_new(*m)))
         return glint_err_set(e, GLINT_ENOMEM, "out of memory");
     if (((v = json_object_get(body, "params")) &&

@@ -98,7 +98,11 @@ export class FitPanel extends EventTarget {
       // environment (lighting-mismatch), and an environment's method on a
       // scene painted under lamps would assume a light the paintings never
       // had: offered, but not choosable
-      if (env && x.lighting === 'point') {
+      if (x.available === false) {
+        // this host cannot fit it (tab_prior without the measured fits)
+        o.disabled = true;
+        o.title += ' — not on this server: ' + (x.unavailable || 'it cannot fit it');
+      } else if (env && x.lighting === 'point') {
         o.disabled = true;
         o.title += ' — needs the views\' point lights; this scene is painted under an environment';
       } else if (!env && x.lighting === 'environment') {

@@ -39,13 +39,14 @@ export function surfaceTextures(m) {
   return d && Array.isArray(d.surface) ? d.surface : [];
 }
 
-// The method a scene starts on: under an environment the first method lit
-// by one; else the first that chooses the model the painting needs; else
-// the default.
+// The method a scene starts on, among those the server can fit: under an
+// environment the first method lit by one; else the first that chooses the
+// model the painting needs; else the default.
 export function startMethod(env) {
-  if (!list.length) return null;
-  const env1 = env && list.find(x => x.lighting === 'environment');
-  return env1 || list.find(x => x.chooses) || list[0];
+  const can = list.filter(x => x.available !== false);
+  if (!can.length) return list[0] || null;
+  const env1 = env && can.find(x => x.lighting === 'environment');
+  return env1 || can.find(x => x.chooses) || can[0];
 }
 
 // A material's size in words, from the members its summary carries

@@ -51,6 +51,11 @@ int cmd_methods(int argc, char **argv)
         if (m->label)
             printf("  %s (%s lighting): %s\n", m->label,
                    m->lighting == METHOD_LIGHT_ENV ? "environment" : "point", m->summary);
+        {
+            glint_err why;
+            if (method_available(m, &why))
+                printf("  cannot fit here: %s\n", why.msg);
+        }
         for (int k = 0; def && k < m->nparams; k++) {
             const method_param *p = &m->params[k];
             char v[256];

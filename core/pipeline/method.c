@@ -444,6 +444,21 @@ static const char *type_name(const method_param *p)
     }
 }
 
+int method_available(const method *m, glint_err *why)
+{
+    glint_err_clear(why);
+    return m->available ? m->available(why) : 0;
+}
+
+static void describe_availability(const method *m, json_t *o)
+{
+    glint_err why;
+    int rc = method_available(m, &why);
+    json_object_set_new(o, "available", json_boolean(!rc));
+    if (rc)
+        json_object_set_new(o, "unavailable", json_string(why.msg));
+}
+
 json_t *method_describe(const method *m)
 {
     void *def = method_params_new(m);
@@ -510,6 +525,7 @@ json_t *method_describe(const method *m)
     json_object_set_new(o, "presets", presets);
     if (m->held_out)
         json_object_set_new(o, "held_out", json_string(m->held_out));
+    describe_availability(m, o);
     return o;
 }
 

@@ -307,6 +307,11 @@ typedef struct method {
      * that names the problem, not the parameter: OUT *param names that. */
     int (*params_usable)(const void *params, const method_source *src, const char **param,
                          glint_err *err);
+    /* Optional (NULL: always): 0 when this host can fit the method at all,
+     * else a code with a message saying what the host lacks (tab_prior
+     * without the measured materials' fits).  Cheap; GET /methods says it,
+     * and params_usable refuses a fit by it before any work. */
+    int (*available)(glint_err *why);
     /* Which pixels are samples (samples.h: SAMPLES_LIT, the default 0, or
      * SAMPLES_SEEN for methods lit by an environment). */
     int pattern_rule;
@@ -396,6 +401,10 @@ int method_params_from_json(const method *m, void *params, const json_t *obj, gl
 int method_params_usable(const method *m, const void *params, const method_source *src,
                          glint_err *err);
 
+/* m->available (0 when the method has none): 0, or the code and message
+ * saying why this host cannot fit m. */
+int method_available(const method *m, glint_err *why);
+
 /* Set one parameter from text (the command line: messages name it
  * "--<name> '<text>'"). */
 int method_param_set_text(const method *m, void *params, const char *name, const char *text,
@@ -418,7 +427,8 @@ void method_param_format(const method_param *p, const void *params, char *buf, s
 /* The method described for GET /methods: name, title, label, summary,
  * when, lighting ("point" or "environment"), varies (over the surface),
  * surface, shows, chooses, reference, description, params (with plain
- * names, groups, defaults and ranges), presets, held_out (a new object). */
+ * names, groups, defaults and ranges), presets, held_out, available (and
+ * unavailable: why not, when this host cannot fit it) (a new object). */
 json_t *method_describe(const method *m);
 
 /* A JSON Schema (draft 2020-12) of the method's params object, as proto/

@@ -91,6 +91,9 @@ run({
     assert(said.includes(`${labels.get('tab_prior')}: not tried here`), 'said so: ' + said);
     const why = await page.evaluate(() => [...document.querySelectorAll('#auto-choice span[title]')].map(e => e.title).join(' | '));
     assert(/measured/.test(why), 'the reason on hover: ' + why);
+    // and in the method list it is offered but not choosable, the reason on hover
+    const opt = await page.evaluate(() => { const o = document.querySelector('#fit-method option[value="tab_prior"]'); return o && { disabled: o.disabled, title: o.title }; });
+    assert(opt && opt.disabled && /not on this server: .*measured/.test(opt.title), 'tab_prior offered but disabled: ' + JSON.stringify(opt));
 
     // material maps of 3 products
     await setValue(page, 'fit-method', 'maps');

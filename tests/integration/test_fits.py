@@ -466,6 +466,21 @@ def test_10_methods(d):
     names = {p["name"] for p in hf3["params"]}
     assert {"res", "lambda", "regularization", "mapping", "model", "precision",
             "route"} <= names
+    # this daemon has no --measured-dir: the one method that learns from the
+    # measured materials is listed as one it cannot fit, with the reason, and
+    # a fit of it is refused before any work
+    by = {x["name"]: x for x in m["methods"]}
+    assert all(x["available"] for n, x in by.items() if n != "tab_prior"), \
+        [n for n, x in by.items() if not x["available"]]
+    tp = by["tab_prior"]
+    assert tp["available"] is False and "--measured-dir" in tp["unavailable"], tp
+    assert all("unavailable" not in x for n, x in by.items() if n != "tab_prior")
+    r = d.post("/api/v1/sessions/%s/fits" % S["session"], headers=paint_headers(None),
+               data=json.dumps({"method": "tab_prior"}))
+    assert r.status_code == 422, (r.status_code, r.text[:400])
+    prob = r.json()
+    assert prob["type"].endswith("method-unavailable"), prob
+    assert "tab_prior cannot fit on this host" in prob["detail"] and "--measured-dir" in prob["detail"], prob
     # the points measured on the scene, held-out error included (measured in
     # the background, below every request's priority and in the daemon's
     # pauses: wait for it; the deadline only guards a hang)

@@ -43,10 +43,13 @@ _cli_out = {}
 
 def cli_json(*args):
     """The CLI's JSON answer to args (each asked once: the answers depend on
-    the binary alone, and each run costs the CLI's start)."""
+    the binary and the measured fits alone, and each run costs the CLI's
+    start).  The CLI is given the daemon's measured fits: what a method
+    needs of its host (GET /methods' available) is then the same."""
     if args not in _cli_out:
+        env = dict(os.environ, GLINT_MEASURED_DIR=MDIR)
         _cli_out[args] = subprocess.run([CLI] + list(args), check=True, capture_output=True,
-                                        text=True).stdout
+                                        text=True, env=env).stdout
     return json.loads(_cli_out[args])
 
 
@@ -142,6 +145,9 @@ def test_methods_say_what_they_are_for(d):
     assert by["maps"]["surface"] == ["coefficients"] and by["hf4"]["surface"] == ["spatial"]
     assert by["hybrid"]["surface"] == ["coefficients", "spatial"]
     assert by["hf3"]["surface"] == [] and not by["hf3"]["varies"]
+    # this daemon has measured fits (--measured-dir): every method can fit here
+    assert all(x["available"] and "unavailable" not in x for x in by.values()), \
+        [n for n, x in by.items() if not x["available"]]
 
 
 # small parameters of each method lit by lamps (tests/unit/method_small.h's)

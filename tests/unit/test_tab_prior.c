@@ -488,11 +488,29 @@ TEST(unknown_names_and_no_fits_file_are_refused)
     ASSERT_OK(setup());
     v = calloc(3 * (size_t)S.n, sizeof *v);
     ASSERT_EQ(fit_values(&method_tab_prior, "exclude=nosuch", &S, v, &m, &e), GLINT_EINVAL);
-    ASSERT(strstr(e.msg, "nosuch") != NULL);
+    ASSERT(strstr(e.msg, "params.exclude: \"nosuch\" is not one of the") != NULL);
+    ASSERT_OK(method_available(&method_tab_prior, &e));
+    /* the same name refused before any work, as the API checks a fit */
+    {
+        void *p = method_params_new(&method_tab_prior);
+        method_source src = {1};
+        ASSERT(p != NULL);
+        ASSERT_OK(method_param_set_text(&method_tab_prior, p, "exclude", "held+nosuch", &e));
+        ASSERT_EQ(method_params_usable(&method_tab_prior, p, &src, &e), GLINT_EINVAL);
+        ASSERT(strstr(e.msg, "params.exclude: \"nosuch\" is not one of the") != NULL);
+        ASSERT_OK(method_param_set_text(&method_tab_prior, p, "exclude", "held", &e));
+        ASSERT_OK(method_params_usable(&method_tab_prior, p, &src, &e));
+        free(p);
+    }
     measured_set_file(NULL, "$GLINT_MEASURED_DIR");
     ASSERT(fit_values(&method_tab_prior, "", &S, v, &m, &e) != 0);
     ASSERT(strstr(e.msg, "measured") != NULL);
+    /* without fits the host cannot fit it at all, and says why */
+    ASSERT_EQ(method_available(&method_tab_prior, &e), GLINT_ENOTFOUND);
+    ASSERT(strstr(e.msg, "there are none: no measured fits here: $GLINT_MEASURED_DIR") != NULL);
+    ASSERT_OK(method_available(&method_tab, &e)); /* a method without the hook: always */
     measured_set_file(FAMILY, NULL);
+    ASSERT_OK(method_available(&method_tab_prior, &e));
     free(v);
 }
 

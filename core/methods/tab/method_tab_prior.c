@@ -186,11 +186,45 @@ static int check_names(const char *names, const measured_set *s, glint_err *err)
         snprintf(name, sizeof name, "%.*s", (int)(l < sizeof name ? l : sizeof name - 1), p);
         if (!measured_find(s, name))
             return glint_err_set(err, GLINT_EINVAL,
-                                 "params.exclude: \"%s\" is not one of the %d measured "
-                                 "materials", name, s->n);
+                                 "\"%s\" is not one of the %d measured materials", name,
+                                 s->n);
         p += l + (e ? 1 : 0);
     }
     return 0;
+}
+
+/* The host has a fits file with at least two materials to learn from. */
+static int tab_prior_available(glint_err *why)
+{
+    const measured_set *set;
+    int rc;
+    if ((rc = measured_current(&set, why))) {
+        char msg[GLINT_ERR_MSG_MAX];
+        snprintf(msg, sizeof msg, "%s", why->msg);
+        return glint_err_set(why, rc,
+                             "tab_prior learns from the measured materials' fits, and there "
+                             "are none: %s", msg);
+    }
+    if (set->n < 2)
+        return glint_err_set(why, GLINT_ENOTFOUND,
+                             "tab_prior learns from at least 2 measured materials; the host's "
+                             "fits file holds %d", set->n);
+    return 0;
+}
+
+/* Before any work: the names `exclude` lists are measured materials. */
+static int tab_prior_params_usable(const void *params, const method_source *src,
+                                   const char **param, glint_err *err)
+{
+    const tab_prior_params *tp = params;
+    const measured_set *set;
+    int every = 0, rc;
+    (void)src;
+    if (measured_current(&set, NULL) || exclude_syntax(tp->exclude, &every, NULL) || every)
+        return 0; /* said by tab_prior_available, by the parameter's parse */
+    if ((rc = check_names(tp->exclude, set, err)))
+        *param = "exclude";
+    return rc;
 }
 
 static void prior_free(void *data)
@@ -216,7 +250,7 @@ int tab_prior_level_build(const method_build_in *in, cache_value *out, glint_err
     }
     if ((rc = exclude_syntax(tp->exclude, &rule.every, err)) ||
         (!rule.every && (rc = check_names(tp->exclude, set, err))))
-        return rc;
+        return glint_err_prefix(err, "params.exclude");
     if (!(p = malloc(sizeof *p)))
         return glint_err_set(err, GLINT_ENOMEM, "out of memory (tab prior)");
     if (in->progress)
@@ -317,6 +351,8 @@ const method method_tab_prior = {
     .nparams = (int)(sizeof tab_prior_params_table / sizeof tab_prior_params_table[0]),
     .params_default = tab_prior_params_default,
     .params_check = tab_prior_params_check,
+    .params_usable = tab_prior_params_usable,
+    .available = tab_prior_available,
     .levels = tab_prior_levels,
     .nlevels = (int)(sizeof tab_prior_levels / sizeof tab_prior_levels[0]),
     .fit = tab_prior_fit,
