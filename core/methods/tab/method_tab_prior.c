@@ -241,13 +241,8 @@ int tab_prior_level_build(const method_build_in *in, cache_value *out, glint_err
     exclude_rule rule = {0, tp->exclude};
     tab_prior *p;
     int rc;
-    if ((rc = measured_current(&set, err))) {
-        char why[GLINT_ERR_MSG_MAX];
-        snprintf(why, sizeof why, "%s", err->msg);
-        return glint_err_set(err, rc,
-                             "tab_prior learns from the measured materials' fits, and there "
-                             "are none: %s", why);
-    }
+    if ((rc = tab_prior_available(err)) || (rc = measured_current(&set, err)))
+        return rc;
     if ((rc = exclude_syntax(tp->exclude, &rule.every, err)) ||
         (!rule.every && (rc = check_names(tp->exclude, set, err))))
         return glint_err_prefix(err, "params.exclude");
