@@ -309,8 +309,9 @@ typedef struct method {
                          glint_err *err);
     /* Optional (NULL: always): 0 when this host can fit the method at all,
      * else a code with a message saying what the host lacks (tab_prior
-     * without the measured materials' fits).  Cheap; GET /methods says it,
-     * and params_usable refuses a fit by it before any work. */
+     * without the measured materials' fits).  Cheap; GET /methods says it
+     * (method_describe), and the API refuses a fit of such a method before
+     * any work (422 method-unavailable). */
     int (*available)(glint_err *why);
     /* Which pixels are samples (samples.h: SAMPLES_LIT, the default 0, or
      * SAMPLES_SEEN for methods lit by an environment). */
