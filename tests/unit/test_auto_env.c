@@ -14,12 +14,12 @@
  *   - prep_holdout on one preparation gives for each view the error that
  *     the fold's own preparation and a prediction of the view alone give;
  *   - auto_env reports its six candidates, each measured on the held-out
- *     view, takes the first unless a later one gains the threshold, never
+ *     views of its two hold-outs (other views in each), takes the first unless a later one gains the threshold, never
  *     answers worse there than the first, and its material renders the
  *     truth on the held-out view;
  *   - a painting of two lobes takes the two-lobe candidate;
- *   - extremes: one view only (its most grazing pixels held out, srbf not
- *     tried), all-black, a single painted pixel, NaN (refused, named). */
+ *   - extremes: one view only (its right and then its left band held out,
+ *     counted here from the pixels; srbf not tried), all-black, a single painted pixel, NaN (refused, named). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -364,6 +364,23 @@ TEST(auto_env_chooses_and_reports)
     ASSERT_EQ(json_array_size(json_object_get(ch, "candidates")), 6);
     ASSERT(!strcmp(json_string_value(json_object_get(ch, "held_out")), "views"));
     ASSERT_EQ(json_integer_value(json_array_get(json_object_get(ch, "held_out_views"), 0)), 8);
+    /* two hold-outs (the default): the views of the first, then others */
+    {
+        const json_t *f = json_object_get(ch, "held_out_folds"), *a, *b;
+        size_t i, j;
+        ASSERT_EQ(json_array_size(f), 2);
+        a = json_array_get(f, 0);
+        b = json_array_get(f, 1);
+        ASSERT(json_equal(a, json_object_get(ch, "held_out_views")));
+        ASSERT(json_array_size(b) >= 1);
+        for (i = 0; i < json_array_size(a); i++)
+            for (j = 0; j < json_array_size(b); j++)
+                ASSERT(json_integer_value(json_array_get(a, i)) !=
+                       json_integer_value(json_array_get(b, j)));
+        char *txt = json_dumps(f, JSON_COMPACT);
+        printf("  hold-outs: views %s\n", txt ? txt : "?");
+        free(txt);
+    }
     k = chosen_index(&m);
     for (int c = 0; c < 6; c++) {
         printf("  %-58s held out %.5g painted %.5g %s\n",
@@ -424,6 +441,30 @@ TEST(extremes)
     one[4] = 1;
     ASSERT_OK(auto_fit(&truth, one, &m, &pp, &e));
     ASSERT(!strcmp(json_string_value(json_object_get(choice_of(&m), "held_out")), "pixels"));
+    /* its right and left bands, a quarter of its covered columns each */
+    {
+        const json_t *f = json_object_get(choice_of(&m), "held_out_folds");
+        const samples *s1 = prep_samples(pp);
+        int lo = s1->width, hi = -1, band;
+        long want = 0;
+        ASSERT_EQ(json_array_size(f), 2);
+        ASSERT(!strcmp(json_string_value(json_array_get(f, 0)), "right"));
+        ASSERT(!strcmp(json_string_value(json_array_get(f, 1)), "left"));
+        for (int i = 0; i < s1->n; i++) {
+            int x = s1->pixel[i] % s1->width;
+            lo = x < lo ? x : lo;
+            hi = x > hi ? x : hi;
+        }
+        band = (hi - lo + 1) / p.every;
+        ASSERT(band >= 1);
+        for (int i = 0; i < s1->n; i++) {
+            int x = s1->pixel[i] % s1->width;
+            want += (x > hi - band) + (x < lo + band);
+        }
+        ASSERT_EQ(json_integer_value(json_object_get(choice_of(&m), "held_out_samples")), want);
+        ASSERT(cand_num(&m, 0, "held_out_samples") > 0);
+        ASSERT(cand_num(&m, 0, "held_out_samples") <= want);
+    }
     /* srbf is not tried from one view, and says why */
     ASSERT_EQ(json_array_size(json_object_get(choice_of(&m), "candidates")), 5);
     ASSERT(!strcmp(json_string_value(json_object_get(

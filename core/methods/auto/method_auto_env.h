@@ -22,6 +22,19 @@
  * for difference angles beyond the fitted ones: method_auto_env.c says
  * what each chose).  There are no lights beyond the painted
  * range to hold out: the light is the environment, the same in every view.
+ * The hold-out is made `folds` times (default 2), each holding other
+ * samples out: the next views in turn (fewer when fewer views are
+ * painted), or the one view's right, left, bottom and top bands; every
+ * candidate is fitted to each hold-out's kept samples and judged by its
+ * RMS over all the held-out samples together.  On the 14 measured
+ * materials of BENCHMARKS.md (bench_env_measured --every 4 --set
+ * folds=N), one hold-out against two: from one view new views 23.2%
+ * against 18.6% median (rotated 12.0%, other environment 14.2% both);
+ * from three views rotated 9.6% against 7.3% (new views 31.0% against
+ * 31.3%, other environment 12.3% both).  Three from three views chose
+ * as two did; four from one view changed four choices, two for the
+ * better and two for the worse (the same medians; 90th percentile on new
+ * views 57.1% against 45.7%), at 1.7 times two's cost.
  *
  * Every candidate reads the same levels as a fit of its own (the same
  * cache keys, in memory and on disk): pbr_env's lights, rows and terms
@@ -57,7 +70,8 @@ typedef struct auto_env_params {
     srbf_params env;
     double threshold;  /* fraction a later candidate must gain on held-out samples */
     double floor;      /* and at least this fraction of the painting's RMS */
-    int every;         /* one view (or pixel by n.wo) in this many held out */
+    int every;         /* one view (or a band of the one view) in this many held out */
+    int folds;         /* hold-outs the candidates are judged on together (1-4) */
 } auto_env_params;
 
 #endif
