@@ -1,8 +1,9 @@
 /* bench_env_measured.c: how fits of measured materials painted under an
  * environment hold up under new views and new light.
  *
- *   bench_env_measured [--data DIR] [--every K] [--size WxH] [--methods a,b]
- *                      [--views 3,1] [--env A B] [--lights K] [--set NAME=VALUE]...
+ *   bench_env_measured [--data DIR] [--every K] [--first I] [--size WxH]
+ *                      [--methods a,b] [--views 3,1] [--env A B] [--lights K]
+ *                      [--set NAME=VALUE]...
  *
  * Methods: any environment method, and srbf+kd: srbf with its diffuse
  * colour given, the one pbr_env fits to the same painting (the lobes fit
@@ -11,8 +12,9 @@
  * lights truths and renders sum; --set: a parameter of every method that
  * has it (e.g. start_samples=256), for the speed-accuracy trade.
  *
- * For every K-th material of DIR/measured/merl56_fits.json (default 4: 14
- * of the 56; the published sgd fits): the sphere at WxH (default 64x48)
+ * For every K-th material of DIR/measured/merl56_fits.json from the I-th
+ * (default 4 from 0: 14 of the 56; the published sgd fits; another I
+ * gives materials a setting was not chosen on): the sphere at WxH (default 64x48)
  * with the 20 views of the icosahedron's face centres; views 0, 7 and 14
  * painted (or view 0 alone) under environment A; each method (srbf,
  * pbr_env; their defaults, the environment named) fitted to them and its
@@ -365,7 +367,7 @@ int main(int argc, char **argv)
     const method *ms[8];
     int kdg[8] = {0};
     char mnames[8][32];
-    int env_given = 0, every = 4, w = 64, h = 48, nm = 0, nmat = 0, nvs[2], nnv = 0;
+    int env_given = 0, every = 4, first = 0, w = 64, h = 48, nm = 0, nmat = 0, nvs[2], nnv = 0;
     measured_set set;
     measured_truth *mats;
     scene sc;
@@ -379,6 +381,8 @@ int main(int argc, char **argv)
             snprintf(DATA, sizeof DATA, "%s", argv[++i]);
         else if (!strcmp(argv[i], "--every") && i + 1 < argc)
             every = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--first") && i + 1 < argc)
+            first = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--size") && i + 1 < argc)
             sscanf(argv[++i], "%dx%d", &w, &h);
         else if (!strcmp(argv[i], "--methods") && i + 1 < argc)
@@ -395,14 +399,15 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--views") && i + 1 < argc)
             snprintf(viewsarg, sizeof viewsarg, "%s", argv[++i]);
         else {
-            fprintf(stderr, "usage: %s [--data DIR] [--every K] [--size WxH] [--methods a,b] "
-                            "[--views 3,1] [--env A B] [--lights K] [--set NAME=VALUE]...\n",
+            fprintf(stderr, "usage: %s [--data DIR] [--every K] [--first I] [--size WxH] "
+                            "[--methods a,b] [--views 3,1] [--env A B] [--lights K] "
+                            "[--set NAME=VALUE]...\n",
                     argv[0]);
             return 2;
         }
     }
-    if (every < 1 || w < 8 || h < 8) {
-        fprintf(stderr, "bad --every or --size\n");
+    if (every < 1 || first < 0 || first >= every || w < 8 || h < 8) {
+        fprintf(stderr, "bad --every, --first (0 to every - 1) or --size\n");
         return 2;
     }
     for (char *tok = strtok(methods, ","); tok && nm < 8; tok = strtok(NULL, ",")) {
@@ -433,7 +438,7 @@ int main(int argc, char **argv)
         envB = "sunset";
     }
     mats = calloc((size_t)set.n, sizeof *mats);
-    for (int i = 0; i < set.n; i += every)
+    for (int i = first; i < set.n; i += every)
         measured_truth_of(&set.m[i], MEASURED_SGD, &mats[nmat++]);
     {
         scene_params sp;
@@ -461,9 +466,9 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    printf("# %d sgd materials (every %d of %d), sphere %dx%d, environment %s (rotated 120 "
-           "degrees; other: %s), truths and renders with %d lights\n",
-           nmat, every, set.n, w, h, envA, envB, eval_lights);
+    printf("# %d sgd materials (every %d of %d from %d), sphere %dx%d, environment %s (rotated "
+           "120 degrees; other: %s), truths and renders with %d lights\n",
+           nmat, every, set.n, first, w, h, envA, envB, eval_lights);
     result *res = calloc((size_t)2 * nm * nmat, sizeof *res);
     for (int vi = 0; vi < nnv; vi++) {
         unsigned char use[SCENE_MAX_VIEWS], rest[SCENE_MAX_VIEWS];
