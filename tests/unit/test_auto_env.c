@@ -19,7 +19,8 @@
  *     truth on the held-out view;
  *   - a painting of two lobes takes the two-lobe candidate;
  *   - extremes: one view only (its right and then its left band held out,
- *     counted here from the pixels; srbf not tried), all-black, a single painted pixel, NaN (refused, named). */
+ *     counted here from the pixels; srbf not tried), two views (each held
+ *     out in turn), all-black, a single painted pixel, NaN (refused, named). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -474,6 +475,20 @@ TEST(extremes)
            json_string_value(json_object_get(choice_of(&m), "chosen")),
            pbr_material_of(&m) ? pbr_material_of(&m)->kd[0] : -1.0);
     ASSERT(cand_num(&m, 0, "held_out_rms") >= 0.0);
+    material_free(&m);
+    prep_release(C, pp);
+
+    /* two views: each held out in turn, the last first */
+    one[9] = 1;
+    ASSERT_OK(auto_fit(&truth, one, &m, &pp, &e));
+    {
+        const json_t *f = json_object_get(choice_of(&m), "held_out_folds");
+        ASSERT_EQ(json_array_size(f), 2);
+        ASSERT_EQ(json_array_size(json_array_get(f, 0)), 1);
+        ASSERT_EQ(json_array_size(json_array_get(f, 1)), 1);
+        ASSERT_EQ(json_integer_value(json_array_get(json_array_get(f, 0), 0)), 9);
+        ASSERT_EQ(json_integer_value(json_array_get(json_array_get(f, 1), 0)), 4);
+    }
     material_free(&m);
     prep_release(C, pp);
 

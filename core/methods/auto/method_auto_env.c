@@ -298,8 +298,8 @@ static void side_held(const samples *s, int every, int side, unsigned char *held
 
 /* The held-out samples of hold-out `fold` (OUT held[n], 1 where held):
  * whole views when two or more views hold samples (one in `every` of
- * them, the next ones in turn for each later fold; fold 0 holds at least
- * one, and each keeps at least one), else a band of the view (side_held:
+ * them, the ones before them for each later fold; with every/2 painted
+ * views or fewer, one view a fold, the last first), else a band of the view (side_held:
  * right, left, bottom, top for folds 0-3).  OUT *by_views: 1 when views
  * are held out, 0 when pixels are; OUT held_view[v].  Returns 1 (nothing
  * set in err) when a later fold holds nothing new: fewer views than folds.
@@ -319,11 +319,11 @@ static int env_split(const samples *s, int every, int fold, unsigned char *held,
     *by_views = nu >= 2;
     if (fold > 0 && (*by_views ? fold >= every || fold >= nu : fold >= 4))
         return 1;
-    for (int k = 0, nh = 0; k < nu && *by_views; k++)
-        if ((k + fold) % every == every / 2 || (fold == 0 && nh == 0 && k == nu - 1)) {
-            held_view[used[k]] = 1;
-            nh++;
-        }
+    /* views at every/2, every/2 + every, ... for fold 0, one before each for
+     * fold 1; with every/2 views or fewer, one view each, the last first */
+    for (int k = 0; k < nu && *by_views; k++)
+        held_view[used[k]] = nu > every / 2 ? (k + fold) % every == every / 2
+                                            : k == nu - 1 - fold;
     if (*by_views)
         for (int i = 0; i < s->n; i++)
             held[i] = held_view[s->view[i]];

@@ -23,7 +23,8 @@
  * what each chose).  There are no lights beyond the painted
  * range to hold out: the light is the environment, the same in every view.
  * The hold-out is made `folds` times (default 2), each holding other
- * samples out: the next views in turn (fewer when fewer views are
+ * samples out: the views before those of the first in turn (with two
+ * painted views, each in turn; fewer hold-outs when fewer views are
  * painted), or the one view's right, left, bottom and top bands; every
  * candidate is fitted to each hold-out's kept samples and judged by its
  * RMS over all the held-out samples together.  On the 14 measured
