@@ -647,7 +647,10 @@ export class Judge extends EventTarget {
     // a candidate's own label first: one method may be tried in several forms
     const b = document.createElement('b'); b.textContent = c.chosen_label || name(c.chosen);
     const on = c.held_out === 'views' ? 'views' : 'parts of the painting';
-    div.append('Chose ', b, `: the error of each on ${on} it did not see — `,
+    // a choice judged on several hold-outs (auto_env's folds) says how many
+    const folds = (c.held_out_folds || []).length;
+    const over = folds > 1 ? `, over ${folds} hold-outs` : '';
+    div.append('Chose ', b, `: the error of each on ${on} it did not see${over} — `,
       c.candidates.filter(x => !x.skipped).map(x => `${x.label || name(x.method)} ${level != null ? pct(relError(x.held_out_rms, level)) : fmtErr(x.held_out_rms)}`).join(' · ') + '. ');
     // a candidate this host cannot fit (a method that learns from data it
     // lacks): named, the reason on hover

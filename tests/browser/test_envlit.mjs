@@ -270,5 +270,8 @@ run({
     const said = await page.textContent('#auto-choice');
     t.log('said: ' + said);
     for (const c of mat.choice.candidates) assert(said.includes(c.label), 'names ' + c.label + ': ' + said);
+    // judged on two hold-outs (auto_env's default), and it says so
+    assertEq(mat.choice.held_out_folds.length, 2, 'two hold-outs');
+    assert(said.includes('over 2 hold-outs'), 'says how many hold-outs: ' + said);
   },
 });
