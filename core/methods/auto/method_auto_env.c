@@ -43,9 +43,10 @@ static const method_param auto_env_params_table[] = {
     {.name = "folds", .label = "hold-outs", .group = METHOD_GROUP_ADVANCED,
      .type = METHOD_PARAM_INT, .affects = "fit",
      .description = "the hold-out is made this many times, each holding other samples out "
-                    "(the next views in turn; with one view painted, its right, left, "
-                    "bottom and top bands), and the candidates are judged on all of them "
-                    "together: each costs a fit of every candidate",
+                    "(the views before the first's in turn, with two painted views each "
+                    "one; with one view painted, its right, left, bottom and top bands), "
+                    "and the candidates are judged on all of them together: each costs a "
+                    "fit of every candidate",
      .offset = offsetof(auto_env_params, folds), .min = 1, .max = 4},
 };
 
@@ -268,11 +269,12 @@ static const method_level auto_env_levels[LV_N] = {
 /* With one view painted: the band of its covered columns farthest to the
  * right, one in `every` of them (at least one column, when it has two; OUT
  * held) for side 0; the columns farthest left, the bottom rows and the top
- * rows for sides 1-3 (later hold-outs).  What a new view shows that the painted one did not is the object
- * at other normals under the same light: a band at one side holds normals
- * the kept pixels lack.  On the 14 measured materials painted from one view
- * under the courtyard (bench_env_measured --every 4 --views 1), a choice by
- * this band predicted new views at 23.2% median (rotated 12.0%, other
+ * rows for sides 1-3 (later hold-outs).  What a new view shows that the
+ * painted one did not is the object at other normals under the same
+ * light: a band at one side holds normals the kept pixels lack.  On the 14
+ * measured materials painted from one view under the courtyard
+ * (bench_env_measured --every 4 --views 1), a choice by the right band
+ * alone predicted new views at 23.2% median (rotated 12.0%, other
  * environment 14.2%) where one by the view's most grazing pixels, one in
  * four by n.wo, gave 34.3% (15.3%, 22.4%): held out, a grazing band asks
  * a table for theta_d beyond all it was fitted to, which a refit on every
@@ -299,8 +301,8 @@ static void side_held(const samples *s, int every, int side, unsigned char *held
 /* The held-out samples of hold-out `fold` (OUT held[n], 1 where held):
  * whole views when two or more views hold samples (one in `every` of
  * them, the ones before them for each later fold; with every/2 painted
- * views or fewer, one view a fold, the last first), else a band of the view (side_held:
- * right, left, bottom, top for folds 0-3).  OUT *by_views: 1 when views
+ * views or fewer, one view a fold, the last first), else a band of the
+ * view (side_held: right, left, bottom, top for folds 0-3).  OUT *by_views: 1 when views
  * are held out, 0 when pixels are; OUT held_view[v].  Returns 1 (nothing
  * set in err) when a later fold holds nothing new: fewer views than folds.
  * GLINT_EINVAL when fold 0 would hold nothing or everything. */
