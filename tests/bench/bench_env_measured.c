@@ -3,11 +3,17 @@
  *
  *   bench_env_measured [--data DIR] [--every K] [--first I] [--size WxH]
  *                      [--methods a,b] [--views 3,1] [--env A B] [--lights K]
- *                      [--set NAME=VALUE]...
+ *                      [--set NAME=VALUE]... [--rim C]
  *
  * Methods: any environment method, and srbf+kd: srbf with its diffuse
  * colour given, the one pbr_env fits to the same painting (the lobes fit
- * what the parametric diffuse leaves).
+ * what the parametric diffuse leaves); and abc, no fit: the other published
+ * fit of the same measurements rendered as the prediction, how far apart
+ * two fits of one material are on each set of views (the truth's own
+ * uncertainty, measured.h).
+ * --rim C: the errors also over the pixels whose n.wo is at least C (a
+ * second table): what the rim, where a light behind the sphere makes its
+ * brightest highlight at grazing angles, leaves out.
  * --env: environments A and B (specs, e.g. sky sunset); --lights: the
  * lights truths and renders sum; --set: a parameter of every method that
  * has it (e.g. start_samples=256), for the speed-accuracy trade.
@@ -64,6 +70,7 @@
 #define MAXMAT MEASURED_MAX
 
 static int eval_lights = 256; /* --lights */
+static double rim = -1.0;     /* --rim: the second table's n.wo floor; < 0: none */
 static const char *sets[8]; /* --set NAME=VALUE: a parameter of every method that has it */
 static int nsets;
 
@@ -114,6 +121,7 @@ static const char *const E_NAME[E_N] = {"painted", "new views", "rotated", "othe
 
 typedef struct result {
     double e[E_N];
+    double e_rim[E_N];  /* over the pixels with n.wo >= rim (--rim) */
     double fit_ms;
     int ok;
     char chose[96];  /* a method that chooses: the chosen candidate's label */
@@ -148,22 +156,29 @@ static const float *truth_get(truths *tr, int k, const samples *s, const env_lig
     return tr->a[k];
 }
 
-/* The relative RMS of material m against truth k over s under l. */
-static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
-                      const material *m)
+/* The relative RMS of shader sm against truth k over s under l (OUT
+ * r->e[k], and r->e_rim[k] over the pixels with n.wo >= rim). */
+static void rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
+                    const shader *sm, result *r)
 {
     const float *a = truth_get(tr, k, s, l);
     float *b = malloc((size_t)3 * s->n * sizeof *b);
-    shader sm = {NULL, m};
-    double num = 0.0, den = 0.0;
+    double num = 0.0, den = 0.0, rnum = 0.0, rden = 0.0;
+    r->e[k] = r->e_rim[k] = NAN;
     if (!a || !b) {
         free(b);
-        return NAN;
+        return;
     }
-    render(s, l, &sm, b);
+    render(s, l, sm, b);
     for (long i = 0; i < 3L * s->n; i++) {
-        num += ((double)b[i] - a[i]) * ((double)b[i] - a[i]);
-        den += (double)a[i] * a[i];
+        const float *nn = s->nrm + 3 * (i / 3), *wo = s->wo + 3 * (i / 3);
+        double d2 = ((double)b[i] - a[i]) * ((double)b[i] - a[i]), t2 = (double)a[i] * a[i];
+        num += d2;
+        den += t2;
+        if (nn[0] * wo[0] + nn[1] * wo[1] + nn[2] * wo[2] >= rim) {
+            rnum += d2;
+            rden += t2;
+        }
     }
     if (getenv("BENCH_ENV_DEBUG")) { /* by view: error, and the view's share of |truth|^2 */
         double vn[64] = {0}, vd[64] = {0};
@@ -179,7 +194,8 @@ static double rel_rms(truths *tr, int k, const samples *s, const env_lights *l,
         printf("\n");
     }
     free(b);
-    return den > 0.0 ? sqrt(num / den) : NAN;
+    r->e[k] = den > 0.0 ? sqrt(num / den) : NAN;
+    r->e_rim[k] = rden > 0.0 ? sqrt(rnum / rden) : NAN;
 }
 
 /* The painting of s's views under A: the truth's radiance over each
@@ -285,11 +301,14 @@ static int run_one(bench *b, const method *m, int kd_given, truths *tr,
         printf("    %s errors: %.600s\n", m->name, txt ? txt : "");
         free(txt);
     }
-    r->e[E_PAINTED] = rel_rms(tr, E_PAINTED, s, &b->lA, &mat);
-    s = prep_samples(pn);
-    r->e[E_NEW] = rel_rms(tr, E_NEW, s, &b->lA, &mat);
-    r->e[E_ROT] = rel_rms(tr, E_ROT, s, &b->lRot, &mat);
-    r->e[E_OTHER] = rel_rms(tr, E_OTHER, s, &b->lB, &mat);
+    {
+        shader sm = {NULL, &mat};
+        rel_rms(tr, E_PAINTED, s, &b->lA, &sm, r);
+        s = prep_samples(pn);
+        rel_rms(tr, E_NEW, s, &b->lA, &sm, r);
+        rel_rms(tr, E_ROT, s, &b->lRot, &sm, r);
+        rel_rms(tr, E_OTHER, s, &b->lB, &sm, r);
+    }
     rc = 0;
 done:
     if (rc)
@@ -297,6 +316,41 @@ done:
     free(rgb);
     material_free(&mat);
     material_free(&warm);
+    prep_release(b->c, p);
+    prep_release(b->c, pn);
+    free(par);
+    return rc;
+}
+
+/* No fit: `other` (the other published fit of tr's material) rendered as
+ * the prediction on the views of `use` and `rest` (OUT r; the samples are
+ * pbr_env's of those views).  0, or -1 with the reason printed. */
+static int run_other_fit(bench *b, const measured_truth *other, truths *tr,
+                         const unsigned char *use, const unsigned char *rest, result *r)
+{
+    void *par = method_params_new(&method_pbr_env);
+    prep *p = NULL, *pn = NULL;
+    shader sm = {other, NULL};
+    glint_err e;
+    int rc = -1;
+    if (!par || method_param_set_text(&method_pbr_env, par, "env", b->envA, &e))
+        goto done;
+    {
+        prep_request rq = {&method_pbr_env, par, b->se, use, NULL},
+                     rn = {&method_pbr_env, par, b->se, rest, NULL};
+        if (prep_acquire(b->c, &rq, NULL, NULL, &p, &e) ||
+            prep_acquire(b->c, &rn, NULL, NULL, &pn, &e))
+            goto done;
+    }
+    rel_rms(tr, E_PAINTED, prep_samples(p), &b->lA, &sm, r);
+    rel_rms(tr, E_NEW, prep_samples(pn), &b->lA, &sm, r);
+    rel_rms(tr, E_ROT, prep_samples(pn), &b->lRot, &sm, r);
+    rel_rms(tr, E_OTHER, prep_samples(pn), &b->lB, &sm, r);
+    r->fit_ms = 0.0;
+    rc = 0;
+done:
+    if (rc)
+        printf("  abc on %s: failed: %s\n", tr->t->name, e.msg);
     prep_release(b->c, p);
     prep_release(b->c, pn);
     free(par);
@@ -324,7 +378,7 @@ static double pct(const double *v, int n, double q)
 }
 
 static void summary(const char *mname, int nv, const result *res, const measured_truth *mats,
-                    int n)
+                    int n, int of_rim)
 {
     double v[MAXMAT], ms[MAXMAT];
     int idx[MAXMAT], k2 = 0;
@@ -337,8 +391,9 @@ static void summary(const char *mname, int nv, const result *res, const measured
     for (int k = 0; k < E_N; k++) {
         int worst = idx[0];
         for (int j = 0; j < k2; j++) {
-            v[j] = res[idx[j]].e[k];
-            if (res[idx[j]].e[k] > res[worst].e[k])
+            const double *e = of_rim ? res[idx[j]].e_rim : res[idx[j]].e;
+            v[j] = e[k];
+            if (e[k] > (of_rim ? res[worst].e_rim : res[worst].e)[k])
                 worst = idx[j];
         }
         printf(" %.1f%% / %.1f%%%s%s |", 100 * pct(v, k2, 0.5), 100 * pct(v, k2, 0.9),
@@ -365,11 +420,11 @@ int main(int argc, char **argv)
     char path[1200], methods[256] = "srbf,pbr_env", viewsarg[32] = "3,1";
     const char *envA = "data:courtyard.exr", *envB = "data:sunset.exr";
     const method *ms[8];
-    int kdg[8] = {0};
+    int kdg[8] = {0}, other[8] = {0};
     char mnames[8][32];
     int env_given = 0, every = 4, first = 0, w = 64, h = 48, nm = 0, nmat = 0, nvs[2], nnv = 0;
     measured_set set;
-    measured_truth *mats;
+    measured_truth *mats, *amats;
     scene sc;
     bench b;
     glint_err e;
@@ -398,10 +453,17 @@ int main(int argc, char **argv)
             sets[nsets++] = argv[++i];
         else if (!strcmp(argv[i], "--views") && i + 1 < argc)
             snprintf(viewsarg, sizeof viewsarg, "%s", argv[++i]);
-        else {
+        else if (!strcmp(argv[i], "--rim") && i + 1 < argc) {
+            char *end;
+            rim = strtod(argv[++i], &end);
+            if (*end || !(rim >= 0.0 && rim < 1.0)) {
+                fprintf(stderr, "--rim takes n.wo in [0, 1)\n");
+                return 2;
+            }
+        } else {
             fprintf(stderr, "usage: %s [--data DIR] [--every K] [--first I] [--size WxH] "
                             "[--methods a,b] [--views 3,1] [--env A B] [--lights K] "
-                            "[--set NAME=VALUE]...\n",
+                            "[--set NAME=VALUE]... [--rim C]\n",
                     argv[0]);
             return 2;
         }
@@ -413,8 +475,9 @@ int main(int argc, char **argv)
     for (char *tok = strtok(methods, ","); tok && nm < 8; tok = strtok(NULL, ",")) {
         /* srbf+kd: srbf given pbr_env's diffuse colour */
         kdg[nm] = !strcmp(tok, "srbf+kd");
+        other[nm] = !strcmp(tok, "abc"); /* no fit: the other published fit */
         snprintf(mnames[nm], sizeof mnames[nm], "%s", tok);
-        ms[nm] = method_find(kdg[nm] ? "srbf" : tok);
+        ms[nm] = other[nm] ? &method_pbr_env : method_find(kdg[nm] ? "srbf" : tok);
         if (!ms[nm++]) {
             fprintf(stderr, "unknown method %s\n", tok);
             return 2;
@@ -438,8 +501,11 @@ int main(int argc, char **argv)
         envB = "sunset";
     }
     mats = calloc((size_t)set.n, sizeof *mats);
-    for (int i = first; i < set.n; i += every)
+    amats = calloc((size_t)set.n, sizeof *amats);
+    for (int i = first; i < set.n; i += every) {
+        measured_truth_of(&set.m[i], MEASURED_ABC, &amats[nmat]);
         measured_truth_of(&set.m[i], MEASURED_SGD, &mats[nmat++]);
+    }
     {
         scene_params sp;
         scene_params_default(&sp);
@@ -477,25 +543,36 @@ int main(int argc, char **argv)
             truths tr = {&mats[i], {NULL}};
             for (int mi = 0; mi < nm; mi++) {
                 result *r = &res[((size_t)vi * nm + mi) * nmat + i];
-                if (run_one(&b, ms[mi], kdg[mi], &tr, use, rest, r))
+                if (other[mi] ? run_other_fit(&b, &amats[i], &tr, use, rest, r)
+                              : run_one(&b, ms[mi], kdg[mi], &tr, use, rest, r))
                     continue;
                 r->ok = 1;
                 printf("  %-28s %-8s %d view%s: painted %.4f new %.4f rotated %.4f other %.4f "
                        "(%.0f ms)%s%s\n", mats[i].name, mnames[mi], nvs[vi],
                        nvs[vi] > 1 ? "s" : "", r->e[E_PAINTED], r->e[E_NEW], r->e[E_ROT],
                        r->e[E_OTHER], r->fit_ms, r->chose[0] ? " chose: " : "", r->chose);
+                if (rim >= 0.0)
+                    printf("  %-28s %-8s %d view%s, n.wo >= %g: painted %.4f new %.4f rotated "
+                           "%.4f other %.4f\n", mats[i].name, mnames[mi], nvs[vi],
+                           nvs[vi] > 1 ? "s" : "", rim, r->e_rim[E_PAINTED], r->e_rim[E_NEW],
+                           r->e_rim[E_ROT], r->e_rim[E_OTHER]);
                 fflush(stdout);
             }
             truths_free(&tr);
         }
     }
-    printf("\n| method | views |");
-    for (int k = 0; k < E_N; k++)
-        printf(" %s median / p90 |", E_NAME[k]);
-    printf(" warm fit ms (median) |\n|---|---|---|---|---|---|---|\n");
-    for (int vi = 0; vi < nnv; vi++)
-        for (int mi = 0; mi < nm; mi++)
-            summary(mnames[mi], nvs[vi], res + ((size_t)vi * nm + mi) * nmat, mats, nmat);
+    for (int of_rim = 0; of_rim <= (rim >= 0.0); of_rim++) {
+        if (of_rim)
+            printf("\nOver the pixels with n.wo >= %g:\n", rim);
+        printf("\n| method | views |");
+        for (int k = 0; k < E_N; k++)
+            printf(" %s median / p90 |", E_NAME[k]);
+        printf(" warm fit ms (median) |\n|---|---|---|---|---|---|---|\n");
+        for (int vi = 0; vi < nnv; vi++)
+            for (int mi = 0; mi < nm; mi++)
+                summary(mnames[mi], nvs[vi], res + ((size_t)vi * nm + mi) * nmat, mats, nmat,
+                        of_rim);
+    }
     free(res);
     cache_release(b.c, b.se);
     cache_close(b.c);
@@ -505,5 +582,6 @@ int main(int argc, char **argv)
     scene_free(&sc);
     measured_free(&set);
     free(mats);
+    free(amats);
     return 0;
 }

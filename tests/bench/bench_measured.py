@@ -16,7 +16,10 @@ command, warm precomputation).
 usage: bench_measured.py GLINT [--size N] [--every K | --materials a,b]
        [--methods a,b:param=value,c] [--data ../shared/data/measured]
 (every K-th material of the 56; default 4: 14 materials; or those named).
-A method that chooses prints what it chose.  GLINT is copied first, so a
+A method that chooses prints what it chose.  The method `abc` fits
+nothing: it is the other published fit of the same measurements (`glint
+paint --brdf abc:NAME`) scored against the sgd truths, how far apart two
+fits of one material are under this protocol.  GLINT is copied first, so a
 rebuild while it runs does not stop it.  The radiance is
 scene.h's: a point light of intensity 1 makes a white Lambertian read 1."""
 import argparse
@@ -44,6 +47,17 @@ def pixels(path):
     px = np.asarray(inp.read_image("float"))[..., :3].astype(np.float64)
     inp.close()
     return px
+
+
+def image_error(dir_a, truth_dir, n):
+    """The relative RMS of the images of dir_a against truth_dir's."""
+    num = den = 0.0
+    for k in range(n):
+        t = pixels(os.path.join(truth_dir, "view_%02d.exr" % k))
+        r = pixels(os.path.join(dir_a, "view_%02d.exr" % k))
+        num += float(((r - t) ** 2).sum())
+        den += float((t ** 2).sum())
+    return (num / den) ** 0.5 if den > 0 else float("nan")
 
 
 def error(glint, mat, scene, truth_dir, n, tmp):
@@ -102,6 +116,16 @@ def main():
                 meth, *kv = m.split(":")
                 extra = [x for p in kv for x in ("--" + p.split("=", 1)[0], p.split("=", 1)[1])]
                 mat = os.path.join(tmp, "m_" + str(methods.index(m)))
+                if meth == "abc":  # no fit: the other published fit against sgd
+                    e = []
+                    for k, n in (("painted", 12), ("new", 20), ("beyond", 20)):
+                        other = os.path.join(tmp, "abc_" + k)
+                        run([a.glint, "paint", sc[k], "--brdf", "abc:" + name, "-o", other])
+                        e.append(image_error(other, dirs[k], n))
+                    res[m].append((name, e[0], e[1], e[2], 0.0))
+                    print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%"
+                          % (name, m, 100 * e[0], 100 * e[1], 100 * e[2]), flush=True)
+                    continue
                 t0 = time.perf_counter()
                 try:
                     run([a.glint, "fit", sc["painted"], "--paintings", dirs["painted"], "-o", mat,
