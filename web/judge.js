@@ -662,7 +662,14 @@ export class Judge extends EventTarget {
     }
     const why = document.createElement('span');
     why.className = 'muted'; why.title = c.rule || '';
-    why.textContent = `(a richer model is kept only when it is more than ${Math.round(100 * c.threshold)}% better)`;
+    // where the choice started from another than the first candidate (auto_env
+    // from one painted view starts from the correction), it says which
+    const first = c.candidates.find(x => !x.skipped);
+    const start = c.started_from && first && c.started_from !== (first.label || name(first.method)) ? c.started_from : null;
+    const pc = Math.round(100 * c.threshold);
+    why.textContent = start
+      ? `(started from ${start}, the best from one painted view on measured materials; another is kept only when it is more than ${pc}% better)`
+      : `(a richer model is kept only when it is more than ${pc}% better)`;
     div.appendChild(why);
     return div;
   }

@@ -273,5 +273,13 @@ run({
     // judged on two hold-outs (auto_env's default), and it says so
     assertEq(mat.choice.held_out_folds.length, 2, 'two hold-outs');
     assert(said.includes('over 2 hold-outs'), 'says how many hold-outs: ' + said);
+    // where it started: from the correction only with one view painted, and then it says so
+    const c0 = mat.choice.candidates[0].label;
+    assert(mat.choice.started_from === c0 || mat.choice.held_out === 'pixels', 'several views start from the simplest: ' + mat.choice.started_from);
+    if (mat.choice.started_from !== c0)
+      assert(said.includes('started from ' + mat.choice.started_from), 'says where it started: ' + said);
+    else
+      assert(said.includes('a richer model is kept only when'), 'says a richer model must win: ' + said);
+    t.log(`started from ${mat.choice.started_from} (held out: ${mat.choice.held_out})`);
   },
 });

@@ -330,23 +330,43 @@ static int chosen_index(const material *m)
     return k;
 }
 
-/* auto_env fitted to truth painted under the sky's lights. */
-static int auto_fit(const material *truth, const unsigned char *use, material *m, prep **pp,
-                    glint_err *e)
+/* auto_env at p fitted to truth painted under the sky's lights. */
+static int auto_fit_at(const auto_env_params *p, const material *truth, const unsigned char *use,
+                       material *m, prep **pp, glint_err *e)
 {
-    auto_env_params p;
     env_lights l;
     float *v;
     int rc;
-    auto_env_of(&p);
-    if (lights_of(0.0, p.env.lights, &l) ||
-        !(*pp = prep_method(&method_auto_env, &p, use)))
+    if (lights_of(0.0, p->env.lights, &l) ||
+        !(*pp = prep_method(&method_auto_env, p, use)))
         return -1;
     v = paint(truth, prep_samples(*pp), &l);
     rc = prep_fit(*pp, NULL, v, m, e);
     free(v);
     env_lights_free(&l);
     return rc;
+}
+
+/* auto_env at its defaults. */
+static int auto_fit(const material *truth, const unsigned char *use, material *m, prep **pp,
+                    glint_err *e)
+{
+    auto_env_params p;
+    auto_env_of(&p);
+    return auto_fit_at(&p, truth, use, m, pp, e);
+}
+
+static const char *choice_str(const material *m, const char *key)
+{
+    const char *v = json_string_value(json_object_get(choice_of(m), key));
+    return v ? v : "";
+}
+
+static const char *cand_str(const material *m, int c, const char *key)
+{
+    const char *v = json_string_value(
+        json_object_get(json_array_get(json_object_get(choice_of(m), "candidates"), c), key));
+    return v ? v : "";
 }
 
 TEST(auto_env_chooses_and_reports)
@@ -425,6 +445,60 @@ TEST(two_lobes_take_the_two_lobe_candidate)
     prep_release(C, pp);
 }
 
+/* From one view the choice starts from the correction on two lobes
+ * (candidate 4) where its held-out RMS is no worse than the simplest's;
+ * with `start` simplest, or from three views, from the simplest. */
+TEST(one_view_starts_from_the_correction)
+{
+    auto_env_params p;
+    material truth, m;
+    glint_err e;
+    prep *pp = NULL;
+    unsigned char one[SCENE_MAX_VIEWS] = {0};
+    int k;
+
+    ASSERT(setup() == 0);
+    two_lobes(&truth);
+    one[4] = 1;
+    auto_env_of(&p);
+    ASSERT_EQ(p.start, AUTO_ENV_START_VIEWS);
+    ASSERT_OK(auto_fit_at(&p, &truth, one, &m, &pp, &e));
+    printf("  one view: simplest held out %.5g, correction %.5g; started from %s, chose %s\n",
+           cand_num(&m, 0, "held_out_rms"), cand_num(&m, 4, "held_out_rms"),
+           choice_str(&m, "started_from"), choice_str(&m, "chosen_label"));
+    ASSERT(!strcmp(choice_str(&m, "start"), "views"));
+    /* a two-lobe truth: the correction on two lobes holds out better */
+    ASSERT(cand_num(&m, 4, "held_out_rms") <= cand_num(&m, 0, "held_out_rms"));
+    ASSERT(!strcmp(choice_str(&m, "started_from"), cand_str(&m, 4, "label")));
+    ASSERT(json_is_true(json_object_get(
+        json_array_get(json_object_get(choice_of(&m), "candidates"), 4), "taken")));
+    k = chosen_index(&m);
+    ASSERT(cand_num(&m, k, "held_out_rms") <= cand_num(&m, 4, "held_out_rms"));
+    /* a candidate other than the start is taken only by beating it by the threshold */
+    if (k != 4)
+        ASSERT(cand_num(&m, k, "held_out_rms") <
+               cand_num(&m, 4, "held_out_rms") * (1.0 - p.threshold));
+    material_free(&m);
+    prep_release(C, pp);
+
+    p.start = AUTO_ENV_START_SIMPLEST;
+    ASSERT_OK(auto_fit_at(&p, &truth, one, &m, &pp, &e));
+    ASSERT(!strcmp(choice_str(&m, "start"), "simplest"));
+    ASSERT(!strcmp(choice_str(&m, "started_from"), cand_str(&m, 0, "label")));
+    ASSERT(json_is_true(json_object_get(
+        json_array_get(json_object_get(choice_of(&m), "candidates"), 0), "taken")));
+    material_free(&m);
+    prep_release(C, pp);
+
+    /* three views at the defaults: the simplest */
+    auto_env_of(&p);
+    ASSERT_OK(auto_fit_at(&p, &truth, NULL, &m, &pp, &e));
+    ASSERT(!strcmp(choice_str(&m, "started_from"), cand_str(&m, 0, "label")));
+    material_free(&m);
+    material_free(&truth);
+    prep_release(C, pp);
+}
+
 TEST(extremes)
 {
     auto_env_params p;
@@ -471,9 +545,14 @@ TEST(extremes)
     ASSERT(!strcmp(json_string_value(json_object_get(
                        json_array_get(json_object_get(choice_of(&m), "not_tried"), 0), "method")),
                    "srbf"));
-    printf("  one view: chose %s, kd %.4f\n",
+    printf("  one view: chose %s, kd %.4f (held out: simplest %.6g, correction %.6g)\n",
            json_string_value(json_object_get(choice_of(&m), "chosen")),
-           pbr_material_of(&m) ? pbr_material_of(&m)->kd[0] : -1.0);
+           pbr_material_of(&m) ? pbr_material_of(&m)->kd[0] : -1.0,
+           cand_num(&m, 0, "held_out_rms"), cand_num(&m, 4, "held_out_rms"));
+    /* the start is the correction only where it holds out no worse */
+    ASSERT(!strcmp(choice_str(&m, "started_from"),
+                   cand_str(&m, cand_num(&m, 4, "held_out_rms") <= cand_num(&m, 0, "held_out_rms")
+                                    ? 4 : 0, "label")));
     ASSERT(cand_num(&m, 0, "held_out_rms") >= 0.0);
     material_free(&m);
     prep_release(C, pp);
@@ -531,6 +610,7 @@ TEST_LIST {
     TEST_ENTRY(holdout_on_one_preparation_is_the_folds),
     TEST_ENTRY(auto_env_chooses_and_reports),
     TEST_ENTRY(two_lobes_take_the_two_lobe_candidate),
+    TEST_ENTRY(one_view_starts_from_the_correction),
     TEST_ENTRY(extremes),
 };
 
