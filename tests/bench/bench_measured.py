@@ -49,6 +49,14 @@ def pixels(path):
     return px
 
 
+def shown(m):
+    """METHOD[:param=value...] as printed: a list of names (A+B+...) as its
+    count, so that a run's lines stay one per material."""
+    meth, *kv = m.split(":")
+    return ":".join([meth] + [k.split("=", 1)[0] + "=<%d names>" % (k.count("+") + 1)
+                              if "+" in k else k for k in kv])
+
+
 def image_error(dir_a, truth_dir, n):
     """The relative RMS of the images of dir_a against truth_dir's."""
     num = den = 0.0
@@ -124,14 +132,14 @@ def main():
                         e.append(image_error(other, dirs[k], n))
                     res[m].append((name, e[0], e[1], e[2], 0.0))
                     print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%"
-                          % (name, m, 100 * e[0], 100 * e[1], 100 * e[2]), flush=True)
+                          % (name, shown(m), 100 * e[0], 100 * e[1], 100 * e[2]), flush=True)
                     continue
                 t0 = time.perf_counter()
                 try:
                     run([a.glint, "fit", sc["painted"], "--paintings", dirs["painted"], "-o", mat,
                          "--method", meth, "--cache-dir", cache] + extra)
                 except RuntimeError as e:
-                    print("%-26s %-6s fit failed: %s" % (name, m, e), flush=True)
+                    print("%-26s %-6s fit failed: %s" % (name, shown(m), e), flush=True)
                     continue
                 secs = time.perf_counter() - t0
                 e_p = error(a.glint, mat, sc["painted"], dirs["painted"], 12, tmp)
@@ -141,7 +149,7 @@ def main():
                 with open(os.path.join(mat, "material.json")) as f:
                     chose = json.load(f)["method"]
                 print("%-26s %-10s painted %6.2f%%  new views %6.2f%%  beyond %6.2f%%  %.2f s%s"
-                      % (name, m, 100 * e_p, 100 * e_n, 100 * e_b, secs,
+                      % (name, shown(m), 100 * e_p, 100 * e_n, 100 * e_b, secs,
                          "" if chose == meth else "  chose " + chose), flush=True)
     print()
     print("| method | materials | painted median | new views median | p90 | beyond median | "
@@ -154,7 +162,7 @@ def main():
         col = lambda i: np.array([x[i] for x in r])
         worst = sorted(r, key=lambda x: -x[2])[:3]
         print("| %s | %d | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %.1f%% | %s | %.2f |" % (
-            m, len(r), 100 * np.median(col(1)), 100 * np.median(col(2)),
+            shown(m), len(r), 100 * np.median(col(1)), 100 * np.median(col(2)),
             100 * np.percentile(col(2), 90), 100 * np.median(col(3)),
             100 * np.percentile(col(3), 90),
             ", ".join("%s %.0f%%" % (w[0], 100 * w[2]) for w in worst), np.median(col(4))))
