@@ -552,8 +552,9 @@ static int starts_at_correction(const auto_env_params *p, int by_views, const sc
  * starts_at_correction) is the first choice; every other candidate, in
  * order, is taken when its held-out RMS is below the current choice's by
  * more than the threshold and the floor (fl, in the painting's units), so
- * the choice is never worse on the held-out samples than the first.
- * Writes each candidate's figures into `list`; the chosen index. */
+ * the choice is never worse on the held-out samples than the simplest.
+ * Writes each candidate's figures into `list`; the chosen index (OUT
+ * *start: the start's). */
 static int choose(const auto_env_params *p, double fl, int by_views, const cands *cs,
                   const scores *sc, json_t *list, json_t *skipped, int *start)
 {
@@ -596,9 +597,9 @@ static json_t *choice_report(const auto_env_params *p, double fl, int by_views,
         "threshold", p->threshold, "floor", p->floor, "floor_value", fl, "held_out",
         by_views ? "views" : "pixels", "held_out_every",
         p->every, "held_out_samples", (json_int_t)nheld, "rule",
-        "the start first (started_from: the simplest, pbr_env with one dielectric lobe, or "
-        "with one view painted the correction on two lobes where its held-out RMS is no "
-        "worse than the simplest's); every other candidate in order (pbr_env: one lobe, "
+        "the start first (started_from: the simplest, pbr_env with one dielectric lobe, or, "
+        "by start (with one view painted, by default), the correction on two lobes where its "
+        "held-out RMS is no worse than the simplest's); every other candidate in order (pbr_env: one lobe, "
         "dielectric; conductor; two lobes; pbr_tab_env on one and two lobes; then srbf) is "
         "taken when its held-out RMS is below the current choice's by more than "
         "the threshold (a fraction) and floor_value (the floor times the painting's RMS), so "
